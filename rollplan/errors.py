@@ -1,0 +1,47 @@
+"""Exceptions of rollplan: bad input, no plan, and solver failure."""
+
+from __future__ import annotations
+
+import math
+
+__all__ = ["InputError", "NoPlanError", "SolverError", "check_finite", "check_range"]
+
+
+class InputError(ValueError):
+    """A user-supplied value is not allowed. The message is one line."""
+
+
+class NoPlanError(RuntimeError):
+    """No plan reaches the target with the given number of steps."""
+
+
+class SolverError(RuntimeError):
+    """A numerical solver failed; carries the solver's status."""
+
+    def __init__(self, message: str, status: str = "") -> None:
+        super().__init__(message)
+        self.status = status
+
+
+def check_finite(name: str, value) -> float:
+    """Return ``value`` as a float, or raise InputError if it is not a finite number."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} = {value!r} is not a number") from None
+    if not math.isfinite(x):
+        raise InputError(f"{name} = {value!r} is not allowed: it must be a finite number")
+    return x
+
+
+def check_range(name: str, value, low=None, high=None, low_open=False, high_open=False) -> float:
+    """Finite ``value`` within [low, high] (or open ends); InputError naming the bound otherwise."""
+    x = check_finite(name, value)
+    bad_low = low is not None and (x <= low if low_open else x < low)
+    bad_high = high is not None and (x >= high if high_open else x > high)
+    if bad_low or bad_high:
+        lo = "-inf" if low is None else f"{low:g}"
+        hi = "inf" if high is None else f"{high:g}"
+        span = ("(" if low_open or low is None else "[") + f"{lo}, {hi}" + (")" if high_open or high is None else "]")
+        raise InputError(f"{name} = {x:g} is not allowed: it must lie in {span}")
+    return x

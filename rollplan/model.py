@@ -1,0 +1,179 @@
+"""The symbolic model: the single source of truth for every planner.
+
+Everything here is a CasADi expression built from the equations of Svinin,
+Morinaga and Yamamoto (the paper), numbered as there:
+
+* contact point on the sphere (1) and orientation matrix (2)-(5);
+* Montana's contact kinematics (6)-(10);
+* angular velocity from contact rates, :math:`\\hat\\omega = \\dot R R^T` (18)-(19);
+* the dynamic-realizability condition (12)-(13), solved for :math:`\\omega_z`;
+* the inertia ratio ``k`` (14) and the rotor rates from the momentum integral (11);
+* the curve-parameterized ODE (28)-(30) for any spherical curve.
+
+Nothing is typed twice: (17) and (20) are *composed* from (10), (13), (18),
+(19); (28)-(30) are composed from (6), (7), (10) with the contact rates of a
+curve obtained by automatic differentiation of (24)-(25). The printed forms of
+(20) and (28)-(30) are used only in the tests, as independent references.
+
+Lengths are in units of the sphere radius unless a radius ``R`` is passed.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+__all__ = [
+    "rot_x",
+    "rot_y",
+    "rot_z",
+    "contact_point",
+    "orientation",
+    "montana",
+    "omega_from_contact_rates",
+    "omega_z_realizable",
+    "realizability_residual",
+    "psi_dot_realizable",
+    "inertia_ratio",
+    "rotor_rates",
+    "contact_coordinates",
+    "curve_rhs",
+]
+
+
+def rot_x(t):
+    """Elementary rotation about x (active, right-handed)."""
+    c, s = ca.cos(t), ca.sin(t)
+    return ca.vertcat(ca.horzcat(1, 0, 0), ca.horzcat(0, c, -s), ca.horzcat(0, s, c))
+
+
+def rot_y(t):
+    """Elementary rotation about y (active, right-handed)."""
+    c, s = ca.cos(t), ca.sin(t)
+    return ca.vertcat(ca.horzcat(c, 0, s), ca.horzcat(0, 1, 0), ca.horzcat(-s, 0, c))
+
+
+def rot_z(t):
+    """Elementary rotation about z (active, right-handed)."""
+    c, s = ca.cos(t), ca.sin(t)
+    return ca.vertcat(ca.horzcat(c, -s, 0), ca.horzcat(s, c, 0), ca.horzcat(0, 0, 1))
+
+
+def contact_point(u_o, v_o, R=1.0):
+    """Contact point on the sphere in the body frame, eq. (1); south pole at u=v=0."""
+    return R * ca.vertcat(-ca.sin(u_o) * ca.cos(v_o), ca.sin(v_o), -ca.cos(u_o) * ca.cos(v_o))
+
+
+def orientation(u_o, v_o, psi):
+    """Orientation of the body frame relative to the plane, eq. (2).
+
+    ``R = Rz(psi)^T Rx(v_o)^T Ry(u_o)^T``; its columns are n1, n2, n3 of (3)-(5).
+    """
+    return rot_z(psi).T @ rot_x(v_o).T @ rot_y(u_o).T
+
+
+def montana(omega, u_o, v_o, psi, R=1.0):
+    """Contact-coordinate rates from the angular velocity, eqs. (6)-(10).
+
+    Parameters
+    ----------
+    omega : (3,) angular velocity of the sphere in the plane frame [rad/s]
+    u_o, v_o, psi : contact coordinates [rad]
+
+    Returns
+    -------
+    (5,) rates of (u_a, v_a, u_o, v_o, psi).
+    """
+    wx, wy, wz = omega[0], omega[1], omega[2]
+    roll = wx * ca.sin(psi) + wy * ca.cos(psi)
+    return ca.vertcat(
+        R * wy,                                # (6)
+        -R * wx,                               # (7)
+        -roll / ca.cos(v_o),                   # (8)
+        -wx * ca.cos(psi) + wy * ca.sin(psi),  # (9)
+        -wz - roll * ca.tan(v_o),              # (10)
+    )
+
+
+def omega_from_contact_rates(u_o, v_o, psi, du_o, dv_o):
+    """Rolling components (omega_x, omega_y) from the contact rates, eqs. (18)-(19)."""
+    wx = -du_o * ca.cos(v_o) * ca.sin(psi) - dv_o * ca.cos(psi)
+    wy = -du_o * ca.cos(v_o) * ca.cos(psi) + dv_o * ca.sin(psi)
+    return ca.vertcat(wx, wy)
+
+
+def realizability_residual(omega, u_o, v_o, psi, k):
+    """Left side of the realizability condition (13), ``n3 . Jc omega / Jzz``."""
+    n3 = orientation(u_o, v_o, psi)[:, 2]
+    return k * (n3[0] * omega[0] + n3[1] * omega[1]) + n3[2] * omega[2]
+
+
+def omega_z_realizable(omega_xy, u_o, v_o, psi, k):
+    """The spin omega_z that makes (13) hold for given rolling components."""
+    n3 = orientation(u_o, v_o, psi)[:, 2]
+    return -k * (n3[0] * omega_xy[0] + n3[1] * omega_xy[1]) / n3[2]
+
+
+def realizable_omega(u_o, v_o, psi, du_o, dv_o, k):
+    """Full angular velocity of a dynamically realizable motion: (18), (19), (13)."""
+    wxy = omega_from_contact_rates(u_o, v_o, psi, du_o, dv_o)
+    return ca.vertcat(wxy, omega_z_realizable(wxy, u_o, v_o, psi, k))
+
+
+def psi_dot_realizable(u_o, v_o, psi, du_o, dv_o, k):
+    """psi-dot of a realizable motion, eq. (20), composed from (10), (13), (18), (19)."""
+    w = realizable_omega(u_o, v_o, psi, du_o, dv_o, k)
+    return montana(w, u_o, v_o, psi)[4]
+
+
+def inertia_ratio(radius, mass_total, mass_shell, rotor_inertia_axial, rotor_inertia_transverse):
+    """Inertia ratio k = Jxx/Jzz, eq. (14); also returns (Jxx, Jzz).
+
+    ``Jzz = 2/3 m_o R^2 + 2 J_p + J_r`` and ``Jxx = Jzz + M R^2`` (Section II).
+    Works on floats and on CasADi symbols alike.
+    """
+    j_zz = 2.0 / 3.0 * mass_shell * radius**2 + 2.0 * rotor_inertia_transverse + rotor_inertia_axial
+    j_xx = j_zz + mass_total * radius**2
+    return j_xx / j_zz, j_xx, j_zz
+
+
+def rotor_rates(omega, u_o, v_o, psi, j_xx, j_zz, j_r):
+    """Rotor rates (phi1_dot, phi2_dot) from the momentum integral (11).
+
+    Pre-multiplying (11) by the orthonormal n1 and n2 gives
+    ``phi_i_dot = -n_i . Jc omega / J_r`` with ``Jc = diag(Jxx, Jxx, Jzz)``.
+    """
+    rot = orientation(u_o, v_o, psi)
+    jw = ca.vertcat(j_xx * omega[0], j_xx * omega[1], j_zz * omega[2])
+    return ca.vertcat(-ca.dot(rot[:, 0], jw) / j_r, -ca.dot(rot[:, 1], jw) / j_r)
+
+
+def contact_coordinates(point, R=1.0):
+    """(u_o, v_o) of a point on the sphere, by inverting (1) as in (24)-(25).
+
+    Valid on the open lower hemisphere (z < 0), where |u_o| < pi/2.
+    """
+    x, y, z = point[0], point[1], point[2]
+    return ca.atan2(-x, -z), ca.asin(y / R)
+
+
+def curve_rhs(point, theta, k, R=1.0):
+    """Right side of the curve-parameterized ODE (28)-(30).
+
+    The contact point follows ``point(theta)`` (a CasADi expression in the
+    symbol ``theta``); the state is (u_a, v_a, psi). The contact rates
+    (u_o', v_o') are the derivatives of (24)-(25) along the curve (eq. 27),
+    the angular velocity is (18)-(19) with the spin from (13), and the state
+    rates are Montana's (6), (7), (10).
+
+    Returns
+    -------
+    rhs : casadi expression, (3,) in terms of ``theta``, a fresh symbol ``psi``
+    psi : the state symbol psi used in ``rhs``
+    """
+    psi = ca.SX.sym("psi") if isinstance(theta, ca.SX) else ca.MX.sym("psi")
+    u_o, v_o = contact_coordinates(point, R)
+    du_o = ca.jacobian(u_o, theta)
+    dv_o = ca.jacobian(v_o, theta)
+    w = realizable_omega(u_o, v_o, psi, du_o, dv_o, k)
+    rates = montana(w, u_o, v_o, psi, R)
+    return ca.vertcat(rates[0], rates[1], rates[4]), psi

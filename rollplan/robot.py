@@ -1,0 +1,88 @@
+"""Robot parameters and the inertia ratio k of eq. (14)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+from . import model
+from .errors import InputError, check_range
+
+__all__ = ["Robot", "load_robot"]
+
+
+@dataclass(frozen=True)
+class Robot:
+    """Physical parameters of the two-rotor spherical robot (Section II).
+
+    Attributes
+    ----------
+    radius : float
+        Sphere radius R [m].
+    mass_total : float
+        Total mass M [kg].
+    mass_shell : float
+        Mass of the spherical shell m_o [kg].
+    rotor_inertia_axial : float
+        Moment of inertia J_r of one rotor about its spin axis [kg m^2].
+    rotor_inertia_transverse : float
+        Moment of inertia J_p of one rotor about a transverse axis [kg m^2].
+    """
+
+    radius: float = 0.1
+    mass_total: float = 1.2
+    mass_shell: float = 0.4
+    rotor_inertia_axial: float = 2.0e-4
+    rotor_inertia_transverse: float = 1.2e-4
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            check_range(f.name, getattr(self, f.name), 0.0, None, low_open=True)
+        if self.mass_shell > self.mass_total:
+            raise InputError(f"mass_shell = {self.mass_shell:g} is not allowed: it must not exceed mass_total = {self.mass_total:g}")
+
+    def _ratio(self):
+        return model.inertia_ratio(self.radius, self.mass_total, self.mass_shell,
+                                   self.rotor_inertia_axial, self.rotor_inertia_transverse)
+
+    @property
+    def k(self) -> float:
+        """Inertia ratio k = Jxx/Jzz, eq. (14); always > 1."""
+        return float(self._ratio()[0])
+
+    @property
+    def j_xx(self) -> float:
+        """Jxx = Jzz + M R^2 about the contact point [kg m^2]."""
+        return float(self._ratio()[1])
+
+    @property
+    def j_zz(self) -> float:
+        """Jzz = 2/3 m_o R^2 + 2 J_p + J_r [kg m^2]."""
+        return float(self._ratio()[2])
+
+    def as_dict(self) -> dict:
+        d = {f.name: getattr(self, f.name) for f in fields(self)}
+        d["k"] = self.k
+        return d
+
+
+def load_robot(path) -> Robot:
+    """Read a robot from a TOML file with exactly the fields of :class:`Robot`."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10
+        import tomli as tomllib
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except OSError as exc:
+        raise InputError(f"robot file {str(path)!r} cannot be read: {exc.strerror}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"robot file {str(path)!r} is not valid TOML: {exc}") from None
+    names = [f.name for f in fields(Robot)]
+    unknown = sorted(set(data) - set(names))
+    if unknown:
+        raise InputError(f"robot file {str(path)!r}: unknown key {unknown[0]!r}; allowed: {', '.join(names)}")
+    missing = [n for n in names if n not in data]
+    if missing:
+        raise InputError(f"robot file {str(path)!r}: missing key {missing[0]!r}")
+    return Robot(**{n: data[n] for n in names})
