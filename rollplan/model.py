@@ -37,6 +37,9 @@ __all__ = [
     "rotor_rates",
     "contact_coordinates",
     "curve_rhs",
+    "realizable_omega",
+    "contact_rhs",
+    "omega_from_rotor_rates",
 ]
 
 
@@ -177,3 +180,34 @@ def curve_rhs(point, theta, k, R=1.0):
     w = realizable_omega(u_o, v_o, psi, du_o, dv_o, k)
     rates = montana(w, u_o, v_o, psi, R)
     return ca.vertcat(rates[0], rates[1], rates[4]), psi
+
+
+def contact_rhs(state, rates, k, R=1.0):
+    """Time derivative of the contact state for a realizable motion, (15)-(17) with (20).
+
+    Parameters
+    ----------
+    state : (5,) (u_a, v_a, u_o, v_o, psi) [length unit of R, rad]
+    rates : (2,) the contact rates (u_o_dot, v_o_dot) [rad/s], the free inputs
+    k : inertia ratio
+
+    Returns
+    -------
+    (5,) d/dt of the state. The angular velocity is (18)-(19) with the spin
+    from (13), so the realizability condition holds by construction; the rates
+    are Montana's (6)-(10), whose (8)-(9) give back ``rates``.
+    """
+    u_o, v_o, psi = state[2], state[3], state[4]
+    w = realizable_omega(u_o, v_o, psi, rates[0], rates[1], k)
+    return montana(w, u_o, v_o, psi, R)
+
+
+def omega_from_rotor_rates(phi_dot, u_o, v_o, psi, j_xx, j_zz, j_r):
+    """Angular velocity of the sphere from the rotor rates, by solving (11) for omega.
+
+    ``Jc omega = -J_r (n1 phi1_dot + n2 phi2_dot)`` with ``Jc = diag(Jxx, Jxx, Jzz)``
+    in the plane frame. The result satisfies (12)-(13) automatically.
+    """
+    rot = orientation(u_o, v_o, psi)
+    m = -j_r * (rot[:, 0] * phi_dot[0] + rot[:, 1] * phi_dot[1])
+    return ca.vertcat(m[0] / j_xx, m[1] / j_xx, m[2] / j_zz)
