@@ -1,0 +1,111 @@
+"""The step map against an independent integrator (scipy DOP853), the closed
+form (36), and the symmetries the planner relies on."""
+
+import casadi as ca
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rollplan.curves import A_MAX, figure_eight
+from rollplan.integrate import CvodesIntegrator, spectral_step
+
+
+def rot(angle, v):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def closed_form_36(a):
+    """h/R of a symmetric figure eight under pure rolling (k = 0), eq. (36)."""
+    return 4 * a / np.sqrt(1 - a * a) * np.sin(np.pi * np.sqrt(1 - a * a))
+
+
+@pytest.fixture(scope="module")
+def fmap():
+    return spectral_step(figure_eight())
+
+
+def sx(f, a, b, k, gamma=0.0, x0=(0, 0, 0)):
+    return np.array(f(x0, [a, b], k, gamma)).ravel()
+
+
+CASES = [(0.3, 0.4, 2.5, 0.0), (0.6, 0.2, 5.0, 0.3), (0.533681, 0.533681, 0.0, 0.0), (0.1, 0.65, 2.5, -1.0),
+         (0.69, 0.5, 10.0, 0.0), (0.68, 0.68, 10.0, 2.0), (0.05, 0.02, 1.3, 0.0), (A_MAX, A_MAX, 5.0, 0.0)]
+
+
+@pytest.mark.parametrize("a,b,k,gamma", CASES)
+def test_spectral_step_matches_scipy(fmap, scipy_trace, a, b, k, gamma):
+    assert np.abs(sx(fmap, a, b, k, gamma) - scipy_trace(a, b, k, gamma)).max() < 1e-10
+
+
+@pytest.mark.parametrize("a,b,k,gamma", CASES[:4])
+def test_cvodes_matches_scipy(scipy_trace, a, b, k, gamma):
+    _, xs = CvodesIntegrator(figure_eight(), 1e-13, 1e-14).trace([a, b], k, gamma)
+    assert np.abs(xs[-1] - scipy_trace(a, b, k, gamma)).max() < 1e-10
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(0.02, A_MAX))
+def test_pure_rolling_matches_closed_form_36(fmap, a):
+    x = sx(fmap, a, a, 0.0)
+    assert np.hypot(x[0], x[1]) == pytest.approx(abs(closed_form_36(a)), abs=1e-11)
+    assert abs(x[2]) < 1e-12  # no net turn
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(0.02, A_MAX), st.floats(0.0, 10.0))
+def test_symmetric_figure_eight_has_no_holonomy(fmap, a, k):
+    """Mirror symmetry y -> -y of (28)-(30) maps psi to -psi, so eta(a, a) = 0."""
+    assert abs(sx(fmap, a, a, k)[2]) < 1e-10 * (1 + k)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(0.02, A_MAX), st.floats(0.0, 8.0))
+def test_mirror_leaf(a, k):
+    """Leaf b alone is the mirror image of leaf a: (u, v, psi) -> (u, -v, -psi)."""
+    c = figure_eight()
+    first = np.array(spectral_step(c, pieces=(0,))([0, 0, 0], [a, a], k, 0)).ravel()
+    second = np.array(spectral_step(c, pieces=(1,))([0, 0, 0], [a, a], k, 0)).ravel()
+    assert np.allclose(second, first * [1, -1, -1], atol=1e-11 * (1 + abs(first[2])))
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(0.05, 0.65), st.floats(0.05, 0.65), st.floats(0.0, 8.0), st.floats(-3.0, 3.0))
+def test_gamma_turns_the_displacement(fmap, a, b, k, gamma):
+    """Rotating the curve about OZ by gamma turns the displacement by +gamma, psi unchanged."""
+    x0, xg = sx(fmap, a, b, k), sx(fmap, a, b, k, gamma)
+    assert np.allclose(xg[:2], rot(gamma, x0[:2]), atol=1e-11)
+    assert xg[2] == pytest.approx(x0[2], abs=1e-10)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.floats(0.05, 0.65), st.floats(0.05, 0.65), st.floats(0.0, 8.0), st.floats(-3.0, 3.0))
+def test_initial_heading_turns_the_shift(fmap, a, b, k, psi0):
+    """(28)-(29) rotate with psi: a step from heading psi0 gives the shift turned by -psi0."""
+    x0, xp = sx(fmap, a, b, k), sx(fmap, a, b, k, 0.0, (0.3, -0.2, psi0))
+    assert np.allclose(xp[:2] - [0.3, -0.2], rot(-psi0, x0[:2]), atol=1e-11)
+    assert xp[2] - psi0 == pytest.approx(x0[2], abs=1e-10)
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.floats(0.02, 0.68), st.floats(0.02, 0.68), st.floats(0.0, 5.0), st.sampled_from([0, 1, 2]))
+def test_step_map_jacobian_matches_finite_differences(fmap, a, b, k, row):
+    ab = ca.MX.sym("ab", 2)
+    jac = ca.Function("J", [ab], [ca.jacobian(fmap(ca.DM.zeros(3), ab, k, 0), ab)])
+    j = np.array(jac([a, b]))
+    eps = 1e-6
+    for col, (da, db) in enumerate([(eps, 0), (0, eps)]):
+        fd = (sx(fmap, a + da, b + db, k) - sx(fmap, a - da, b - db, k)) / (2 * eps)
+        assert j[row, col] == pytest.approx(fd[row], rel=1e-5, abs=1e-6)
+
+
+def test_contact_path_length_is_the_curve_length(planner):
+    """Rolling: the planar contact path is as long as the spherical one, 2 pi (a + b), for any k."""
+    from rollplan import plan
+
+    p = plan((0.0, 1.0, 0.0), k=2.5)
+    traj = p.trajectory(samples_per_leaf=4000)
+    assert traj.path_length() == pytest.approx(2 * np.pi * (p.a + p.b), rel=1e-6)
+    sphere = np.linalg.norm(np.diff(traj.contact, axis=0), axis=1).sum()
+    assert sphere == pytest.approx(traj.path_length(), rel=1e-6)
