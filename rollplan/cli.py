@@ -148,6 +148,9 @@ def main(argv=None) -> int:
     except SolverError as exc:
         print(f"rollplan: solver failed ({exc.status}): {exc}", file=sys.stderr)
         return EXIT_SOLVER
+    except BrokenPipeError:  # output piped into e.g. `head`
+        sys.stderr.close()
+        return EXIT_OK
 
 
 if __name__ == "__main__":
