@@ -44,7 +44,7 @@ class Piece:
     """
 
     point: Callable
-    breaks: tuple = (0.0, 2.0 * np.pi)
+    breaks: tuple = tuple(np.linspace(0.0, 2.0 * np.pi, 5))
 
 
 @dataclass(frozen=True)

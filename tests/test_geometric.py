@@ -133,3 +133,29 @@ def test_bad_input_is_one_clear_line(kwargs, match):
 def test_step_rejects_radii_outside_admissible_range(a, b):
     with pytest.raises(InputError, match="is not allowed"):
         rollplan.step(a, b, k=2.5)
+
+
+@pytest.mark.parametrize("target,steps,k", [((0.5, 0.7, 0.8), 1, 2.5), ((0.3, 0.2, -2.0), 2, 5.0)])
+def test_realizability_13_along_the_computed_motion(target, steps, k):
+    """Finite differences of the orientation (2) along the CVODES trajectory give omega;
+    n3 . Jc omega = 0 must hold there (and fails for another k: the check can fail)."""
+    import casadi as ca
+
+    from rollplan import model
+
+    p = rollplan.plan(target, steps=steps, k=k)
+    t = p.trajectory(samples_per_leaf=4000)
+    q = ca.SX.sym("q", 3)
+    rot = ca.Function("R", [q], [model.orientation(q[0], q[1], q[2])]).map(t.theta.size)
+    mats = np.array(rot(np.vstack([t.u_o, t.v_o, t.psi]))).reshape(3, t.theta.size, 3).transpose(1, 0, 2)
+    inner = (t.leaf[1:-1] == t.leaf[:-2]) & (t.leaf[1:-1] == t.leaf[2:]) & (np.diff(t.theta)[:-1] > 0)
+    i = np.nonzero(inner)[0] + 1
+    h = (t.theta[i + 1] - t.theta[i - 1])[:, None, None]
+    w_hat = (mats[i + 1] - mats[i - 1]) / h @ mats[i].transpose(0, 2, 1)
+    w = np.stack([w_hat[:, 2, 1], w_hat[:, 0, 2], w_hat[:, 1, 0]], axis=1)
+    n3 = mats[i][:, :, 2]
+    realizable = k * (n3[:, 0] * w[:, 0] + n3[:, 1] * w[:, 1]) + n3[:, 2] * w[:, 2]
+    scale = np.abs(w).max()
+    assert np.abs(realizable).max() < 1e-4 * scale
+    other = (k + 1) * (n3[:, 0] * w[:, 0] + n3[:, 1] * w[:, 1]) + n3[:, 2] * w[:, 2]
+    assert np.abs(other).max() > 1e-2 * scale

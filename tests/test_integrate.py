@@ -109,3 +109,24 @@ def test_contact_path_length_is_the_curve_length(planner):
     assert traj.path_length() == pytest.approx(2 * np.pi * (p.a + p.b), rel=1e-6)
     sphere = np.linalg.norm(np.diff(traj.contact, axis=0), axis=1).sum()
     assert sphere == pytest.approx(traj.path_length(), rel=1e-6)
+
+
+def test_pluggable_curve_matches_scipy():
+    """Any closed curve through the south pole: a lemniscate-like curve, one piece."""
+    from scipy.integrate import solve_ivp
+
+    from rollplan.curves import Curve, Piece
+    from rollplan.integrate import piece_rhs
+
+    def lemniscate(phi, p):
+        v = ca.vertcat(p[0] * ca.sin(phi), p[1] * ca.sin(2 * phi), -1)
+        return v / ca.norm_2(v)
+
+    curve = Curve((Piece(lemniscate),), ("alpha", "beta"))
+    f = piece_rhs(curve, 0)
+    for params, k in [((0.5, 0.3), 2.5), ((0.8, -0.4), 6.0)]:
+        spectral = np.array(spectral_step(curve)([0, 0, 0], params, k, 0.4)).ravel()
+        ref = solve_ivp(lambda t, y: np.array(f(t, y, params, k, 0.4)).ravel(), (0, 2 * np.pi), [0, 0, 0],
+                        method="DOP853", rtol=1e-13, atol=1e-15).y[:, -1]
+        assert np.abs(spectral - ref).max() < 1e-10
+        assert np.hypot(*spectral[:2]) > 1e-3  # it does move the robot
