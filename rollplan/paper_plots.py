@@ -31,14 +31,8 @@ def contact_figure(plan, traj, title: str) -> Figure:
     fig = Figure(figsize=(11, 5))
     ax1 = fig.add_subplot(1, 2, 1, projection="3d")
     draw_sphere_path(ax1, traj, plan.radius)
-    c = traj.contact
-    span = max(np.ptp(c[:, 0]), np.ptp(c[:, 1]), 1e-3) * 0.75
-    mid = c.mean(axis=0)
-    ax1.set_xlim(mid[0] - span, mid[0] + span)
-    ax1.set_ylim(mid[1] - span, mid[1] + span)
-    ax1.set_zlim(-1.0, -1.0 + 2 * span)
-    ax1.view_init(elev=-35, azim=-60)
-    ax1.set_title("contact path on the sphere (body frame)")
+    ax1.view_init(elev=-30, azim=-50)  # from below: the paths lie around the south pole
+    ax1.set_title("contact path on the sphere (body frame, seen from below)", pad=18)
     ax2 = fig.add_subplot(1, 2, 2)
     draw_plane_path(ax2, traj, plan.target, "R")
     ax2.plot([], [], color="tab:red", label="1st half-step")
@@ -70,14 +64,15 @@ def shift_vs_k_figure(sweep, sweep_printed=None, paper_zeros=()) -> Figure:
     ax.plot(sweep.roots, np.zeros(len(sweep.roots)), "o", color="tab:green", markersize=6,
             label="zeros (root finding)")
     for i, r in enumerate(sweep.roots, 1):
-        ax.annotate(f"$k_{i}$={r:.5g}", (r, 0), textcoords="offset points", xytext=(0, 10), ha="center", fontsize=8)
+        ax.annotate(f"$k_{i}$={r:.5g}", (r, 0), textcoords="offset points", xytext=(0, -16), ha="center", fontsize=8)
     if len(paper_zeros):
         ax.plot(paper_zeros, np.zeros(len(paper_zeros)), "x", color="tab:red", markersize=9, mew=1.5,
                 label="zeros printed in the paper")
     ax.set_xlabel("inertia ratio k [-]")
     ax.set_ylabel("normalized shift h/R [-]")
     ax.set_xlim(sweep.x[0], sweep.x[-1])
-    ax.set_ylim(bottom=0)
+    ax.set_ylim(bottom=-0.3)
+    ax.axhline(0.0, color="0.3", linewidth=0.6)
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
     ax.set_title("Fig. 9: non-holonomic shift versus k (n = 1, a = b)")
