@@ -170,7 +170,7 @@ def bracket_roots(x: np.ndarray, f: np.ndarray) -> list:
 # ----------------------------------------------------------------------------- geometry
 
 
-def count_self_intersections(u: np.ndarray, v: np.ndarray, block: int = 32) -> int:
+def count_self_intersections(u: np.ndarray, v: np.ndarray, block: int = 8) -> int:
     """Number of proper crossings of the polyline ``(u[i], v[i])`` with itself.
 
     Every pair of non-adjacent segments whose blocks' bounding boxes overlap
@@ -184,17 +184,17 @@ def count_self_intersections(u: np.ndarray, v: np.ndarray, block: int = 32) -> i
     if n < 3:
         return 0
     nb = -(-n // block)
-    idx = np.arange(nb * block).clip(max=n - 1).reshape(nb, block)
-    lo = np.minimum(a, b)[idx].min(axis=1)
-    hi = np.maximum(a, b)[idx].max(axis=1)
+    idx = np.arange(nb * block).reshape(nb, block)
+    valid = idx < n
+    idx_c = idx.clip(max=n - 1)
+    lo = np.minimum(a, b)[idx_c].min(axis=1)
+    hi = np.maximum(a, b)[idx_c].max(axis=1)
     overlap = np.all((lo[:, None, :] <= hi[None, :, :]) & (lo[None, :, :] <= hi[:, None, :]), axis=2)
     bi, bj = np.nonzero(np.triu(overlap))
-    i = idx[bi][:, :, None].repeat(block, axis=2).ravel()
-    j = idx[bj][:, None, :].repeat(block, axis=1).ravel()
-    keep = j > i + 1
+    i = np.broadcast_to(idx[bi][:, :, None], (bi.size, block, block)).ravel()
+    j = np.broadcast_to(idx[bj][:, None, :], (bi.size, block, block)).ravel()
+    keep = (j > i + 1) & (j < n)  # padding indices (>= n) dropped; each pair once (bi <= bj)
     i, j = i[keep], j[keep]
-    pairs = np.unique(i * n + j)  # blocks padded with the last segment repeat pairs
-    i, j = pairs // n, pairs % n
     d_i, d_j = b[i] - a[i], b[j] - a[j]
 
     def side(o, dv, q):
@@ -204,15 +204,20 @@ def count_self_intersections(u: np.ndarray, v: np.ndarray, block: int = 32) -> i
     return int(hit.sum())
 
 
-def converged_crossings(path: Callable[[int], np.ndarray], samples: int, levels: int = 3) -> tuple:
+def converged_crossings(path: np.ndarray, levels: int = 3) -> tuple:
     """Self-intersections of a sampled smooth path, under refinement.
 
-    Counts the crossings of ``path(n)`` (an ``(n + 1, 2)`` polyline) for
-    ``n = samples, 2 samples, ..., 2^(levels-1) samples`` and returns the tuple
-    of counts (finest last). A coarse polyline can cut across a tight loop and
-    add crossings; the counts must settle under refinement.
+    ``path`` is an ``(N + 1, 2)`` polyline sampled uniformly in the curve
+    parameter with ``N`` divisible by ``2^(levels-1)``. The crossings are
+    counted on every ``2^m``-th point, ``m = levels-1, ..., 0`` (the nested
+    coarser samplings), and returned coarse to fine. A coarse polyline can
+    cut across a tight loop and add crossings; the counts must settle under
+    refinement.
     """
-    return tuple(count_self_intersections(*path(samples * 2 ** m).T) for m in range(levels))
+    step = 2 ** (levels - 1)
+    if (len(path) - 1) % step:
+        raise InputError(f"a path of {len(path) - 1} segments cannot be halved {levels - 1} times")
+    return tuple(count_self_intersections(*path[:: 2 ** m].T) for m in range(levels - 1, -1, -1))
 
 
 # ----------------------------------------------------------------------------- results
@@ -381,14 +386,17 @@ class CaseStudy:
 
     def __init__(self, planner: Optional[GeometricPhasePlanner] = None, nodes: int = DEFAULT_NODES,
                  chunk: int = 200) -> None:
-        self.planner = planner or GeometricPhasePlanner()
+        # the planner's root solver is not used here; Newton is the cheaper one to build
+        self.planner = planner or GeometricPhasePlanner(method="newton")
         self.chunk = int(chunk)
         curve = self.planner.curve
-        leaf = spectral_step(curve, nodes, pieces=(0,))
+        # The step map composed from its two leaves (spectral_step traces the
+        # pieces in the same way), so the first leaf's end state is at hand.
+        leaves = [spectral_step(curve, nodes, pieces=(i,)) for i in range(2)]
         a, k = ca.SX.sym("a"), ca.SX.sym("k")
         ab = ca.vertcat(a, a)
-        x1 = leaf(ca.DM.zeros(3), ab, k, 0)
-        x = self.planner.step_map(ca.DM.zeros(3), ab, k, 0)
+        x1 = leaves[0](ca.DM.zeros(3), ab, k, 0)
+        x = leaves[1](x1, ab, k, 0)
         s = x[0] * ca.cos(x1[2] / 2) - x[1] * ca.sin(x1[2] / 2)
         #: (a, k) -> (u_a, v_a, psi, eta_1, s), one step of the symmetric figure eight from rest.
         self.symmetric = ca.Function("symmetric_step", [a, k], [ca.vertcat(x, x1[2], s)], ["a", "k"], ["out"])
@@ -468,9 +476,9 @@ class CaseStudy:
             d = max(1e-7, 1e-7 * abs(r))
             lo2, hi2 = max(lo, r - d), min(hi, r + d)
             try:
-                roots_cv.append(refine_root(cvo, lo2, hi2, xtol=1e-13))
+                roots_cv.append(refine_root(cvo, lo2, hi2, xtol=1e-12))
             except InputError:
-                roots_cv.append(refine_root(cvo, lo, hi, xtol=1e-13))
+                roots_cv.append(refine_root(cvo, lo, hi, xtol=1e-12))
         # Count check on a grid of twice the resolution (midpoints added).
         mid = 0.5 * (x[:-1] + x[1:])
         out_mid = self.batch(*((fixed, mid) if variable == "k" else (mid, fixed)), label=f"h({variable}) check",
@@ -525,7 +533,7 @@ def _row(quantity: str, key: str, computed: float, note: str) -> Row:
                note)
 
 
-def run_case_study(k_points: int = 1401, a_points: int = 1400, samples: int = 400,
+def run_case_study(k_points: int = 701, a_points: int = 1400, samples: int = 400,
                    crossing_samples: int = 1000, crossings_per_interval: int = 3,
                    progress: Optional[Progress] = None, study: Optional[CaseStudy] = None) -> CaseStudyResult:
     """Compute every number and claim of Section III.C (no files written).
@@ -686,8 +694,8 @@ def run_case_study(k_points: int = 1401, a_points: int = 1400, samples: int = 40
         probes.append((0.5 * (k_sweep.roots[4] + k5p), -1))
     crossings = []
     for n, (kk, i) in enumerate(probes, 1):
-        counts = converged_crossings(lambda m: study.half_step_path(a0, kk, m), crossing_samples)
-        crossings.append(Crossings(float(kk), i, counts, tuple(crossing_samples * 2 ** m for m in range(len(counts)))))
+        counts = converged_crossings(study.half_step_path(a0, kk, 4 * crossing_samples), 3)
+        crossings.append(Crossings(float(kk), i, counts, tuple(crossing_samples * 2 ** m for m in range(3))))
         if progress is not None:
             progress("self-intersections", n, len(probes))
     for i in range(len(zeros) - 1):
