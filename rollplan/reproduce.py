@@ -613,7 +613,11 @@ def run_case_study(k_points: int = 701, a_points: int = 1400, samples: int = 400
 
     g0, h0, g0c, h0c = gamma_h(a0, 0.0)
     g0p, _, g0pc, _ = gamma_h(a0p, 0.0)
-    ev.update(gamma_k0=g0, gamma_k0_cvodes=g0c, gamma_k0_printed_a=g0p, gamma_k0_printed_a_cvodes=g0pc)
+    ev.update(gamma_k0=g0, gamma_k0_cvodes=g0c, gamma_k0_printed_a=g0p, gamma_k0_printed_a_cvodes=g0pc,
+              h_k0=h0, h_k0_cvodes=h0c)
+    # sensitivity: the printed h(k = 2.5) needs the root to more digits than the 6 printed
+    a6 = round(a0, 6)
+    ev.update(a0_rounded=a6, **{"h_k2.5_rounded_a": float(study.h(study.spectral(a6, 2.5)))})
     rows.append(_row("gamma [rad] pointing the shift along +v_a, k = 0", "gamma_k0", g0,
                      f"at a = {a0:.9f} (h/R = {h0:.12f}); CVODES {_fmt(g0c, 12)}. At the printed a = {PAPER['a_k0']}: "
                      f"{_fmt(g0p, 7)} (CVODES {_fmt(g0pc, 7)})."))

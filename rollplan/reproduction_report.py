@@ -38,7 +38,9 @@ def markdown(result, figures=(), paper=None) -> str:
         f"a = {a0:.6f} R.** At the printed radius, (36) gives h/R = {_g(ev['h36_at_printed'], 6)}, not 1. The only "
         f"root of h/R = 1 at k = 0 on (0, 0.69] is a = {_g(a0, 10)} (three independent ways, table below), and at "
         f"that radius every other number of the first part (gamma for k = 0, 2.5, 5, h for k = 2.5, 5, zeros k_1..k_4) "
-        f"is reproduced to all printed digits; at the printed radius none of them is.")
+        f"is reproduced to all printed digits; at the printed radius none of them is. The paper must have used the "
+        f"root to more digits than it prints: with a rounded to {ev['a0_rounded']:.6f}, h/R at k = 2.5 would be "
+        f"{ev['h_k2.5_rounded_a']:.6f} instead of the printed {paper['h_k2.5']}.")
     if len(result.k_sweep.roots) >= 5:
         k5 = result.k_sweep.roots[4]
         add(f"2. **The printed k_5 = {paper['k5']} is not a zero of h(k).** The fifth zero is at k_5 = {_g(k5, 9)} "
@@ -71,8 +73,8 @@ def markdown(result, figures=(), paper=None) -> str:
     add(f"| quantity | paper | a = {paper['a_k0']} spectral | a = {paper['a_k0']} CVODES | a0 = {a0:.9f} spectral "
         f"| a0 CVODES |")
     add("|---|---|---|---|---|---|")
-    add(f"| h/R, k = 0 | 1 | {_g(ev['h_spectral_at_printed'])} | {_g(ev['h_cvodes_at_printed'])} (36): "
-        f"{_g(ev['h36_at_printed'])} | 1 (root) | 1 (root) |")
+    add(f"| h/R, k = 0 | 1 | {_g(ev['h_spectral_at_printed'])} | {_g(ev['h_cvodes_at_printed'])} | "
+        f"{_g(ev['h_k0'], 13)} | {_g(ev['h_k0_cvodes'], 13)} |")
     add(f"| gamma, k = 0 | {paper['gamma_k0']} | {_g(ev['gamma_k0_printed_a'])} | "
         f"{_g(ev['gamma_k0_printed_a_cvodes'])} | {_g(ev['gamma_k0'])} | {_g(ev['gamma_k0_cvodes'])} |")
     for k in ("2.5", "5"):
@@ -86,7 +88,8 @@ def markdown(result, figures=(), paper=None) -> str:
         add(f"| zero k_{i + 1} | {paper[f'k{i + 1}']} | {_g(zps[i]) if i < len(zps) else '-'} | "
             f"{_g(zpc[i]) if i < len(zpc) else '-'} | {_g(zs[i])} | {_g(zc[i])} |")
     add(f"\nThe root a0 of h/R = 1 at k = 0: spectral {_g(ev['a0_spectral'], 13)}, CVODES {_g(ev['a0_cvodes'], 13)}, "
-        f"closed form (36) {_g(ev['a0_closed_form'], 13)}; roots of (36) = 1 on [0.02, 0.69]: "
+        f"closed form (36) {_g(ev['a0_closed_form'], 13)}. At the printed radius (36) gives h/R = "
+        f"{_g(ev['h36_at_printed'], 12)}. Roots of (36) = 1 on [0.02, 0.69] (below 0.02, h/R ~ 2 pi a^3 < 1e-4): "
         f"{', '.join(_g(r, 10) for r in ev['roots_k0_closed_form'])}; on the step map: "
         f"{', '.join(_g(r, 10) for r in ev['roots_k0_spectral'])}. The test suite checks the same numbers with a "
         "third integrator (scipy DOP853).\n")
@@ -97,7 +100,7 @@ def markdown(result, figures=(), paper=None) -> str:
         "count must settle under refinement).\n")
     add("| k | interval i (k in [k_i, k_i+1]) | crossings (N / 2N / 4N) | claim |")
     add("|---|---|---|---|")
-    for c in result.crossings:
+    for c in sorted(result.crossings, key=lambda c: c.k):
         interval = str(c.interval) if c.interval >= 0 else f"5 (paper's interval: 4)"
         claim = c.interval if c.interval >= 0 else 4
         add(f"| {c.k:.4f} | {interval} | {' / '.join(map(str, c.counts))} (N = {c.samples[0]}) | {claim} |")

@@ -222,3 +222,14 @@ def test_cli_reproduce_writes_everything(tmp_path, capsys):
     status = {r["quantity"]: r["status"] for r in rows}
     assert sum(s == "reproduced" for s in status.values()) >= 20
     assert "reproduced" in capsys.readouterr().out
+
+
+def test_batches_report_progress(study, capsys):
+    from rollplan.cli import _StderrProgress
+
+    calls = []
+    study.batch(A0, np.linspace(0.0, 3.0, 2 * study.chunk + 7), progress=lambda *c: calls.append(c))
+    assert [c[1] for c in calls] == [study.chunk, 2 * study.chunk, 2 * study.chunk + 7]
+    shown = _StderrProgress(delay=0.0)
+    shown("h(k) sweep", 3, 3)
+    assert "h(k) sweep: 3/3" in capsys.readouterr().err
