@@ -451,48 +451,48 @@ class CaseStudy:
         Roots are bracketed on the sweep, refined on the spectral map and again
         with CVODES; the count is cross-checked on a grid of twice the resolution.
         """
+        if variable not in ("k", "a"):
+            raise InputError(f"variable = {variable!r} is not allowed: choose 'k' or 'a'")
+        if variable == "a" and level is None:
+            raise InputError("level is missing: an a sweep finds the roots of h(a) = level")
         x = np.asarray(x, float)
+        pair = (lambda v: (fixed, v)) if variable == "k" else (lambda v: (v, fixed))
+
+        def target(out):  # the function whose sign changes are the roots, from (5, N) outputs
+            return out[4] if variable == "k" else np.hypot(out[0], out[1]) - level
+
+        def spectral(v):
+            return float(target(self.spectral(*pair(v))[:, None])[0])
+
+        def cvodes(v):
+            return float(target(self.cvodes(*pair(v))[:, None])[0])
+
         t0 = time.perf_counter()
-        args = (fixed, x) if variable == "k" else (x, fixed)
-        out = self.batch(*args, label=f"h({variable}) sweep", progress=progress)
+        out = self.batch(*pair(x), label=f"h({variable}) sweep", progress=progress)
         elapsed = time.perf_counter() - t0
         h = self.h(out)
-        sym_err = float(np.max(np.abs(np.abs(out[4]) - h)))
-
-        if variable == "k":
-            col, shift = 4, 0.0
-            spec = lambda v: self.spectral(fixed, v)[4]
-            cvo = lambda v: self.cvodes(fixed, v)[4]
-        else:
-            col, shift = None, level
-            spec = lambda v: float(np.hypot(*self.spectral(v, fixed)[:2])) - level
-            cvo = lambda v: float(np.hypot(*self.cvodes(v, fixed)[:2])) - level
-        f = out[4] if col == 4 else h - shift
+        f = target(out)
         roots, roots_cv = [], []
-        for i, lo, hi in bracket_roots(x, f):
-            r = refine_root(spec, lo, hi)
+        for _, lo, hi in bracket_roots(x, f):
+            r = refine_root(spectral, lo, hi)
             roots.append(r)
-            # CVODES refinement in a tight bracket around the spectral root.
+            # CVODES refinement, in a tight bracket around the spectral root if it holds one.
             d = max(1e-7, 1e-7 * abs(r))
-            lo2, hi2 = max(lo, r - d), min(hi, r + d)
             try:
-                roots_cv.append(refine_root(cvo, lo2, hi2, xtol=1e-12))
+                roots_cv.append(refine_root(cvodes, max(lo, r - d), min(hi, r + d), xtol=1e-12))
             except InputError:
-                roots_cv.append(refine_root(cvo, lo, hi, xtol=1e-12))
+                roots_cv.append(refine_root(cvodes, lo, hi, xtol=1e-12))
         # Count check on a grid of twice the resolution (midpoints added).
         mid = 0.5 * (x[:-1] + x[1:])
-        out_mid = self.batch(*((fixed, mid) if variable == "k" else (mid, fixed)), label=f"h({variable}) check",
-                             progress=progress)
-        xx = np.empty(x.size + mid.size)
-        ff = np.empty_like(xx)
+        f_mid = target(self.batch(*pair(mid), label=f"h({variable}) check", progress=progress))
+        xx, ff = np.empty(x.size + mid.size), np.empty(x.size + mid.size)
         xx[0::2], xx[1::2] = x, mid
-        ff[0::2] = f
-        ff[1::2] = out_mid[4] if col == 4 else self.h(out_mid) - shift
+        ff[0::2], ff[1::2] = f, f_mid
         double = len(bracket_roots(xx, ff))
         if double != len(roots):
             log.warning("%s sweep: %d roots on the grid, %d on the doubled grid", variable, len(roots), double)
         return Sweep(variable, float(fixed), x, h, out[4].copy(), out[3].copy(), tuple(roots), tuple(roots_cv),
-                     double, sym_err, elapsed)
+                     double, float(np.max(np.abs(np.abs(out[4]) - h))), elapsed)
 
     # -- plans for the figures ---------------------------------------------------------
     def symmetric_plan(self, a: float, k: float) -> Plan:
@@ -787,6 +787,9 @@ def reproduce(out, progress: Optional[Progress] = None, **options) -> CaseStudyR
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"--out {str(out)!r} cannot be created: {exc.strerror}") from None
+    from .io import check_writable
+
+    check_writable(out / "reproduction.json")  # fail now, not after the computation
     result = run_case_study(progress=progress, **options)
     t0 = time.perf_counter()
     write_reproduction(result, out)

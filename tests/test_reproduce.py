@@ -55,9 +55,6 @@ def reduced(study):
                           study=study)
 
 
-def rows_by_start(result):
-    return {r.quantity: r for r in result.rows}
-
 
 def find(result, start):
     hits = [r for r in result.rows if r.quantity.startswith(start)]
