@@ -98,6 +98,59 @@ def cmd_step(args) -> int:
     return EXIT_OK
 
 
+class _StderrProgress:
+    """Progress of a slow command on stderr, shown once it has run for more than ``delay`` seconds."""
+
+    def __init__(self, delay: float = 1.0) -> None:
+        import time
+
+        self._clock = time.perf_counter
+        self._start = self._clock()
+        self._delay = delay
+        self._tty = sys.stderr.isatty()
+        self._open = False
+
+    def __call__(self, label: str, done: int, total: int) -> None:
+        if self._clock() - self._start < self._delay:
+            return
+        elapsed = self._clock() - self._start
+        if self._tty:
+            sys.stderr.write(f"\r\033[K  {label}: {done}/{total}  ({elapsed:.1f} s)")
+            self._open = True
+            if label == "reproduce" and done == total:
+                self.close()
+        elif label == "reproduce" or done == total:
+            sys.stderr.write(f"  {label}: {done}/{total}  ({elapsed:.1f} s)\n")
+        sys.stderr.flush()
+
+    def close(self) -> None:
+        if self._open:
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+            self._open = False
+
+
+def cmd_reproduce(args) -> int:
+    import time
+
+    from .reproduce import reproduce
+
+    t0 = time.perf_counter()
+    progress = _StderrProgress()
+    print(f"rollplan reproduce: Section III.C of the paper into {args.out}", file=sys.stderr)
+    try:
+        result = reproduce(args.out, progress=progress)
+    finally:
+        progress.close()
+    width = max(len(r.quantity) for r in result.rows)
+    for r in result.rows:
+        print(f"  {r.quantity:<{width}}  paper {r.paper:<11.9g} computed {r.computed:<16.12g} {r.status}")
+    n_ok = sum(r.status == "reproduced" for r in result.rows)
+    print(f"{n_ok} of {len(result.rows)} reproduced, {len(result.rows) - n_ok} discrepancies "
+          f"(evidence in {args.out}/REPRODUCTION.md); {time.perf_counter() - t0:.1f} s")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="rollplan", description=__doc__)
     parser.add_argument("-v", "--verbose", action="store_true", help="log the planner's progress")
@@ -125,6 +178,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--gamma", type=_number, default=0.0, help="rotation about OZ [rad] (default 0)")
     s.add_argument("--json", metavar="FILE", help="write the result as JSON")
     s.set_defaults(func=cmd_step)
+
+    r = sub.add_parser("reproduce", help="regenerate the paper's case study (Figs 6-12, table, report)")
+    r.add_argument("--out", required=True, metavar="DIR",
+                   help="folder for fig06.png..fig12.png, reproduction.json, REPRODUCTION.md (created if missing)")
+    r.set_defaults(func=cmd_reproduce)
     return parser
 
 
