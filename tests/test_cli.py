@@ -89,3 +89,14 @@ def test_outputs_are_atomic(tmp_path, capsys):
     code, _, _ = run(capsys, "plan", "--to", "30", "0", "--k", "2.5", "--json", str(js))
     assert code == 3 and js.read_text() == "old"  # a failed run leaves the old file intact
     assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_output_files_get_the_usual_mode(tmp_path, capsys):
+    import os
+    import stat
+
+    js = tmp_path / "s.json"
+    run(capsys, "step", "--a", "0.3", "--k", "2.5", "--json", str(js))
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(js.stat().st_mode) == 0o666 & ~umask
