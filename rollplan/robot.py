@@ -85,4 +85,10 @@ def load_robot(path) -> Robot:
     missing = [n for n in names if n not in data]
     if missing:
         raise InputError(f"robot file {str(path)!r}: missing key {missing[0]!r}")
-    return Robot(**{n: data[n] for n in names})
+    for n in names:
+        if isinstance(data[n], bool) or not isinstance(data[n], (int, float)):
+            raise InputError(f"robot file {str(path)!r}: {n} = {data[n]!r} is not allowed: it must be a number")
+    try:
+        return Robot(**{n: data[n] for n in names})
+    except InputError as exc:
+        raise InputError(f"robot file {str(path)!r}: {exc}") from None
