@@ -23,7 +23,7 @@ from . import model
 from .errors import InputError
 from .robot import Robot
 
-__all__ = ["Simulation", "rate_spline", "simulate_rotors", "arrival_error"]
+__all__ = ["Simulation", "RotorPlan", "rate_spline", "simulate_rotors", "arrival_error", "load_rotor_plan"]
 
 log = logging.getLogger(__name__)
 
@@ -134,3 +134,63 @@ def simulate_rotors(robot: Robot, t, rates, target=None, x0=None, reltol: float 
         pos = float(np.hypot(err[0], err[1]))
         log.info("rotor-driven simulation: arrival error %.3e (position %.3e R)", arr, pos)
     return Simulation(t, xs, omegas, final, err, arr, pos)
+
+
+@dataclass(frozen=True)
+class RotorPlan:
+    """What a rotor-driven simulation needs from a plan file.
+
+    Attributes
+    ----------
+    robot : Robot
+        The robot the plan was made for.
+    time : ndarray, shape (N,)
+        Sample times [s].
+    rotor_rates : ndarray, shape (N, 2)
+        Rotor rates [rad/s].
+    target : tuple of 3 float
+        Planned arrival (u_a [m], v_a [m], psi [rad]).
+    data : dict
+        The whole JSON object.
+    """
+
+    robot: Robot
+    time: np.ndarray
+    rotor_rates: np.ndarray
+    target: tuple
+    data: dict
+
+
+def load_rotor_plan(path) -> RotorPlan:
+    """Read a plan written by ``rollplan plan --duration T --json FILE``; InputError if it lacks the motion."""
+    import json
+
+    from dataclasses import fields
+
+    try:
+        with open(path, encoding="utf-8") as fh:
+            data = json.load(fh)
+    except OSError as exc:
+        raise InputError(f"plan file {str(path)!r} cannot be read: {exc.strerror}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"plan file {str(path)!r} is not valid JSON: {exc}") from None
+    if not isinstance(data, dict):
+        raise InputError(f"plan file {str(path)!r} is not a rollplan plan (a JSON object)")
+    for key in ("time", "rotor_rates", "robot", "target"):
+        if key not in data:
+            hint = " (make it with: rollplan plan ... --duration T --json FILE)" if key != "target" else ""
+            raise InputError(f"plan file {str(path)!r} has no key {key!r}{hint}")
+    rob = data["robot"]
+    names = [f.name for f in fields(Robot)]
+    if not isinstance(rob, dict) or any(n not in rob for n in names):
+        raise InputError(f"plan file {str(path)!r}: 'robot' must hold {', '.join(names)}")
+    robot = Robot(**{n: rob[n] for n in names})
+    tg = data["target"]
+    try:
+        target = (float(tg["u_a"]), float(tg["v_a"]), float(tg["psi"]))
+        t = np.asarray(data["time"], float)
+        rates = np.asarray(data["rotor_rates"], float)
+    except (TypeError, KeyError, ValueError):
+        raise InputError(f"plan file {str(path)!r}: 'target', 'time' or 'rotor_rates' is malformed") from None
+    t, rates = _check_samples(t, rates)
+    return RotorPlan(robot, t, rates, target, data)
