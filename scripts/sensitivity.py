@@ -107,8 +107,8 @@ def main():
         lines.append("")
     lines += ["Reading: an error in k or in the rotor rate gain is systematic and the position error grows about "
               "linearly with it; white noise on the samples is partly averaged out by the motion and its effect grows "
-              "about linearly with the noise level. For a symmetric figure eight (a = b, psi = 0) the heading stays "
-              "almost exact under k and gain errors (the two mirrored half-steps cancel their turns).", "",
+              "about linearly with the noise level. For a symmetric figure eight (a = b, psi = 0) the heading error "
+              "stays below 0.05 deg under these k and gain errors, while the position error does not.", "",
               f"Total run time {time.perf_counter() - t0:.0f} s (machine shared; not a benchmark).", ""]
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     write_atomic(args.out, "\n".join(lines).encode())
