@@ -5,6 +5,9 @@ from .curves import A_MAX, Curve, Piece, circle_point, figure_eight
 from .errors import InputError, NoPlanError, SolverError
 from .geometric import SOLVERS, GeometricPhasePlanner, Plan, SolverStats, StepResult, Trajectory, plan, step
 from .robot import Robot, load_robot
+from .actuation import Motion, actuate
+from .robot import default_robot
+from .simulate import Simulation, simulate_rotors
 
 __version__ = "0.1.0"
 
@@ -13,4 +16,5 @@ __all__ = [
     "InputError", "NoPlanError", "SolverError",
     "SOLVERS", "GeometricPhasePlanner", "Plan", "SolverStats", "StepResult", "Trajectory", "plan", "step",
     "Robot", "load_robot",
+    "Motion", "actuate", "default_robot", "Simulation", "simulate_rotors",
 ]

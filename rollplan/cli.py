@@ -60,6 +60,15 @@ def cmd_plan(args) -> int:
         if path is not None:
             check_writable(path)
     k, robot = _k_or_robot(args)
+    if args.duration is not None and robot is None:
+        if k is not None:
+            raise InputError("--duration needs the robot's inertias, not only k: give --robot FILE "
+                             "(or drop --k to use the default robot)")
+        from .robot import default_robot
+
+        robot = default_robot()
+        print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
+              "lengths in m")
     p = geometric.plan((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.all, args.method)
     unit = "m" if robot is not None else ("R" if args.radius is None else "")
     print(f"rollplan: k = {p.k:.9g}, R = {p.radius:g}, steps = {p.steps}, target (u_a, v_a, psi) = "
@@ -70,16 +79,40 @@ def cmd_plan(args) -> int:
     for i, alt in enumerate(p.alternatives, 1):
         print(f"alternative {i}:")
         print(_fmt_plan(alt, unit))
+    motion, extra = _timed(args, p, robot) if args.duration is not None else (None, {})
     traj = p.trajectory() if (args.json or args.plot) else None
     if args.json:
-        write_json(args.json, plan_to_dict(p, traj))
+        write_json(args.json, {**plan_to_dict(p, traj), **extra})
         print(f"wrote {args.json}")
-    if args.plot:
+    if args.plot and motion is not None:
+        from .plots_motion import plot_motion
+
+        save_figure(plot_motion(motion, p, traj, unit), args.plot)
+        print(f"wrote {args.plot}")
+    elif args.plot:
         from .plots import plot_plan
 
         save_figure(plot_plan(p, traj, unit or "R"), args.plot)
         print(f"wrote {args.plot}")
     return EXIT_OK
+
+
+def _timed(args, p, robot):
+    """``plan --duration``: rotor rates, angles and torques, checked by the rotor-only simulation."""
+    from .actuation import actuate, motion_to_dict
+    from .simulate import simulate_rotors
+
+    motion = actuate(p, robot, args.duration, args.samples)
+    sim = simulate_rotors(robot, motion.time, motion.rotor_rates, p.target)
+    print(f"  motion        T = {motion.duration:g} s, {motion.time.size} samples, rest-to-rest per half-step")
+    print(f"  rotors        max |rate| = {abs(motion.rotor_rates).max():.4g} rad/s   "
+          f"max |torque| = {abs(motion.rotor_torques).max():.4g} N m")
+    print(f"  rotor-only    arrival error {sim.arrival_error:.2e} (position {sim.position_error:.2e} R; "
+          "spline through the rotor rates, (11) and (6)-(10) by CVODES)")
+    extra = motion_to_dict(motion)
+    extra["rotor_simulation"] = {"arrival_error": sim.arrival_error, "position_error": sim.position_error,
+                                 "final": [float(v) for v in sim.final]}
+    return motion, extra
 
 
 def cmd_step(args) -> int:
@@ -151,6 +184,40 @@ def cmd_reproduce(args) -> int:
     return EXIT_OK
 
 
+def cmd_simulate(args) -> int:
+    from .simulate import load_rotor_plan, simulate_rotors
+
+    if args.json is not None:
+        check_writable(args.json)
+    rp = load_rotor_plan(args.plan_file)
+    robot = load_robot(args.robot) if args.robot else rp.robot
+    sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.target)
+    e = sim.error
+    print(f"rollplan simulate: {rp.time.size} samples over {rp.time[-1] - rp.time[0]:g} s, robot k = {robot.k:.9g}"
+          f"{' (planned k = %.9g)' % rp.robot.k if args.robot else ''}")
+    print(f"  final         u_a = {sim.final[0]:.12g} m  v_a = {sim.final[1]:.12g} m  psi = {sim.final[4]:.12g} rad"
+          f"  u_o = {sim.final[2]:.3g}  v_o = {sim.final[3]:.3g}")
+    print(f"  target        u_a = {rp.target[0]:.12g} m  v_a = {rp.target[1]:.12g} m  psi = {rp.target[2]:.12g} rad")
+    print(f"  arrival error {sim.arrival_error:.3e} (position {sim.position_error:.3e} R = "
+          f"{sim.position_error * robot.radius:.3e} m, psi {e[2]:.3e} rad, u_o {e[3]:.1e}, v_o {e[4]:.1e})")
+    if args.json:
+        write_json(args.json, {"final": dict(zip(("u_a", "v_a", "u_o", "v_o", "psi"), map(float, sim.final))),
+                               "arrival_error": sim.arrival_error, "position_error": sim.position_error,
+                               "error": dict(zip(("u_a", "v_a", "psi", "u_o", "v_o"), map(float, e))),
+                               "robot": robot.as_dict()})
+        print(f"wrote {args.json}")
+    return EXIT_OK
+
+
+def cmd_animate(args) -> int:
+    from .animate import animate_plan_file
+
+    check_writable(args.out)
+    animate_plan_file(args.plan_file, args.out, frames=args.frames, fps=args.fps)
+    print(f"wrote {args.out}")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="rollplan", description=__doc__)
     parser.add_argument("-v", "--verbose", action="store_true", help="log the planner's progress")
@@ -168,7 +235,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--all", action="store_true", help="also list every other verified solution branch")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     p.add_argument("--json", metavar="FILE", help="write the plan as JSON")
-    p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere and the plane")
+    p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere and the plane "
+                   "(with --duration: omega, rotor rates and torques in time)")
+    p.add_argument("--duration", type=_number, default=None, metavar="T",
+                   help="time the plan rest-to-rest per half-step over T seconds and compute the rotor rates, "
+                        "angles and torques (uses the default robot unless --robot is given)")
+    p.add_argument("--samples", type=_whole, default=2000,
+                   help="least number of time samples with --duration (default 2000, >= 400 per half-step)")
     p.set_defaults(func=cmd_plan)
 
     s = sub.add_parser("step", help="what one figure eight does: shift h and holonomy eta")
@@ -183,6 +256,19 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--out", required=True, metavar="DIR",
                    help="folder for fig06.png..fig12.png, reproduction.json, REPRODUCTION.md (created if missing)")
     r.set_defaults(func=cmd_reproduce)
+
+    m = sub.add_parser("simulate", help="drive the robot by the plan's rotor rates alone and report the arrival error")
+    m.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
+    m.add_argument("--robot", metavar="FILE.toml", help="simulate this (real) robot instead of the planned one")
+    m.add_argument("--json", metavar="FILE", help="write the simulated final state and errors as JSON")
+    m.set_defaults(func=cmd_simulate)
+
+    a = sub.add_parser("animate", help="animate the sphere rolling under the plan's rotor rates (GIF)")
+    a.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
+    a.add_argument("--out", metavar="FILE.gif", required=True, help="output animation (GIF)")
+    a.add_argument("--frames", type=_whole, default=100, help="number of frames (default 100)")
+    a.add_argument("--fps", type=_whole, default=20, help="frames per second (default 20)")
+    a.set_defaults(func=cmd_animate)
     return parser
 
 
@@ -193,7 +279,7 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.ERROR, format="%(name)s: %(message)s")
-    if getattr(args, "command", None) == "plan" and args.k is None and args.robot is None:
+    if getattr(args, "command", None) == "plan" and args.k is None and args.robot is None and args.duration is None:
         args.k = DEFAULT_K
     try:
         return args.func(args)

@@ -7,7 +7,10 @@ from dataclasses import dataclass, fields
 from . import model
 from .errors import InputError, check_range
 
-__all__ = ["Robot", "load_robot"]
+__all__ = ["Robot", "load_robot", "default_robot", "DEFAULT_ROBOT_FILE"]
+
+#: The shipped default robot (package data, same values as ``Robot()``), documented in the file.
+DEFAULT_ROBOT_FILE = "data/default_robot.toml"
 
 
 @dataclass(frozen=True)
@@ -85,4 +88,18 @@ def load_robot(path) -> Robot:
     missing = [n for n in names if n not in data]
     if missing:
         raise InputError(f"robot file {str(path)!r}: missing key {missing[0]!r}")
-    return Robot(**{n: data[n] for n in names})
+    for n in names:
+        if isinstance(data[n], bool) or not isinstance(data[n], (int, float)):
+            raise InputError(f"robot file {str(path)!r}: {n} = {data[n]!r} is not allowed: it must be a number")
+    try:
+        return Robot(**{n: data[n] for n in names})
+    except InputError as exc:
+        raise InputError(f"robot file {str(path)!r}: {exc}") from None
+
+
+def default_robot() -> Robot:
+    """The shipped default robot, read from :data:`DEFAULT_ROBOT_FILE` (package data)."""
+    from importlib.resources import as_file, files
+
+    with as_file(files(__package__).joinpath(DEFAULT_ROBOT_FILE)) as path:
+        return load_robot(path)

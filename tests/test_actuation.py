@@ -1,0 +1,182 @@
+"""Time law, omega, rotor rates, angles and torques (rollplan.actuation).
+
+References are independent of the code under test: the paper's printed n_2, n_3
+(4)-(5) in numpy (n_1 = n_2 x n_3; the printed (3) has a typo in its third
+entry, see test_paper_n1_typo), finite differences of the sampled motion, the
+full angular-momentum vector of an axisymmetric rotor, and scaling identities
+of the time law.
+"""
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+import rollplan
+from rollplan import InputError
+from rollplan.actuation import MIN_SAMPLES_PER_LEAF, actuate, rest_to_rest
+from rollplan.plots_motion import plot_motion
+
+ROBOT = rollplan.Robot()
+
+
+def paper_axes(u, v, psi):
+    """n_1, n_2, n_3 as arrays (..., 3): (4), (5) as printed, n_1 = n_2 x n_3."""
+    n2 = np.stack([np.cos(v) * np.sin(psi), np.cos(v) * np.cos(psi), -np.sin(v)], axis=-1)
+    n3 = np.stack([-np.sin(u) * np.cos(psi) + np.cos(u) * np.sin(v) * np.sin(psi),
+                   np.sin(u) * np.sin(psi) + np.cos(u) * np.sin(v) * np.cos(psi),
+                   np.cos(u) * np.cos(v)], axis=-1)
+    return np.cross(n2, n3), n2, n3
+
+
+@pytest.fixture(scope="module")
+def sym_plan():
+    return rollplan.plan((0.0, 0.1, 0.0), 1, robot=ROBOT)  # h = 1 R, psi = 0: a = b
+
+
+@pytest.fixture(scope="module")
+def asym_plan():
+    return rollplan.plan((0.05, 0.08, 0.5), 2, robot=ROBOT)
+
+
+@pytest.fixture(scope="module")
+def motion(asym_plan):
+    return actuate(asym_plan, ROBOT, 8.0, 4000)
+
+
+def test_paper_n1_typo():
+    """The orientation (2) used by the model has n_1 = n_2 x n_3; the printed (3) has n_1z = cos u cos v."""
+    import casadi as ca
+    from rollplan import model
+
+    u, v, psi = 0.3, -0.2, 0.7
+    rot = np.array(ca.Function("r", [], [model.orientation(u, v, psi)])()["o0"])
+    n1, n2, n3 = paper_axes(u, v, psi)
+    np.testing.assert_allclose(rot, np.column_stack([n1, n2, n3]), atol=1e-15)
+    assert abs(n1[2] - np.sin(u) * np.cos(v)) < 1e-15
+    assert abs(n1[2] - np.cos(u) * np.cos(v)) > 0.5
+
+
+def test_rest_to_rest_profile_is_minimum_jerk():
+    tau = np.linspace(0, 1, 11)
+    s, ds, dds = (np.array(x).ravel() for x in rest_to_rest().map(11)(tau[None, :]))
+    np.testing.assert_allclose(s, 10 * tau**3 - 15 * tau**4 + 6 * tau**5, atol=1e-15)
+    np.testing.assert_allclose(ds, 30 * tau**2 * (1 - tau) ** 2, atol=1e-13)
+    np.testing.assert_allclose(dds, 60 * tau * (1 - tau) * (1 - 2 * tau), atol=1e-13)
+    assert s[0] == 0 and s[-1] == 1 and ds[0] == ds[-1] == 0 and dds[0] == dds[-1] == 0
+
+
+def test_sampling(motion, asym_plan):
+    n = motion.time.size
+    assert n >= 2000 and n == 4 * 1000 + 1
+    assert motion.omega.shape == (n, 3) and motion.rotor_rates.shape == (n, 2)
+    assert motion.rotor_angles.shape == (n, 2) and motion.rotor_torques.shape == (n, 2)
+    np.testing.assert_allclose(np.diff(motion.time), 8.0 / (n - 1), rtol=1e-9)
+    assert motion.time[0] == 0 and motion.time[-1] == 8.0
+    assert list(motion.time[motion.rest_indices]) == pytest.approx([0, 2, 4, 6, 8])
+    few = actuate(asym_plan, ROBOT, 8.0, 10)
+    assert few.time.size == 4 * MIN_SAMPLES_PER_LEAF + 1
+
+
+def test_omega_zero_at_rest_points(motion):
+    rest = motion.rest_indices
+    assert np.all(motion.omega[rest] == 0) and np.all(motion.rotor_rates[rest] == 0)
+    assert np.abs(motion.rotor_torques[rest]).max() < 1e-12 * np.abs(motion.rotor_torques).max()
+    assert np.abs(motion.omega).max() > 0.1  # it does move in between
+    # each leaf starts at the south pole
+    assert np.abs(motion.state[rest, 2:4]).max() < 1e-12
+
+
+def test_arrives_at_target(motion, asym_plan):
+    u, v, psi = asym_plan.target
+    np.testing.assert_allclose(motion.state[-1], [u, v, 0, 0, psi], atol=1e-10)
+
+
+def test_realizability_13_along_motion(motion):
+    u, v, psi = motion.state[:, 2], motion.state[:, 3], motion.state[:, 4]
+    _, _, n3 = paper_axes(u, v, psi)
+    w = motion.omega
+    res = ROBOT.k * (n3[:, 0] * w[:, 0] + n3[:, 1] * w[:, 1]) + n3[:, 2] * w[:, 2]  # (13)
+    assert np.abs(res).max() < 1e-13 * np.abs(w).max()
+    # pure rolling (omega_z = 0) would violate it: the spin is really used
+    assert np.abs(w[:, 2]).max() > 0.3 * np.abs(w[:, :2]).max()
+
+
+def test_momentum_integral_11(motion):
+    u, v, psi = motion.state[:, 2], motion.state[:, 3], motion.state[:, 4]
+    n1, n2, _ = paper_axes(u, v, psi)
+    jc_w = motion.omega * [ROBOT.j_xx, ROBOT.j_xx, ROBOT.j_zz]
+    total = jc_w + ROBOT.rotor_inertia_axial * (n1 * motion.rotor_rates[:, :1] + n2 * motion.rotor_rates[:, 1:])
+    assert np.abs(total).max() < 1e-14 * np.abs(jc_w).max() + 1e-18
+
+
+def test_omega_drives_the_state_by_montana(motion):
+    """Finite differences of the sampled contact coordinates equal Montana's (6)-(10) with the output omega."""
+    t, x, w, R = motion.time, motion.state, motion.omega, ROBOT.radius
+    u, v, psi = x[:, 2], x[:, 3], x[:, 4]
+    roll = w[:, 0] * np.sin(psi) + w[:, 1] * np.cos(psi)
+    rates = np.column_stack([R * w[:, 1], -R * w[:, 0], -roll / np.cos(v),
+                             -w[:, 0] * np.cos(psi) + w[:, 1] * np.sin(psi), -w[:, 2] - roll * np.tan(v)])
+    fd = np.gradient(x, t, axis=0, edge_order=2)
+    scale = np.abs(rates).max(axis=0)
+    assert np.all(np.abs(fd - rates).max(axis=0) < 2e-4 * scale)
+
+
+def test_rotor_angles_integrate_rates(motion):
+    t, r = motion.time, motion.rotor_rates
+    trap = np.vstack([[0, 0], np.cumsum(0.5 * (r[1:] + r[:-1]) * np.diff(t)[:, None], axis=0)])
+    assert np.abs(trap - motion.rotor_angles).max() < 1e-4 * np.abs(motion.rotor_angles).max()
+
+
+def test_torques_equal_rate_of_rotor_angular_momentum(motion):
+    """tau_i = n_i . dH_i/dt with the full H_i of an axisymmetric rotor (axial J_r, transverse J_p)."""
+    jr, jp = ROBOT.rotor_inertia_axial, ROBOT.rotor_inertia_transverse
+    t, w = motion.time, motion.omega
+    n = paper_axes(motion.state[:, 2], motion.state[:, 3], motion.state[:, 4])
+    for i in range(2):
+        ni = n[i]
+        axial = np.sum(ni * w, axis=1)
+        H = jp * w + ((jr - jp) * axial + jr * motion.rotor_rates[:, i])[:, None] * ni
+        dH = np.gradient(H, t, axis=0, edge_order=2)
+        fd = np.sum(ni * dH, axis=1)
+        tau = motion.rotor_torques[:, i]
+        assert np.abs(fd - tau).max() < 2e-4 * np.abs(tau).max()  # O(h^2); J_r d(phi_dot)/dt alone is off by 2e-2
+
+
+def test_time_scaling(asym_plan, motion):
+    """Doubling T halves rates and omega, quarters torques, keeps the path and rotor angles."""
+    slow = actuate(asym_plan, ROBOT, 16.0, 4000)
+    np.testing.assert_allclose(slow.time, 2 * motion.time, rtol=1e-12)
+    np.testing.assert_allclose(slow.state, motion.state, atol=1e-11)
+    np.testing.assert_allclose(slow.rotor_angles, motion.rotor_angles, atol=1e-9)
+    np.testing.assert_allclose(slow.omega, motion.omega / 2, atol=1e-12)
+    np.testing.assert_allclose(slow.rotor_rates, motion.rotor_rates / 2, atol=1e-10)
+    np.testing.assert_allclose(slow.rotor_torques, motion.rotor_torques / 4, atol=1e-12)
+
+
+def test_symmetric_plan_mirror(sym_plan):
+    """a = b, psi = 0: the two half-steps mirror in time; the rotor rate magnitudes repeat."""
+    assert sym_plan.a == pytest.approx(sym_plan.b, rel=1e-9)
+    m = actuate(sym_plan, ROBOT, 10.0, 2000)
+    r = np.abs(m.rotor_rates)
+    np.testing.assert_allclose(r, r[::-1], atol=1e-8 * r.max())
+
+
+def test_bad_input(asym_plan):
+    with pytest.raises(InputError, match="duration"):
+        actuate(asym_plan, ROBOT, 0.0)
+    with pytest.raises(InputError, match="duration"):
+        actuate(asym_plan, ROBOT, float("nan"))
+    with pytest.raises(InputError, match="samples"):
+        actuate(asym_plan, ROBOT, 1.0, 2)
+    other = rollplan.Robot(mass_total=2.0)
+    with pytest.raises(InputError, match="k ="):
+        actuate(asym_plan, other, 1.0)
+
+
+def test_plot_motion(motion, asym_plan):
+    fig = plot_motion(motion, asym_plan, asym_plan.trajectory(20), "m")
+    assert isinstance(fig, Figure)
+    labels = [ax.get_ylabel() for ax in fig.axes]
+    assert "angular velocity [rad/s]" in labels and "rotor rate [rad/s]" in labels
+    assert "motor torque [mN m]" in labels
+    assert all(ax.get_xlabel() == "time t [s]" for ax in fig.axes[:3])

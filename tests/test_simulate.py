@@ -1,0 +1,129 @@
+"""The rotor-driven simulation (rollplan.simulate): against a closed form, an
+independent numpy/scipy implementation, invariances, and the planner's motions."""
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.interpolate import CubicSpline
+
+import rollplan
+from rollplan import InputError
+from rollplan.actuation import actuate
+from rollplan.simulate import rate_spline, simulate_rotors
+
+ROBOT = rollplan.Robot()
+
+
+def test_spline_is_not_a_knot_cubic():
+    rng = np.random.default_rng(0)
+    t = np.sort(rng.uniform(0, 5, 40))
+    y = rng.normal(size=(40, 2))
+    tt = np.linspace(t[0], t[-1], 777)
+    ours = np.array(rate_spline(t, y).map(tt.size)(tt[None, :])).T
+    np.testing.assert_allclose(ours, CubicSpline(t, y, bc_type="not-a-knot")(tt), atol=1e-10)
+
+
+def test_constant_rotor_rate_closed_form():
+    """phi_1_dot = c, phi_2_dot = 0 from rest: steady roll about n_1 = x, v_a = R J_r c t / Jxx, v_o = J_r c t / Jxx."""
+    c = 30.0
+    T = 0.8 * ROBOT.j_xx / (ROBOT.rotor_inertia_axial * c)  # v_o reaches 0.8 rad
+    t = np.linspace(0, T, 50)
+    sim = simulate_rotors(ROBOT, t, np.column_stack([np.full(50, c), np.zeros(50)]))
+    rate = ROBOT.rotor_inertia_axial * c / ROBOT.j_xx
+    expected = np.column_stack([0 * t, ROBOT.radius * rate * t, 0 * t, rate * t, 0 * t])
+    np.testing.assert_allclose(sim.state, expected, atol=1e-11)
+    np.testing.assert_allclose(sim.omega, np.tile([-rate, 0, 0], (50, 1)), atol=1e-13)
+
+
+def _numpy_rhs(robot, spline):
+    """(6)-(10) with omega from (11): rotation matrices composed in numpy (independent of rollplan.model)."""
+    def rz(a):
+        return np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+
+    def rx(a):
+        return np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
+
+    def ry(a):
+        return np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+
+    jc = np.array([robot.j_xx, robot.j_xx, robot.j_zz])
+    R = robot.radius
+
+    def f(t, x):
+        u, v, psi = x[2], x[3], x[4]
+        rot = rz(psi).T @ rx(v).T @ ry(u).T
+        r1, r2 = spline(t)
+        w = -robot.rotor_inertia_axial * (rot[:, 0] * r1 + rot[:, 1] * r2) / jc
+        roll = w[0] * np.sin(psi) + w[1] * np.cos(psi)
+        return [R * w[1], -R * w[0], -roll / np.cos(v), -w[0] * np.cos(psi) + w[1] * np.sin(psi),
+                -w[2] - roll * np.tan(v)]
+
+    return f
+
+
+def test_against_scipy_dop853():
+    t = np.linspace(0, 3, 301)
+    rates = np.column_stack([20 * np.sin(2 * t) * t, -15 * np.sin(3 * t) + 5 * t])
+    sim = simulate_rotors(ROBOT, t, rates)
+    f = _numpy_rhs(ROBOT, CubicSpline(t, rates, bc_type="not-a-knot"))
+    ref = solve_ivp(f, (0, 3), np.zeros(5), method="DOP853", rtol=1e-12, atol=1e-14, t_eval=t)
+    assert ref.success
+    assert np.abs(ref.y[:, -1]).max() > 0.1  # a real motion
+    np.testing.assert_allclose(sim.state, ref.y.T, atol=1e-9)
+
+
+def test_scaling_all_inertias_changes_nothing():
+    """omega from (11) depends only on Jxx/J_r and Jzz/J_r: scale every mass and inertia alike."""
+    t = np.linspace(0, 2, 201)
+    rates = np.column_stack([10 * np.sin(3 * t), 8 * np.cos(2 * t) - 8])
+    heavy = rollplan.Robot(0.1, 2 * 1.2, 2 * 0.4, 2 * 2.0e-4, 2 * 1.2e-4)
+    a = simulate_rotors(ROBOT, t, rates)
+    b = simulate_rotors(heavy, t, rates)
+    np.testing.assert_allclose(a.state, b.state, atol=1e-11)
+
+
+@pytest.mark.parametrize("target, steps, duration", [((0.0, 0.1, 0.0), 1, 10.0),      # symmetric, a = b
+                                                     ((0.05, 0.08, 0.5), 2, 6.0),     # asymmetric
+                                                     ((-0.03, 0.06, -2.0), 3, 20.0)])  # asymmetric, 3 steps
+def test_rotor_rates_reproduce_the_plan(target, steps, duration):
+    """Rotor rates from (11), spline-interpolated, drive (6)-(10) along the planned contact coordinates."""
+    p = rollplan.plan(target, steps, robot=ROBOT)
+    if target[2] == 0:
+        assert p.a == pytest.approx(p.b, rel=1e-9)
+    else:
+        assert abs(p.a - p.b) > 1e-3 * ROBOT.radius
+    m = actuate(p, ROBOT, duration)
+    assert m.time.size >= 2000
+    sim = simulate_rotors(ROBOT, m.time, m.rotor_rates, p.target)
+    assert sim.arrival_error < 1e-6
+    dev = np.abs(sim.state - m.state).max(axis=0)
+    assert dev[:2].max() < 1e-6 * ROBOT.radius and dev[2:].max() < 1e-6
+    np.testing.assert_allclose(sim.omega, m.omega, atol=1e-6 * np.abs(m.omega).max())
+
+
+def test_wrong_k_misses_the_target():
+    p = rollplan.plan((0.05, 0.08, 0.5), 2, robot=ROBOT)
+    m = actuate(p, ROBOT, 6.0)
+    heavier = rollplan.Robot(mass_total=1.3)  # k larger by ~7 %
+    sim = simulate_rotors(heavier, m.time, m.rotor_rates, p.target)
+    assert sim.arrival_error > 1e-3
+
+
+def test_bad_input():
+    t = np.linspace(0, 1, 10)
+    with pytest.raises(InputError, match="rates"):
+        simulate_rotors(ROBOT, t, np.zeros((10, 3)))
+    with pytest.raises(InputError, match="increase"):
+        simulate_rotors(ROBOT, t[::-1], np.zeros((10, 2)))
+    with pytest.raises(InputError, match="finite"):
+        simulate_rotors(ROBOT, t, np.full((10, 2), np.nan))
+
+
+@pytest.mark.slow
+def test_many_steps_still_arrive():
+    """Six steps (12 half-steps, >= 400 samples each): the spline-driven simulation still arrives within 1e-6 R."""
+    p = rollplan.plan((0.3, -0.2, 2.0), 6, robot=ROBOT)
+    m = actuate(p, ROBOT, 30.0)
+    assert m.time.size == 12 * 400 + 1
+    sim = simulate_rotors(ROBOT, m.time, m.rotor_rates, p.target)
+    assert sim.arrival_error < 1e-6
