@@ -1,6 +1,7 @@
 """rollplan: exact, dynamically realizable motion planning for a spherical robot
 driven by two internal rotors (Svinin, Morinaga, Yamamoto)."""
 
+from .collocation import CollocationPlanner, CollocationResult, collocate
 from .curves import A_MAX, Curve, Piece, circle_point, figure_eight
 from .errors import InputError, NoPlanError, SolverError
 from .geometric import SOLVERS, GeometricPhasePlanner, Plan, SolverStats, StepResult, Trajectory, plan, step
@@ -13,4 +14,5 @@ __all__ = [
     "InputError", "NoPlanError", "SolverError",
     "SOLVERS", "GeometricPhasePlanner", "Plan", "SolverStats", "StepResult", "Trajectory", "plan", "step",
     "Robot", "load_robot",
+    "CollocationPlanner", "CollocationResult", "collocate",
 ]

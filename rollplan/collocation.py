@@ -469,6 +469,15 @@ class CollocationPlanner:
         starts = np.arange(N) / N
         return starts, starts[:, None] + self.tau[None, 1:] / N
 
+    def _check_guess(self, g: Guess) -> Guess:
+        N, d = self.intervals, self.degree
+        want = {"states": (N + 1, 5), "colloc": (N, d, 5), "controls": (N, 2)}
+        for name, shape in want.items():
+            arr = np.asarray(getattr(g, name), float)
+            if arr.shape != shape or not np.all(np.isfinite(arr)):
+                raise InputError(f"guess.{name} of shape {arr.shape} is not allowed: expected finite {shape}")
+        return g
+
     def naive_guess(self, final) -> Guess:
         """Straight line: every state linear in time from 0 to ``final`` (u_o = v_o = 0), zero rates."""
         starts, tc = self._grid()
@@ -524,7 +533,7 @@ class CollocationPlanner:
         if warm_plan is not None:
             g = self.warm_guess(warm_plan, horizon)
         elif isinstance(guess, Guess):
-            g = guess
+            g = self._check_guess(guess)
         else:
             g = self.naive_guess(final)
         guess_time = time.perf_counter() - t0

@@ -248,3 +248,18 @@ def test_bad_solve_input(planner40):
         planner40.solve((0.1, 0.2, float("nan")), k=K)
     with pytest.raises(InputError, match="k"):
         planner40.solve(TARGET, k=-1.0)
+    g = CollocationPlanner(10, 3).naive_guess(np.zeros(5))
+    with pytest.raises(InputError, match="guess.states"):
+        planner40.solve(TARGET, k=K, guess=g)
+
+
+def test_explicit_guess_object_is_used(planner40, warm40):
+    """A Guess built from a previous solution converges faster to the same optimum."""
+    from rollplan.collocation import Guess
+
+    r = warm40
+    d = r.degree
+    g = Guess(r.states, r.states_colloc.reshape(r.intervals, d, 5), r.controls, "previous")
+    again = planner40.solve(TARGET, k=K, guess=g, turns=r.turns)
+    assert again.guess == "previous" and again.stats.iterations < r.stats.iterations
+    assert again.objective == pytest.approx(r.objective, rel=1e-9)

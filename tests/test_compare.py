@@ -102,3 +102,18 @@ def test_cli_compare_robot(tmp_path, capsys):
     assert d["geometric_phase"]["effort_kind"] == "rotor" == d["collocation"]["effort_kind"]
     # the rotor-effort optimum costs less rotor effort than the figure eight
     assert d["collocation"]["effort"] < d["geometric_phase"]["effort"]
+
+
+def test_cli_compare_solver_failure_exit_4(monkeypatch, capsys):
+    """A failing IPOPT solve maps to exit 4 with its status, no traceback."""
+    import rollplan.comparison as cmp
+    from rollplan.errors import SolverError
+
+    def failing(*args, **kwargs):
+        raise SolverError("IPOPT did not solve the collocation problem; hint: try guess='warm'",
+                          "Maximum_Iterations_Exceeded")
+
+    monkeypatch.setattr(cmp, "collocate", failing)
+    assert main(["compare", "--to", "0.5", "0.3"]) == 4
+    err = capsys.readouterr().err
+    assert "Maximum_Iterations_Exceeded" in err and "hint" in err and "Traceback" not in err
