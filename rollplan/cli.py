@@ -110,7 +110,7 @@ def cmd_compare(args) -> int:
             check_writable(path)
     k, robot = _k_or_robot(args)
     c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
-                           args.cost, args.intervals, args.degree, args.scheme, args.guess)
+                           args.cost, args.intervals, args.degree, args.scheme, args.guess, args.contact_bound)
     g, o, r = c.geometric_phase, c.collocation, c.result
     unit = "m" if robot is not None else ("R" if args.radius is None else "")
     effort = "rotor effort int|phi'|^2 dt" if robot is not None else "effort int|omega|^2 dt"
@@ -161,6 +161,9 @@ def _add_compare_parser(sub) -> None:
     c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
     c.add_argument("--guess", choices=collocation.GUESSES, default="warm",
                    help="collocation initial guess: warm (the geometric plan) or naive (straight line)")
+    c.add_argument("--contact-bound", type=_number, default=collocation.CONTACT_BOUND, metavar="RAD",
+                   help="collocation: largest polar angle of the contact point from the south pole "
+                        "(default %.4g rad = 75 deg)" % collocation.CONTACT_BOUND)
     c.add_argument("--json", metavar="FILE", help="write both results as JSON")
     c.add_argument("--plot", metavar="FILE.png", help="overlay both contact paths on the plane and the sphere")
     c.set_defaults(func=cmd_compare)

@@ -16,6 +16,8 @@ components (18)-(19) and the spin ``omega_z`` from the realizability condition
 
 with ``m`` (``turns``) the number of whole turns of psi, 0 by default and the
 branch of the geometric-phase plan for the warm start (same final orientation).
+The contact point stays within a polar angle ``contact_bound`` of the south
+pole (75 deg by default): (8) and the spin (13) are singular on the equator.
 
 Transcription. ``N`` intervals of equal length in ``tau``; on each, the state
 is a polynomial of degree ``d`` through the interval's start and ``d``
@@ -43,7 +45,9 @@ Costs, by name in :data:`COSTS` (lengths in units of R inside the NLP):
 Verification. Every solution is integrated again, with the optimized
 piecewise-constant controls, by CVODES at tight tolerances (independent of the
 transcription); its end point gives the residual to the target, and CVODES
-quadratures give the path length and efforts that are reported.
+quadratures give the path length and efforts that are reported. A solution
+whose residual exceeds ``verify_tol`` is never returned: SolverError with
+status ``"Verification_Failed"``.
 """
 
 from __future__ import annotations
@@ -72,11 +76,13 @@ log = logging.getLogger(__name__)
 SCHEMES = ("legendre", "radau")
 #: Initial guesses by name.
 GUESSES = ("naive", "warm")
-#: Default bound on |u_o| and |v_o| [rad]; (8) and (13) are singular at pi/2.
-CONTACT_BOUND = 1.55
+#: Default bound on the contact point's polar angle from the south pole [rad] (75 deg).
+#: (8) and (13) are singular on the equator (90 deg), where the spin (13) grows like
+#: 1 / cos(polar angle); unbounded, path-length optima ride that singularity.
+CONTACT_BOUND = math.radians(75.0)
 #: Default smoothing eps of the path-length integrand [(R/s)^2].
 SMOOTHING = 1e-4
-#: Default largest verified residual counted as reaching the target.
+#: Default largest verified residual of a returned solution.
 TOLERANCE = 1e-6
 
 # NLP parameter vector: k, T, eps, j_xx, j_zz, j_r
@@ -373,7 +379,12 @@ class CollocationPlanner:
     cost : str
         Name in :data:`COSTS`.
     contact_bound : float
-        Bound on |u_o| and |v_o| [rad], in (0, pi/2).
+        Bound on the polar angle of the contact point from the south pole [rad],
+        in (0, pi/2): ``-z >= cos(bound)`` for the contact point (1) at every
+        collocation point and interval end (hence also ``|u_o|, |v_o| <= bound``).
+    verify_tol : float or None
+        Largest verified residual of a returned solution; a larger one raises
+        SolverError with status ``"Verification_Failed"``. None: report only.
     tol : float
         IPOPT's tolerance (also its constraint-violation tolerance).
     max_iter : int
@@ -384,7 +395,7 @@ class CollocationPlanner:
 
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre", cost: str = "path_length",
                  contact_bound: float = CONTACT_BOUND, tol: float = 1e-10, max_iter: int = 500,
-                 verify_samples: int = 1000) -> None:
+                 verify_samples: int = 1000, verify_tol: float | None = TOLERANCE) -> None:
         self.intervals = _check_int("intervals", intervals, 1)
         self.degree = _check_int("degree", degree, 1, 9)
         if scheme not in SCHEMES:
@@ -394,6 +405,7 @@ class CollocationPlanner:
         self.scheme = scheme
         self.cost = COSTS[cost]
         self.contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
+        self.verify_tol = None if verify_tol is None else check_range("verify_tol", verify_tol, 0.0, None, True)
         self.tol = check_range("tol", tol, 0.0, None, low_open=True)
         self.max_iter = _check_int("max_iter", max_iter, 1)
         self.samples_per_interval = max(1, math.ceil(_check_int("verify_samples", verify_samples, 1) / self.intervals))
@@ -413,17 +425,21 @@ class CollocationPlanner:
         V, g, J = [], [], 0
         xk = ca.SX.sym("X0", 5)
         V.append(xk)
+        x = ca.SX.sym("x", 5)
+        depth = ca.Function("depth", [x], [-model.contact_point(x[2], x[3])[2]])  # cos(polar angle), eq. (1)
         for i in range(N):
             xc = ca.SX.sym(f"XC{i}", 5, d)
             w = ca.SX.sym(f"W{i}", 2)
             defect, x_end, Ji = self.interval(xk, xc, w, h, par)
             xk = ca.SX.sym(f"X{i + 1}", 5)
             V += [ca.vec(xc), w, xk]
-            g += [ca.vec(defect), x_end - xk]
+            g += [ca.vec(defect), x_end - xk, depth.map(d)(xc).T, depth(xk)]
             J = J + Ji
         nlp = {"x": ca.vertcat(*V), "p": par, "f": J, "g": ca.vertcat(*g)}
         self.solver = ca.nlpsol("collocation", "ipopt", nlp, _ipopt_options(self.tol, self.max_iter))
         self._block = 5 * d + 2 + 5  # variables per interval after X0
+        # constraint bounds: per interval 5d + 5 equalities, then d + 1 path constraints
+        self._path_rows = np.concatenate([np.zeros(5 * d + 5, bool), np.ones(d + 1, bool)] * N)
 
     def _pack(self, guess: Guess) -> np.ndarray:
         N = self.intervals
@@ -540,8 +556,10 @@ class CollocationPlanner:
         par = self._par(k, horizon, smoothing, robot)
         lbx, ubx = self._bounds(final)
         x0 = np.clip(self._pack(g), lbx, ubx)
+        lbg = np.where(self._path_rows, math.cos(self.contact_bound), 0.0)
+        ubg = np.where(self._path_rows, np.inf, 0.0)
         t0 = time.perf_counter()
-        sol = self.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=0, ubg=0, p=par)
+        sol = self.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
         solve_time = time.perf_counter() - t0
         st = self.solver.stats()
         status, iters = str(st["return_status"]), int(st["iter_count"])
@@ -561,8 +579,11 @@ class CollocationPlanner:
         reorder = lambda s: np.array([s[0], s[1], s[4], s[2], s[3]])
         residual = _residual(reorder(ver["xf"]), target_r)
         coll_res = _residual(reorder(states[-1]), target_r)
-        if residual > TOLERANCE:
-            log.warning("verified residual %.2e exceeds %.0e: raise N or d", residual, TOLERANCE)
+        if self.verify_tol is not None and not residual <= self.verify_tol:
+            raise SolverError(f"the collocation solution (N = {self.intervals}, d = {self.degree}, {self.scheme}, cost "
+                              f"{self.cost.name}) misses the target by {residual:.2e} > {self.verify_tol:.0e} when "
+                              f"integrated by CVODES (IPOPT: {status}, {iters} iterations); hint: raise N or d, or "
+                              f"lower contact_bound (now {self.contact_bound:.3g} rad)", "Verification_Failed")
         R = radius
         scale = np.array([R, R, 1.0, 1.0, 1.0])
         tgrid = np.arange(self.intervals + 1) / self.intervals * horizon
@@ -730,7 +751,7 @@ def collocate(target, k: float | None = None, robot: Robot | None = None, radius
     smoothing : float
         eps of the path-length integrand.
     contact_bound : float
-        Bound on |u_o|, |v_o| [rad].
+        Bound on the contact point's polar angle from the south pole [rad].
 
     Returns
     -------

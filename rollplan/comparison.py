@@ -28,7 +28,7 @@ import casadi as ca
 import numpy as np
 
 from . import model
-from .collocation import CollocationResult, collocate
+from .collocation import CONTACT_BOUND, CollocationResult, collocate
 from .curves import figure_eight, rotated_point
 from .geometric import Plan, plan as gp_plan
 from .robot import Robot
@@ -186,7 +186,8 @@ def summarize_collocation(r: CollocationResult, robot: Robot | None = None) -> P
 
 def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None = None,
             radius: float | None = None, horizon: float = 1.0, cost: str = "path_length", intervals: int = 100,
-            degree: int = 3, scheme: str = "legendre", guess: str = "warm") -> Comparison:
+            degree: int = 3, scheme: str = "legendre", guess: str = "warm",
+            contact_bound: float = CONTACT_BOUND) -> Comparison:
     """Plan by geometric phase (:func:`rollplan.plan`) and by collocation, and measure both.
 
     The collocation is warm-started from the same plan when ``guess="warm"``,
@@ -200,7 +201,7 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     g = p if guess == "warm" else guess
     r = collocate(target, k=None if robot is not None else k, robot=robot, radius=radius, cost=cost,
                   intervals=intervals, degree=degree, scheme=scheme, horizon=horizon, guess=g, steps=steps,
-                  turns=p.branch)
+                  turns=p.branch, contact_bound=contact_bound)
     return Comparison((float(target[0]), float(target[1]), float(target[2])), p.k, p.radius, float(horizon),
                       p.steps, summarize_plan(p, horizon, robot), summarize_collocation(r, robot), p, r)
 

@@ -124,7 +124,7 @@ def scaling(Ns, repeats, target=(0.5, 0.3, 0.4)):
     p = plan(target, 1, k=K)
     res = {}
     for cost in COSTS:
-        times, builds, iters = [], [], []
+        times, builds, iters, objs, resid = [], [], [], [], []
         for N in Ns:
             t0 = time.perf_counter()
             P = CollocationPlanner(N, 3, "legendre", cost)
@@ -135,7 +135,9 @@ def scaling(Ns, repeats, target=(0.5, 0.3, 0.4)):
                 ts.append(r.stats.solve_time_s)
             times.append(statistics.median(ts))
             iters.append(r.stats.iterations)
-        res[cost] = (np.array(times), np.array(builds), iters)
+            objs.append(r.path_length if cost == "path_length" else r.effort)
+            resid.append(r.residual)
+        res[cost] = (np.array(times), np.array(builds), iters, np.array(objs), np.array(resid))
     return res
 
 
@@ -226,11 +228,17 @@ def main():
            "Naive: every state linear in time from 0 to the target with u_o = v_o = 0 and zero rates. "
            "Warm: the geometric-phase plan, theta mapped to t / T. Both steer psi to the plan's branch.", ""] + conv
     md += ["", "## Time against N (Legendre d = 3, warm start, target (0.5, 0.3, 0.4))", "",
-           "| N | " + " | ".join(f"{c} IPOPT [s] | {c} iterations | build [s]" for c in COSTS) + " |",
-           "|---|" + "---|---|---|" * len(COSTS)]
+           "Per cost: IPOPT time, iterations, NLP build time, the verified optimum (path length for "
+           "`path_length`, int |omega|^2 dt for `angular_velocity`) and the verified residual.", "",
+           "| N | " + " | ".join(f"{c}: IPOPT [s] | iter. | build [s] | optimum | residual" for c in COSTS) + " |",
+           "|---|" + "---|---|---|---|---|" * len(COSTS)]
     for i, N in enumerate(Ns):
-        md.append(f"| {N} | " + " | ".join(f"{sc[c][0][i]:.3f} | {sc[c][2][i]} | {sc[c][1][i]:.2f}"
-                                           for c in COSTS) + " |")
+        md.append(f"| {N} | " + " | ".join(f"{sc[c][0][i]:.3f} | {sc[c][2][i]} | {sc[c][1][i]:.2f} | "
+                                           f"{sc[c][3][i]:.8f} | {sc[c][4][i]:.1e}" for c in COSTS) + " |")
+    md += ["", "The optimum changes by O(N^-2) as N doubles: the contact rates are constant on each interval, "
+           "and a piecewise-constant approximation of a smooth optimal control costs O(h^2) in the cost "
+           "(first-order optimality makes the O(h) control error enter quadratically). The residual sits at "
+           "the level of IPOPT's tolerance (1e-10) for d = 3, where the Gauss method's O(h^6) error is smaller."]
     md += ["", "Fitted exponent of IPOPT time ~ N^p: " + ", ".join(f"{c}: p = {slope[c]:.2f}" for c in COSTS) + ".",
            "", "![time vs N](comparison_scaling.png)", "",
            "## Budget: N = 100, d = 3, warm start", "",

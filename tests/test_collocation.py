@@ -168,7 +168,7 @@ def test_collocation_order_with_fixed_controls(scheme, degree, order, fixed_cont
 def test_verified_residual_of_optimal_solutions_shrinks_at_order(scheme, degree, order):
     """The verified residual of optimal solutions (controls re-optimized at each N) follows the same order."""
     Ns = [20, 40, 80]
-    res = np.array([CollocationPlanner(N, degree, scheme, "path_length").solve(TARGET, k=K).residual for N in Ns])
+    res = np.array([CollocationPlanner(N, degree, scheme, "path_length", verify_tol=None).solve(TARGET, k=K).residual for N in Ns])
     slope = -np.polyfit(np.log(Ns), np.log(res), 1)[0]
     assert abs(slope - order) < 0.4, (res, slope)
 
