@@ -233,6 +233,8 @@ class CollocationResult:
         m: psi is steered to ``target[2] + 2 pi m``.
     guess : str
         Name of the initial guess.
+    contact_bound : float
+        Largest polar angle of the contact point from the south pole [rad].
     t : ndarray, shape (N + 1,)
         Interval boundaries [s].
     states : ndarray, shape (N + 1, 5)
@@ -260,9 +262,9 @@ class CollocationResult:
     residual : float
         Euclidean norm of ``final`` minus the target (lengths over R, psi
         wrapped to (-pi, pi]).
-    collocation_residual : float
-        The same norm for the transcription's own end state (the NLP's
-        constraint violation there).
+    max_defect : float
+        Largest violation of the NLP's constraints (collocation equations,
+        continuity, contact bound) at the solution [units of R, rad].
     stats : CollocationStats
     trajectory : CollocationTrajectory
         The verified motion on ``>= 1000`` points (by default).
@@ -278,6 +280,7 @@ class CollocationResult:
     target: tuple
     turns: int
     guess: str
+    contact_bound: float
     t: np.ndarray
     states: np.ndarray
     t_colloc: np.ndarray
@@ -290,7 +293,7 @@ class CollocationResult:
     peak_omega: float
     final: np.ndarray
     residual: float
-    collocation_residual: float
+    max_defect: float
     stats: CollocationStats
     trajectory: CollocationTrajectory
 
@@ -578,7 +581,8 @@ class CollocationPlanner:
         target_r = np.array([u_t, v_t, final[4], 0.0, 0.0])
         reorder = lambda s: np.array([s[0], s[1], s[4], s[2], s[3]])
         residual = _residual(reorder(ver["xf"]), target_r)
-        coll_res = _residual(reorder(states[-1]), target_r)
+        gval = np.array(sol["g"]).ravel()
+        max_defect = float(np.max(np.maximum(lbg - gval, 0.0) + np.maximum(gval - ubg, 0.0)))
         if self.verify_tol is not None and not residual <= self.verify_tol:
             raise SolverError(f"the collocation solution (N = {self.intervals}, d = {self.degree}, {self.scheme}, cost "
                               f"{self.cost.name}) misses the target by {residual:.2e} > {self.verify_tol:.0e} when "
@@ -595,9 +599,9 @@ class CollocationPlanner:
         stats = CollocationStats(status, True, iters, solve_time, guess_time, verify_time)
         return CollocationResult(
             self.cost.name, self.scheme, self.degree, self.intervals, horizon, k, radius,
-            (float(target[0]), float(target[1]), psi_t), int(turns), guess_name, tgrid, states * scale,
+            (float(target[0]), float(target[1]), psi_t), int(turns), guess_name, self.contact_bound, tgrid, states * scale,
             tc.ravel() * horizon, colloc.reshape(-1, 5) * scale, controls, float(sol["f"]),
-            ver["length"] * R, ver["effort"], ver["rotor"], ver["peak"], fin, residual, coll_res, stats, traj)
+            ver["length"] * R, ver["effort"], ver["rotor"], ver["peak"], fin, residual, max_defect, stats, traj)
 
     @staticmethod
     def _par(k, horizon, smoothing, robot):

@@ -224,5 +224,6 @@ def comparison_to_dict(c: Comparison) -> dict:
                                  "branch": c.plan.branch})
     d["collocation"].update({"cost": r.cost, "objective": r.objective, "scheme": r.scheme, "degree": r.degree,
                              "intervals": r.intervals, "guess": r.guess, "turns": r.turns,
-                             "guess_time_s": r.stats.guess_time_s, "verify_time_s": r.stats.verify_time_s})
+                             "guess_time_s": r.stats.guess_time_s, "verify_time_s": r.stats.verify_time_s,
+                             "max_defect": r.max_defect, "contact_bound": r.contact_bound})
     return d
