@@ -49,6 +49,9 @@ def plot_scaling(intervals, times, labels) -> Figure:
     ax = fig.add_subplot(1, 1, 1)
     for t, lab in zip(times, labels):
         ax.loglog(intervals, t, "o-", label=lab)
+    ax.set_xticks(list(intervals))
+    ax.set_xticklabels([str(n) for n in intervals])
+    ax.minorticks_off()
     ax.set_xlabel("intervals N")
     ax.set_ylabel("IPOPT solve time [s]")
     ax.grid(True, which="both", alpha=0.3)
