@@ -103,7 +103,7 @@ def _fmt_row(name, a, b, fmt):
 
 
 def cmd_compare(args) -> int:
-    from . import collocation, comparison
+    from . import comparison
 
     for path in (args.json, args.plot):
         if path is not None:
