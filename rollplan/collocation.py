@@ -570,6 +570,9 @@ class CollocationPlanner:
                  self.scheme, guess_name, status, iters, solve_time)
         if not st["success"]:
             hint = _HINTS.get(status, "try guess='warm', more intervals or a longer horizon")
+            if guess_name == "naive" and status in ("Infeasible_Problem_Detected", "Restoration_Failed"):
+                hint = ("the naive guess rests at the south pole, where the linearized kinematics are not "
+                        "controllable (displacement and psi need Lie brackets); use guess='warm'")
             raise SolverError(f"IPOPT did not solve the collocation problem (N = {self.intervals}, d = {self.degree}, "
                               f"{self.scheme}, cost {self.cost.name}, {guess_name} guess): {status} after {iters} "
                               f"iterations; hint: {hint}", status)
