@@ -263,3 +263,23 @@ def test_explicit_guess_object_is_used(planner40, warm40):
     again = planner40.solve(TARGET, k=K, guess=g, turns=r.turns)
     assert again.guess == "previous" and again.stats.iterations < r.stats.iterations
     assert again.objective == pytest.approx(r.objective, rel=1e-9)
+
+
+def test_naive_guess_is_a_singular_point_and_fails_with_a_hint():
+    """At rest on the south pole the linearized kinematics are not controllable: the equality
+    Jacobian loses rank, and IPOPT fails from the naive guess for a psi = 0 target (see comparison.md)."""
+    P = CollocationPlanner(10, 3, "legendre", "path_length")
+    final = np.array([0.3, 0.0, 0.0, 0.0, 0.0])
+    x0 = P._pack(P.naive_guess(final))
+    lbx, ubx = P._bounds(final)
+    J = np.array(P.solver.get_function("nlp_jac_g")(x0, P._par(K, 1.0, 0.0, None))[1])
+    Je = J[~P._path_rows][:, lbx != ubx]
+    assert np.linalg.matrix_rank(Je) < Je.shape[0]
+    # the warm start is not singular
+    xw = P._pack(P.warm_guess(plan((0.3, 0.0, 0.0), 1, k=K), 1.0))
+    Jw = np.array(P.solver.get_function("nlp_jac_g")(np.clip(xw, lbx, ubx), P._par(K, 1.0, 0.0, None))[1])
+    assert np.linalg.matrix_rank(Jw[~P._path_rows][:, lbx != ubx]) == Je.shape[0]
+    with pytest.raises(SolverError) as exc:
+        P.solve((0.3, 0.0, 0.0), k=K, guess="naive")
+    assert exc.value.status in ("Infeasible_Problem_Detected", "Restoration_Failed")
+    assert "controllable" in str(exc.value)
