@@ -1,6 +1,7 @@
 """rollplan: exact, dynamically realizable motion planning for a spherical robot
 driven by two internal rotors (Svinin, Morinaga, Yamamoto)."""
 
+from .collocation import CollocationPlanner, CollocationResult, collocate
 from .curves import A_MAX, Curve, Piece, circle_point, figure_eight
 from .errors import InputError, NoPlanError, SolverError
 from .geometric import SOLVERS, GeometricPhasePlanner, Plan, SolverStats, StepResult, Trajectory, plan, step
@@ -17,4 +18,5 @@ __all__ = [
     "SOLVERS", "GeometricPhasePlanner", "Plan", "SolverStats", "StepResult", "Trajectory", "plan", "step",
     "Robot", "load_robot",
     "Motion", "actuate", "default_robot", "Simulation", "simulate_rotors",
+    "CollocationPlanner", "CollocationResult", "collocate",
 ]

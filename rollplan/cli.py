@@ -218,6 +218,77 @@ def cmd_animate(args) -> int:
     return EXIT_OK
 
 
+def _fmt_row(name, a, b, fmt):
+    return f"  {name:<30s} {format(a, fmt):>20s} {format(b, fmt):>20s}"
+
+
+def cmd_compare(args) -> int:
+    from . import comparison
+
+    for path in (args.json, args.plot):
+        if path is not None:
+            check_writable(path)
+    k, robot = _k_or_robot(args)
+    c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
+                           args.cost, args.intervals, args.degree, args.scheme, args.guess, args.contact_bound)
+    g, o, r = c.geometric_phase, c.collocation, c.result
+    unit = "m" if robot is not None else ("R" if args.radius is None else "")
+    effort = "rotor effort int|phi'|^2 dt" if robot is not None else "effort int|omega|^2 dt"
+    print(f"rollplan compare: k = {c.k:.9g}, R = {c.radius:g}, T = {c.horizon:g} s, target (u_a, v_a, psi) = "
+          f"({c.target[0]:g}, {c.target[1]:g}, {c.target[2]:g})")
+    print(f"  geometric phase: {c.steps} figure eight(s), a = {c.plan.a:.6g}, b = {c.plan.b:.6g}, "
+          f"gamma = {c.plan.gamma:.6g}, timed t ~ theta")
+    print(f"  collocation: cost {r.cost}, {r.scheme} d = {r.degree}, N = {r.intervals}, {r.guess} guess, "
+          f"psi turns m = {r.turns}")
+    print(f"  {'':<30s} {'geometric phase':>20s} {'collocation':>20s}")
+    print(_fmt_row(f"contact path length [{unit or '-'}]", g.path_length, o.path_length, ".6g"))
+    print(_fmt_row(f"{effort} [rad^2/s]", g.effort, o.effort, ".6g"))
+    print(_fmt_row("peak |omega| [rad/s]", g.peak_omega, o.peak_omega, ".6g"))
+    print(_fmt_row("final residual (CVODES)", g.residual, o.residual, ".2e"))
+    print(_fmt_row("solve time [ms]", g.solve_time_s * 1e3, o.solve_time_s * 1e3, ".1f"))
+    print(_fmt_row("iterations", g.iterations, o.iterations, "d"))
+    print(_fmt_row("status", g.status, o.status, "s"))
+    if r.guess == "warm":
+        print(f"  (collocation time is IPOPT's; its warm start took another {r.stats.guess_time_s * 1e3:.1f} ms)")
+    if args.json:
+        write_json(args.json, comparison.comparison_to_dict(c))
+        print(f"wrote {args.json}")
+    if args.plot:
+        from .compare_plots import plot_comparison
+
+        save_figure(plot_comparison(c, unit or "R"), args.plot)
+        print(f"wrote {args.plot}")
+    return EXIT_OK
+
+
+def _add_compare_parser(sub) -> None:
+    from . import collocation
+
+    c = sub.add_parser("compare", help="geometric-phase plan versus direct-collocation optimum, side by side")
+    c.add_argument("--to", nargs=2, type=_number, metavar=("U", "V"), required=True,
+                   help="target contact point (u_a, v_a) on the plane")
+    c.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
+    c.add_argument("--steps", type=_whole, default=1, help="figure eights n >= 1 of the geometric plan (default 1)")
+    g = c.add_mutually_exclusive_group()
+    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default 2.5)")
+    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
+    c.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+    c.add_argument("--cost", choices=sorted(collocation.COSTS), default="path_length",
+                   help="collocation cost (default path_length; rotor_effort needs --robot)")
+    c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T [s] of both motions (default 1)")
+    c.add_argument("--intervals", type=_whole, default=100, help="collocation intervals N (default 100)")
+    c.add_argument("--degree", type=_whole, default=3, help="collocation degree d (default 3)")
+    c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
+    c.add_argument("--guess", choices=collocation.GUESSES, default="warm",
+                   help="collocation initial guess: warm (the geometric plan) or naive (straight line)")
+    c.add_argument("--contact-bound", type=_number, default=collocation.CONTACT_BOUND, metavar="RAD",
+                   help="collocation: largest polar angle of the contact point from the south pole "
+                        "(default %.4g rad = 75 deg)" % collocation.CONTACT_BOUND)
+    c.add_argument("--json", metavar="FILE", help="write both results as JSON")
+    c.add_argument("--plot", metavar="FILE.png", help="overlay both contact paths on the plane and the sphere")
+    c.set_defaults(func=cmd_compare)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="rollplan", description=__doc__)
     parser.add_argument("-v", "--verbose", action="store_true", help="log the planner's progress")
@@ -269,6 +340,8 @@ def build_parser() -> argparse.ArgumentParser:
     a.add_argument("--frames", type=_whole, default=100, help="number of frames (default 100)")
     a.add_argument("--fps", type=_whole, default=20, help="frames per second (default 20)")
     a.set_defaults(func=cmd_animate)
+
+    _add_compare_parser(sub)
     return parser
 
 
@@ -279,7 +352,8 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.ERROR, format="%(name)s: %(message)s")
-    if getattr(args, "command", None) == "plan" and args.k is None and args.robot is None and args.duration is None:
+    if (getattr(args, "command", None) in ("plan", "compare") and args.k is None and args.robot is None
+            and getattr(args, "duration", None) is None):
         args.k = DEFAULT_K
     try:
         return args.func(args)
