@@ -1,0 +1,368 @@
+"""C code generation: a self-contained C99 planner for the robot's microcontroller.
+
+Everything numerical in the generated library comes from the symbolic model
+through CasADi's :class:`~casadi.CodeGenerator`; no equation is typed twice:
+
+* the realizability condition (13) solved for the spin ``omega_z``
+  (:func:`rollplan.model.omega_z_realizable`);
+* the rotor-rate map (11) (:func:`rollplan.model.rotor_rates`);
+* Montana's contact kinematics (6)-(10) (:func:`rollplan.model.montana`);
+* the step map ``(a, b, k) -> (shift, eta, direction)`` of one trace of the
+  figure eight (31), (35), integrated along the curve ODE (28)-(30)
+  (:func:`rollplan.integrate.piece_rhs`), and its Jacobian;
+* a coarse table of the two leaves on a fixed grid of radii, used only to
+  bracket the root of (32)-(33) on branch ``m = 0``.
+
+The step map is the Chebyshev spectral scheme of :mod:`rollplan.integrate`
+written with loops: each leaf is integrated over the curve's graded panels
+(its fixed steps), each panel on ``degree + 1`` Chebyshev points. Along a
+curve psi' in (30) does not depend on the state, and (28)-(29) are
+``[u_a', v_a'] = Rot(-psi) [A, B]`` with ``(A, B)`` their value at psi = 0
+(checked when the function is built). So one ``map`` over the nodes evaluates
+``(A, B, psi')``, a cumulative Chebyshev integration gives psi at the nodes,
+and two weighted sums give ``(u_a, v_a)``. The generated C loops over the
+nodes instead of unrolling them.
+
+``steps_per_leaf`` counts node intervals per leaf: panels x degree. The
+default, :data:`DEFAULT_STEPS_PER_LEAF`, keeps the step map within ~1e-11 of
+the converged one for ``k <= 5`` (``scripts/bench_codegen.py --accuracy``
+measures error against steps per leaf).
+
+The planner (hand-written C glue, not model equations) solves, for branch
+``m = 0``,
+
+    eta(a, b) = psi / n                                                 (32)
+    h(a, b)   = h_des |sin(eta / 2) / sin(n eta / 2)|   (h_des / n if psi = 0)   (33)
+
+by a damped Newton iteration on the generated step map and its Jacobian,
+started from the centre of the first grid cell (smallest ``a + b``) whose
+corner values bracket the targets, then sets
+``gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift)`` (see
+:mod:`rollplan.geometric`). It uses static memory only, a bounded number of
+iterations and returns a status code.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from . import model
+from .curves import A_MAX, figure_eight
+from .errors import InputError
+from .integrate import chebyshev_matrices, piece_rhs
+from .io import write_atomic
+
+__all__ = [
+    "DEFAULT_STEPS_PER_LEAF",
+    "DEFAULT_PREFIX",
+    "TABLE_RADII",
+    "TABLE_STEPS_PER_LEAF",
+    "GeneratedCode",
+    "model_functions",
+    "leaf_function",
+    "step_functions",
+    "table_function",
+    "generated_functions",
+    "generate",
+]
+
+log = logging.getLogger(__name__)
+
+#: Node intervals per leaf of the generated step map (10 graded panels x degree 20).
+DEFAULT_STEPS_PER_LEAF = 200
+#: Node intervals per leaf of the coarse bracketing table (10 panels x degree 6).
+TABLE_STEPS_PER_LEAF = 60
+#: Radii of the bracketing table, equally spaced on (0, A_MAX].
+TABLE_RADII = 40
+#: Default name prefix of the generated C symbols and files.
+DEFAULT_PREFIX = "rollplan"
+
+# Planner constants (written into the C code).
+_MAX_ITER = 40
+_MAX_CELLS = 12
+_TOL = 1e-13
+_A_MIN = 1e-6
+
+
+@dataclass(frozen=True)
+class GeneratedCode:
+    """What :func:`generate` wrote.
+
+    Attributes
+    ----------
+    out : Path
+        Output folder.
+    prefix : str
+        Prefix of the C symbols and files.
+    steps_per_leaf : int
+        Node intervals per leaf of the step map.
+    files : tuple of Path
+        Files written.
+    code_bytes : int
+        Size of the generated C sources and headers together [bytes].
+    model_bytes : int
+        Size of the CasADi-generated source ``<prefix>_model.c`` alone [bytes].
+    work_doubles : int
+        Static work memory of the planner [doubles].
+    """
+
+    out: Path
+    prefix: str
+    steps_per_leaf: int
+    files: tuple
+    code_bytes: int
+    model_bytes: int
+    work_doubles: int
+
+
+# ----------------------------------------------------------------------------- functions
+
+
+def model_functions(prefix: str = DEFAULT_PREFIX) -> list:
+    """The model's pointwise functions, eqs. (6)-(10), (11), (13), as CasADi Functions.
+
+    Returns
+    -------
+    list of casadi.Function
+        ``<prefix>_omega_z(omega_xy[2], u_o, v_o, psi, k) -> omega_z`` (13);
+        ``<prefix>_rotor_rates(omega[3], u_o, v_o, psi, j_xx, j_zz, j_r) -> phi_dot[2]`` (11);
+        ``<prefix>_montana(omega[3], u_o, v_o, psi) -> rates[5]`` (6)-(10).
+    """
+    sx = ca.SX.sym
+    wxy, w = sx("omega_xy", 2), sx("omega", 3)
+    u_o, v_o, psi, k = sx("u_o"), sx("v_o"), sx("psi"), sx("k")
+    j_xx, j_zz, j_r = sx("j_xx"), sx("j_zz"), sx("j_r")
+    return [
+        ca.Function(f"{prefix}_omega_z", [wxy, u_o, v_o, psi, k],
+                    [model.omega_z_realizable(wxy, u_o, v_o, psi, k)],
+                    ["omega_xy", "u_o", "v_o", "psi", "k"], ["omega_z"]),
+        ca.Function(f"{prefix}_rotor_rates", [w, u_o, v_o, psi, j_xx, j_zz, j_r],
+                    [model.rotor_rates(w, u_o, v_o, psi, j_xx, j_zz, j_r)],
+                    ["omega", "u_o", "v_o", "psi", "j_xx", "j_zz", "j_r"], ["phi_dot"]),
+        ca.Function(f"{prefix}_montana", [w, u_o, v_o, psi], [model.montana(w, u_o, v_o, psi)],
+                    ["omega", "u_o", "v_o", "psi"], ["rates"]),
+    ]
+
+
+def _degree(steps_per_leaf, panels: int) -> int:
+    if isinstance(steps_per_leaf, bool) or not isinstance(steps_per_leaf, (int, np.integer)) \
+            or steps_per_leaf < 2 * panels or steps_per_leaf % panels:
+        raise InputError(f"steps per leaf = {steps_per_leaf!r} is not allowed: it must be a multiple of "
+                         f"{panels} (the curve's panels), at least {2 * panels}")
+    return int(steps_per_leaf) // panels
+
+
+def _node_rates(curve, index: int) -> ca.Function:
+    """``g(phi, r, k) -> (A, B, psi')`` along leaf ``index`` with radius ``r``, from (28)-(30).
+
+    ``(A, B)`` are (u_a', v_a') at psi = 0. Checks the structure the loop
+    relies on: the rates do not depend on (u_a, v_a), psi' does not depend on
+    psi, and ``(u_a', v_a') = Rot(-psi) (A, B)``.
+    """
+    f = piece_rhs(curve, index)
+    phi, r, k, psi = ca.SX.sym("phi"), ca.SX.sym("r"), ca.SX.sym("k"), ca.SX.sym("psi")
+    params = ca.SX.zeros(curve.n_params)
+    params[index] = r
+    full_p = ca.SX.sym("p", curve.n_params)
+    probe = f(phi, ca.SX.sym("x", 3), full_p, k, 0)
+    others = [i for i in range(curve.n_params) if i != index]
+    if others and ca.depends_on(probe, full_p[others]):
+        raise ValueError(f"leaf {index} depends on other parameters than its own radius")
+    at0 = f(phi, ca.SX.zeros(3), params, k, 0)
+    at_psi = f(phi, ca.vertcat(0, 0, psi), params, k, 0)
+    g = ca.Function(f"leaf{index}_rates", [phi, r, k], [at0])
+    # Numerical check of Rot(-psi) structure and psi-independence of psi' at a few points.
+    check = ca.Function("chk", [phi, r, k, psi], [at_psi, at0])
+    rng = np.random.default_rng(index)
+    for _ in range(4):
+        ph, rr, kk, ps = rng.uniform(0, 2 * np.pi), rng.uniform(0.05, A_MAX), rng.uniform(0, 5), rng.uniform(-4, 4)
+        v_psi, v0 = (np.array(x).ravel() for x in check(ph, rr, kk, ps))
+        c, s = np.cos(ps), np.sin(ps)
+        want = np.array([c * v0[0] + s * v0[1], -s * v0[0] + c * v0[1], v0[2]])
+        if not np.allclose(v_psi, want, rtol=1e-12, atol=1e-12 * (1 + np.abs(v0).max())):
+            raise ValueError("curve ODE lacks the rotation structure the generated step map needs")
+    return g
+
+
+def leaf_function(curve, index: int, degree: int, name: str) -> ca.Function:
+    """One leaf of the curve by looped Chebyshev spectral integration of (28)-(30).
+
+    ``leaf(x0[3], r, k) -> x_end[3]`` (MX, the nodes loop through ``map``).
+    The panels are the piece's ``breaks``; each carries ``degree + 1`` nodes.
+    """
+    g = _node_rates(curve, index)
+    breaks = np.asarray(curve.pieces[index].breaks, float)
+    panels = breaks.size - 1
+    xi, q = chebyshev_matrices(degree)
+    half = 0.5 * np.diff(breaks)
+    nodes = breaks[:-1][None, :] + (xi[:, None] + 1.0) * half[None, :]   # (degree+1) x panels
+    count = nodes.size
+    x0, r, k = ca.MX.sym("x0", 3), ca.MX.sym("r"), ca.MX.sym("k")
+    rates = g.map(count, "serial")(ca.DM(nodes.reshape(-1, order="F")).T, r, k)   # 3 x count
+    dpsi = ca.reshape(rates[2, :], degree + 1, panels)
+    within = ca.mtimes(ca.DM(q), dpsi) * ca.repmat(ca.DM(half).T, degree + 1, 1)
+    starts = ca.mtimes(within[degree, :], ca.DM(np.triu(np.ones((panels, panels)), 1)))
+    psi = ca.reshape(x0[2] + within + ca.repmat(starts, degree + 1, 1), 1, count)
+    c, s = ca.cos(psi), ca.sin(psi)
+    du = rates[0, :] * c + rates[1, :] * s
+    dv = rates[1, :] * c - rates[0, :] * s
+    weights = ca.DM((q[-1][:, None] * half[None, :]).reshape(-1, order="F"))
+    x_end = ca.vertcat(x0[0] + ca.mtimes(du, weights), x0[1] + ca.mtimes(dv, weights),
+                       x0[2] + starts[panels - 1] + within[degree, panels - 1])
+    return ca.Function(name, [x0, r, k], [x_end], ["x0", "r", "k"], ["x_end"])
+
+
+def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX):
+    """The step map of one figure-eight trace and its Jacobian, eqs. (28)-(31), (35).
+
+    Returns
+    -------
+    step : casadi.Function
+        ``<prefix>_step(ab[2], k) -> (shift[2], eta, direction)``: displacement
+        (u_a, v_a) [R], holonomy eta [rad] and ``atan2(v_a, u_a)`` [rad] of one
+        trace from zero state with gamma = 0.
+    step_jac : casadi.Function
+        ``<prefix>_step_jac(ab[2], k) -> (shift[2], eta, direction, jac[4x2])``
+        with ``jac`` the Jacobian of ``(shift, eta, direction)`` by ``(a, b)``
+        (column-major).
+    """
+    curve = figure_eight()
+    degree = _degree(steps_per_leaf, len(curve.pieces[0].breaks) - 1)
+    ab, k = ca.MX.sym("ab", 2), ca.MX.sym("k")
+    x = ca.MX.zeros(3)
+    for i in range(len(curve.pieces)):
+        x = leaf_function(curve, i, degree, f"{prefix}_leaf{i}")(x, ab[i], k)
+    direction = ca.atan2(x[1], x[0])
+    y = ca.vertcat(x[0], x[1], x[2], direction)
+    names_in, names_out = ["ab", "k"], ["shift", "eta", "direction"]
+    step = ca.Function(f"{prefix}_step", [ab, k], [x[:2], x[2], direction], names_in, names_out)
+    step_jac = ca.Function(f"{prefix}_step_jac", [ab, k], [x[:2], x[2], direction, ca.jacobian(y, ab)],
+                           names_in, names_out + ["jac"])
+    return step, step_jac
+
+
+def table_radii(count: int = TABLE_RADII) -> np.ndarray:
+    """Radii of the bracketing table: ``A_MAX j / count`` for ``j = 1 .. count``."""
+    return A_MAX * np.arange(1, count + 1) / count
+
+
+def table_function(prefix: str = DEFAULT_PREFIX, steps_per_leaf: int = TABLE_STEPS_PER_LEAF,
+                   count: int = TABLE_RADII) -> ca.Function:
+    """Coarse leaf maps on the fixed radii grid, for bracketing only.
+
+    ``<prefix>_leaf_table(k) -> (leaf0[3 x count], leaf1[3 x count])``: columns
+    are (u_a, v_a, psi) at the end of each leaf traced alone from zero state.
+    """
+    curve = figure_eight()
+    degree = _degree(steps_per_leaf, len(curve.pieces[0].breaks) - 1)
+    k = ca.MX.sym("k")
+    radii = ca.DM(table_radii(count)).T
+    outs = [leaf_function(curve, i, degree, f"{prefix}_tleaf{i}").map(count, "serial")(ca.DM.zeros(3, 1), radii, k)
+            for i in range(len(curve.pieces))]
+    return ca.Function(f"{prefix}_leaf_table", [k], outs, ["k"], ["leaf0", "leaf1"])
+
+
+def generated_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX) -> list:
+    """Every function that :func:`generate` writes to C, in order (the symbolic twins)."""
+    return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix), table_function(prefix)]
+
+
+# ----------------------------------------------------------------------------- C sources
+
+_PRAGMA = """/* Generated by rollplan.codegen from the symbolic model with CasADi's CodeGenerator. */
+#if defined(__GNUC__)
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#endif
+"""
+
+
+def _check_prefix(prefix) -> str:
+    if not isinstance(prefix, str) or not prefix.isidentifier() or not prefix.isascii() or prefix.startswith("_"):
+        raise InputError(f"prefix = {prefix!r} is not allowed: it must be a C identifier (letters, digits, _)")
+    return prefix
+
+
+def _template(name: str) -> str:
+    return (Path(__file__).with_name("c_templates") / name).read_text()
+
+
+def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX) -> GeneratedCode:
+    """Write the C99 library, ``plan_demo.c`` and a ``Makefile`` into folder ``out``.
+
+    Parameters
+    ----------
+    out : path
+        Output folder (created if missing; its parent must exist).
+    steps_per_leaf : int
+        Node intervals per leaf of the step map (a multiple of the 10 panels).
+    prefix : str
+        Prefix of the C symbols and file names.
+
+    Returns
+    -------
+    GeneratedCode
+    """
+    prefix = _check_prefix(prefix)
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"output folder {str(out)!r} is a file")
+    if not out.exists():
+        if not out.parent.is_dir() and str(out.parent):
+            raise InputError(f"output folder {str(out)!r} cannot be created: {str(out.parent)!r} does not exist")
+        out.mkdir()
+    funcs = generated_functions(steps_per_leaf, prefix)
+    step, step_jac, table = funcs[3], funcs[4], funcs[5]
+    lib = f"{prefix}_model"
+    cg = ca.CodeGenerator(f"{lib}.c", {"with_header": True})
+    for f in funcs:
+        cg.add(f)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg.generate(tmp + os.sep)
+        model_c = _PRAGMA + (Path(tmp) / f"{lib}.c").read_text()
+        model_h = (Path(tmp) / f"{lib}.h").read_text()
+    sizes = {name: max(int(getattr(f, name)()) for f in (step, step_jac, table))
+             for name in ("sz_arg", "sz_res", "sz_iw", "sz_w")}
+    subs = {
+        "@PREFIX@": prefix,
+        "@PREFIX_UPPER@": prefix.upper(),
+        "@SZ_ARG@": str(sizes["sz_arg"]),
+        "@SZ_RES@": str(sizes["sz_res"]),
+        "@SZ_IW@": str(max(sizes["sz_iw"], 1)),
+        "@SZ_W@": str(max(sizes["sz_w"], 1)),
+        "@TABLE_RADII@": str(TABLE_RADII),
+        "@A_MAX@": repr(float(A_MAX)),
+        "@A_MIN@": repr(_A_MIN),
+        "@MAX_ITER@": str(_MAX_ITER),
+        "@MAX_CELLS@": str(_MAX_CELLS),
+        "@TOL@": repr(_TOL),
+        "@STEPS_PER_LEAF@": str(int(steps_per_leaf)),
+    }
+
+    def fill(text: str) -> str:
+        for key, value in subs.items():
+            text = text.replace(key, value)
+        return text
+
+    files = {
+        f"{lib}.c": model_c,
+        f"{lib}.h": model_h,
+        f"{prefix}.h": fill(_template("planner.h")),
+        f"{prefix}_planner.c": fill(_template("planner.c")),
+        "plan_demo.c": fill(_template("plan_demo.c")),
+        "Makefile": fill(_template("Makefile")),
+    }
+    written = []
+    for name, text in files.items():
+        write_atomic(out / name, text.encode())
+        written.append(out / name)
+    code_bytes = sum(len(t.encode()) for n, t in files.items() if n != "Makefile")
+    work = sizes["sz_w"]
+    log.info("wrote %s: %d bytes of C, %d doubles of work memory", out, code_bytes, work)
+    return GeneratedCode(out, prefix, int(steps_per_leaf), tuple(written), code_bytes, len(model_c.encode()), work)
