@@ -71,16 +71,17 @@ __all__ = [
     "table_function",
     "generated_functions",
     "generate",
+    "reference_plan",
 ]
 
 log = logging.getLogger(__name__)
 
 #: Node intervals per leaf of the generated step map (10 graded panels x degree 20).
 DEFAULT_STEPS_PER_LEAF = 200
-#: Node intervals per leaf of the coarse bracketing table (10 panels x degree 6).
-TABLE_STEPS_PER_LEAF = 60
+#: Node intervals per leaf of the coarse bracketing table (10 panels x degree 4).
+TABLE_STEPS_PER_LEAF = 40
 #: Radii of the bracketing table, equally spaced on (0, A_MAX].
-TABLE_RADII = 40
+TABLE_RADII = 32
 #: Default name prefix of the generated C symbols and files.
 DEFAULT_PREFIX = "rollplan"
 
@@ -177,7 +178,7 @@ def _node_rates(curve, index: int) -> ca.Function:
         raise ValueError(f"leaf {index} depends on other parameters than its own radius")
     at0 = f(phi, ca.SX.zeros(3), params, k, 0)
     at_psi = f(phi, ca.vertcat(0, 0, psi), params, k, 0)
-    g = ca.Function(f"leaf{index}_rates", [phi, r, k], [at0])
+    g = ca.Function(f"leaf{index}_rates", [phi, r, k], [ca.cse(at0)])
     # Numerical check of Rot(-psi) structure and psi-independence of psi' at a few points.
     check = ca.Function("chk", [phi, r, k, psi], [at_psi, at0])
     rng = np.random.default_rng(index)
@@ -191,32 +192,41 @@ def _node_rates(curve, index: int) -> ca.Function:
     return g
 
 
-def leaf_function(curve, index: int, degree: int, name: str) -> ca.Function:
-    """One leaf of the curve by looped Chebyshev spectral integration of (28)-(30).
-
-    ``leaf(x0[3], r, k) -> x_end[3]`` (MX, the nodes loop through ``map``).
-    The panels are the piece's ``breaks``; each carries ``degree + 1`` nodes.
-    """
-    g = _node_rates(curve, index)
-    breaks = np.asarray(curve.pieces[index].breaks, float)
+def _leaf_expr(g: ca.Function, breaks, degree: int, x0, r, k):
+    """End state of one leaf (MX expression): looped Chebyshev spectral integration of (28)-(30)."""
+    breaks = np.asarray(breaks, float)
     panels = breaks.size - 1
     xi, q = chebyshev_matrices(degree)
     half = 0.5 * np.diff(breaks)
     nodes = breaks[:-1][None, :] + (xi[:, None] + 1.0) * half[None, :]   # (degree+1) x panels
     count = nodes.size
-    x0, r, k = ca.MX.sym("x0", 3), ca.MX.sym("r"), ca.MX.sym("k")
-    rates = g.map(count, "serial")(ca.DM(nodes.reshape(-1, order="F")).T, r, k)   # 3 x count
+    rates = g.map(count, "serial")(ca.DM(nodes.reshape(-1, order="F")).T, r, k)   # (A, B, psi') x count
     dpsi = ca.reshape(rates[2, :], degree + 1, panels)
     within = ca.mtimes(ca.DM(q), dpsi) * ca.repmat(ca.DM(half).T, degree + 1, 1)
     starts = ca.mtimes(within[degree, :], ca.DM(np.triu(np.ones((panels, panels)), 1)))
     psi = ca.reshape(x0[2] + within + ca.repmat(starts, degree + 1, 1), 1, count)
     c, s = ca.cos(psi), ca.sin(psi)
-    du = rates[0, :] * c + rates[1, :] * s
+    du = rates[0, :] * c + rates[1, :] * s      # Rot(-psi) (A, B)
     dv = rates[1, :] * c - rates[0, :] * s
     weights = ca.DM((q[-1][:, None] * half[None, :]).reshape(-1, order="F"))
-    x_end = ca.vertcat(x0[0] + ca.mtimes(du, weights), x0[1] + ca.mtimes(dv, weights),
-                       x0[2] + starts[panels - 1] + within[degree, panels - 1])
-    return ca.Function(name, [x0, r, k], [x_end], ["x0", "r", "k"], ["x_end"])
+    return ca.vertcat(x0[0] + ca.mtimes(du, weights), x0[1] + ca.mtimes(dv, weights),
+                      x0[2] + starts[panels - 1] + within[degree, panels - 1])
+
+
+def leaf_function(curve, index: int, degree: int, name: str, jacobian: bool = False) -> ca.Function:
+    """One leaf of the curve by looped Chebyshev spectral integration of (28)-(30).
+
+    ``leaf(x0[3], r, k) -> x_end[3]`` (MX, the nodes loop through ``map``).
+    The panels are the piece's ``breaks``; each carries ``degree + 1`` nodes.
+    With ``jacobian``, also ``d x_end / d x0`` (3x3) and ``d x_end / d r`` (3x1).
+    """
+    g = _node_rates(curve, index)
+    x0, r, k = ca.MX.sym("x0", 3), ca.MX.sym("r"), ca.MX.sym("k")
+    x_end = _leaf_expr(g, curve.pieces[index].breaks, degree, x0, r, k)
+    if not jacobian:
+        return ca.Function(name, [x0, r, k], [x_end], ["x0", "r", "k"], ["x_end"])
+    return ca.Function(name, [x0, r, k], [x_end, ca.jacobian(x_end, x0), ca.jacobian(x_end, r)],
+                       ["x0", "r", "k"], ["x_end", "jac_x0", "jac_r"])
 
 
 def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX):
@@ -231,19 +241,24 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
     step_jac : casadi.Function
         ``<prefix>_step_jac(ab[2], k) -> (shift[2], eta, direction, jac[4x2])``
         with ``jac`` the Jacobian of ``(shift, eta, direction)`` by ``(a, b)``
-        (column-major).
+        (column-major). It is assembled by the chain rule from the leaves'
+        Jacobians, so each leaf is differentiated in its own radius only.
     """
     curve = figure_eight()
     degree = _degree(steps_per_leaf, len(curve.pieces[0].breaks) - 1)
     ab, k = ca.MX.sym("ab", 2), ca.MX.sym("k")
     x = ca.MX.zeros(3)
+    dx = ca.MX.zeros(3, 2)   # d x / d (a, b)
     for i in range(len(curve.pieces)):
-        x = leaf_function(curve, i, degree, f"{prefix}_leaf{i}")(x, ab[i], k)
+        leaf = leaf_function(curve, i, degree, f"{prefix}_leaf{i}", jacobian=True)
+        x, j_x0, j_r = leaf(x, ab[i], k)
+        dx = ca.mtimes(j_x0, dx)
+        dx = ca.horzcat(*[dx[:, c] + (j_r if c == i else 0) for c in range(2)])
     direction = ca.atan2(x[1], x[0])
-    y = ca.vertcat(x[0], x[1], x[2], direction)
+    ddir = (x[0] * dx[1, :] - x[1] * dx[0, :]) / (x[0] ** 2 + x[1] ** 2)
     names_in, names_out = ["ab", "k"], ["shift", "eta", "direction"]
     step = ca.Function(f"{prefix}_step", [ab, k], [x[:2], x[2], direction], names_in, names_out)
-    step_jac = ca.Function(f"{prefix}_step_jac", [ab, k], [x[:2], x[2], direction, ca.jacobian(y, ab)],
+    step_jac = ca.Function(f"{prefix}_step_jac", [ab, k], [x[:2], x[2], direction, ca.vertcat(dx, ddir)],
                            names_in, names_out + ["jac"])
     return step, step_jac
 
@@ -272,6 +287,40 @@ def table_function(prefix: str = DEFAULT_PREFIX, steps_per_leaf: int = TABLE_STE
 def generated_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX) -> list:
     """Every function that :func:`generate` writes to C, in order (the symbolic twins)."""
     return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix), table_function(prefix)]
+
+
+def reference_plan(target, steps: int, k: float, near=None, max_solves: int = 20):
+    """The Python planner's verified plan on branch m = 0, for cross-checking the C planner.
+
+    Solves (32)-(33) with ``m = 0`` by :mod:`rollplan.geometric` (IPOPT on the
+    spectral step map, CVODES verification). Returns the shortest such plan,
+    or with ``near = (a, b)`` the one closest to it; None if there is none.
+    Tries :func:`rollplan.geometric.plan` first (fast when the shortest plan is
+    on branch 0), then the branch-0 brackets one by one.
+    """
+    from . import geometric
+
+    u, v, psi = (float(x) for x in target)
+    dist = (lambda q: 0.0) if near is None else (lambda q: max(abs(q.a - near[0]), abs(q.b - near[1])))
+    try:
+        best = geometric.plan((u, v, psi), steps, k=k)
+    except geometric.NoPlanError:
+        best = None
+    if best is not None and best.branch == 0 and dist(best) < 1e-6:
+        return best
+    best = best if best is not None and best.branch == 0 else None
+    planner = geometric._planner("ipopt")
+    rows = planner._brackets(k, float(np.hypot(u, v)), psi, steps)
+    for row in rows[rows[:, 5] == 0][:max_solves]:
+        x, status, iters, ok = planner._solve(row[1:3], [k, row[6], row[7]])
+        if not ok:
+            continue
+        cand = planner._finish(x, 0, row[6], steps, k, 1.0, (u, v, psi), status, iters)
+        if cand is not None and (best is None or dist(cand) < dist(best)):
+            best = cand
+            if dist(best) < 1e-6:
+                break
+    return best
 
 
 # ----------------------------------------------------------------------------- C sources
