@@ -274,14 +274,23 @@ def table_function(prefix: str = DEFAULT_PREFIX, steps_per_leaf: int = TABLE_STE
 
     ``<prefix>_leaf_table(k) -> (leaf0[3 x count], leaf1[3 x count])``: columns
     are (u_a, v_a, psi) at the end of each leaf traced alone from zero state.
+    The second leaf is the mirror image (y -> -y) of the first, so its table is
+    ``diag(1, -1, -1)`` times the first one's; this is checked here against a
+    direct integration of the second leaf (and in ``tests/test_codegen.py``).
     """
     curve = figure_eight()
     degree = _degree(steps_per_leaf, len(curve.pieces[0].breaks) - 1)
     k = ca.MX.sym("k")
-    radii = ca.DM(table_radii(count)).T
-    outs = [leaf_function(curve, i, degree, f"{prefix}_tleaf{i}").map(count, "serial")(ca.DM.zeros(3, 1), radii, k)
-            for i in range(len(curve.pieces))]
-    return ca.Function(f"{prefix}_leaf_table", [k], outs, ["k"], ["leaf0", "leaf1"])
+    radii = table_radii(count)
+    leaves = [leaf_function(curve, i, degree, f"{prefix}_tleaf{i}") for i in range(2)]
+    mirror = ca.DM([1.0, -1.0, -1.0])
+    for r, kk in ((radii[3], 2.5), (radii[-1], 5.0)):
+        first, second = (np.array(f(ca.DM.zeros(3), r, kk)).ravel() for f in leaves)
+        if not np.allclose(second, np.array(mirror).ravel() * first, rtol=1e-10, atol=1e-12):
+            raise ValueError("the second leaf is not the mirror image of the first")
+    leaf0 = leaves[0].map(count, "serial")(ca.DM.zeros(3, 1), ca.DM(radii).T, k)
+    leaf1 = ca.repmat(mirror, 1, count) * leaf0
+    return ca.Function(f"{prefix}_leaf_table", [k], [leaf0, leaf1], ["k"], ["leaf0", "leaf1"])
 
 
 def generated_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX) -> list:

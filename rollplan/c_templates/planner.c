@@ -145,6 +145,27 @@ static int brackets(int i, int j, double eta_m, double h_m) {
     return emin <= eta_m && eta_m <= emax && hmin <= h_m && h_m <= hmax;
 }
 
+/* Initial guess in cell (i, j): the targets interpolated linearly from the corner values
+ * (kept inside the cell), or the cell centre where that is singular. */
+static void start(int i, int j, double eta_m, double h_m, double x[2]) {
+    const int c0 = i * (NR + 1) + j, c1 = c0 + NR + 1;   /* (i, j) and (i + 1, j) */
+    double ec = 0.25 * (s_eta[c0] + s_eta[c0 + 1] + s_eta[c1] + s_eta[c1 + 1]);
+    double hc = 0.25 * (s_h[c0] + s_h[c0 + 1] + s_h[c1] + s_h[c1 + 1]);
+    double ea = 0.5 * (s_eta[c1] + s_eta[c1 + 1] - s_eta[c0] - s_eta[c0 + 1]);
+    double eb = 0.5 * (s_eta[c0 + 1] + s_eta[c1 + 1] - s_eta[c0] - s_eta[c1]);
+    double ha = 0.5 * (s_h[c1] + s_h[c1 + 1] - s_h[c0] - s_h[c0 + 1]);
+    double hb = 0.5 * (s_h[c0 + 1] + s_h[c1 + 1] - s_h[c0] - s_h[c1]);
+    double det = ea * hb - eb * ha, di = 0.0, dj = 0.0;
+    if (fabs(det) > 1e-300 && isfinite(det)) {
+        di = (hb * (eta_m - ec) - eb * (h_m - hc)) / det;
+        dj = (ea * (h_m - hc) - ha * (eta_m - ec)) / det;
+        di = di < -0.5 ? -0.5 : (di > 0.5 ? 0.5 : di);
+        dj = dj < -0.5 ? -0.5 : (dj > 0.5 ? 0.5 : dj);
+    }
+    x[0] = clamp(@PREFIX_UPPER@_A_MAX * (i + 0.5 + di) / NR);
+    x[1] = clamp(@PREFIX_UPPER@_A_MAX * (j + 0.5 + dj) / NR);
+}
+
 int @PREFIX@_plan(double u, double v, double psi, int steps, double k, @PREFIX@_plan_t *plan) {
     double h_des, eta_m, h_m, num, den, tol, x[2], shift[2], eta = 0.0, res_norm = INFINITY;
     double tr, ti, sr, si, fu, fv, gamma, c, s, dr = 1.0;
@@ -175,8 +196,7 @@ int @PREFIX@_plan(double u, double v, double psi, int steps, double k, @PREFIX@_
             j = sum - i;
             if (!brackets(i, j, eta_m, h_m)) continue;
             ++cells;
-            x[0] = clamp(@PREFIX_UPPER@_A_MAX * (i + 0.5) / NR);
-            x[1] = clamp(@PREFIX_UPPER@_A_MAX * (j + 0.5) / NR);
+            start(i, j, eta_m, h_m, x);
             found = newton(x, k, eta_m, h_m, tol, &res_norm, &iters, shift, &eta);
             plan->a = x[0];
             plan->b = x[1];
