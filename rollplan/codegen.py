@@ -48,6 +48,7 @@ import logging
 import os
 import tempfile
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
@@ -80,8 +81,10 @@ log = logging.getLogger(__name__)
 DEFAULT_STEPS_PER_LEAF = 200
 #: Node intervals per leaf of the coarse bracketing table (10 panels x degree 4).
 TABLE_STEPS_PER_LEAF = 40
-#: Radii of the bracketing table, equally spaced on (0, A_MAX].
-TABLE_RADII = 32
+#: Radii of the bracketing table on (0, A_MAX], graded towards A_MAX (see :func:`table_radii`).
+TABLE_RADII = 48
+#: Inertia ratio for which the table's radii equidistribute the turn of psi.
+_TABLE_K = 2.5
 #: Default name prefix of the generated C symbols and files.
 DEFAULT_PREFIX = "rollplan"
 
@@ -192,25 +195,43 @@ def _node_rates(curve, index: int) -> ca.Function:
     return g
 
 
-def _leaf_expr(g: ca.Function, breaks, degree: int, x0, r, k):
-    """End state of one leaf (MX expression): looped Chebyshev spectral integration of (28)-(30)."""
+def _leaf_expr(g: ca.Function, breaks, degree: int, x0, r, k, with_dr: bool = False):
+    """End state of one leaf (MX expression): looped Chebyshev spectral integration of (28)-(30).
+
+    With ``with_dr``, ``g`` also returns the derivatives of (A, B, psi') by r
+    (rows 3-5), and the derivative of the end state by r is returned too,
+    propagated through the (linear) quadrature in forward mode. One pass over
+    the nodes then gives the value and the derivative, sharing the
+    transcendental functions of each node.
+    """
     breaks = np.asarray(breaks, float)
     panels = breaks.size - 1
     xi, q = chebyshev_matrices(degree)
     half = 0.5 * np.diff(breaks)
     nodes = breaks[:-1][None, :] + (xi[:, None] + 1.0) * half[None, :]   # (degree+1) x panels
     count = nodes.size
-    rates = g.map(count, "serial")(ca.DM(nodes.reshape(-1, order="F")).T, r, k)   # (A, B, psi') x count
-    dpsi = ca.reshape(rates[2, :], degree + 1, panels)
-    within = ca.mtimes(ca.DM(q), dpsi) * ca.repmat(ca.DM(half).T, degree + 1, 1)
-    starts = ca.mtimes(within[degree, :], ca.DM(np.triu(np.ones((panels, panels)), 1)))
-    psi = ca.reshape(x0[2] + within + ca.repmat(starts, degree + 1, 1), 1, count)
+    rates = g.map(count, "serial")(ca.DM(nodes.reshape(-1, order="F")).T, r, k)   # (A, B, psi'[, d/dr]) x count
+    weights = ca.DM((q[-1][:, None] * half[None, :]).reshape(-1, order="F"))
+    upper = ca.DM(np.triu(np.ones((panels, panels)), 1))
+    scale = ca.repmat(ca.DM(half).T, degree + 1, 1)
+
+    def cumulative(rate):   # integral of the rate from the leaf's start to each node
+        within = ca.mtimes(ca.DM(q), ca.reshape(rate, degree + 1, panels)) * scale
+        starts = ca.mtimes(within[degree, :], upper)
+        return ca.reshape(within + ca.repmat(starts, degree + 1, 1), 1, count)
+
+    turn = cumulative(rates[2, :])
+    psi = x0[2] + turn
     c, s = ca.cos(psi), ca.sin(psi)
     du = rates[0, :] * c + rates[1, :] * s      # Rot(-psi) (A, B)
     dv = rates[1, :] * c - rates[0, :] * s
-    weights = ca.DM((q[-1][:, None] * half[None, :]).reshape(-1, order="F"))
-    return ca.vertcat(x0[0] + ca.mtimes(du, weights), x0[1] + ca.mtimes(dv, weights),
-                      x0[2] + starts[panels - 1] + within[degree, panels - 1])
+    x_end = ca.vertcat(x0[0] + ca.mtimes(du, weights), x0[1] + ca.mtimes(dv, weights), x0[2] + turn[count - 1])
+    if not with_dr:
+        return x_end
+    turn_r = cumulative(rates[5, :])
+    du_r = rates[3, :] * c + rates[4, :] * s + dv * turn_r
+    dv_r = rates[4, :] * c - rates[3, :] * s - du * turn_r
+    return x_end, ca.vertcat(ca.mtimes(du_r, weights), ca.mtimes(dv_r, weights), turn_r[count - 1])
 
 
 def leaf_function(curve, index: int, degree: int, name: str, jacobian: bool = False) -> ca.Function:
@@ -218,14 +239,21 @@ def leaf_function(curve, index: int, degree: int, name: str, jacobian: bool = Fa
 
     ``leaf(x0[3], r, k) -> x_end[3]`` (MX, the nodes loop through ``map``).
     The panels are the piece's ``breaks``; each carries ``degree + 1`` nodes.
-    With ``jacobian``, also ``d x_end / d x0`` (3x3) and ``d x_end / d r`` (3x1).
+    With ``jacobian``, also ``d x_end / d x0`` (3x3, by CasADi's AD) and
+    ``d x_end / d r`` (3x1, forward mode through the quadrature with the
+    node rates' derivatives from CasADi's AD).
     """
     g = _node_rates(curve, index)
     x0, r, k = ca.MX.sym("x0", 3), ca.MX.sym("r"), ca.MX.sym("k")
-    x_end = _leaf_expr(g, curve.pieces[index].breaks, degree, x0, r, k)
+    breaks = curve.pieces[index].breaks
     if not jacobian:
+        x_end = _leaf_expr(g, breaks, degree, x0, r, k)
         return ca.Function(name, [x0, r, k], [x_end], ["x0", "r", "k"], ["x_end"])
-    return ca.Function(name, [x0, r, k], [x_end, ca.jacobian(x_end, x0), ca.jacobian(x_end, r)],
+    phi, rs, ks = ca.SX.sym("phi"), ca.SX.sym("r"), ca.SX.sym("k")
+    val = g(phi, rs, ks)
+    g_dr = ca.Function(f"{g.name()}_dr", [phi, rs, ks], [ca.cse(ca.vertcat(val, ca.jacobian(val, rs)))])
+    x_end, jac_r = _leaf_expr(g_dr, breaks, degree, x0, r, k, with_dr=True)
+    return ca.Function(name, [x0, r, k], [x_end, ca.jacobian(x_end, x0), jac_r],
                        ["x0", "r", "k"], ["x_end", "jac_x0", "jac_r"])
 
 
@@ -263,9 +291,24 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
     return step, step_jac
 
 
+@lru_cache(maxsize=4)
 def table_radii(count: int = TABLE_RADII) -> np.ndarray:
-    """Radii of the bracketing table: ``A_MAX j / count`` for ``j = 1 .. count``."""
-    return A_MAX * np.arange(1, count + 1) / count
+    """Radii of the bracketing table, graded towards A_MAX.
+
+    Half of the cells are spread evenly over (0, A_MAX], half follow the turn
+    of psi over the first leaf for k = 2.5, which grows steeply towards the
+    singular radius R/sqrt(2) (and with it the density of roots of (32)-(33)):
+    the radii equidistribute ``1/A_MAX + |d eta_0/d r| / TV(eta_0)``.
+    """
+    curve = figure_eight()
+    leaf = leaf_function(curve, 0, 8, "grading")
+    fine = np.linspace(0.0, A_MAX, 801)
+    eta = np.array(leaf.map(fine.size)(ca.DM.zeros(3), ca.DM(fine).T, _TABLE_K))[2]
+    turn = np.abs(np.diff(eta))
+    monitor = np.concatenate([[0.0], np.cumsum(np.diff(fine) / A_MAX + turn / turn.sum())])
+    radii = np.interp(np.linspace(0.0, monitor[-1], count + 1)[1:], monitor, fine)
+    radii[-1] = A_MAX
+    return radii
 
 
 def table_function(prefix: str = DEFAULT_PREFIX, steps_per_leaf: int = TABLE_STEPS_PER_LEAF,
@@ -395,6 +438,7 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@SZ_IW@": str(max(sizes["sz_iw"], 1)),
         "@SZ_W@": str(max(sizes["sz_w"], 1)),
         "@TABLE_RADII@": str(TABLE_RADII),
+        "@RADII@": ", ".join(repr(float(r)) for r in (0.0, *table_radii())),
         "@A_MAX@": repr(float(A_MAX)),
         "@A_MIN@": repr(_A_MIN),
         "@MAX_ITER@": str(_MAX_ITER),

@@ -37,6 +37,14 @@ TARGETS = [
     (-0.4, 0.8, 0.3, 1, 1.5),
 ]
 
+#: Extra targets of the accuracy sweep whose leaves come close to A_MAX (where the step map is hardest).
+LARGE_TARGETS = [
+    (0.0, 2.8, 0.0, 1, 2.5),
+    (1.0, 2.0, 0.3, 1, 2.5),
+    (0.0, 2.0, 0.0, 1, 0.0),
+    (3.0, 3.0, 0.2, 2, 2.5),
+]
+
 _BENCH_C = r"""
 #define _POSIX_C_SOURCE 199309L
 #include <stdio.h>
@@ -44,18 +52,29 @@ _BENCH_C = r"""
 #include <time.h>
 #include "@PREFIX@.h"
 static const double T[][5] = { @TARGETS@ };
-int main(int argc, char **argv) {
-    int reps = argc > 1 ? atoi(argv[1]) : 20, n = (int)(sizeof T / sizeof T[0]), r, i, fails = 0;
+static double run(int reps, int forget, int *fails) {
+    int n = (int)(sizeof T / sizeof T[0]), r, i;
     @PREFIX@_plan_t p;
     struct timespec t0, t1;
-    double us;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    for (r = 0; r < reps; ++r)
-        for (i = 0; i < n; ++i)
-            fails += @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p) != 0;
-    clock_gettime(CLOCK_MONOTONIC, &t1);
-    us = ((t1.tv_sec - t0.tv_sec) * 1e9 + (t1.tv_nsec - t0.tv_nsec)) / 1e3 / (reps * n);
-    printf("%.3f %d\n", us, fails);
+    double best = 1e300, us;
+    for (r = 0; r < reps; ++r) {   /* best of reps: the machine is shared */
+        clock_gettime(CLOCK_MONOTONIC, &t0);
+        for (i = 0; i < n; ++i) {
+            if (forget) @PREFIX@_forget_table();
+            *fails += @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p) != 0;
+        }
+        clock_gettime(CLOCK_MONOTONIC, &t1);
+        us = ((t1.tv_sec - t0.tv_sec) * 1e9 + (t1.tv_nsec - t0.tv_nsec)) / 1e3 / n;
+        if (us < best) best = us;
+    }
+    return best;
+}
+int main(int argc, char **argv) {
+    int reps = argc > 1 ? atoi(argv[1]) : 20, fails = 0;
+    double cold = run(reps, 1, &fails), warm;
+    fails = 0;
+    warm = run(reps, 0, &fails);
+    printf("%.3f %.3f %d\n", cold, warm, fails);
     return 0;
 }
 """
@@ -69,15 +88,19 @@ def build(out: Path, steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, prefi
 
 
 def time_plans(out: Path, prefix: str = "rollplan", targets=TARGETS, reps: int = 20):
-    """Microseconds per C plan over ``targets`` (built with -O2) and the number of failed plans."""
+    """Microseconds per C plan over ``targets`` (built with -O2, best of ``reps`` sweeps).
+
+    Returns (us with the leaf table recomputed for every plan, us with the table
+    kept for the last k, failed plans).
+    """
     text = _BENCH_C.replace("@PREFIX@", prefix).replace(
         "@TARGETS@", ", ".join("{" + ", ".join(repr(float(x)) for x in t) + "}" for t in targets))
     (out / "bench.c").write_text(text)
     exe = out / "bench"
     subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(exe), str(out / "bench.c"), str(out / f"{prefix}_planner.c"),
                     str(out / f"{prefix}_model.c"), "-lm"], check=True, capture_output=True)
-    us, fails = subprocess.run([str(exe), str(reps)], check=True, capture_output=True, text=True).stdout.split()
-    return float(us), int(fails)
+    cold, warm, fails = subprocess.run([str(exe), str(reps)], check=True, capture_output=True, text=True).stdout.split()
+    return float(cold), float(warm), int(fails)
 
 
 def python_plan_ms(targets=TARGETS) -> float:
@@ -94,10 +117,11 @@ def measure(steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, reps: int = 20
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "c"
         g = build(out, steps_per_leaf)
-        us, fails = time_plans(out, reps=reps)
+        cold, warm, fails = time_plans(out, reps=reps)
         binary = (out / "plan_demo").stat().st_size
         lib = (out / "librollplan.a").stat().st_size
-    res = {"steps_per_leaf": steps_per_leaf, "c_us_per_plan": us, "c_failed_plans": fails,
+    res = {"steps_per_leaf": steps_per_leaf, "c_us_per_plan": cold, "c_us_per_plan_same_k": warm,
+           "c_failed_plans": fails,
            "c_code_bytes": g.code_bytes, "c_model_bytes": g.model_bytes, "c_static_lib_bytes": lib,
            "plan_demo_bytes": binary, "c_work_doubles": g.work_doubles, "targets": len(TARGETS)}
     if python:
@@ -117,7 +141,7 @@ def step_map_error(steps_per_leaf: int, points) -> float:
     return err
 
 
-def plan_error(steps_per_leaf: int, targets=TARGETS) -> dict:
+def plan_error(steps_per_leaf: int, targets=TARGETS + LARGE_TARGETS) -> dict:
     """C plans at ``steps_per_leaf``: largest CVODES-verified residual, largest gap to the Python plan."""
     planner = geometric.GeometricPhasePlanner()
     worst, gap = 0.0, 0.0
@@ -139,7 +163,7 @@ def plan_error(steps_per_leaf: int, targets=TARGETS) -> dict:
     return {"steps_per_leaf": steps_per_leaf, "verified_residual": worst, "gap_to_python": gap}
 
 
-def accuracy(levels=(60, 100, 140, 160, 200, 240, 320)) -> list:
+def accuracy(levels=(80, 120, 160, 200, 240)) -> list:
     """Step-map error and plan exactness against steps per leaf."""
     points_k5 = [(0.69, 0.69, 2.5), (0.69, 0.3, 2.5), (0.1, 0.5, 0.0), (0.5, 0.69, 5.0), (0.3, 0.53, 2.5)]
     points_k10 = [(0.5, 0.69, 10.0)]

@@ -23,6 +23,8 @@ static casadi_int s_iw[SZ_IW];
 static casadi_real s_w[SZ_W];
 static double s_leaf0[3 * NR], s_leaf1[3 * NR];
 static double s_eta[(NR + 1) * (NR + 1)], s_h[(NR + 1) * (NR + 1)];
+/* Radii of the table rows/columns [R]: 0, then the generated function's grid. */
+static const double s_radii[NR + 1] = {@RADII@};
 
 /* Angle wrapped to (-pi, pi]. */
 static double wrap(double x) {
@@ -105,9 +107,17 @@ static int newton(double x[2], double k, double eta_m, double h_m, double tol, d
     return nr <= tol;
 }
 
+/* The table depends on k only; a robot has one k, so it is kept for the last k. */
+static int s_have_table = 0;
+static double s_table_k = 0.0;
+
+void @PREFIX@_forget_table(void) { s_have_table = 0; }
+
 /* Leaf tables and the corner values eta, h of the (a, b) grid (index 0 is r = 0). */
 static int tabulate(double k) {
     int i, j;
+    if (s_have_table && s_table_k == k) return 0;
+    s_have_table = 0;
     s_arg[0] = &k;
     s_res[0] = s_leaf0;
     s_res[1] = s_leaf1;
@@ -124,6 +134,8 @@ static int tabulate(double k) {
             s_h[i * (NR + 1) + j] = hypot(u0 + c * u1 + s * v1, v0 - s * u1 + c * v1);
         }
     }
+    s_have_table = 1;
+    s_table_k = k;
     return 0;
 }
 
@@ -162,14 +174,15 @@ static void start(int i, int j, double eta_m, double h_m, double x[2]) {
         di = di < -0.5 ? -0.5 : (di > 0.5 ? 0.5 : di);
         dj = dj < -0.5 ? -0.5 : (dj > 0.5 ? 0.5 : dj);
     }
-    x[0] = clamp(@PREFIX_UPPER@_A_MAX * (i + 0.5 + di) / NR);
-    x[1] = clamp(@PREFIX_UPPER@_A_MAX * (j + 0.5 + dj) / NR);
+    x[0] = clamp(s_radii[i] + (0.5 + di) * (s_radii[i + 1] - s_radii[i]));
+    x[1] = clamp(s_radii[j] + (0.5 + dj) * (s_radii[j + 1] - s_radii[j]));
 }
 
 int @PREFIX@_plan(double u, double v, double psi, int steps, double k, @PREFIX@_plan_t *plan) {
     double h_des, eta_m, h_m, num, den, tol, x[2], shift[2], eta = 0.0, res_norm = INFINITY;
     double tr, ti, sr, si, fu, fv, gamma, c, s, dr = 1.0;
-    int sum, i, j, iters, cells = 0, found = 0;
+    double cand_lower[MAX_CELLS];
+    int cand[MAX_CELLS], ncand = 0, sum, i, j, iters, cells = 0, found = 0;
     if (plan == NULL) return @PREFIX_UPPER@_BAD_INPUT;
     plan->a = plan->b = plan->gamma = plan->eta = plan->h = NAN;
     plan->residual = INFINITY;
@@ -190,19 +203,29 @@ int @PREFIX@_plan(double u, double v, double psi, int steps, double k, @PREFIX@_
     }
     tol = TOL * (1.0 + fabs(eta_m) + h_m);
     if (tabulate(k)) return @PREFIX_UPPER@_NO_CONVERGENCE;
-    /* cells in order of their smallest a + b (uniform grid: i + j), then i */
-    for (sum = 0; sum <= 2 * (NR - 1) && !found && cells < MAX_CELLS; ++sum) {
-        for (i = sum < NR ? 0 : sum - NR + 1; i <= sum && i < NR && !found && cells < MAX_CELLS; ++i) {
-            j = sum - i;
-            if (!brackets(i, j, eta_m, h_m)) continue;
-            ++cells;
-            start(i, j, eta_m, h_m, x);
-            found = newton(x, k, eta_m, h_m, tol, &res_norm, &iters, shift, &eta);
-            plan->a = x[0];
-            plan->b = x[1];
-            plan->iterations = iters;
-            plan->residual = res_norm;
+    /* the MAX_CELLS bracketing cells of smallest a + b (lower corner), by insertion */
+    for (i = 0; i < NR; ++i) {
+        for (j = 0; j < NR; ++j) {
+            int q;
+            double lower = s_radii[i] + s_radii[j];
+            if ((ncand == MAX_CELLS && lower >= cand_lower[MAX_CELLS - 1]) || !brackets(i, j, eta_m, h_m)) continue;
+            q = ncand < MAX_CELLS ? ncand++ : MAX_CELLS - 1;
+            for (; q > 0 && cand_lower[q - 1] > lower; --q) {
+                cand_lower[q] = cand_lower[q - 1];
+                cand[q] = cand[q - 1];
+            }
+            cand_lower[q] = lower;
+            cand[q] = i * NR + j;
         }
+    }
+    for (sum = 0; sum < ncand && !found; ++sum) {
+        ++cells;
+        start(cand[sum] / NR, cand[sum] % NR, eta_m, h_m, x);
+        found = newton(x, k, eta_m, h_m, tol, &res_norm, &iters, shift, &eta);
+        plan->a = x[0];
+        plan->b = x[1];
+        plan->iterations = iters;
+        plan->residual = res_norm;
     }
     plan->cells = cells;
     if (!cells) return @PREFIX_UPPER@_NO_PLAN;

@@ -26,8 +26,8 @@
  *   @PREFIX@_step_jac(ab[2], k) -> shift[2], eta, direction, jac[4x2]
  *       the same and the Jacobian of (shift, eta, direction) by (a, b).
  *   @PREFIX@_leaf_table(k) -> leaf0[3x@TABLE_RADII@], leaf1[3x@TABLE_RADII@]
- *       coarse (u_a, v_a, psi) of each leaf alone at radii A_MAX*j/@TABLE_RADII@,
- *       used by the planner to bracket a root.
+ *       coarse (u_a, v_a, psi) of each leaf alone at @TABLE_RADII@ fixed radii graded
+ *       towards A_MAX, used by the planner to bracket a root.
  */
 #ifndef @PREFIX_UPPER@_H
 #define @PREFIX_UPPER@_H
@@ -67,13 +67,17 @@ typedef struct {
  * (h_des / steps when eta = 0), h_des = |(u, v)|; then
  * gamma = atan2(v, u) - arg(sum_{j<steps} exp(-i j eta) shift(a, b)).
  *
- * Brackets the root on the coarse leaf table (smallest a + b first), refines by a
- * damped Newton iteration on @PREFIX@_step_jac (at most @MAX_ITER@ iterations per cell,
- * @MAX_CELLS@ cells). Deterministic; static memory only; not reentrant (one static
- * work area). Returns one of the status codes above; `plan` is filled in on
+ * Brackets the root on the coarse leaf table (the @MAX_CELLS@ bracketing cells of smallest
+ * a + b, in that order), refines by a damped Newton iteration on @PREFIX@_step_jac from a
+ * start interpolated in the cell (at most @MAX_ITER@ iterations per cell). The table
+ * depends on k only and is kept for the last k, so repeated plans for one robot skip
+ * it. Deterministic; static memory only; not reentrant (one static work area). Returns one of the status codes above; `plan` is filled in on
  * @PREFIX_UPPER@_OK (and holds the last iterate otherwise).
  */
 int @PREFIX@_plan(double u, double v, double psi, int steps, double k, @PREFIX@_plan_t *plan);
+
+/* Drop the leaf table kept for the last k (the next plan recomputes it). */
+void @PREFIX@_forget_table(void);
 
 /*
  * Convenience wrapper of @PREFIX@_step_jac with plain arguments (static work area).
