@@ -14,19 +14,26 @@ through CasADi's :class:`~casadi.CodeGenerator`; no equation is typed twice:
   bracket the root of (32)-(33) on branch ``m = 0``.
 
 The step map is the Chebyshev spectral scheme of :mod:`rollplan.integrate`
-written with loops: each leaf is integrated over the curve's graded panels
+written with loops: each leaf is integrated over the curve's 10 graded panels
 (its fixed steps), each panel on ``degree + 1`` Chebyshev points. Along a
 curve psi' in (30) does not depend on the state, and (28)-(29) are
 ``[u_a', v_a'] = Rot(-psi) [A, B]`` with ``(A, B)`` their value at psi = 0
 (checked when the function is built). So one ``map`` over the nodes evaluates
-``(A, B, psi')``, a cumulative Chebyshev integration gives psi at the nodes,
-and two weighted sums give ``(u_a, v_a)``. The generated C loops over the
-nodes instead of unrolling them.
+``(A, B, psi')`` and their derivatives by the leaf radius, a cumulative
+Chebyshev integration gives psi at the nodes, and weighted sums give
+``(u_a, v_a)``. The generated C loops over the nodes instead of unrolling
+them. The Jacobian by (a, b) is assembled by the chain rule from the leaves'
+derivatives. A fixed-step RK4 (``mapaccum``) was measured too: it needs about
+512 uniform steps per leaf for 1e-8 at k = 2.5 near A_MAX, i.e. ten times the
+right-side evaluations of the spectral scheme for a worse error.
 
 ``steps_per_leaf`` counts node intervals per leaf: panels x degree. The
-default, :data:`DEFAULT_STEPS_PER_LEAF`, keeps the step map within ~1e-11 of
-the converged one for ``k <= 5`` (``scripts/bench_codegen.py --accuracy``
-measures error against steps per leaf).
+default, :data:`DEFAULT_STEPS_PER_LEAF` = 200 (degree 20), is the smallest
+tried for which the step map stays within 2e-10 of the converged one over the
+whole admissible range ``0 < a, b <= A_MAX`` for ``k <= 5`` and the C plans are
+within 1e-8 of the Python plans and exact to 1e-7 (verified by CVODES); 160
+gives 2e-8 near A_MAX. For k around 10 use 240 or more.
+(``scripts/bench_codegen.py --accuracy`` measures error against steps per leaf.)
 
 The planner (hand-written C glue, not model equations) solves, for branch
 ``m = 0``,
@@ -34,12 +41,14 @@ The planner (hand-written C glue, not model equations) solves, for branch
     eta(a, b) = psi / n                                                 (32)
     h(a, b)   = h_des |sin(eta / 2) / sin(n eta / 2)|   (h_des / n if psi = 0)   (33)
 
-by a damped Newton iteration on the generated step map and its Jacobian,
-started from the centre of the first grid cell (smallest ``a + b``) whose
-corner values bracket the targets, then sets
-``gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift)`` (see
-:mod:`rollplan.geometric`). It uses static memory only, a bounded number of
-iterations and returns a status code.
+by a damped Newton iteration (backtracking on the residual norm, iterates kept
+in ``(0, A_MAX]``) on the generated step map and its Jacobian. It starts in the
+bracketing cells of the leaf table in order of their smallest ``a + b`` (as the
+Python planner orders its brackets), from the targets interpolated linearly in
+the cell, then sets ``gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift)``
+(see :mod:`rollplan.geometric`). The table depends on k only and is kept for
+the last k. Static memory only, a bounded number of iterations, and a status
+code (0 ok, 2 bad input, 3 no bracket, 4 no convergence).
 """
 
 from __future__ import annotations
@@ -82,7 +91,7 @@ DEFAULT_STEPS_PER_LEAF = 200
 #: Node intervals per leaf of the coarse bracketing table (10 panels x degree 4).
 TABLE_STEPS_PER_LEAF = 40
 #: Radii of the bracketing table on (0, A_MAX], graded towards A_MAX (see :func:`table_radii`).
-TABLE_RADII = 48
+TABLE_RADII = 64
 #: Inertia ratio for which the table's radii equidistribute the turn of psi.
 _TABLE_K = 2.5
 #: Default name prefix of the generated C symbols and files.
@@ -295,17 +304,17 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
 def table_radii(count: int = TABLE_RADII) -> np.ndarray:
     """Radii of the bracketing table, graded towards A_MAX.
 
-    Half of the cells are spread evenly over (0, A_MAX], half follow the turn
-    of psi over the first leaf for k = 2.5, which grows steeply towards the
-    singular radius R/sqrt(2) (and with it the density of roots of (32)-(33)):
-    the radii equidistribute ``1/A_MAX + |d eta_0/d r| / TV(eta_0)``.
+    A quarter of the cells are spread evenly over (0, A_MAX], three quarters
+    follow the turn of psi over the first leaf for k = 2.5, which grows steeply
+    towards the singular radius R/sqrt(2) (and with it the density of roots of
+    (32)-(33)): the radii equidistribute ``1/A_MAX + 3 |d eta_0/d r| / TV(eta_0)``.
     """
     curve = figure_eight()
     leaf = leaf_function(curve, 0, 8, "grading")
     fine = np.linspace(0.0, A_MAX, 801)
     eta = np.array(leaf.map(fine.size)(ca.DM.zeros(3), ca.DM(fine).T, _TABLE_K))[2]
     turn = np.abs(np.diff(eta))
-    monitor = np.concatenate([[0.0], np.cumsum(np.diff(fine) / A_MAX + turn / turn.sum())])
+    monitor = np.concatenate([[0.0], np.cumsum(np.diff(fine) / A_MAX + 3.0 * turn / turn.sum())])
     radii = np.interp(np.linspace(0.0, monitor[-1], count + 1)[1:], monitor, fine)
     radii[-1] = A_MAX
     return radii
