@@ -66,29 +66,34 @@ _BENCH_C = r"""
 #include <time.h>
 #include "@PREFIX@.h"
 static const double T[][5] = { @TARGETS@ };
+static double now_us(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec * 1e6 + t.tv_nsec / 1e3;
+}
+/* Mean over the targets of the best of reps plans (the machine is shared); with forget,
+ * the leaf table is recomputed for every plan (a new k each time). */
 static double run(int reps, int forget, int *fails) {
     int n = (int)(sizeof T / sizeof T[0]), r, i;
     @PREFIX@_plan_t p;
-    struct timespec t0, t1;
-    double best = 1e300, us;
-    for (r = 0; r < reps; ++r) {   /* best of reps: the machine is shared */
-        clock_gettime(CLOCK_MONOTONIC, &t0);
-        for (i = 0; i < n; ++i) {
+    double total = 0.0, best, t;
+    for (i = 0; i < n; ++i) {
+        *fails += @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p) != 0;
+        for (best = 1e300, r = 0; r < reps; ++r) {
             if (forget) @PREFIX@_forget_table();
-            *fails += @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p) != 0;
+            t = now_us();
+            @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p);
+            t = now_us() - t;
+            if (t < best) best = t;
         }
-        clock_gettime(CLOCK_MONOTONIC, &t1);
-        us = ((t1.tv_sec - t0.tv_sec) * 1e9 + (t1.tv_nsec - t0.tv_nsec)) / 1e3 / n;
-        if (us < best) best = us;
+        total += best;
     }
-    return best;
+    return total / n;
 }
 int main(int argc, char **argv) {
     int reps = argc > 1 ? atoi(argv[1]) : 20, fails = 0;
-    double cold = run(reps, 1, &fails), warm;
-    fails = 0;
-    warm = run(reps, 0, &fails);
-    printf("%.3f %.3f %d\n", cold, warm, fails);
+    double cold = run(reps, 1, &fails), warm = run(reps, 0, &fails);
+    printf("%.3f %.3f %d\n", cold, warm, fails / 2);
     return 0;
 }
 """
@@ -102,10 +107,10 @@ def build(out: Path, steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, prefi
 
 
 def time_plans(out: Path, prefix: str = "rollplan", targets=TARGETS, reps: int = 20):
-    """Microseconds per C plan over ``targets`` (built with -O2, best of ``reps`` sweeps).
+    """Microseconds per C plan, mean over ``targets`` of the best of ``reps`` runs (built with -O2).
 
     Returns (us with the leaf table recomputed for every plan, us with the table
-    kept for the last k, failed plans).
+    kept from the previous plan of the same k, failed plans).
     """
     text = _BENCH_C.replace("@PREFIX@", prefix).replace(
         "@TARGETS@", ", ".join("{" + ", ".join(repr(float(x)) for x in t) + "}" for t in targets))
