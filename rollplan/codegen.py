@@ -28,11 +28,14 @@ derivatives. A fixed-step RK4 (``mapaccum``) was measured too: it needs about
 right-side evaluations of the spectral scheme for a worse error.
 
 ``steps_per_leaf`` counts node intervals per leaf: panels x degree. The
-default, :data:`DEFAULT_STEPS_PER_LEAF` = 200 (degree 20), is the smallest
-tried for which the step map stays within 2e-10 of the converged one over the
-whole admissible range ``0 < a, b <= A_MAX`` for ``k <= 5`` and the C plans are
-within 1e-8 of the Python plans and exact to 1e-7 (verified by CVODES); 160
-gives 2e-8 near A_MAX. For k around 10 use 240 or more.
+default, :data:`DEFAULT_STEPS_PER_LEAF` = 200 (degree 20), keeps the step map
+within 2e-10 of the converged one over the whole admissible range
+``0 < a, b <= A_MAX`` for ``k <= 5``, below the Python planner's verification
+tolerance (1e-9). Measured on 15 targets, three of them forcing a leaf near
+A_MAX: at 120 the C plans miss (1.1e-7 verified by CVODES, 2e-8 from the Python
+plans), at 160 they pass (1.4e-9, 5e-11) but the step map is off by 1.8e-8 at
+a = b = A_MAX, at 200 they are exact to 9e-11 and within 2e-12 of the Python
+plans. For k around 10 use 240 or more (2.5e-7 at 200, 1.3e-8 at 240).
 (``scripts/bench_codegen.py --accuracy`` measures error against steps per leaf.)
 
 The planner (hand-written C glue, not model equations) solves, for branch

@@ -224,3 +224,23 @@ def test_cli_codegen(tmp_path, capsys):
     assert main(["codegen", "--out", str(tmp_path / "d"), "--prefix", "9x"]) == 2
     assert main(["codegen", "--out", str(tmp_path / "no" / "such")]) == 2
     assert "not allowed" in capsys.readouterr().err
+
+
+def test_plan_demo_no_convergence_is_nonzero(built):
+    """k = 5, h = 2.8 R in one step: the coarse table brackets cells, but branch m = 0 has no root
+    (the Python planner finds none either); the demo says so and exits with 4."""
+    run = demo(built, 2, 2, 0, 1, 5)
+    assert run.returncode == 4 and run.stdout == "" and "no convergence" in run.stderr
+    assert codegen.reference_plan((2.0, 2.0, 0.0), 1, 5.0) is None
+
+
+@pytest.mark.slow
+def test_generated_prefix_builds_and_plans(tmp_path):
+    out = tmp_path / "rp"
+    codegen.generate(out, 160, "rp")
+    run = subprocess.run(["make", "-C", str(out)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert (out / "librp.a").exists()
+    run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], capture_output=True, text=True)
+    a, b = (float(x) for x in run.stdout.split()[:2])
+    assert abs(a - 0.300429) < 5e-7 and abs(b - 0.300429) < 5e-7
