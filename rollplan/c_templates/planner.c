@@ -22,7 +22,8 @@ static casadi_real *s_res[SZ_RES];
 static casadi_int s_iw[SZ_IW];
 static casadi_real s_w[SZ_W];
 static double s_leaf0[3 * NR], s_leaf1[3 * NR];
-static double s_eta[(NR + 1) * (NR + 1)], s_h[(NR + 1) * (NR + 1)];
+/* Corner values eta, h of the (a, b) grid: only for bracketing, so single precision (half the RAM). */
+static float s_eta[(NR + 1) * (NR + 1)], s_h[(NR + 1) * (NR + 1)];
 /* Radii of the table rows/columns [R]: 0, then the generated function's grid. */
 static const double s_radii[NR + 1] = {@RADII@};
 
@@ -130,8 +131,8 @@ static int tabulate(double k) {
             double u1 = j ? s_leaf1[3 * (j - 1)] : 0.0, v1 = j ? s_leaf1[3 * (j - 1) + 1] : 0.0;
             double p1 = j ? s_leaf1[3 * (j - 1) + 2] : 0.0;
             /* second leaf starts at heading p0: its shift turns by -p0 */
-            s_eta[i * (NR + 1) + j] = p0 + p1;
-            s_h[i * (NR + 1) + j] = hypot(u0 + c * u1 + s * v1, v0 - s * u1 + c * v1);
+            s_eta[i * (NR + 1) + j] = (float)(p0 + p1);
+            s_h[i * (NR + 1) + j] = (float)hypot(u0 + c * u1 + s * v1, v0 - s * u1 + c * v1);
         }
     }
     s_have_table = 1;
