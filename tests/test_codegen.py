@@ -166,7 +166,8 @@ def test_rotation_structure_of_curve_ode():
 
 TARGETS = [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 1, 2.5), (2.0, 1.0, 1.0, 3, 2.5)]
 SLOW_TARGETS = [(0.5, 0.5, -2.0, 2, 2.5), (0.0, 1.0, 0.0, 1, 0.0), (-0.4, 0.8, 0.3, 1, 1.5), (1.0, 0.5, 0.2, 2, 4.0),
-                (0.0, 2.8, 0.0, 1, 2.5), (1.0, 2.0, 0.3, 1, 2.5)]   # the last two: leaves near A_MAX
+                (0.0, 2.8, 0.0, 1, 2.5), (1.0, 2.0, 0.3, 1, 2.5),   # leaves near A_MAX
+                (1.5, 0.0, 0.0, 3, 2.5)]                            # psi = 0, n > 1: the limit h_des / n (34)
 
 
 def _check_plan(built, target):
