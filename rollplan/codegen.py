@@ -101,7 +101,7 @@ _TABLE_K = 2.5
 DEFAULT_PREFIX = "rollplan"
 
 # Planner constants (written into the C code).
-_MAX_ITER = 40
+_MAX_ITER = 25
 _MAX_CELLS = 12
 _TOL = 1e-13
 _A_MIN = 1e-6

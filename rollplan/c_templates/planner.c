@@ -14,6 +14,7 @@
 #define MAX_ITER @MAX_ITER@
 #define MAX_CELLS @MAX_CELLS@
 #define TOL @TOL@
+#define MIN_STEP (1.0 / 256.0)  /* smallest damping factor of the line search (9 trials) */
 #define PI 3.14159265358979323846
 
 /* Static work area shared by all calls (no malloc; not reentrant). */
@@ -82,7 +83,7 @@ static int newton(double x[2], double k, double eta_m, double h_m, double tol, d
         if (!(fabs(det) > 0.0) || !isfinite(det)) return 0;
         dx0 = -(jr[3] * r[0] - jr[1] * r[1]) / det;
         dx1 = -(-jr[2] * r[0] + jr[0] * r[1]) / det;
-        for (alpha = 1.0; alpha >= 1.0 / 1024.0; alpha *= 0.5) {
+        for (alpha = 1.0; alpha >= MIN_STEP; alpha *= 0.5) {
             xt[0] = clamp(x[0] + alpha * dx0);
             xt[1] = clamp(x[1] + alpha * dx1);
             if (residual(xt, k, eta_m, h_m, rt, jt, st, &et)) continue;
@@ -90,7 +91,7 @@ static int newton(double x[2], double k, double eta_m, double h_m, double tol, d
             if (nrt < (1.0 - 1e-4 * alpha) * nr || nrt <= tol) break;
         }
         *iters = it + 1;
-        if (alpha < 1.0 / 1024.0) {
+        if (alpha < MIN_STEP) {
             /* no decrease: converged to rounding level, or stuck */
             return nr <= 1e3 * tol;
         }

@@ -71,7 +71,9 @@ typedef struct {
  * a + b, in that order), refines by a damped Newton iteration on @PREFIX@_step_jac from a
  * start interpolated in the cell (at most @MAX_ITER@ iterations per cell). The table
  * depends on k only and is kept for the last k, so repeated plans for one robot skip
- * it. Deterministic; static memory only; not reentrant (one static work area). Returns one of the status codes above; `plan` is filled in on
+ * it. Deterministic; static memory only; not reentrant (one static work area).
+ * Bounded time: at most @MAX_CELLS@ x @MAX_ITER@ x 9 evaluations of @PREFIX@_step_jac (a plan
+ * typically takes 3-6, a failing one a few hundred). Returns one of the status codes above; `plan` is filled in on
  * @PREFIX_UPPER@_OK (and holds the last iterate otherwise).
  */
 int @PREFIX@_plan(double u, double v, double psi, int steps, double k, @PREFIX@_plan_t *plan);
