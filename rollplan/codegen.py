@@ -186,11 +186,13 @@ def _node_rates(curve, index: int) -> ca.Function:
     phi, r, k, psi = ca.SX.sym("phi"), ca.SX.sym("r"), ca.SX.sym("k"), ca.SX.sym("psi")
     params = ca.SX.zeros(curve.n_params)
     params[index] = r
-    full_p = ca.SX.sym("p", curve.n_params)
-    probe = f(phi, ca.SX.sym("x", 3), full_p, k, 0)
+    full_p, x = ca.SX.sym("p", curve.n_params), ca.SX.sym("x", 3)
+    probe = f(phi, x, full_p, k, 0)
     others = [i for i in range(curve.n_params) if i != index]
     if others and ca.depends_on(probe, full_p[others]):
         raise ValueError(f"leaf {index} depends on other parameters than its own radius")
+    if ca.depends_on(probe, x[:2]):
+        raise ValueError("curve ODE lacks the structure the generated step map needs: rates depend on (u_a, v_a)")
     at0 = f(phi, ca.SX.zeros(3), params, k, 0)
     at_psi = f(phi, ca.vertcat(0, 0, psi), params, k, 0)
     g = ca.Function(f"leaf{index}_rates", [phi, r, k], [ca.cse(at0)])
