@@ -1,0 +1,256 @@
+/* @PREFIX@_planner.c -- damped Newton planner on the generated step map (hand-written glue).
+ * The model equations are all in @PREFIX@_model.c, generated from rollplan's symbolic model. */
+#include <math.h>
+#include <stddef.h>
+
+#include "@PREFIX@.h"
+
+#define SZ_ARG @SZ_ARG@
+#define SZ_RES @SZ_RES@
+#define SZ_IW @SZ_IW@
+#define SZ_W @SZ_W@
+#define NR @TABLE_RADII@        /* radii of the bracketing table (plus r = 0) */
+#define A_MIN @A_MIN@
+#define MAX_ITER @MAX_ITER@
+#define MAX_CELLS @MAX_CELLS@
+#define TOL @TOL@
+#define MIN_STEP (1.0 / 256.0)  /* smallest damping factor of the line search (9 trials) */
+#define PI 3.14159265358979323846
+
+/* Static work area shared by all calls (no malloc; not reentrant). */
+static const casadi_real *s_arg[SZ_ARG];
+static casadi_real *s_res[SZ_RES];
+static casadi_int s_iw[SZ_IW];
+static casadi_real s_w[SZ_W];
+static double s_leaf0[3 * NR], s_leaf1[3 * NR];
+/* Corner values eta, h of the (a, b) grid: only for bracketing, so single precision (half the RAM). */
+static float s_eta[(NR + 1) * (NR + 1)], s_h[(NR + 1) * (NR + 1)];
+/* Radii of the table rows/columns [R]: 0, then the generated function's grid. */
+static const double s_radii[NR + 1] = {@RADII@};
+
+/* Angle wrapped to (-pi, pi]. */
+static double wrap(double x) {
+    double m = fmod(PI - x, 2.0 * PI);
+    if (m < 0.0) m += 2.0 * PI;
+    return PI - m;
+}
+
+static double clamp(double x) { return x < A_MIN ? A_MIN : (x > @PREFIX_UPPER@_A_MAX ? @PREFIX_UPPER@_A_MAX : x); }
+
+int @PREFIX@_step_eval(double a, double b, double k, double shift[2], double *eta, double *direction,
+                       double jac[8]) {
+    double ab[2];
+    ab[0] = a;
+    ab[1] = b;
+    s_arg[0] = ab;
+    s_arg[1] = &k;
+    s_res[0] = shift;
+    s_res[1] = eta;
+    s_res[2] = direction;
+    s_res[3] = jac;
+    return @PREFIX@_step_jac(s_arg, s_res, s_iw, s_w, 0);
+}
+
+/* Residual of (32)-(33) and its Jacobian at (a, b). Returns 0 on success. */
+static int residual(const double x[2], double k, double eta_m, double h_m, double r[2], double jr[4],
+                    double shift[2], double *eta) {
+    double jac[8], dir, h;
+    if (@PREFIX@_step_eval(x[0], x[1], k, shift, eta, &dir, jac)) return 1;
+    h = hypot(shift[0], shift[1]);
+    r[0] = *eta - eta_m;
+    r[1] = h - h_m;
+    jr[0] = jac[2];                     /* d eta / d a */
+    jr[1] = jac[6];                     /* d eta / d b */
+    if (h < 1e-300) h = 1e-300;
+    jr[2] = (shift[0] * jac[0] + shift[1] * jac[1]) / h;   /* d h / d a */
+    jr[3] = (shift[0] * jac[4] + shift[1] * jac[5]) / h;   /* d h / d b */
+    return !(isfinite(r[0]) && isfinite(r[1]));
+}
+
+/* Damped Newton from x (in place). Returns 1 if converged. */
+static int newton(double x[2], double k, double eta_m, double h_m, double tol, double *res_norm, int *iters,
+                  double shift[2], double *eta) {
+    double r[2], jr[4], xt[2] = {0.0, 0.0}, rt[2] = {0.0, 0.0}, jt[4] = {0.0, 0.0, 0.0, 0.0};
+    double st[2] = {0.0, 0.0}, et = 0.0, nr, nrt = INFINITY, det, dx0, dx1, alpha;
+    int it;
+    *iters = 0;
+    if (residual(x, k, eta_m, h_m, r, jr, shift, eta)) return 0;
+    nr = hypot(r[0], r[1]);
+    for (it = 0; it < MAX_ITER; ++it) {
+        *res_norm = nr;
+        if (nr <= tol) return 1;
+        det = jr[0] * jr[3] - jr[1] * jr[2];
+        if (!(fabs(det) > 0.0) || !isfinite(det)) return 0;
+        dx0 = -(jr[3] * r[0] - jr[1] * r[1]) / det;
+        dx1 = -(-jr[2] * r[0] + jr[0] * r[1]) / det;
+        for (alpha = 1.0; alpha >= MIN_STEP; alpha *= 0.5) {
+            xt[0] = clamp(x[0] + alpha * dx0);
+            xt[1] = clamp(x[1] + alpha * dx1);
+            if (residual(xt, k, eta_m, h_m, rt, jt, st, &et)) continue;
+            nrt = hypot(rt[0], rt[1]);
+            if (nrt < (1.0 - 1e-4 * alpha) * nr || nrt <= tol) break;
+        }
+        *iters = it + 1;
+        if (alpha < MIN_STEP) {
+            /* no decrease: converged to rounding level, or stuck */
+            return nr <= 1e3 * tol;
+        }
+        x[0] = xt[0];
+        x[1] = xt[1];
+        r[0] = rt[0];
+        r[1] = rt[1];
+        jr[0] = jt[0]; jr[1] = jt[1]; jr[2] = jt[2]; jr[3] = jt[3];
+        shift[0] = st[0];
+        shift[1] = st[1];
+        *eta = et;
+        nr = nrt;
+    }
+    *res_norm = nr;
+    return nr <= tol;
+}
+
+/* The table depends on k only; a robot has one k, so it is kept for the last k. */
+static int s_have_table = 0;
+static double s_table_k = 0.0;
+
+void @PREFIX@_forget_table(void) { s_have_table = 0; }
+
+/* Leaf tables and the corner values eta, h of the (a, b) grid (index 0 is r = 0). */
+static int tabulate(double k) {
+    int i, j;
+    if (s_have_table && s_table_k == k) return 0;
+    s_have_table = 0;
+    s_arg[0] = &k;
+    s_res[0] = s_leaf0;
+    s_res[1] = s_leaf1;
+    if (@PREFIX@_leaf_table(s_arg, s_res, s_iw, s_w, 0)) return 1;
+    for (i = 0; i <= NR; ++i) {
+        double u0 = i ? s_leaf0[3 * (i - 1)] : 0.0, v0 = i ? s_leaf0[3 * (i - 1) + 1] : 0.0;
+        double p0 = i ? s_leaf0[3 * (i - 1) + 2] : 0.0;
+        double c = cos(p0), s = sin(p0);
+        for (j = 0; j <= NR; ++j) {
+            double u1 = j ? s_leaf1[3 * (j - 1)] : 0.0, v1 = j ? s_leaf1[3 * (j - 1) + 1] : 0.0;
+            double p1 = j ? s_leaf1[3 * (j - 1) + 2] : 0.0;
+            /* second leaf starts at heading p0: its shift turns by -p0 */
+            s_eta[i * (NR + 1) + j] = (float)(p0 + p1);
+            s_h[i * (NR + 1) + j] = (float)hypot(u0 + c * u1 + s * v1, v0 - s * u1 + c * v1);
+        }
+    }
+    s_have_table = 1;
+    s_table_k = k;
+    return 0;
+}
+
+static int brackets(int i, int j, double eta_m, double h_m) {
+    int c[4], q;
+    double emin, emax, hmin, hmax;
+    c[0] = i * (NR + 1) + j;
+    c[1] = c[0] + 1;
+    c[2] = c[0] + NR + 1;
+    c[3] = c[2] + 1;
+    emin = emax = s_eta[c[0]];
+    hmin = hmax = s_h[c[0]];
+    for (q = 1; q < 4; ++q) {
+        emin = fmin(emin, s_eta[c[q]]);
+        emax = fmax(emax, s_eta[c[q]]);
+        hmin = fmin(hmin, s_h[c[q]]);
+        hmax = fmax(hmax, s_h[c[q]]);
+    }
+    return emin <= eta_m && eta_m <= emax && hmin <= h_m && h_m <= hmax;
+}
+
+/* Initial guess in cell (i, j): the targets interpolated linearly from the corner values
+ * (kept inside the cell), or the cell centre where that is singular. */
+static void start(int i, int j, double eta_m, double h_m, double x[2]) {
+    const int c0 = i * (NR + 1) + j, c1 = c0 + NR + 1;   /* (i, j) and (i + 1, j) */
+    double ec = 0.25 * (s_eta[c0] + s_eta[c0 + 1] + s_eta[c1] + s_eta[c1 + 1]);
+    double hc = 0.25 * (s_h[c0] + s_h[c0 + 1] + s_h[c1] + s_h[c1 + 1]);
+    double ea = 0.5 * (s_eta[c1] + s_eta[c1 + 1] - s_eta[c0] - s_eta[c0 + 1]);
+    double eb = 0.5 * (s_eta[c0 + 1] + s_eta[c1 + 1] - s_eta[c0] - s_eta[c1]);
+    double ha = 0.5 * (s_h[c1] + s_h[c1 + 1] - s_h[c0] - s_h[c0 + 1]);
+    double hb = 0.5 * (s_h[c0 + 1] + s_h[c1 + 1] - s_h[c0] - s_h[c1]);
+    double det = ea * hb - eb * ha, di = 0.0, dj = 0.0;
+    if (fabs(det) > 1e-300 && isfinite(det)) {
+        di = (hb * (eta_m - ec) - eb * (h_m - hc)) / det;
+        dj = (ea * (h_m - hc) - ha * (eta_m - ec)) / det;
+        di = di < -0.5 ? -0.5 : (di > 0.5 ? 0.5 : di);
+        dj = dj < -0.5 ? -0.5 : (dj > 0.5 ? 0.5 : dj);
+    }
+    x[0] = clamp(s_radii[i] + (0.5 + di) * (s_radii[i + 1] - s_radii[i]));
+    x[1] = clamp(s_radii[j] + (0.5 + dj) * (s_radii[j + 1] - s_radii[j]));
+}
+
+int @PREFIX@_plan(double u, double v, double psi, int steps, double k, @PREFIX@_plan_t *plan) {
+    double h_des, eta_m, h_m, num, den, tol, x[2], shift[2], eta = 0.0, res_norm = INFINITY;
+    double tr, ti, sr, si, fu, fv, gamma, c, s, dr = 1.0;
+    double cand_lower[MAX_CELLS];
+    int cand[MAX_CELLS], ncand = 0, sum, i, j, iters, cells = 0, found = 0;
+    if (plan == NULL) return @PREFIX_UPPER@_BAD_INPUT;
+    plan->a = plan->b = plan->gamma = plan->eta = plan->h = NAN;
+    plan->residual = INFINITY;
+    plan->iterations = plan->cells = 0;
+    if (!(isfinite(u) && isfinite(v) && isfinite(psi) && isfinite(k)) || steps < 1 || k < 0.0)
+        return @PREFIX_UPPER@_BAD_INPUT;
+    h_des = hypot(u, v);
+    if (!(h_des > 0.0)) return @PREFIX_UPPER@_BAD_INPUT;
+    /* branch m = 0 of (32)-(33); the limit (34) where sin(n eta / 2) = sin(eta / 2) = 0 */
+    eta_m = psi / steps;
+    num = sin(eta_m / 2.0);
+    den = sin(steps * eta_m / 2.0);
+    if (fabs(den) < 1e-12) {
+        if (fabs(num) >= 1e-12) return @PREFIX_UPPER@_NO_PLAN;
+        h_m = h_des / steps;
+    } else {
+        h_m = h_des * fabs(num / den);
+    }
+    tol = TOL * (1.0 + fabs(eta_m) + h_m);
+    if (tabulate(k)) return @PREFIX_UPPER@_NO_CONVERGENCE;
+    /* the MAX_CELLS bracketing cells of smallest a + b (lower corner), by insertion */
+    for (i = 0; i < NR; ++i) {
+        for (j = 0; j < NR; ++j) {
+            int q;
+            double lower = s_radii[i] + s_radii[j];
+            if ((ncand == MAX_CELLS && lower >= cand_lower[MAX_CELLS - 1]) || !brackets(i, j, eta_m, h_m)) continue;
+            q = ncand < MAX_CELLS ? ncand++ : MAX_CELLS - 1;
+            for (; q > 0 && cand_lower[q - 1] > lower; --q) {
+                cand_lower[q] = cand_lower[q - 1];
+                cand[q] = cand[q - 1];
+            }
+            cand_lower[q] = lower;
+            cand[q] = i * NR + j;
+        }
+    }
+    for (sum = 0; sum < ncand && !found; ++sum) {
+        ++cells;
+        start(cand[sum] / NR, cand[sum] % NR, eta_m, h_m, x);
+        found = newton(x, k, eta_m, h_m, tol, &res_norm, &iters, shift, &eta);
+        plan->a = x[0];
+        plan->b = x[1];
+        plan->iterations = iters;
+        plan->residual = res_norm;
+    }
+    plan->cells = cells;
+    if (!cells) return @PREFIX_UPPER@_NO_PLAN;
+    if (!found) return @PREFIX_UPPER@_NO_CONVERGENCE;
+    /* gamma = arg(target) - arg(sum_{j<n} exp(-i j eta) shift) */
+    sr = 0.0;
+    si = 0.0;
+    for (i = 0; i < steps; ++i) {
+        sr += cos(i * eta);
+        si -= sin(i * eta);
+    }
+    tr = sr * shift[0] - si * shift[1];
+    ti = sr * shift[1] + si * shift[0];
+    gamma = wrap(atan2(v, u) - atan2(ti, tr));
+    /* prediction of the generated step map: n steps, the displacement turned by gamma */
+    c = cos(gamma);
+    s = sin(gamma);
+    fu = c * tr - s * ti;
+    fv = s * tr + c * ti;
+    dr = wrap(steps * eta - psi);
+    plan->gamma = gamma;
+    plan->eta = eta;
+    plan->h = hypot(shift[0], shift[1]);
+    plan->residual = sqrt((fu - u) * (fu - u) + (fv - v) * (fv - v) + dr * dr);
+    return @PREFIX_UPPER@_OK;
+}

@@ -1,0 +1,224 @@
+"""Measure the generated C planner: microseconds per plan, code size, and accuracy vs steps per leaf.
+
+Usage::
+
+    python scripts/bench_codegen.py                 # timing and code size at the default steps per leaf
+    python scripts/bench_codegen.py --accuracy      # also: error vs steps per leaf (writes results/codegen_accuracy.json)
+
+:func:`measure` is the entry point for ``scripts/benchmark.py``. Needs a C compiler (``cc``) and ``make``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from rollplan import codegen, geometric
+from rollplan.curves import figure_eight
+from rollplan.integrate import spectral_step
+from rollplan.io import write_json
+
+#: Targets (u, v, psi, steps, k) of the timing run.
+TARGETS = [
+    (0.0, 1.0, 0.0, 1, 2.5),
+    (1.0, 0.0, 0.0, 1, 2.5),
+    (0.3, -0.2, 0.5, 1, 2.5),
+    (2.0, 1.0, 1.0, 3, 2.5),
+    (0.5, 0.5, -2.0, 2, 2.5),
+    (0.0, 1.0, 0.0, 1, 0.0),
+    (0.0, 1.0, 0.0, 1, 5.0),
+    (-0.4, 0.8, 0.3, 1, 1.5),
+]
+
+#: Extra targets of the accuracy sweep whose leaves come close to A_MAX (where the step map is hardest).
+LARGE_TARGETS = [
+    (0.0, 2.8, 0.0, 1, 2.5),
+    (1.0, 2.0, 0.3, 1, 2.5),
+    (0.0, 2.0, 0.0, 1, 0.0),
+    (3.0, 3.0, 0.2, 2, 2.5),
+]
+
+#: Leaves (a, b, k) near A_MAX whose own step is the target (psi = eta(a, b), n = 1): plans that must
+#: use such a leaf, where the step map is hardest to integrate.
+STRESS_LEAVES = [(0.688, 0.3, 2.5), (0.68, 0.5, 5.0), (0.685, 0.2, 1.0)]
+
+
+def stress_targets():
+    """Targets (u, v, psi, 1, k) reached by one step of the figure eights in :data:`STRESS_LEAVES`."""
+    out = []
+    for a, b, k in STRESS_LEAVES:
+        s = geometric.step(a, b, k)
+        out.append((float(s.shift[0]), float(s.shift[1]), float(s.eta), 1, k))
+    return out
+
+
+_BENCH_C = r"""
+#define _POSIX_C_SOURCE 199309L
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+#include "@PREFIX@.h"
+static const double T[][5] = { @TARGETS@ };
+static double now_us(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec * 1e6 + t.tv_nsec / 1e3;
+}
+/* Mean over the targets of the best of reps plans (the machine is shared); with forget,
+ * the leaf table is recomputed for every plan (a new k each time). */
+static double run(int reps, int forget, int *fails) {
+    int n = (int)(sizeof T / sizeof T[0]), r, i;
+    @PREFIX@_plan_t p;
+    double total = 0.0, best, t;
+    for (i = 0; i < n; ++i) {
+        *fails += @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p) != 0;
+        for (best = 1e300, r = 0; r < reps; ++r) {
+            if (forget) @PREFIX@_forget_table();
+            t = now_us();
+            @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p);
+            t = now_us() - t;
+            if (t < best) best = t;
+        }
+        total += best;
+    }
+    return total / n;
+}
+int main(int argc, char **argv) {
+    int reps = argc > 1 ? atoi(argv[1]) : 20, fails = 0;
+    double cold = run(reps, 1, &fails), warm = run(reps, 0, &fails);
+    printf("%.3f %.3f %d\n", cold, warm, fails / 2);
+    return 0;
+}
+"""
+
+
+def build(out: Path, steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, prefix: str = "rollplan"):
+    """Generate the library into ``out`` and build ``plan_demo``; returns the GeneratedCode."""
+    g = codegen.generate(out, steps_per_leaf, prefix)
+    subprocess.run(["make", "-s", "-C", str(out)], check=True, capture_output=True)
+    return g
+
+
+def time_plans(out: Path, prefix: str = "rollplan", targets=TARGETS, reps: int = 20):
+    """Microseconds per C plan, mean over ``targets`` of the best of ``reps`` runs (built with -O2).
+
+    Returns (us with the leaf table recomputed for every plan, us with the table
+    kept from the previous plan of the same k, failed plans).
+    """
+    text = _BENCH_C.replace("@PREFIX@", prefix).replace(
+        "@TARGETS@", ", ".join("{" + ", ".join(repr(float(x)) for x in t) + "}" for t in targets))
+    (out / "bench.c").write_text(text)
+    exe = out / "bench"
+    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(exe), str(out / "bench.c"), str(out / f"{prefix}_planner.c"),
+                    str(out / f"{prefix}_model.c"), "-lm"], check=True, capture_output=True)
+    cold, warm, fails = subprocess.run([str(exe), str(reps)], check=True, capture_output=True, text=True).stdout.split()
+    return float(cold), float(warm), int(fails)
+
+
+def python_plan_ms(targets=TARGETS) -> float:
+    """Milliseconds per Python plan (IPOPT, with CVODES verification) over ``targets``."""
+    geometric.plan(targets[0][:3], targets[0][3], k=targets[0][4])  # warm up (builds the planner)
+    t0 = time.perf_counter()
+    for u, v, psi, n, k in targets:
+        geometric.plan((u, v, psi), n, k=k)
+    return (time.perf_counter() - t0) / len(targets) * 1e3
+
+
+def measure(steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, reps: int = 20, python: bool = True,
+            targets=TARGETS) -> dict:
+    """Timing and size of the C planner (and of the Python planner for comparison).
+
+    ``targets`` are (u, v, psi, steps, k) tuples. Keys of the result: ``c_us_per_plan``
+    (leaf table recomputed for every plan, i.e. a new k each time),
+    ``c_us_per_plan_same_k`` (table kept between plans of equal k), ``c_code_bytes``
+    (generated .c and .h), ``c_static_lib_bytes``, ``plan_demo_bytes``,
+    ``c_work_doubles`` (static work memory), ``python_ms_per_plan``.
+    """
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "c"
+        g = build(out, steps_per_leaf)
+        cold, warm, fails = time_plans(out, targets=targets, reps=reps)
+        binary = (out / "plan_demo").stat().st_size
+        lib = (out / "librollplan.a").stat().st_size
+    res = {"steps_per_leaf": steps_per_leaf, "c_us_per_plan": cold, "c_us_per_plan_same_k": warm,
+           "c_failed_plans": fails,
+           "c_code_bytes": g.code_bytes, "c_model_bytes": g.model_bytes, "c_static_lib_bytes": lib,
+           "plan_demo_bytes": binary, "c_work_doubles": g.work_doubles, "targets": len(targets)}
+    if python:
+        res["python_ms_per_plan"] = python_plan_ms(targets)
+    return res
+
+
+def step_map_error(steps_per_leaf: int, points) -> float:
+    """Largest error of the generated step map (its symbolic twin) against a converged spectral reference."""
+    step, _ = codegen.step_functions(steps_per_leaf)
+    ref = spectral_step(figure_eight(), 48)
+    err = 0.0
+    for a, b, k in points:
+        got = np.concatenate([np.array(x).ravel() for x in step([a, b], k)[:2]])
+        want = np.array(ref(ca.DM.zeros(3), ca.vertcat(a, b), k, 0)).ravel()
+        err = max(err, float(np.abs(got - want).max()))
+    return err
+
+
+def plan_error(steps_per_leaf: int, targets=None) -> dict:
+    """C plans at ``steps_per_leaf``: largest CVODES-verified residual, largest gap to the Python plan."""
+    targets = TARGETS + LARGE_TARGETS + stress_targets() if targets is None else targets
+    planner = geometric.GeometricPhasePlanner()
+    worst, gap = 0.0, 0.0
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "c"
+        build(out, steps_per_leaf)
+        for u, v, psi, n, k in targets:
+            run = subprocess.run([str(out / "plan_demo"), *(repr(float(x)) for x in (u, v, psi)), str(n), repr(k)],
+                                 capture_output=True, text=True)
+            if run.returncode:
+                return {"steps_per_leaf": steps_per_leaf, "failed": f"{(u, v, psi, n, k)}: {run.stderr.strip()}"}
+            a, b, gamma, _ = (float(x) for x in run.stdout.split())
+            final = planner.verify(a, b, k, gamma, n)
+            err = [final[0] - u, final[1] - v, float(geometric.wrap(final[2] - psi)), final[3], final[4]]
+            worst = max(worst, float(np.linalg.norm(err)))
+            q = codegen.reference_plan((u, v, psi), n, k, near=(a, b))
+            if q is not None:
+                gap = max(gap, max(abs(q.a - a), abs(q.b - b), abs(float(geometric.wrap(q.gamma - gamma)))))
+    return {"steps_per_leaf": steps_per_leaf, "verified_residual": worst, "gap_to_python": gap}
+
+
+def accuracy(levels=(120, 160, 200, 240)) -> list:
+    """Step-map error and plan exactness against steps per leaf."""
+    points_k5 = [(0.69, 0.69, 2.5), (0.69, 0.3, 2.5), (0.1, 0.5, 0.0), (0.5, 0.69, 5.0), (0.3, 0.53, 2.5)]
+    points_k10 = [(0.5, 0.69, 10.0)]
+    rows = []
+    for n in levels:
+        row = {"steps_per_leaf": n, "step_map_error_k_le_5": step_map_error(n, points_k5),
+               "step_map_error_k10": step_map_error(n, points_k10)}
+        row.update(plan_error(n))
+        rows.append(row)
+        print(json.dumps(row))
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps-per-leaf", type=int, default=codegen.DEFAULT_STEPS_PER_LEAF)
+    ap.add_argument("--reps", type=int, default=20)
+    ap.add_argument("--accuracy", action="store_true", help="measure error against steps per leaf")
+    args = ap.parse_args()
+    res = measure(args.steps_per_leaf, args.reps)
+    print(json.dumps(res, indent=1))
+    if args.accuracy:
+        rows = accuracy()
+        Path("results").mkdir(exist_ok=True)
+        write_json("results/codegen_accuracy.json", {"timing": res, "accuracy": rows})
+        print("wrote results/codegen_accuracy.json")
+
+
+if __name__ == "__main__":
+    main()
