@@ -118,11 +118,18 @@ class CvodesIntegrator:
 
     Used to verify plans and to sample trajectories; independent of the
     spectral scheme and of the step-composition rules the planner relies on.
+
+    ``multistep`` is CVODES' linear multistep method: ``"adams"`` (default;
+    the ODE is not stiff on the admissible range, and at tolerances near
+    1e-13 the high-order Adams method takes far fewer steps than BDF, which
+    is limited to order 5) or ``"bdf"``. Both are checked against scipy's
+    DOP853 in ``tests/test_performance.py``.
     """
 
     curve: Curve
     reltol: float = 1e-12
     abstol: float = 1e-13
+    multistep: str = "adams"
 
     def _integrator(self, index: int, grid):
         f = piece_rhs(self.curve, index)
@@ -130,7 +137,8 @@ class CvodesIntegrator:
         x = ca.SX.sym("x", 3)
         p = ca.SX.sym("p", self.curve.n_params + 2)
         ode = f(phi, x, p[: self.curve.n_params], p[-2], p[-1])
-        opts = {"abstol": self.abstol, "reltol": self.reltol, "max_num_steps": 200000}
+        opts = {"abstol": self.abstol, "reltol": self.reltol, "max_num_steps": 200000,
+                "linear_multistep_method": self.multistep}
         return ca.integrator(f"cvodes{index}", "cvodes", {"t": phi, "x": x, "p": p, "ode": ode},
                              0.0, list(grid), opts)
 
