@@ -127,6 +127,13 @@ def plan_row(index: int, row: dict, method: str = "ipopt") -> dict:
                 "reason": (str(exc).splitlines() or [type(exc).__name__])[0]}
 
 
+def _ignore_sigint():
+    """Worker initializer: Ctrl-C is handled by the parent, which stops the pool."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def _plan_job(job):
     index, row, method = job
     return plan_row(index, row, method)
@@ -234,7 +241,7 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
                 results = map(_plan_job, todo)
             else:
                 ctx = multiprocessing.get_context("spawn")
-                pool = ctx.Pool(min(jobs, len(todo)))
+                pool = ctx.Pool(min(jobs, len(todo)), initializer=_ignore_sigint)
                 results = pool.imap(_plan_job, todo, chunksize=1)   # yields in input order
             if report:
                 report(done, len(rows), failed)
