@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
@@ -128,12 +129,9 @@ def compute_atlas(k: float, steps: int = 1, resolution: int = 81, planner=None, 
     return Atlas(k, int(steps), r, r.copy(), h, eta, det, total_h, total_psi, fold)
 
 
+@lru_cache(maxsize=4)
 def _cached_atlas_function(planner) -> ca.Function:
-    fun = getattr(planner, "_atlas_function", None)
-    if fun is None:
-        fun = atlas_function(planner.step_map)
-        planner._atlas_function = fun
-    return fun
+    return atlas_function(planner.step_map)
 
 
 def atlas_to_dict(at: Atlas) -> dict:
