@@ -449,8 +449,26 @@ Fixes (separate commits, public API unchanged, verification unchanged in kind an
    the psi = 0 rates turned by -psi; checked numerically when the map is built) with CSE per node:
    125k -> 90k SX instructions, 0.31 -> 0.20 ms per evaluation; accuracy vs scipy <= 2e-13.
 
-Remaining cost of a warm plan: see the profile table above (the IPOPT call is now the largest part; the
-'newton' method takes about half of it)."""
+Remaining cost of a warm plan (CPU time by time.process_time during development, k = 2.5, target
+(0.5, 0.3, 0.4), n = 2: 12.6 ms in all): the IPOPT solve 6.2 ms (3 iterations; 5 constraint-Jacobian
+evaluations of 0.46 ms and 4 constraint evaluations of 0.15 ms = 2.9 ms, the rest is IPOPT/MUMPS per-solve and
+per-iteration overhead, which no IPOPT option tried changed: scaling, mu strategy, mu_init, bound_push, SPRAL);
+the CVODES verification 1.6 ms per step (258 Adams steps per leaf at 1e-13; ~0.5 ms of each leaf is the
+integrator call's fixed cost); bracketing 0.6 ms; the step map for gamma 0.15 ms; Python glue ~2 ms.
+The 'newton' method solves the same roots in 2.3 ms (4 iterations of residual + Jacobian), but from the
+cell centre it can converge to a root outside the bracketing cell: on 80 random targets (k in {0, 1, 2.5, 5},
+n in 1..3) it returned the same plan as IPOPT 62 times, a longer plan 3 times (IPOPT's was shorter), and
+both found no plan 15 times. So IPOPT stays the default; a Newton step accepted only inside the bracketing
+cell (falling back to IPOPT) would save ~4 ms per plan.
+
+Why the 50x budget is missed: the hand-written baseline, started at rollplan's bracket, converges in
+4-5 residual evaluations (plus finite-difference Jacobians: ~13 DOP853 figure-eight integrations of ~5-10 ms
+CPU each), i.e. 60-70 ms CPU. The verification that every rollplan plan must pass (an independent CVODES
+integration at 1e-13, n steps) alone costs 1.6 ms per step, 1/40 of the whole baseline; with the root solve
+the floor is ~5 ms (newton) to ~9 ms (ipopt) for n = 1. The measured ratio is 4-6x against the baseline at
+rtol 1e-10 (whose plans are 10x less accurate: residual 2e-11 to 4e-11 against 2e-13 to 7e-12) and 5-24x
+against the baseline at rtol 1e-13, the equal-accuracy comparison. A 50x ratio would need a plan in ~1.3 ms,
+below the cost of the verification alone."""
 
 
 def main(argv=None):
