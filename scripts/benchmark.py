@@ -458,8 +458,9 @@ integrator call's fixed cost); bracketing 0.6 ms; the step map for gamma 0.15 ms
 The 'newton' method solves the same roots in 2.3 ms (4 iterations of residual + Jacobian), but from the
 cell centre it can converge to a root outside the bracketing cell: on 80 random targets (k in {0, 1, 2.5, 5},
 n in 1..3) it returned the same plan as IPOPT 62 times, a longer plan 3 times (IPOPT's was shorter), and
-both found no plan 15 times. So IPOPT stays the default; a Newton step accepted only inside the bracketing
-cell (falling back to IPOPT) would save ~4 ms per plan.
+both found no plan 15 times. So IPOPT stays the default. A "hybrid" (Newton accepted only inside the
+bracketing cell, else IPOPT) gave IPOPT's plans on 65/65 but was slower (median 16.2 vs 14.4 ms CPU), since
+Newton from the cell centre usually ends outside the cell; it was not kept.
 
 Why the 50x budget is missed: the hand-written baseline, started at rollplan's bracket, converges in
 4-5 residual evaluations (plus finite-difference Jacobians: ~13 DOP853 figure-eight integrations of ~5-10 ms
