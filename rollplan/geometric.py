@@ -350,7 +350,7 @@ class GeometricPhasePlanner:
         hmin, hmax = span(h)
         order = np.argsort(emin, kind="stable")
         cells = {"r": r, "n": r.size - 1, "order": order, "emin_sorted": emin[order],
-                 "emin": emin, "emax": emax, "hmin": hmin, "hmax": hmax,
+                 "emin": emin, "emax": emax, "hmin": hmin, "hmax": hmax, "eta": eta, "h": h,
                  "width": float((emax - emin).max()) if emin.size else 0.0,
                  "eta_lo": float(emin.min()), "eta_hi": float(emax.max())}
         self._cell_index[k] = cells
@@ -360,7 +360,8 @@ class GeometricPhasePlanner:
         """Grid cells that bracket a root of (32)-(33) on some branch m.
 
         Returns an array with one row per (cell, m): lower bound of a + b in the
-        cell, a0, b0 (cell centre), cell half-widths da, db, m, eta_m, h_m;
+        cell, a0, b0 (cell centre), cell half-widths da, db, m, eta_m, h_m, and
+        the solver's start (a_s, b_s) in the cell (see :func:`_cell_start`);
         sorted by the lower bound.
 
         A cell brackets branch m when ``n eta = psi + 2 pi m`` for some eta
@@ -394,8 +395,9 @@ class GeometricPhasePlanner:
         ii, jj = cell // n, cell % n
         eta_m = (psi + two_pi * m) / steps
         h_m = _target_shift(h_des, eta_m, steps)
+        a_s, b_s = _cell_start(c["eta"], c["h"], r, ii, jj, eta_m, h_m)
         out = np.column_stack([r[ii] + r[jj], 0.5 * (r[ii] + r[ii + 1]), 0.5 * (r[jj] + r[jj + 1]),
-                               0.5 * (r[ii + 1] - r[ii]), 0.5 * (r[jj + 1] - r[jj]), m, eta_m, h_m])
+                               0.5 * (r[ii + 1] - r[ii]), 0.5 * (r[jj + 1] - r[jj]), m, eta_m, h_m, a_s, b_s])
         return out[np.lexsort((m, cell, out[:, 0]))]
 
     # -- solve -----------------------------------------------------------------------
@@ -417,12 +419,12 @@ class GeometricPhasePlanner:
         found: list = []
         solves = 0
         last_status = "no bracket"
-        for lower, a0, b0, da, db, m, eta_m, h_m in brackets:
+        for lower, a0, b0, da, db, m, eta_m, h_m, a_s, b_s in brackets:
             if not all_solutions and found and found[0][0] + found[0][1] <= lower:
                 break  # no bracket left can hold a shorter path
             if any(f[2].branch == m and abs(f[0] - a0) <= 2 * da and abs(f[1] - b0) <= 2 * db for f in found):
                 continue  # this cell's root is one already found
-            x, status, iters, ok = self._solve([a0, b0], [k, eta_m, h_m])
+            x, status, iters, ok = self._solve([a_s, b_s], [k, eta_m, h_m])
             solves += 1
             last_status = status
             if not ok or any(abs(x[0] - f[0]) < 1e-7 and abs(x[1] - f[1]) < 1e-7 for f in found):
@@ -491,6 +493,31 @@ class GeometricPhasePlanner:
         return Trajectory(cat(0.0, theta), cat(0.0, u_o), cat(0.0, v_o), cat(0.0, xs[:, 0] * R),
                           cat(0.0, xs[:, 1] * R), cat(0.0, xs[:, 2]), np.vstack([[0, 0, -R], pts * R]),
                           cat(zero, leaf).astype(int), cat(zero, step_no).astype(int))
+
+
+def _cell_start(eta, h, r, ii, jj, eta_m, h_m):
+    """Start of the root solve in cell (ii, jj): the root of the tables' bilinear model, linearized at
+    the cell centre, clipped to the cell (the centre where the model is singular).
+
+    ``eta``, ``h``: tabulated eta(a_i, b_j), h(a_i, b_j); returns arrays (a_s, b_s).
+    """
+    def corners(z):
+        return z[ii, jj], z[ii + 1, jj], z[ii, jj + 1], z[ii + 1, jj + 1]
+
+    e00, e10, e01, e11 = corners(eta)
+    h00, h10, h01, h11 = corners(h)
+    res_e = eta_m - 0.25 * (e00 + e10 + e01 + e11)
+    res_h = h_m - 0.25 * (h00 + h10 + h01 + h11)
+    es, et = 0.5 * (e10 - e00 + e11 - e01), 0.5 * (e01 - e00 + e11 - e10)
+    hs, ht = 0.5 * (h10 - h00 + h11 - h01), 0.5 * (h01 - h00 + h11 - h10)
+    det = es * ht - et * hs
+    ok = np.abs(det) > 1e-14 * (np.abs(es * ht) + np.abs(et * hs) + 1e-300)
+    safe = np.where(ok, det, 1.0)
+    ds = np.where(ok, (res_e * ht - et * res_h) / safe, 0.0)
+    dt = np.where(ok, (es * res_h - hs * res_e) / safe, 0.0)
+    s = np.clip(0.5 + ds, 0.0, 1.0)
+    t = np.clip(0.5 + dt, 0.0, 1.0)
+    return r[ii] + s * (r[ii + 1] - r[ii]), r[jj] + t * (r[jj + 1] - r[jj])
 
 
 def _target_shift(h_des, eta_m, steps):
