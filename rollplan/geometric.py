@@ -241,7 +241,8 @@ def _ipopt_solver(residual: ca.Function):
 
 def _newton_solver(residual: ca.Function):
     rf = ca.rootfinder("gp_newton", "newton", residual,
-                       {"abstol": 1e-14, "abstolStep": 1e-16, "max_iter": 40, "error_on_fail": False})
+                       {"abstol": 1e-14, "abstolStep": 1e-16, "max_iter": 40, "error_on_fail": False,
+                        "show_eval_warnings": False})  # NaN outside the admissible range is a failed solve
 
     def solve(x0, par_value):
         x = np.array(rf(x0, par_value)).ravel()
