@@ -17,9 +17,9 @@ the printed equations (28)-(30) for the figure eight of circles (35) in numpy
 (nothing from rollplan), integrated by ``solve_ivp`` (DOP853, rtol 1e-10,
 atol 1e-12), and (32)-(33) solved by ``scipy.optimize.least_squares``
 (trust-region reflective, bounds (0, A_MAX], 2-point finite-difference
-Jacobian). It is started from the centre of the bracketing cell of rollplan's
-plan (same branch m, same eta_m and h_m), i.e. it gets the branch selection
-for free and is not timed for it. Both plans' gamma come from the same
+Jacobian). It is started from the point where rollplan starts its root solve
+in the bracketing cell of its plan (same branch m, same eta_m and h_m), i.e.
+it gets the branch selection and a close start for free, untimed. Both plans' gamma come from the same
 composition rule, and both plans are checked by the same independent CVODES
 integration (``GeometricPhasePlanner().verify``).
 """
@@ -144,12 +144,14 @@ def verified_residual(verifier, a, b, k, gamma, steps, target):
 
 
 def _bracket_of(planner, p, target):
-    """Centre of the bracketing cell of plan p (its branch), as rollplan's solver was started."""
+    """rollplan's start point of the root solve in the bracketing cell of plan p (its branch)."""
     h_des = math.hypot(target[0], target[1])
     br = planner._brackets(p.k, h_des, target[2], p.steps)
-    for lower, a0, b0, da, db, m, eta_m, h_m in br:
+    for row in br:
+        a0, b0, da, db, m, eta_m, h_m = row[1:8]
+        start = (row[8], row[9]) if row.size >= 10 else (a0, b0)
         if int(m) == p.branch and abs(p.a - a0) <= da + 1e-12 and abs(p.b - b0) <= db + 1e-12:
-            return (a0, b0), eta_m, h_m
+            return start, eta_m, h_m
     raise RuntimeError("bracket of the plan not found")
 
 
@@ -217,8 +219,8 @@ def section_plan(ctx):
              "Residual = |(u_a, v_a, psi, u_o, v_o) - (target, 0, 0)| after n steps by the same CVODES "
              "verifier (Adams, 1e-13/1e-14) for both plans.",
              "scipy baseline: printed (28)-(30) in numpy, solve_ivp DOP853 rtol 1e-10 atol 1e-12, least_squares "
-             "(trf, bounds, 2-point FD Jacobian, diff_step 1e-7, x/f/gtol 1e-15) started at the centre of "
-             "rollplan's bracketing cell of the same branch (so it is given the branch and a close start). "
+             "(trf, bounds, 2-point FD Jacobian, diff_step 1e-7, x/f/gtol 1e-15) started at rollplan's own start "
+             "point in its bracketing cell of the same branch (so it is given the branch and a close start). "
              "'scipy rtol 1e-13' is the same baseline at rtol 1e-13, atol 1e-15: the equal-accuracy comparison. "
              f"'scipy fixed guess' starts at (a, b) = {FIXED_GUESS} instead (same branch targets eta_m, h_m); "
              "'same plan' says whether it lands on rollplan's (a, b).",
