@@ -99,10 +99,13 @@ def cmd_step(args) -> int:
 
 
 def cmd_batch(args) -> int:
+    import os
+
     from .batch import run_batch
 
     try:
-        r = run_batch(args.targets, args.out, args.jobs, args.resume, args.overwrite, args.method,
+        jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
+        r = run_batch(args.targets, args.out, jobs, args.resume, args.overwrite, args.method,
                       progress=not args.quiet)
     except KeyboardInterrupt:
         print(f"\nrollplan: interrupted; finished lines are kept in {args.out}: rerun with --resume",
@@ -162,7 +165,7 @@ def build_parser() -> argparse.ArgumentParser:
     b = sub.add_parser("batch", help="plan every target of a CSV file (u_a, v_a, psi, steps, k) in parallel")
     b.add_argument("targets", metavar="TARGETS.csv", help="CSV with header u_a, v_a, psi, steps, k")
     b.add_argument("--out", required=True, metavar="PLANS.jsonl", help="output: one JSON line per target")
-    b.add_argument("--jobs", type=_whole, default=1, help="worker processes (default 1)")
+    b.add_argument("--jobs", type=_whole, default=None, help="worker processes (default: number of cores)")
     b.add_argument("--resume", action="store_true", help="keep the lines in --out and plan only the missing rows")
     b.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     b.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
