@@ -301,6 +301,42 @@ def cmd_codegen(args) -> int:
     return EXIT_OK
 
 
+def cmd_batch(args) -> int:
+    import os
+
+    from .batch import run_batch
+
+    try:
+        jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
+        r = run_batch(args.targets, args.out, jobs, args.resume, args.overwrite, args.method,
+                      progress=not args.quiet)
+    except KeyboardInterrupt:
+        print(f"\nrollplan: interrupted; finished lines are kept in {args.out}: rerun with --resume",
+              file=sys.stderr)
+        return 130
+    print(f"rollplan batch: {r.total} targets, {r.skipped} already done, {r.planned} planned "
+          f"({r.failed} failed) in {r.time_s:.1f} s; wrote {args.out}")
+    return EXIT_OK
+
+
+def cmd_atlas(args) -> int:
+    from .atlas import atlas_to_dict, compute_atlas, plot_atlas
+
+    for path in (args.out, args.json):
+        if path is not None:
+            check_writable(path)
+    at = compute_atlas(args.k, args.steps, args.resolution)
+    save_figure(plot_atlas(at), args.out)
+    print(f"rollplan atlas: k = {at.k:g}, steps = {at.steps}, {at.a.size} x {at.b.size} grid on (0, {at.a[-1]:g}]^2")
+    print(f"  shift per step h in [{at.h.min():.6g}, {at.h.max():.6g}] R, holonomy eta in "
+          f"[{at.eta.min():.6g}, {at.eta.max():.6g}] rad, {at.fold_cells} grid cells on the fold det = 0")
+    print(f"wrote {args.out}")
+    if args.json:
+        write_json(args.json, atlas_to_dict(at))
+        print(f"wrote {args.json}")
+    return EXIT_OK
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="rollplan", description=__doc__)
     parser.add_argument("-v", "--verbose", action="store_true", help="log the planner's progress")
@@ -361,6 +397,24 @@ def build_parser() -> argparse.ArgumentParser:
                    help="node intervals per leaf of the step map, a multiple of 10 (default 200)")
     c.add_argument("--prefix", default="rollplan", help="prefix of the C symbols and files (default rollplan)")
     c.set_defaults(func=cmd_codegen)
+
+    b = sub.add_parser("batch", help="plan every target of a CSV file (u_a, v_a, psi, steps, k) in parallel")
+    b.add_argument("targets", metavar="TARGETS.csv", help="CSV with header u_a, v_a, psi, steps, k")
+    b.add_argument("--out", required=True, metavar="PLANS.jsonl", help="output: one JSON line per target")
+    b.add_argument("--jobs", type=_whole, default=None, help="worker processes (default: number of cores)")
+    b.add_argument("--resume", action="store_true", help="keep the lines in --out and plan only the missing rows")
+    b.add_argument("--overwrite", action="store_true", help="replace an existing --out")
+    b.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
+    b.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+    b.set_defaults(func=cmd_batch)
+
+    t = sub.add_parser("atlas", help="maps of h(a, b) and eta(a, b) with contours and the fold of the step map")
+    t.add_argument("--k", type=_number, required=True, help="inertia ratio k >= 0")
+    t.add_argument("--steps", type=_whole, default=1, help="also map what n figure eights reach (default 1)")
+    t.add_argument("--resolution", type=_whole, default=81, help="grid points per axis (default 81)")
+    t.add_argument("--out", required=True, metavar="FILE.png", help="figure")
+    t.add_argument("--json", metavar="FILE", help="write the maps as JSON")
+    t.set_defaults(func=cmd_atlas)
     return parser
 
 

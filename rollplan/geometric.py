@@ -241,7 +241,8 @@ def _ipopt_solver(residual: ca.Function):
 
 def _newton_solver(residual: ca.Function):
     rf = ca.rootfinder("gp_newton", "newton", residual,
-                       {"abstol": 1e-14, "abstolStep": 1e-16, "max_iter": 40, "error_on_fail": False})
+                       {"abstol": 1e-14, "abstolStep": 1e-16, "max_iter": 40, "error_on_fail": False,
+                        "show_eval_warnings": False})  # NaN outside the admissible range is a failed solve
 
     def solve(x0, par_value):
         x = np.array(rf(x0, par_value)).ravel()
@@ -290,6 +291,7 @@ class GeometricPhasePlanner:
         self.verifier = CvodesIntegrator(self.curve, reltol=1e-13, abstol=1e-14)
         self._verify_ints = self.verifier.integrators(1)
         self._tables: dict = {}
+        self._cell_index: dict = {}
 
     # -- step map ------------------------------------------------------------------
     def step(self, a: float, b: float | None = None, k: float = 0.0, gamma: float = 0.0) -> StepResult:
@@ -324,35 +326,80 @@ class GeometricPhasePlanner:
         self._tables[k] = vals
         return vals
 
-    def _brackets(self, k: float, h_des: float, psi: float, steps: int) -> np.ndarray:
-        """Grid cells that bracket a root of (32)-(33) on some branch m.
+    def _cells(self, k: float) -> dict:
+        """Per-k index of the grid cells of the leaf tables (cached with the tables).
 
-        Returns an array with one row per (cell, m): lower bound of a + b in the
-        cell, a0, b0 (cell centre), cell half-widths da, db, m, eta_m, h_m;
-        sorted by the lower bound.
+        For every cell (i, j) of the (a, b) grid: the range of eta and of h
+        over its four corners, and the lower bound ``r_i + r_j`` of a + b;
+        cells are sorted by their smallest eta so that the cells whose eta
+        range holds a given value are found by bisection.
         """
+        if k in self._cell_index:
+            return self._cell_index[k]
         t = self._leaf_tables(k)
         r, d0, eta0, d1, eta1 = t[0], t[1:3], t[3], t[4:6], t[6]
         eta = eta0[:, None] + eta1[None, :]
         shift = _rot(eta0, d0)[:, :, None] + d1[:, None, :]   # Rot(eta0) D_bar, |.| = h
         h = np.hypot(shift[0], shift[1])
-        corners = lambda z: np.stack([z[:-1, :-1], z[1:, :-1], z[:-1, 1:], z[1:, 1:]])
-        ec, hc = corners(eta), corners(h)
-        lo = np.ceil((steps * ec.min(0) - psi) / (2 * np.pi)).astype(int)
-        hi = np.floor((steps * ec.max(0) - psi) / (2 * np.pi)).astype(int)
-        ii, jj = np.nonzero(hi >= lo)
-        count = hi[ii, jj] - lo[ii, jj] + 1
-        cell = np.repeat(np.arange(ii.size), count)
-        m = lo[ii, jj][cell] + np.arange(cell.size) - np.repeat(np.cumsum(count) - count, count)
-        ii, jj = ii[cell], jj[cell]
-        eta_m = (psi + 2 * np.pi * m) / steps
+
+        def span(z):
+            lo = np.minimum(np.minimum(z[:-1, :-1], z[1:, :-1]), np.minimum(z[:-1, 1:], z[1:, 1:]))
+            hi = np.maximum(np.maximum(z[:-1, :-1], z[1:, :-1]), np.maximum(z[:-1, 1:], z[1:, 1:]))
+            return lo.ravel(), hi.ravel()
+
+        emin, emax = span(eta)
+        hmin, hmax = span(h)
+        order = np.argsort(emin, kind="stable")
+        cells = {"r": r, "n": r.size - 1, "order": order, "emin_sorted": emin[order],
+                 "emin": emin, "emax": emax, "hmin": hmin, "hmax": hmax, "eta": eta, "h": h,
+                 "width": float((emax - emin).max()) if emin.size else 0.0,
+                 "eta_lo": float(emin.min()), "eta_hi": float(emax.max())}
+        self._cell_index[k] = cells
+        return cells
+
+    def _brackets(self, k: float, h_des: float, psi: float, steps: int) -> np.ndarray:
+        """Grid cells that bracket a root of (32)-(33) on some branch m.
+
+        Returns an array with one row per (cell, m): lower bound of a + b in the
+        cell, a0, b0 (cell centre), cell half-widths da, db, m, eta_m, h_m, and
+        the solver's start (a_s, b_s) in the cell (see :func:`_cell_start`);
+        sorted by the lower bound.
+
+        A cell brackets branch m when ``n eta = psi + 2 pi m`` for some eta
+        between its corners' smallest and largest eta, and ``h_m`` of (33)
+        lies between its corners' smallest and largest h. Only the cells
+        whose smallest eta lies within one cell width below ``eta_m`` are
+        tested (bisection in the per-k index of :meth:`_cells`).
+        """
+        c = self._cells(k)
+        two_pi = 2 * np.pi
+        m_all = np.arange(math.ceil((steps * c["eta_lo"] - psi) / two_pi) - 1,
+                          math.floor((steps * c["eta_hi"] - psi) / two_pi) + 2)
+        eta_all = (psi + two_pi * m_all) / steps
+        h_all = _target_shift(h_des, eta_all, steps)
+        keep = np.isfinite(h_all)
+        m_all, eta_all, h_all = m_all[keep], eta_all[keep], h_all[keep]
+        pad = 1e-9 * (1.0 + abs(c["eta_lo"]) + abs(c["eta_hi"]))
+        i0 = np.searchsorted(c["emin_sorted"], eta_all - c["width"] - pad)
+        i1 = np.searchsorted(c["emin_sorted"], eta_all + pad)
+        count = i1 - i0
+        which = np.repeat(np.arange(m_all.size), count)      # which branch each tested cell is for
+        pos = np.arange(which.size) - np.repeat(np.cumsum(count) - count, count) + np.repeat(i0, count)
+        cell = c["order"][pos]
+        m, h_m = m_all[which], h_all[which]
+        # the same tests as for the whole grid: m within [ceil, floor] of the cell's branch range
+        lo = np.ceil((steps * c["emin"][cell] - psi) / two_pi)
+        hi = np.floor((steps * c["emax"][cell] - psi) / two_pi)
+        ok = (lo <= m) & (m <= hi) & (c["hmin"][cell] <= h_m) & (h_m <= c["hmax"][cell])
+        cell, m = cell[ok], m[ok]
+        r, n = c["r"], c["n"]
+        ii, jj = cell // n, cell % n
+        eta_m = (psi + two_pi * m) / steps
         h_m = _target_shift(h_des, eta_m, steps)
-        hcell = hc[:, ii, jj]
-        ok = np.isfinite(h_m) & (hcell.min(0) <= h_m) & (h_m <= hcell.max(0))
-        ii, jj, m, eta_m, h_m = ii[ok], jj[ok], m[ok], eta_m[ok], h_m[ok]
+        a_s, b_s = _cell_start(c["eta"], c["h"], r, ii, jj, eta_m, h_m)
         out = np.column_stack([r[ii] + r[jj], 0.5 * (r[ii] + r[ii + 1]), 0.5 * (r[jj] + r[jj + 1]),
-                               0.5 * (r[ii + 1] - r[ii]), 0.5 * (r[jj + 1] - r[jj]), m, eta_m, h_m])
-        return out[np.argsort(out[:, 0], kind="stable")]
+                               0.5 * (r[ii + 1] - r[ii]), 0.5 * (r[jj + 1] - r[jj]), m, eta_m, h_m, a_s, b_s])
+        return out[np.lexsort((m, cell, out[:, 0]))]
 
     # -- solve -----------------------------------------------------------------------
     def solve(self, target, steps: int = 1, k: float | None = None, robot: Robot | None = None,
@@ -373,12 +420,12 @@ class GeometricPhasePlanner:
         found: list = []
         solves = 0
         last_status = "no bracket"
-        for lower, a0, b0, da, db, m, eta_m, h_m in brackets:
+        for lower, a0, b0, da, db, m, eta_m, h_m, a_s, b_s in brackets:
             if not all_solutions and found and found[0][0] + found[0][1] <= lower:
                 break  # no bracket left can hold a shorter path
             if any(f[2].branch == m and abs(f[0] - a0) <= 2 * da and abs(f[1] - b0) <= 2 * db for f in found):
                 continue  # this cell's root is one already found
-            x, status, iters, ok = self._solve([a0, b0], [k, eta_m, h_m])
+            x, status, iters, ok = self._solve([a_s, b_s], [k, eta_m, h_m])
             solves += 1
             last_status = status
             if not ok or any(abs(x[0] - f[0]) < 1e-7 and abs(x[1] - f[1]) < 1e-7 for f in found):
@@ -447,6 +494,31 @@ class GeometricPhasePlanner:
         return Trajectory(cat(0.0, theta), cat(0.0, u_o), cat(0.0, v_o), cat(0.0, xs[:, 0] * R),
                           cat(0.0, xs[:, 1] * R), cat(0.0, xs[:, 2]), np.vstack([[0, 0, -R], pts * R]),
                           cat(zero, leaf).astype(int), cat(zero, step_no).astype(int))
+
+
+def _cell_start(eta, h, r, ii, jj, eta_m, h_m):
+    """Start of the root solve in cell (ii, jj): the root of the tables' bilinear model, linearized at
+    the cell centre, clipped to the cell (the centre where the model is singular).
+
+    ``eta``, ``h``: tabulated eta(a_i, b_j), h(a_i, b_j); returns arrays (a_s, b_s).
+    """
+    def corners(z):
+        return z[ii, jj], z[ii + 1, jj], z[ii, jj + 1], z[ii + 1, jj + 1]
+
+    e00, e10, e01, e11 = corners(eta)
+    h00, h10, h01, h11 = corners(h)
+    res_e = eta_m - 0.25 * (e00 + e10 + e01 + e11)
+    res_h = h_m - 0.25 * (h00 + h10 + h01 + h11)
+    es, et = 0.5 * (e10 - e00 + e11 - e01), 0.5 * (e01 - e00 + e11 - e10)
+    hs, ht = 0.5 * (h10 - h00 + h11 - h01), 0.5 * (h01 - h00 + h11 - h10)
+    det = es * ht - et * hs
+    ok = np.abs(det) > 1e-14 * (np.abs(es * ht) + np.abs(et * hs) + 1e-300)
+    safe = np.where(ok, det, 1.0)
+    ds = np.where(ok, (res_e * ht - et * res_h) / safe, 0.0)
+    dt = np.where(ok, (es * res_h - hs * res_e) / safe, 0.0)
+    s = np.clip(0.5 + ds, 0.0, 1.0)
+    t = np.clip(0.5 + dt, 0.0, 1.0)
+    return r[ii] + s * (r[ii + 1] - r[ii]), r[jj] + t * (r[jj + 1] - r[jj])
 
 
 def _target_shift(h_des, eta_m, steps):

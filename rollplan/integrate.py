@@ -69,21 +69,57 @@ def piece_rhs(curve: Curve, index: int) -> ca.Function:
                        ["phi", "x", "p", "k", "gamma"], ["xdot"])
 
 
+def _rates_at_zero_heading(f: ca.Function) -> ca.Function:
+    """``f0(phi, params, k, gamma) = f(phi, (0, 0, 0), params, k, gamma)`` with common subexpressions merged."""
+    phi = ca.SX.sym("phi")
+    params = ca.SX.sym("p", f.size1_in(2))
+    k = ca.SX.sym("k")
+    gamma = ca.SX.sym("gamma")
+    out = ca.cse(f(phi, ca.DM.zeros(3), params, k, gamma))
+    return ca.Function(f"{f.name()}_0", [phi, params, k, gamma], [out])
+
+
+def _check_heading_structure(f: ca.Function, n_params: int, trials: int = 4) -> None:
+    """Check ``f(phi, (u, v, psi)) = (Rot(-psi) f(phi, 0)[:2], f(phi, 0)[2])`` at random points.
+
+    This is the structure of (28)-(30): the rates of (u_a, v_a) are those at
+    psi = 0 turned by -psi, and psi' does not depend on the state.
+    """
+    rng = np.random.default_rng(12345)
+    for _ in range(trials):
+        phi = rng.uniform(0.0, 2.0 * np.pi)
+        p = rng.uniform(0.05, 0.6, n_params)
+        k, gamma, psi = rng.uniform(0.0, 5.0), rng.uniform(-np.pi, np.pi), rng.uniform(-np.pi, np.pi)
+        d0 = np.array(f(phi, [0.0, 0.0, 0.0], p, k, gamma)).ravel()
+        d = np.array(f(phi, [rng.normal(), rng.normal(), psi], p, k, gamma)).ravel()
+        c, s = np.cos(psi), np.sin(psi)
+        expect = np.array([c * d0[0] + s * d0[1], -s * d0[0] + c * d0[1], d0[2]])
+        if not np.allclose(d, expect, rtol=1e-12, atol=1e-12 * (1.0 + np.abs(d0).max())):
+            raise ValueError("curve ODE lacks the structure the spectral integrator needs")
+
+
 def _spectral_piece(f: ca.Function, breaks, nodes: int, x0, params, k, gamma):
-    """Spectral integration of one piece (symbolic, SX); returns the end state."""
+    """Spectral integration of one piece (symbolic, SX); returns the end state.
+
+    The rates are evaluated once per node at psi = 0 (``f0``); psi is their
+    third component integrated (psi' does not depend on the state), and the
+    rates of (u_a, v_a) at the node's psi are the psi = 0 rates turned by
+    -psi, eqs. (28)-(29).
+    """
     xi, q = chebyshev_matrices(nodes)
     ua, va, psi = x0[0], x0[1], x0[2]
-    fm = f.map(nodes + 1)
+    f0 = _rates_at_zero_heading(f).map(nodes + 1)
     for t0, t1 in zip(breaks[:-1], breaks[1:]):
         half = 0.5 * (t1 - t0)
         t = ca.DM(t0 + (xi + 1.0) * half).T
-        dpsi = fm(t, ca.DM.zeros(3, 1), params, k, gamma)[2, :].T
-        psi_nodes = psi + half * ca.mtimes(ca.DM(q), dpsi)
-        states = ca.vertcat(ca.repmat(ua, 1, nodes + 1), ca.repmat(va, 1, nodes + 1), psi_nodes.T)
-        d = fm(t, states, params, k, gamma)
+        d0 = f0(t, params, k, gamma)
+        psi_nodes = psi + half * ca.mtimes(ca.DM(q), d0[2, :].T)
+        c, s = ca.cos(psi_nodes), ca.sin(psi_nodes)
+        du = c * d0[0, :].T + s * d0[1, :].T
+        dv = c * d0[1, :].T - s * d0[0, :].T
         w = ca.DM(half * q[-1]).T
-        ua = ua + ca.mtimes(w, d[0, :].T)
-        va = va + ca.mtimes(w, d[1, :].T)
+        ua = ua + ca.mtimes(w, du)
+        va = va + ca.mtimes(w, dv)
         psi = psi_nodes[-1]
     return ca.vertcat(ua, va, psi)
 
@@ -102,12 +138,14 @@ def spectral_step(curve: Curve, nodes: int = DEFAULT_NODES, pieces=None) -> ca.F
     for i in range(len(curve.pieces)) if pieces is None else pieces:
         f = piece_rhs(curve, i)
         # The spectral scheme rests on the structure of (28)-(30): the rates do
-        # not depend on (u_a, v_a) (checked here), and psi' does not depend on
-        # psi, which holds because (20) has no psi (an identity the symbolic
-        # expression does not show; tests/test_model.py checks it).
+        # not depend on (u_a, v_a) (checked symbolically here), psi' does not
+        # depend on psi, which holds because (20) has no psi (an identity the
+        # symbolic expression does not show), and the rates of (u_a, v_a) are
+        # those at psi = 0 turned by -psi (both checked numerically here).
         xs = ca.SX.sym("xs", 3)
         if ca.depends_on(f(ca.SX.sym("t"), xs, params, k, gamma), xs[:2]):
             raise ValueError("curve ODE lacks the structure the spectral integrator needs")
+        _check_heading_structure(f, curve.n_params)
         x = _spectral_piece(f, curve.pieces[i].breaks, nodes, x, params, k, gamma)
     return ca.Function("step", [x0, params, k, gamma], [x], ["x0", "p", "k", "gamma"], ["xf"])
 
@@ -118,11 +156,18 @@ class CvodesIntegrator:
 
     Used to verify plans and to sample trajectories; independent of the
     spectral scheme and of the step-composition rules the planner relies on.
+
+    ``multistep`` is CVODES' linear multistep method: ``"adams"`` (default;
+    the ODE is not stiff on the admissible range, and at tolerances near
+    1e-13 the high-order Adams method takes far fewer steps than BDF, which
+    is limited to order 5) or ``"bdf"``. Both are checked against scipy's
+    DOP853 in ``tests/test_performance.py``.
     """
 
     curve: Curve
     reltol: float = 1e-12
     abstol: float = 1e-13
+    multistep: str = "adams"
 
     def _integrator(self, index: int, grid):
         f = piece_rhs(self.curve, index)
@@ -130,7 +175,8 @@ class CvodesIntegrator:
         x = ca.SX.sym("x", 3)
         p = ca.SX.sym("p", self.curve.n_params + 2)
         ode = f(phi, x, p[: self.curve.n_params], p[-2], p[-1])
-        opts = {"abstol": self.abstol, "reltol": self.reltol, "max_num_steps": 200000}
+        opts = {"abstol": self.abstol, "reltol": self.reltol, "max_num_steps": 200000,
+                "linear_multistep_method": self.multistep}
         return ca.integrator(f"cvodes{index}", "cvodes", {"t": phi, "x": x, "p": p, "ode": ode},
                              0.0, list(grid), opts)
 

@@ -1,0 +1,193 @@
+"""Reachability atlas: the step map (h, eta)(a, b) over the admissible square.
+
+One trace of the figure eight (31) with leaf radii (a, b) shifts the contact
+point by ``h(a, b)`` and turns psi by ``eta(a, b)`` (Section III.B of the
+paper; (28)-(30) integrated over one step). ``n`` traces reach the shift and
+turn (see :mod:`rollplan.geometric`)
+
+    H_n = h |sin(n eta / 2) / sin(eta / 2)|,   Psi_n = n eta,       (32)-(34)
+
+so the image of the square ``(0, A_MAX]^2`` under ``(a, b) -> (H_n, Psi_n)``
+is the set of (shift, turn) pairs ``n`` figure eights can reach. Where the
+Jacobian determinant ``det d(h, eta)/d(a, b)`` vanishes the map folds: there
+two solution branches of (32)-(33) meet and disappear, and the root solver's
+Newton matrix is singular. The maps are evaluated by the spectral step map,
+batched with CasADi ``map`` over threads; the determinant is exact (AD).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from .curves import A_MAX
+from .errors import InputError, check_range
+
+__all__ = ["Atlas", "atlas_function", "compute_atlas", "atlas_to_dict", "plot_atlas", "n_step_totals"]
+
+
+@dataclass(frozen=True)
+class Atlas:
+    """Maps of one step of the figure eight over the (a, b) grid, for one k.
+
+    Attributes
+    ----------
+    k : float
+        Inertia ratio.
+    steps : int
+        Number of traces n of the totals ``shift_total``, ``turn_total``.
+    a, b : ndarray, shape (N,)
+        Leaf radii of the grid [units of R], in (0, A_MAX].
+    h : ndarray, shape (N, N)
+        Shift of one step ``h(a_i, b_j)`` [units of R].
+    eta : ndarray, shape (N, N)
+        Holonomy angle of one step ``eta(a_i, b_j)`` [rad].
+    det : ndarray, shape (N, N)
+        ``det d(h, eta)/d(a, b)`` [rad]; zero on the fold.
+    shift_total : ndarray, shape (N, N)
+        Shift reached by n steps, ``H_n`` [units of R].
+    turn_total : ndarray, shape (N, N)
+        Turn reached by n steps, ``Psi_n = n eta`` [rad] (not wrapped).
+    fold_cells : int
+        Grid cells whose corners' ``det`` change sign.
+    """
+
+    k: float
+    steps: int
+    a: np.ndarray
+    b: np.ndarray
+    h: np.ndarray
+    eta: np.ndarray
+    det: np.ndarray
+    shift_total: np.ndarray
+    turn_total: np.ndarray
+    fold_cells: int
+
+
+def atlas_function(step_map: ca.Function) -> ca.Function:
+    """``G(ab[2], k) -> (h, eta, det d(h, eta)/d(ab))`` from a step map ``F(x0, p, k, gamma)``.
+
+    The step starts from zero with gamma = 0 (h and eta do not depend on gamma).
+    """
+    ab = ca.SX.sym("ab", 2)
+    k = ca.SX.sym("k")
+    xf = step_map(ca.DM.zeros(3), ab, k, 0)
+    h = ca.norm_2(xf[:2])
+    eta = xf[2]
+    jac = ca.jacobian(ca.vertcat(h, eta), ab)
+    return ca.Function("atlas", [ab, k], [h, eta, ca.det(jac)], ["ab", "k"], ["h", "eta", "det"])
+
+
+def n_step_totals(h, eta, steps: int):
+    """``(H_n, Psi_n)`` of n steps from (h, eta): ``h |sin(n eta/2)/sin(eta/2)|`` (limit ``n h``), ``n eta``."""
+    h, eta = np.asarray(h, float), np.asarray(eta, float)
+    num, den = np.sin(steps * eta / 2), np.sin(eta / 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(np.abs(den) < 1e-12, float(steps), np.abs(num / den))
+    return h * ratio, steps * eta
+
+
+def compute_atlas(k: float, steps: int = 1, resolution: int = 81, planner=None, threads: int | None = None) -> Atlas:
+    """Evaluate h, eta and the fold determinant on a ``resolution`` x ``resolution`` grid of (0, A_MAX]^2.
+
+    Parameters
+    ----------
+    k : float
+        Inertia ratio k >= 0 (14).
+    steps : int
+        n >= 1 for the totals ``H_n``, ``Psi_n``.
+    resolution : int
+        Grid points per axis, >= 2; ``a_i = A_MAX i / N``, i = 1..N.
+    planner : GeometricPhasePlanner, optional
+        Planner whose step map to use (default: the module's cached one).
+    threads : int, optional
+        Threads of the CasADi ``map`` (default: all cores).
+    """
+    from .geometric import _planner
+
+    k = check_range("k", k, 0.0, None)
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
+        raise InputError(f"steps = {steps!r} is not allowed: it must be a whole number >= 1")
+    if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or not 2 <= resolution <= 1000:
+        raise InputError(f"resolution = {resolution!r} is not allowed: it must be a whole number in [2, 1000]")
+    planner = planner or _planner("ipopt")
+    fun = _cached_atlas_function(planner)
+    r = A_MAX * np.arange(1, resolution + 1) / resolution
+    aa, bb = np.meshgrid(r, r, indexing="ij")
+    pts = np.vstack([aa.ravel(), bb.ravel()])
+    threads = threads or os.cpu_count() or 1
+    batch = fun.map(pts.shape[1], "thread", threads) if threads > 1 else fun.map(pts.shape[1])
+    h, eta, det = (np.array(v).reshape(resolution, resolution) for v in batch(pts, k))
+    total_h, total_psi = n_step_totals(h, eta, int(steps))
+    s = np.sign(det)
+    corners = np.stack([s[:-1, :-1], s[1:, :-1], s[:-1, 1:], s[1:, 1:]])
+    fold = int(np.count_nonzero(corners.min(0) != corners.max(0)))
+    return Atlas(k, int(steps), r, r.copy(), h, eta, det, total_h, total_psi, fold)
+
+
+@lru_cache(maxsize=4)
+def _cached_atlas_function(planner) -> ca.Function:
+    return atlas_function(planner.step_map)
+
+
+def atlas_to_dict(at: Atlas) -> dict:
+    """The atlas as the JSON object of ``rollplan atlas --json`` (2-D arrays as lists of rows over a)."""
+    rows = lambda z: [[float(v) for v in row] for row in np.asarray(z)]
+    return {"k": at.k, "steps": at.steps, "a": [float(v) for v in at.a], "b": [float(v) for v in at.b],
+            "h": rows(at.h), "eta": rows(at.eta), "det": rows(at.det),
+            "shift_total": rows(at.shift_total), "turn_total": rows(at.turn_total), "fold_cells": at.fold_cells,
+            "ranges": {"h": [float(at.h.min()), float(at.h.max())], "eta": [float(at.eta.min()), float(at.eta.max())],
+                       "shift_total": [float(at.shift_total.min()), float(at.shift_total.max())],
+                       "turn_total": [float(at.turn_total.min()), float(at.turn_total.max())]}}
+
+
+def plot_atlas(at: Atlas):
+    """Figure of an atlas (computes nothing): h and eta over (a, b) with contours and the fold
+    ``det = 0`` (black), and the (turn, shift) pairs n steps reach (turn wrapped to (-pi, pi])."""
+    from matplotlib.colors import LogNorm, SymLogNorm
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(16, 5.2), layout="constrained")
+    axes = fig.subplots(1, 3)
+    big = float(np.abs(at.eta).max()) or 1.0
+    eta_levels = np.unique(np.concatenate([-np.geomspace(0.05, big, 12)[::-1], [0.0], np.geomspace(0.05, big, 12)]))
+    for ax, z, title, cmap, levels, norm in (
+            (axes[0], at.h, "shift of one step h(a, b) [R]", "viridis", 24, None),
+            (axes[1], at.eta, "holonomy of one step eta(a, b) [rad]", "coolwarm", eta_levels,
+             SymLogNorm(0.05, vmin=-big, vmax=big))):
+        cf = ax.contourf(at.b, at.a, z, cmap=cmap, levels=levels, norm=norm)
+        cs = ax.contour(at.b, at.a, z, colors="w", linewidths=0.5, levels=levels)
+        ax.clabel(cs, cs.levels[::3], fontsize=7, fmt="%.2g")
+        if np.nanmin(at.det) < 0 < np.nanmax(at.det):
+            ax.contour(at.b, at.a, at.det, levels=[0.0], colors="k", linewidths=1.8)
+        ax.plot([at.a[0], at.a[-1]], [at.a[0], at.a[-1]], ls=":", color="0.3", lw=0.8)
+        ax.set_xlabel("b [R]")
+        ax.set_ylabel("a [R]")
+        ax.set_title(title)
+        ax.set_aspect("equal")
+        fig.colorbar(cf, ax=ax, shrink=0.85)
+    ax = axes[2]
+    turn = np.pi - np.mod(np.pi - at.turn_total.ravel(), 2 * np.pi)
+    shift = at.shift_total.ravel()
+    hist, xe, ye = np.histogram2d(turn, shift, bins=(72, 60), range=((-np.pi, np.pi), (0.0, float(shift.max()))))
+    hist = np.where(hist > 0, hist, np.nan)
+    mesh = ax.pcolormesh(xe, ye, hist.T, cmap="cividis", norm=LogNorm())
+    fig.colorbar(mesh, ax=ax, shrink=0.85, label="grid points (a, b) landing in the cell")
+    ax.set_xlabel(f"turn psi reached by {at.steps} step(s), n eta wrapped to (-pi, pi] [rad]")
+    ax.set_ylabel(f"shift reached by {at.steps} step(s) [R]")
+    ax.set_title("reachable (turn, shift) pairs (white: none on the grid)")
+    fig.suptitle(f"Reachability atlas of the figure eight, k = {at.k:g}, n = {at.steps}")
+    return fig
+
+
+def _bilinear(z, fi, fj):
+    """z at fractional grid indices (fi, fj) by bilinear interpolation (for drawing only)."""
+    i0 = np.clip(np.floor(fi).astype(int), 0, z.shape[0] - 2)
+    j0 = np.clip(np.floor(fj).astype(int), 0, z.shape[1] - 2)
+    ti, tj = fi - i0, fj - j0
+    return ((1 - ti) * (1 - tj) * z[i0, j0] + ti * (1 - tj) * z[i0 + 1, j0]
+            + (1 - ti) * tj * z[i0, j0 + 1] + ti * tj * z[i0 + 1, j0 + 1])

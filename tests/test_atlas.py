@@ -1,0 +1,83 @@
+import json
+
+import numpy as np
+import pytest
+
+from rollplan import cli, geometric
+from rollplan.atlas import compute_atlas, n_step_totals
+from rollplan.curves import A_MAX
+from rollplan.errors import InputError
+
+from printed_rhs import trace
+
+
+@pytest.fixture(scope="module")
+def atlas():
+    return compute_atlas(2.5, steps=2, resolution=6)
+
+
+def test_grid_is_the_admissible_square(atlas):
+    assert atlas.a[0] > 0 and atlas.a[-1] == pytest.approx(A_MAX)
+    assert atlas.h.shape == atlas.eta.shape == atlas.det.shape == (6, 6)
+
+
+@pytest.mark.parametrize("i,j", [(0, 0), (1, 4), (5, 2), (3, 3), (5, 5)])
+def test_values_match_the_step_map(atlas, i, j):
+    s = geometric.step(atlas.a[i], atlas.b[j], 2.5)
+    assert atlas.h[i, j] == pytest.approx(s.h, rel=1e-12, abs=1e-14)
+    assert atlas.eta[i, j] == pytest.approx(s.eta, rel=1e-12, abs=1e-14)
+
+
+def test_one_point_matches_scipy(atlas):
+    x = trace(atlas.a[2], atlas.b[4], 2.5)
+    assert atlas.h[2, 4] == pytest.approx(np.hypot(x[0], x[1]), abs=1e-9)
+    assert atlas.eta[2, 4] == pytest.approx(x[2], abs=1e-9)
+
+
+def test_n_step_totals_match_an_n_step_cvodes_trace(atlas):
+    planner = geometric.GeometricPhasePlanner()
+    for i, j in [(1, 3), (4, 0)]:
+        final = planner.verify(atlas.a[i], atlas.b[j], 2.5, 0.0, 2)
+        assert atlas.shift_total[i, j] == pytest.approx(np.hypot(final[0], final[1]), abs=1e-9)
+        assert atlas.turn_total[i, j] == pytest.approx(final[2], abs=1e-9)
+
+
+def test_mirror_symmetry(atlas):
+    # swapping the leaves mirrors the figure eight: same shift, opposite turn
+    assert np.allclose(atlas.h, atlas.h.T, rtol=1e-10, atol=1e-13)
+    assert np.allclose(atlas.eta, -atlas.eta.T, rtol=1e-10, atol=1e-13)
+
+
+def test_fold_determinant_matches_finite_differences(atlas):
+    def he(a, b):
+        s = geometric.step(a, b, 2.5)
+        return np.array([s.h, s.eta])
+
+    for i, j in [(1, 4), (2, 2), (4, 1)]:
+        a, b, d = atlas.a[i], atlas.b[j], 1e-6
+        jac = np.column_stack([(he(a + d, b) - he(a - d, b)) / (2 * d), (he(a, b + d) - he(a, b - d)) / (2 * d)])
+        assert atlas.det[i, j] == pytest.approx(np.linalg.det(jac), rel=1e-5, abs=1e-7)
+
+
+def test_n_step_totals_limit():
+    h, psi = n_step_totals(np.array([0.5]), np.array([0.0]), 3)
+    assert h[0] == pytest.approx(1.5) and psi[0] == 0.0
+
+
+def test_bad_input():
+    with pytest.raises(InputError, match="k = -1"):
+        compute_atlas(-1.0)
+    with pytest.raises(InputError, match="resolution"):
+        compute_atlas(1.0, resolution=1)
+
+
+def test_cli_atlas(tmp_path):
+    png, js = tmp_path / "atlas.png", tmp_path / "atlas.json"
+    assert cli.main(["atlas", "--k", "2.5", "--steps", "2", "--resolution", "6", "--out", str(png),
+                     "--json", str(js)]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    d = json.loads(js.read_text())
+    s = geometric.step(d["a"][1], d["b"][3], 2.5)
+    assert d["h"][1][3] == pytest.approx(s.h, rel=1e-12)
+    assert cli.main(["atlas", "--k", "-2", "--out", str(png)]) == 2
+    assert cli.main(["atlas", "--k", "1", "--out", str(tmp_path / "no" / "a.png")]) == 2
