@@ -9,7 +9,7 @@ import sys
 
 from . import geometric
 from .errors import InputError, NoPlanError, SolverError, check_finite
-from .io import check_writable, plan_to_dict, save_figure, write_json
+from .io import check_figure_path, check_writable, plan_to_dict, save_figure, write_json
 from .robot import load_robot
 
 EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER = 0, 2, 3, 4
@@ -36,6 +36,14 @@ def _whole(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
 
 
+def _check_outputs(json=None, figure=None) -> None:
+    """Refuse unwritable output paths and unknown figure formats before any computation."""
+    if json is not None:
+        check_writable(json)
+    if figure is not None:
+        check_figure_path(figure)
+
+
 def _k_or_robot(args):
     """(k, robot) from --k / --robot."""
     if args.robot is not None:
@@ -56,9 +64,7 @@ def _fmt_plan(p, unit) -> str:
 
 
 def cmd_plan(args) -> int:
-    for path in (args.json, args.plot):
-        if path is not None:
-            check_writable(path)
+    _check_outputs(json=args.json, figure=args.plot)
     k, robot = _k_or_robot(args)
     if args.duration is not None and robot is None:
         if k is not None:
@@ -70,7 +76,7 @@ def cmd_plan(args) -> int:
         print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
               "lengths in m")
     p = geometric.plan((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.all, args.method)
-    unit = "m" if robot is not None else ("R" if args.radius is None else "")
+    unit = "m" if robot is not None else ("R" if args.radius is None else "units")
     print(f"rollplan: k = {p.k:.9g}, R = {p.radius:g}, steps = {p.steps}, target (u_a, v_a, psi) = "
           f"({p.target[0]:g}, {p.target[1]:g}, {p.target[2]:g})")
     print(_fmt_plan(p, unit))
@@ -118,7 +124,7 @@ def _timed(args, p, robot):
 def cmd_step(args) -> int:
     if args.json is not None:
         check_writable(args.json)
-    r = geometric.step(args.a, args.b, args.k, args.gamma)
+    r = geometric.step(args.a, args.b, k=args.k, gamma=args.gamma)
     u, v = r.shift
     # final psi of one step equals eta
     print(f"rollplan step: a = {r.a:g} R, b = {r.b:g} R, k = {r.k:g}, gamma = {r.gamma:g} rad")
@@ -225,14 +231,12 @@ def _fmt_row(name, a, b, fmt):
 def cmd_compare(args) -> int:
     from . import comparison
 
-    for path in (args.json, args.plot):
-        if path is not None:
-            check_writable(path)
+    _check_outputs(json=args.json, figure=args.plot)
     k, robot = _k_or_robot(args)
     c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
                            args.cost, args.intervals, args.degree, args.scheme, args.guess, args.contact_bound)
     g, o, r = c.geometric_phase, c.collocation, c.result
-    unit = "m" if robot is not None else ("R" if args.radius is None else "")
+    unit = "m" if robot is not None else ("R" if args.radius is None else "units")
     effort = "rotor effort int|phi'|^2 dt" if robot is not None else "effort int|omega|^2 dt"
     print(f"rollplan compare: k = {c.k:.9g}, R = {c.radius:g}, T = {c.horizon:g} s, target (u_a, v_a, psi) = "
           f"({c.target[0]:g}, {c.target[1]:g}, {c.target[2]:g})")
@@ -322,9 +326,7 @@ def cmd_batch(args) -> int:
 def cmd_atlas(args) -> int:
     from .atlas import atlas_to_dict, compute_atlas, plot_atlas
 
-    for path in (args.out, args.json):
-        if path is not None:
-            check_writable(path)
+    _check_outputs(json=args.json, figure=args.out)
     at = compute_atlas(args.k, args.steps, args.resolution)
     save_figure(plot_atlas(at), args.out)
     print(f"rollplan atlas: k = {at.k:g}, steps = {at.steps}, {at.a.size} x {at.b.size} grid on (0, {at.a[-1]:g}]^2")

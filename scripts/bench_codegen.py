@@ -54,7 +54,7 @@ def stress_targets():
     """Targets (u, v, psi, 1, k) reached by one step of the figure eights in :data:`STRESS_LEAVES`."""
     out = []
     for a, b, k in STRESS_LEAVES:
-        s = geometric.step(a, b, k)
+        s = geometric.step(a, b, k=k)
         out.append((float(s.shift[0]), float(s.shift[1]), float(s.eta), 1, k))
     return out
 
