@@ -63,6 +63,9 @@ MAX_STEPS = 1000
 K_MAX = 100.0
 #: Largest |residual of (32)-(33)| of a solver's end point that is still a candidate root.
 _ROOT_TOL = 1e-10
+#: Brackets whose tables' model root lies within this many cell widths of the cell centre are
+#: solved first (see :func:`_cell_start`).
+_PLAUSIBLE_OFFSET = 1.5
 #: Leaf tables kept per planner (one per k value).
 _TABLE_CACHE = 8
 #: Coarse Chebyshev degree for tabulating the leaves when bracketing branches.
@@ -417,9 +420,9 @@ class GeometricPhasePlanner:
         ii, jj = cell // n, cell % n
         eta_m = (psi + two_pi * m) / steps
         h_m = _target_shift(h_des, eta_m, steps)
-        a_s, b_s = _cell_start(c["eta"], c["h"], r, ii, jj, eta_m, h_m)
+        a_s, b_s, off = _cell_start(c["eta"], c["h"], r, ii, jj, eta_m, h_m)
         out = np.column_stack([r[ii] + r[jj], 0.5 * (r[ii] + r[ii + 1]), 0.5 * (r[jj] + r[jj + 1]),
-                               0.5 * (r[ii + 1] - r[ii]), 0.5 * (r[jj + 1] - r[jj]), m, eta_m, h_m, a_s, b_s])
+                               0.5 * (r[ii + 1] - r[ii]), 0.5 * (r[jj + 1] - r[jj]), m, eta_m, h_m, a_s, b_s, off])
         return out[np.lexsort((m, cell, out[:, 0]))]
 
     # -- solve -----------------------------------------------------------------------
@@ -450,27 +453,35 @@ class GeometricPhasePlanner:
         rejected: list = []   # verified residuals of the roots that failed verification
         statuses: Counter = Counter()
         solves = 0
-        for lower, a0, b0, da, db, m, eta_m, h_m, a_s, b_s in brackets:
-            if not all_solutions and found and found[0].a + found[0].b <= lower:
-                break  # no bracket left can hold a shorter path
-            if any(sm == m and abs(sa - a0) <= da and abs(sb - b0) <= db for sa, sb, sm in seen):
-                continue  # the root in this cell is known
-            # Solve within the bracketing cell widened by two cells each way: near A_MAX eta is
-            # steep, and an unbounded step can jump to another root and leave this one unfound.
-            box_lo = np.maximum([a0 - 3 * da, b0 - 3 * db], 1e-6)
-            box_hi = np.minimum([a0 + 3 * da, b0 + 3 * db], A_MAX)
-            x, status, iters, ok = self._solve([a_s, b_s], [k, eta_m, h_m], box_lo, box_hi)
-            solves += 1
-            statuses[str(status)] += 1
-            if not ok or any(abs(x[0] - sa) < 1e-7 and abs(x[1] - sb) < 1e-7 for sa, sb, _ in seen):
-                continue
-            seen.append((float(x[0]), float(x[1]), m))
-            cand, residual = self._finish(x, int(m) - turns, steps, k, (u_des, v_des, psi_des), status, iters)
-            if cand is None:
-                rejected.append(residual)
-                continue
-            found.append(cand)
-            found.sort(key=lambda p: p.a + p.b)
+        # Brackets whose model root lies well outside the cell are mostly false (parallel zero
+        # curves); the shortest plan is sought among the others first, and they are solved only
+        # for all solutions or when the others give no plan.
+        plausible = brackets[:, 10] <= _PLAUSIBLE_OFFSET
+        passes = [brackets] if all_solutions else [brackets[plausible], brackets[~plausible]]
+        for rows in passes:
+            if found:
+                break
+            for lower, a0, b0, da, db, m, eta_m, h_m, a_s, b_s, _ in rows:
+                if not all_solutions and found and found[0].a + found[0].b <= lower:
+                    break  # no bracket left can hold a shorter path
+                if any(sm == m and abs(sa - a0) <= da and abs(sb - b0) <= db for sa, sb, sm in seen):
+                    continue  # the root in this cell is known
+                # Solve within the bracketing cell widened by two cells each way: near A_MAX eta is
+                # steep, and an unbounded step can jump to another root and leave this one unfound.
+                box_lo = np.maximum([a0 - 3 * da, b0 - 3 * db], 1e-6)
+                box_hi = np.minimum([a0 + 3 * da, b0 + 3 * db], A_MAX)
+                x, status, iters, ok = self._solve([a_s, b_s], [k, eta_m, h_m], box_lo, box_hi)
+                solves += 1
+                statuses[str(status)] += 1
+                if not ok or any(abs(x[0] - sa) < 1e-7 and abs(x[1] - sb) < 1e-7 for sa, sb, _ in seen):
+                    continue
+                seen.append((float(x[0]), float(x[1]), m))
+                cand, residual = self._finish(x, int(m) - turns, steps, k, (u_des, v_des, psi_des), status, iters)
+                if cand is None:
+                    rejected.append(residual)
+                    continue
+                found.append(cand)
+                found.sort(key=lambda p: p.a + p.b)
         elapsed = time.perf_counter() - t_start
         if not found:
             if rejected:
@@ -541,7 +552,10 @@ def _cell_start(eta, h, r, ii, jj, eta_m, h_m):
     """Start of the root solve in cell (ii, jj): the root of the tables' bilinear model, linearized at
     the cell centre, clipped to the cell (the centre where the model is singular).
 
-    ``eta``, ``h``: tabulated eta(a_i, b_j), h(a_i, b_j); returns arrays (a_s, b_s).
+    ``eta``, ``h``: tabulated eta(a_i, b_j), h(a_i, b_j); returns arrays (a_s, b_s, off), where
+    ``off`` is how far the unclipped model root lies from the cell centre, in cell widths
+    (inf where the model is singular): a cell where the zero curves of (32) and (33) run
+    parallel passes the corner-sign test but has its model root far outside.
     """
     def corners(z):
         return z[ii, jj], z[ii + 1, jj], z[ii, jj + 1], z[ii + 1, jj + 1]
@@ -559,7 +573,8 @@ def _cell_start(eta, h, r, ii, jj, eta_m, h_m):
     dt = np.where(ok, (es * res_h - hs * res_e) / safe, 0.0)
     s = np.clip(0.5 + ds, 0.0, 1.0)
     t = np.clip(0.5 + dt, 0.0, 1.0)
-    return r[ii] + s * (r[ii + 1] - r[ii]), r[jj] + t * (r[jj + 1] - r[jj])
+    off = np.where(ok, np.maximum(np.abs(ds), np.abs(dt)), np.inf)
+    return r[ii] + s * (r[ii + 1] - r[ii]), r[jj] + t * (r[jj + 1] - r[jj]), off
 
 
 def _target_shift(h_des, eta_m, steps):
