@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
 import sys
 
 from . import geometric
@@ -13,6 +12,8 @@ from .io import check_figure_path, check_writable, plan_to_dict, save_figure, wr
 from .robot import load_robot
 
 EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER = 0, 2, 3, 4
+#: k of ``plan`` and ``compare`` when neither --k nor --robot is given (the paper's case study).
+DEFAULT_K = 2.5
 
 
 class _Parser(argparse.ArgumentParser):
@@ -265,18 +266,27 @@ def cmd_compare(args) -> int:
     return EXIT_OK
 
 
+def _add_target_options(parser, to_default, steps_help) -> None:
+    """--to, --psi, --steps, --k | --robot, --radius: the target and the robot, as in ``plan``."""
+    if to_default is None:
+        parser.add_argument("--to", nargs=2, type=_number, metavar=("U", "V"), required=True,
+                            help="target contact point (u_a, v_a) on the plane")
+    else:
+        parser.add_argument("--to", nargs=2, type=_number, metavar=("U", "V"), default=to_default,
+                            help="target contact point (u_a, v_a) on the plane (default %g %g)" % tuple(to_default))
+    parser.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
+    parser.add_argument("--steps", type=_whole, default=1, help=steps_help)
+    g = parser.add_mutually_exclusive_group()
+    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default %g)" % DEFAULT_K)
+    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
+    parser.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+
+
 def _add_compare_parser(sub) -> None:
     from . import collocation
 
     c = sub.add_parser("compare", help="geometric-phase plan versus direct-collocation optimum, side by side")
-    c.add_argument("--to", nargs=2, type=_number, metavar=("U", "V"), required=True,
-                   help="target contact point (u_a, v_a) on the plane")
-    c.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
-    c.add_argument("--steps", type=_whole, default=1, help="figure eights n >= 1 of the geometric plan (default 1)")
-    g = c.add_mutually_exclusive_group()
-    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default 2.5)")
-    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
-    c.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+    _add_target_options(c, to_default=None, steps_help="figure eights n >= 1 of the geometric plan (default 1)")
     c.add_argument("--cost", choices=sorted(collocation.COSTS), default="path_length",
                    help="collocation cost (default path_length; rotor_effort needs --robot)")
     c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T [s] of both motions (default 1)")
@@ -345,14 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("plan", help="plan a motion to a target by tracing a figure eight n times")
-    p.add_argument("--to", nargs=2, type=_number, metavar=("U", "V"), default=(0.0, 1.0),
-                   help="target contact point (u_a, v_a) on the plane (default 0 1)")
-    p.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
-    p.add_argument("--steps", type=_whole, default=1, help="number of figure eights n >= 1 (default 1)")
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default 2.5)")
-    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
-    p.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+    _add_target_options(p, to_default=(0.0, 1.0), steps_help="number of figure eights n >= 1 (default 1)")
     p.add_argument("--all", action="store_true", help="also list every other verified solution branch")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     p.add_argument("--json", metavar="FILE", help="write the plan as JSON")
@@ -418,9 +421,6 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--json", metavar="FILE", help="write the maps as JSON")
     t.set_defaults(func=cmd_atlas)
     return parser
-
-
-DEFAULT_K = 2.5
 
 
 def main(argv=None) -> int:
