@@ -23,7 +23,7 @@ def test_grid_is_the_admissible_square(atlas):
 
 @pytest.mark.parametrize("i,j", [(0, 0), (1, 4), (5, 2), (3, 3), (5, 5)])
 def test_values_match_the_step_map(atlas, i, j):
-    s = geometric.step(atlas.a[i], atlas.b[j], 2.5)
+    s = geometric.step(atlas.a[i], atlas.b[j], k=2.5)
     assert atlas.h[i, j] == pytest.approx(s.h, rel=1e-12, abs=1e-14)
     assert atlas.eta[i, j] == pytest.approx(s.eta, rel=1e-12, abs=1e-14)
 
@@ -50,7 +50,7 @@ def test_mirror_symmetry(atlas):
 
 def test_fold_determinant_matches_finite_differences(atlas):
     def he(a, b):
-        s = geometric.step(a, b, 2.5)
+        s = geometric.step(a, b, k=2.5)
         return np.array([s.h, s.eta])
 
     for i, j in [(1, 4), (2, 2), (4, 1)]:
@@ -77,7 +77,7 @@ def test_cli_atlas(tmp_path):
                      "--json", str(js)]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     d = json.loads(js.read_text())
-    s = geometric.step(d["a"][1], d["b"][3], 2.5)
+    s = geometric.step(d["a"][1], d["b"][3], k=2.5)
     assert d["h"][1][3] == pytest.approx(s.h, rel=1e-12)
     assert cli.main(["atlas", "--k", "-2", "--out", str(png)]) == 2
     assert cli.main(["atlas", "--k", "1", "--out", str(tmp_path / "no" / "a.png")]) == 2
