@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
 import sys
 
 from . import geometric
 from .errors import InputError, NoPlanError, SolverError, check_finite
-from .io import check_writable, plan_to_dict, save_figure, write_json
+from .io import check_figure_path, check_writable, plan_to_dict, save_figure, write_json
 from .robot import load_robot
 
 EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER = 0, 2, 3, 4
+#: k of ``plan`` and ``compare`` when neither --k nor --robot is given (the paper's case study).
+DEFAULT_K = 2.5
 
 
 class _Parser(argparse.ArgumentParser):
@@ -36,6 +37,14 @@ def _whole(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
 
 
+def _check_outputs(json=None, figure=None) -> None:
+    """Refuse unwritable output paths and unknown figure formats before any computation."""
+    if json is not None:
+        check_writable(json)
+    if figure is not None:
+        check_figure_path(figure)
+
+
 def _k_or_robot(args):
     """(k, robot) from --k / --robot."""
     if args.robot is not None:
@@ -56,9 +65,7 @@ def _fmt_plan(p, unit) -> str:
 
 
 def cmd_plan(args) -> int:
-    for path in (args.json, args.plot):
-        if path is not None:
-            check_writable(path)
+    _check_outputs(json=args.json, figure=args.plot)
     k, robot = _k_or_robot(args)
     if args.duration is not None and robot is None:
         if k is not None:
@@ -70,7 +77,7 @@ def cmd_plan(args) -> int:
         print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
               "lengths in m")
     p = geometric.plan((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.all, args.method)
-    unit = "m" if robot is not None else ("R" if args.radius is None else "")
+    unit = "m" if robot is not None else ("R" if args.radius is None else "units")
     print(f"rollplan: k = {p.k:.9g}, R = {p.radius:g}, steps = {p.steps}, target (u_a, v_a, psi) = "
           f"({p.target[0]:g}, {p.target[1]:g}, {p.target[2]:g})")
     print(_fmt_plan(p, unit))
@@ -118,7 +125,7 @@ def _timed(args, p, robot):
 def cmd_step(args) -> int:
     if args.json is not None:
         check_writable(args.json)
-    r = geometric.step(args.a, args.b, args.k, args.gamma)
+    r = geometric.step(args.a, args.b, k=args.k, gamma=args.gamma)
     u, v = r.shift
     # final psi of one step equals eta
     print(f"rollplan step: a = {r.a:g} R, b = {r.b:g} R, k = {r.k:g}, gamma = {r.gamma:g} rad")
@@ -225,14 +232,12 @@ def _fmt_row(name, a, b, fmt):
 def cmd_compare(args) -> int:
     from . import comparison
 
-    for path in (args.json, args.plot):
-        if path is not None:
-            check_writable(path)
+    _check_outputs(json=args.json, figure=args.plot)
     k, robot = _k_or_robot(args)
     c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
                            args.cost, args.intervals, args.degree, args.scheme, args.guess, args.contact_bound)
     g, o, r = c.geometric_phase, c.collocation, c.result
-    unit = "m" if robot is not None else ("R" if args.radius is None else "")
+    unit = "m" if robot is not None else ("R" if args.radius is None else "units")
     effort = "rotor effort int|phi'|^2 dt" if robot is not None else "effort int|omega|^2 dt"
     print(f"rollplan compare: k = {c.k:.9g}, R = {c.radius:g}, T = {c.horizon:g} s, target (u_a, v_a, psi) = "
           f"({c.target[0]:g}, {c.target[1]:g}, {c.target[2]:g})")
@@ -261,18 +266,27 @@ def cmd_compare(args) -> int:
     return EXIT_OK
 
 
+def _add_target_options(parser, to_default, steps_help) -> None:
+    """--to, --psi, --steps, --k | --robot, --radius: the target and the robot, as in ``plan``."""
+    if to_default is None:
+        parser.add_argument("--to", nargs=2, type=_number, metavar=("U", "V"), required=True,
+                            help="target contact point (u_a, v_a) on the plane")
+    else:
+        parser.add_argument("--to", nargs=2, type=_number, metavar=("U", "V"), default=to_default,
+                            help="target contact point (u_a, v_a) on the plane (default %g %g)" % tuple(to_default))
+    parser.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
+    parser.add_argument("--steps", type=_whole, default=1, help=steps_help)
+    g = parser.add_mutually_exclusive_group()
+    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default %g)" % DEFAULT_K)
+    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
+    parser.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+
+
 def _add_compare_parser(sub) -> None:
     from . import collocation
 
     c = sub.add_parser("compare", help="geometric-phase plan versus direct-collocation optimum, side by side")
-    c.add_argument("--to", nargs=2, type=_number, metavar=("U", "V"), required=True,
-                   help="target contact point (u_a, v_a) on the plane")
-    c.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
-    c.add_argument("--steps", type=_whole, default=1, help="figure eights n >= 1 of the geometric plan (default 1)")
-    g = c.add_mutually_exclusive_group()
-    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default 2.5)")
-    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
-    c.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+    _add_target_options(c, to_default=None, steps_help="figure eights n >= 1 of the geometric plan (default 1)")
     c.add_argument("--cost", choices=sorted(collocation.COSTS), default="path_length",
                    help="collocation cost (default path_length; rotor_effort needs --robot)")
     c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T [s] of both motions (default 1)")
@@ -322,9 +336,7 @@ def cmd_batch(args) -> int:
 def cmd_atlas(args) -> int:
     from .atlas import atlas_to_dict, compute_atlas, plot_atlas
 
-    for path in (args.out, args.json):
-        if path is not None:
-            check_writable(path)
+    _check_outputs(json=args.json, figure=args.out)
     at = compute_atlas(args.k, args.steps, args.resolution)
     save_figure(plot_atlas(at), args.out)
     print(f"rollplan atlas: k = {at.k:g}, steps = {at.steps}, {at.a.size} x {at.b.size} grid on (0, {at.a[-1]:g}]^2")
@@ -343,14 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("plan", help="plan a motion to a target by tracing a figure eight n times")
-    p.add_argument("--to", nargs=2, type=_number, metavar=("U", "V"), default=(0.0, 1.0),
-                   help="target contact point (u_a, v_a) on the plane (default 0 1)")
-    p.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
-    p.add_argument("--steps", type=_whole, default=1, help="number of figure eights n >= 1 (default 1)")
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default 2.5)")
-    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
-    p.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+    _add_target_options(p, to_default=(0.0, 1.0), steps_help="number of figure eights n >= 1 (default 1)")
     p.add_argument("--all", action="store_true", help="also list every other verified solution branch")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     p.add_argument("--json", metavar="FILE", help="write the plan as JSON")
@@ -416,9 +421,6 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--json", metavar="FILE", help="write the maps as JSON")
     t.set_defaults(func=cmd_atlas)
     return parser
-
-
-DEFAULT_K = 2.5
 
 
 def main(argv=None) -> int:

@@ -355,38 +355,24 @@ def generated_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: st
     return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix), table_function(prefix)]
 
 
-def reference_plan(target, steps: int, k: float, near=None, max_solves: int = 20):
+def reference_plan(target, steps: int, k: float, near=None):
     """The Python planner's verified plan on branch m = 0, for cross-checking the C planner.
 
     Solves (32)-(33) with ``m = 0`` by :mod:`rollplan.geometric` (IPOPT on the
     spectral step map, CVODES verification). Returns the shortest such plan,
     or with ``near = (a, b)`` the one closest to it; None if there is none.
-    Tries :func:`rollplan.geometric.plan` first (fast when the shortest plan is
-    on branch 0), then the branch-0 brackets one by one.
+    Uses :func:`rollplan.geometric.plan` restricted to ``branch=0`` (all of its
+    roots when ``near`` is given).
     """
     from . import geometric
 
     u, v, psi = (float(x) for x in target)
     dist = (lambda q: 0.0) if near is None else (lambda q: max(abs(q.a - near[0]), abs(q.b - near[1])))
     try:
-        best = geometric.plan((u, v, psi), steps, k=k)
+        best = geometric.plan((u, v, psi), steps, k=k, branch=0, all_solutions=near is not None)
     except geometric.NoPlanError:
-        best = None
-    if best is not None and best.branch == 0 and dist(best) < 1e-6:
-        return best
-    best = best if best is not None and best.branch == 0 else None
-    planner = geometric._planner("ipopt")
-    rows = planner._brackets(k, float(np.hypot(u, v)), psi, steps)
-    for row in rows[rows[:, 5] == 0][:max_solves]:
-        x, status, iters, ok = planner._solve(row[1:3], [k, row[6], row[7]])
-        if not ok:
-            continue
-        cand = planner._finish(x, 0, row[6], steps, k, 1.0, (u, v, psi), status, iters)
-        if cand is not None and (best is None or dist(cand) < dist(best)):
-            best = cand
-            if dist(best) < 1e-6:
-                break
-    return best
+        return None
+    return min((best,) + best.alternatives, key=lambda q: (dist(q), q.a + q.b))
 
 
 # ----------------------------------------------------------------------------- C sources

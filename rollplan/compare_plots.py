@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import numpy as np
 from matplotlib.figure import Figure
+
+from .plots import plane_axes, sphere_axes
 
 __all__ = ["plot_comparison", "plot_scaling"]
 
@@ -16,27 +17,12 @@ def plot_comparison(c, unit: str = "R") -> Figure:
     fig = Figure(figsize=(11, 5))
     ax1 = fig.add_subplot(1, 2, 1, projection="3d")
     ax2 = fig.add_subplot(1, 2, 2)
-    R = c.radius
-    u, v = np.mgrid[0:2 * np.pi:40j, 0:np.pi:20j]
-    ax1.plot_wireframe(R * np.cos(u) * np.sin(v), R * np.sin(u) * np.sin(v), R * np.cos(v), color="0.85",
-                       linewidth=0.4)
     for s in (c.geometric_phase, c.collocation):
         label = f"{LABELS[s.name]}: length {s.path_length:.4g} {unit}"
         ax1.plot(s.contact[:, 0], s.contact[:, 1], s.contact[:, 2], color=COLORS[s.name], linewidth=1.5)
         ax2.plot(s.u_a, s.v_a, color=COLORS[s.name], linewidth=1.4, label=label)
-    ax1.set_xlabel(f"x [{unit}]")
-    ax1.set_ylabel(f"y [{unit}]")
-    ax1.set_zlabel(f"z [{unit}]")
-    ax1.set_box_aspect((1, 1, 1))
-    ax1.set_title("contact paths on the sphere")
-    ax2.plot([0], [0], "ko", markersize=4, label="start")
-    ax2.plot([c.target[0]], [c.target[1]], "k*", markersize=10, label="target")
-    ax2.set_xlabel(f"u_a [{unit}]")
-    ax2.set_ylabel(f"v_a [{unit}]")
-    ax2.set_aspect("equal", adjustable="datalim")
-    ax2.grid(True, alpha=0.3)
-    ax2.legend(loc="best", fontsize=8)
-    ax2.set_title("contact paths on the plane")
+    sphere_axes(ax1, c.radius, unit, "contact paths on the sphere")
+    plane_axes(ax2, c.target, unit, "contact paths on the plane")
     fig.suptitle(f"k = {c.k:.4g}, target (u_a, v_a, psi) = ({c.target[0]:g}, {c.target[1]:g}, {c.target[2]:g}), "
                  f"n = {c.steps}, collocation {c.result.cost} N = {c.result.intervals} d = {c.result.degree}")
     fig.tight_layout()

@@ -38,6 +38,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections import Counter
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
@@ -56,6 +57,17 @@ log = logging.getLogger(__name__)
 
 #: Default tolerance of the verified residual (units of R and rad).
 TOLERANCE = 1e-9
+#: Largest number of steps a plan may have.
+MAX_STEPS = 1000
+#: Largest inertia ratio the planner accepts (physical robots have 1 < k < ~20).
+K_MAX = 100.0
+#: Largest |residual of (32)-(33)| of a solver's end point that is still a candidate root.
+_ROOT_TOL = 1e-10
+#: Brackets whose tables' model root lies within this many cell widths of the cell centre are
+#: solved first (see :func:`_cell_start`).
+_PLAUSIBLE_OFFSET = 1.5
+#: Leaf tables kept per planner (one per k value).
+_TABLE_CACHE = 8
 #: Coarse Chebyshev degree for tabulating the leaves when bracketing branches.
 _TABLE_NODES = 12
 
@@ -191,7 +203,8 @@ class Plan:
         integration [length unit, rad].
     residual : float
         Euclidean norm of ``final`` minus the target (lengths divided by R,
-        psi wrapped to (-pi, pi]).
+        psi wrapped to (-pi, pi]). The (u_o, v_o) entries are those of the
+        curve's end point, zero by construction of a closed curve.
     stats : SolverStats
     alternatives : tuple of Plan
         The other verified solution branches, shortest first (``all`` only).
@@ -231,10 +244,14 @@ def _ipopt_solver(residual: ca.Function):
             "ipopt.hessian_approximation": "limited-memory"}
     solver = ca.nlpsol("gp_ipopt", "ipopt", nlp, opts)
 
-    def solve(x0, par_value):
-        sol = solver(x0=x0, p=par_value, lbx=1e-6, ubx=A_MAX, lbg=0, ubg=0)
+    def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
+        sol = solver(x0=x0, p=par_value, lbx=lbx, ubx=ubx, lbg=0, ubg=0)
         st = solver.stats()
-        return np.array(sol["x"]).ravel(), st["return_status"], int(st["iter_count"]), bool(st["success"])
+        # Where eta is steep (|d eta/da| ~ 1e4 near A_MAX) IPOPT may stop short of its 1e-13
+        # tolerance at a point that solves (32)-(33) to rounding ("Search_Direction_Becomes_Too_Small");
+        # such a point is a candidate too: the CVODES verification decides.
+        ok = bool(st["success"]) or float(np.abs(np.array(sol["g"])).max()) < _ROOT_TOL
+        return np.array(sol["x"]).ravel(), st["return_status"], int(st["iter_count"]), ok
 
     return solve
 
@@ -244,16 +261,17 @@ def _newton_solver(residual: ca.Function):
                        {"abstol": 1e-14, "abstolStep": 1e-16, "max_iter": 40, "error_on_fail": False,
                         "show_eval_warnings": False})  # NaN outside the admissible range is a failed solve
 
-    def solve(x0, par_value):
+    def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
         x = np.array(rf(x0, par_value)).ravel()
         st = rf.stats()
-        ok = bool(st["success"]) and bool(np.all((x > 0) & (x <= A_MAX)))
+        ok = bool(st["success"]) and bool(np.all((x >= lbx) & (x <= ubx)))
         return x, st["return_status"], int(st.get("iter_count", -1)), ok
 
     return solve
 
 
-#: Root solvers for (32)-(33), by name.
+#: Root solvers for (32)-(33), by name: ``make(residual)`` returns
+#: ``solve(x0, par, lbx, ubx) -> (x, status, iterations, ok)``, the root kept in the box.
 SOLVERS = {"ipopt": _ipopt_solver, "newton": _newton_solver}
 
 
@@ -288,13 +306,15 @@ class GeometricPhasePlanner:
         xf = self.step_map(ca.DM.zeros(3), ab, par[0], 0)
         self.residual = ca.Function("residual", [ab, par], [ca.vertcat(xf[2] - par[1], ca.norm_2(xf[:2]) - par[2])])
         self._solve = SOLVERS[method](self.residual)
-        self.verifier = CvodesIntegrator(self.curve, reltol=1e-13, abstol=1e-14)
+        # Adams at rtol 3e-15: ~2e-11 from DOP853 on the printed (28)-(30) over 10 steps of large
+        # leaves (rtol 1e-13 left 5e-10 there, too close to the 1e-9 tolerance it certifies).
+        self.verifier = CvodesIntegrator(self.curve, reltol=3e-15, abstol=1e-16)
         self._verify_ints = self.verifier.integrators(1)
         self._tables: dict = {}
         self._cell_index: dict = {}
 
     # -- step map ------------------------------------------------------------------
-    def step(self, a: float, b: float | None = None, k: float = 0.0, gamma: float = 0.0) -> StepResult:
+    def step(self, a: float, b: float | None = None, *, k: float, gamma: float = 0.0) -> StepResult:
         """One trace of the figure eight (a, b) rotated by gamma, from zero state."""
         b = a if b is None else b
         a, b, k, gamma = _check_leaf("a", a), _check_leaf("b", b), _check_k(k), check_finite("gamma", gamma)
@@ -303,14 +323,17 @@ class GeometricPhasePlanner:
                           float(np.arctan2(x[1], x[0])))
 
     # -- branch bracketing ---------------------------------------------------------
-    def _leaf_tables(self, k: float):
+    def _leaf_tables(self, k: float, fine: bool = False):
         """Leaf maps on an adaptive grid of radii (coarse; only for bracketing).
 
-        The grid is refined until psi turns by less than 0.5 rad and the shift
-        moves by less than 0.1 R between neighbouring radii.
+        The grid is refined until psi turns by less than 0.5 rad (0.2 rad when
+        ``fine``, for finding all branches) and the shift moves by less than
+        0.1 R (0.04 R) between neighbouring radii.
         """
-        if k in self._tables:
-            return self._tables[k]
+        key = (k, fine)
+        if key in self._tables:
+            return self._tables[key]
+        turn, move, cap = (0.2, 0.04, 2500) if fine else (0.5, 0.1, 1500)
         grid = np.linspace(0.0, A_MAX, 129)
         vals = np.zeros((7, 0))
         while grid.size:
@@ -319,14 +342,14 @@ class GeometricPhasePlanner:
             vals = np.hstack([vals, np.vstack([grid, res[0], res[1]])])
             vals = vals[:, np.argsort(vals[0])]
             diff = np.abs(np.diff(vals[1:], axis=1))
-            coarse = (diff[[2, 5]].max(axis=0) > 0.5) | (diff[[0, 1, 3, 4]].max(axis=0) > 0.1)
-            if vals.shape[1] > 1500:
+            coarse = (diff[[2, 5]].max(axis=0) > turn) | (diff[[0, 1, 3, 4]].max(axis=0) > move)
+            if vals.shape[1] > cap:
                 break
             grid = 0.5 * (vals[0, :-1] + vals[0, 1:])[coarse]
-        self._tables[k] = vals
+        _remember(self._tables, key, vals)
         return vals
 
-    def _cells(self, k: float) -> dict:
+    def _cells(self, k: float, fine: bool = False) -> dict:
         """Per-k index of the grid cells of the leaf tables (cached with the tables).
 
         For every cell (i, j) of the (a, b) grid: the range of eta and of h
@@ -334,9 +357,10 @@ class GeometricPhasePlanner:
         cells are sorted by their smallest eta so that the cells whose eta
         range holds a given value are found by bisection.
         """
-        if k in self._cell_index:
-            return self._cell_index[k]
-        t = self._leaf_tables(k)
+        key = (k, fine)
+        if key in self._cell_index:
+            return self._cell_index[key]
+        t = self._leaf_tables(k, fine)
         r, d0, eta0, d1, eta1 = t[0], t[1:3], t[3], t[4:6], t[6]
         eta = eta0[:, None] + eta1[None, :]
         shift = _rot(eta0, d0)[:, :, None] + d1[:, None, :]   # Rot(eta0) D_bar, |.| = h
@@ -354,10 +378,10 @@ class GeometricPhasePlanner:
                  "emin": emin, "emax": emax, "hmin": hmin, "hmax": hmax, "eta": eta, "h": h,
                  "width": float((emax - emin).max()) if emin.size else 0.0,
                  "eta_lo": float(emin.min()), "eta_hi": float(emax.max())}
-        self._cell_index[k] = cells
+        _remember(self._cell_index, key, cells)
         return cells
 
-    def _brackets(self, k: float, h_des: float, psi: float, steps: int) -> np.ndarray:
+    def _brackets(self, k: float, h_des: float, psi: float, steps: int, fine: bool = False) -> np.ndarray:
         """Grid cells that bracket a root of (32)-(33) on some branch m.
 
         Returns an array with one row per (cell, m): lower bound of a + b in the
@@ -371,7 +395,7 @@ class GeometricPhasePlanner:
         whose smallest eta lies within one cell width below ``eta_m`` are
         tested (bisection in the per-k index of :meth:`_cells`).
         """
-        c = self._cells(k)
+        c = self._cells(k, fine)
         two_pi = 2 * np.pi
         m_all = np.arange(math.ceil((steps * c["eta_lo"] - psi) / two_pi) - 1,
                           math.floor((steps * c["eta_hi"] - psi) / two_pi) + 2)
@@ -396,14 +420,14 @@ class GeometricPhasePlanner:
         ii, jj = cell // n, cell % n
         eta_m = (psi + two_pi * m) / steps
         h_m = _target_shift(h_des, eta_m, steps)
-        a_s, b_s = _cell_start(c["eta"], c["h"], r, ii, jj, eta_m, h_m)
+        a_s, b_s, off = _cell_start(c["eta"], c["h"], r, ii, jj, eta_m, h_m)
         out = np.column_stack([r[ii] + r[jj], 0.5 * (r[ii] + r[ii + 1]), 0.5 * (r[jj] + r[jj + 1]),
-                               0.5 * (r[ii + 1] - r[ii]), 0.5 * (r[jj + 1] - r[jj]), m, eta_m, h_m, a_s, b_s])
+                               0.5 * (r[ii + 1] - r[ii]), 0.5 * (r[jj + 1] - r[jj]), m, eta_m, h_m, a_s, b_s, off])
         return out[np.lexsort((m, cell, out[:, 0]))]
 
     # -- solve -----------------------------------------------------------------------
     def solve(self, target, steps: int = 1, k: float | None = None, robot: Robot | None = None,
-              radius: float | None = None, all_solutions: bool = False) -> Plan:
+              radius: float | None = None, all_solutions: bool = False, branch: int | None = None) -> Plan:
         """Plan to ``target = (u_a, v_a, psi)`` in ``steps`` traces; see :func:`plan`."""
         t_start = time.perf_counter()
         k, radius = _resolve_k_radius(k, robot, radius)
@@ -411,44 +435,72 @@ class GeometricPhasePlanner:
         if len(target) != 3:
             raise InputError(f"target = {target!r} is not allowed: give (u_a, v_a, psi)")
         u_des, v_des = (check_finite(n, x) / radius for n, x in zip(("u_a", "v_a"), target[:2]))
-        psi_des = check_finite("psi", target[2])
+        psi_given = check_finite("psi", target[2])
+        psi_des = float(wrap(psi_given))  # psi is an angle; the branches psi + 2 pi m cover the rest
+        turns = round((psi_given - psi_des) / (2 * math.pi))  # branch numbers stay relative to psi as given
         h_des = math.hypot(u_des, v_des)
+        where = (f"(u_a, v_a, psi) = ({target[0]:g}, {target[1]:g}, {psi_given:g}) in {steps} step(s) "
+                 f"with k = {k:g}")
         if h_des == 0.0:
-            raise NoPlanError("the target lies at the start point: a figure-eight plan needs a nonzero shift")
-        brackets = self._brackets(k, h_des, psi_des, steps)
+            raise NoPlanError(f"no plan for {where}: the target is the start point, and rollplan plans "
+                              "motions with a nonzero displacement")
+        brackets = self._brackets(k, h_des, psi_des, steps, fine=all_solutions)
+        if branch is not None:
+            brackets = brackets[brackets[:, 5] == int(branch) + turns]
         log.info("k=%g: %d brackets", k, len(brackets))
-        found: list = []
+        found: list = []      # verified plans, shortest first
+        seen: list = []       # (a, b, m) of every converged root, verified or not
+        rejected: list = []   # verified residuals of the roots that failed verification
+        statuses: Counter = Counter()
         solves = 0
-        last_status = "no bracket"
-        for lower, a0, b0, da, db, m, eta_m, h_m, a_s, b_s in brackets:
-            if not all_solutions and found and found[0][0] + found[0][1] <= lower:
-                break  # no bracket left can hold a shorter path
-            if any(f[2].branch == m and abs(f[0] - a0) <= 2 * da and abs(f[1] - b0) <= 2 * db for f in found):
-                continue  # this cell's root is one already found
-            x, status, iters, ok = self._solve([a_s, b_s], [k, eta_m, h_m])
-            solves += 1
-            last_status = status
-            if not ok or any(abs(x[0] - f[0]) < 1e-7 and abs(x[1] - f[1]) < 1e-7 for f in found):
-                continue
-            cand = self._finish(x, m, eta_m, steps, k, radius, (u_des, v_des, psi_des), status, iters)
-            if cand is not None:
-                found.append((x[0], x[1], cand))
-
-                found.sort(key=lambda f: f[0] + f[1])
+        # Brackets whose model root lies well outside the cell are mostly false (parallel zero
+        # curves); the shortest plan is sought among the others first, and they are solved only
+        # for all solutions or when the others give no plan.
+        plausible = brackets[:, 10] <= _PLAUSIBLE_OFFSET
+        passes = [brackets] if all_solutions else [brackets[plausible], brackets[~plausible]]
+        for rows in passes:
+            if found:
+                break
+            for lower, a0, b0, da, db, m, eta_m, h_m, a_s, b_s, _ in rows:
+                if not all_solutions and found and found[0].a + found[0].b <= lower:
+                    break  # no bracket left can hold a shorter path
+                if any(sm == m and abs(sa - a0) <= da and abs(sb - b0) <= db for sa, sb, sm in seen):
+                    continue  # the root in this cell is known
+                # Solve within the bracketing cell widened by two cells each way: near A_MAX eta is
+                # steep, and an unbounded step can jump to another root and leave this one unfound.
+                box_lo = np.maximum([a0 - 3 * da, b0 - 3 * db], 1e-6)
+                box_hi = np.minimum([a0 + 3 * da, b0 + 3 * db], A_MAX)
+                x, status, iters, ok = self._solve([a_s, b_s], [k, eta_m, h_m], box_lo, box_hi)
+                solves += 1
+                statuses[str(status)] += 1
+                if not ok or any(abs(x[0] - sa) < 1e-7 and abs(x[1] - sb) < 1e-7 for sa, sb, _ in seen):
+                    continue
+                seen.append((float(x[0]), float(x[1]), m))
+                cand, residual = self._finish(x, int(m) - turns, steps, k, (u_des, v_des, psi_des), status, iters)
+                if cand is None:
+                    rejected.append(residual)
+                    continue
+                found.append(cand)
+                found.sort(key=lambda p: p.a + p.b)
         elapsed = time.perf_counter() - t_start
         if not found:
-            raise NoPlanError(
-                f"no verified plan reaches (u_a, v_a, psi) = ({target[0]:g}, {target[1]:g}, {psi_des:g}) "
-                f"in {steps} step(s) with k = {k:g} ({len(brackets)} brackets, last solver status: {last_status}); "
-                "try more steps")
-        plans = [replace(f[2], radius=radius, stats=replace(f[2].stats, candidates=len(brackets), solves=solves,
-                                                             time_s=elapsed)) for f in found]
-        plans = [_scaled(p, radius, target, self) for p in plans]
-        best = plans[0]
-        return replace(best, alternatives=tuple(plans[1:]) if all_solutions else ())
+            if rejected:
+                raise NoPlanError(f"no verified plan for {where}: {len(rejected)} root(s) of (32)-(33) found, but "
+                                  f"their verified residual (best {min(rejected):.1e}) exceeds {self.tol:.0e}; "
+                                  "try more steps")
+            if solves:
+                status = statuses.most_common(1)[0][0]
+                raise SolverError(f"no solve of (32)-(33) converged for {where} ({solves} solves from "
+                                  f"{len(brackets)} brackets, most often {status}); try method='newton' or more steps",
+                                  status)
+            raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R; "
+                              "try more steps")
+        plans = [_scaled(replace(p, stats=replace(p.stats, candidates=len(brackets), solves=solves, time_s=elapsed)),
+                         radius, target, self) for p in found]
+        return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
 
-    def _finish(self, x, m, eta_m, steps, k, radius, target_r, status, iters):
-        """Gamma from the geometry, then verification by CVODES. None if not verified."""
+    def _finish(self, x, m, steps, k, target_r, status, iters):
+        """Gamma from the geometry, then verification by CVODES: (plan or None, residual)."""
         a, b = float(x[0]), float(x[1])
         xf = np.array(self.step_map(ca.DM.zeros(3), x, k, 0)).ravel()
         eta = float(xf[2])
@@ -459,10 +511,10 @@ class GeometricPhasePlanner:
         residual = float(np.linalg.norm(err))
         if residual > self.tol:
             log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: verified residual %.2e > %.0e", m, a, b, residual, self.tol)
-            return None
+            return None, residual
         stats = SolverStats(self.method, str(status), iters, 0, 0, 0.0)
         return Plan(a, b, gamma, steps, k, 1.0, target_r, int(m), float(np.hypot(*xf[:2])), eta,
-                    2 * np.pi * steps * (a + b), final, residual, stats, (), self)
+                    2 * np.pi * steps * (a + b), final, residual, stats, (), self), residual
 
     # -- verification and sampling --------------------------------------------------
     def verify(self, a, b, k, gamma, steps):
@@ -500,7 +552,10 @@ def _cell_start(eta, h, r, ii, jj, eta_m, h_m):
     """Start of the root solve in cell (ii, jj): the root of the tables' bilinear model, linearized at
     the cell centre, clipped to the cell (the centre where the model is singular).
 
-    ``eta``, ``h``: tabulated eta(a_i, b_j), h(a_i, b_j); returns arrays (a_s, b_s).
+    ``eta``, ``h``: tabulated eta(a_i, b_j), h(a_i, b_j); returns arrays (a_s, b_s, off), where
+    ``off`` is how far the unclipped model root lies from the cell centre, in cell widths
+    (inf where the model is singular): a cell where the zero curves of (32) and (33) run
+    parallel passes the corner-sign test but has its model root far outside.
     """
     def corners(z):
         return z[ii, jj], z[ii + 1, jj], z[ii, jj + 1], z[ii + 1, jj + 1]
@@ -518,7 +573,8 @@ def _cell_start(eta, h, r, ii, jj, eta_m, h_m):
     dt = np.where(ok, (es * res_h - hs * res_e) / safe, 0.0)
     s = np.clip(0.5 + ds, 0.0, 1.0)
     t = np.clip(0.5 + dt, 0.0, 1.0)
-    return r[ii] + s * (r[ii + 1] - r[ii]), r[jj] + t * (r[jj + 1] - r[jj])
+    off = np.where(ok, np.maximum(np.abs(ds), np.abs(dt)), np.inf)
+    return r[ii] + s * (r[ii + 1] - r[ii]), r[jj] + t * (r[jj + 1] - r[jj]), off
 
 
 def _target_shift(h_des, eta_m, steps):
@@ -539,11 +595,19 @@ def _scaled(p: Plan, radius: float, target, planner) -> Plan:
     final = p.final.copy()
     final[:2] *= radius
     return replace(p, a=p.a * radius, b=p.b * radius, h=p.h * radius, path_length=p.path_length * radius,
-                   final=final, target=(float(target[0]), float(target[1]), float(target[2])), _planner=planner)
+                   radius=radius, final=final, target=(float(target[0]), float(target[1]), float(target[2])),
+                   _planner=planner)
+
+
+def _remember(cache: dict, key, value, size: int = _TABLE_CACHE) -> None:
+    """Store ``value`` in a small cache, dropping the oldest entry beyond ``size``."""
+    cache[key] = value
+    while len(cache) > size:
+        cache.pop(next(iter(cache)))
 
 
 def _check_k(k) -> float:
-    return check_range("k", k, 0.0, None)
+    return check_range("k", k, 0.0, K_MAX)
 
 
 def _check_leaf(name, value) -> float:
@@ -551,8 +615,8 @@ def _check_leaf(name, value) -> float:
 
 
 def _check_steps(steps) -> int:
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
-        raise InputError(f"steps = {steps!r} is not allowed: it must be a whole number >= 1")
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or not 1 <= steps <= MAX_STEPS:
+        raise InputError(f"steps = {steps!r} is not allowed: it must be a whole number in [1, {MAX_STEPS}]")
     return int(steps)
 
 
@@ -575,7 +639,7 @@ def _planner(method: str) -> GeometricPhasePlanner:
 
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
-         all_solutions: bool = False, method: str = "ipopt") -> Plan:
+         all_solutions: bool = False, method: str = "ipopt", branch: int | None = None) -> Plan:
     """Plan an exact, dynamically realizable motion by tracing a figure eight n times.
 
     Solves (32)-(33) for the leaf radii (a, b) on every branch
@@ -599,6 +663,8 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
         Also return the other verified branches in ``Plan.alternatives``.
     method : str
         Root solver name from :data:`SOLVERS`.
+    branch : int, optional
+        Only the branch m of ``n eta = psi + 2 pi m`` (psi as given).
 
     Returns
     -------
@@ -611,12 +677,12 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
         Bad input.
     NoPlanError
         No verified plan exists in the admissible range ``0 < a, b <= A_MAX R``.
+    SolverError
+        Roots were bracketed but no solve converged (carries the solver's status).
     """
-    if method not in SOLVERS:
-        raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
-    return _planner(method).solve(target, steps, k, robot, radius, all_solutions)
+    return _planner(method).solve(target, steps, k, robot, radius, all_solutions, branch)
 
 
-def step(a: float, b: float | None = None, k: float = 0.0, gamma: float = 0.0) -> StepResult:
+def step(a: float, b: float | None = None, *, k: float, gamma: float = 0.0) -> StepResult:
     """What one figure eight does: shift h(a, b), holonomy eta(a, b), eqs. (28)-(31)."""
-    return _planner("ipopt").step(a, b, k, gamma)
+    return _planner("ipopt").step(a, b, k=k, gamma=gamma)

@@ -1,6 +1,6 @@
 """Integrators of the curve ODE (28)-(30) over the pieces of a closed curve.
 
-Two methods, chosen by name from :data:`METHODS`:
+Two integrators:
 
 ``"spectral"`` (the planner's)
     Along a curve, psi' in (30) does not depend on the state, and (28)-(29)
@@ -31,9 +31,7 @@ from numpy.polynomial import chebyshev as cheb
 from . import model
 from .curves import Curve, rotated_point
 
-__all__ = ["METHODS", "piece_rhs", "spectral_step", "CvodesIntegrator", "chebyshev_matrices"]
-
-METHODS = ("spectral", "cvodes")
+__all__ = ["piece_rhs", "spectral_step", "CvodesIntegrator", "chebyshev_matrices"]
 
 #: Chebyshev degree per panel of the spectral integrator.
 DEFAULT_NODES = 32

@@ -11,15 +11,21 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["check_writable", "write_atomic", "write_json", "save_figure", "plan_to_dict"]
+__all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict"]
 
 
 def check_writable(path) -> Path:
-    """Raise InputError unless ``path`` can be created (its folder exists and is writable)."""
-    p = Path(path)
+    """The real path behind ``path`` (symlinks followed), or InputError unless it can be written.
+
+    An existing target must be a regular file: a device, FIFO or socket is
+    refused rather than replaced by the atomic rename.
+    """
+    p = Path(os.path.realpath(path)) if os.path.islink(path) else Path(path)
     folder = p.parent if str(p.parent) else Path(".")
     if p.is_dir():
-        raise InputError(f"output path {str(p)!r} is a directory")
+        raise InputError(f"output path {str(path)!r} is a directory")
+    if p.exists() and not p.is_file():
+        raise InputError(f"output path {str(path)!r} is not allowed: it exists and is not a regular file")
     if not folder.is_dir():
         raise InputError(f"output path {str(p)!r} is not writable: folder {str(folder)!r} does not exist")
     if not os.access(folder, os.W_OK):
@@ -28,7 +34,10 @@ def check_writable(path) -> Path:
 
 
 def write_atomic(path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and an atomic rename."""
+    """Write ``data`` to ``path`` through a temporary file and an atomic rename.
+
+    A symlink is written through: its target gets the data, the link stays.
+    """
     p = check_writable(path)
     fd, tmp = tempfile.mkstemp(dir=p.parent if str(p.parent) else ".", prefix=f".{p.name}.", suffix=".tmp")
     try:
@@ -46,6 +55,18 @@ def write_atomic(path, data: bytes) -> None:
 
 def write_json(path, obj) -> None:
     write_atomic(path, (json.dumps(obj, indent=1, allow_nan=False) + "\n").encode())
+
+
+def check_figure_path(path) -> Path:
+    """``check_writable`` plus a file format matplotlib can write, judged by the suffix."""
+    from matplotlib.figure import Figure
+
+    formats = Figure().canvas.get_supported_filetypes()
+    suffix = Path(path).suffix.lstrip(".").lower()
+    if suffix not in formats:
+        raise InputError(f"figure path {str(path)!r} is not allowed: its extension {('.' + suffix) if suffix else '(none)'!r} "
+                         f"is not a figure format; use one of {', '.join('.' + f for f in sorted(formats))}")
+    return check_writable(path)
 
 
 def save_figure(fig, path, dpi=120) -> None:

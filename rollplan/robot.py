@@ -81,6 +81,8 @@ def load_robot(path) -> Robot:
         raise InputError(f"robot file {str(path)!r} cannot be read: {exc.strerror}") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"robot file {str(path)!r} is not valid TOML: {exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"robot file {str(path)!r} is not valid TOML: it is not UTF-8 text") from None
     names = [f.name for f in fields(Robot)]
     unknown = sorted(set(data) - set(names))
     if unknown:

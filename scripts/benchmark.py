@@ -10,7 +10,12 @@ The benchmark is a list of sections (:data:`SECTIONS`). A section is a
 function ``section(ctx) -> dict`` returning ``{"title": str, "rows": [dict],
 "notes": [str], ...}``; rows become a markdown table (columns in the order of
 the first row's keys). To add a planner, write a section function and append
-it to :data:`SECTIONS`.
+it to :data:`SECTIONS`. Sections: the geometric-phase plan against scipy, the
+step map, the collocation planner (``scripts/bench_collocation.py:measure``),
+the generated C planner (``scripts/bench_codegen.py:measure``; skipped without
+a C compiler), memory, a profile, and the budgets of issues 2, 4, 6 and 7 with
+their measured values (shown first). The load average at start is recorded:
+the machine is shared.
 
 The scipy baseline is what a researcher would write by hand from the paper:
 the printed equations (28)-(30) for the figure eight of circles (35) in numpy
@@ -35,6 +40,7 @@ import os
 import platform
 import pstats
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -48,6 +54,8 @@ import scipy
 from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
+import bench_codegen
+import bench_collocation
 import rollplan
 from rollplan import geometric
 from rollplan.curves import A_MAX
@@ -61,6 +69,10 @@ FIXED_GUESS = (0.35, 0.35)
 BUDGET_PLAN_MS = 20.0
 BUDGET_RATIO = 50.0
 BUDGET_STEP_EVALS = 20000.0
+#: Issue 2's budget: a single plan under 50 ms median.
+BUDGET_PLAN_MS_FOUNDATION = 50.0
+#: Issue 6's budget: a C plan under 1 ms.
+BUDGET_C_PLAN_US = 1000.0
 
 
 # ----------------------------------------------------------------------------- scipy baseline (by hand)
@@ -212,6 +224,7 @@ def section_plan(ctx):
     warm = statistics.median(r["rollplan warm [ms]"] for r in rows)
     ratio = min(r["speed-up"] for r in rows)
     ratio_cpu = min(r["speed-up (CPU time)"] for r in rows)
+    ratio_tight = min(r["speed-up vs 1e-13"] for r in rows)
     acc = all(r["residual rollplan"] <= r["residual scipy"] for r in rows)
     notes = [f"k = {K}; warm = median of {ctx['repeats']} calls after one warm-up (planner and per-k tables cached); "
              f"scipy = median of {ctx['scipy_repeats']} runs; cold = first call in a fresh interpreter "
@@ -231,6 +244,7 @@ def section_plan(ctx):
              f"rollplan residual <= scipy residual on every target: {acc})."]
     return {"title": "Plan: rollplan.plan against a hand-written scipy baseline", "rows": rows, "notes": notes,
             "raw": raw, "summary": {"median_warm_ms": warm, "min_speedup": ratio, "min_speedup_cpu": ratio_cpu,
+                                                "min_speedup_vs_rtol_1e-13": ratio_tight,
                                                 "accuracy_ok": acc}}
 
 
@@ -313,14 +327,16 @@ def section_step_map(ctx):
                  "time per eval [us]": t / scipy_n * 1e6, "build [s]": 0.0,
                  "max |error| vs scipy": float(np.abs(np.column_stack([scipy_step(a, b, K) for a, b in check.T])
                                                    - ref).max())})
-    best = max(r["evaluations/s"] for r in rows if "map" in r["variant"] or "processes" in r["variant"])
+    batched = [r for r in rows if "map" in r["variant"] or "processes" in r["variant"]]
+    best_row = max(batched, key=lambda r: r["evaluations/s"])
+    best = best_row["evaluations/s"]
     notes = [f"k = {K}, {n} random (a, b) in (0.02, A_MAX); median of {ctx['map_repeats']} runs; {threads} cores. "
              f"Accuracy: max abs error of (u_a, v_a, psi) against scipy DOP853 at rtol 1e-13 on the printed "
              f"(28)-(30) at {check.shape[1]} points.",
              f"Budget batched >= {BUDGET_STEP_EVALS:g} evaluations/s on 2 cores: "
              f"{'MET' if best >= BUDGET_STEP_EVALS else 'MISSED'} (best batched {best:.0f}/s)."]
     return {"title": "Step map (one figure eight, spectral, 90k SX instructions)", "rows": rows, "notes": notes,
-            "summary": {"best_batched_per_s": best}}
+            "summary": {"best_batched_per_s": best, "best_batched_variant": best_row["variant"]}}
 
 
 def section_memory(ctx):
@@ -394,8 +410,131 @@ def section_profile(ctx):
                                     "overhead included)."], "text": "\n".join(lines)}
 
 
-#: The benchmark, in order. Append new sections (e.g. the collocation and C planners) here.
-SECTIONS = [section_plan, section_step_map, section_memory, section_profile]
+def section_collocation(ctx):
+    """Collocation planner, N = 100, d = 3 (Legendre), warm start: median IPOPT time; naive-guess convergence."""
+    targets = bench_collocation.TARGETS[: ctx["coll_targets"]]
+    res = bench_collocation.measure(ctx["coll_repeats"], targets, K)
+    rows = [{"target (u_a, v_a, psi)": str(r["target"]), "warm: status": r["status"], "warm: iterations": r["iterations"],
+             "warm: median IPOPT [s]": r["median_s"], "warm: verified residual": r["residual"],
+             "naive: status": r["naive_status"], "naive: iterations": r["naive_iterations"] if r["naive_iterations"]
+             is not None else "-", "naive: IPOPT [s]": r["naive_s"] if r["naive_s"] is not None else float("nan")}
+            for r in res["rows"]]
+    notes = [f"rollplan.collocation.CollocationPlanner(N = {res['intervals']}, d = {res['degree']}, {res['scheme']}, "
+             f"cost {res['cost']}), k = {K}; NLP built once in {res['build_s']:.2f} s (not timed). Warm start = the "
+             f"geometric-phase plan (n = 1); time = IPOPT wall time (solve_time_s), {res['repeats']} solves per target "
+             "(a failed solve counts as infinite). Residual = CVODES integration of the optimized controls. Naive = "
+             "one solve from the straight-line guess at rest on the south pole, same psi branch. Measured by "
+             "scripts/bench_collocation.py:measure.",
+             f"Naive guess converged on {res['naive_converged']} of {res['naive_total']} targets "
+             f"(warm start: {sum(r['status'] == 'Solve_Succeeded' for r in res['rows'])} of {len(res['rows'])}).",
+             f"Budget (issue 4) N = 100, d = 3 warm start < {res['budget_s']:g} s median: "
+             f"{'MET' if res['met'] else 'MISSED'} (median over {len(res['times_s'])} solves {res['median_s']:.3f} s)."]
+    return {"title": "Collocation planner (N = 100, degree 3)", "rows": rows, "notes": notes,
+            "summary": {k: v for k, v in res.items() if k != "rows"}}
+
+
+def section_c_planner(ctx):
+    """The generated C planner: microseconds per plan (new k, same k) and code size (scripts/bench_codegen.py)."""
+    title = "C planner (generated C, rollplan.codegen)"
+    missing = [tool for tool in ("gcc", "cc", "make") if shutil.which(tool) is None]
+    if missing:
+        why = "no C compiler" if {"gcc", "cc"} & set(missing) else "no make"
+        return {"title": title, "rows": [], "notes": [f"skipped: {why} ({', '.join(missing)} not found on PATH)."],
+                "summary": {"skipped": why}}
+    res = bench_codegen.measure(reps=ctx["c_reps"], python=True)
+    py_us = res["python_ms_per_plan"] * 1e3
+    new_k = len({t[4] for t in bench_codegen.TARGETS} - {bench_codegen.TARGETS[0][4]})   # k after the warm-up
+    second = bench_codegen.python_plan_times()                  # now every k's tables are cached
+    res["python_ms_per_target_tables_cached"] = second
+    res["python_ms_per_plan_tables_cached"] = float(np.mean(second))
+    py_cached_us = res["python_ms_per_plan_tables_cached"] * 1e3
+    py_median_us = statistics.median(second) * 1e3
+    slow = int(np.argmax(second))
+    rows = [{"quantity": "C plan, new k (leaf table recomputed) [us]", "value": res["c_us_per_plan"]},
+            {"quantity": "C plan, same k (leaf table kept) [us]", "value": res["c_us_per_plan_same_k"]},
+            {"quantity": f"Python rollplan.plan, first pass (per-k tables built for {new_k} new k) [us]",
+             "value": py_us},
+            {"quantity": "Python rollplan.plan, second pass (per-k tables cached), mean [us]", "value": py_cached_us},
+            {"quantity": "Python rollplan.plan, second pass, median over targets [us]", "value": py_median_us},
+            {"quantity": "speed-up C new k vs Python first pass", "value": py_us / res["c_us_per_plan"]},
+            {"quantity": "speed-up C same k vs Python second pass",
+             "value": py_cached_us / res["c_us_per_plan_same_k"]},
+            {"quantity": "speed-up C same k vs Python second pass median", "value": py_median_us / res["c_us_per_plan_same_k"]},
+            {"quantity": "C plans failed", "value": res["c_failed_plans"]},
+            {"quantity": "generated code .c + .h [bytes]", "value": res["c_code_bytes"]},
+            {"quantity": "  of which the model (step map) [bytes]", "value": res["c_model_bytes"]},
+            {"quantity": "static library librollplan.a [bytes]", "value": res["c_static_lib_bytes"]},
+            {"quantity": "plan_demo executable [bytes]", "value": res["plan_demo_bytes"]},
+            {"quantity": "static work memory [doubles]", "value": res["c_work_doubles"]}]
+    worst = max(res["c_us_per_plan"], res["c_us_per_plan_same_k"])
+    notes = [f"{res['targets']} targets (bench_codegen.TARGETS, k in 0..5, n in 1..3), {res['steps_per_leaf']} steps "
+             f"per leaf; C time = mean over the targets of the best of {ctx['c_reps']} plans (cc -O2); Python time = "
+             "mean of one pass over the same targets after a warm-up on the first (IPOPT + CVODES verification), then of "
+             "a second pass. Measured by "
+             "scripts/bench_codegen.py:measure.",
+             f"Slowest Python plan of the second pass: target (u, v, psi, n, k) = {bench_codegen.TARGETS[slow]}, "
+             f"{second[slow]:.0f} ms (the mean is dominated by it; the median is {py_median_us / 1e3:.1f} ms).",
+             f"Budget (issue 6) C plan < {BUDGET_C_PLAN_US:g} us: {'MET' if worst < BUDGET_C_PLAN_US else 'MISSED'} "
+             f"({res['c_us_per_plan']:.0f} us new k, {res['c_us_per_plan_same_k']:.0f} us same k)."]
+    return {"title": title, "rows": rows, "notes": notes, "summary": res}
+
+
+def _status(ok):
+    return "MET" if ok else "MISSED"
+
+
+def section_budgets(ctx):
+    """All budgets of the issues with the measured values (from the sections run before)."""
+    done = ctx["results"]
+    rows = []
+
+    def add(issue, budget, measured, ok):
+        rows.append({"issue": issue, "budget": budget, "measured": measured, "status": ok})
+
+    plan = done.get("section_plan", {}).get("summary")
+    if plan:
+        warm = plan["median_warm_ms"]
+        add("2", f"single plan < {BUDGET_PLAN_MS_FOUNDATION:g} ms median", f"{warm:.1f} ms",
+            _status(warm < BUDGET_PLAN_MS_FOUNDATION))
+        add("7", f"single plan < {BUDGET_PLAN_MS:g} ms median", f"{warm:.1f} ms", _status(warm < BUDGET_PLAN_MS))
+        add("7", f">= {BUDGET_RATIO:g}x faster than scipy at equal or better accuracy",
+            f"smallest over targets {plan['min_speedup']:.1f}x wall ({plan['min_speedup_cpu']:.1f}x CPU time) vs "
+            f"scipy rtol 1e-10, {plan['min_speedup_vs_rtol_1e-13']:.1f}x vs scipy rtol 1e-13; rollplan residual <= "
+            f"scipy's on every target: {plan['accuracy_ok']}",
+            _status(plan["min_speedup"] >= BUDGET_RATIO and plan["accuracy_ok"]))
+    else:
+        add("2, 7", "single plan; speed-up vs scipy", "not run", "n/a")
+    step = done.get("section_step_map", {}).get("summary")
+    if step:
+        best = step["best_batched_per_s"]
+        add("7", f"batched step map >= {BUDGET_STEP_EVALS:g} evaluations/s on 2 cores", f"{best:.0f}/s (best: {step['best_batched_variant']})",
+            _status(best >= BUDGET_STEP_EVALS))
+    else:
+        add("7", "batched step map", "not run", "n/a")
+    coll = done.get("section_collocation", {}).get("summary")
+    if coll:
+        add("4", f"collocation N = 100, d = 3, warm start < {coll['budget_s']:g} s median",
+            f"{coll['median_s']:.3f} s", _status(coll["met"]))
+    else:
+        add("4", "collocation", "not run", "n/a")
+    c = done.get("section_c_planner", {}).get("summary")
+    if c and "skipped" not in c:
+        worst = max(c["c_us_per_plan"], c["c_us_per_plan_same_k"])
+        add("6", f"C plan < {BUDGET_C_PLAN_US:g} us", f"{c['c_us_per_plan']:.0f} us new k, "
+            f"{c['c_us_per_plan_same_k']:.0f} us same k", _status(worst < BUDGET_C_PLAN_US))
+    else:
+        add("6", "C plan", f"skipped: {c['skipped']}" if c else "not run", "n/a")
+    load = ctx["load_average"]
+    notes = [f"Measured on a shared machine: load average at start {', '.join(f'{x:.2f}' for x in load or [])} on "
+             f"{os.cpu_count()} cores, so timings are pessimistic. Details and the measurements behind each value in "
+             "the sections below."]
+    return {"title": "Budgets", "rows": rows, "notes": notes, "top": True}
+
+
+#: The benchmark, in order. Append new sections here; :func:`section_budgets` reads the others' summaries and
+#: is shown first in the report.
+SECTIONS = [section_plan, section_step_map, section_collocation, section_c_planner, section_memory, section_profile,
+            section_budgets]
 
 
 # ----------------------------------------------------------------------------- report
@@ -527,19 +666,27 @@ def main(argv=None):
     ctx = {"repeats": 5 if args.quick else 21, "scipy_repeats": 1 if args.quick else 3,
            "batch": 500 if args.quick else 4000, "map_repeats": 1 if args.quick else 5,
            "single_evals": 100 if args.quick else 1000, "check_points": 4 if args.quick else 8,
-           "jit": not args.no_jit, "jit_flags": args.jit_flags, "cold": not args.no_cold}
+           "jit": not args.no_jit, "jit_flags": args.jit_flags, "cold": not args.no_cold,
+           "coll_repeats": 1 if args.quick else 11, "coll_targets": 2 if args.quick else len(bench_collocation.TARGETS),
+           "c_reps": 3 if args.quick else 20}
+    mach = machine()
+    print(f"load average at start: {mach['load_average']}", file=sys.stderr, flush=True)
     report = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
-              "commit": git_commit(), "machine": machine(), "command": " ".join(["python"] + sys.argv),
-              "settings": ctx, "sections": []}
+              "commit": git_commit(), "machine": mach, "command": " ".join(["python"] + sys.argv),
+              "settings": dict(ctx), "sections": []}
+    ctx["load_average"] = mach["load_average"]
+    ctx["results"] = {}
     for sec in SECTIONS:
-        if args.only and not any(s in sec.__name__ for s in args.only):
+        if args.only and sec is not section_budgets and not any(s in sec.__name__ for s in args.only):
             continue
         t = time.perf_counter()
         print(f"running {sec.__name__} ...", file=sys.stderr, flush=True)
         res = sec(ctx)
         res["function"] = sec.__name__
         res["time_s"] = time.perf_counter() - t
+        ctx["results"][sec.__name__] = res
         report["sections"].append(res)
+    report["sections"].sort(key=lambda r: not r.get("top", False))     # the budgets first, the rest in order
     report["postscript"] = WHERE_TIME_GOES
     out = Path(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+import bench_collocation
 from rollplan import NoPlanError, SolverError, plan
 from rollplan.collocation import CollocationPlanner
 from rollplan.compare_plots import plot_comparison, plot_scaling
@@ -140,22 +141,6 @@ def scaling(Ns, repeats, target=(0.5, 0.3, 0.4)):
     return res
 
 
-def budget(targets, repeats):
-    """N = 100, d = 3, Legendre, warm start, path_length: IPOPT time over targets x repeats."""
-    P = CollocationPlanner(100, 3, "legendre", "path_length")
-    ts = []
-    for tgt in targets:
-        p = gp(tgt)
-        if p is None:
-            continue
-        for _ in range(repeats):
-            try:
-                ts.append(P.solve(tgt, k=K, guess=p).stats.solve_time_s)
-            except SolverError:
-                ts.append(float("inf"))
-    return ts
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--out", default="results")
@@ -179,7 +164,7 @@ def main():
     sc = scaling(Ns, 3 if args.quick else 5)
     save_figure(plot_scaling(Ns, [sc[c][0] for c in COSTS], [f"{c}, Legendre d = 3, warm" for c in COSTS]),
                 out / "comparison_scaling.png")
-    bt = budget(targets[:6], 3 if args.quick else 5)
+    bt = bench_collocation.measure(repeats=3 if args.quick else 5, targets=targets[:6], k=K, naive=False)["times_s"]
     med = statistics.median(bt)
 
     # which is shorter / cheaper

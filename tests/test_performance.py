@@ -97,4 +97,6 @@ def test_benchmark_script_runs(tmp_path):
                     "--out-dir", str(tmp_path)], check=True, capture_output=True, timeout=600)
     text = (tmp_path / "benchmarks.md").read_text()
     assert "evaluations/s" in text and "commit" in text and "speed-up" in text and "Profile" in text
+    assert "## Budgets" in text and "Collocation planner" in text and "C planner" in text
+    assert "load average at start" in text
     assert (tmp_path / "benchmarks.json").stat().st_size > 0

@@ -1,0 +1,15 @@
+"""Regenerate results/atlas_k2.5.png: h(a, b) and eta(a, b) of one figure eight at k = 2.5.
+
+Run: python scripts/make_atlas.py   (the same as `rollplan atlas --k 2.5 --resolution 101 --out ...`)
+"""
+
+from pathlib import Path
+
+from rollplan.atlas import compute_atlas, plot_atlas
+from rollplan.io import save_figure
+
+OUT = Path(__file__).resolve().parent.parent / "results" / "atlas_k2.5.png"
+
+if __name__ == "__main__":
+    save_figure(plot_atlas(compute_atlas(2.5, 1, 101)), OUT)
+    print(f"wrote {OUT}")
