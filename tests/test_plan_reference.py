@@ -77,7 +77,6 @@ def _solutions(target, steps, k):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason="bracketing misses roots near a, b = A_MAX; the lead is fixing it in main")
 def test_all_is_complete_by_mirror_symmetry():
     """Mirroring the target about the u_a axis and negating psi: one step of (b, a) has the shift
     h(a, b) and the holonomy -eta(a, b) (checked by the reference below), so the solutions of
@@ -102,7 +101,6 @@ def test_all_is_complete_by_mirror_symmetry():
     assert not unmatched(ab_plus, ba_minus)
 
 
-@pytest.mark.xfail(strict=False, reason="bracketing misses roots near a, b = A_MAX; the lead is fixing it in main")
 def test_all_contains_the_root_found_by_brute_force():
     """(0, 1, 0), k = 2.5, one step: (a, b) = (0.6876921, 0.4888853) is a root (found by brute
     force; the reference confirms it below), so --all must list it."""
