@@ -1,12 +1,15 @@
-"""Shared fixtures and independent references (scipy) for the tests."""
+"""Shared fixtures and the independent reference for the tests.
 
-import numpy as np
+``scipy_trace`` is the paper's printed (28)-(30), (35) and Rz(gamma) (31), typed in
+numpy in ``tests/printed_rhs.py`` and integrated by scipy's DOP853: it shares no code
+with rollplan (not its model, curves or integrators). That rollplan's symbolic model
+agrees with the printed equations is tested on its own in ``tests/test_integrate.py``.
+"""
+
 import pytest
-from scipy.integrate import solve_ivp
 
-from rollplan.curves import figure_eight
+import printed_rhs
 from rollplan.geometric import GeometricPhasePlanner
-from rollplan.integrate import piece_rhs
 
 
 @pytest.fixture(scope="session")
@@ -16,17 +19,6 @@ def planner():
 
 @pytest.fixture(scope="session")
 def scipy_trace():
-    """Independent reference: DOP853 integration of (28)-(30) over the figure eight, n times."""
-    curve = figure_eight()
-    rhs = [piece_rhs(curve, i) for i in range(len(curve.pieces))]
-
-    def trace(a, b, k, gamma=0.0, steps=1, x0=(0.0, 0.0, 0.0), rtol=1e-13):
-        x = np.asarray(x0, float)
-        for _ in range(steps):
-            for f in rhs:
-                sol = solve_ivp(lambda t, y: np.array(f(t, y, [a, b], k, gamma)).ravel(), (0.0, 2 * np.pi), x,
-                                method="DOP853", rtol=rtol, atol=1e-15)
-                x = sol.y[:, -1]
-        return x
-
-    return trace
+    """Independent reference: (u_a, v_a, psi) after ``steps`` figure eights (a, b) rotated by gamma,
+    from zero, by DOP853 on the printed (28)-(30), (35) (units of R, rad)."""
+    return printed_rhs.trace

@@ -1,12 +1,14 @@
 """The rollplan command: outputs, JSON keys, exit codes, one-line errors."""
 
 import json
+import re
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
+import printed_rhs
 from rollplan.cli import main
 
 
@@ -38,13 +40,29 @@ def test_plan_paper_case_json_and_plot(tmp_path, capsys):
     assert png.stat().st_size > 10000 and png.read_bytes()[:4] == b"\x89PNG"
 
 
-def test_step_command(tmp_path, capsys):
+@pytest.mark.parametrize("argv,ab,k,gamma", [
+    (["--a", "0.3", "--b", "0.4", "--k", "2.5"], (0.3, 0.4), 2.5, 0.0),
+    (["--a", "0.6", "--b", "0.2", "--k", "5", "--gamma", "0.3"], (0.6, 0.2), 5.0, 0.3),
+    (["--a", "0.5", "--k", "1.3"], (0.5, 0.5), 1.3, 0.0),                 # b defaults to a
+    (["--a", "0.1", "--b", "0.65", "--k", "0", "--gamma", "-1"], (0.1, 0.65), 0.0, -1.0),
+])
+def test_step_command_matches_printed_reference(tmp_path, capsys, argv, ab, k, gamma):
+    """`rollplan step` h, eta, final (u_a, v_a, psi) and direction against an independent DOP853
+    integration of the printed (28)-(30), (35) (tests/printed_rhs.py)."""
     js = tmp_path / "s.json"
-    code, out, _ = run(capsys, "step", "--a", "0.3", "--b", "0.4", "--k", "2.5", "--json", str(js))
+    code, out, _ = run(capsys, "step", *argv, "--json", str(js))
     assert code == 0
     d = json.loads(js.read_text())
-    assert d["h"] == pytest.approx(np.hypot(d["final"]["u_a"], d["final"]["v_a"]))
-    assert d["final"]["psi"] == d["eta"]
+    ref = printed_rhs.trace(ab[0], ab[1], k, gamma)
+    assert (d["a"], d["b"], d["k"], d["gamma"]) == (ab[0], ab[1], k, gamma)
+    assert [d["final"]["u_a"], d["final"]["v_a"], d["final"]["psi"]] == pytest.approx(ref, abs=1e-10)
+    assert d["h"] == pytest.approx(np.hypot(ref[0], ref[1]), abs=1e-10)
+    assert d["eta"] == pytest.approx(ref[2], abs=1e-10)
+    assert d["direction"] == pytest.approx(np.arctan2(ref[1], ref[0]), abs=1e-9)
+    # stdout reports the same h and eta
+    shown = dict(re.findall(r"\b(h|eta) = (\S+)", out))
+    assert float(shown["h"]) == pytest.approx(np.hypot(ref[0], ref[1]), abs=1e-10)
+    assert float(shown["eta"]) == pytest.approx(ref[2], abs=1e-10)
 
 
 @pytest.mark.parametrize("argv,needle", [

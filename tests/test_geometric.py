@@ -6,7 +6,11 @@ import pytest
 
 import rollplan
 from rollplan import InputError, NoPlanError, Robot
-from rollplan.geometric import n_step_sum, wrap
+
+
+def wrap(angle):
+    """Angle to (-pi, pi] (typed here, not rollplan's)."""
+    return np.angle(np.exp(1j * np.asarray(angle, float)))
 
 
 def closed_form_36(a):
@@ -68,9 +72,14 @@ def test_plans_land_on_target(scipy_trace, target, steps, k):
     assert p.steps == steps
     if target[2] != 0:
         assert abs(p.a - p.b) > 1e-6  # a turn needs unequal leaves
-    # geometry of (32)-(33): n eta = psi + 2 pi m, and the n shifts add up to the target
-    assert steps * p.eta == pytest.approx(target[2] + 2 * np.pi * p.branch, abs=1e-9)
-    assert p.h * abs(n_step_sum(p.eta, steps)) == pytest.approx(np.hypot(*target[:2]), abs=1e-9)
+    # (32)-(33) against the independent reference: one step of (a, b) turns psi by eta and shifts
+    # by h (printed (28)-(30), DOP853), with n eta = psi + 2 pi m and h |sin(n eta/2) / sin(eta/2)| = h_des
+    one = scipy_trace(p.a, p.b, k, 0.0, 1)
+    h, eta = np.hypot(one[0], one[1]), one[2]
+    assert (p.h, p.eta) == pytest.approx((h, eta), abs=1e-10)
+    assert steps * eta == pytest.approx(target[2] + 2 * np.pi * p.branch, abs=1e-9)
+    gain = steps if abs(np.sin(eta / 2)) < 1e-12 else abs(np.sin(steps * eta / 2) / np.sin(eta / 2))  # (34)
+    assert h * gain == pytest.approx(np.hypot(*target[:2]), abs=1e-9)
 
 
 def test_final_state_is_independent_integration(scipy_trace):
@@ -86,7 +95,7 @@ def test_methods_agree():
     assert (a.a, a.b, a.gamma) == pytest.approx((b.a, b.b, b.gamma), abs=1e-9)
 
 
-def test_radius_and_robot_scale_lengths():
+def test_radius_and_robot_scale_lengths(scipy_trace):
     robot = Robot()
     unit = rollplan.plan((0.3, 0.4, 0.5), k=robot.k)
     metres = rollplan.plan((0.3 * robot.radius, 0.4 * robot.radius, 0.5), robot=robot)
@@ -94,6 +103,10 @@ def test_radius_and_robot_scale_lengths():
     assert metres.a == pytest.approx(unit.a * robot.radius, rel=1e-9)
     assert metres.gamma == pytest.approx(unit.gamma, abs=1e-9)
     assert metres.path_length == pytest.approx(unit.path_length * robot.radius, rel=1e-9)
+    assert reaches(unit, scipy_trace) < 1e-9
+    assert reaches(metres, scipy_trace) < 1e-9  # a / R, b / R against the target / R
+    scaled = rollplan.plan((0.6, 0.8, 0.5), k=robot.k, radius=2.0)
+    assert reaches(scaled, scipy_trace) < 1e-9
 
 
 def test_trajectory_starts_at_rest_and_ends_on_target():

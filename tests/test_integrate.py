@@ -1,4 +1,5 @@
-"""The step map against an independent integrator (scipy DOP853), the closed
+"""The step map against the independent reference (the paper's printed (28)-(30),
+(35) in numpy, integrated by scipy DOP853: ``tests/printed_rhs.py``), the closed
 form (36), and the symmetries the planner relies on."""
 
 import casadi as ca
@@ -7,8 +8,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import printed_rhs
 from rollplan.curves import A_MAX, figure_eight
-from rollplan.integrate import CvodesIntegrator, spectral_step
+from rollplan.integrate import CvodesIntegrator, piece_rhs, spectral_step
 
 
 def rot(angle, v):
@@ -36,13 +38,39 @@ CASES = [(0.3, 0.4, 2.5, 0.0), (0.6, 0.2, 5.0, 0.3), (0.533681, 0.533681, 0.0, 0
 
 @pytest.mark.parametrize("a,b,k,gamma", CASES)
 def test_spectral_step_matches_scipy(fmap, scipy_trace, a, b, k, gamma):
-    assert np.abs(sx(fmap, a, b, k, gamma) - scipy_trace(a, b, k, gamma)).max() < 1e-10
+    assert np.abs(sx(fmap, a, b, k, gamma) - scipy_trace(a, b, k, gamma)).max() < 1e-11
 
 
 @pytest.mark.parametrize("a,b,k,gamma", CASES[:4])
 def test_cvodes_matches_scipy(scipy_trace, a, b, k, gamma):
     _, xs = CvodesIntegrator(figure_eight(), 1e-13, 1e-14).trace([a, b], k, gamma)
-    assert np.abs(xs[-1] - scipy_trace(a, b, k, gamma)).max() < 1e-10
+    assert np.abs(xs[-1] - scipy_trace(a, b, k, gamma)).max() < 1e-11
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(0.02, A_MAX), st.floats(0.0, 2 * np.pi), st.floats(-4.0, 4.0), st.floats(0.0, 10.0),
+       st.floats(-3.2, 3.2), st.sampled_from([0, 1]))
+def test_symbolic_rhs_matches_printed_rhs(a, phi, psi, k, gamma, leaf):
+    """rollplan's symbolic (28)-(30) along the rotated circles (model.curve_rhs, circle_point,
+    rotated_point) equals the printed equations typed in numpy, pointwise."""
+    f = piece_rhs(figure_eight(), leaf)
+    ours = np.array(f(phi, [0.2, -0.1, psi], [a, a], k, gamma)).ravel()
+    ref = printed_rhs.rhs(phi, np.array([0.2, -0.1, psi]), a, 1.0 if leaf == 0 else -1.0, k, gamma)
+    assert np.allclose(ours, ref, rtol=1e-12, atol=1e-12 * (1 + np.abs(ref).max()))
+
+
+@pytest.mark.parametrize("a,b,k,gamma", [(0.3, 0.4, 2.5, 0.0), (0.1, 0.65, 2.5, -1.0), (0.68, 0.68, 10.0, 2.0)])
+def test_symbolic_rhs_integrates_like_printed_rhs(a, b, k, gamma):
+    """Integrating rollplan's symbolic right side by the same DOP853 gives the printed reference's step."""
+    from scipy.integrate import solve_ivp
+
+    curve = figure_eight()
+    x = np.zeros(3)
+    for i in range(2):
+        f = piece_rhs(curve, i)
+        x = solve_ivp(lambda t, y: np.array(f(t, y, [a, b], k, gamma)).ravel(), (0.0, 2 * np.pi), x,
+                      method="DOP853", rtol=1e-13, atol=1e-14).y[:, -1]
+    assert np.abs(x - printed_rhs.trace(a, b, k, gamma)).max() < 1e-11
 
 
 @settings(max_examples=25, deadline=None)
