@@ -61,6 +61,9 @@ TOLERANCE = 1e-9
 MAX_STEPS = 1000
 #: Largest inertia ratio the planner accepts (physical robots have 1 < k < ~20).
 K_MAX = 100.0
+#: Solver statuses that mean "no root in this bracket" (its box is infeasible), not a solver failure.
+_NEWTON_NO_ROOT = "no_root_in_bracket"
+_NO_ROOT_STATUSES = frozenset({"Infeasible_Problem_Detected", _NEWTON_NO_ROOT})
 #: Largest |residual of (32)-(33)| of a solver's end point that is still a candidate root.
 _ROOT_TOL = 1e-10
 #: Brackets whose tables' model root lies within this many cell widths of the cell centre are
@@ -265,7 +268,9 @@ def _newton_solver(residual: ca.Function):
         x = np.array(rf(x0, par_value)).ravel()
         st = rf.stats()
         ok = bool(st["success"]) and bool(np.all((x >= lbx) & (x <= ubx)))
-        return x, st["return_status"], int(st.get("iter_count", -1)), ok
+        # Newton cannot tell a bracket without a root from a failure: both are "no root" here.
+        status = st["return_status"] if ok else _NEWTON_NO_ROOT
+        return x, status, int(st.get("iter_count", -1)), ok
 
     return solve
 
@@ -488,8 +493,9 @@ class GeometricPhasePlanner:
                 raise NoPlanError(f"no verified plan for {where}: {len(rejected)} root(s) of (32)-(33) found, but "
                                   f"their verified residual (best {min(rejected):.1e}) exceeds {self.tol:.0e}; "
                                   "try more steps")
-            if solves:
-                status = statuses.most_common(1)[0][0]
+            failures = Counter({s: c for s, c in statuses.items() if s not in _NO_ROOT_STATUSES})
+            if failures:
+                status = failures.most_common(1)[0][0]
                 raise SolverError(f"no solve of (32)-(33) converged for {where} ({solves} solves from "
                                   f"{len(brackets)} brackets, most often {status}); try method='newton' or more steps",
                                   status)
