@@ -112,7 +112,7 @@ def test_momentum_integral_11(motion):
 def test_omega_drives_the_state_by_montana(motion):
     """Finite differences of the sampled contact coordinates equal Montana's (6)-(10) with the output omega."""
     t, x, w, R = motion.time, motion.state, motion.omega, ROBOT.radius
-    u, v, psi = x[:, 2], x[:, 3], x[:, 4]
+    v, psi = x[:, 3], x[:, 4]
     roll = w[:, 0] * np.sin(psi) + w[:, 1] * np.cos(psi)
     rates = np.column_stack([R * w[:, 1], -R * w[:, 0], -roll / np.cos(v),
                              -w[:, 0] * np.cos(psi) + w[:, 1] * np.sin(psi), -w[:, 2] - roll * np.tan(v)])
