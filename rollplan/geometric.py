@@ -61,9 +61,13 @@ TOLERANCE = 1e-9
 MAX_STEPS = 1000
 #: Largest inertia ratio the planner accepts (physical robots have 1 < k < ~20).
 K_MAX = 100.0
-#: Solver statuses that mean "no root in this bracket" (its box is infeasible), not a solver failure.
+#: Solver statuses that mean the solver itself broke (not that a bracket held no root).
+#: A bracket may be false (zero curves of (32) and (33) nearly touching), and a solve that
+#: stops there, infeasible or out of iterations, only says that the bracket holds no root.
+_SOLVER_ERROR_STATUSES = frozenset({"Invalid_Number_Detected", "Error_In_Step_Computation", "Internal_Error",
+                                    "Insufficient_Memory", "Not_Enough_Memory", "Unrecoverable_Exception",
+                                    "NonIpopt_Exception_Thrown", "Invalid_Problem_Definition", "Invalid_Option"})
 _NEWTON_NO_ROOT = "no_root_in_bracket"
-_NO_ROOT_STATUSES = frozenset({"Infeasible_Problem_Detected", _NEWTON_NO_ROOT})
 #: Largest |residual of (32)-(33)| of a solver's end point that is still a candidate root.
 _ROOT_TOL = 1e-10
 #: Brackets whose tables' model root lies within this many cell widths of the cell centre are
@@ -493,13 +497,14 @@ class GeometricPhasePlanner:
                 raise NoPlanError(f"no verified plan for {where}: {len(rejected)} root(s) of (32)-(33) found, but "
                                   f"their verified residual (best {min(rejected):.1e}) exceeds {self.tol:.0e}; "
                                   "try more steps")
-            failures = Counter({s: c for s, c in statuses.items() if s not in _NO_ROOT_STATUSES})
-            if failures:
-                status = failures.most_common(1)[0][0]
-                raise SolverError(f"no solve of (32)-(33) converged for {where} ({solves} solves from "
-                                  f"{len(brackets)} brackets, most often {status}); try method='newton' or more steps",
-                                  status)
-            raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R; "
+            errors = Counter({s: c for s, c in statuses.items() if s in _SOLVER_ERROR_STATUSES})
+            if errors:
+                status = errors.most_common(1)[0][0]
+                raise SolverError(f"the root solver failed for {where} ({solves} solves from {len(brackets)} "
+                                  f"brackets, {status}); try method='newton' or more steps", status)
+            tried = ", ".join(f"{s} x{c}" for s, c in statuses.most_common(3))
+            raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R"
+                              f"{f' ({solves} bracket solves without a root: {tried})' if solves else ''}; "
                               "try more steps")
         plans = [_scaled(replace(p, stats=replace(p.stats, candidates=len(brackets), solves=solves, time_s=elapsed)),
                          radius, target, self) for p in found]
@@ -684,7 +689,8 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     NoPlanError
         No verified plan exists in the admissible range ``0 < a, b <= A_MAX R``.
     SolverError
-        Roots were bracketed but no solve converged (carries the solver's status).
+        The root solver broke down (an internal IPOPT error; carries its status). A bracket
+        whose solve does not converge is taken to hold no root.
     """
     return _planner(method).solve(target, steps, k, robot, radius, all_solutions, branch)
 
