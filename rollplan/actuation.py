@@ -74,7 +74,7 @@ import numpy as np
 
 from . import model
 from .curves import figure_eight, rotated_point
-from .errors import InputError, check_range
+from .errors import InputError, check_range, check_whole
 from .integrate import piece_rhs
 from .robot import Robot
 
@@ -235,8 +235,7 @@ def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES)
     Motion
     """
     duration = check_range("duration", duration, 0.0, None, low_open=True)
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 3:
-        raise InputError(f"samples = {samples!r} is not allowed: it must be a whole number >= 3")
+    samples = check_whole("samples", samples, 3)
     if not math.isclose(plan.k, robot.k, rel_tol=1e-12, abs_tol=0.0):
         raise InputError(f"the plan was made for k = {plan.k:.12g}, the robot has k = {robot.k:.12g}: "
                          "plan with this robot")

@@ -25,7 +25,7 @@ import casadi as ca
 import numpy as np
 
 from .curves import A_MAX
-from .errors import InputError, check_range
+from .errors import check_whole
 
 __all__ = ["Atlas", "atlas_function", "compute_atlas", "atlas_to_dict", "plot_atlas", "n_step_totals"]
 
@@ -107,13 +107,10 @@ def compute_atlas(k: float, steps: int = 1, resolution: int = 81, planner=None, 
     threads : int, optional
         Threads of the CasADi ``map`` (default: all cores).
     """
-    from .geometric import _planner
+    from .geometric import _check_k, _check_steps, _planner
 
-    k = check_range("k", k, 0.0, None)
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 1:
-        raise InputError(f"steps = {steps!r} is not allowed: it must be a whole number >= 1")
-    if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or not 2 <= resolution <= 1000:
-        raise InputError(f"resolution = {resolution!r} is not allowed: it must be a whole number in [2, 1000]")
+    k, steps = _check_k(k), _check_steps(steps)  # the planner's own limits
+    resolution = check_whole("resolution", resolution, 2, 1000)
     planner = planner or _planner("ipopt")
     fun = _cached_atlas_function(planner)
     r = A_MAX * np.arange(1, resolution + 1) / resolution

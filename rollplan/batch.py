@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from .errors import InputError, NoPlanError, SolverError
+from .errors import InputError, NoPlanError, SolverError, check_whole
 from .io import check_writable, plan_to_dict, write_atomic
 
 __all__ = ["COLUMNS", "BatchResult", "read_targets", "plan_row", "run_batch", "read_output"]
@@ -208,8 +208,7 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
     """
     from .geometric import SOLVERS
 
-    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
-        raise InputError(f"jobs = {jobs!r} is not allowed: it must be a whole number >= 1")
+    jobs = check_whole("jobs", jobs, 1)
     if method not in SOLVERS:
         raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
     rows = read_targets(targets)

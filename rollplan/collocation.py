@@ -63,7 +63,7 @@ import casadi as ca
 import numpy as np
 
 from . import model
-from .errors import InputError, SolverError, check_finite, check_range
+from .errors import InputError, SolverError, check_finite, check_range, check_whole
 from .geometric import Plan, _check_steps, _resolve_k_radius, plan as gp_plan, wrap
 from .robot import Robot
 
@@ -399,8 +399,8 @@ class CollocationPlanner:
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre", cost: str = "path_length",
                  contact_bound: float = CONTACT_BOUND, tol: float = 1e-10, max_iter: int = 500,
                  verify_samples: int = 1000, verify_tol: float | None = TOLERANCE) -> None:
-        self.intervals = _check_int("intervals", intervals, 1)
-        self.degree = _check_int("degree", degree, 1, 9)
+        self.intervals = check_whole("intervals", intervals, 1)
+        self.degree = check_whole("degree", degree, 1, 9)
         if scheme not in SCHEMES:
             raise InputError(f"scheme = {scheme!r} is not allowed: choose one of {', '.join(SCHEMES)}")
         if cost not in COSTS:
@@ -410,8 +410,8 @@ class CollocationPlanner:
         self.contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
         self.verify_tol = None if verify_tol is None else check_range("verify_tol", verify_tol, 0.0, None, True)
         self.tol = check_range("tol", tol, 0.0, None, low_open=True)
-        self.max_iter = _check_int("max_iter", max_iter, 1)
-        self.samples_per_interval = max(1, math.ceil(_check_int("verify_samples", verify_samples, 1) / self.intervals))
+        self.max_iter = check_whole("max_iter", max_iter, 1)
+        self.samples_per_interval = max(1, math.ceil(check_whole("verify_samples", verify_samples, 1) / self.intervals))
         self.point = _point_functions(self.cost)
         self.interval = _interval_function(self.point, self.degree, scheme)
         self.tau = collocation_coefficients(self.degree, scheme)[0]
@@ -534,7 +534,7 @@ class CollocationPlanner:
         horizon = check_range("horizon", horizon, 0.0, None, low_open=True)
         smoothing = check_range("smoothing", smoothing, 0.0, None)
         if turns is not None:
-            turns = _check_int("turns", turns, None)
+            turns = check_whole("turns", turns, None)
         t0 = time.perf_counter()
         if isinstance(guess, Plan):
             warm_plan, guess_name = guess, "warm"
@@ -708,13 +708,6 @@ def _residual(final, target) -> float:
     return float(np.linalg.norm(err))
 
 
-def _check_int(name, value, low=None, high=None) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise InputError(f"{name} = {value!r} is not allowed: it must be a whole number")
-    if (low is not None and value < low) or (high is not None and value > high):
-        span = f">= {low}" if high is None else f"in {low}..{high}"
-        raise InputError(f"{name} = {value!r} is not allowed: it must be a whole number {span}")
-    return int(value)
 
 
 @lru_cache(maxsize=8)

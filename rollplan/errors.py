@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import math
+from numbers import Integral
 
-__all__ = ["InputError", "NoPlanError", "SolverError", "check_finite", "check_range"]
+__all__ = ["InputError", "NoPlanError", "SolverError", "check_finite", "check_range", "check_whole"]
 
 
 class InputError(ValueError):
@@ -45,3 +46,16 @@ def check_range(name: str, value, low=None, high=None, low_open=False, high_open
         span = ("(" if low_open or low is None else "[") + f"{lo}, {hi}" + (")" if high_open or high is None else "]")
         raise InputError(f"{name} = {x:g} is not allowed: it must lie in {span}")
     return x
+
+
+def check_whole(name: str, value, low=None, high=None) -> int:
+    """Return ``value`` as an int, or raise InputError unless it is a whole number in [low, high].
+
+    Booleans are refused; so are floats, even whole-valued ones.
+    """
+    if isinstance(value, bool) or not isinstance(value, Integral):
+        raise InputError(f"{name} = {value!r} is not allowed: it must be a whole number")
+    if (low is not None and value < low) or (high is not None and value > high):
+        span = f">= {low}" if high is None else (f"<= {high}" if low is None else f"in [{low}, {high}]")
+        raise InputError(f"{name} = {value!r} is not allowed: it must be a whole number {span}")
+    return int(value)

@@ -46,7 +46,7 @@ import casadi as ca
 import numpy as np
 
 from .curves import A_MAX, figure_eight, rotated_point
-from .errors import InputError, NoPlanError, SolverError, check_finite, check_range
+from .errors import InputError, NoPlanError, SolverError, check_finite, check_range, check_whole
 from .integrate import DEFAULT_NODES, CvodesIntegrator, spectral_step
 from .robot import Robot
 from . import model
@@ -626,9 +626,7 @@ def _check_leaf(name, value) -> float:
 
 
 def _check_steps(steps) -> int:
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or not 1 <= steps <= MAX_STEPS:
-        raise InputError(f"steps = {steps!r} is not allowed: it must be a whole number in [1, {MAX_STEPS}]")
-    return int(steps)
+    return check_whole("steps", steps, 1, MAX_STEPS)
 
 
 def _resolve_k_radius(k, robot, radius):
