@@ -167,7 +167,8 @@ class CvodesIntegrator:
     abstol: float = 1e-13
     multistep: str = "adams"
 
-    def _integrator(self, index: int, grid):
+    def piece_integrator(self, index: int, grid):
+        """A CasADi integrator of piece ``index`` with outputs at ``grid`` (in (0, 2 pi])."""
         f = piece_rhs(self.curve, index)
         phi = ca.SX.sym("phi")
         x = ca.SX.sym("x", 3)
@@ -181,7 +182,7 @@ class CvodesIntegrator:
     def integrators(self, samples: int = 1):
         """One CasADi integrator per piece, with ``samples`` outputs on (0, 2 pi]."""
         grid = np.linspace(0.0, 2.0 * np.pi, samples + 1)[1:]
-        return [self._integrator(i, grid) for i in range(len(self.curve.pieces))]
+        return [self.piece_integrator(i, grid) for i in range(len(self.curve.pieces))]
 
     def trace(self, params, k, gamma, steps=1, samples=1, x0=(0.0, 0.0, 0.0), integrators=None):
         """Trace the curve ``steps`` times.

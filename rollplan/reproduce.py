@@ -513,7 +513,7 @@ class CaseStudy:
     def half_step_path(self, a: float, k: float, samples: int) -> np.ndarray:
         """(samples + 1, 2) contact path (u_a, v_a) of the first leaf, by CVODES."""
         if samples not in self._path_ints:
-            self._path_ints[samples] = [self._cvodes._integrator(0, np.linspace(0.0, 2.0 * np.pi, samples + 1)[1:])]
+            self._path_ints[samples] = [self._cvodes.piece_integrator(0, np.linspace(0.0, 2.0 * np.pi, samples + 1)[1:])]
         ints = self._path_ints[samples]
         _, xs = self._cvodes.trace([a, a], k, 0.0, 1, samples, integrators=ints)
         return np.vstack([[0.0, 0.0], xs[:, :2]])
