@@ -1,22 +1,36 @@
-"""rollplan: exact, dynamically realizable motion planning for a spherical robot
-driven by two internal rotors (Svinin, Morinaga, Yamamoto)."""
+"""rollplan: exact, dynamically realizable motion planning for a spherical robot driven by two
+internal rotors.
 
-from .collocation import CollocationPlanner, CollocationResult, collocate
-from .curves import A_MAX, Curve, Piece, circle_point, figure_eight
+It implements, on one symbolic CasADi model, the geometric-phase planner of
+
+    M. Svinin, A. Morinaga and M. Yamamoto, "On the Geometric Phase Approach to Motion Planning for a
+    Spherical Rolling Robot in Dynamic Formulation"
+
+(cited in full once, here; everywhere else "the paper" and its equation numbers), and a
+direct-collocation optimal-control planner for the same :class:`Problem`.
+"""
+
+from .core.curves import A_MAX, Curve, Piece, circle_point, figure_eight
 from .errors import InputError, NoPlanError, SolverError
-from .geometric import SOLVERS, GeometricPhasePlanner, Plan, SolverStats, StepResult, Trajectory, plan, step
-from .robot import Robot, load_robot
-from .actuation import Motion, actuate
-from .robot import default_robot
-from .simulate import Simulation, simulate_rotors
+from .execution.actuation import Motion, actuate
+from .execution.plants import Simulation, simulate_rotors
+from .planners import METHODS, solve
+from .planners.collocation import CollocationPlanner, CollocationResult, collocate
+from .planners.geometric import SOLVERS, GeometricPhasePlanner, Plan, StepResult, plan, step
+from .problem import STATE_NAMES, Problem, State
+from .result import Certificate, Measures, PlanResult, SolverStats, Trajectory
+from .robot import Robot, default_robot, load_robot
 
 __version__ = "0.1.0"
 
 __all__ = [
     "A_MAX", "Curve", "Piece", "circle_point", "figure_eight",
     "InputError", "NoPlanError", "SolverError",
-    "SOLVERS", "GeometricPhasePlanner", "Plan", "SolverStats", "StepResult", "Trajectory", "plan", "step",
-    "Robot", "load_robot",
-    "Motion", "actuate", "default_robot", "Simulation", "simulate_rotors",
+    "STATE_NAMES", "State", "Problem",
+    "Certificate", "Measures", "PlanResult", "SolverStats", "Trajectory",
+    "METHODS", "solve",
+    "SOLVERS", "GeometricPhasePlanner", "Plan", "StepResult", "plan", "step",
     "CollocationPlanner", "CollocationResult", "collocate",
+    "Robot", "load_robot", "default_robot",
+    "Motion", "actuate", "Simulation", "simulate_rotors",
 ]

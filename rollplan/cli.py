@@ -6,10 +6,12 @@ import argparse
 import logging
 import sys
 
-from . import geometric
+from .core.curves import A_MAX
 from .errors import InputError, NoPlanError, SolverError, check_finite
 from .io import check_figure_path, check_writable, plan_to_dict, save_figure, write_json
-from .robot import load_robot
+from .planners import geometric
+from .problem import STATE_NAMES
+from .robot import default_robot, load_robot
 
 EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER = 0, 2, 3, 4
 #: k of ``plan`` and ``compare`` when neither --k nor --robot is given (the paper's case study).
@@ -54,12 +56,13 @@ def _k_or_robot(args):
 
 def _fmt_plan(p, unit) -> str:
     lines = [
-        f"  figure eight  a = {p.a:.9g} {unit}   b = {p.b:.9g} {unit}   gamma = {p.gamma:.9g} rad   (branch m = {p.branch})",
+        f"  figure eight  a = {p.a:.9g} {unit}   b = {p.b:.9g} {unit}   gamma = {p.gamma:.9g} rad"
+        f"   (branch m = {p.branch})",
         f"  one step      h = {p.h:.9g} {unit}   eta = {p.eta:.9g} rad",
         f"  path length   {p.path_length:.9g} {unit}",
-        f"  final         u_a = {p.final[0]:.12g}  v_a = {p.final[1]:.12g}  psi = {p.final[2]:.12g}"
-        f"  u_o = {p.final[3]:.3g}  v_o = {p.final[4]:.3g}",
-        f"  residual      {p.residual:.2e} (CVODES, independent of the planner)",
+        f"  final         u_a = {p.final.u_a:.12g}  v_a = {p.final.v_a:.12g}  psi = {p.final.psi:.12g}"
+        f"  u_o = {p.final.u_o:.3g}  v_o = {p.final.v_o:.3g}",
+        f"  residual      {p.residual:.2e} ({p.certificate.method}, independent of the planner)",
     ]
     return "\n".join(lines)
 
@@ -71,33 +74,33 @@ def cmd_plan(args) -> int:
         if k is not None:
             raise InputError("--duration needs the robot's inertias, not only k: give --robot FILE "
                              "(or drop --k to use the default robot)")
-        from .robot import default_robot
-
         robot = default_robot()
         print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
               "lengths in m")
     p = geometric.plan((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.all, args.method)
     unit = "m" if robot is not None else ("R" if args.radius is None else "units")
+    g = p.goal
     print(f"rollplan: k = {p.k:.9g}, R = {p.radius:g}, steps = {p.steps}, target (u_a, v_a, psi) = "
-          f"({p.target[0]:g}, {p.target[1]:g}, {p.target[2]:g})")
+          f"({g.u_a:g}, {g.v_a:g}, {g.psi:g})")
     print(_fmt_plan(p, unit))
     print(f"  solver        {p.stats.method}: {p.stats.status}, {p.stats.iterations} iterations, "
-          f"{p.stats.candidates} brackets, {p.stats.solves} solves, {p.stats.time_s * 1e3:.1f} ms")
+          f"{p.stats.details['candidates']} brackets, {p.stats.details['solves']} solves, "
+          f"{p.stats.time_s * 1e3:.1f} ms")
     for i, alt in enumerate(p.alternatives, 1):
         print(f"alternative {i}:")
         print(_fmt_plan(alt, unit))
     motion, extra = _timed(args, p, robot) if args.duration is not None else (None, {})
-    traj = p.trajectory() if (args.json or args.plot) else None
+    traj = p.sample() if (args.json or args.plot) else None
     if args.json:
         write_json(args.json, {**plan_to_dict(p, traj), **extra})
         print(f"wrote {args.json}")
     if args.plot and motion is not None:
-        from .plots_motion import plot_motion
+        from .plots.motion import plot_motion
 
         save_figure(plot_motion(motion, p, traj, unit), args.plot)
         print(f"wrote {args.plot}")
     elif args.plot:
-        from .plots import plot_plan
+        from .plots.plan import plot_plan
 
         save_figure(plot_plan(p, traj, unit or "R"), args.plot)
         print(f"wrote {args.plot}")
@@ -106,11 +109,12 @@ def cmd_plan(args) -> int:
 
 def _timed(args, p, robot):
     """``plan --duration``: rotor rates, angles and torques, checked by the rotor-only simulation."""
-    from .actuation import actuate, motion_to_dict
-    from .simulate import simulate_rotors
+    from .execution.actuation import actuate
+    from .execution.plants import simulate_rotors
+    from .io import motion_to_dict
 
     motion = actuate(p, robot, args.duration, args.samples)
-    sim = simulate_rotors(robot, motion.time, motion.rotor_rates, p.target)
+    sim = simulate_rotors(robot, motion.time, motion.rotor_rates, p.goal)
     print(f"  motion        T = {motion.duration:g} s, {motion.time.size} samples, rest-to-rest per half-step")
     print(f"  rotors        max |rate| = {abs(motion.rotor_rates).max():.4g} rad/s   "
           f"max |torque| = {abs(motion.rotor_torques).max():.4g} N m")
@@ -138,45 +142,35 @@ def cmd_step(args) -> int:
     return EXIT_OK
 
 
-class _StderrProgress:
-    """Progress of a slow command on stderr, shown once it has run for more than ``delay`` seconds."""
+class _Progress:
+    """``progress(label, done, total)`` drawn as one tqdm bar per label on stderr."""
 
-    def __init__(self, delay: float = 1.0) -> None:
-        import time
+    def __init__(self) -> None:
+        from tqdm import tqdm
 
-        self._clock = time.perf_counter
-        self._start = self._clock()
-        self._delay = delay
-        self._tty = sys.stderr.isatty()
-        self._open = False
+        self._tqdm = tqdm
+        self._bars: dict = {}
 
     def __call__(self, label: str, done: int, total: int) -> None:
-        if self._clock() - self._start < self._delay:
-            return
-        elapsed = self._clock() - self._start
-        if self._tty:
-            sys.stderr.write(f"\r\033[K  {label}: {done}/{total}  ({elapsed:.1f} s)")
-            self._open = True
-            if label == "reproduce" and done == total:
-                self.close()
-        elif label == "reproduce" or done == total:
-            sys.stderr.write(f"  {label}: {done}/{total}  ({elapsed:.1f} s)\n")
-        sys.stderr.flush()
+        bar = self._bars.get(label)
+        if bar is None:
+            bar = self._bars[label] = self._tqdm(total=total, desc=label, file=sys.stderr, leave=False)
+        bar.total = total
+        bar.update(done - bar.n)
 
     def close(self) -> None:
-        if self._open:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
-            self._open = False
+        for bar in self._bars.values():
+            bar.close()
+        self._bars.clear()
 
 
 def cmd_reproduce(args) -> int:
     import time
 
-    from .reproduce import reproduce
+    from .studies.paper import reproduce
 
     t0 = time.perf_counter()
-    progress = _StderrProgress()
+    progress = _Progress()
     print(f"rollplan reproduce: Section III.C of the paper into {args.out}", file=sys.stderr)
     try:
         result = reproduce(args.out, progress=progress)
@@ -192,35 +186,45 @@ def cmd_reproduce(args) -> int:
 
 
 def cmd_simulate(args) -> int:
-    from .simulate import load_rotor_plan, simulate_rotors
+    from .execution.plants import simulate_rotors
+    from .io import load_rotor_plan
 
     if args.json is not None:
         check_writable(args.json)
     rp = load_rotor_plan(args.plan_file)
     robot = load_robot(args.robot) if args.robot else rp.robot
-    sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.target)
+    sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal)
     e = sim.error
+    f, g = sim.final, rp.goal
     print(f"rollplan simulate: {rp.time.size} samples over {rp.time[-1] - rp.time[0]:g} s, robot k = {robot.k:.9g}"
           f"{' (planned k = %.9g)' % rp.robot.k if args.robot else ''}")
-    print(f"  final         u_a = {sim.final[0]:.12g} m  v_a = {sim.final[1]:.12g} m  psi = {sim.final[4]:.12g} rad"
-          f"  u_o = {sim.final[2]:.3g}  v_o = {sim.final[3]:.3g}")
-    print(f"  target        u_a = {rp.target[0]:.12g} m  v_a = {rp.target[1]:.12g} m  psi = {rp.target[2]:.12g} rad")
+    print(f"  final         u_a = {f[0]:.12g} m  v_a = {f[1]:.12g} m  psi = {f[2]:.12g} rad"
+          f"  u_o = {f[3]:.3g}  v_o = {f[4]:.3g}")
+    print(f"  target        u_a = {g.u_a:.12g} m  v_a = {g.v_a:.12g} m  psi = {g.psi:.12g} rad")
     print(f"  arrival error {sim.arrival_error:.3e} (position {sim.position_error:.3e} R = "
           f"{sim.position_error * robot.radius:.3e} m, psi {e[2]:.3e} rad, u_o {e[3]:.1e}, v_o {e[4]:.1e})")
     if args.json:
-        write_json(args.json, {"final": dict(zip(("u_a", "v_a", "u_o", "v_o", "psi"), map(float, sim.final))),
+        write_json(args.json, {"final": dict(zip(STATE_NAMES, map(float, sim.final))),
                                "arrival_error": sim.arrival_error, "position_error": sim.position_error,
-                               "error": dict(zip(("u_a", "v_a", "psi", "u_o", "v_o"), map(float, e))),
+                               "error": dict(zip(STATE_NAMES, map(float, e))),
                                "robot": robot.as_dict()})
         print(f"wrote {args.json}")
     return EXIT_OK
 
 
 def cmd_animate(args) -> int:
-    from .animate import animate_plan_file
+    from .execution.plants import simulate_rotors
+    from .io import load_rotor_plan
+    from .plots.animation import make_animation
 
     check_writable(args.out)
-    animate_plan_file(args.plan_file, args.out, frames=args.frames, fps=args.fps)
+    if not 2 <= args.frames <= 2000:
+        raise InputError(f"--frames {args.frames} is not allowed: it must lie in [2, 2000]")
+    if not 1 <= args.fps <= 100:
+        raise InputError(f"--fps {args.fps} is not allowed: it must lie in [1, 100]")
+    rp = load_rotor_plan(args.plan_file)
+    sim = simulate_rotors(rp.robot, rp.time, rp.rotor_rates, rp.goal)
+    make_animation(rp.time, sim.state, rp.rotor_rates, rp.robot, rp.goal, args.out, args.frames, args.fps)
     print(f"wrote {args.out}")
     return EXIT_OK
 
@@ -230,36 +234,39 @@ def _fmt_row(name, a, b, fmt):
 
 
 def cmd_compare(args) -> int:
-    from . import comparison
+    from .studies import comparison
 
     _check_outputs(json=args.json, figure=args.plot)
     k, robot = _k_or_robot(args)
     c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
                            args.cost, args.intervals, args.degree, args.scheme, args.guess, args.contact_bound)
-    g, o, r = c.geometric_phase, c.collocation, c.result
+    p, r, prob = c.plan, c.result, c.problem
+    gm, om = c.plan_measures, r.measures
     unit = "m" if robot is not None else ("R" if args.radius is None else "units")
     effort = "rotor effort int|phi'|^2 dt" if robot is not None else "effort int|omega|^2 dt"
-    print(f"rollplan compare: k = {c.k:.9g}, R = {c.radius:g}, T = {c.horizon:g} s, target (u_a, v_a, psi) = "
-          f"({c.target[0]:g}, {c.target[1]:g}, {c.target[2]:g})")
-    print(f"  geometric phase: {c.steps} figure eight(s), a = {c.plan.a:.6g}, b = {c.plan.b:.6g}, "
-          f"gamma = {c.plan.gamma:.6g}, timed t ~ theta")
-    print(f"  collocation: cost {r.cost}, {r.scheme} d = {r.degree}, N = {r.intervals}, {r.guess} guess, "
+    g, tr = prob.goal, r.transcription
+    print(f"rollplan compare: k = {prob.k:.9g}, R = {prob.radius:g}, T = {c.horizon:g} s, target (u_a, v_a, psi) = "
+          f"({g.u_a:g}, {g.v_a:g}, {g.psi:g})")
+    print(f"  geometric phase: {prob.steps} figure eight(s), a = {p.a:.6g}, b = {p.b:.6g}, "
+          f"gamma = {p.gamma:.6g}, timed t ~ theta")
+    print(f"  collocation: cost {r.cost}, {tr.scheme} d = {tr.degree}, N = {tr.intervals}, {r.guess} guess, "
           f"psi turns m = {r.turns}")
     print(f"  {'':<30s} {'geometric phase':>20s} {'collocation':>20s}")
-    print(_fmt_row(f"contact path length [{unit or '-'}]", g.path_length, o.path_length, ".6g"))
-    print(_fmt_row(f"{effort} [rad^2/s]", g.effort, o.effort, ".6g"))
-    print(_fmt_row("peak |omega| [rad/s]", g.peak_omega, o.peak_omega, ".6g"))
-    print(_fmt_row("final residual (CVODES)", g.residual, o.residual, ".2e"))
-    print(_fmt_row("solve time [ms]", g.solve_time_s * 1e3, o.solve_time_s * 1e3, ".1f"))
-    print(_fmt_row("iterations", g.iterations, o.iterations, "d"))
-    print(_fmt_row("status", g.status, o.status, "s"))
+    print(_fmt_row(f"contact path length [{unit or '-'}]", gm.path_length, om.path_length, ".6g"))
+    print(_fmt_row(f"{effort} [rad^2/s]", c.effort(gm), c.effort(om), ".6g"))
+    print(_fmt_row("peak |omega| [rad/s]", gm.peak_omega, om.peak_omega, ".6g"))
+    print(_fmt_row("final residual (CVODES)", p.residual, r.residual, ".2e"))
+    print(_fmt_row("solve time [ms]", p.stats.time_s * 1e3, r.stats.time_s * 1e3, ".1f"))
+    print(_fmt_row("iterations", p.stats.iterations, r.stats.iterations, "d"))
+    print(_fmt_row("status", p.stats.status, r.stats.status, "s"))
     if r.guess == "warm":
-        print(f"  (collocation time is IPOPT's; its warm start took another {r.stats.guess_time_s * 1e3:.1f} ms)")
+        print(f"  (collocation time is IPOPT's; its warm start took another "
+              f"{r.stats.details['guess_time_s'] * 1e3:.1f} ms)")
     if args.json:
         write_json(args.json, comparison.comparison_to_dict(c))
         print(f"wrote {args.json}")
     if args.plot:
-        from .compare_plots import plot_comparison
+        from .plots.compare import plot_comparison
 
         save_figure(plot_comparison(c, unit or "R"), args.plot)
         print(f"wrote {args.plot}")
@@ -283,7 +290,7 @@ def _add_target_options(parser, to_default, steps_help) -> None:
 
 
 def _add_compare_parser(sub) -> None:
-    from . import collocation
+    from .planners import collocation
 
     c = sub.add_parser("compare", help="geometric-phase plan versus direct-collocation optimum, side by side")
     _add_target_options(c, to_default=None, steps_help="figure eights n >= 1 of the geometric plan (default 1)")
@@ -293,7 +300,7 @@ def _add_compare_parser(sub) -> None:
     c.add_argument("--intervals", type=_whole, default=100, help="collocation intervals N (default 100)")
     c.add_argument("--degree", type=_whole, default=3, help="collocation degree d (default 3)")
     c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
-    c.add_argument("--guess", choices=collocation.GUESSES, default="warm",
+    c.add_argument("--guess", choices=sorted(collocation.GUESSES), default="warm",
                    help="collocation initial guess: warm (the geometric plan) or naive (straight line)")
     c.add_argument("--contact-bound", type=_number, default=collocation.CONTACT_BOUND, metavar="RAD",
                    help="collocation: largest polar angle of the contact point from the south pole "
@@ -318,7 +325,7 @@ def cmd_codegen(args) -> int:
 def cmd_batch(args) -> int:
     import os
 
-    from .batch import run_batch
+    from .studies.batch import run_batch
 
     try:
         jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
@@ -334,7 +341,8 @@ def cmd_batch(args) -> int:
 
 
 def cmd_atlas(args) -> int:
-    from .atlas import atlas_to_dict, compute_atlas, plot_atlas
+    from .plots.atlas import plot_atlas
+    from .studies.atlas import atlas_to_dict, compute_atlas
 
     _check_outputs(json=args.json, figure=args.out)
     at = compute_atlas(args.k, args.steps, args.resolution)
@@ -369,7 +377,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_plan)
 
     s = sub.add_parser("step", help="what one figure eight does: shift h and holonomy eta")
-    s.add_argument("--a", type=_number, required=True, help="first leaf radius [R], 0 < a <= %g" % geometric.A_MAX)
+    s.add_argument("--a", type=_number, required=True, help="first leaf radius [R], 0 < a <= %g" % A_MAX)
     s.add_argument("--b", type=_number, default=None, help="second leaf radius [R] (default a)")
     s.add_argument("--k", type=_number, required=True, help="inertia ratio k >= 0")
     s.add_argument("--gamma", type=_number, default=0.0, help="rotation about OZ [rad] (default 0)")

@@ -1,17 +1,22 @@
-"""Atomic file output and JSON conversion of results."""
+"""Files: atomic output, the JSON forms of results, and reading plan files back."""
 
 from __future__ import annotations
 
 import json
 import os
 import tempfile
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
 
 from .errors import InputError
+from .execution.plants import check_samples
+from .problem import State
+from .robot import Robot
 
-__all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict"]
+__all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict",
+           "motion_to_dict", "RotorPlan", "load_rotor_plan"]
 
 
 def check_writable(path) -> Path:
@@ -64,7 +69,8 @@ def check_figure_path(path) -> Path:
     formats = Figure().canvas.get_supported_filetypes()
     suffix = Path(path).suffix.lstrip(".").lower()
     if suffix not in formats:
-        raise InputError(f"figure path {str(path)!r} is not allowed: its extension {('.' + suffix) if suffix else '(none)'!r} "
+        ext = ("." + suffix) if suffix else "(none)"
+        raise InputError(f"figure path {str(path)!r} is not allowed: its extension {ext!r} "
                          f"is not a figure format; use one of {', '.join('.' + f for f in sorted(formats))}")
     return check_writable(path)
 
@@ -82,24 +88,102 @@ def _f(x):
     return [float(v) for v in np.asarray(x).ravel()]
 
 
+def _rows(a):
+    return [[float(v) for v in r] for r in np.asarray(a)]
+
+
 def plan_to_dict(plan, traj=None, include_alternatives=True) -> dict:
-    """The plan as the JSON object of ``rollplan plan --json``."""
+    """A geometric-phase plan as the JSON object of ``rollplan plan --json``."""
+    g = plan.goal
     d = {
         "k": plan.k,
         "radius": plan.radius,
         "steps": plan.steps,
-        "target": {"u_a": plan.target[0], "v_a": plan.target[1], "psi": plan.target[2]},
+        "target": {"u_a": g.u_a, "v_a": g.v_a, "psi": g.psi},
         "figure_eight": {"a": plan.a, "b": plan.b, "gamma": plan.gamma},
         "step": {"h": plan.h, "eta": plan.eta},
         "branch": plan.branch,
-        "final": dict(zip(("u_a", "v_a", "psi", "u_o", "v_o"), _f(plan.final))),
+        "final": plan.final.as_dict(),
         "residual": plan.residual,
+        "certificate": plan.certificate.as_dict(),
         "path_length": plan.path_length,
-        "solver": {"method": plan.stats.method, "status": plan.stats.status, "iterations": plan.stats.iterations,
-                   "candidates": plan.stats.candidates, "solves": plan.stats.solves, "time_s": plan.stats.time_s},
+        "solver": plan.stats.as_dict(),
     }
     if traj is not None:
-        d["trajectory"] = {n: _f(getattr(traj, n)) for n in ("theta", "u_o", "v_o", "u_a", "v_a", "psi")}
+        d["trajectory"] = traj.as_dict()
     if include_alternatives and plan.alternatives:
         d["alternatives"] = [plan_to_dict(p, None, False) for p in plan.alternatives]
     return d
+
+
+def motion_to_dict(motion) -> dict:
+    """The motion's keys of ``rollplan plan --duration T --json``: time series as lists of rows.
+
+    ``state`` rows are in :class:`~rollplan.problem.State` order (u_a, v_a, psi, u_o, v_o).
+    """
+    return {
+        "duration": motion.duration,
+        "time": _f(motion.time),
+        "omega": _rows(motion.omega),
+        "rotor_rates": _rows(motion.rotor_rates),
+        "rotor_angles": _rows(motion.rotor_angles),
+        "rotor_torques": _rows(motion.rotor_torques),
+        "state": _rows(motion.state),
+        "robot": motion.robot.as_dict(),
+    }
+
+
+@dataclass(frozen=True)
+class RotorPlan:
+    """What a rotor-driven simulation needs from a plan file.
+
+    Attributes
+    ----------
+    robot : Robot
+        The robot the plan was made for.
+    time : ndarray, shape (N,)
+        Sample times [s].
+    rotor_rates : ndarray, shape (N, 2)
+        Rotor rates [rad/s].
+    goal : State
+        Planned arrival [m, rad].
+    data : dict
+        The whole JSON object.
+    """
+
+    robot: Robot
+    time: np.ndarray
+    rotor_rates: np.ndarray
+    goal: State
+    data: dict
+
+
+def load_rotor_plan(path) -> RotorPlan:
+    """Read a plan written by ``rollplan plan --duration T --json FILE``; InputError if it lacks the motion."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            data = json.load(fh)
+    except OSError as exc:
+        raise InputError(f"plan file {str(path)!r} cannot be read: {exc.strerror}") from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"plan file {str(path)!r} is not valid JSON: {exc}") from None
+    if not isinstance(data, dict):
+        raise InputError(f"plan file {str(path)!r} is not a rollplan plan (a JSON object)")
+    for key in ("time", "rotor_rates", "robot", "target"):
+        if key not in data:
+            hint = " (make it with: rollplan plan ... --duration T --json FILE)" if key != "target" else ""
+            raise InputError(f"plan file {str(path)!r} has no key {key!r}{hint}")
+    rob = data["robot"]
+    names = [f.name for f in fields(Robot)]
+    if not isinstance(rob, dict) or any(n not in rob for n in names):
+        raise InputError(f"plan file {str(path)!r}: 'robot' must hold {', '.join(names)}")
+    robot = Robot(**{n: rob[n] for n in names})
+    tg = data["target"]
+    try:
+        goal = State(float(tg["u_a"]), float(tg["v_a"]), float(tg["psi"]))
+        t = np.asarray(data["time"], float)
+        rates = np.asarray(data["rotor_rates"], float)
+    except (TypeError, KeyError, ValueError):
+        raise InputError(f"plan file {str(path)!r}: 'target', 'time' or 'rotor_rates' is malformed") from None
+    t, rates = check_samples(t, rates)
+    return RotorPlan(robot, t, rates, goal, data)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from . import model
+from .core import model
 from .errors import InputError, check_range
 
 __all__ = ["Robot", "load_robot", "default_robot", "DEFAULT_ROBOT_FILE"]
@@ -41,7 +41,8 @@ class Robot:
         for f in fields(self):
             check_range(f.name, getattr(self, f.name), 0.0, None, low_open=True)
         if self.mass_shell > self.mass_total:
-            raise InputError(f"mass_shell = {self.mass_shell:g} is not allowed: it must not exceed mass_total = {self.mass_total:g}")
+            raise InputError(f"mass_shell = {self.mass_shell:g} is not allowed: it must not exceed "
+                             f"mass_total = {self.mass_total:g}")
 
     def _ratio(self):
         return model.inertia_ratio(self.radius, self.mass_total, self.mass_shell,

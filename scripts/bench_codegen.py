@@ -20,10 +20,13 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from rollplan import codegen, geometric
-from rollplan.curves import figure_eight
-from rollplan.integrate import spectral_step
+from rollplan import Problem
+from rollplan.codegen import c_library as codegen
+from rollplan.core.curves import figure_eight
+from rollplan.core.integrate import spectral_step
+from rollplan.core.plane import wrap
 from rollplan.io import write_json
+from rollplan.planners import geometric
 
 #: Targets (u, v, psi, steps, k) of the timing run.
 TARGETS = [
@@ -191,12 +194,11 @@ def plan_error(steps_per_leaf: int, targets=None) -> dict:
             if run.returncode:
                 return {"steps_per_leaf": steps_per_leaf, "failed": f"{(u, v, psi, n, k)}: {run.stderr.strip()}"}
             a, b, gamma, _ = (float(x) for x in run.stdout.split())
-            final = planner.verify(a, b, k, gamma, n)
-            err = [final[0] - u, final[1] - v, float(geometric.wrap(final[2] - psi)), final[3], final[4]]
-            worst = max(worst, float(np.linalg.norm(err)))
+            final = planner.certifier.final(a, b, k, gamma, n)
+            worst = max(worst, Problem((u, v, psi), k=k, steps=n).residual(final))
             q = codegen.reference_plan((u, v, psi), n, k, near=(a, b))
             if q is not None:
-                gap = max(gap, max(abs(q.a - a), abs(q.b - b), abs(float(geometric.wrap(q.gamma - gamma)))))
+                gap = max(gap, max(abs(q.a - a), abs(q.b - b), abs(float(wrap(q.gamma - gamma)))))
     return {"steps_per_leaf": steps_per_leaf, "verified_residual": worst, "gap_to_python": gap}
 
 

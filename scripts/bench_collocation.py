@@ -15,9 +15,8 @@ import argparse
 import statistics
 import sys
 
-from rollplan import plan
-from rollplan.collocation import COSTS, CollocationPlanner
-from rollplan.errors import SolverError
+from rollplan import Problem, SolverError, plan
+from rollplan.planners.collocation import COSTS, CollocationPlanner
 
 TARGETS = [(0.3, 0.0, 0.0), (0.0, 0.5, 0.0), (0.5, 0.3, 0.4), (-0.4, 0.4, 1.0), (0.8, -0.2, -0.5)]
 K = 2.5
@@ -47,11 +46,12 @@ def measure(repeats: int = 11, targets=TARGETS, k: float = K, cost: str = "path_
     times, rows = [], []
     for tgt in targets:
         p = plan(tgt, 1, k=k)
+        problem = Problem(tgt, k=k)
         ts, r, status = [], None, ""
         for _ in range(repeats):
             try:
-                r = P.solve(tgt, k=k, guess=p)
-                ts.append(r.stats.solve_time_s)
+                r = P.solve(problem, warm_start=p)
+                ts.append(r.stats.time_s)
                 status = r.stats.status
             except SolverError as exc:
                 ts.append(float("inf"))
@@ -62,9 +62,8 @@ def measure(repeats: int = 11, targets=TARGETS, k: float = K, cost: str = "path_
                "naive_status": None, "naive_iterations": None, "naive_s": None}
         if naive:
             try:
-                q = P.solve(tgt, k=k, guess="naive", turns=p.branch)
-                row.update(naive_status=q.stats.status, naive_iterations=q.stats.iterations,
-                           naive_s=q.stats.solve_time_s)
+                q = P.solve(problem, guess="naive", turns=p.branch)
+                row.update(naive_status=q.stats.status, naive_iterations=q.stats.iterations, naive_s=q.stats.time_s)
             except SolverError as exc:
                 row.update(naive_status=exc.status)
         rows.append(row)

@@ -26,7 +26,7 @@ Jacobian). It is started from the point where rollplan starts its root solve
 in the bracketing cell of its plan (same branch m, same eta_m and h_m), i.e.
 it gets the branch selection and a close start for free, untimed. Both plans' gamma come from the same
 composition rule, and both plans are checked by the same independent CVODES
-integration (``GeometricPhasePlanner().verify``).
+integration (``GeometricPhasePlanner().certifier``).
 """
 
 from __future__ import annotations
@@ -57,9 +57,10 @@ from scipy.optimize import least_squares
 import bench_codegen
 import bench_collocation
 import rollplan
-from rollplan import geometric
-from rollplan.curves import A_MAX
+from rollplan import Problem
+from rollplan.core.curves import A_MAX
 from rollplan.io import write_atomic, write_json
+from rollplan.planners import geometric
 
 K = 2.5
 #: (target (u_a, v_a, psi), steps) of the plan benchmark, all at k = K.
@@ -145,25 +146,18 @@ def _median_times(fn, repeats):
     return statistics.median(wall), statistics.median(cpu), wall
 
 
-def _wrap(x):
-    return math.pi - (math.pi - x) % (2 * math.pi)
-
-
 def verified_residual(verifier, a, b, k, gamma, steps, target):
-    """Norm of (final - target, u_o, v_o) by the independent CVODES integration, as rollplan reports it."""
-    f = verifier.verify(a, b, k, gamma, steps)
-    return float(np.linalg.norm([f[0] - target[0], f[1] - target[1], _wrap(f[2] - target[2]), f[3], f[4]]))
+    """Residual of the independent CVODES integration to the target, as rollplan reports it."""
+    return Problem(target, k=k, steps=steps).residual(verifier.certifier.final(a, b, k, gamma, steps))
 
 
 def _bracket_of(planner, p, target):
     """rollplan's start point of the root solve in the bracketing cell of plan p (its branch)."""
     h_des = math.hypot(target[0], target[1])
-    br = planner._brackets(p.k, h_des, target[2], p.steps)
-    for row in br:
-        a0, b0, da, db, m, eta_m, h_m = row[1:8]
-        start = (row[8], row[9]) if row.size >= 10 else (a0, b0)
-        if int(m) == p.branch and abs(p.a - a0) <= da + 1e-12 and abs(p.b - b0) <= db + 1e-12:
-            return start, eta_m, h_m
+    for br in planner.brackets(p.k, h_des, target[2], p.steps):
+        if (int(br["m"]) == p.branch and abs(p.a - br["a0"]) <= br["da"] + 1e-12
+                and abs(p.b - br["b0"]) <= br["db"] + 1e-12):
+            return (br["a_s"], br["b_s"]), br["eta_m"], br["h_m"]
     raise RuntimeError("bracket of the plan not found")
 
 
@@ -182,7 +176,7 @@ def _cold_plan_ms(target, steps, k):
 
 def section_plan(ctx):
     """rollplan.plan (warm and cold) against the scipy baseline on the same targets."""
-    planner = geometric._planner("ipopt")
+    planner = geometric.default_planner()
     verifier = geometric.GeometricPhasePlanner()
     rows, raw = [], []
     for target, steps in TARGETS:
@@ -273,7 +267,7 @@ def _eval_chunk(chunk):
 
 def section_step_map(ctx):
     """Evaluations per second of the spectral step map, one at a time, batched, threaded, compiled."""
-    planner = geometric._planner("ipopt")
+    planner = geometric.default_planner()
     F = planner.step_map
     n = ctx["batch"]
     rng = np.random.default_rng(0)
@@ -348,7 +342,7 @@ def section_memory(ctx):
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     tracemalloc.start()
-    geometric.GeometricPhasePlanner().solve(target, steps, K)
+    geometric.GeometricPhasePlanner().solve(Problem(target, k=K, steps=steps))
     _, peak_cold = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     rss_self = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -368,29 +362,30 @@ def section_memory(ctx):
 
 def section_profile(ctx):
     """Where the time of one warm plan goes (cProfile over repeated plans)."""
-    planner = geometric._planner("ipopt")
+    planner = geometric.default_planner()
     target, steps = TARGETS[1]
-    planner.solve(target, steps, K)
+    problem = Problem(target, k=K, steps=steps)
+    planner.solve(problem)
     reps = ctx["repeats"]
     prof = cProfile.Profile()
     prof.enable()
     for _ in range(reps):
-        planner.solve(target, steps, K)
+        planner.solve(problem)
     prof.disable()
     st = pstats.Stats(prof)
     total = 0.0
     parts = {}
-    wanted = {("geometric.py", "solve"): "whole plan (GeometricPhasePlanner.solve)",
-              ("geometric.py", "_brackets"): "bracketing (per-k cell index, bisection)",
-              ("geometric.py", "verify"): "verification (CVODES, n steps)",
-              ("geometric.py", "_finish"): "gamma + verification",
+    wanted = {("planner.py", "solve"): "whole plan (GeometricPhasePlanner.solve)",
+              ("planner.py", "brackets"): "bracketing (per-k cell index, bisection)",
+              ("certify.py", "final"): "certification (CVODES, n steps)",
+              ("planner.py", "_certified"): "gamma + certification",
               ("integrate.py", "trace"): "CVODES calls"}
     plan_line = geometric.GeometricPhasePlanner.solve.__code__.co_firstlineno
     root_code = getattr(planner._solve, "__code__", None)
     root_line = root_code.co_firstlineno if root_code is not None else -1
     for (file, line, name), (cc, nc, tt, ct, callers) in st.stats.items():
         base = os.path.basename(file)
-        if base == "geometric.py" and name == "solve":
+        if base in ("planner.py", "refine.py") and name == "solve":
             key = wanted[(base, name)] if line == plan_line else (
                 f"root solve ({planner.method})" if line == root_line else None)
         else:
@@ -671,7 +666,7 @@ def main(argv=None):
            "jit": not args.no_jit, "jit_flags": args.jit_flags, "cold": not args.no_cold,
            "coll_repeats": 1 if args.quick else 11, "coll_targets": 2 if args.quick else len(bench_collocation.TARGETS),
            "c_reps": 3 if args.quick else 20}
-    v = geometric.GeometricPhasePlanner().verifier
+    v = geometric.default_planner().certifier.integrator
     ctx["verifier"] = f"{v.multistep.capitalize()}, rtol {v.reltol:g}, atol {v.abstol:g}"
     mach = machine()
     print(f"load average at start: {mach['load_average']}", file=sys.stderr, flush=True)

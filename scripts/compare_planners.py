@@ -22,11 +22,11 @@ from pathlib import Path
 import numpy as np
 
 import bench_collocation
-from rollplan import NoPlanError, SolverError, plan
-from rollplan.collocation import CollocationPlanner
-from rollplan.compare_plots import plot_comparison, plot_scaling
-from rollplan.comparison import compare, summarize_plan
+from rollplan import NoPlanError, Problem, SolverError, plan
 from rollplan.io import save_figure, write_atomic
+from rollplan.planners.collocation import CollocationPlanner
+from rollplan.plots.compare import plot_comparison, plot_scaling
+from rollplan.studies.comparison import compare, measure_plan
 
 K = 2.5
 TARGETS = [(0.3, 0.0, 0.0), (0.0, 0.5, 0.0), (0.5, 0.3, 0.4), (-0.4, 0.4, 1.0), (0.8, -0.2, -0.5),
@@ -51,12 +51,12 @@ def run_targets(planners, targets):
         if p is None:
             rows.append({"target": tgt, "plan": None})
             continue
-        g = summarize_plan(p)
+        g, _ = measure_plan(p)
         row = {"target": tgt, "plan": p, "gp": g, "coll": {}}
         for cost in COSTS:
             for guess in ("warm", "naive"):
                 try:
-                    r = planners[cost].solve(tgt, k=K, guess=p if guess == "warm" else "naive", turns=p.branch)
+                    r = planners[cost].solve(Problem(tgt, k=K), guess=guess, turns=p.branch, warm_start=p)
                     row["coll"][cost, guess] = r
                 except SolverError as exc:
                     row["coll"][cost, guess] = exc
@@ -85,12 +85,13 @@ def target_table(rows):
         g = row["gp"]
         rl = row["coll"]["path_length", "warm"]
         re = row["coll"]["angular_velocity", "warm"]
-        cl = fmt(rl.path_length) if not isinstance(rl, Exception) else f"failed ({rl.status})"
-        pk = fmt(rl.peak_omega) if not isinstance(rl, Exception) else "-"
-        ce = fmt(re.effort) if not isinstance(re, Exception) else f"failed ({re.status})"
+        cl = fmt(rl.measures.path_length) if not isinstance(rl, Exception) else f"failed ({rl.status})"
+        pk = fmt(rl.measures.peak_omega) if not isinstance(rl, Exception) else "-"
+        ce = fmt(re.measures.effort) if not isinstance(re, Exception) else f"failed ({re.status})"
         res = max((r.residual for r in (rl, re) if not isinstance(r, Exception)), default=float("nan"))
         out.append(f"| ({t[0]:g}, {t[1]:g}, {t[2]:g}) | {row['plan'].steps} | {g.path_length:.4g} | "
-                   f"{g.effort:.4g} | {g.peak_omega:.4g} | {cl} | {ce} | {pk} | {g.residual:.1e} / {res:.1e} | "
+                   f"{g.effort:.4g} | {g.peak_omega:.4g} | {cl} | {ce} | {pk} | {row['plan'].residual:.1e} / "
+                   f"{res:.1e} | "
                    f"{_status(row['coll']['path_length', 'naive'])} / {_status(row['coll']['angular_velocity', 'naive'])} |")
     return out
 
@@ -108,13 +109,14 @@ def convergence_table(rows):
                 pairs = [(row["coll"][cost, "warm"], row["coll"][cost, "naive"]) for row in rows
                          if row["plan"] is not None]
                 pairs = [(a, b) for a, b in pairs if not isinstance(a, Exception) and not isinstance(b, Exception)]
-                n_same = sum(abs(a.objective - b.objective) <= 1e-6 * max(1.0, abs(a.objective)) for a, b in pairs)
-                n_lower = sum(b.objective < a.objective - 1e-6 * max(1.0, abs(a.objective)) for a, b in pairs)
+                obj = lambda r: r.solution.objective  # noqa: E731
+                n_same = sum(abs(obj(a) - obj(b)) <= 1e-6 * max(1.0, abs(obj(a))) for a, b in pairs)
+                n_lower = sum(obj(b) < obj(a) - 1e-6 * max(1.0, abs(obj(a))) for a, b in pairs)
                 same = f"{n_same}/{len(pairs)} (naive lower in {n_lower})"
             fails = [f"{r.status}" for r in rs if isinstance(r, Exception)]
             summary[cost, guess] = (len(ok), len(rs))
             it = statistics.median([r.stats.iterations for r in ok]) if ok else float("nan")
-            tm = statistics.median([r.stats.solve_time_s for r in ok]) if ok else float("nan")
+            tm = statistics.median([r.stats.time_s for r in ok]) if ok else float("nan")
             fail_txt = f" (failed: {', '.join(sorted(set(fails)))})" if fails else ""
             out.append(f"| {cost} | {guess} | {len(ok)}/{len(rs)}{fail_txt} | {it:g} | {tm:.3f} | {same} |")
     return out, summary
@@ -131,11 +133,11 @@ def scaling(Ns, repeats, target=(0.5, 0.3, 0.4)):
             builds.append(time.perf_counter() - t0)
             ts = []
             for _ in range(repeats):
-                r = P.solve(target, k=K, guess=p)
-                ts.append(r.stats.solve_time_s)
+                r = P.solve(Problem(target, k=K), warm_start=p)
+                ts.append(r.stats.time_s)
             times.append(statistics.median(ts))
             iters.append(r.stats.iterations)
-            objs.append(r.path_length if cost == "path_length" else r.effort)
+            objs.append(r.measures.path_length if cost == "path_length" else r.measures.effort)
             resid.append(r.residual)
         res[cost] = (np.array(times), np.array(builds), iters, np.array(objs), np.array(resid))
     return res
@@ -170,14 +172,14 @@ def main():
     # which is shorter / cheaper
     valid = [r for r in rows if r["plan"] is not None]
     shorter = sum(1 for r in valid if not isinstance(r["coll"]["path_length", "warm"], Exception)
-                  and r["coll"]["path_length", "warm"].path_length < r["gp"].path_length)
+                  and r["coll"]["path_length", "warm"].measures.path_length < r["gp"].path_length)
     cheaper = sum(1 for r in valid if not isinstance(r["coll"]["angular_velocity", "warm"], Exception)
-                  and r["coll"]["angular_velocity", "warm"].effort < r["gp"].effort)
-    ratio_l = [r["coll"]["path_length", "warm"].path_length / r["gp"].path_length for r in valid
+                  and r["coll"]["angular_velocity", "warm"].measures.effort < r["gp"].effort)
+    ratio_l = [r["coll"]["path_length", "warm"].measures.path_length / r["gp"].path_length for r in valid
                if not isinstance(r["coll"]["path_length", "warm"], Exception)]
     coll_res = [r["coll"]["path_length", "warm"].residual for r in valid
                 if not isinstance(r["coll"]["path_length", "warm"], Exception)] or [float("nan")]
-    ratio_e = [r["coll"]["angular_velocity", "warm"].effort / r["gp"].effort for r in valid
+    ratio_e = [r["coll"]["angular_velocity", "warm"].measures.effort / r["gp"].effort for r in valid
                if not isinstance(r["coll"]["angular_velocity", "warm"], Exception)]
     gp_times = [r["plan"].stats.time_s for r in valid]
     conv, _ = convergence_table(rows)
@@ -205,7 +207,7 @@ def main():
         f"{cheaper}/{len(valid)} targets; effort ratio median {statistics.median(ratio_e):.3f} "
         f"(range {min(ratio_e):.3f}-{max(ratio_e):.3f})." if ratio_e else "- no collocation solution",
         f"- The geometric-phase planner takes {statistics.median(gp_times):.3f} s median (bracketing, root solve and "
-        f"CVODES verification); its residual is at most {max(r['gp'].residual for r in valid):.1e}, the "
+        f"CVODES verification); its residual is at most {max(r['plan'].residual for r in valid):.1e}, the "
         f"collocation's at most {max(coll_res):.1e} (path-length cost, warm start), bounded by the transcription "
         "error and IPOPT's tolerance. The plan is exact in structure (any timing of the same "
         "curve is realizable); the collocation result is optimal only for its cost, horizon and discretization.",

@@ -5,8 +5,9 @@ Run: python scripts/make_atlas.py   (the same as `rollplan atlas --k 2.5 --resol
 
 from pathlib import Path
 
-from rollplan.atlas import compute_atlas, plot_atlas
 from rollplan.io import save_figure
+from rollplan.plots.atlas import plot_atlas
+from rollplan.studies.atlas import compute_atlas
 
 OUT = Path(__file__).resolve().parent.parent / "results" / "atlas_k2.5.png"
 

@@ -73,7 +73,7 @@ def main():
         plan = rollplan.plan(target, steps, robot=robot)
         motion = rollplan.actuate(plan, robot, duration)
         t, rates = motion.time, motion.rotor_rates
-        nominal = rollplan.simulate_rotors(robot, t, rates, plan.target)
+        nominal = rollplan.simulate_rotors(robot, t, rates, plan.goal)
         h = math.hypot(*target[:2])
         lines += [
             f"## Target (u_a, v_a, psi) = ({target[0]} m, {target[1]} m, {target[2]} rad), n = {steps}, T = {duration} s",
@@ -88,12 +88,12 @@ def main():
         ]
         for dk in K_ERRORS:
             real = robot_with_k(robot, robot.k * (1 + dk))
-            sim = rollplan.simulate_rotors(real, t, rates, plan.target)
+            sim = rollplan.simulate_rotors(real, t, rates, plan.goal)
             mm, deg, r = errors(sim, robot)
             lines.append(f"| {dk * 100:+.0f} % | {real.k:.4f} | {mm:.3f} | {r:.2e} | {deg:.3f} | {mm / (h * 1e3):.1%} |")
         lines += ["", "| rotor rate gain error | position error [mm] | heading error [deg] |", "|---:|---:|---:|"]
         for g in GAINS:
-            sim = rollplan.simulate_rotors(robot, t, rates * (1 + g), plan.target)
+            sim = rollplan.simulate_rotors(robot, t, rates * (1 + g), plan.goal)
             mm, deg, _ = errors(sim, robot)
             lines.append(f"| {g * 100:+.0f} % | {mm:.3f} | {deg:.3f} |")
         lines += ["", f"| rate noise (std / max rate) | position error [mm], mean of {DRAWS} | max | "
@@ -101,7 +101,7 @@ def main():
         scale = np.abs(rates).max()
         for s in NOISE:
             res = np.array([errors(rollplan.simulate_rotors(robot, t, rates + rng.normal(0, s * scale, rates.shape),
-                                                            plan.target), robot)[:2] for _ in range(DRAWS)])
+                                                            plan.goal), robot)[:2] for _ in range(DRAWS)])
             lines.append(f"| {s * 100:.1f} % | {res[:, 0].mean():.3f} | {res[:, 0].max():.3f} | "
                          f"{res[:, 1].mean():.3f} | {res[:, 1].max():.3f} |")
         lines.append("")

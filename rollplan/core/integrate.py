@@ -4,17 +4,20 @@ Two integrators:
 
 ``"spectral"`` (the planner's)
     Along a curve, psi' in (30) does not depend on the state, and (28)-(29)
-    depend on the state only through psi. So psi is a quadrature, and then
+    depend on the state only through psi: the rates of (u_a, v_a) are their
+    values at psi = 0 turned by -psi. So psi is a quadrature, and then
     (u_a, v_a) are quadratures. Each piece is split into panels; on each panel
     the integrals are taken by Chebyshev (Clenshaw-Curtis) spectral
     integration on ``nodes + 1`` points, which converges exponentially for the
-    analytic integrands. The result is a plain CasADi SX function: fast,
-    exactly differentiable, and code-generatable. The structural assumption is
-    checked symbolically when the function is built.
+    analytic integrands (:func:`spectral_leaf`). The result is a CasADi
+    function: exactly differentiable and code-generatable (the C planner of
+    :mod:`rollplan.codegen` uses the same quadrature). The structural
+    assumption is checked when the function is built
+    (:func:`check_heading_structure`).
 
 ``"cvodes"``
-    CasADi's CVODES (SUNDIALS BDF with Newton) at tight tolerances: the
-    independent, adaptive integrator that verifies every plan.
+    CasADi's CVODES (SUNDIALS' variable-order Adams method by default) at
+    tight tolerances: the independent, adaptive integrator that verifies plans.
 
 The state is ``x = (u_a, v_a, psi)`` in units of R and rad.
 """
@@ -31,7 +34,8 @@ from numpy.polynomial import chebyshev as cheb
 from . import model
 from .curves import Curve, rotated_point
 
-__all__ = ["piece_rhs", "spectral_step", "CvodesIntegrator", "chebyshev_matrices"]
+__all__ = ["DEFAULT_NODES", "piece_rhs", "heading_free_rates", "check_heading_structure", "chebyshev_matrices",
+           "spectral_leaf", "spectral_step", "CvodesIntegrator"]
 
 #: Chebyshev degree per panel of the spectral integrator.
 DEFAULT_NODES = 32
@@ -67,22 +71,34 @@ def piece_rhs(curve: Curve, index: int) -> ca.Function:
                        ["phi", "x", "p", "k", "gamma"], ["xdot"])
 
 
-def _rates_at_zero_heading(f: ca.Function) -> ca.Function:
-    """``f0(phi, params, k, gamma) = f(phi, (0, 0, 0), params, k, gamma)`` with common subexpressions merged."""
+def heading_free_rates(f: ca.Function) -> ca.Function:
+    """``f0(phi, params, k, gamma) = f(phi, (0, 0, 0), params, k, gamma)`` of a :func:`piece_rhs`.
+
+    Checks the structure first (:func:`check_heading_structure`); common
+    subexpressions are merged.
+    """
+    check_heading_structure(f)
     phi = ca.SX.sym("phi")
     params = ca.SX.sym("p", f.size1_in(2))
     k = ca.SX.sym("k")
     gamma = ca.SX.sym("gamma")
     out = ca.cse(f(phi, ca.DM.zeros(3), params, k, gamma))
-    return ca.Function(f"{f.name()}_0", [phi, params, k, gamma], [out])
+    return ca.Function(f"{f.name()}_0", [phi, params, k, gamma], [out], ["phi", "p", "k", "gamma"], ["rates"])
 
 
-def _check_heading_structure(f: ca.Function, n_params: int, trials: int = 4) -> None:
-    """Check ``f(phi, (u, v, psi)) = (Rot(-psi) f(phi, 0)[:2], f(phi, 0)[2])`` at random points.
+def check_heading_structure(f: ca.Function, trials: int = 4) -> None:
+    """Check the structure of (28)-(30) that :func:`spectral_leaf` rests on; ValueError if it fails.
 
-    This is the structure of (28)-(30): the rates of (u_a, v_a) are those at
-    psi = 0 turned by -psi, and psi' does not depend on the state.
+    The rates of ``f`` (a :func:`piece_rhs`) must not depend on (u_a, v_a)
+    (checked symbolically), and ``f(phi, (u, v, psi)) = (Rot(-psi) f(phi, 0)[:2],
+    f(phi, 0)[2])``: psi' does not depend on psi, which holds because (20) has
+    no psi (an identity the symbolic expression does not show), and the rates of
+    (u_a, v_a) are those at psi = 0 turned by -psi (checked at random points).
     """
+    n_params = f.size1_in(2)
+    xs = ca.SX.sym("xs", 3)
+    if ca.depends_on(f(ca.SX.sym("t"), xs, ca.SX.sym("p", n_params), ca.SX.sym("k"), ca.SX.sym("g")), xs[:2]):
+        raise ValueError("curve ODE lacks the structure the spectral integrator needs: rates depend on (u_a, v_a)")
     rng = np.random.default_rng(12345)
     for _ in range(trials):
         phi = rng.uniform(0.0, 2.0 * np.pi)
@@ -93,37 +109,57 @@ def _check_heading_structure(f: ca.Function, n_params: int, trials: int = 4) -> 
         c, s = np.cos(psi), np.sin(psi)
         expect = np.array([c * d0[0] + s * d0[1], -s * d0[0] + c * d0[1], d0[2]])
         if not np.allclose(d, expect, rtol=1e-12, atol=1e-12 * (1.0 + np.abs(d0).max())):
-            raise ValueError("curve ODE lacks the structure the spectral integrator needs")
+            raise ValueError("curve ODE lacks the rotation structure the spectral integrator needs")
 
 
-def _spectral_piece(f: ca.Function, breaks, nodes: int, x0, params, k, gamma):
-    """Spectral integration of one piece (symbolic, SX); returns the end state.
+def spectral_leaf(rates: ca.Function, breaks, nodes: int, x0, *args, derivative: bool = False):
+    """End state of one piece by Chebyshev spectral integration of (28)-(30) (SX or MX expression).
 
-    The rates are evaluated once per node at psi = 0 (``f0``); psi is their
-    third component integrated (psi' does not depend on the state), and the
-    rates of (u_a, v_a) at the node's psi are the psi = 0 rates turned by
-    -psi, eqs. (28)-(29).
+    ``rates(phi, *args)`` gives ``(A, B, psi')``, the rates of (u_a, v_a, psi)
+    at psi = 0 (:func:`heading_free_rates`), evaluated once per node by one
+    ``map`` over all nodes of all panels. psi at the nodes is the cumulative
+    spectral integral of psi', and the end (u_a, v_a) are weighted sums of
+    ``Rot(-psi) (A, B)``.
+
+    With ``derivative``, ``rates`` returns three more rows, the derivatives of
+    (A, B, psi') by one parameter r, and the derivative of the end state by r
+    is returned too, propagated through the (linear) quadrature in forward
+    mode, so one pass over the nodes gives the value and its derivative.
+
+    Returns ``x_end`` (3,), or ``(x_end, dx_end/dr)`` with ``derivative``.
     """
+    breaks = np.asarray(breaks, float)
+    panels = breaks.size - 1
     xi, q = chebyshev_matrices(nodes)
-    ua, va, psi = x0[0], x0[1], x0[2]
-    f0 = _rates_at_zero_heading(f).map(nodes + 1)
-    for t0, t1 in zip(breaks[:-1], breaks[1:]):
-        half = 0.5 * (t1 - t0)
-        t = ca.DM(t0 + (xi + 1.0) * half).T
-        d0 = f0(t, params, k, gamma)
-        psi_nodes = psi + half * ca.mtimes(ca.DM(q), d0[2, :].T)
-        c, s = ca.cos(psi_nodes), ca.sin(psi_nodes)
-        du = c * d0[0, :].T + s * d0[1, :].T
-        dv = c * d0[1, :].T - s * d0[0, :].T
-        w = ca.DM(half * q[-1]).T
-        ua = ua + ca.mtimes(w, du)
-        va = va + ca.mtimes(w, dv)
-        psi = psi_nodes[-1]
-    return ca.vertcat(ua, va, psi)
+    half = 0.5 * np.diff(breaks)
+    points = breaks[:-1][None, :] + (xi[:, None] + 1.0) * half[None, :]   # (nodes + 1) x panels
+    count = points.size
+    r = rates.map(count, "serial")(ca.DM(points.reshape(-1, order="F")).T, *args)   # rows x count
+    weights = ca.DM((q[-1][:, None] * half[None, :]).reshape(-1, order="F"))
+    upper = ca.DM(np.triu(np.ones((panels, panels)), 1))
+    scale = ca.repmat(ca.DM(half).T, nodes + 1, 1)
+
+    def cumulative(rate):   # integral of the rate from the piece's start to each node
+        within = ca.mtimes(ca.DM(q), ca.reshape(rate, nodes + 1, panels)) * scale
+        starts = ca.mtimes(within[nodes, :], upper)
+        return ca.reshape(within + ca.repmat(starts, nodes + 1, 1), 1, count)
+
+    turn = cumulative(r[2, :])
+    psi = x0[2] + turn
+    c, s = ca.cos(psi), ca.sin(psi)
+    du = r[0, :] * c + r[1, :] * s      # Rot(-psi) (A, B)
+    dv = r[1, :] * c - r[0, :] * s
+    x_end = ca.vertcat(x0[0] + ca.mtimes(du, weights), x0[1] + ca.mtimes(dv, weights), x0[2] + turn[count - 1])
+    if not derivative:
+        return x_end
+    turn_r = cumulative(r[5, :])
+    du_r = r[3, :] * c + r[4, :] * s + dv * turn_r
+    dv_r = r[4, :] * c - r[3, :] * s - du * turn_r
+    return x_end, ca.vertcat(ca.mtimes(du_r, weights), ca.mtimes(dv_r, weights), turn_r[count - 1])
 
 
 def spectral_step(curve: Curve, nodes: int = DEFAULT_NODES, pieces=None) -> ca.Function:
-    """One trace of ``curve`` by spectral integration of (28)-(30).
+    """One trace of ``curve`` by spectral integration of (28)-(30) (:func:`spectral_leaf` per piece).
 
     ``F(x0[3], params[n], k, gamma) -> x_end[3]`` as an SX function (exact AD).
     ``pieces`` restricts the trace to some pieces (default: all, in order).
@@ -134,17 +170,8 @@ def spectral_step(curve: Curve, nodes: int = DEFAULT_NODES, pieces=None) -> ca.F
     gamma = ca.SX.sym("gamma")
     x = x0
     for i in range(len(curve.pieces)) if pieces is None else pieces:
-        f = piece_rhs(curve, i)
-        # The spectral scheme rests on the structure of (28)-(30): the rates do
-        # not depend on (u_a, v_a) (checked symbolically here), psi' does not
-        # depend on psi, which holds because (20) has no psi (an identity the
-        # symbolic expression does not show), and the rates of (u_a, v_a) are
-        # those at psi = 0 turned by -psi (both checked numerically here).
-        xs = ca.SX.sym("xs", 3)
-        if ca.depends_on(f(ca.SX.sym("t"), xs, params, k, gamma), xs[:2]):
-            raise ValueError("curve ODE lacks the structure the spectral integrator needs")
-        _check_heading_structure(f, curve.n_params)
-        x = _spectral_piece(f, curve.pieces[i].breaks, nodes, x, params, k, gamma)
+        rates = heading_free_rates(piece_rhs(curve, i))
+        x = spectral_leaf(rates, curve.pieces[i].breaks, nodes, x, params, k, gamma)
     return ca.Function("step", [x0, params, k, gamma], [x], ["x0", "p", "k", "gamma"], ["xf"])
 
 
@@ -159,7 +186,7 @@ class CvodesIntegrator:
     the ODE is not stiff on the admissible range, and at tolerances near
     1e-13 the high-order Adams method takes far fewer steps than BDF, which
     is limited to order 5) or ``"bdf"``. Both are checked against scipy's
-    DOP853 in ``tests/test_performance.py``.
+    DOP853 in the tests.
     """
 
     curve: Curve

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from matplotlib.figure import Figure
 
-from .plots import plane_axes, sphere_axes
+from .common import plane_axes, sphere_axes
 
 __all__ = ["plot_comparison", "plot_scaling"]
 
@@ -13,18 +13,22 @@ LABELS = {"geometric_phase": "geometric phase", "collocation": "collocation"}
 
 
 def plot_comparison(c, unit: str = "R") -> Figure:
-    """Both contact paths overlaid: on the sphere (body frame, 3-D) and on the plane."""
+    """Both contact paths of a :class:`~rollplan.studies.comparison.Comparison` overlaid: on the sphere
+    (body frame, 3-D) and on the plane."""
     fig = Figure(figsize=(11, 5))
     ax1 = fig.add_subplot(1, 2, 1, projection="3d")
     ax2 = fig.add_subplot(1, 2, 2)
-    for s in (c.geometric_phase, c.collocation):
-        label = f"{LABELS[s.name]}: length {s.path_length:.4g} {unit}"
-        ax1.plot(s.contact[:, 0], s.contact[:, 1], s.contact[:, 2], color=COLORS[s.name], linewidth=1.5)
-        ax2.plot(s.u_a, s.v_a, color=COLORS[s.name], linewidth=1.4, label=label)
-    sphere_axes(ax1, c.radius, unit, "contact paths on the sphere")
-    plane_axes(ax2, c.target, unit, "contact paths on the plane")
-    fig.suptitle(f"k = {c.k:.4g}, target (u_a, v_a, psi) = ({c.target[0]:g}, {c.target[1]:g}, {c.target[2]:g}), "
-                 f"n = {c.steps}, collocation {c.result.cost} N = {c.result.intervals} d = {c.result.degree}")
+    for name, traj, length in (("geometric_phase", c.plan_trajectory, c.plan_measures.path_length),
+                               ("collocation", c.result.trajectory, c.result.measures.path_length)):
+        label = f"{LABELS[name]}: length {length:.4g} {unit}"
+        contact = traj.contact
+        ax1.plot(contact[:, 0], contact[:, 1], contact[:, 2], color=COLORS[name], linewidth=1.5)
+        ax2.plot(traj.u_a, traj.v_a, color=COLORS[name], linewidth=1.4, label=label)
+    p, g, tr = c.problem, c.problem.goal, c.result.transcription
+    sphere_axes(ax1, p.radius, unit, "contact paths on the sphere")
+    plane_axes(ax2, g[:2], unit, "contact paths on the plane")
+    fig.suptitle(f"k = {p.k:.4g}, target (u_a, v_a, psi) = ({g.u_a:g}, {g.v_a:g}, {g.psi:g}), "
+                 f"n = {p.steps}, collocation {c.result.cost} N = {tr.intervals} d = {tr.degree}")
     fig.tight_layout()
     return fig
 

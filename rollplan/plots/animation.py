@@ -1,9 +1,9 @@
 """Animation of the sphere rolling on the plane under its rotors (matplotlib + Pillow, GIF).
 
-The motion shown is the rotor-driven simulation (:func:`rollplan.simulate.simulate_rotors`)
-of a plan file, so the animation shows what the two motors produce. The
-sphere's centre is at ``(u_a, v_a, R)`` above the contact point and its
-orientation is (2), ``R = Rz(psi)^T Rx(v_o)^T Ry(u_o)^T`` (:func:`rollplan.model.orientation`),
+The motion shown is given (e.g. the rotor-driven simulation of a plan file,
+:func:`rollplan.execution.plants.simulate_rotors`, so the animation shows what
+the two motors produce). The sphere's centre is at ``(u_a, v_a, R)`` above the contact point and its
+orientation is (2), ``R = Rz(psi)^T Rx(v_o)^T Ry(u_o)^T`` (:func:`rollplan.core.model.orientation`),
 which maps the contact point (1) of the body frame to the bottom of the sphere.
 Drawn: the shell (meridians and parallels), the body axes n_1 (red, rotor 1),
 n_2 (green, rotor 2), n_3 (blue), the contact path on the plane and on the
@@ -15,50 +15,23 @@ from __future__ import annotations
 import logging
 import os
 import tempfile
-from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 from matplotlib.figure import Figure
 
-from . import model
-from .io import write_atomic
-from .simulate import load_rotor_plan, simulate_rotors
+from ..execution.poses import animation_frames
+from ..io import write_atomic
 
-__all__ = ["animate_plan_file", "animation_frames", "make_animation"]
+__all__ = ["make_animation"]
 
 log = logging.getLogger(__name__)
 
 
-@lru_cache(maxsize=1)
-def _geometry() -> ca.Function:
-    """``f(u_o, v_o, psi) -> (orientation (2) [3x3], contact point (1) on the unit sphere [3])``."""
-    u, v, psi = ca.SX.sym("u"), ca.SX.sym("v"), ca.SX.sym("psi")
-    return ca.Function("geometry", [u, v, psi], [model.orientation(u, v, psi), model.contact_point(u, v)])
+def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps: int = 20) -> None:
+    """Write a GIF of the sphere rolling (see module docstring) to ``out`` atomically.
 
-
-def animation_frames(time, state, frames: int):
-    """Frame times and, per frame, the interpolated state, orientation matrix and body-frame contact point.
-
-    Returns
-    -------
-    t : (F,) frame times [s]
-    x : (F, 5) states (u_a, v_a, u_o, v_o, psi)
-    rot : (F, 3, 3) orientation matrices (2)
-    contact : (S, 3) contact points (1) on the unit sphere, body frame, at every sample
+    ``state`` (N, 5) in :class:`~rollplan.problem.State` order at ``time``; ``goal`` (u_a, v_a, ...) [m].
     """
-    time = np.asarray(time, float)
-    state = np.asarray(state, float)
-    t = np.linspace(time[0], time[-1], frames)
-    x = np.column_stack([np.interp(t, time, state[:, j]) for j in range(5)])
-    geo = _geometry()
-    rot = np.array([np.array(geo(*x[i, 2:5])[0]) for i in range(frames)])
-    contact = np.array(geo.map(time.size)(state[:, 2][None, :], state[:, 3][None, :], state[:, 4][None, :])[1]).T
-    return t, x, rot, contact
-
-
-def make_animation(time, state, rates, robot, target, out, frames: int = 100, fps: int = 20) -> None:
-    """Write a GIF of the sphere rolling (see module docstring) to ``out`` atomically."""
     from matplotlib.animation import FuncAnimation, PillowWriter
 
     R = robot.radius
@@ -70,8 +43,8 @@ def make_animation(time, state, rates, robot, target, out, frames: int = 100, fp
     fig = Figure(figsize=(11, 5.2))
     ax = fig.add_subplot(1, 2, 1, projection="3d")
     ax2 = fig.add_subplot(1, 2, 2)
-    lo = np.minimum(state[:, :2].min(0), target[:2]) - 1.2 * R
-    hi = np.maximum(state[:, :2].max(0), target[:2]) + 1.2 * R
+    lo = np.minimum(state[:, :2].min(0), goal[:2]) - 1.2 * R
+    hi = np.maximum(state[:, :2].max(0), goal[:2]) + 1.2 * R
     span = max(hi - lo)
     mid = 0.5 * (lo + hi)
     ax.set_xlim(mid[0] - span / 2, mid[0] + span / 2)
@@ -82,7 +55,7 @@ def make_animation(time, state, rates, robot, target, out, frames: int = 100, fp
     ax.set_ylabel("v_a [m]")
     ax.set_zlabel("z [m]")
     ax.plot([0], [0], [0], "ko", markersize=4)
-    ax.plot([target[0]], [target[1]], [0], "k*", markersize=10)
+    ax.plot([goal[0]], [goal[1]], [0], "k*", markersize=10)
 
     # shell: 6 meridians and 5 parallels on the unit sphere, body frame
     s = np.linspace(0, 2 * np.pi, 49)
@@ -129,16 +102,3 @@ def make_animation(time, state, rates, robot, target, out, frames: int = 100, fp
         with open(name, "rb") as fh:
             write_atomic(out, fh.read())
     log.info("wrote %d frames to %s", frames, out)
-
-
-def animate_plan_file(plan_file, out, frames: int = 100, fps: int = 20) -> None:
-    """Simulate a plan file's rotor rates (:func:`rollplan.simulate.simulate_rotors`) and animate it to a GIF."""
-    from .errors import InputError
-
-    if frames < 2 or frames > 2000:
-        raise InputError(f"frames = {frames} is not allowed: it must lie in [2, 2000]")
-    if fps < 1 or fps > 100:
-        raise InputError(f"fps = {fps} is not allowed: it must lie in [1, 100]")
-    rp = load_rotor_plan(plan_file)
-    sim = simulate_rotors(rp.robot, rp.time, rp.rotor_rates, rp.target)
-    make_animation(rp.time, sim.state, rp.rotor_rates, rp.robot, rp.target, out, frames, fps)

@@ -4,17 +4,18 @@ Everything numerical in the generated library comes from the symbolic model
 through CasADi's :class:`~casadi.CodeGenerator`; no equation is typed twice:
 
 * the realizability condition (13) solved for the spin ``omega_z``
-  (:func:`rollplan.model.omega_z_realizable`);
-* the rotor-rate map (11) (:func:`rollplan.model.rotor_rates`);
-* Montana's contact kinematics (6)-(10) (:func:`rollplan.model.montana`);
+  (:func:`rollplan.core.model.omega_z_realizable`);
+* the rotor-rate map (11) (:func:`rollplan.core.model.rotor_rates`);
+* Montana's contact kinematics (6)-(10) (:func:`rollplan.core.model.montana`);
 * the step map ``(a, b, k) -> (shift, eta, direction)`` of one trace of the
   figure eight (31), (35), integrated along the curve ODE (28)-(30)
-  (:func:`rollplan.integrate.piece_rhs`), and its Jacobian;
+  (:func:`rollplan.core.integrate.piece_rhs`), and its Jacobian;
 * a coarse table of the two leaves on a fixed grid of radii, used only to
   bracket the root of (32)-(33) on branch ``m = 0``.
 
-The step map is the Chebyshev spectral scheme of :mod:`rollplan.integrate`
-written with loops: each leaf is integrated over the curve's 10 graded panels
+The step map is the Chebyshev spectral quadrature of :mod:`rollplan.core.integrate`
+(:func:`~rollplan.core.integrate.spectral_leaf`), written with loops: each leaf is integrated over the
+curve's 10 graded panels
 (its fixed steps), each panel on ``degree + 1`` Chebyshev points. Along a
 curve psi' in (30) does not depend on the state, and (28)-(29) are
 ``[u_a', v_a'] = Rot(-psi) [A, B]`` with ``(A, B)`` their value at psi = 0
@@ -23,20 +24,13 @@ curve psi' in (30) does not depend on the state, and (28)-(29) are
 Chebyshev integration gives psi at the nodes, and weighted sums give
 ``(u_a, v_a)``. The generated C loops over the nodes instead of unrolling
 them. The Jacobian by (a, b) is assembled by the chain rule from the leaves'
-derivatives. A fixed-step RK4 (``mapaccum``) was measured too: it needs about
-512 uniform steps per leaf for 1e-8 at k = 2.5 near A_MAX, i.e. ten times the
-right-side evaluations of the spectral scheme for a worse error.
+derivatives.
 
 ``steps_per_leaf`` counts node intervals per leaf: panels x degree. The
-default, :data:`DEFAULT_STEPS_PER_LEAF` = 200 (degree 20), keeps the step map
-within 2e-10 of the converged one over the whole admissible range
-``0 < a, b <= A_MAX`` for ``k <= 5``, below the Python planner's verification
-tolerance (1e-9). Measured on 15 targets, three of them forcing a leaf near
-A_MAX: at 120 the C plans miss (1.1e-7 verified by CVODES, 2e-8 from the Python
-plans), at 160 they pass (1.4e-9, 5e-11) but the step map is off by 1.8e-8 at
-a = b = A_MAX, at 200 they are exact to 9e-11 and within 2e-12 of the Python
-plans. For k around 10 use 240 or more (2.5e-7 at 200, 1.3e-8 at 240).
-(``scripts/bench_codegen.py --accuracy`` measures error against steps per leaf.)
+default, :data:`DEFAULT_STEPS_PER_LEAF`, was chosen from the measured error of
+the generated step map against steps per leaf over the admissible range
+(``scripts/bench_codegen.py --accuracy`` writes ``results/codegen_accuracy.json``);
+larger k needs more steps per leaf.
 
 The planner (hand-written C glue, not model equations) solves, for branch
 ``m = 0``,
@@ -49,7 +43,7 @@ in ``(0, A_MAX]``) on the generated step map and its Jacobian. It starts in the
 bracketing cells of the leaf table in order of their smallest ``a + b`` (as the
 Python planner orders its brackets), from the targets interpolated linearly in
 the cell, then sets ``gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift)``
-(see :mod:`rollplan.geometric`). The table depends on k only and is kept for
+(see :mod:`rollplan.planners.geometric`). The table depends on k only and is kept for
 the last k. Static memory only, a bounded number of iterations, and a status
 code (0 ok, 2 bad input, 3 no bracket, 4 no convergence).
 """
@@ -66,11 +60,12 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from . import model
-from .curves import A_MAX, figure_eight
-from .errors import InputError
-from .integrate import chebyshev_matrices, piece_rhs
-from .io import write_atomic
+from ..core import model
+from ..core.curves import A_MAX, figure_eight
+from ..core.integrate import check_heading_structure, heading_free_rates, piece_rhs, spectral_leaf
+from ..errors import InputError, NoPlanError
+from ..io import write_atomic
+from ..planners.geometric import plan as gp_plan
 
 __all__ = [
     "DEFAULT_STEPS_PER_LEAF",
@@ -178,74 +173,19 @@ def _degree(steps_per_leaf, panels: int) -> int:
 def _node_rates(curve, index: int) -> ca.Function:
     """``g(phi, r, k) -> (A, B, psi')`` along leaf ``index`` with radius ``r``, from (28)-(30).
 
-    ``(A, B)`` are (u_a', v_a') at psi = 0. Checks the structure the loop
-    relies on: the rates do not depend on (u_a, v_a), psi' does not depend on
-    psi, and ``(u_a', v_a') = Rot(-psi) (A, B)``.
+    ``(A, B)`` are (u_a', v_a') at psi = 0 (:func:`rollplan.core.integrate.heading_free_rates`,
+    which checks the structure the quadrature relies on); the leaf must depend on its own radius only.
     """
     f = piece_rhs(curve, index)
-    phi, r, k, psi = ca.SX.sym("phi"), ca.SX.sym("r"), ca.SX.sym("k"), ca.SX.sym("psi")
+    check_heading_structure(f)
+    full_p = ca.SX.sym("p", curve.n_params)
+    others = [i for i in range(curve.n_params) if i != index]
+    if others and ca.depends_on(f(ca.SX.sym("phi"), ca.SX.sym("x", 3), full_p, ca.SX.sym("k"), 0), full_p[others]):
+        raise ValueError(f"leaf {index} depends on other parameters than its own radius")
+    phi, r, k = ca.SX.sym("phi"), ca.SX.sym("r"), ca.SX.sym("k")
     params = ca.SX.zeros(curve.n_params)
     params[index] = r
-    full_p, x = ca.SX.sym("p", curve.n_params), ca.SX.sym("x", 3)
-    probe = f(phi, x, full_p, k, 0)
-    others = [i for i in range(curve.n_params) if i != index]
-    if others and ca.depends_on(probe, full_p[others]):
-        raise ValueError(f"leaf {index} depends on other parameters than its own radius")
-    if ca.depends_on(probe, x[:2]):
-        raise ValueError("curve ODE lacks the structure the generated step map needs: rates depend on (u_a, v_a)")
-    at0 = f(phi, ca.SX.zeros(3), params, k, 0)
-    at_psi = f(phi, ca.vertcat(0, 0, psi), params, k, 0)
-    g = ca.Function(f"leaf{index}_rates", [phi, r, k], [ca.cse(at0)])
-    # Numerical check of Rot(-psi) structure and psi-independence of psi' at a few points.
-    check = ca.Function("chk", [phi, r, k, psi], [at_psi, at0])
-    rng = np.random.default_rng(index)
-    for _ in range(4):
-        ph, rr, kk, ps = rng.uniform(0, 2 * np.pi), rng.uniform(0.05, A_MAX), rng.uniform(0, 5), rng.uniform(-4, 4)
-        v_psi, v0 = (np.array(x).ravel() for x in check(ph, rr, kk, ps))
-        c, s = np.cos(ps), np.sin(ps)
-        want = np.array([c * v0[0] + s * v0[1], -s * v0[0] + c * v0[1], v0[2]])
-        if not np.allclose(v_psi, want, rtol=1e-12, atol=1e-12 * (1 + np.abs(v0).max())):
-            raise ValueError("curve ODE lacks the rotation structure the generated step map needs")
-    return g
-
-
-def _leaf_expr(g: ca.Function, breaks, degree: int, x0, r, k, with_dr: bool = False):
-    """End state of one leaf (MX expression): looped Chebyshev spectral integration of (28)-(30).
-
-    With ``with_dr``, ``g`` also returns the derivatives of (A, B, psi') by r
-    (rows 3-5), and the derivative of the end state by r is returned too,
-    propagated through the (linear) quadrature in forward mode. One pass over
-    the nodes then gives the value and the derivative, sharing the
-    transcendental functions of each node.
-    """
-    breaks = np.asarray(breaks, float)
-    panels = breaks.size - 1
-    xi, q = chebyshev_matrices(degree)
-    half = 0.5 * np.diff(breaks)
-    nodes = breaks[:-1][None, :] + (xi[:, None] + 1.0) * half[None, :]   # (degree+1) x panels
-    count = nodes.size
-    rates = g.map(count, "serial")(ca.DM(nodes.reshape(-1, order="F")).T, r, k)   # (A, B, psi'[, d/dr]) x count
-    weights = ca.DM((q[-1][:, None] * half[None, :]).reshape(-1, order="F"))
-    upper = ca.DM(np.triu(np.ones((panels, panels)), 1))
-    scale = ca.repmat(ca.DM(half).T, degree + 1, 1)
-
-    def cumulative(rate):   # integral of the rate from the leaf's start to each node
-        within = ca.mtimes(ca.DM(q), ca.reshape(rate, degree + 1, panels)) * scale
-        starts = ca.mtimes(within[degree, :], upper)
-        return ca.reshape(within + ca.repmat(starts, degree + 1, 1), 1, count)
-
-    turn = cumulative(rates[2, :])
-    psi = x0[2] + turn
-    c, s = ca.cos(psi), ca.sin(psi)
-    du = rates[0, :] * c + rates[1, :] * s      # Rot(-psi) (A, B)
-    dv = rates[1, :] * c - rates[0, :] * s
-    x_end = ca.vertcat(x0[0] + ca.mtimes(du, weights), x0[1] + ca.mtimes(dv, weights), x0[2] + turn[count - 1])
-    if not with_dr:
-        return x_end
-    turn_r = cumulative(rates[5, :])
-    du_r = rates[3, :] * c + rates[4, :] * s + dv * turn_r
-    dv_r = rates[4, :] * c - rates[3, :] * s - du * turn_r
-    return x_end, ca.vertcat(ca.mtimes(du_r, weights), ca.mtimes(dv_r, weights), turn_r[count - 1])
+    return ca.Function(f"leaf{index}_rates", [phi, r, k], [heading_free_rates(f)(phi, params, k, 0)])
 
 
 def leaf_function(curve, index: int, degree: int, name: str, jacobian: bool = False) -> ca.Function:
@@ -261,12 +201,12 @@ def leaf_function(curve, index: int, degree: int, name: str, jacobian: bool = Fa
     x0, r, k = ca.MX.sym("x0", 3), ca.MX.sym("r"), ca.MX.sym("k")
     breaks = curve.pieces[index].breaks
     if not jacobian:
-        x_end = _leaf_expr(g, breaks, degree, x0, r, k)
+        x_end = spectral_leaf(g, breaks, degree, x0, r, k)
         return ca.Function(name, [x0, r, k], [x_end], ["x0", "r", "k"], ["x_end"])
     phi, rs, ks = ca.SX.sym("phi"), ca.SX.sym("r"), ca.SX.sym("k")
     val = g(phi, rs, ks)
     g_dr = ca.Function(f"{g.name()}_dr", [phi, rs, ks], [ca.cse(ca.vertcat(val, ca.jacobian(val, rs)))])
-    x_end, jac_r = _leaf_expr(g_dr, breaks, degree, x0, r, k, with_dr=True)
+    x_end, jac_r = spectral_leaf(g_dr, breaks, degree, x0, r, k, derivative=True)
     return ca.Function(name, [x0, r, k], [x_end, ca.jacobian(x_end, x0), jac_r],
                        ["x0", "r", "k"], ["x_end", "jac_x0", "jac_r"])
 
@@ -358,19 +298,17 @@ def generated_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: st
 def reference_plan(target, steps: int, k: float, near=None):
     """The Python planner's verified plan on branch m = 0, for cross-checking the C planner.
 
-    Solves (32)-(33) with ``m = 0`` by :mod:`rollplan.geometric` (IPOPT on the
+    Solves (32)-(33) with ``m = 0`` by :mod:`rollplan.planners.geometric` (IPOPT on the
     spectral step map, CVODES verification). Returns the shortest such plan,
     or with ``near = (a, b)`` the one closest to it; None if there is none.
-    Uses :func:`rollplan.geometric.plan` restricted to ``branch=0`` (all of its
+    Uses :func:`rollplan.planners.geometric.plan` restricted to ``branch=0`` (all of its
     roots when ``near`` is given).
     """
-    from . import geometric
-
     u, v, psi = (float(x) for x in target)
     dist = (lambda q: 0.0) if near is None else (lambda q: max(abs(q.a - near[0]), abs(q.b - near[1])))
     try:
-        best = geometric.plan((u, v, psi), steps, k=k, branch=0, all_solutions=near is not None)
-    except geometric.NoPlanError:
+        best = gp_plan((u, v, psi), steps, k=k, branch=0, all_solutions=near is not None)
+    except NoPlanError:
         return None
     return min((best,) + best.alternatives, key=lambda q: (dist(q), q.a + q.b))
 

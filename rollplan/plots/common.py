@@ -1,20 +1,26 @@
-"""Figures of plans. Functions take results and return matplotlib figures; they compute nothing."""
+"""Shared pieces of the figures: axes of the sphere and of the plane, and path segments.
+
+Functions take results and draw; they compute nothing.
+"""
 
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.figure import Figure
 
-__all__ = ["plot_plan", "draw_sphere_path", "draw_plane_path", "sphere_axes", "plane_axes"]
+__all__ = ["LEAF_COLORS", "segments", "sphere_axes", "plane_axes", "draw_sphere_path", "draw_plane_path"]
 
 LEAF_COLORS = ("tab:red", "tab:blue")  # first half-step red, second blue (paper's figures)
 
 
-def _segments(traj):
-    """Index ranges of consecutive samples on the same leaf (each including its start point)."""
-    change = np.nonzero(np.diff(traj.leaf[1:]) != 0)[0] + 1
-    bounds = np.concatenate([[0], change, [traj.leaf.size - 1]])
-    return [(int(s), int(e) + 1, int(traj.leaf[e])) for s, e in zip(bounds[:-1], bounds[1:])]
+def segments(traj):
+    """``(start, stop, segment)`` of each run of samples on one segment of a :class:`~rollplan.result.Trajectory`.
+
+    Each run includes the joint sample before it, so consecutive runs connect.
+    """
+    seg = traj.segment
+    change = np.nonzero(np.diff(seg[1:]) != 0)[0] + 1
+    bounds = np.concatenate([[0], change, [seg.size - 1]])
+    return [(int(s), int(e) + 1, int(seg[e])) for s, e in zip(bounds[:-1], bounds[1:])]
 
 
 def sphere_axes(ax, radius=1.0, unit="R", title="contact path on the sphere"):
@@ -44,7 +50,7 @@ def plane_axes(ax, target=None, unit="R", title="contact path on the plane"):
 
 def draw_sphere_path(ax, traj, radius=1.0, unit="R"):
     """Contact path on the sphere (body frame), 3-D axes, first half-steps red, second blue."""
-    for s, e, leaf in _segments(traj):
+    for s, e, leaf in segments(traj):
         c = traj.contact[s:e + 1]
         ax.plot(c[:, 0], c[:, 1], c[:, 2], color=LEAF_COLORS[leaf % 2], linewidth=1.6)
     sphere_axes(ax, radius, unit)
@@ -52,19 +58,6 @@ def draw_sphere_path(ax, traj, radius=1.0, unit="R"):
 
 def draw_plane_path(ax, traj, target=None, unit="R"):
     """Contact path on the plane, first half-steps red, second blue."""
-    for s, e, leaf in _segments(traj):
+    for s, e, leaf in segments(traj):
         ax.plot(traj.u_a[s:e + 1], traj.v_a[s:e + 1], color=LEAF_COLORS[leaf % 2], linewidth=1.4)
     plane_axes(ax, target, unit)
-
-
-def plot_plan(plan, traj, unit="R") -> Figure:
-    """Two panels: the contact path on the sphere (3-D) and on the plane."""
-    fig = Figure(figsize=(11, 5))
-    ax1 = fig.add_subplot(1, 2, 1, projection="3d")
-    draw_sphere_path(ax1, traj, plan.radius, unit)
-    ax2 = fig.add_subplot(1, 2, 2)
-    draw_plane_path(ax2, traj, plan.target, unit)
-    fig.suptitle(f"k = {plan.k:g}, n = {plan.steps}: a = {plan.a:.6g}, b = {plan.b:.6g}, "
-                 f"gamma = {plan.gamma:.6g} rad, residual {plan.residual:.1e}")
-    fig.tight_layout()
-    return fig

@@ -72,13 +72,15 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from . import model
-from .curves import figure_eight, rotated_point
-from .errors import InputError, check_range, check_whole
-from .integrate import piece_rhs
-from .robot import Robot
+from ..core import model
+from ..core.curves import figure_eight, rotated_point
+from ..core.integrate import piece_rhs
+from ..errors import InputError, check_range, check_whole
+from ..problem import State
+from ..robot import Robot
+from .timing import rest_to_rest
 
-__all__ = ["Motion", "rest_to_rest", "leaf_function", "actuate", "DEFAULT_SAMPLES"]
+__all__ = ["Motion", "leaf_function", "actuate", "motion_to_dict", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF"]
 
 log = logging.getLogger(__name__)
 
@@ -87,19 +89,6 @@ DEFAULT_SAMPLES = 2000
 #: Least number of samples per leaf: a cubic spline through the rotor rates then drives the
 #: rotor-only simulation to the target within ~1e-8 R (the error falls as h^4; see the tests).
 MIN_SAMPLES_PER_LEAF = 400
-
-
-@lru_cache(maxsize=1)
-def rest_to_rest() -> ca.Function:
-    """The minimum-jerk profile ``s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5`` and its derivatives.
-
-    ``f(tau) -> (s, ds/dtau, d2s/dtau2)``; ``s(0) = 0``, ``s(1) = 1``, first
-    and second derivatives zero at both ends.
-    """
-    tau = ca.SX.sym("tau")
-    s = tau**3 * (10 - 15 * tau + 6 * tau**2)
-    ds = ca.jacobian(s, tau)
-    return ca.Function("rest_to_rest", [tau], [s, ds, ca.jacobian(ds, tau)], ["tau"], ["s", "ds", "dds"])
 
 
 @lru_cache(maxsize=4)
@@ -121,10 +110,7 @@ def leaf_function(index: int) -> ca.Function:
     phi, psi, gamma, k = (ca.SX.sym(n) for n in ("phi", "psi", "gamma", "k"))
     p = ca.SX.sym("p", 2)
     jxx, jzz, jr = ca.SX.sym("jxx"), ca.SX.sym("jzz"), ca.SX.sym("jr")
-    point = rotated_point(curve.pieces[index], phi, p, gamma)
-    u_o, v_o = model.contact_coordinates(point)
-    du, dv = ca.jacobian(u_o, phi), ca.jacobian(v_o, phi)
-    w = model.realizable_omega(u_o, v_o, psi, du, dv, k)
+    w, u_o, v_o = model.curve_omega(rotated_point(curve.pieces[index], phi, p, gamma), phi, psi, k)
     g = model.rotor_rates(w, u_o, v_o, psi, jxx, jzz, jr)
     rot = model.orientation(u_o, v_o, psi)
     a = ca.vertcat(ca.dot(rot[:, 0], w), ca.dot(rot[:, 1], w)) + g
@@ -171,7 +157,7 @@ class Motion:
         Index of the leaf (half-step) the sample belongs to, from 0 (a boundary
         sample belongs to the leaf that ends there; sample 0 to leaf 0).
     state : ndarray, shape (N, 5)
-        Contact coordinates (u_a [m], v_a [m], u_o, v_o, psi [rad]).
+        Contact coordinates in :class:`~rollplan.problem.State` order (u_a [m], v_a [m], psi, u_o, v_o [rad]).
     omega : ndarray, shape (N, 3)
         Angular velocity of the sphere in the plane frame, as in (6)-(11) [rad/s].
     rotor_rates : ndarray, shape (N, 2)
@@ -183,8 +169,8 @@ class Motion:
     robot : Robot
     duration : float
         Total time T [s].
-    target : tuple of 3 float
-        The plan's target (u_a [m], v_a [m], psi [rad]).
+    goal : State
+        The plan's goal [m, rad].
     """
 
     time: np.ndarray
@@ -198,7 +184,7 @@ class Motion:
     rotor_torques: np.ndarray
     robot: Robot
     duration: float
-    target: tuple
+    goal: State
 
     @property
     def rest_indices(self) -> np.ndarray:
@@ -220,7 +206,7 @@ def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES)
 
     Parameters
     ----------
-    plan : rollplan.Plan
+    plan : rollplan.planners.geometric.Plan
         A geometric-phase plan, made for this robot (same k and radius).
     robot : Robot
         The robot's parameters.
@@ -272,7 +258,7 @@ def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES)
     cat = {k: np.concatenate(v) for k, v in rows.items()}
     pd, pdd = cat["phi_dot"], cat["phi_ddot"]
     xs = cat["x"]
-    state = np.column_stack([xs[:, 0] * R, xs[:, 1] * R, cat["uv"], xs[:, 2]])
+    state = np.column_stack([xs[:, 0] * R, xs[:, 1] * R, xs[:, 2], cat["uv"]])
     omega = pd[:, None] * cat["w"]
     rates = pd[:, None] * cat["g"]
     torques = jr * (pdd[:, None] * cat["a"] + pd[:, None] ** 2 * cat["da"])
@@ -281,7 +267,7 @@ def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES)
     log.info("motion: %d leaves x %d samples, T = %g s, max |rotor rate| = %.3g rad/s, max |torque| = %.3g N m",
              leaves, m, duration, np.abs(rates).max(), np.abs(torques).max())
     return Motion(time, cat["phi"], pd, cat["leaf"], state, omega, rates, xs[:, 3:5], torques, robot,
-                  duration, tuple(plan.target))
+                  duration, plan.goal)
 
 
 def motion_to_dict(motion: Motion) -> dict:

@@ -1,6 +1,6 @@
 """Figures 6-12 of the paper's case study (Section III.C).
 
-Functions take results of :mod:`rollplan.reproduce` and return matplotlib
+Functions take results of :mod:`rollplan.studies.paper` and return matplotlib
 figures; they compute nothing. Conventions as in the paper: the first
 half-step (first leaf of the figure eight) in red, the second in blue; the
 contact path on the sphere (body frame, 3-D) and on the plane.
@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from .plots import draw_plane_path, draw_sphere_path
+from .common import draw_plane_path, draw_sphere_path
 
 __all__ = ["contact_figure", "shift_vs_k_figure", "shift_vs_a_figure", "case_study_figures"]
 
@@ -24,7 +24,7 @@ def contact_figure(plan, traj, title: str) -> Figure:
     plan : Plan
         The plan (a, b, k, gamma, target).
     traj : Trajectory
-        Its sampled trajectory (``plan.trajectory()``).
+        Its sampled trajectory (``plan.sample()``).
     title : str
         Figure title.
     """
@@ -34,7 +34,7 @@ def contact_figure(plan, traj, title: str) -> Figure:
     ax1.view_init(elev=-30, azim=-50)  # from below: the paths lie around the south pole
     ax1.set_title("contact path on the sphere (body frame, seen from below)", pad=18)
     ax2 = fig.add_subplot(1, 2, 2)
-    draw_plane_path(ax2, traj, plan.target, "R")
+    draw_plane_path(ax2, traj, plan.goal[:2], "R")
     ax2.plot([], [], color="tab:red", label="1st half-step")
     ax2.plot([], [], color="tab:blue", label="2nd half-step")
     ax2.legend(loc="best", fontsize=8)
@@ -117,13 +117,11 @@ def shift_vs_a_figure(sweep, level: float = 1.0, paper_roots=(), labelled: int =
     return fig
 
 
-def case_study_figures(result, paper=None) -> list:
-    """Figs 6-12 of the case study, in order, from a :class:`~rollplan.reproduce.CaseStudyResult`.
+def case_study_figures(result, paper: dict) -> list:
+    """Figs 6-12 of the case study, in order, from a :class:`~rollplan.studies.paper.CaseStudyResult`.
 
-    ``paper`` maps the keys of :data:`rollplan.reproduce.PAPER` to printed values.
+    ``paper`` maps the keys of :data:`rollplan.studies.paper.values.PAPER` to the printed values.
     """
-    if paper is None:
-        from .reproduce import PAPER as paper
     figs = []
     a_txt = f"a = {result.a0:.6f} R (paper prints a = {paper['a_k0']} R)"
     for num, key in ((6, "k0"), (7, "k2.5"), (8, "k5")):

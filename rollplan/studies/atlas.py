@@ -3,7 +3,7 @@
 One trace of the figure eight (31) with leaf radii (a, b) shifts the contact
 point by ``h(a, b)`` and turns psi by ``eta(a, b)`` (Section III.B of the
 paper; (28)-(30) integrated over one step). ``n`` traces reach the shift and
-turn (see :mod:`rollplan.geometric`)
+turn (the n-step law of :mod:`rollplan.core.plane`)
 
     H_n = h |sin(n eta / 2) / sin(eta / 2)|,   Psi_n = n eta,       (32)-(34)
 
@@ -24,10 +24,13 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from .curves import A_MAX
-from .errors import check_whole
+from ..core.curves import A_MAX
+from ..core.plane import n_step_gain
+from ..errors import check_whole
+from ..planners.geometric import default_planner
+from ..problem import check_k, check_steps
 
-__all__ = ["Atlas", "atlas_function", "compute_atlas", "atlas_to_dict", "plot_atlas", "n_step_totals"]
+__all__ = ["Atlas", "atlas_function", "compute_atlas", "atlas_to_dict", "n_step_totals"]
 
 
 @dataclass(frozen=True)
@@ -85,10 +88,7 @@ def atlas_function(step_map: ca.Function) -> ca.Function:
 def n_step_totals(h, eta, steps: int):
     """``(H_n, Psi_n)`` of n steps from (h, eta): ``h |sin(n eta/2)/sin(eta/2)|`` (limit ``n h``), ``n eta``."""
     h, eta = np.asarray(h, float), np.asarray(eta, float)
-    num, den = np.sin(steps * eta / 2), np.sin(eta / 2)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(np.abs(den) < 1e-12, float(steps), np.abs(num / den))
-    return h * ratio, steps * eta
+    return h * n_step_gain(eta, steps), steps * eta
 
 
 def compute_atlas(k: float, steps: int = 1, resolution: int = 81, planner=None, threads: int | None = None) -> Atlas:
@@ -107,11 +107,9 @@ def compute_atlas(k: float, steps: int = 1, resolution: int = 81, planner=None, 
     threads : int, optional
         Threads of the CasADi ``map`` (default: all cores).
     """
-    from .geometric import _check_k, _check_steps, _planner
-
-    k, steps = _check_k(k), _check_steps(steps)  # the planner's own limits
+    k, steps = check_k(k), check_steps(steps)  # the planner's own limits
     resolution = check_whole("resolution", resolution, 2, 1000)
-    planner = planner or _planner("ipopt")
+    planner = planner or default_planner()
     fun = _cached_atlas_function(planner)
     r = A_MAX * np.arange(1, resolution + 1) / resolution
     aa, bb = np.meshgrid(r, r, indexing="ij")
@@ -140,51 +138,3 @@ def atlas_to_dict(at: Atlas) -> dict:
             "ranges": {"h": [float(at.h.min()), float(at.h.max())], "eta": [float(at.eta.min()), float(at.eta.max())],
                        "shift_total": [float(at.shift_total.min()), float(at.shift_total.max())],
                        "turn_total": [float(at.turn_total.min()), float(at.turn_total.max())]}}
-
-
-def plot_atlas(at: Atlas):
-    """Figure of an atlas (computes nothing): h and eta over (a, b) with contours and the fold
-    ``det = 0`` (black), and the (turn, shift) pairs n steps reach (turn wrapped to (-pi, pi])."""
-    from matplotlib.colors import LogNorm, SymLogNorm
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(16, 5.2), layout="constrained")
-    axes = fig.subplots(1, 3)
-    big = float(np.abs(at.eta).max()) or 1.0
-    eta_levels = np.unique(np.concatenate([-np.geomspace(0.05, big, 12)[::-1], [0.0], np.geomspace(0.05, big, 12)]))
-    for ax, z, title, cmap, levels, norm in (
-            (axes[0], at.h, "shift of one step h(a, b) [R]", "viridis", 24, None),
-            (axes[1], at.eta, "holonomy of one step eta(a, b) [rad]", "coolwarm", eta_levels,
-             SymLogNorm(0.05, vmin=-big, vmax=big))):
-        cf = ax.contourf(at.b, at.a, z, cmap=cmap, levels=levels, norm=norm)
-        cs = ax.contour(at.b, at.a, z, colors="w", linewidths=0.5, levels=levels)
-        ax.clabel(cs, cs.levels[::3], fontsize=7, fmt="%.2g")
-        if np.nanmin(at.det) < 0 < np.nanmax(at.det):
-            ax.contour(at.b, at.a, at.det, levels=[0.0], colors="k", linewidths=1.8)
-        ax.plot([at.a[0], at.a[-1]], [at.a[0], at.a[-1]], ls=":", color="0.3", lw=0.8)
-        ax.set_xlabel("b [R]")
-        ax.set_ylabel("a [R]")
-        ax.set_title(title)
-        ax.set_aspect("equal")
-        fig.colorbar(cf, ax=ax, shrink=0.85)
-    ax = axes[2]
-    turn = np.pi - np.mod(np.pi - at.turn_total.ravel(), 2 * np.pi)
-    shift = at.shift_total.ravel()
-    hist, xe, ye = np.histogram2d(turn, shift, bins=(72, 60), range=((-np.pi, np.pi), (0.0, float(shift.max()))))
-    hist = np.where(hist > 0, hist, np.nan)
-    mesh = ax.pcolormesh(xe, ye, hist.T, cmap="cividis", norm=LogNorm())
-    fig.colorbar(mesh, ax=ax, shrink=0.85, label="grid points (a, b) landing in the cell")
-    ax.set_xlabel(f"turn psi reached by {at.steps} step(s), n eta wrapped to (-pi, pi] [rad]")
-    ax.set_ylabel(f"shift reached by {at.steps} step(s) [R]")
-    ax.set_title("reachable (turn, shift) pairs (white: none on the grid)")
-    fig.suptitle(f"Reachability atlas of the figure eight, k = {at.k:g}, n = {at.steps}")
-    return fig
-
-
-def _bilinear(z, fi, fj):
-    """z at fractional grid indices (fi, fj) by bilinear interpolation (for drawing only)."""
-    i0 = np.clip(np.floor(fi).astype(int), 0, z.shape[0] - 2)
-    j0 = np.clip(np.floor(fj).astype(int), 0, z.shape[1] - 2)
-    ti, tj = fi - i0, fj - j0
-    return ((1 - ti) * (1 - tj) * z[i0, j0] + ti * (1 - tj) * z[i0 + 1, j0]
-            + (1 - ti) * tj * z[i0, j0 + 1] + ti * tj * z[i0 + 1, j0 + 1])

@@ -1,24 +1,112 @@
-"""REPRODUCTION.md: the case-study table for people, with figures and evidence.
+"""The case study in words: the rows of the table with their notes, and REPRODUCTION.md.
 
-:func:`markdown` takes a :class:`~rollplan.reproduce.CaseStudyResult` and
-returns the text; it computes nothing.
+:func:`case_study_rows` judges every computed number against the printed one
+and writes how it was obtained; :func:`markdown` lays out the report. Both take
+the results of :mod:`.stages` and compute nothing.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["markdown"]
+from .values import PAPER, Row, row
+
+__all__ = ["case_study_rows", "markdown"]
 
 
 def _g(x, d=9):
     return f"{x:.{d}g}"
 
 
-def markdown(result, figures=(), paper=None) -> str:
+def case_study_rows(ev: dict, k_sweep, a_sweep, crossings, plans) -> tuple:
+    """One :class:`~.values.Row` per number or claim of Section III.C, with its note."""
+    a0, a_max = ev["a0"], float(a_sweep.x[-1])
+    rows = [row("a/R with h/R = 1 at k = 0", "a_k0", a0,
+                f"only root of h(a) = 1 on (0, {a_max:g}]: spectral {_g(a0, 12)}, CVODES "
+                f"{_g(ev['a0_cvodes'], 12)}, closed form (36) {_g(ev['a0_closed_form'], 12)}. At the printed "
+                f"a = {PAPER['a_k0']}: h/R = {_g(ev['h36_at_printed'], 7)} by (36), "
+                f"{_g(ev['h_spectral_at_printed'], 7)} spectral, {_g(ev['h_cvodes_at_printed'], 7)} CVODES, not 1. "
+                f"The paper's gamma, h and zeros below correspond to a = {a0:.6f}: the printed radius is a misprint."),
+            Row(f"h/R at k = 0 for the printed a = {PAPER['a_k0']} R", 1.0, ev["h_spectral_at_printed"],
+                "reproduced" if abs(ev["h_spectral_at_printed"] - 1.0) < 5e-7 else "discrepancy",
+                f"paper: 'we set a = {PAPER['a_k0']} R so that h/R = 1'. Closed form (36): "
+                f"{_g(ev['h36_at_printed'], 12)}; CVODES: {_g(ev['h_cvodes_at_printed'], 12)}."),
+            row("gamma [rad] pointing the shift along +v_a, k = 0", "gamma_k0", ev["gamma_k0"],
+                f"at a = {a0:.9f} (h/R = {ev['h_k0']:.12f}); CVODES {_g(ev['gamma_k0_cvodes'], 12)}. At the printed "
+                f"a = {PAPER['a_k0']}: {_g(ev['gamma_k0_printed_a'], 7)} (CVODES "
+                f"{_g(ev['gamma_k0_printed_a_cvodes'], 7)}).")]
+    for key in ("2.5", "5"):
+        rows.append(row(f"h/R at k = {key}, same a as for k = 0", f"h_k{key}", ev[f"h_k{key}"],
+                        f"a = {a0:.9f}: spectral {_g(ev[f'h_k{key}'], 10)}, CVODES {_g(ev[f'h_k{key}_cvodes'], 10)}. "
+                        f"At the printed a = {PAPER['a_k0']}: {_g(ev[f'h_k{key}_printed_a'], 7)} (CVODES "
+                        f"{_g(ev[f'h_k{key}_printed_a_cvodes'], 7)})."))
+    for key in ("2.5", "5"):
+        rows.append(row(f"gamma [rad] at k = {key}", f"gamma_k{key}", ev[f"gamma_k{key}"],
+                        f"a = {a0:.9f}: spectral {_g(ev[f'gamma_k{key}'], 10)}, CVODES "
+                        f"{_g(ev[f'gamma_k{key}_cvodes'], 10)}. At the printed a = {PAPER['a_k0']}: "
+                        f"{_g(ev[f'gamma_k{key}_printed_a'], 7)}."))
+    zs, zc, zp = ev["zeros_spectral"], ev["zeros_cvodes"], ev["zeros_printed_a"]
+    for i in range(5):
+        key = f"k{i + 1}"
+        if i < len(zs):
+            hk_sp, hk_cv = ev[f"h_at_printed_{key}"]
+            rp = zp[i] if i < len(zp) else float("nan")
+            rows.append(row(f"zero k_{i + 1} of h(k), same a", key, zs[i],
+                            f"a = {a0:.9f}: sign change of the signed shift refined on the spectral map "
+                            f"{_g(zs[i], 12)}, "
+                            f"on CVODES {_g(zc[i], 12)} (h/R there by CVODES {ev['h_at_zeros_cvodes'][i]:.1e}); h/R at "
+                            f"the printed k = {PAPER[key]}: {hk_sp:.3g} spectral, {hk_cv:.3g} CVODES. At the printed "
+                            f"a = {PAPER['a_k0']} the zero is at {_g(rp, 7)}."))
+        else:
+            rows.append(Row(f"zero k_{i + 1} of h(k), same a", float(PAPER[key]), float("nan"), "discrepancy",
+                            f"no zero found on k in [{k_sweep.x[0]:g}, {k_sweep.x[-1]:g}]"))
+    roots, roots_cv = a_sweep.roots, a_sweep.roots_cvodes
+    extra = ", ".join(f"{r:.6f}" for r in roots[4:])
+    for i in range(4):
+        rows.append(row(f"a_{i + 1}/R with h/R = 1 at k = 2.5 (a = b)", f"a{i + 1}", roots[i],
+                        f"spectral {_g(roots[i], 12)}, CVODES {_g(roots_cv[i], 12)}."
+                        + (f" Further roots up to a = {a_max:g} R (the paper lists four): {extra}." if i == 3 and extra
+                           else "")))
+    for i in range(2):
+        key = f"gamma_a{i + 1}"
+        rows.append(row(f"gamma [rad] for a_{i + 1}, k = 2.5", key, ev[key],
+                        f"spectral {_g(ev[key], 10)}, CVODES {_g(ev[key + '_cvodes'], 10)} (h/R by CVODES "
+                        f"{_g(ev[f'h_a{i + 1}_cvodes'], 12)})."))
+    zeros = [0.0] + list(zs)
+    for i in range(len(zeros) - 1):
+        rows_i = [c for c in crossings if c.interval == i]
+        ok = all(c.converged and c.count == i for c in rows_i)
+        worst = next((c.count for c in rows_i if c.count != i), i)
+        ks_txt = "; ".join(f"k = {c.k:.3f}: {'/'.join(map(str, c.counts))}" for c in rows_i)
+        rows.append(Row(f"self-intersections of the half-step plane path, k in [k_{i}, k_{i + 1}] = "
+                        f"[{zeros[i]:.4f}, {zeros[i + 1]:.4f}]", float(i), float(worst),
+                        "reproduced" if ok else "discrepancy",
+                        f"a = {a0:.6f}, computed zeros; crossings of the first-leaf CVODES path with "
+                        f"{'/'.join(map(str, rows_i[0].samples))} samples: {ks_txt}. Claim, no number printed."))
+    for c in (c for c in crossings if c.interval == -1):
+        rows.append(Row(f"self-intersections at k = {c.k:.4f}, inside the paper's [k_4, k_5] = "
+                        f"[{PAPER['k4']}, {PAPER['k5']}]", 4.0, float(c.count),
+                        "reproduced" if c.converged and c.count == 4 else "discrepancy",
+                        f"counts {'/'.join(map(str, c.counts))} with {'/'.join(map(str, c.samples))} samples: the path "
+                        f"has {c.count} crossings here, beyond the computed k_5 = {zs[4]:.6f} "
+                        f"(the printed k_5 is {PAPER['k5']}); the claim's count for [k_5, k_6] is 5."))
+    lengths = ev["path_length_polyline"]
+    l1, l0 = plans["a1"][0].path_length, plans["k0"][0].path_length
+    rows.append(Row("a_1 contact path shorter than the pure-rolling one (1 = yes)", 1.0, float(l1 < l0),
+                    "reproduced" if l1 < l0 else "discrepancy",
+                    f"length 2 pi n (a + b): a_1 (k = 2.5) {l1:.6f} R vs pure rolling (k = 0, a = {a0:.6f}) {l0:.6f} R "
+                    f"(ratio {l1 / l0:.4f}); polyline of the CVODES plane path: {lengths['a1']:.6f} R vs "
+                    f"{lengths['k0']:.6f} R. Claim in the paper, no number printed."))
+    shortest = all(plans["a1"][0].path_length <= 4 * np.pi * r for r in roots)
+    rows.append(Row("a_1 has the shortest contact path of the k = 2.5 solutions (1 = yes)", 1.0, float(shortest),
+                    "reproduced" if shortest else "discrepancy",
+                    "lengths 4 pi a_i R: " + ", ".join(f"{4 * np.pi * r:.4f}" for r in roots[:4])
+                    + (" ..." if len(roots) > 4 else "") + "."))
+    return tuple(rows)
+
+
+def markdown(result, figures=(), paper=PAPER) -> str:
     """The report as Markdown (``figures``: file names of Figs 6-12 to embed, in order)."""
-    if paper is None:
-        from .reproduce import PAPER as paper
     ev = result.evidence
     rows = result.rows
     n_ok = sum(r.status == "reproduced" for r in rows)
@@ -26,8 +114,8 @@ def markdown(result, figures=(), paper=None) -> str:
     L = []
     add = L.append
     add("# Reproduction of the case study (Section III.C)\n")
-    add("Svinin, Morinaga, Yamamoto: exact, dynamically realizable motion planning of a spherical robot driven by "
-        "two internal rotors. Generated by `rollplan reproduce --out DIR` (the same as "
+    add("Svinin, Morinaga, Yamamoto, *On the Geometric Phase Approach to Motion Planning for a Spherical Rolling "
+        "Robot in Dynamic Formulation*. Generated by `rollplan reproduce --out DIR` (the same as "
         "`python scripts/reproduce_paper.py DIR`); do not edit by hand.\n")
     add(f"**{n_ok} of {len(rows)} rows reproduced, {len(rows) - n_ok} discrepancies.** A number counts as reproduced "
         "when the computed value rounded to the decimals the paper prints equals the printed value. The values are "
@@ -46,7 +134,8 @@ def markdown(result, figures=(), paper=None) -> str:
         add(f"2. **The printed k_5 = {paper['k5']} is not a zero of h(k).** The fifth zero is at k_5 = {_g(k5, 9)} "
             f"(spectral and CVODES agree); h/R at the printed k_5 is {_g(ev['h_at_printed_k5'][0], 4)} "
             f"(spectral) / {_g(ev['h_at_printed_k5'][1], 4)} (CVODES). The zeros are almost evenly spaced "
-            f"(gaps {', '.join(f'{d:.4f}' for d in np.diff(result.k_sweep.roots))}); the printed value would make a gap "
+            f"(gaps {', '.join(f'{d:.4f}' for d in np.diff(result.k_sweep.roots))}); the printed value would make "
+            f"a gap "
             f"of {float(paper['k5']) - float(paper['k4']):.4f}. The self-intersection count between the computed and "
             f"the printed k_5 is already 5, which also places k_5 at {k5:.6f}.")
     a_roots = result.a_sweep.roots
@@ -114,7 +203,7 @@ def markdown(result, figures=(), paper=None) -> str:
         "length of the sampled CVODES plane path is an independent check.\n")
     add("| trajectory | a [R] | k | gamma [rad] | h [R] | 2 pi n (a + b) [R] | polyline [R] | CVODES residual |")
     add("|---|---|---|---|---|---|---|---|")
-    for name, (p, traj) in result.plans.items():
+    for name, (p, _) in result.plans.items():
         add(f"| {name} | {p.a:.6f} | {p.k:g} | {p.gamma:.6f} | {p.h:.6f} | {p.path_length:.6f} | "
             f"{ev['path_length_polyline'][name]:.6f} | {p.residual:.1e} |")
     add("")
@@ -124,7 +213,7 @@ def markdown(result, figures=(), paper=None) -> str:
         "shift lies on the axis at angle -eta_1/2 (eta_1: turn of psi over the first leaf), so the signed shift "
         "s = u_a cos(eta_1/2) - v_a sin(eta_1/2), |s| = h, changes sign at the zeros of h(k) "
         f"(checked on the sweep: max ||s| - h| = {result.k_sweep.symmetry_error:.1e}).")
-    add("* Roots are bracketed by sign changes on the sweep and refined by Illinois regula falsi on the spectral "
+    add("* Roots are bracketed by sign changes on the sweep and refined by scipy's brentq on the spectral "
         "step map (not read off the grid), then refined again on CVODES. The number of brackets is recounted on a "
         f"grid of twice the resolution: k sweep {len(result.k_sweep.roots)} / {result.k_sweep.roots_double_grid}, "
         f"a sweep {len(result.a_sweep.roots)} / {result.a_sweep.roots_double_grid}.")
@@ -135,8 +224,8 @@ def markdown(result, figures=(), paper=None) -> str:
 
     if figures:
         add("## Figures\n")
-        captions = ["Fig. 6: contact path for k = 0", "Fig. 7: contact path for k = 2.5", "Fig. 8: contact path for k = 5",
-                    "Fig. 9: h/R versus k", "Fig. 10: h/R versus a/R for k = 2.5",
+        captions = ["Fig. 6: contact path for k = 0", "Fig. 7: contact path for k = 2.5",
+                    "Fig. 8: contact path for k = 5", "Fig. 9: h/R versus k", "Fig. 10: h/R versus a/R for k = 2.5",
                     "Fig. 11: k = 2.5, solution a_1", "Fig. 12: k = 2.5, solution a_2"]
         for cap, name in zip(captions, figures):
             add(f"### {cap}\n\n![{cap}]({name})\n")

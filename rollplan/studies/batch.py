@@ -1,7 +1,7 @@
 """Batch planning: many targets from a CSV file, in parallel, one JSON line each.
 
 Every row of the targets file (columns ``u_a, v_a, psi, steps, k``; more
-columns are carried along) is planned with :func:`rollplan.geometric.plan`,
+columns are carried along) is planned with :func:`rollplan.planners.geometric.plan`,
 which solves (32)-(33) for the figure eight (31) and verifies the plan by an
 independent CVODES integration of (28)-(30). The output is JSON Lines, one
 object per row, in input order:
@@ -27,12 +27,15 @@ import multiprocessing
 import os
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
-from .errors import InputError, NoPlanError, SolverError, check_whole
-from .io import check_writable, plan_to_dict, write_atomic
+from tqdm import tqdm
+
+from ..errors import InputError, NoPlanError, SolverError, check_whole
+from ..io import check_writable, plan_to_dict, write_atomic
+from ..planners.geometric import SOLVERS, plan
 
 __all__ = ["COLUMNS", "BatchResult", "read_targets", "plan_row", "run_batch", "read_output"]
 
@@ -110,11 +113,9 @@ def _parse(row: dict):
 
 def plan_row(index: int, row: dict, method: str = "ipopt") -> dict:
     """Plan one row; the JSON object of its output line (never raises for a bad row)."""
-    from . import geometric
-
     try:
         target, steps, k = _parse(row)
-        p = geometric.plan(target, steps, k=k, method=method)
+        p = plan(target, steps, k=k, method=method)
         out = plan_to_dict(p, None, include_alternatives=False)
         out.update({"index": index, "input": row, "status": "ok"})
         return out
@@ -162,23 +163,10 @@ def _dump(d: dict) -> str:
     return json.dumps(d, allow_nan=False, separators=(",", ":")) + "\n"
 
 
-def _progress_bar(stream):
-    start = time.perf_counter()
-
-    def show(done, total, failed):
-        width = 30
-        frac = done / total if total else 1.0
-        filled = int(round(width * frac))
-        elapsed = time.perf_counter() - start
-        eta = elapsed / done * (total - done) if done else float("nan")
-        eta_txt = f"{eta:5.0f} s" if eta == eta else "    ? s"
-        stream.write(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{total}  failed {failed}  "
-                     f"elapsed {elapsed:5.0f} s  left {eta_txt}")
-        if done == total:
-            stream.write("\n")
-        stream.flush()
-
-    return show
+def _tick(bar, done: int, failed: int) -> None:
+    bar.n = done
+    bar.set_postfix(failed=failed, refresh=False)
+    bar.refresh()
 
 
 def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool = False,
@@ -198,16 +186,14 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
     overwrite : bool
         Replace an existing ``out`` (otherwise an existing file needs ``resume``).
     method : str
-        Root solver of :func:`rollplan.geometric.plan`.
+        Root solver of :func:`rollplan.planners.geometric.plan`.
     progress : callable ``(done, total, failed)``, True or None
-        Progress report after each row; True draws a bar on stderr.
+        Progress report after each row; True draws a tqdm bar on stderr.
 
     Returns
     -------
     BatchResult
     """
-    from .geometric import SOLVERS
-
     jobs = check_whole("jobs", jobs, 1)
     if method not in SOLVERS:
         raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
@@ -228,7 +214,8 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
         write_atomic(out, b"")
     have = {d["index"] for d in done_lines}
     todo = [(i, row, method) for i, row in enumerate(rows) if i not in have]
-    report = _progress_bar(sys.stderr) if progress is True else (progress or None)
+    bar = tqdm(total=len(rows), initial=len(have), unit="target", file=sys.stderr) if progress is True else None
+    report = (lambda done, total, failed: _tick(bar, done, failed)) if bar is not None else (progress or None)
     start = time.perf_counter()
     failed = 0
     done = len(have)
@@ -257,6 +244,8 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
             pool.join()
             pool = None
     finally:
+        if bar is not None:
+            bar.close()
         if pool is not None:
             pool.terminate()
             pool.join()

@@ -36,6 +36,8 @@ __all__ = [
     "inertia_ratio",
     "rotor_rates",
     "contact_coordinates",
+    "curve_contact",
+    "curve_omega",
     "curve_rhs",
     "realizable_omega",
     "contact_rhs",
@@ -84,16 +86,16 @@ def montana(omega, u_o, v_o, psi, R=1.0):
 
     Returns
     -------
-    (5,) rates of (u_a, v_a, u_o, v_o, psi).
+    (5,) rates of the state (u_a, v_a, psi, u_o, v_o): eqs. (6), (7), (10), (8), (9).
     """
     wx, wy, wz = omega[0], omega[1], omega[2]
     roll = wx * ca.sin(psi) + wy * ca.cos(psi)
     return ca.vertcat(
         R * wy,                                # (6)
         -R * wx,                               # (7)
+        -wz - roll * ca.tan(v_o),              # (10)
         -roll / ca.cos(v_o),                   # (8)
         -wx * ca.cos(psi) + wy * ca.sin(psi),  # (9)
-        -wz - roll * ca.tan(v_o),              # (10)
     )
 
 
@@ -125,7 +127,7 @@ def realizable_omega(u_o, v_o, psi, du_o, dv_o, k):
 def psi_dot_realizable(u_o, v_o, psi, du_o, dv_o, k):
     """psi-dot of a realizable motion, eq. (20), composed from (10), (13), (18), (19)."""
     w = realizable_omega(u_o, v_o, psi, du_o, dv_o, k)
-    return montana(w, u_o, v_o, psi)[4]
+    return montana(w, u_o, v_o, psi)[2]
 
 
 def inertia_ratio(radius, mass_total, mass_shell, rotor_inertia_axial, rotor_inertia_transverse):
@@ -159,14 +161,34 @@ def contact_coordinates(point, R=1.0):
     return ca.atan2(-x, -z), ca.asin(y / R)
 
 
+def curve_contact(point, theta, R=1.0):
+    """Contact coordinates along a curve and their derivatives by the curve parameter.
+
+    ``point`` is a CasADi expression in the symbol ``theta``; returns
+    ``(u_o, v_o, du_o/dtheta, dv_o/dtheta)`` by inverting (1) as in (24)-(25)
+    and differentiating automatically, which is (27).
+    """
+    u_o, v_o = contact_coordinates(point, R)
+    return u_o, v_o, ca.jacobian(u_o, theta), ca.jacobian(v_o, theta)
+
+
+def curve_omega(point, theta, psi, k, R=1.0):
+    """Angular velocity per unit rate of theta along a curve, and the contact coordinates.
+
+    The contact rates of :func:`curve_contact` in (18)-(19), with the spin from
+    the realizability condition (13). Returns ``(omega (3,), u_o, v_o)``;
+    the angular velocity of a motion along the curve is ``theta_dot`` times ``omega``.
+    """
+    u_o, v_o, du_o, dv_o = curve_contact(point, theta, R)
+    return realizable_omega(u_o, v_o, psi, du_o, dv_o, k), u_o, v_o
+
+
 def curve_rhs(point, theta, k, R=1.0):
     """Right side of the curve-parameterized ODE (28)-(30).
 
     The contact point follows ``point(theta)`` (a CasADi expression in the
-    symbol ``theta``); the state is (u_a, v_a, psi). The contact rates
-    (u_o', v_o') are the derivatives of (24)-(25) along the curve (eq. 27),
-    the angular velocity is (18)-(19) with the spin from (13), and the state
-    rates are Montana's (6), (7), (10).
+    symbol ``theta``); the state is (u_a, v_a, psi). The angular velocity is
+    :func:`curve_omega` and the state rates are Montana's (6), (7), (10).
 
     Returns
     -------
@@ -174,12 +196,8 @@ def curve_rhs(point, theta, k, R=1.0):
     psi : the state symbol psi used in ``rhs``
     """
     psi = ca.SX.sym("psi") if isinstance(theta, ca.SX) else ca.MX.sym("psi")
-    u_o, v_o = contact_coordinates(point, R)
-    du_o = ca.jacobian(u_o, theta)
-    dv_o = ca.jacobian(v_o, theta)
-    w = realizable_omega(u_o, v_o, psi, du_o, dv_o, k)
-    rates = montana(w, u_o, v_o, psi, R)
-    return ca.vertcat(rates[0], rates[1], rates[4]), psi
+    w, u_o, v_o = curve_omega(point, theta, psi, k, R)
+    return montana(w, u_o, v_o, psi, R)[:3], psi
 
 
 def contact_rhs(state, rates, k, R=1.0):
@@ -187,7 +205,7 @@ def contact_rhs(state, rates, k, R=1.0):
 
     Parameters
     ----------
-    state : (5,) (u_a, v_a, u_o, v_o, psi) [length unit of R, rad]
+    state : (5,) (u_a, v_a, psi, u_o, v_o) [length unit of R, rad]
     rates : (2,) the contact rates (u_o_dot, v_o_dot) [rad/s], the free inputs
     k : inertia ratio
 
@@ -197,7 +215,7 @@ def contact_rhs(state, rates, k, R=1.0):
     from (13), so the realizability condition holds by construction; the rates
     are Montana's (6)-(10), whose (8)-(9) give back ``rates``.
     """
-    u_o, v_o, psi = state[2], state[3], state[4]
+    psi, u_o, v_o = state[2], state[3], state[4]
     w = realizable_omega(u_o, v_o, psi, rates[0], rates[1], k)
     return montana(w, u_o, v_o, psi, R)
 

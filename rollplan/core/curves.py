@@ -15,8 +15,8 @@ converges to 1e-10 (see ``tests/test_integrate.py``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import casadi as ca
 import numpy as np

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from .plots import draw_plane_path
+from .common import draw_plane_path
 
 __all__ = ["plot_motion", "draw_time_series"]
 
@@ -29,9 +29,9 @@ def draw_time_series(ax, motion, values, labels, ylabel, title, scale=1.0):
 
 
 def plot_motion(motion, plan=None, traj=None, unit="m") -> Figure:
-    """Omega, rotor rates and torques of a :class:`rollplan.actuation.Motion` in time.
+    """Omega, rotor rates and torques of a :class:`rollplan.execution.actuation.Motion` in time.
 
-    With ``plan`` and ``traj`` (a :class:`rollplan.Trajectory`) a fourth panel
+    With ``plan`` and ``traj`` (a :class:`rollplan.result.Trajectory`) a fourth panel
     shows the contact path on the plane.
     """
     fig = Figure(figsize=(12, 8))
@@ -43,7 +43,7 @@ def plot_motion(motion, plan=None, traj=None, unit="m") -> Figure:
     draw_time_series(axes[1, 0], motion, motion.rotor_torques, ["$\\tau_1$", "$\\tau_2$"],
                      "motor torque [mN m]", "rotor torques", scale=1e3)
     if plan is not None and traj is not None:
-        draw_plane_path(axes[1, 1], traj, plan.target, unit)
+        draw_plane_path(axes[1, 1], traj, plan.goal[:2], unit)
     else:
         draw_time_series(axes[1, 1], motion, motion.rotor_angles / (2 * np.pi), ["$\\varphi_1$", "$\\varphi_2$"],
                          "rotor angle [turns]", "rotor angles")

@@ -1,0 +1,505 @@
+"""Direct-collocation optimal-control planner on the same symbolic model.
+
+Problem. On a fixed horizon ``t in [0, T]`` find contact rates
+``w(t) = (u_o_dot, v_o_dot)`` that minimize
+
+    J = int_0^T L(x, w) dt
+
+subject to the realizable contact kinematics ``x_dot = f(x, w; k)`` of
+:func:`rollplan.core.model.contact_rhs`, i.e. Montana's (6)-(10) with the
+rolling components (18)-(19) and the spin ``omega_z`` from the realizability
+condition (13), so that (13) holds by construction. The state is
+``x = (u_a, v_a, psi, u_o, v_o)``; the boundary conditions are the
+problem's start and goal states,
+
+    x(0) = start,   x(T) = goal + (0, 0, 2 pi m, 0, 0),
+
+with ``m`` (``turns``) the number of whole turns of psi, 0 by default and the
+branch of the geometric-phase plan for the warm start (same final orientation).
+The contact point stays within a polar angle ``contact_bound`` of the south
+pole (75 deg by default): (8) and the spin (13) are singular on the equator.
+
+Transcription: :mod:`.transcription` (separate from the NLP solve here). The
+NLP is built once (SX, exact Hessian) per (N, d, scheme, cost, contact bound);
+k, T and the robot inertias are NLP parameters and the boundary values are
+variable bounds, so repeated solves reuse it. IPOPT solves it.
+
+Costs, by name in :data:`.costs.COSTS` (lengths in units of R inside the NLP):
+``"path_length"`` (the energy form ``int |v|^2 dt`` of the contact path length;
+on a fixed horizon its minimizers are the shortest paths traced at constant
+speed), ``"path_length_smooth"`` (``int sqrt(eps + |v|^2) dt``),
+``"angular_velocity"`` (``int |omega|^2 dt``) and ``"rotor_effort"``
+(``int |phi_dot|^2 dt`` with the rotor rates of (11); needs a robot).
+
+Certification. Every solution is integrated again, with the optimized
+piecewise-constant controls, by CVODES at tight tolerances (independent of the
+transcription); its end point gives the certified residual to the goal, and
+CVODES quadratures give the path length and efforts that are reported. A
+solution whose residual exceeds ``verify_tol`` is never returned: SolverError
+with status ``"Verification_Failed"``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from ...core import model
+from ...errors import InputError, SolverError, check_range, check_whole
+from ...problem import Problem, State
+from ...result import Certificate, Measures, SolverStats, Trajectory
+from ...robot import Robot
+from ..geometric.planner import default_planner
+from .costs import COSTS, N_PAR, Cost
+from .transcription import SCHEMES, Guess, Transcription
+
+__all__ = ["SCHEMES", "COSTS", "GUESSES", "CONTACT_BOUND", "SMOOTHING", "TOLERANCE", "Guess",
+           "CollocationSolution", "CollocationResult", "CollocationPlanner", "collocate"]
+
+log = logging.getLogger(__name__)
+
+#: Default bound on the contact point's polar angle from the south pole [rad] (75 deg).
+#: (8) and (13) are singular on the equator (90 deg), where the spin (13) grows like
+#: 1 / cos(polar angle); unbounded, path-length optima ride that singularity.
+CONTACT_BOUND = math.radians(75.0)
+#: Default smoothing eps of the path-length integrand [(R/s)^2].
+SMOOTHING = 1e-4
+#: Default largest certified residual of a returned solution.
+TOLERANCE = 1e-6
+
+_HINTS = {
+    "Maximum_Iterations_Exceeded": "raise max_iter, or warm-start from the geometric-phase plan (guess 'warm')",
+    "Infeasible_Problem_Detected": "the boundary conditions look unreachable within the contact bound; "
+                                   "try guess 'warm', more intervals or a larger contact bound",
+    "Restoration_Failed": "IPOPT lost feasibility; try guess 'warm' or more intervals",
+    "Error_In_Step_Computation": "the KKT system is singular; try guess 'warm' or another cost",
+    "Invalid_Number_Detected": "NaN/Inf in the model: the contact point reached the equator (u_o or v_o = pi/2); "
+                               "lower the contact bound or try guess 'warm'",
+}
+
+
+@dataclass(frozen=True)
+class CollocationSolution:
+    """The NLP's solution on the collocation grid.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N + 1,)
+        Interval boundaries [s].
+    states : ndarray, shape (N + 1, 5)
+        States (u_a, v_a, psi, u_o, v_o) at ``t`` [length unit, rad].
+    t_colloc : ndarray, shape (N * d,)
+        Collocation times [s].
+    states_colloc : ndarray, shape (N * d, 5)
+        States at ``t_colloc``.
+    controls : ndarray, shape (N, 2)
+        (u_o_dot, v_o_dot), constant on each interval [rad/s].
+    objective : float
+        Optimal value of the cost as transcribed [cost unit; lengths in R].
+    max_defect : float
+        Largest violation of the NLP's constraints at the solution [units of R, rad].
+    """
+
+    t: np.ndarray
+    states: np.ndarray
+    t_colloc: np.ndarray
+    states_colloc: np.ndarray
+    controls: np.ndarray
+    objective: float
+    max_defect: float
+
+
+@dataclass(frozen=True)
+class CollocationResult:
+    """A certified direct-collocation solution (satisfies :class:`rollplan.result.PlanResult`).
+
+    Attributes
+    ----------
+    problem : Problem
+    cost : str
+        Name in :data:`COSTS`.
+    transcription : Transcription
+        N, d, scheme.
+    horizon : float
+        T [s].
+    turns : int
+        m: psi is steered to ``goal.psi + 2 pi m``.
+    guess : str
+        Name of the initial guess.
+    contact_bound : float
+        Largest polar angle of the contact point from the south pole [rad].
+    solution : CollocationSolution
+    measures : Measures
+    certificate : Certificate
+        CVODES integration with the optimized controls from the start state.
+    stats : SolverStats
+        IPOPT's status and iterations; ``time_s`` is the IPOPT call, ``details``
+        the guess and certification times.
+    trajectory : Trajectory
+        The certified motion on a uniform time grid (``parameter == "t"``;
+        ``segment`` is the collocation interval).
+    omega : ndarray, shape (M, 3)
+        Angular velocity at the samples of ``trajectory`` [rad/s], plane frame.
+    """
+
+    method = "collocation"
+
+    problem: Problem
+    cost: str
+    transcription: Transcription
+    horizon: float
+    turns: int
+    guess: str
+    contact_bound: float
+    solution: CollocationSolution
+    measures: Measures
+    certificate: Certificate
+    stats: SolverStats
+    trajectory: Trajectory
+    omega: np.ndarray
+
+    @property
+    def final(self) -> State:
+        return self.certificate.final
+
+    @property
+    def residual(self) -> float:
+        return self.certificate.residual
+
+    @property
+    def path_length(self) -> float:
+        return self.measures.path_length
+
+    def sample(self, samples: int | None = None) -> Trajectory:
+        """The certified trajectory (sampled when the result was made; ``samples`` is ignored)."""
+        return self.trajectory
+
+
+def _point_function(cost: Cost) -> ca.Function:
+    """The model at one point: ``(x, w, par) -> (xdot, L, omega)``."""
+    x = ca.SX.sym("x", 5)
+    w = ca.SX.sym("w", 2)
+    par = ca.SX.sym("par", N_PAR)
+    xdot = model.contact_rhs(x, w, par[0])
+    omega = model.realizable_omega(x[3], x[4], x[2], w[0], w[1], par[0])
+    return ca.Function("point", [x, w, par], [xdot, cost.integrand(x, w, xdot, omega, par), omega],
+                       ["x", "w", "par"], ["xdot", "L", "omega"])
+
+
+def _naive_guess(planner: CollocationPlanner, problem: Problem, start, final, horizon: float, warm_start):
+    """Straight line: every state linear in time from ``start`` to ``final``, zero rates."""
+    starts, tc = planner.transcription.grid()
+    s = np.append(starts, 1.0)
+    lerp = lambda t: start + t[..., None] * (final - start)  # noqa: E731
+    return Guess(lerp(s), lerp(tc), np.zeros((planner.transcription.intervals, 2)), "naive")
+
+
+def _geometric_plan(problem: Problem):
+    """The geometric-phase plan of the problem (the warm start)."""
+    return default_planner().solve(problem)
+
+
+def _warm_guess(planner: CollocationPlanner, problem: Problem, start, final, horizon: float, warm_start):
+    """The geometric-phase plan ``warm_start`` with theta mapped to time.
+
+    States are interpolated from the plan's samples at normalized time ``theta / (2 pi n)``;
+    the rates on each interval are the mean rates of the plan over that interval.
+    """
+    p = warm_start
+    tr = planner.transcription
+    traj = p.sample(max(200, math.ceil(2 * tr.intervals * tr.degree / (2 * p.steps))))
+    tau = traj.s / traj.s[-1]
+    cols = traj.state / np.array([p.radius, p.radius, 1.0, 1.0, 1.0])
+    interp = lambda s: np.stack([np.interp(s, tau, c) for c in cols.T], axis=-1)  # noqa: E731
+    starts, tc = tr.grid()
+    states = interp(np.append(starts, 1.0))
+    controls = np.diff(states[:, 3:5], axis=0) * tr.intervals / horizon
+    return Guess(states, interp(tc), controls, "warm")
+
+
+#: Initial guesses by name: ``make(planner, problem, start, final, horizon, warm_start) -> Guess``
+#: (start and final in units of R).
+GUESSES = {"naive": _naive_guess, "warm": _warm_guess}
+
+
+class CollocationPlanner:
+    """Direct-collocation planner (problem class): the NLP is built once.
+
+    Parameters
+    ----------
+    intervals, degree, scheme
+        The :class:`Transcription`: N >= 1, d in 1..9, ``"legendre"`` or ``"radau"``.
+    cost : str
+        Name in :data:`COSTS`.
+    contact_bound : float
+        Bound on the polar angle of the contact point from the south pole [rad],
+        in (0, pi/2): ``-z >= cos(bound)`` for the contact point (1) at every
+        collocation point and interval end (hence also ``|u_o|, |v_o| <= bound``).
+    tol : float
+        IPOPT's tolerance (also its constraint-violation tolerance), in (0, 1e-2].
+    max_iter : int
+        IPOPT's iteration limit, in [1, 100000].
+    verify_samples : int
+        Least number of points of the certified trajectory, in [1, 10^6].
+    verify_tol : float or None
+        Largest certified residual of a returned solution; a larger one raises
+        SolverError with status ``"Verification_Failed"``. None: report only.
+    """
+
+    def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre", cost: str = "path_length",
+                 contact_bound: float = CONTACT_BOUND, tol: float = 1e-10, max_iter: int = 500,
+                 verify_samples: int = 1000, verify_tol: float | None = TOLERANCE) -> None:
+        self.transcription = Transcription(intervals, degree, scheme)
+        if not isinstance(cost, str) or cost not in COSTS:
+            raise InputError(f"cost = {cost!r} is not allowed: choose one of {', '.join(COSTS)}")
+        self.cost = COSTS[cost]
+        self.contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
+        self.verify_tol = None if verify_tol is None else check_range("verify_tol", verify_tol, 0.0, None, True)
+        self.tol = check_range("tol", tol, 0.0, 1e-2, low_open=True)
+        self.max_iter = check_whole("max_iter", max_iter, 1, 100000)
+        verify_samples = check_whole("verify_samples", verify_samples, 1, 10**6)
+        self.samples_per_interval = max(1, math.ceil(verify_samples / self.transcription.intervals))
+        self.point = _point_function(self.cost)
+        x = ca.SX.sym("x", 5)
+        depth = ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])  # cos(polar angle), eq. (1)
+        t0 = time.perf_counter()
+        nlp, self._path_rows = self.transcription.nlp(self.point, depth, N_PAR)
+        opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": self.tol,
+                "ipopt.constr_viol_tol": self.tol, "ipopt.max_iter": self.max_iter, "ipopt.mu_strategy": "adaptive"}
+        self.solver = ca.nlpsol("collocation", "ipopt", nlp, opts)
+        self.build_time_s = time.perf_counter() - t0
+        self._verifier = None
+
+    # -- solve --------------------------------------------------------------------------
+    def solve(self, problem: Problem, horizon: float = 1.0, guess: str = "warm", turns: int | None = None,
+              smoothing: float = SMOOTHING, warm_start=None) -> CollocationResult:
+        """Solve the optimal-control problem for ``problem``; see :func:`collocate`.
+
+        ``guess`` names an initial guess in :data:`GUESSES`; ``warm_start`` is the
+        geometric-phase plan the ``"warm"`` guess follows (planned for the problem if None).
+        """
+        if not isinstance(guess, str) or guess not in GUESSES:
+            raise InputError(f"guess = {guess!r} is not allowed: choose one of {', '.join(GUESSES)}")
+        t0 = time.perf_counter()
+        if guess == "warm" and warm_start is None:
+            warm_start = _geometric_plan(problem)
+        if turns is None:
+            turns = warm_start.branch if warm_start is not None else 0
+        start, final = self._boundary(problem, turns)
+        horizon = check_range("horizon", horizon, 0.0, None, low_open=True)
+        g = GUESSES[guess](self, problem, start, final, horizon, warm_start)
+        return self._solve(problem, g, horizon, turns, smoothing, time.perf_counter() - t0)
+
+    def solve_from(self, problem: Problem, initial: Guess, horizon: float = 1.0, turns: int = 0,
+                   smoothing: float = SMOOTHING) -> CollocationResult:
+        """Solve from an explicit initial guess (e.g. a previous solution's arrays)."""
+        return self._solve(problem, self.transcription.check_guess(initial), horizon, turns, smoothing, 0.0)
+
+    def _boundary(self, problem: Problem, turns) -> tuple:
+        if not isinstance(problem, Problem):
+            raise InputError(f"problem = {problem!r} is not allowed: give a rollplan.Problem")
+        if self.cost.needs_robot and problem.robot is None:
+            raise InputError(f"cost = {self.cost.name!r} needs robot parameters: give a robot")
+        turns = check_whole("turns", turns)
+        start = problem.scaled(problem.start).array()
+        final = problem.scaled(problem.goal).array()
+        final[2] += 2 * math.pi * turns
+        return start, final
+
+    def _solve(self, problem, g: Guess, horizon, turns, smoothing, guess_time) -> CollocationResult:
+        start, final = self._boundary(problem, turns)
+        horizon = check_range("horizon", horizon, 0.0, None, low_open=True)
+        smoothing = check_range("smoothing", smoothing, 0.0, None)
+        tr = self.transcription
+        par = self._par(problem.k, horizon, smoothing, problem.robot)
+        c = self.contact_bound
+        lbx, ubx = tr.bounds(start, final, [np.inf, np.inf, np.inf, c, c])
+        x0 = np.clip(tr.pack(g), lbx, ubx)
+        lbg = np.where(self._path_rows, math.cos(c), 0.0)
+        ubg = np.where(self._path_rows, np.inf, 0.0)
+        t0 = time.perf_counter()
+        sol = self.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
+        solve_time = time.perf_counter() - t0
+        st = self.solver.stats()
+        status, iters = str(st["return_status"]), int(st["iter_count"])
+        where = (f"N = {tr.intervals}, d = {tr.degree}, {tr.scheme}, cost {self.cost.name}, {g.name} guess")
+        log.info("collocation %s: %s in %d iterations, %.3f s", where, status, iters, solve_time)
+        if not st["success"]:
+            hint = _HINTS.get(status, "try guess 'warm', more intervals or a longer horizon")
+            if g.name == "naive" and status in ("Infeasible_Problem_Detected", "Restoration_Failed"):
+                hint = ("the naive guess rests at the south pole, where the linearized kinematics are not "
+                        "controllable (displacement and psi need Lie brackets); use guess 'warm'")
+            raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {status} after {iters} "
+                              f"iterations; hint: {hint}", status)
+        states, colloc, controls = tr.unpack(np.array(sol["x"]).ravel())
+        t0 = time.perf_counter()
+        ver = self.verify(controls, problem.k, horizon, problem.robot, start)
+        verify_time = time.perf_counter() - t0
+        R = problem.radius
+        scale = np.array([R, R, 1.0, 1.0, 1.0])
+        fin = State(*(ver["xf"] * scale))
+        residual = problem.residual(fin)  # psi is compared as an angle: the turns do not count
+        tol = self.verify_tol if self.verify_tol is not None else math.inf
+        cert = Certificate("cvodes", fin, residual, 0.0, tol)
+        if not cert.passed:
+            raise SolverError(f"the collocation solution ({where}) misses the goal by {residual:.2e} > {tol:.0e} "
+                              f"when integrated by CVODES (IPOPT: {status}, {iters} iterations); hint: raise N or d, "
+                              f"or lower contact_bound (now {self.contact_bound:.3g} rad)", "Verification_Failed")
+        gval = np.array(sol["g"]).ravel()
+        max_defect = float(np.max(np.maximum(lbg - gval, 0.0) + np.maximum(gval - ubg, 0.0)))
+        _, tc = tr.grid()
+        solution = CollocationSolution(np.arange(tr.intervals + 1) / tr.intervals * horizon, states * scale,
+                                       tc.ravel() * horizon, colloc.reshape(-1, 5) * scale, controls,
+                                       float(sol["f"]), max_defect)
+        measures = Measures(ver["length"] * R, ver["effort"], ver["rotor"], ver["peak"])
+        traj = Trajectory(ver["t"], ver["x"] * scale, ver["segment"], R, "t")
+        stats = SolverStats("ipopt", status, iters, solve_time,
+                            {"guess_time_s": guess_time, "verify_time_s": verify_time})
+        return CollocationResult(problem=problem, cost=self.cost.name, transcription=tr, horizon=horizon,
+                                 turns=int(turns), guess=g.name, contact_bound=self.contact_bound, solution=solution,
+                                 measures=measures, certificate=cert, stats=stats, trajectory=traj, omega=ver["omega"])
+
+    @staticmethod
+    def _par(k, horizon, smoothing, robot):
+        if robot is None:
+            return np.array([k, horizon, smoothing, 1.0, 1.0, 1.0])
+        return np.array([k, horizon, smoothing, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial])
+
+    # -- certification -------------------------------------------------------------------
+    def _verify_integrator(self):
+        """CVODES over one interval of normalized length 1/N, ``samples_per_interval`` outputs.
+
+        (One call per interval, with the interval's constant rates as a
+        parameter, so that CVODES restarts at every control jump.)
+        """
+        if self._verifier is None:
+            x = ca.SX.sym("x", 5)
+            w = ca.SX.sym("w", 2)
+            par = ca.SX.sym("par", N_PAR)
+            T = par[1]
+            xdot, _, omega = self.point(x, w, par)
+            rotor = model.rotor_rates(omega, x[3], x[4], x[2], par[3], par[4], par[5])
+            quad = ca.vertcat(ca.norm_2(xdot[:2]), ca.sumsqr(omega), ca.sumsqr(rotor))
+            m = self.samples_per_interval
+            grid = list(np.arange(1, m + 1) / (m * self.transcription.intervals))
+            opts = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 100000}
+            self._verifier = ca.integrator("verify", "cvodes", {"x": x, "p": ca.vertcat(w, par), "ode": T * xdot,
+                                                                "quad": T * quad}, 0.0, grid, opts)
+            self._omega = ca.Function("omega", [x, w, par], [omega])
+        return self._verifier
+
+    def verify(self, controls, k: float, horizon: float = 1.0, robot: Robot | None = None, x0=None) -> dict:
+        """Integrate :func:`~rollplan.core.model.contact_rhs` from ``x0`` (default rest at the origin)
+        with piecewise-constant ``controls`` (N, 2) by CVODES.
+
+        Returns a dict: ``t`` (M + 1,) [s], ``x`` (M + 1, 5) states in units of R,
+        ``segment`` (M + 1,) interval of each sample, ``xf`` (5,), ``omega`` (M + 1, 3),
+        ``length`` [R], ``effort`` [rad^2/s], ``rotor`` [rad^2/s] (nan without
+        robot) and ``peak`` [rad/s].
+        """
+        F = self._verify_integrator()
+        controls = np.asarray(controls, float)
+        N = self.transcription.intervals
+        if controls.shape != (N, 2):
+            raise InputError(f"controls of shape {controls.shape} are not allowed: expected ({N}, 2)")
+        m = self.samples_per_interval
+        par = self._par(k, horizon, 0.0, robot)
+        x = np.zeros(5) if x0 is None else np.asarray(x0, float)
+        xs, q = [x[:, None]], np.zeros(3)
+        for w in controls:
+            r = F(x0=x, p=np.concatenate([w, par]))
+            xi = np.array(r["xf"])
+            xs.append(xi)
+            q += np.array(r["qf"])[:, -1]
+            x = xi[:, -1]
+        xs = np.hstack(xs)
+        M = xs.shape[1] - 1
+        u = np.repeat(controls, m, axis=0).T
+        # omega at each sample with the rate of the sample interval ending there (the first at t = 0);
+        # omega jumps with the control at interval boundaries, so the peak takes both sides
+        om = np.array(self._omega.map(M + 1)(xs, np.hstack([u[:, :1], u]), par)).T
+        om_left = np.array(self._omega.map(M)(xs[:, :-1], u, par)).T
+        peak = float(max(np.linalg.norm(om, axis=1).max(), np.linalg.norm(om_left, axis=1).max()))
+        segment = np.concatenate([[0], np.repeat(np.arange(N), m)])
+        return {"t": np.arange(M + 1) / M * horizon, "x": xs.T, "segment": segment, "xf": xs[:, -1].copy(),
+                "omega": om, "length": float(q[0]), "effort": float(q[1]),
+                "rotor": float(q[2]) if robot is not None else float("nan"), "peak": peak}
+
+    def simulate(self, controls, k: float, horizon: float = 1.0, x0=None) -> np.ndarray:
+        """The transcription as an implicit Runge-Kutta method with fixed controls (:meth:`Transcription.simulate`)."""
+        return self.transcription.simulate(self.point, N_PAR, controls, self._par(k, horizon, 0.0, None), x0)
+
+
+@lru_cache(maxsize=8)
+def _planner(intervals, degree, scheme, cost, contact_bound) -> CollocationPlanner:
+    return CollocationPlanner(intervals, degree, scheme, cost, contact_bound)
+
+
+def collocate(target, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
+              cost: str = "path_length", intervals: int = 100, degree: int = 3, scheme: str = "legendre",
+              horizon: float = 1.0, guess: str = "warm", steps: int = 1, turns: int | None = None,
+              smoothing: float = SMOOTHING, contact_bound: float = CONTACT_BOUND, start=None,
+              warm_start=None) -> CollocationResult:
+    """Optimal realizable motion to a target by direct collocation.
+
+    Minimizes ``int_0^T L dt`` subject to the contact kinematics (6)-(10) with
+    omega from (18), (19) and the realizability condition (13)
+    (:func:`rollplan.core.model.contact_rhs`), from ``start`` (default rest at
+    the origin) to ``target``.
+
+    Parameters
+    ----------
+    target : State or sequence
+        Goal: (u_a, v_a, psi) [length unit of ``radius``, rad] with the contact
+        point at the pole, or a full state (u_a, v_a, psi, u_o, v_o).
+    k : float, optional
+        Inertia ratio (14), k >= 0. Or give ``robot``.
+    robot : Robot, optional
+        Sets k and the radius; needed for ``cost="rotor_effort"``.
+    radius : float, optional
+        Sphere radius (default 1, or the robot's).
+    cost : str
+        Name in :data:`COSTS`.
+    intervals, degree, scheme
+        N, d and ``"legendre"`` or ``"radau"``.
+    horizon : float
+        T > 0 [s].
+    guess : str
+        Name in :data:`GUESSES`: ``"warm"`` plans by geometric phase (``steps``
+        traces) first, or follows ``warm_start``; ``"naive"`` is a straight line.
+    steps : int
+        Traces of the warm-start plan.
+    turns : int, optional
+        Whole turns m added to psi (default: the warm plan's branch, else 0).
+    smoothing : float
+        eps of the path-length integrand.
+    contact_bound : float
+        Bound on the contact point's polar angle from the south pole [rad].
+    start : State or sequence, optional
+        Start state (default zero).
+    warm_start : Plan, optional
+        The geometric-phase plan the warm guess follows.
+
+    Returns
+    -------
+    CollocationResult
+
+    Raises
+    ------
+    InputError
+        Bad input.
+    NoPlanError
+        No geometric-phase plan for the warm start.
+    SolverError
+        IPOPT failed; ``.status`` is its return status.
+    """
+    problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
+                      steps=steps)
+    return _planner(intervals, degree, scheme, cost, contact_bound).solve(problem, horizon, guess, turns, smoothing,
+                                                                          warm_start)

@@ -1,0 +1,217 @@
+"""Direct collocation of the realizable contact kinematics: the transcription, separate from the NLP solve.
+
+``N`` intervals of equal length in normalized time ``tau = t / T``; on each,
+the state is a polynomial of degree ``d`` through the interval's start and
+``d`` Legendre or Radau points (:func:`casadi.collocation_points`), and the
+control (the contact rates) is constant. The collocation equations on each
+interval are those of the ``d``-stage Gauss-Legendre (order ``2d``) or Radau
+IIA (order ``2d - 1``) implicit Runge-Kutta method, with the coefficients of
+:func:`casadi.collocation_coeff`; with the control held fixed the
+end-of-interval states converge at that order as ``N`` grows
+(:meth:`Transcription.simulate`, checked in the tests). The cost is integrated
+by the same quadrature.
+
+Decision variables, in order: ``X_0``, then per interval its collocation
+states (5 x d, column by column), its control (2) and ``X_{i+1}``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from ...errors import InputError, check_whole
+
+__all__ = ["SCHEMES", "Guess", "Transcription"]
+
+#: Collocation point families accepted by :func:`casadi.collocation_points`.
+SCHEMES = ("legendre", "radau")
+
+
+@dataclass(frozen=True)
+class Guess:
+    """An initial guess in units of R, normalized time on N intervals.
+
+    Attributes
+    ----------
+    states : ndarray, shape (N + 1, 5)
+        (u_a, v_a, psi, u_o, v_o) at the interval boundaries.
+    colloc : ndarray, shape (N, d, 5)
+        The state at the collocation points.
+    controls : ndarray, shape (N, 2)
+        (u_o_dot, v_o_dot) on each interval [rad/s].
+    name : str
+    """
+
+    states: np.ndarray
+    colloc: np.ndarray
+    controls: np.ndarray
+    name: str
+
+
+@dataclass(frozen=True)
+class Transcription:
+    """The collocation grid and equations: N intervals, degree d, scheme.
+
+    Parameters
+    ----------
+    intervals : int
+        N >= 1 intervals of equal length, at most 100000.
+    degree : int
+        Collocation degree d in 1..9.
+    scheme : str
+        ``"legendre"`` (Gauss points, order 2d) or ``"radau"`` (order 2d - 1).
+    """
+
+    intervals: int = 100
+    degree: int = 3
+    scheme: str = "legendre"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "intervals", check_whole("intervals", self.intervals, 1, 100000))
+        object.__setattr__(self, "degree", check_whole("degree", self.degree, 1, 9))
+        if not isinstance(self.scheme, str) or self.scheme not in SCHEMES:
+            raise InputError(f"scheme = {self.scheme!r} is not allowed: choose one of {', '.join(SCHEMES)}")
+
+    def coefficients(self):
+        """``tau`` (d + 1,) = [0, tau_1..tau_d] and :func:`casadi.collocation_coeff`'s ``C`` (d + 1, d),
+        ``D`` (d + 1,), ``B`` (d,): derivatives of the Lagrange basis at the collocation points, its
+        values at 1 (continuity) and the quadrature weights."""
+        pts = ca.collocation_points(self.degree, self.scheme)
+        C, D, B = ca.collocation_coeff(pts)
+        return np.append(0.0, pts), np.array(C), np.array(D).ravel(), np.array(B).ravel()
+
+    def interval_function(self, point: ca.Function, n_par: int) -> ca.Function:
+        """Collocation equations of one interval of normalized length h.
+
+        ``point(x, w, par) -> (xdot, L, omega)`` is the model at one point;
+        returns ``G(x0[5], xc[5 x d], w[2], h, par) -> (defect[5 x d], x_end[5], J)``
+        with ``defect_r = sum_j C[j, r] X_j - h T f(X_r, w)`` (T = par[1]).
+        """
+        d = self.degree
+        _, C, D, B = self.coefficients()
+        x0 = ca.SX.sym("x0", 5)
+        xc = ca.SX.sym("xc", 5, d)
+        w = ca.SX.sym("w", 2)
+        h = ca.SX.sym("h")
+        par = ca.SX.sym("par", n_par)
+        T = par[1]
+        X = [x0] + [xc[:, j] for j in range(d)]
+        defects = []
+        J = 0
+        x_end = D[0] * x0
+        for r in range(1, d + 1):
+            xp = sum(C[j, r - 1] * X[j] for j in range(d + 1))
+            f, L, _ = point(X[r], w, par)
+            defects.append(xp - h * T * f)
+            x_end = x_end + D[r] * X[r]
+            J = J + B[r - 1] * L * h * T
+        return ca.Function("interval", [x0, xc, w, h, par], [ca.horzcat(*defects), x_end, J],
+                           ["x0", "xc", "w", "h", "par"], ["defect", "x_end", "J"])
+
+    def nlp(self, point: ca.Function, path: ca.Function, n_par: int):
+        """The NLP of the transcription: ``({"x", "p", "f", "g"}, path_rows)``.
+
+        ``path(x) -> scalar`` is a path constraint imposed at every collocation
+        point and interval end; ``path_rows`` (bool array over g) marks its rows,
+        the others are equalities (collocation equations and continuity).
+        """
+        N, d = self.intervals, self.degree
+        G = self.interval_function(point, n_par)
+        par = ca.SX.sym("par", n_par)
+        V, g, J = [], [], 0
+        xk = ca.SX.sym("X0", 5)
+        V.append(xk)
+        for i in range(N):
+            xc = ca.SX.sym(f"XC{i}", 5, d)
+            w = ca.SX.sym(f"W{i}", 2)
+            defect, x_end, Ji = G(xk, xc, w, 1.0 / N, par)
+            xk = ca.SX.sym(f"X{i + 1}", 5)
+            V += [ca.vec(xc), w, xk]
+            g += [ca.vec(defect), x_end - xk, path.map(d)(xc).T, path(xk)]
+            J = J + Ji
+        rows = np.concatenate([np.zeros(5 * d + 5, bool), np.ones(d + 1, bool)] * N)
+        return {"x": ca.vertcat(*V), "p": par, "f": J, "g": ca.vertcat(*g)}, rows
+
+    @property
+    def _block(self) -> int:
+        return 5 * self.degree + 2 + 5  # variables per interval after X0
+
+    def pack(self, guess: Guess) -> np.ndarray:
+        """The decision vector of a guess."""
+        out = [guess.states[0]]
+        for i in range(self.intervals):
+            out += [guess.colloc[i].T.ravel(order="F"), guess.controls[i], guess.states[i + 1]]
+        return np.concatenate(out)
+
+    def unpack(self, v: np.ndarray):
+        """``(states (N + 1, 5), colloc (N, d, 5), controls (N, 2))`` of a decision vector."""
+        N, d = self.intervals, self.degree
+        states, colloc, controls = np.zeros((N + 1, 5)), np.zeros((N, d, 5)), np.zeros((N, 2))
+        states[0] = v[:5]
+        for i in range(N):
+            blk = v[5 + i * self._block: 5 + (i + 1) * self._block]
+            colloc[i] = blk[: 5 * d].reshape(d, 5)
+            controls[i] = blk[5 * d: 5 * d + 2]
+            states[i + 1] = blk[5 * d + 2:]
+        return states, colloc, controls
+
+    def bounds(self, start, final, box):
+        """Variable bounds: ``start`` and ``final`` fixed, every other state within ``+-box`` (5,)."""
+        N, d = self.intervals, self.degree
+        box = np.asarray(box, float)
+        wb = np.full(2, np.inf)
+        lb, ub = [np.asarray(start, float)], [np.asarray(start, float)]
+        for i in range(N):
+            lb += [np.tile(-box, d), -wb]
+            ub += [np.tile(box, d), wb]
+            last = i == N - 1
+            lb.append(np.asarray(final, float) if last else -box)
+            ub.append(np.asarray(final, float) if last else box)
+        return np.concatenate(lb), np.concatenate(ub)
+
+    def grid(self):
+        """Normalized times of the interval starts (N,) and of the collocation points (N, d)."""
+        N = self.intervals
+        starts = np.arange(N) / N
+        return starts, starts[:, None] + self.coefficients()[0][None, 1:] / N
+
+    def check_guess(self, g: Guess) -> Guess:
+        """``g`` if its arrays have this transcription's shapes and are finite; InputError otherwise."""
+        want = {"states": (self.intervals + 1, 5), "colloc": (self.intervals, self.degree, 5),
+                "controls": (self.intervals, 2)}
+        for name, shape in want.items():
+            arr = np.asarray(getattr(g, name), float)
+            if arr.shape != shape or not np.all(np.isfinite(arr)):
+                raise InputError(f"guess.{name} of shape {arr.shape} is not allowed: expected finite {shape}")
+        return g
+
+    def simulate(self, point: ca.Function, n_par: int, controls, par, x0=None) -> np.ndarray:
+        """Solve the collocation equations interval by interval with fixed controls.
+
+        This is the transcription used as a ``d``-stage implicit Runge-Kutta
+        method (Gauss-Legendre or Radau IIA): no optimization. Returns the
+        states at the interval boundaries, shape (N + 1, 5), units of R.
+        """
+        controls = np.asarray(controls, float)
+        N, d = controls.shape[0], self.degree
+        G = self.interval_function(point, n_par)
+        xc = ca.SX.sym("xc", 5, d)
+        x0s = ca.SX.sym("x0", 5)
+        w = ca.SX.sym("w", 2)
+        h = ca.SX.sym("h")
+        p = ca.SX.sym("par", n_par)
+        defect, x_end, _ = G(x0s, xc, w, h, p)
+        res = ca.Function("res", [ca.vec(xc), ca.vertcat(x0s, w, h, p)], [ca.vec(defect)])
+        rf = ca.rootfinder("sim", "newton", res, {"abstol": 1e-15, "abstolStep": 1e-16, "max_iter": 50,
+                                                   "error_on_fail": False})
+        end = ca.Function("end", [ca.vec(xc), x0s], [x_end])
+        x = np.zeros(5) if x0 is None else np.asarray(x0, float)
+        out = [x]
+        for i in range(N):
+            z = rf(np.tile(x, d), np.concatenate([x, controls[i], [1.0 / N], par]))
+            x = np.array(end(z, x)).ravel()
+            out.append(x)
+        return np.array(out)

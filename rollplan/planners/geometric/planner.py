@@ -1,0 +1,425 @@
+"""Geometric-phase planner: exact, dynamically realizable plans by figure eights.
+
+Problem (Section III.B of the paper). Trace the spherical figure eight
+``c(theta) = Rz(gamma) c_bar(a, b, theta)`` (31) ``n`` times so that the
+contact coordinates go from zero to ``(u_a, v_a, psi) = target``, with
+``u_o = v_o = 0`` at the end.
+
+Geometry, derived from (28)-(30) (and checked in ``tests/test_geometric.py``):
+
+* (28)-(29) are ``[u_a', v_a'] = Rot(-psi) M0 [p, q]`` and psi' does not
+  depend on the state, so a step that starts at heading ``psi0`` produces the
+  shift of a step from zero, ``D_bar(a, b)``, turned by ``-psi0``; it turns psi
+  by ``eta(a, b)``.
+* Rotating the curve by gamma about OZ conjugates the whole motion by that
+  rotation: the displacement turns by ``+gamma``, psi is unchanged.
+* Hence after ``n`` steps ``psi = n eta`` and the displacement is
+  ``Rot(gamma) sum_{j<n} Rot(-j eta) D_bar``, of length
+  ``h |sin(n eta / 2) / sin(eta / 2)|``.
+
+So, for a branch ``m`` (psi is an angle: ``n eta = psi + 2 pi m``), solve
+
+    eta(a, b) = (psi_des + 2 pi m) / n                                  (32)
+    h(a, b)   = h_des |sin(eta / 2) / sin(n eta / 2)|                   (33)
+
+(the paper's (33) has the fraction upside down in its first form; with
+``sin(eta/2) = 0`` the limit is ``h_des / n``, (34); see :mod:`rollplan.core.plane`),
+then ``gamma = arg(target) - arg(sum_j Rot(-j eta) D_bar)``.
+
+The pieces: solution branches are bracketed on tables of the two leaves (each
+leaf depends on one radius only; :mod:`.leaves`, :mod:`.brackets`), refined by
+a root solver chosen by name on the spectral step map (:mod:`.refine`), and
+certified by an independent integration of all ``n`` steps (:mod:`.certify`);
+a plan whose certified residual exceeds the tolerance is never returned.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections import Counter
+from dataclasses import dataclass, field, replace
+from functools import lru_cache
+from typing import NamedTuple
+
+import casadi as ca
+import numpy as np
+
+from ...core import model
+from ...core.curves import A_MAX, figure_eight, rotated_point
+from ...core.integrate import DEFAULT_NODES, spectral_step
+from ...core.plane import n_step_sum, wrap, wrap_exact
+from ...errors import InputError, NoPlanError, SolverError, check_finite, check_range, check_whole
+from ...problem import Problem, State, arrival_residual, check_k
+from ...result import Certificate, SolverStats, Trajectory
+from ...robot import Robot
+from .brackets import find_brackets
+from .certify import CvodesCertifier
+from .leaves import LeafTables
+from .refine import SOLVER_ERROR_STATUSES, SOLVERS, step_residual
+
+__all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
+
+log = logging.getLogger(__name__)
+
+#: Default tolerance of the certified residual (units of R and rad).
+TOLERANCE = 1e-9
+#: Brackets whose tables' model root lies within this many cell widths of the cell centre are
+#: solved first (see :func:`.brackets.cell_start`).
+_PLAUSIBLE_OFFSET = 1.5
+
+
+class _Root(NamedTuple):
+    """A root of (32)-(33) in units of R: leaf radii, rotation, branch, shift and turn of one step."""
+
+    a: float
+    b: float
+    gamma: float
+    m: int
+    h: float
+    eta: float
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """What one trace of the figure eight does, from zero initial conditions.
+
+    Attributes
+    ----------
+    a, b : float
+        Leaf radii [units of R].
+    k : float
+        Inertia ratio.
+    gamma : float
+        Rotation of the figure eight about OZ [rad].
+    shift : ndarray, shape (2,)
+        Displacement (u_a, v_a) of the contact point [units of R].
+    h : float
+        Non-holonomic shift ``|shift|`` [units of R].
+    eta : float
+        Holonomy angle, the change of psi [rad].
+    direction : float
+        Direction of the shift, ``atan2(v_a, u_a)`` [rad].
+    """
+
+    a: float
+    b: float
+    k: float
+    gamma: float
+    shift: np.ndarray
+    h: float
+    eta: float
+    direction: float
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A certified geometric-phase plan (satisfies :class:`rollplan.result.PlanResult`).
+
+    Attributes
+    ----------
+    problem : Problem
+        What was solved (goal, k, radius, steps n).
+    a, b : float
+        Leaf radii of the figure eight [length unit of the problem].
+    gamma : float
+        Rotation of the figure eight about OZ, eq. (31) [rad].
+    branch : int
+        m in ``n eta = psi + 2 pi m`` (psi as given).
+    h : float
+        Shift of one step [length unit].
+    eta : float
+        Holonomy angle of one step [rad].
+    path_length : float
+        Contact path length ``2 pi n (a + b)`` [length unit] (equal on the
+        sphere and on the plane).
+    certificate : Certificate
+        Independent integration of all n steps (:mod:`.certify`) and its residual.
+    stats : SolverStats
+        ``details`` holds ``candidates`` (brackets) and ``solves``.
+    alternatives : tuple of Plan
+        The other certified solution branches, shortest first (``all_solutions`` only).
+    """
+
+    method = "geometric"
+
+    problem: Problem
+    a: float
+    b: float
+    gamma: float
+    branch: int
+    h: float
+    eta: float
+    path_length: float
+    certificate: Certificate
+    stats: SolverStats
+    alternatives: tuple = ()
+    _planner: GeometricPhasePlanner = field(default=None, repr=False, compare=False)
+
+    @property
+    def final(self) -> State:
+        """Certified final state [length unit, rad]."""
+        return self.certificate.final
+
+    @property
+    def residual(self) -> float:
+        """Certified residual to the goal (units of R and rad)."""
+        return self.certificate.residual
+
+    @property
+    def k(self) -> float:
+        return self.problem.k
+
+    @property
+    def radius(self) -> float:
+        return self.problem.radius
+
+    @property
+    def steps(self) -> int:
+        return self.problem.steps
+
+    @property
+    def goal(self) -> State:
+        return self.problem.goal
+
+    def sample(self, samples_per_leaf: int = 200) -> Trajectory:
+        """The plan sampled by CVODES, ``samples_per_leaf`` points per leaf; ``segment`` numbers the leaves."""
+        return self._planner.sample(self, samples_per_leaf)
+
+
+class GeometricPhasePlanner:
+    """Geometric-phase planner for repeated solves (problem class).
+
+    Builds the symbolic step map once; leaf tables are cached per k.
+
+    Parameters
+    ----------
+    method : str
+        Root solver from :data:`.refine.SOLVERS`.
+    nodes : int
+        Chebyshev degree per panel of the spectral step map, in [4, 200].
+    tol : float
+        Largest certified residual a returned plan may have, in (0, 1e-3].
+    """
+
+    def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE) -> None:
+        if not isinstance(method, str) or method not in SOLVERS:
+            raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
+        self.method = method
+        self.tol = check_range("tol", tol, 0.0, 1e-3, low_open=True)
+        self.nodes = check_whole("nodes", nodes, 4, 200)
+        self.curve = figure_eight()
+        self.step_map = spectral_step(self.curve, self.nodes)
+        self.residual = step_residual(self.step_map)
+        self._solve = SOLVERS[method](self.residual)
+        self.tables = LeafTables()
+        self.certifier = CvodesCertifier()
+
+    # -- step map ------------------------------------------------------------------
+    def step(self, a: float, b: float | None = None, *, k: float, gamma: float = 0.0) -> StepResult:
+        """One trace of the figure eight (a, b) rotated by gamma, from zero state."""
+        b = a if b is None else b
+        a, b = (check_range(n, v, 0.0, A_MAX, low_open=True) for n, v in (("a", a), ("b", b)))
+        k, gamma = check_k(k), check_finite("gamma", gamma)
+        x = np.array(self.step_map(ca.DM.zeros(3), ca.vertcat(a, b), k, gamma)).ravel()
+        return StepResult(a, b, k, gamma, x[:2].copy(), float(np.hypot(*x[:2])), float(x[2]),
+                          float(np.arctan2(x[1], x[0])))
+
+    def brackets(self, k: float, h_des: float, psi: float, steps: int, fine: bool = False) -> np.ndarray:
+        """Cells bracketing roots of (32)-(33) for a shift h_des [R], psi in (-pi, pi].
+
+        See :func:`.brackets.find_brackets`.
+        """
+        return find_brackets(self.tables.cells(k, fine), h_des, psi, steps)
+
+    # -- solve -----------------------------------------------------------------------
+    def solve(self, problem: Problem, all_solutions: bool = False, branch: int | None = None) -> Plan:
+        """Plan for ``problem`` (start at rest at the origin, goal at the pole); see :func:`plan`."""
+        t_start = time.perf_counter()
+        if not isinstance(problem, Problem):
+            raise InputError(f"problem = {problem!r} is not allowed: give a rollplan.Problem")
+        if tuple(problem.start) != tuple(State()) or not problem.goal.at_pole:
+            raise InputError("the geometric-phase planner plans from rest at the origin (start = 0) to a goal "
+                             "with the contact point at the south pole (u_o = v_o = 0)")
+        if branch is not None:
+            branch = check_whole("branch", branch)
+        k, steps = problem.k, problem.steps
+        goal_r = problem.scaled(problem.goal)
+        psi_des, turns = wrap_exact(goal_r.psi)  # psi is an angle; branch numbers stay relative to psi as given
+        h_des = math.hypot(goal_r.u_a, goal_r.v_a)
+        where = problem.describe()
+        if h_des == 0.0:
+            raise NoPlanError(f"no plan for {where}: the target is the start point, and rollplan plans "
+                              "motions with a nonzero displacement")
+        brackets = self.brackets(k, h_des, psi_des, steps, fine=all_solutions)
+        if branch is not None:
+            brackets = brackets[brackets["m"] == branch + turns]
+        log.info("k=%g: %d brackets", k, len(brackets))
+        found: list = []      # certified plans, shortest first
+        seen: list = []       # (a, b, m) of every converged root, certified or not
+        rejected: list = []   # certified residuals of the roots that failed certification
+        statuses: Counter = Counter()
+        solves = 0
+        # Brackets whose model root lies well outside the cell are mostly false (parallel zero
+        # curves); the shortest plan is sought among the others first, and they are solved only
+        # for all solutions or when the others give no plan.
+        plausible = brackets["off"] <= _PLAUSIBLE_OFFSET
+        passes = [brackets] if all_solutions else [brackets[plausible], brackets[~plausible]]
+        target = (goal_r.u_a, goal_r.v_a, psi_des)
+        for rows in passes:
+            if found:
+                break
+            for br in rows:
+                m = int(br["m"])
+                if not all_solutions and found and found[0][0].a + found[0][0].b <= br["lower"]:
+                    break  # no bracket left can hold a shorter path
+                if any(sm == m and abs(sa - br["a0"]) <= br["da"] and abs(sb - br["b0"]) <= br["db"]
+                       for sa, sb, sm in seen):
+                    continue  # the root in this cell is known
+                # Solve within the bracketing cell widened by two cells each way: near A_MAX eta is
+                # steep, and an unbounded step can jump to another root and leave this one unfound.
+                box_lo = np.maximum([br["a0"] - 3 * br["da"], br["b0"] - 3 * br["db"]], 1e-6)
+                box_hi = np.minimum([br["a0"] + 3 * br["da"], br["b0"] + 3 * br["db"]], A_MAX)
+                x, status, iters, ok = self._solve([br["a_s"], br["b_s"]], [k, br["eta_m"], br["h_m"]], box_lo, box_hi)
+                solves += 1
+                statuses[str(status)] += 1
+                if not ok or any(abs(x[0] - sa) < 1e-7 and abs(x[1] - sb) < 1e-7 for sa, sb, _ in seen):
+                    continue
+                seen.append((float(x[0]), float(x[1]), m))
+                cand = self._certified(problem, x, m - turns, target, str(status), iters)
+                if not cand[1].passed:
+                    log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual %.2e > %.0e",
+                                m - turns, x[0], x[1], cand[1].residual, self.tol)
+                    rejected.append(cand[1].residual)
+                    continue
+                found.append(cand)
+                found.sort(key=lambda c: c[0].a + c[0].b)
+        elapsed = time.perf_counter() - t_start
+        if not found:
+            if rejected:
+                raise NoPlanError(f"no certified plan for {where}: {len(rejected)} root(s) of (32)-(33) found, but "
+                                  f"their certified residual (best {min(rejected):.1e}) exceeds {self.tol:.0e}; "
+                                  "try more steps")
+            errors = Counter({s: c for s, c in statuses.items() if s in SOLVER_ERROR_STATUSES})
+            if errors:
+                status = errors.most_common(1)[0][0]
+                raise SolverError(f"the root solver failed for {where} ({solves} solves from {len(brackets)} "
+                                  f"brackets, {status}); try method='newton' or more steps", status)
+            tried = ", ".join(f"{s} x{c}" for s, c in statuses.most_common(3))
+            raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R"
+                              f"{f' ({solves} bracket solves without a root: {tried})' if solves else ''}; "
+                              "try more steps")
+        details = {"candidates": int(len(brackets)), "solves": solves}
+        plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
+        return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
+
+    def _certified(self, problem, x, m, target_r, status, iters):
+        """Gamma from the geometry (module docstring), then the certificate: a tuple for :meth:`_plan`."""
+        a, b = float(x[0]), float(x[1])
+        xf = np.array(self.step_map(ca.DM.zeros(3), x, problem.k, 0)).ravel()
+        eta = float(xf[2])
+        total = complex(xf[0], xf[1]) * n_step_sum(eta, problem.steps)
+        gamma = float(wrap(math.atan2(target_r[1], target_r[0]) - math.atan2(total.imag, total.real)))
+        final_r = self.certifier.final(a, b, problem.k, gamma, problem.steps)
+        goal_r = problem.scaled(problem.goal)
+        residual = arrival_residual(final_r, State(goal_r.u_a, goal_r.v_a, target_r[2]))
+        cert = Certificate(self.certifier.name, final_r.scaled(problem.radius), residual, 0.0, self.tol)
+        stats = SolverStats(self.method, status, iters, 0.0)
+        return _Root(a, b, gamma, m, float(np.hypot(*xf[:2])), eta), cert, stats
+
+    def _plan(self, problem, cand, stats) -> Plan:
+        root, cert = cand[0], cand[1]
+        R = problem.radius
+        return Plan(problem, root.a * R, root.b * R, root.gamma, root.m, root.h * R, root.eta,
+                    2 * np.pi * problem.steps * (root.a + root.b) * R, cert, stats, (), self)
+
+    # -- sampling -------------------------------------------------------------------
+    def sample(self, p: Plan, samples_per_leaf: int = 200) -> Trajectory:
+        """Sampled trajectory of a plan (CVODES), in the plan's units; ``segment`` = 2 step + leaf."""
+        samples_per_leaf = check_whole("samples_per_leaf", samples_per_leaf, 1, 100000)
+        ab = [p.a / p.radius, p.b / p.radius]
+        phi, xs = self.certifier.integrator.trace(ab, p.k, p.gamma, p.steps, samples_per_leaf)
+        pieces = len(self.curve.pieces)
+        segment = np.arange(phi.size) // samples_per_leaf
+        leaf = segment % pieces
+        pts = np.zeros((phi.size, 3))
+        ph = ca.SX.sym("ph")
+        for j, piece in enumerate(self.curve.pieces):
+            sel = leaf == j
+            f = ca.Function("pt", [ph], [rotated_point(piece, ph, ca.DM(ab), p.gamma)]).map(int(sel.sum()))
+            pts[sel] = np.array(f(phi[sel][None, :])).T
+        theta = 2 * np.pi * (segment // pieces) + (2 * np.pi / pieces) * (leaf + phi / (2 * np.pi))
+        uv = _contact_coordinates().map(phi.size)(pts.T)
+        state = np.column_stack([xs[:, 0] * p.radius, xs[:, 1] * p.radius, xs[:, 2], np.array(uv[0]).ravel(),
+                                 np.array(uv[1]).ravel()])
+        start = np.zeros((1, 5))
+        return Trajectory(np.concatenate([[0.0], theta]), np.vstack([start, state]),
+                          np.concatenate([[0], segment]).astype(int), p.radius, "theta")
+
+
+@lru_cache(maxsize=1)
+def _contact_coordinates() -> ca.Function:
+    """``point (3,) -> (u_o, v_o)`` of (24)-(25) (:func:`rollplan.core.model.contact_coordinates`)."""
+    pt = ca.SX.sym("pt", 3)
+    return ca.Function("uv", [pt], list(model.contact_coordinates(pt)))
+
+
+@lru_cache(maxsize=4)
+def default_planner(method: str = "ipopt") -> GeometricPhasePlanner:
+    """The shared planner of :func:`plan` and :func:`step` for a root solver (built once per process)."""
+    return GeometricPhasePlanner(method)
+
+
+def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
+         all_solutions: bool = False, method: str = "ipopt", branch: int | None = None) -> Plan:
+    """Plan an exact, dynamically realizable motion by tracing a figure eight n times.
+
+    Solves (32)-(33) for the leaf radii (a, b) on every branch
+    ``n eta = psi + 2 pi m`` and the rotation gamma of (31), so that ``steps``
+    traces bring the robot from rest at the origin to ``target``.
+
+    Parameters
+    ----------
+    target : (u_a, v_a, psi)
+        Final contact point on the plane [length unit of ``radius``] and
+        contact angle [rad].
+    steps : int
+        Number of traces n >= 1.
+    k : float, optional
+        Inertia ratio (14), k >= 0 (k = 0 is pure rolling). Or give ``robot``.
+    robot : Robot, optional
+        Robot parameters; sets k and, unless given, the radius.
+    radius : float, optional
+        Sphere radius R (default 1, or the robot's).
+    all_solutions : bool
+        Also return the other certified branches in ``Plan.alternatives``.
+    method : str
+        Root solver name from :data:`.refine.SOLVERS`.
+    branch : int, optional
+        Only the branch m of ``n eta = psi + 2 pi m`` (psi as given).
+
+    Returns
+    -------
+    Plan
+        The certified plan with the shortest contact path.
+
+    Raises
+    ------
+    InputError
+        Bad input.
+    NoPlanError
+        No certified plan exists in the admissible range ``0 < a, b <= A_MAX R``.
+    SolverError
+        The root solver broke down (an internal IPOPT error; carries its status). A bracket
+        whose solve does not converge is taken to hold no root.
+    """
+    if not isinstance(method, str) or method not in SOLVERS:
+        raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
+    problem = Problem(target, k=k, robot=robot, radius=radius, steps=steps)
+    return default_planner(method).solve(problem, all_solutions, branch)
+
+
+def step(a: float, b: float | None = None, *, k: float, gamma: float = 0.0) -> StepResult:
+    """What one figure eight does: shift h(a, b), holonomy eta(a, b), eqs. (28)-(31)."""
+    return default_planner().step(a, b, k=k, gamma=gamma)
