@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import math
-from numbers import Integral
+from decimal import Decimal
+from numbers import Integral, Real
 
-__all__ = ["InputError", "NoPlanError", "SolverError", "check_finite", "check_range", "check_whole"]
+import numpy as np
+
+__all__ = ["InputError", "NoPlanError", "SolverError", "show", "check_finite", "check_range", "check_whole"]
 
 
 class InputError(ValueError):
@@ -24,14 +27,27 @@ class SolverError(RuntimeError):
         self.status = status
 
 
+def show(value, width: int = 40) -> str:
+    """``repr(value)``, shortened to ``width`` characters for a one-line message."""
+    text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
 def check_finite(name: str, value) -> float:
-    """Return ``value`` as a float, or raise InputError if it is not a finite number."""
+    """Return ``value`` as a float, or raise InputError unless it is a finite real number.
+
+    Real numbers of any type (int, float, numpy scalars, Fraction, Decimal) are
+    accepted; booleans, strings and everything else are refused.
+    """
+    scalar_array = isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf"
+    if isinstance(value, (bool, str, bytes)) or not (isinstance(value, (Real, Decimal)) or scalar_array):
+        raise InputError(f"{name} = {show(value)} is not allowed: it must be a finite real number")
     try:
         x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} = {value!r} is not a number") from None
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{name} = {show(value)} is not allowed: it must be a finite real number") from None
     if not math.isfinite(x):
-        raise InputError(f"{name} = {value!r} is not allowed: it must be a finite number")
+        raise InputError(f"{name} = {show(value)} is not allowed: it must be a finite number")
     return x
 
 
@@ -44,7 +60,7 @@ def check_range(name: str, value, low=None, high=None, low_open=False, high_open
         lo = "-inf" if low is None else f"{low:g}"
         hi = "inf" if high is None else f"{high:g}"
         span = ("(" if low_open or low is None else "[") + f"{lo}, {hi}" + (")" if high_open or high is None else "]")
-        raise InputError(f"{name} = {x:g} is not allowed: it must lie in {span}")
+        raise InputError(f"{name} = {x!r} is not allowed: it must lie in {span}")
     return x
 
 
@@ -54,8 +70,8 @@ def check_whole(name: str, value, low=None, high=None) -> int:
     Booleans are refused; so are floats, even whole-valued ones.
     """
     if isinstance(value, bool) or not isinstance(value, Integral):
-        raise InputError(f"{name} = {value!r} is not allowed: it must be a whole number")
+        raise InputError(f"{name} = {show(value)} is not allowed: it must be a whole number")
     if (low is not None and value < low) or (high is not None and value > high):
         span = f">= {low}" if high is None else (f"<= {high}" if low is None else f"in [{low}, {high}]")
-        raise InputError(f"{name} = {value!r} is not allowed: it must be a whole number {span}")
+        raise InputError(f"{name} = {show(value)} is not allowed: it must be a whole number {span}")
     return int(value)

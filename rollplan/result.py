@@ -19,7 +19,7 @@ import numpy as np
 from .core import model
 from .problem import STATE_NAMES, Problem, State
 
-__all__ = ["Certificate", "SolverStats", "Trajectory", "Measures", "PlanResult"]
+__all__ = ["Certificate", "SolverStats", "Trajectory", "Measures", "CertifiedMotion", "PlanResult"]
 
 
 @dataclass(frozen=True)
@@ -180,6 +180,32 @@ class Measures:
     rotor_effort: float
     peak_omega: float
 
+
+
+class CertifiedMotion:
+    """Base of the planners' results: what follows from their ``problem`` and ``certificate`` fields."""
+
+    @property
+    def final(self) -> State:
+        """Certified final state [length unit, rad]."""
+        return self.certificate.final
+
+    @property
+    def residual(self) -> float:
+        """Certified residual to the goal (units of R and rad)."""
+        return self.certificate.residual
+
+    @property
+    def goal(self) -> State:
+        return self.problem.goal
+
+    @property
+    def k(self) -> float:
+        return self.problem.k
+
+    @property
+    def radius(self) -> float:
+        return self.problem.radius
 
 
 @runtime_checkable

@@ -53,7 +53,7 @@ import numpy as np
 from ...core import model
 from ...errors import InputError, SolverError, check_range, check_whole
 from ...problem import Problem, State
-from ...result import Certificate, Measures, SolverStats, Trajectory
+from ...result import Certificate, CertifiedMotion, Measures, SolverStats, Trajectory
 from ...robot import Robot
 from ..geometric.planner import default_planner
 from .costs import COSTS, N_PAR, Cost
@@ -116,7 +116,7 @@ class CollocationSolution:
 
 
 @dataclass(frozen=True)
-class CollocationResult:
+class CollocationResult(CertifiedMotion):
     """A certified direct-collocation solution (satisfies :class:`rollplan.result.PlanResult`).
 
     Attributes
@@ -163,14 +163,6 @@ class CollocationResult:
     stats: SolverStats
     trajectory: Trajectory
     omega: np.ndarray
-
-    @property
-    def final(self) -> State:
-        return self.certificate.final
-
-    @property
-    def residual(self) -> float:
-        return self.certificate.residual
 
     @property
     def path_length(self) -> float:

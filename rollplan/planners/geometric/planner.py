@@ -52,7 +52,7 @@ from ...core.integrate import DEFAULT_NODES, spectral_step
 from ...core.plane import n_step_sum, wrap, wrap_exact
 from ...errors import InputError, NoPlanError, SolverError, check_finite, check_range, check_whole
 from ...problem import Problem, State, arrival_residual, check_k
-from ...result import Certificate, SolverStats, Trajectory
+from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from .brackets import find_brackets
 from .certify import CvodesCertifier
@@ -114,7 +114,7 @@ class StepResult:
 
 
 @dataclass(frozen=True)
-class Plan:
+class Plan(CertifiedMotion):
     """A certified geometric-phase plan (satisfies :class:`rollplan.result.PlanResult`).
 
     Attributes
@@ -158,30 +158,8 @@ class Plan:
     _planner: GeometricPhasePlanner = field(default=None, repr=False, compare=False)
 
     @property
-    def final(self) -> State:
-        """Certified final state [length unit, rad]."""
-        return self.certificate.final
-
-    @property
-    def residual(self) -> float:
-        """Certified residual to the goal (units of R and rad)."""
-        return self.certificate.residual
-
-    @property
-    def k(self) -> float:
-        return self.problem.k
-
-    @property
-    def radius(self) -> float:
-        return self.problem.radius
-
-    @property
     def steps(self) -> int:
         return self.problem.steps
-
-    @property
-    def goal(self) -> State:
-        return self.problem.goal
 
     def sample(self, samples_per_leaf: int = 200) -> Trajectory:
         """The plan sampled by CVODES, ``samples_per_leaf`` points per leaf; ``segment`` numbers the leaves."""
