@@ -154,7 +154,7 @@ class _Progress:
     def __call__(self, label: str, done: int, total: int) -> None:
         bar = self._bars.get(label)
         if bar is None:
-            bar = self._bars[label] = self._tqdm(total=total, desc=label, file=sys.stderr, leave=False)
+            bar = self._bars[label] = self._tqdm(total=total, desc=label, file=sys.stderr)
         bar.total = total
         bar.update(done - bar.n)
 

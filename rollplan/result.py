@@ -10,10 +10,8 @@ path length, and samples itself as a :class:`Trajectory`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import lru_cache
 from typing import Protocol, runtime_checkable
 
-import casadi as ca
 import numpy as np
 
 from .core import model
@@ -138,7 +136,7 @@ class Trajectory:
     @property
     def contact(self) -> np.ndarray:
         """Contact point on the sphere in the body frame, eq. (1), shape (N, 3) [length unit]."""
-        return np.array(_contact_function().map(self.s.size)(self.u_o[None, :], self.v_o[None, :])).T * self.radius
+        return model.contact_points(self.u_o, self.v_o) * self.radius
 
     def path_length(self) -> float:
         """Length of the sampled contact path on the plane (polyline) [length unit]."""
@@ -150,13 +148,6 @@ class Trajectory:
         d.update({n: [float(v) for v in self.state[:, i]] for i, n in enumerate(STATE_NAMES)})
         d["segment"] = [int(v) for v in self.segment]
         return d
-
-
-@lru_cache(maxsize=1)
-def _contact_function() -> ca.Function:
-    """``(u_o, v_o) -> contact point (1)`` on the unit sphere."""
-    u, v = ca.SX.sym("u"), ca.SX.sym("v")
-    return ca.Function("contact", [u, v], [model.contact_point(u, v)])
 
 
 @dataclass(frozen=True)

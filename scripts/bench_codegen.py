@@ -3,7 +3,8 @@
 Usage::
 
     python scripts/bench_codegen.py                 # timing and code size at the default steps per leaf
-    python scripts/bench_codegen.py --accuracy      # also: error vs steps per leaf (writes results/codegen_accuracy.json)
+    python scripts/bench_codegen.py --accuracy      # also: error vs steps per leaf
+                                                    # (writes results/codegen_accuracy.json)
 
 :func:`measure` is the entry point for ``scripts/benchmark.py``. Needs a C compiler (``cc``) and ``make``.
 """
@@ -119,7 +120,8 @@ def time_plans(out: Path, prefix: str = "rollplan", targets=TARGETS, reps: int =
         "@TARGETS@", ", ".join("{" + ", ".join(repr(float(x)) for x in t) + "}" for t in targets))
     (out / "bench.c").write_text(text)
     exe = out / "bench"
-    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(exe), str(out / "bench.c"), str(out / f"{prefix}_planner.c"),
+    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(exe), str(out / "bench.c"),
+                    str(out / f"{prefix}_planner.c"),
                     str(out / f"{prefix}_model.c"), "-lm"], check=True, capture_output=True)
     cold, warm, fails = subprocess.run([str(exe), str(reps)], check=True, capture_output=True, text=True).stdout.split()
     return float(cold), float(warm), int(fails)
@@ -190,7 +192,7 @@ def plan_error(steps_per_leaf: int, targets=None) -> dict:
         build(out, steps_per_leaf)
         for u, v, psi, n, k in targets:
             run = subprocess.run([str(out / "plan_demo"), *(repr(float(x)) for x in (u, v, psi)), str(n), repr(k)],
-                                 capture_output=True, text=True)
+                                 capture_output=True, text=True, check=False)
             if run.returncode:
                 return {"steps_per_leaf": steps_per_leaf, "failed": f"{(u, v, psi, n, k)}: {run.stderr.strip()}"}
             a, b, gamma, _ = (float(x) for x in run.stdout.split())
@@ -198,7 +200,7 @@ def plan_error(steps_per_leaf: int, targets=None) -> dict:
             worst = max(worst, Problem((u, v, psi), k=k, steps=n).residual(final))
             q = codegen.reference_plan((u, v, psi), n, k, near=(a, b))
             if q is not None:
-                gap = max(gap, max(abs(q.a - a), abs(q.b - b), abs(float(wrap(q.gamma - gamma)))))
+                gap = max(gap, abs(q.a - a), abs(q.b - b), abs(float(wrap(q.gamma - gamma))))
     return {"steps_per_leaf": steps_per_leaf, "verified_residual": worst, "gap_to_python": gap}
 
 

@@ -54,13 +54,14 @@ import scipy
 from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
-import bench_codegen
-import bench_collocation
 import rollplan
 from rollplan import Problem
 from rollplan.core.curves import A_MAX
 from rollplan.io import write_atomic, write_json
 from rollplan.planners import geometric
+
+import bench_codegen
+import bench_collocation
 
 K = 2.5
 #: (target (u_a, v_a, psi), steps) of the plan benchmark, all at k = K.
@@ -213,8 +214,8 @@ def section_plan(ctx):
                "residual scipy": r_scipy, "residual scipy 1e-13": r_tight, "scipy nfev": nfev,
                "|ab - ab_scipy|": math.hypot(p.a - a_s, p.b - b_s)}
         rows.append(row)
-        raw.append({"warm_s": ts, "scipy_s": ts_scipy, "scipy_tight_s": ts_tight, "cold": dict(zip(("import_ms", "first_plan_ms",
-                                                                         "plan_stats_ms", "maxrss_kb"), cold))})
+        cold_keys = ("import_ms", "first_plan_ms", "plan_stats_ms", "maxrss_kb")
+        raw.append({"warm_s": ts, "scipy_s": ts_scipy, "scipy_tight_s": ts_tight, "cold": dict(zip(cold_keys, cold))})
     warm = statistics.median(r["rollplan warm [ms]"] for r in rows)
     ratio = min(r["speed-up"] for r in rows)
     ratio_cpu = min(r["speed-up (CPU time)"] for r in rows)
@@ -383,7 +384,7 @@ def section_profile(ctx):
     plan_line = geometric.GeometricPhasePlanner.solve.__code__.co_firstlineno
     root_code = getattr(planner._solve, "__code__", None)
     root_line = root_code.co_firstlineno if root_code is not None else -1
-    for (file, line, name), (cc, nc, tt, ct, callers) in st.stats.items():
+    for (file, line, name), (_cc, _nc, _tt, ct, _callers) in st.stats.items():
         base = os.path.basename(file)
         if base in ("planner.py", "refine.py") and name == "solve":
             key = wanted[(base, name)] if line == plan_line else (
@@ -409,7 +410,8 @@ def section_collocation(ctx):
     """Collocation planner, N = 100, d = 3 (Legendre), warm start: median IPOPT time; naive-guess convergence."""
     targets = bench_collocation.TARGETS[: ctx["coll_targets"]]
     res = bench_collocation.measure(ctx["coll_repeats"], targets, K)
-    rows = [{"target (u_a, v_a, psi)": str(r["target"]), "warm: status": r["status"], "warm: iterations": r["iterations"],
+    rows = [{"target (u_a, v_a, psi)": str(r["target"]), "warm: status": r["status"],
+             "warm: iterations": r["iterations"],
              "warm: median IPOPT [s]": r["median_s"], "warm: verified residual": r["residual"],
              "naive: status": r["naive_status"], "naive: iterations": r["naive_iterations"] if r["naive_iterations"]
              is not None else "-", "naive: IPOPT [s]": r["naive_s"] if r["naive_s"] is not None else float("nan")}
@@ -454,7 +456,8 @@ def section_c_planner(ctx):
             {"quantity": "speed-up C new k vs Python first pass", "value": py_us / res["c_us_per_plan"]},
             {"quantity": "speed-up C same k vs Python second pass",
              "value": py_cached_us / res["c_us_per_plan_same_k"]},
-            {"quantity": "speed-up C same k vs Python second pass median", "value": py_median_us / res["c_us_per_plan_same_k"]},
+            {"quantity": "speed-up C same k vs Python second pass median",
+             "value": py_median_us / res["c_us_per_plan_same_k"]},
             {"quantity": "C plans failed", "value": res["c_failed_plans"]},
             {"quantity": "generated code .c + .h [bytes]", "value": res["c_code_bytes"]},
             {"quantity": "  of which the model (step map) [bytes]", "value": res["c_model_bytes"]},
@@ -464,7 +467,8 @@ def section_c_planner(ctx):
     worst = max(res["c_us_per_plan"], res["c_us_per_plan_same_k"])
     notes = [f"{res['targets']} targets (bench_codegen.TARGETS, k in 0..5, n in 1..3), {res['steps_per_leaf']} steps "
              f"per leaf; C time = mean over the targets of the best of {ctx['c_reps']} plans (cc -O2); Python time = "
-             "mean of one pass over the same targets after a warm-up on the first (IPOPT + CVODES verification), then of "
+             "mean of one pass over the same targets after a warm-up on the first (IPOPT + CVODES verification), "
+             "then of "
              "a second pass. Measured by "
              "scripts/bench_codegen.py:measure.",
              f"Slowest Python plan of the second pass: target (u, v, psi, n, k) = {bench_codegen.TARGETS[slow]}, "
@@ -502,8 +506,8 @@ def section_budgets(ctx):
     step = done.get("section_step_map", {}).get("summary")
     if step:
         best = step["best_batched_per_s"]
-        add("7", f"batched step map >= {BUDGET_STEP_EVALS:g} evaluations/s on 2 cores", f"{best:.0f}/s (best: {step['best_batched_variant']})",
-            _status(best >= BUDGET_STEP_EVALS))
+        add("7", f"batched step map >= {BUDGET_STEP_EVALS:g} evaluations/s on 2 cores",
+            f"{best:.0f}/s (best: {step['best_batched_variant']})", _status(best >= BUDGET_STEP_EVALS))
     else:
         add("7", "batched step map", "not run", "n/a")
     coll = done.get("section_collocation", {}).get("summary")
@@ -538,9 +542,10 @@ SECTIONS = [section_plan, section_step_map, section_collocation, section_c_plann
 def machine():
     model = ""
     try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                model = line.split(":", 1)[1].strip()
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    model = line.split(":", 1)[1].strip()
                 break
     except OSError:
         pass
@@ -564,7 +569,7 @@ def git_commit():
 
 def _fmt(v):
     if isinstance(v, float):
-        if v != v:
+        if math.isnan(v):
             return "n/a"
         if v == 0:
             return "0"

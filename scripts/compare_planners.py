@@ -21,12 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
-import bench_collocation
 from rollplan import NoPlanError, Problem, SolverError, plan
 from rollplan.io import save_figure, write_atomic
 from rollplan.planners.collocation import CollocationPlanner
 from rollplan.plots.compare import plot_comparison, plot_scaling
 from rollplan.studies.comparison import compare, measure_plan
+
+import bench_collocation
 
 K = 2.5
 TARGETS = [(0.3, 0.0, 0.0), (0.0, 0.5, 0.0), (0.5, 0.3, 0.4), (-0.4, 0.4, 1.0), (0.8, -0.2, -0.5),
@@ -75,7 +76,8 @@ def _status(r):
 
 def target_table(rows):
     out = ["| target (u_a, v_a, psi) | n | GP length | GP effort | GP peak w | coll. length (path cost) "
-           "| coll. effort (energy cost) | coll. peak w (path cost) | residual GP / coll. | naive guess (path / energy) |",
+           "| coll. effort (energy cost) | coll. peak w (path cost) | residual GP / coll. "
+           "| naive guess (path / energy) |",
            "|---|---|---|---|---|---|---|---|---|---|"]
     for row in rows:
         t = row["target"]
@@ -92,7 +94,8 @@ def target_table(rows):
         out.append(f"| ({t[0]:g}, {t[1]:g}, {t[2]:g}) | {row['plan'].steps} | {g.path_length:.4g} | "
                    f"{g.effort:.4g} | {g.peak_omega:.4g} | {cl} | {ce} | {pk} | {row['plan'].residual:.1e} / "
                    f"{res:.1e} | "
-                   f"{_status(row['coll']['path_length', 'naive'])} / {_status(row['coll']['angular_velocity', 'naive'])} |")
+                   f"{_status(row['coll']['path_length', 'naive'])} / "
+                   f"{_status(row['coll']['angular_velocity', 'naive'])} |")
     return out
 
 

@@ -76,21 +76,24 @@ def main():
         nominal = rollplan.simulate_rotors(robot, t, rates, plan.goal)
         h = math.hypot(*target[:2])
         lines += [
-            f"## Target (u_a, v_a, psi) = ({target[0]} m, {target[1]} m, {target[2]} rad), n = {steps}, T = {duration} s",
+            f"## Target (u_a, v_a, psi) = ({target[0]} m, {target[1]} m, {target[2]} rad), n = {steps}, "
+            f"T = {duration} s",
             "",
             f"Plan: a = {plan.a * 1e3:.3f} mm, b = {plan.b * 1e3:.3f} mm, gamma = {plan.gamma:.4f} rad, "
             f"path length {plan.path_length * 1e3:.1f} mm (distance to target {h * 1e3:.1f} mm); "
             f"{t.size} samples; max |rotor rate| {np.abs(rates).max():.1f} rad/s. "
             f"Nominal arrival error (exact robot): {nominal.arrival_error:.2e}.",
             "",
-            "| real k vs planned | real k | position error [mm] | position error [R] | heading error [deg] | error / distance |",
+            "| real k vs planned | real k | position error [mm] | position error [R] | heading error [deg] "
+            "| error / distance |",
             "|---:|---:|---:|---:|---:|---:|",
         ]
         for dk in K_ERRORS:
             real = robot_with_k(robot, robot.k * (1 + dk))
             sim = rollplan.simulate_rotors(real, t, rates, plan.goal)
             mm, deg, r = errors(sim, robot)
-            lines.append(f"| {dk * 100:+.0f} % | {real.k:.4f} | {mm:.3f} | {r:.2e} | {deg:.3f} | {mm / (h * 1e3):.1%} |")
+            lines.append(f"| {dk * 100:+.0f} % | {real.k:.4f} | {mm:.3f} | {r:.2e} | {deg:.3f} "
+                         f"| {mm / (h * 1e3):.1%} |")
         lines += ["", "| rotor rate gain error | position error [mm] | heading error [deg] |", "|---:|---:|---:|"]
         for g in GAINS:
             sim = rollplan.simulate_rotors(robot, t, rates * (1 + g), plan.goal)

@@ -1,19 +1,27 @@
-"""Shared fixtures and the independent reference for the tests.
+"""Shared fixtures; makes ``tests/references.py`` importable as ``references``.
 
-``scipy_trace`` is the paper's printed (28)-(30), (35) and Rz(gamma) (31), typed in
-numpy in ``tests/printed_rhs.py`` and integrated by scipy's DOP853: it shares no code
-with rollplan (not its model, curves or integrators). That rollplan's symbolic model
-agrees with the printed equations is tested on its own in ``tests/test_integrate.py``.
+``references`` holds the independent references of the tests: the paper's printed equations and
+closed forms in numpy, and the printed (28)-(30), (35), (31) integrated by scipy's DOP853
+(``references.trace``). It shares no code with rollplan (not its model, curves or integrators).
+That rollplan's symbolic model agrees with the printed equations is tested on its own in
+``tests/test_model.py`` and ``tests/test_integrate.py``.
 """
+
+import sys
+from pathlib import Path
 
 import pytest
 
-import printed_rhs
-from rollplan.geometric import GeometricPhasePlanner
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from rollplan.planners.geometric import GeometricPhasePlanner  # noqa: E402
+
+import references  # noqa: E402
 
 
 @pytest.fixture(scope="session")
 def planner():
+    """One geometric-phase planner for the whole session (step map and leaf tables built once)."""
     return GeometricPhasePlanner()
 
 
@@ -21,4 +29,4 @@ def planner():
 def scipy_trace():
     """Independent reference: (u_a, v_a, psi) after ``steps`` figure eights (a, b) rotated by gamma,
     from zero, by DOP853 on the printed (28)-(30), (35) (units of R, rad)."""
-    return printed_rhs.trace
+    return references.trace

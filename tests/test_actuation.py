@@ -1,10 +1,9 @@
-"""Time law, omega, rotor rates, angles and torques (rollplan.actuation).
+"""Time law, omega, rotor rates, angles and torques (rollplan.execution.timing and .actuation).
 
-References are independent of the code under test: the paper's printed n_2, n_3
-(4)-(5) in numpy (n_1 = n_2 x n_3; the printed (3) has a typo in its third
-entry, see test_paper_n1_typo), finite differences of the sampled motion, the
-full angular-momentum vector of an axisymmetric rotor, and scaling identities
-of the time law.
+References are independent of the code under test: the paper's printed n_1, n_2, n_3 (3)-(5) in
+numpy (``references.axes``; n_1 = n_2 x n_3, the printed (3) has a typo in its third entry, see
+test_paper_n1_typo), Montana's (6)-(10) as printed, finite differences of the sampled motion, the
+full angular-momentum vector of an axisymmetric rotor, and scaling identities of the time law.
 """
 
 import numpy as np
@@ -13,19 +12,18 @@ from matplotlib.figure import Figure
 
 import rollplan
 from rollplan import InputError
-from rollplan.actuation import MIN_SAMPLES_PER_LEAF, actuate, rest_to_rest
-from rollplan.plots_motion import plot_motion
+from rollplan.execution.actuation import MIN_SAMPLES_PER_LEAF, actuate
+from rollplan.execution.timing import rest_to_rest
+from rollplan.plots.motion import plot_motion
+
+import references
 
 ROBOT = rollplan.Robot()
 
 
-def paper_axes(u, v, psi):
-    """n_1, n_2, n_3 as arrays (..., 3): (4), (5) as printed, n_1 = n_2 x n_3."""
-    n2 = np.stack([np.cos(v) * np.sin(psi), np.cos(v) * np.cos(psi), -np.sin(v)], axis=-1)
-    n3 = np.stack([-np.sin(u) * np.cos(psi) + np.cos(u) * np.sin(v) * np.sin(psi),
-                   np.sin(u) * np.sin(psi) + np.cos(u) * np.sin(v) * np.cos(psi),
-                   np.cos(u) * np.cos(v)], axis=-1)
-    return np.cross(n2, n3), n2, n3
+def contact(state):
+    """(u_o, v_o, psi) columns of sampled states in State order (u_a, v_a, psi, u_o, v_o)."""
+    return state[:, 3], state[:, 4], state[:, 2]
 
 
 @pytest.fixture(scope="module")
@@ -46,14 +44,16 @@ def motion(asym_plan):
 def test_paper_n1_typo():
     """The orientation (2) used by the model has n_1 = n_2 x n_3; the printed (3) has n_1z = cos u cos v."""
     import casadi as ca
-    from rollplan import model
+
+    from rollplan.core import model
 
     u, v, psi = 0.3, -0.2, 0.7
     rot = np.array(ca.Function("r", [], [model.orientation(u, v, psi)])()["o0"])
-    n1, n2, n3 = paper_axes(u, v, psi)
-    np.testing.assert_allclose(rot, np.column_stack([n1, n2, n3]), atol=1e-15)
+    n1, n2, n3 = references.axes(u, v, psi)
+    np.testing.assert_allclose(n1, np.cross(n2, n3), atol=1e-15)
+    np.testing.assert_allclose(rot, np.column_stack([np.cross(n2, n3), n2, n3]), atol=1e-15)
     assert abs(n1[2] - np.sin(u) * np.cos(v)) < 1e-15
-    assert abs(n1[2] - np.cos(u) * np.cos(v)) > 0.5
+    assert abs(n1[2] - references.printed_n1z(u, v)) > 0.5
 
 
 def test_rest_to_rest_profile_is_minimum_jerk():
@@ -83,27 +83,26 @@ def test_omega_zero_at_rest_points(motion):
     assert np.abs(motion.rotor_torques[rest]).max() < 1e-12 * np.abs(motion.rotor_torques).max()
     assert np.abs(motion.omega).max() > 0.1  # it does move in between
     # each leaf starts at the south pole
-    assert np.abs(motion.state[rest, 2:4]).max() < 1e-12
+    assert np.abs(motion.state[rest, 3:5]).max() < 1e-12
 
 
 def test_arrives_at_target(motion, asym_plan):
-    u, v, psi = asym_plan.target
-    np.testing.assert_allclose(motion.state[-1], [u, v, 0, 0, psi], atol=1e-10)
+    g = asym_plan.goal
+    assert motion.goal == g
+    np.testing.assert_allclose(motion.state[-1], [g.u_a, g.v_a, g.psi, 0, 0], atol=1e-10)
 
 
 def test_realizability_13_along_motion(motion):
-    u, v, psi = motion.state[:, 2], motion.state[:, 3], motion.state[:, 4]
-    _, _, n3 = paper_axes(u, v, psi)
+    _, _, n3 = references.axes(*contact(motion.state))
     w = motion.omega
-    res = ROBOT.k * (n3[:, 0] * w[:, 0] + n3[:, 1] * w[:, 1]) + n3[:, 2] * w[:, 2]  # (13)
+    res = references.realizability(n3, w, ROBOT.k)  # (13)
     assert np.abs(res).max() < 1e-13 * np.abs(w).max()
     # pure rolling (omega_z = 0) would violate it: the spin is really used
     assert np.abs(w[:, 2]).max() > 0.3 * np.abs(w[:, :2]).max()
 
 
 def test_momentum_integral_11(motion):
-    u, v, psi = motion.state[:, 2], motion.state[:, 3], motion.state[:, 4]
-    n1, n2, _ = paper_axes(u, v, psi)
+    n1, n2, _ = references.axes(*contact(motion.state))
     jc_w = motion.omega * [ROBOT.j_xx, ROBOT.j_xx, ROBOT.j_zz]
     total = jc_w + ROBOT.rotor_inertia_axial * (n1 * motion.rotor_rates[:, :1] + n2 * motion.rotor_rates[:, 1:])
     assert np.abs(total).max() < 1e-14 * np.abs(jc_w).max() + 1e-18
@@ -112,10 +111,8 @@ def test_momentum_integral_11(motion):
 def test_omega_drives_the_state_by_montana(motion):
     """Finite differences of the sampled contact coordinates equal Montana's (6)-(10) with the output omega."""
     t, x, w, R = motion.time, motion.state, motion.omega, ROBOT.radius
-    v, psi = x[:, 3], x[:, 4]
-    roll = w[:, 0] * np.sin(psi) + w[:, 1] * np.cos(psi)
-    rates = np.column_stack([R * w[:, 1], -R * w[:, 0], -roll / np.cos(v),
-                             -w[:, 0] * np.cos(psi) + w[:, 1] * np.sin(psi), -w[:, 2] - roll * np.tan(v)])
+    u, v, psi = contact(x)
+    rates = references.montana(w, u, v, psi, R)
     fd = np.gradient(x, t, axis=0, edge_order=2)
     scale = np.abs(rates).max(axis=0)
     assert np.all(np.abs(fd - rates).max(axis=0) < 2e-4 * scale)
@@ -131,7 +128,7 @@ def test_torques_equal_rate_of_rotor_angular_momentum(motion):
     """tau_i = n_i . dH_i/dt with the full H_i of an axisymmetric rotor (axial J_r, transverse J_p)."""
     jr, jp = ROBOT.rotor_inertia_axial, ROBOT.rotor_inertia_transverse
     t, w = motion.time, motion.omega
-    n = paper_axes(motion.state[:, 2], motion.state[:, 3], motion.state[:, 4])
+    n = references.axes(*contact(motion.state))
     for i in range(2):
         ni = n[i]
         axial = np.sum(ni * w, axis=1)
@@ -174,7 +171,7 @@ def test_bad_input(asym_plan):
 
 
 def test_plot_motion(motion, asym_plan):
-    fig = plot_motion(motion, asym_plan, asym_plan.trajectory(20), "m")
+    fig = plot_motion(motion, asym_plan, asym_plan.sample(20), "m")
     assert isinstance(fig, Figure)
     labels = [ax.get_ylabel() for ax in fig.axes]
     assert "angular velocity [rad/s]" in labels and "rotor rate [rad/s]" in labels

@@ -1,14 +1,19 @@
+"""The reachability atlas (rollplan.studies.atlas): the step map over the admissible square, its n-step
+totals and fold, against the planner's step map, the printed (28)-(30) integrated by DOP853
+(``references.trace``), CVODES over n steps, finite differences and the mirror symmetry."""
+
 import json
 
 import numpy as np
 import pytest
 
-from rollplan import cli, geometric
-from rollplan.atlas import compute_atlas, n_step_totals
-from rollplan.curves import A_MAX
+from rollplan import cli
+from rollplan.core.curves import A_MAX
 from rollplan.errors import InputError
+from rollplan.planners import geometric
+from rollplan.studies.atlas import compute_atlas, n_step_totals
 
-from printed_rhs import trace
+import references
 
 
 @pytest.fixture(scope="module")
@@ -29,17 +34,16 @@ def test_values_match_the_step_map(atlas, i, j):
 
 
 def test_one_point_matches_scipy(atlas):
-    x = trace(atlas.a[2], atlas.b[4], 2.5)
+    x = references.trace(atlas.a[2], atlas.b[4], 2.5)
     assert atlas.h[2, 4] == pytest.approx(np.hypot(x[0], x[1]), abs=1e-9)
     assert atlas.eta[2, 4] == pytest.approx(x[2], abs=1e-9)
 
 
-def test_n_step_totals_match_an_n_step_cvodes_trace(atlas):
-    planner = geometric.GeometricPhasePlanner()
+def test_n_step_totals_match_an_n_step_cvodes_trace(atlas, planner):
     for i, j in [(1, 3), (4, 0)]:
-        final = planner.verify(atlas.a[i], atlas.b[j], 2.5, 0.0, 2)
-        assert atlas.shift_total[i, j] == pytest.approx(np.hypot(final[0], final[1]), abs=1e-9)
-        assert atlas.turn_total[i, j] == pytest.approx(final[2], abs=1e-9)
+        final = planner.certifier.final(atlas.a[i], atlas.b[j], 2.5, 0.0, 2)
+        assert atlas.shift_total[i, j] == pytest.approx(np.hypot(final.u_a, final.v_a), abs=1e-9)
+        assert atlas.turn_total[i, j] == pytest.approx(final.psi, abs=1e-9)
 
 
 def test_mirror_symmetry(atlas):
@@ -64,11 +68,20 @@ def test_n_step_totals_limit():
     assert h[0] == pytest.approx(1.5) and psi[0] == 0.0
 
 
+def test_n_step_totals_follow_33(atlas):
+    for i, j in [(0, 5), (2, 3), (5, 1)]:
+        gain = references.n_step_gain(atlas.eta[i, j], 2)
+        assert atlas.shift_total[i, j] == pytest.approx(atlas.h[i, j] * gain, rel=1e-12, abs=1e-15)
+        assert atlas.turn_total[i, j] == pytest.approx(2 * atlas.eta[i, j], rel=1e-15)
+
+
 def test_bad_input():
     with pytest.raises(InputError, match="k = -1"):
         compute_atlas(-1.0)
     with pytest.raises(InputError, match="resolution"):
         compute_atlas(1.0, resolution=1)
+    with pytest.raises(InputError, match="steps = 0"):
+        compute_atlas(1.0, steps=0)
 
 
 def test_cli_atlas(tmp_path):

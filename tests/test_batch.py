@@ -1,13 +1,15 @@
+"""Batch planning (rollplan.studies.batch): input order kept, failures recorded, interruption and resume,
+the plans checked by (36) and the printed (28)-(30) integrated by DOP853 (``references``)."""
+
 import json
 
-import numpy as np
 import pytest
 
 from rollplan import cli
-from rollplan.batch import read_output, run_batch
 from rollplan.errors import InputError
+from rollplan.studies.batch import read_output, run_batch
 
-from printed_rhs import trace
+import references
 
 ROWS = [
     # u_a, v_a, psi, steps, k, note
@@ -51,9 +53,9 @@ def test_order_kept_and_failures_recorded_in_parallel(tmp_path):
     # independent checks of a plan: (36) for k = 0 and psi = 0, and scipy on the printed (28)-(30)
     a = lines[0]["figure_eight"]["a"]
     assert lines[0]["figure_eight"]["b"] == pytest.approx(a, abs=1e-9)
-    assert 4 * a / np.sqrt(1 - a * a) * np.sin(np.pi * np.sqrt(1 - a * a)) == pytest.approx(1.0, abs=1e-9)
+    assert references.shift_36(a) == pytest.approx(1.0, abs=1e-9)
     fe = lines[1]["figure_eight"]
-    x = trace(fe["a"], fe["b"], 0.0, fe["gamma"], steps=2)
+    x = references.trace(fe["a"], fe["b"], 0.0, fe["gamma"], steps=2)
     assert x == pytest.approx([0.3, -0.4, 0.2], abs=1e-9)
 
 
@@ -90,6 +92,7 @@ def test_resume_with_a_gap_restores_input_order(tmp_path):
     check_lines([json.loads(x) for x in out.read_text().splitlines()])
 
 
+@pytest.mark.slow
 def test_cli_batch(tmp_path, capsys):
     csv_path, out = write_csv(tmp_path / "t.csv", ROWS[:3]), tmp_path / "p.jsonl"
     assert cli.main(["batch", str(csv_path), "--out", str(out)]) == 0

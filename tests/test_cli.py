@@ -1,22 +1,40 @@
-"""The rollplan command: outputs, JSON keys, exit codes, one-line errors."""
+"""The rollplan command: outputs, JSON keys, exit codes, one-line errors, output files; plan --duration,
+simulate, animate; the rules for numbers and files on the command line (bad input exits 2 in one line
+naming the value, no plan exits 3). The commands of the studies (compare, atlas, batch, reproduce,
+codegen) are tested with their subjects."""
 
 import json
+import os
 import re
+import stat
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
 
-import printed_rhs
-from rollplan.cli import main
+from rollplan import InputError, Robot, State
+from rollplan.cli import _Progress, main
+from rollplan.io import load_rotor_plan
+
+import references
 
 
 def run(capsys, *argv):
-    code = main(list(argv))
+    try:
+        code = main(list(argv))
+    except SystemExit as exc:  # argparse's own checks
+        code = exc.code
     out, err = capsys.readouterr()
     return code, out, err
 
+
+def one_line(err):
+    return len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+# ----------------------------------------------------------------------------- plan and step
 
 def test_plan_paper_case_json_and_plot(tmp_path, capsys):
     js, png = tmp_path / "p.json", tmp_path / "p.png"
@@ -48,12 +66,12 @@ def test_plan_paper_case_json_and_plot(tmp_path, capsys):
 ])
 def test_step_command_matches_printed_reference(tmp_path, capsys, argv, ab, k, gamma):
     """`rollplan step` h, eta, final (u_a, v_a, psi) and direction against an independent DOP853
-    integration of the printed (28)-(30), (35) (tests/printed_rhs.py)."""
+    integration of the printed (28)-(30), (35) (tests/references.py)."""
     js = tmp_path / "s.json"
     code, out, _ = run(capsys, "step", *argv, "--json", str(js))
     assert code == 0
     d = json.loads(js.read_text())
-    ref = printed_rhs.trace(ab[0], ab[1], k, gamma)
+    ref = references.trace(ab[0], ab[1], k, gamma)
     assert (d["a"], d["b"], d["k"], d["gamma"]) == (ab[0], ab[1], k, gamma)
     assert [d["final"]["u_a"], d["final"]["v_a"], d["final"]["psi"]] == pytest.approx(ref, abs=1e-10)
     assert d["h"] == pytest.approx(np.hypot(ref[0], ref[1]), abs=1e-10)
@@ -81,11 +99,7 @@ def test_step_command_matches_printed_reference(tmp_path, capsys, argv, ab, k, g
     (["frobnicate"], "invalid choice"),
 ])
 def test_bad_input_exits_2_with_one_line(capsys, argv, needle):
-    try:
-        code = main(argv)
-    except SystemExit as exc:  # argparse's own checks
-        code = exc.code
-    _, err = capsys.readouterr()
+    code, _, err = run(capsys, *argv)
     assert code == 2
     assert needle in err
     assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
@@ -97,7 +111,8 @@ def test_no_plan_exits_3(capsys):
 
 
 def test_console_script_no_traceback():
-    r = subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", "--k", "-3"], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", "--k", "-3"], check=False, capture_output=True,
+                       text=True)
     assert r.returncode == 2 and "Traceback" not in r.stderr and "k = -3" in r.stderr
 
 
@@ -110,11 +125,230 @@ def test_outputs_are_atomic(tmp_path, capsys):
 
 
 def test_output_files_get_the_usual_mode(tmp_path, capsys):
-    import os
-    import stat
-
     js = tmp_path / "s.json"
     run(capsys, "step", "--a", "0.3", "--k", "2.5", "--json", str(js))
     umask = os.umask(0)
     os.umask(umask)
     assert stat.S_IMODE(js.stat().st_mode) == 0o666 & ~umask
+
+
+# ----------------------------------------------------------------------------- numbers and files
+
+
+@pytest.mark.parametrize("psi", ["1e20", "-1e300"])
+def test_huge_psi_returns_quickly(psi):
+    """psi = 1e20 must not hang (nor exhaust memory): a plan (exit 0) or no plan (exit 3), in a
+    separate process with a time limit."""
+    r = subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", "--to", "0.5", "0.3", f"--psi={psi}",
+                        "--k", "2.5"], check=False, capture_output=True, text=True, timeout=120)
+    assert r.returncode in (0, 3), r.stderr
+    assert "Traceback" not in r.stderr
+    if r.returncode == 3:
+        assert one_line(r.stderr)
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["plan", "--steps", "1001"], "steps = 1001"),
+    (["plan", "--steps", "2.5"], "2.5"),
+    (["plan", "--k", "100.5"], "k = 100.5"),
+    (["plan", "--k", "1e9"], "k = 1000000000.0"),
+])
+def test_cli_rejects_steps_and_k_outside_the_rules(capsys, argv, needle):
+    code, _, err = run(capsys, *argv)
+    assert code == 2 and needle in err and one_line(err)
+
+
+def test_cli_target_at_the_start_point_exits_3(capsys):
+    code, _, err = run(capsys, "plan", "--to", "0", "0", "--psi", "1", "--k", "2.5")
+    assert code == 3 and one_line(err)
+
+
+@pytest.mark.parametrize("name,ext", [("x.unknownext", "unknownext"), ("x.json", "json")])
+def test_plot_with_unsupported_extension_exits_2_before_computing(tmp_path, capsys, name, ext):
+    """The target is unreachable (exit 3 if anything were computed): exit 2 shows the
+    extension is checked first."""
+    out = tmp_path / name
+    code, _, err = run(capsys, "plan", "--to", "30", "0", "--k", "2.5", "--plot", str(out))
+    assert code == 2 and ext in err and one_line(err)
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("argv", [["step", "--a", "0.3", "--k", "2.5", "--json"],
+                                  ["plan", "--to", "0", "1", "--k", "2.5", "--json"]])
+def test_output_path_that_is_a_fifo_exits_2(tmp_path, capsys, argv):
+    fifo = tmp_path / "out.json"
+    os.mkfifo(fifo)
+    code, _, err = run(capsys, *argv, str(fifo))
+    assert code == 2 and "out.json" in err and one_line(err)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)  # left alone
+
+
+def test_plot_path_that_is_a_fifo_exits_2(tmp_path, capsys):
+    fifo = tmp_path / "out.png"
+    os.mkfifo(fifo)
+    code, _, err = run(capsys, "plan", "--to", "0", "1", "--k", "2.5", "--plot", str(fifo))
+    assert code == 2 and "out.png" in err and one_line(err)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+
+
+def test_symlink_output_is_written_through_to_its_target(tmp_path, capsys):
+    (tmp_path / "links").mkdir()
+    (tmp_path / "data").mkdir()
+    real = tmp_path / "data" / "real.json"
+    real.write_text("old")
+    link = tmp_path / "links" / "link.json"
+    link.symlink_to(real)
+    code, _, _ = run(capsys, "step", "--a", "0.3", "--b", "0.4", "--k", "2.5", "--json", str(link))
+    assert code == 0
+    assert link.is_symlink() and os.readlink(link) == str(real)
+    d = json.loads(real.read_text())
+    ref = references.trace(0.3, 0.4, 2.5)
+    assert d["eta"] == pytest.approx(ref[2], abs=1e-10)
+    assert sorted(p.name for p in (tmp_path / "links").iterdir()) == ["link.json"]  # no temporary left
+    assert sorted(p.name for p in (tmp_path / "data").iterdir()) == ["real.json"]
+
+
+def test_relative_symlink_output_is_written_through(tmp_path, capsys, monkeypatch):
+    real = tmp_path / "real.json"
+    (tmp_path / "rel.json").symlink_to("real.json")
+    monkeypatch.chdir(tmp_path)
+    code, _, _ = run(capsys, "step", "--a", "0.3", "--k", "2.5", "--json", "rel.json")
+    assert code == 0 and (tmp_path / "rel.json").is_symlink()
+    assert json.loads(real.read_text())["a"] == 0.3
+
+
+def test_progress_bar_shows_the_count(capsys):
+    """Long commands (reproduce) draw one progress bar per label on stderr with the count done."""
+    progress = _Progress()
+    progress("h(k) sweep", 1, 3)
+    time.sleep(0.15)   # tqdm redraws at most every 0.1 s
+    progress("h(k) sweep", 3, 3)
+    progress.close()
+    err = capsys.readouterr().err
+    assert "h(k) sweep: " in err and "3/3" in err
+
+
+def test_unreadable_and_invalid_files(tmp_path, capsys):
+    assert main(["plan", "--robot", str(tmp_path / "none.toml")]) == 2
+    assert "cannot be read" in capsys.readouterr().err
+    bad = tmp_path / "bad.toml"
+    bad.write_text("radius = = 1\n")
+    assert main(["plan", "--robot", str(bad)]) == 2
+    assert "not valid TOML" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- plan --duration, simulate, animate
+
+ROBOT_TOML = """radius = 0.15
+mass_total = 2.0
+mass_shell = 0.6
+rotor_inertia_axial = 4.0e-4
+rotor_inertia_transverse = 2.5e-4
+"""
+
+
+@pytest.fixture(scope="module")
+def planned(tmp_path_factory):
+    d = tmp_path_factory.mktemp("plan")
+    robot = d / "robot.toml"
+    robot.write_text(ROBOT_TOML)
+    out = d / "plan.json"
+    code = main(["plan", "--robot", str(robot), "--to", "0.06", "0.1", "--psi", "0.4", "--steps", "2",
+                 "--duration", "12", "--json", str(out), "--plot", str(d / "motion.png")])
+    assert code == 0
+    return d, robot, out, json.loads(out.read_text())
+
+
+def test_plan_json_has_the_motion(planned):
+    d, _, _, data = planned
+    n = len(data["time"])
+    assert n >= 2000
+    for key, cols in (("omega", 3), ("rotor_rates", 2), ("rotor_angles", 2), ("rotor_torques", 2)):
+        assert np.asarray(data[key]).shape == (n, cols)
+    rob = Robot(0.15, 2.0, 0.6, 4.0e-4, 2.5e-4)
+    assert data["robot"] == {**{k: getattr(rob, k) for k in ("radius", "mass_total", "mass_shell",
+                                                             "rotor_inertia_axial", "rotor_inertia_transverse")},
+                             "k": rob.k}
+    assert data["k"] == rob.k and data["time"][-1] == 12.0
+    # --to in metres
+    assert data["final"]["u_a"] == pytest.approx(0.06, abs=1e-10)
+    assert data["final"]["v_a"] == pytest.approx(0.1, abs=1e-10)
+    assert data["rotor_simulation"]["arrival_error"] < 1e-6
+    assert (d / "motion.png").stat().st_size > 10000
+    # the motion's states in State order (u_a, v_a, psi, u_o, v_o), at rest at the goal at the end
+    state = np.asarray(data["state"])
+    assert state.shape == (n, 5)
+    assert state[-1] == pytest.approx([0.06, 0.1, 0.4, 0.0, 0.0], abs=1e-10)
+    assert np.array_equal(state[0], np.zeros(5))
+
+
+def test_load_rotor_plan_reads_what_plan_duration_wrote(planned):
+    _, _, out, data = planned
+    rp = load_rotor_plan(out)
+    assert rp.goal == State(0.06, 0.1, 0.4)
+    assert rp.robot == Robot(0.15, 2.0, 0.6, 4.0e-4, 2.5e-4)
+    assert np.array_equal(rp.time, data["time"]) and np.array_equal(rp.rotor_rates, data["rotor_rates"])
+    assert rp.data == data
+
+
+@pytest.mark.parametrize("text, match", [(None, "cannot be read"), ("{", "not valid JSON"), ("[1, 2]", "JSON object"),
+                                         ('{"time": [0, 1]}', "no key 'rotor_rates'")])
+def test_load_rotor_plan_refuses_other_files(tmp_path, text, match):
+    path = tmp_path / "plan.json"
+    if text is not None:
+        path.write_text(text)
+    with pytest.raises(InputError, match=match) as err:
+        load_rotor_plan(path)
+    assert "\n" not in str(err.value)
+
+
+def test_simulate_reports_arrival_error(planned, capsys):
+    d, _, out, _ = planned
+    capsys.readouterr()
+    assert main(["simulate", str(out), "--json", str(d / "sim.json")]) == 0
+    text = capsys.readouterr().out
+    err = float(re.search(r"arrival error (\S+)", text).group(1))
+    assert err < 1e-6
+    assert json.loads((d / "sim.json").read_text())["arrival_error"] == pytest.approx(err, rel=1e-3)
+
+
+def test_simulate_other_robot(planned, tmp_path, capsys):
+    _, _, out, _ = planned
+    other = tmp_path / "other.toml"
+    other.write_text(ROBOT_TOML.replace("mass_total = 2.0", "mass_total = 2.2"))
+    capsys.readouterr()
+    assert main(["simulate", str(out), "--robot", str(other)]) == 0
+    err = float(re.search(r"arrival error (\S+)", capsys.readouterr().out).group(1))
+    assert err > 1e-3
+
+
+def test_default_robot_when_no_file(tmp_path, capsys):
+    out = tmp_path / "p.json"
+    assert main(["plan", "--to", "0", "0.1", "--duration", "5", "--json", str(out)]) == 0
+    assert "default robot" in capsys.readouterr().out
+    assert json.loads(out.read_text())["robot"]["radius"] == Robot().radius
+
+
+def test_duration_errors(capsys, tmp_path):
+    assert main(["plan", "--k", "2.5", "--duration", "5"]) == 2
+    assert "--robot" in capsys.readouterr().err
+    assert main(["plan", "--to", "0", "0.1", "--duration", "-1"]) == 2
+    assert "duration" in capsys.readouterr().err
+    plain = tmp_path / "plain.json"
+    assert main(["plan", "--k", "2.5", "--json", str(plain)]) == 0
+    capsys.readouterr()
+    assert main(["simulate", str(plain)]) == 2
+    err = capsys.readouterr().err
+    assert "'time'" in err and "--duration" in err
+    assert main(["simulate", str(tmp_path / "missing.json")]) == 2
+    assert main(["animate", str(plain), "--out", str(tmp_path / "a.gif")]) == 2
+
+
+def test_animate_writes_a_gif(planned, tmp_path):
+    _, _, out, _ = planned
+    gif = tmp_path / "roll.gif"
+    assert main(["animate", str(out), "--out", str(gif), "--frames", "3"]) == 0
+    from PIL import Image
+
+    assert gif.read_bytes()[:6] in (b"GIF89a", b"GIF87a")
+    assert Image.open(gif).n_frames == 3

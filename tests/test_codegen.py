@@ -1,4 +1,5 @@
-"""Generated C library: compiled with gcc, compared with its symbolic twins and independent references."""
+"""Generated C library (rollplan.codegen): compiled with gcc, compared with its symbolic twins and
+independent references."""
 
 from __future__ import annotations
 
@@ -10,10 +11,14 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from rollplan import codegen, geometric, model
+from rollplan import codegen
 from rollplan.cli import main
-from rollplan.curves import A_MAX, figure_eight
-from rollplan.integrate import CvodesIntegrator, piece_rhs, spectral_step
+from rollplan.codegen.c_library import TABLE_STEPS_PER_LEAF, generated_functions, reference_plan, table_radii
+from rollplan.core import model
+from rollplan.core.curves import figure_eight
+from rollplan.core.integrate import CvodesIntegrator, spectral_step
+
+import references
 
 pytestmark = pytest.mark.skipif(shutil.which("make") is None or shutil.which("cc") is None,
                                 reason="needs make and a C compiler")
@@ -26,14 +31,15 @@ DEGREE = STEPS // (len(figure_eight().pieces[0].breaks) - 1)
 def built(tmp_path_factory):
     out = tmp_path_factory.mktemp("c") / "planner"
     g = codegen.generate(out)
-    run = subprocess.run(["make", "-C", str(out), "plan_demo", "librollplan.so"], capture_output=True, text=True)
+    run = subprocess.run(["make", "-C", str(out), "plan_demo", "librollplan.so"], check=False, capture_output=True,
+                         text=True)
     assert run.returncode == 0, run.stderr
     return g
 
 
 @pytest.fixture(scope="module")
 def twins():
-    return {f.name(): f for f in codegen.generated_functions()}
+    return {f.name(): f for f in generated_functions()}
 
 
 def external(built, name):
@@ -41,7 +47,7 @@ def external(built, name):
 
 
 def demo(built, *args):
-    return subprocess.run([str(built.out / "plan_demo"), *map(str, args)], capture_output=True, text=True)
+    return subprocess.run([str(built.out / "plan_demo"), *map(str, args)], check=False, capture_output=True, text=True)
 
 
 def test_build_uses_strict_c99_flags_and_no_malloc(built):
@@ -143,25 +149,13 @@ def test_leaf_table_matches_twin_and_single_leaves(built, twins):
     got = _values(table, (2.5,))
     for g, w in zip(got, _values(twins["rollplan_leaf_table"], (2.5,))):
         np.testing.assert_allclose(g, w, rtol=1e-13, atol=1e-13)
-    radii = codegen.table_radii()
-    degree = codegen.TABLE_STEPS_PER_LEAF // (len(figure_eight().pieces[0].breaks) - 1)
+    radii = table_radii()
+    degree = TABLE_STEPS_PER_LEAF // (len(figure_eight().pieces[0].breaks) - 1)
     for i in range(2):
         leaf = spectral_step(figure_eight(), degree, pieces=(i,))
         for j in (0, len(radii) // 2, len(radii) - 1):
             p = [radii[j], radii[j]]
             np.testing.assert_allclose(got[i][:, j], np.array(leaf(ca.DM.zeros(3), p, 2.5, 0)).ravel(), atol=1e-12)
-
-
-def test_rotation_structure_of_curve_ode():
-    """(28)-(29) are Rot(-psi) applied to their value at psi = 0, and psi' has no psi (the loop relies on it)."""
-    f = piece_rhs(figure_eight(), 1)
-    rng = np.random.default_rng(4)
-    for _ in range(10):
-        phi, a, b, k, psi = rng.uniform(0, 2 * np.pi), *rng.uniform(0.05, A_MAX, 2), rng.uniform(0, 8), rng.uniform(-9, 9)
-        at0 = np.array(f(phi, [0, 0, 0], [a, b], k, 0)).ravel()
-        at = np.array(f(phi, [0.3, -0.2, psi], [a, b], k, 0)).ravel()
-        c, s = np.cos(psi), np.sin(psi)
-        np.testing.assert_allclose(at, [c * at0[0] + s * at0[1], -s * at0[0] + c * at0[1], at0[2]], atol=1e-12)
 
 
 TARGETS = [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 1, 2.5), (2.0, 1.0, 1.0, 3, 2.5)]
@@ -170,32 +164,34 @@ SLOW_TARGETS = [(0.5, 0.5, -2.0, 2, 2.5), (0.0, 1.0, 0.0, 1, 0.0), (-0.4, 0.8, 0
                 (1.5, 0.0, 0.0, 3, 2.5)]                            # psi = 0, n > 1: the limit h_des / n (34)
 
 
-def _check_plan(built, target):
+def _check_plan(built, planner, target):
     u, v, psi, n, k = target
     run = demo(built, u, v, psi, n, k)
     assert run.returncode == 0, run.stderr
     a, b, gamma, residual = (float(x) for x in run.stdout.split())
     assert residual < 1e-10
     # exact when integrated accurately (CVODES, independent of the step map)
-    planner = geometric.GeometricPhasePlanner()
-    final = planner.verify(a, b, k, gamma, n)
-    err = [final[0] - u, final[1] - v, float(geometric.wrap(final[2] - psi)), final[3], final[4]]
+    final = planner.certifier.final(a, b, k, gamma, n)
+    err = [final.u_a - u, final.v_a - v, float(references.wrap(final.psi - psi)), final.u_o, final.v_o]
     assert np.linalg.norm(err) < 1e-7
+    # and by the printed (28)-(30) integrated by DOP853
+    x = references.trace(a, b, k, gamma, n)
+    assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) < 1e-7
     # the same plan as the Python planner on branch m = 0
-    q = codegen.reference_plan((u, v, psi), n, k, near=(a, b))
+    q = reference_plan((u, v, psi), n, k, near=(a, b))
     assert q is not None and q.branch == 0, "Python planner found no plan on branch m = 0"
-    assert max(abs(q.a - a), abs(q.b - b), abs(float(geometric.wrap(q.gamma - gamma)))) < 1e-8
+    assert max(abs(q.a - a), abs(q.b - b), abs(float(references.wrap(q.gamma - gamma)))) < 1e-8
 
 
 @pytest.mark.parametrize("target", TARGETS)
-def test_plan_demo_matches_python_plan(built, target):
-    _check_plan(built, target)
+def test_plan_demo_matches_python_plan(built, planner, target):
+    _check_plan(built, planner, target)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("target", SLOW_TARGETS)
-def test_plan_demo_matches_python_plan_more(built, target):
-    _check_plan(built, target)
+def test_plan_demo_matches_python_plan_more(built, planner, target):
+    _check_plan(built, planner, target)
 
 
 def test_plan_demo_reproduces_paper_radius(built):
@@ -232,16 +228,17 @@ def test_plan_demo_no_convergence_is_nonzero(built):
     (the Python planner finds none either); the demo says so and exits with 4."""
     run = demo(built, 2, 2, 0, 1, 5)
     assert run.returncode == 4 and run.stdout == "" and "no convergence" in run.stderr
-    assert codegen.reference_plan((2.0, 2.0, 0.0), 1, 5.0) is None
+    assert reference_plan((2.0, 2.0, 0.0), 1, 5.0) is None
 
 
 @pytest.mark.slow
 def test_generated_prefix_builds_and_plans(tmp_path):
     out = tmp_path / "rp"
     codegen.generate(out, 160, "rp")
-    run = subprocess.run(["make", "-C", str(out)], capture_output=True, text=True)
+    run = subprocess.run(["make", "-C", str(out)], check=False, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert (out / "librp.a").exists()
-    run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], capture_output=True, text=True)
+    run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], check=False, capture_output=True,
+                         text=True)
     a, b = (float(x) for x in run.stdout.split()[:2])
     assert abs(a - 0.300429) < 5e-7 and abs(b - 0.300429) < 5e-7

@@ -1,8 +1,9 @@
-"""`rollplan compare` and the measurements behind it.
+"""Geometric phase versus collocation (rollplan.studies.comparison), `rollplan compare`, and the
+measurements behind it.
 
-References: the figure eight's length ``2 pi n (a + b)`` (closed form), finite
-differences of the sampled motions inverted through Montana's (6), (7), (10) as
-printed in the paper, and the JSON schema of the issue.
+References: the figure eight's length ``2 pi n (a + b)`` (closed form), finite differences of the
+sampled motions inverted through Montana's (6), (7), (10) as printed in the paper
+(``references.omega_from_rates``), and the JSON schema of the issue.
 """
 
 from __future__ import annotations
@@ -13,8 +14,11 @@ import math
 import numpy as np
 import pytest
 
+from rollplan import Problem
 from rollplan.cli import main
-from rollplan.comparison import compare
+from rollplan.studies.comparison import compare
+
+import references
 
 K = 2.5
 TARGET = (0.5, 0.3, 0.4)
@@ -25,37 +29,44 @@ def comp():
     return compare(TARGET, 1, k=K, intervals=40)
 
 
-def _fd_energy(s):
-    """int |omega|^2 dt from finite differences of the samples, omega by inverting (6), (7), (10)."""
-    t = s.t
-    x = np.column_stack([s.u_a, s.v_a, s.u_o, s.v_o, s.psi])
+def _fd_energy(traj):
+    """int |omega|^2 dt from finite differences of the samples (a Trajectory timed in t), omega by
+    inverting (6), (7), (10)."""
+    assert traj.parameter == "t"
+    t, x = traj.s, traj.state
     xdot = np.gradient(x, t, axis=0, edge_order=2)
-    wy, wx = xdot[:, 0], -xdot[:, 1]
-    roll = wx * np.sin(s.psi) + wy * np.cos(s.psi)
-    wz = -xdot[:, 4] - roll * np.tan(s.v_o)
-    sq = wx ** 2 + wy ** 2 + wz ** 2
+    sq = (references.omega_from_rates(x, xdot, traj.radius) ** 2).sum(axis=1)
     speed = np.hypot(xdot[:, 0], xdot[:, 1])
-    trap = lambda y: float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))
+    trap = lambda y: float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))  # noqa: E731
     return trap(sq), trap(speed)
 
 
+def test_comparison_holds_both_results_of_one_problem(comp):
+    assert comp.problem == Problem(TARGET, k=K) == comp.plan.problem == comp.result.problem
+    assert comp.horizon == 1.0 and comp.effort_kind == "angular_velocity"
+    assert comp.effort(comp.plan_measures) == comp.plan_measures.effort
+    assert comp.result.turns == comp.plan.branch and comp.result.guess == "warm"
+
+
 def test_geometric_side_measurements(comp):
-    g, p = comp.geometric_phase, comp.plan
+    g, p = comp.plan_measures, comp.plan
+    tr = comp.plan_trajectory
     assert g.path_length == pytest.approx(2 * math.pi * (p.a + p.b), rel=1e-12)
-    energy, length = _fd_energy(g)
+    energy, length = _fd_energy(tr)
     assert length == pytest.approx(g.path_length, rel=1e-3)
-    assert energy == pytest.approx(g.effort, rel=2e-2)  # FD across the leaf junctions is crude
-    assert g.t[0] == 0 and g.t[-1] == pytest.approx(comp.horizon) and np.all(np.diff(g.t) > 0)
+    assert energy == pytest.approx(comp.effort(g), rel=2e-2)  # FD across the leaf junctions is crude
+    assert tr.s[0] == 0 and tr.s[-1] == pytest.approx(comp.horizon) and np.all(np.diff(tr.s) > 0)
 
 
 def test_collocation_side_measurements(comp):
-    o = comp.collocation
-    energy, length = _fd_energy(o)
+    r = comp.result
+    o = r.measures
+    energy, length = _fd_energy(r.trajectory)
     assert length == pytest.approx(o.path_length, rel=1e-3)
-    assert energy == pytest.approx(o.effort, rel=2e-2)
-    assert o.residual < 1e-7 and comp.geometric_phase.residual < 1e-9
+    assert energy == pytest.approx(comp.effort(o), rel=2e-2)
+    assert r.residual < 1e-7 and comp.plan.residual < 1e-9
     # the optimum of the path-length cost is shorter than the figure eight
-    assert o.path_length < comp.geometric_phase.path_length
+    assert o.path_length < comp.plan_measures.path_length
 
 
 def test_cli_compare_json_and_plot(tmp_path, capsys):
@@ -106,7 +117,7 @@ def test_cli_compare_robot(tmp_path, capsys):
 
 def test_cli_compare_solver_failure_exit_4(monkeypatch, capsys):
     """A failing IPOPT solve maps to exit 4 with its status, no traceback."""
-    import rollplan.comparison as cmp
+    import rollplan.studies.comparison as cmp
     from rollplan.errors import SolverError
 
     def failing(*args, **kwargs):

@@ -1,26 +1,19 @@
-"""The step map against the independent reference (the paper's printed (28)-(30),
-(35) in numpy, integrated by scipy DOP853: ``tests/printed_rhs.py``), the closed
-form (36), and the symmetries the planner relies on."""
+"""The step map (rollplan.core.integrate) against the independent reference (the paper's printed
+(28)-(30), (35) in numpy, integrated by scipy DOP853: ``tests/references.py``), the closed form
+(36), and the symmetries the planner relies on."""
 
 import casadi as ca
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.integrate import solve_ivp
 
-import printed_rhs
-from rollplan.curves import A_MAX, figure_eight
-from rollplan.integrate import CvodesIntegrator, piece_rhs, spectral_step
+from rollplan.core.curves import A_MAX, Curve, Piece, figure_eight
+from rollplan.core.integrate import CvodesIntegrator, piece_rhs, spectral_step
+from rollplan.problem import Problem
 
-
-def rot(angle, v):
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
-
-
-def closed_form_36(a):
-    """h/R of a symmetric figure eight under pure rolling (k = 0), eq. (36)."""
-    return 4 * a / np.sqrt(1 - a * a) * np.sin(np.pi * np.sqrt(1 - a * a))
+import references
 
 
 @pytest.fixture(scope="module")
@@ -32,8 +25,18 @@ def sx(f, a, b, k, gamma=0.0, x0=(0, 0, 0)):
     return np.array(f(x0, [a, b], k, gamma)).ravel()
 
 
+def max_error(x, ref):
+    """Largest error of (u_a, v_a, psi) against the reference, psi compared as an angle."""
+    e = np.asarray(x[:3], float) - ref
+    e[2] = references.wrap(e[2])
+    return np.abs(e).max()
+
+
 CASES = [(0.3, 0.4, 2.5, 0.0), (0.6, 0.2, 5.0, 0.3), (0.533681, 0.533681, 0.0, 0.0), (0.1, 0.65, 2.5, -1.0),
          (0.69, 0.5, 10.0, 0.0), (0.68, 0.68, 10.0, 2.0), (0.05, 0.02, 1.3, 0.0), (A_MAX, A_MAX, 5.0, 0.0)]
+# (a, b, k, gamma, steps): several steps, leaves at A_MAX, k from 0 to 10
+MULTI = [(0.3, 0.3, 2.5, 0.1, 1), (A_MAX, A_MAX, 2.5, -1.0, 1), (A_MAX, 0.05, 10.0, 2.0, 2), (0.5, 0.2, 0.0, 0.3, 3),
+         (0.12, 0.61, 5.0, -2.5, 1)]
 
 
 @pytest.mark.parametrize("a,b,k,gamma", CASES)
@@ -41,10 +44,30 @@ def test_spectral_step_matches_scipy(fmap, scipy_trace, a, b, k, gamma):
     assert np.abs(sx(fmap, a, b, k, gamma) - scipy_trace(a, b, k, gamma)).max() < 1e-11
 
 
+@pytest.mark.parametrize("a,b,k,gamma,steps", MULTI)
+def test_spectral_steps_composed_match_scipy(fmap, scipy_trace, a, b, k, gamma, steps):
+    """The one-pass spectral step map, composed over n steps, against the reference's n steps."""
+    x = np.zeros(3)
+    for _ in range(steps):
+        x = sx(fmap, a, b, k, gamma, x)
+    assert max_error(x, scipy_trace(a, b, k, gamma, steps)) < 1e-11
+
+
 @pytest.mark.parametrize("a,b,k,gamma", CASES[:4])
 def test_cvodes_matches_scipy(scipy_trace, a, b, k, gamma):
     _, xs = CvodesIntegrator(figure_eight(), 1e-13, 1e-14).trace([a, b], k, gamma)
     assert np.abs(xs[-1] - scipy_trace(a, b, k, gamma)).max() < 1e-11
+
+
+def test_cvodes_bdf_agrees_with_adams():
+    """CVODES' BDF method is still available and agrees with the default Adams method."""
+    curve = figure_eight()
+    bdf = CvodesIntegrator(curve, 1e-13, 1e-14, multistep="bdf")
+    adams = CvodesIntegrator(curve, 1e-13, 1e-14)
+    for a, b, k, gamma, steps in MULTI[:3]:
+        x1 = bdf.trace([a, b], k, gamma, steps)[1][-1]
+        x2 = adams.trace([a, b], k, gamma, steps)[1][-1]
+        assert np.abs(x1 - x2).max() < 2e-10
 
 
 @settings(max_examples=40, deadline=None)
@@ -55,29 +78,27 @@ def test_symbolic_rhs_matches_printed_rhs(a, phi, psi, k, gamma, leaf):
     rotated_point) equals the printed equations typed in numpy, pointwise."""
     f = piece_rhs(figure_eight(), leaf)
     ours = np.array(f(phi, [0.2, -0.1, psi], [a, a], k, gamma)).ravel()
-    ref = printed_rhs.rhs(phi, np.array([0.2, -0.1, psi]), a, 1.0 if leaf == 0 else -1.0, k, gamma)
+    ref = references.rhs(phi, np.array([0.2, -0.1, psi]), a, 1.0 if leaf == 0 else -1.0, k, gamma)
     assert np.allclose(ours, ref, rtol=1e-12, atol=1e-12 * (1 + np.abs(ref).max()))
 
 
 @pytest.mark.parametrize("a,b,k,gamma", [(0.3, 0.4, 2.5, 0.0), (0.1, 0.65, 2.5, -1.0), (0.68, 0.68, 10.0, 2.0)])
 def test_symbolic_rhs_integrates_like_printed_rhs(a, b, k, gamma):
     """Integrating rollplan's symbolic right side by the same DOP853 gives the printed reference's step."""
-    from scipy.integrate import solve_ivp
-
     curve = figure_eight()
     x = np.zeros(3)
     for i in range(2):
         f = piece_rhs(curve, i)
-        x = solve_ivp(lambda t, y: np.array(f(t, y, [a, b], k, gamma)).ravel(), (0.0, 2 * np.pi), x,
+        x = solve_ivp(lambda t, y, f=f: np.array(f(t, y, [a, b], k, gamma)).ravel(), (0.0, 2 * np.pi), x,
                       method="DOP853", rtol=1e-13, atol=1e-14).y[:, -1]
-    assert np.abs(x - printed_rhs.trace(a, b, k, gamma)).max() < 1e-11
+    assert np.abs(x - references.trace(a, b, k, gamma)).max() < 1e-11
 
 
 @settings(max_examples=25, deadline=None)
 @given(st.floats(0.02, A_MAX))
 def test_pure_rolling_matches_closed_form_36(fmap, a):
     x = sx(fmap, a, a, 0.0)
-    assert np.hypot(x[0], x[1]) == pytest.approx(abs(closed_form_36(a)), abs=1e-11)
+    assert np.hypot(x[0], x[1]) == pytest.approx(abs(references.shift_36(a)), abs=1e-11)
     assert abs(x[2]) < 1e-12  # no net turn
 
 
@@ -103,7 +124,7 @@ def test_mirror_leaf(a, k):
 def test_gamma_turns_the_displacement(fmap, a, b, k, gamma):
     """Rotating the curve about OZ by gamma turns the displacement by +gamma, psi unchanged."""
     x0, xg = sx(fmap, a, b, k), sx(fmap, a, b, k, gamma)
-    assert np.allclose(xg[:2], rot(gamma, x0[:2]), atol=1e-11)
+    assert np.allclose(xg[:2], references.rotate(gamma, x0[:2]), atol=1e-11)
     assert xg[2] == pytest.approx(x0[2], abs=1e-10)
 
 
@@ -112,8 +133,22 @@ def test_gamma_turns_the_displacement(fmap, a, b, k, gamma):
 def test_initial_heading_turns_the_shift(fmap, a, b, k, psi0):
     """(28)-(29) rotate with psi: a step from heading psi0 gives the shift turned by -psi0."""
     x0, xp = sx(fmap, a, b, k), sx(fmap, a, b, k, 0.0, (0.3, -0.2, psi0))
-    assert np.allclose(xp[:2] - [0.3, -0.2], rot(-psi0, x0[:2]), atol=1e-11)
+    assert np.allclose(xp[:2] - [0.3, -0.2], references.rotate(-psi0, x0[:2]), atol=1e-11)
     assert xp[2] - psi0 == pytest.approx(x0[2], abs=1e-10)
+
+
+def test_rotation_structure_of_curve_ode():
+    """(28)-(29) are Rot(-psi) applied to their value at psi = 0, and psi' has no psi (the spectral
+    quadrature and the generated C loop rely on it)."""
+    f = piece_rhs(figure_eight(), 1)
+    rng = np.random.default_rng(4)
+    for _ in range(10):
+        phi, a, b = rng.uniform(0, 2 * np.pi), *rng.uniform(0.05, A_MAX, 2)
+        k, psi = rng.uniform(0, 8), rng.uniform(-9, 9)
+        at0 = np.array(f(phi, [0, 0, 0], [a, b], k, 0)).ravel()
+        at = np.array(f(phi, [0.3, -0.2, psi], [a, b], k, 0)).ravel()
+        c, s = np.cos(psi), np.sin(psi)
+        np.testing.assert_allclose(at, [c * at0[0] + s * at0[1], -s * at0[0] + c * at0[1], at0[2]], atol=1e-12)
 
 
 @settings(max_examples=15, deadline=None)
@@ -130,10 +165,8 @@ def test_step_map_jacobian_matches_finite_differences(fmap, a, b, k, row):
 
 def test_contact_path_length_is_the_curve_length(planner):
     """Rolling: the planar contact path is as long as the spherical one, 2 pi (a + b), for any k."""
-    from rollplan import plan
-
-    p = plan((0.0, 1.0, 0.0), k=2.5)
-    traj = p.trajectory(samples_per_leaf=4000)
+    p = planner.solve(Problem((0.0, 1.0, 0.0), k=2.5))
+    traj = p.sample(4000)
     assert traj.path_length() == pytest.approx(2 * np.pi * (p.a + p.b), rel=1e-6)
     sphere = np.linalg.norm(np.diff(traj.contact, axis=0), axis=1).sum()
     assert sphere == pytest.approx(traj.path_length(), rel=1e-6)
@@ -141,10 +174,6 @@ def test_contact_path_length_is_the_curve_length(planner):
 
 def test_pluggable_curve_matches_scipy():
     """Any closed curve through the south pole: a lemniscate-like curve, one piece."""
-    from scipy.integrate import solve_ivp
-
-    from rollplan.curves import Curve, Piece
-    from rollplan.integrate import piece_rhs
 
     def lemniscate(phi, p):
         v = ca.vertcat(p[0] * ca.sin(phi), p[1] * ca.sin(2 * phi), -1)
@@ -154,7 +183,7 @@ def test_pluggable_curve_matches_scipy():
     f = piece_rhs(curve, 0)
     for params, k in [((0.5, 0.3), 2.5), ((0.8, -0.4), 6.0)]:
         spectral = np.array(spectral_step(curve)([0, 0, 0], params, k, 0.4)).ravel()
-        ref = solve_ivp(lambda t, y: np.array(f(t, y, params, k, 0.4)).ravel(), (0, 2 * np.pi), [0, 0, 0],
-                        method="DOP853", rtol=1e-13, atol=1e-15).y[:, -1]
+        ref = solve_ivp(lambda t, y, params=params, k=k: np.array(f(t, y, params, k, 0.4)).ravel(), (0, 2 * np.pi),
+                        [0, 0, 0], method="DOP853", rtol=1e-13, atol=1e-15).y[:, -1]
         assert np.abs(spectral - ref).max() < 1e-10
         assert np.hypot(*spectral[:2]) > 1e-3  # it does move the robot

@@ -1,7 +1,7 @@
-"""Each relation of the model derived from the ones before it, and identities.
+"""The symbolic model (rollplan.core.model): each relation derived from the ones before it, and identities.
 
-The printed formulas of the paper are typed here as independent references;
-where the paper has a misprint the test says so.
+The paper's printed formulas are the independent references (``tests/references.py``); where the
+paper has a misprint the test says so.
 """
 
 import casadi as ca
@@ -10,8 +10,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rollplan import model
-from rollplan.curves import circle_point
+from rollplan.core import model
+from rollplan.core.curves import circle_point
+
+import references
 
 angle = st.floats(-1.2, 1.2)
 rate = st.floats(-3.0, 3.0)
@@ -32,22 +34,20 @@ def test_orientation_is_a_rotation(u, v, psi):
     r = num(model.orientation(u, v, psi))
     assert np.allclose(r.T @ r, np.eye(3), atol=1e-14)
     assert np.linalg.det(r) == pytest.approx(1.0, abs=1e-14)
+    assert np.allclose(r, references.orientation(u, v, psi), atol=1e-14)  # (2) from elementary rotations
 
 
 @settings(max_examples=40, deadline=None)
 @given(angle, angle, st.floats(-3.2, 3.2))
 def test_columns_match_printed_3_to_5(u, v, psi):
     r = num(model.orientation(u, v, psi))
-    cu, su, cv, sv, cp, sp = np.cos(u), np.sin(u), np.cos(v), np.sin(v), np.cos(psi), np.sin(psi)
     # (3) as printed has n1z = cos u cos v, which would make n1 non-unit and equal to n3z;
-    # the product (2) gives sin u cos v. Misprint in the paper.
-    n1 = [cu * cp + su * sv * sp, -cu * sp + su * sv * cp, su * cv]
-    n2 = [cv * sp, cv * cp, -sv]
-    n3 = [-su * cp + cu * sv * sp, su * sp + cu * sv * cp, cu * cv]
+    # the product (2) gives sin u cos v. Misprint in the paper (references.axes corrects it).
+    n1, n2, n3 = references.axes(u, v, psi)
     assert np.allclose(r, np.column_stack([n1, n2, n3]), atol=1e-14)
-    printed_n1z = cu * cv
+    cu, su, cv = np.cos(u), np.sin(u), np.cos(v)
     if abs(su - cu) > 1e-3 and cv > 1e-3:
-        assert abs(r[2, 0] - printed_n1z) > 1e-6
+        assert abs(r[2, 0] - references.printed_n1z(u, v)) > 1e-6
 
 
 @settings(max_examples=40, deadline=None)
@@ -79,20 +79,39 @@ def test_18_19_and_17_from_rdot(u, v, psi, du, dv, dpsi):
 @settings(max_examples=60, deadline=None)
 @given(angle, angle, st.floats(-3.2, 3.2), rate, rate, rate, st.floats(0.2, 2.0))
 def test_montana_8_10_invert_the_angular_velocity(u, v, psi, du, dv, dpsi, radius):
+    """Montana's (6)-(10) return the rates in State order (u_a, v_a, psi, u_o, v_o)."""
     w = _omega_and_rates(u, v, psi, du, dv, dpsi)
     rates = num(model.montana(w, u, v, psi, radius))
-    assert np.allclose(rates[2:], [du, dv, dpsi], atol=1e-11)
+    assert np.allclose(rates[2:], [dpsi, du, dv], atol=1e-11)
     # (6)-(7): no slip, the centre moves with omega x (R e_z)
     assert np.allclose(rates[:2], np.cross(w, [0, 0, radius])[:2], atol=1e-12)
+    assert np.allclose(rates, references.montana(w, u, v, psi, radius), atol=1e-12)  # as printed
 
 
 @settings(max_examples=60, deadline=None)
 @given(angle, angle, st.floats(-3.2, 3.2), rate, rate, kk)
 def test_20_from_10_13_18_19(u, v, psi, du, dv, k):
-    printed = (1 - k) * np.sin(v) * du + k * np.tan(u) / np.cos(v) * dv
-    assert float(model.psi_dot_realizable(u, v, psi, du, dv, k)) == pytest.approx(printed, abs=1e-10 * (1 + abs(printed)))
+    printed = references.psi_dot(u, v, du, dv, k)
+    ours = float(model.psi_dot_realizable(u, v, psi, du, dv, k))
+    assert ours == pytest.approx(printed, abs=1e-10 * (1 + abs(printed)))
     w = model.realizable_omega(u, v, psi, du, dv, k)
     assert abs(float(model.realizability_residual(w, u, v, psi, k))) < 1e-12
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(-2.0, 2.0), st.floats(-2.0, 2.0), st.floats(-3.2, 3.2), angle, angle, rate, rate, kk,
+       st.floats(0.2, 2.0))
+def test_contact_rhs_in_state_order(u_a, v_a, psi, u, v, du, dv, k, radius):
+    """contact_rhs takes and returns (u_a, v_a, psi, u_o, v_o): its (8)-(9) give back the contact
+    rates, its psi' is the printed (20), and its omega satisfies (13) through the printed (6), (7), (10)."""
+    x = [u_a, v_a, psi, u, v]
+    xdot = num(model.contact_rhs(ca.DM(x), ca.DM([du, dv]), k, radius))
+    assert np.allclose(xdot[3:], [du, dv], atol=1e-12)
+    printed = references.psi_dot(u, v, du, dv, k)
+    assert xdot[2] == pytest.approx(printed, abs=1e-10 * (1 + abs(printed)))
+    w = references.omega_from_rates(np.array([x]), np.array([xdot]), radius)[0]
+    n3 = references.axes(u, v, psi)[2]
+    assert abs(references.realizability(n3, w, k)) < 1e-10 * (1 + np.abs(w).max())
 
 
 def test_pure_rolling_is_not_realizable_in_general():
@@ -106,7 +125,7 @@ def test_pure_rolling_is_not_realizable_in_general():
 def test_inertia_ratio_14():
     radius, m_total, m_shell, j_r, j_p = 0.12, 1.5, 0.5, 3e-4, 2e-4
     k, j_xx, j_zz = model.inertia_ratio(radius, m_total, m_shell, j_r, j_p)
-    assert k == pytest.approx(1 + m_total * radius**2 / (2 / 3 * m_shell * radius**2 + 2 * j_p + j_r), rel=1e-15)
+    assert k == pytest.approx(references.inertia_ratio(radius, m_total, m_shell, j_r, j_p), rel=1e-15)
     assert j_xx == pytest.approx(j_zz + m_total * radius**2)
     assert k > 1
 
@@ -130,19 +149,6 @@ def test_contact_coordinates_invert_1():
     assert float(uu) == pytest.approx(u, abs=1e-15) and float(vv) == pytest.approx(v, abs=1e-15)
 
 
-def _printed_28_30(x, y, z, dc, psi, k, radius=1.0):
-    """(28)-(30) as printed, with c_u, c_v of (26)."""
-    s = np.sqrt(radius**2 - y**2)
-    c_u = np.array([z, 0.0, -x])
-    c_v = np.array([-x * y / s, s, -y * z / s])
-    p, q = c_u @ dc, c_v @ dc
-    return np.array([
-        -np.cos(psi) / s * p + np.sin(psi) / radius * q,
-        np.sin(psi) / s * p + np.cos(psi) / radius * q,
-        ((1 - k) * y * p / (radius**2 - y**2) + k * x * q / (z * s)) / radius,
-    ])
-
-
 @settings(max_examples=60, deadline=None)
 @given(st.floats(0.02, 0.69), st.floats(0.0, 2 * np.pi), st.floats(-6.0, 6.0), kk, st.sampled_from([1.0, -1.0]))
 def test_curve_ode_matches_printed_28_30_and_psi_prime_is_state_free(a, theta, psi, k, side):
@@ -151,7 +157,7 @@ def test_curve_ode_matches_printed_28_30_and_psi_prime_is_state_free(a, theta, p
     rhs, psym = model.curve_rhs(pt, th, k)
     f = ca.Function("f", [th, psym], [rhs, pt, ca.jacobian(pt, th), ca.jacobian(rhs[2], psym)])
     val, c, dc, dpsi = (num(o) for o in f(theta, psi))
-    assert np.allclose(val, _printed_28_30(*c, dc, psi, k), rtol=1e-9, atol=1e-10)
+    assert np.allclose(val, references.curve_rhs(c, dc, psi, k), rtol=1e-9, atol=1e-10)
     assert abs(float(dpsi)) < 1e-9 * (1 + abs(val[2]))  # (20) has no psi
 
 
@@ -164,3 +170,4 @@ def test_circle_35_is_on_the_sphere_through_the_south_pole(a, theta):
     # a circle of Euclidean radius a: all points at distance a from the centre of the circle
     centre = (num(circle_point(a, 0.0)) + num(circle_point(a, np.pi))) / 2
     assert np.linalg.norm(c - centre) == pytest.approx(a, abs=1e-13)
+    assert np.allclose(c, references.circle(a, theta, 1.0)[0], atol=1e-15)  # the printed (35)

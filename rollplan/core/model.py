@@ -20,7 +20,10 @@ Lengths are in units of the sphere radius unless a radius ``R`` is passed.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import casadi as ca
+import numpy as np
 
 __all__ = [
     "rot_x",
@@ -42,6 +45,8 @@ __all__ = [
     "realizable_omega",
     "contact_rhs",
     "omega_from_rotor_rates",
+    "contact_points",
+    "orientations",
 ]
 
 
@@ -218,6 +223,25 @@ def contact_rhs(state, rates, k, R=1.0):
     psi, u_o, v_o = state[2], state[3], state[4]
     w = realizable_omega(u_o, v_o, psi, rates[0], rates[1], k)
     return montana(w, u_o, v_o, psi, R)
+
+
+@lru_cache(maxsize=1)
+def _pose_function() -> ca.Function:
+    u, v, psi = ca.SX.sym("u"), ca.SX.sym("v"), ca.SX.sym("psi")
+    return ca.Function("pose", [u, v, psi], [contact_point(u, v), ca.reshape(orientation(u, v, psi), 9, 1)])
+
+
+def contact_points(u_o, v_o) -> np.ndarray:
+    """Contact points (1) on the unit sphere (body frame) for arrays of (u_o, v_o): shape (N, 3)."""
+    u, v = np.atleast_1d(np.asarray(u_o, float)), np.atleast_1d(np.asarray(v_o, float))
+    return np.array(_pose_function().map(u.size)(u[None, :], v[None, :], 0.0)[0]).T
+
+
+def orientations(u_o, v_o, psi) -> np.ndarray:
+    """Orientation matrices (2) for arrays of (u_o, v_o, psi): shape (N, 3, 3)."""
+    u, v, p = (np.atleast_1d(np.asarray(x, float)) for x in (u_o, v_o, psi))
+    flat = np.array(_pose_function().map(u.size)(u[None, :], v[None, :], p[None, :])[1]).T   # (N, 9), column-major
+    return flat.reshape(-1, 3, 3).transpose(0, 2, 1)
 
 
 def omega_from_rotor_rates(phi_dot, u_o, v_o, psi, j_xx, j_zz, j_r):

@@ -41,7 +41,7 @@ class Simulation:
         at ``time``.
     omega : ndarray, shape (N, 3)
         Angular velocity from (11) at ``time`` [rad/s], plane frame.
-    final : ndarray, shape (5,)
+    final : State
         ``state[-1]``.
     error : ndarray, shape (5,) or None
         :func:`rollplan.problem.arrival_error` of ``final`` to the goal (u_a, v_a
@@ -55,7 +55,7 @@ class Simulation:
     time: np.ndarray
     state: np.ndarray
     omega: np.ndarray
-    final: np.ndarray
+    final: State
     error: np.ndarray | None
     arrival_error: float | None
     position_error: float | None
@@ -121,7 +121,7 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
     xs = np.hstack([x0[:, None], np.array(integ(x0=x0)["xf"])]).T
     om = ca.Function("omega", [time, x], [omega]).map(t.size)
     omegas = np.array(om(t[None, :], xs.T)).T
-    final = xs[-1].copy()
+    final = State(*(float(v) for v in xs[-1]))
     err = arr = pos = None
     if goal is not None:
         err = arrival_error(final, State.of(goal, "goal"), R)

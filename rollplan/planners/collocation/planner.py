@@ -59,7 +59,7 @@ from ..geometric.planner import default_planner
 from .costs import COSTS, N_PAR, Cost
 from .transcription import SCHEMES, Guess, Transcription
 
-__all__ = ["SCHEMES", "COSTS", "GUESSES", "CONTACT_BOUND", "SMOOTHING", "TOLERANCE", "Guess",
+__all__ = ["SCHEMES", "COSTS", "GUESSES", "CONTACT_BOUND", "SMOOTHING", "TOLERANCE", "Guess", "Certifier",
            "CollocationSolution", "CollocationResult", "CollocationPlanner", "collocate"]
 
 log = logging.getLogger(__name__)
@@ -169,8 +169,17 @@ class CollocationResult(CertifiedMotion):
         return self.measures.path_length
 
     def sample(self, samples: int | None = None) -> Trajectory:
-        """The certified trajectory (sampled when the result was made; ``samples`` is ignored)."""
-        return self.trajectory
+        """The certified motion sampled by CVODES on at least ``samples`` points (default: :attr:`trajectory`)."""
+        if samples is None:
+            return self.trajectory
+        samples = check_whole("samples", samples, 1, 10**7)
+        tr = self.transcription
+        per = max(1, math.ceil(samples / tr.intervals))
+        p = self.problem
+        ver = _verifier(tr.intervals, per).verify(self.solution.controls, p.k, self.horizon, p.robot,
+                                                  p.scaled(p.start).array())
+        R = self.problem.radius
+        return Trajectory(ver["t"], ver["x"] * np.array([R, R, 1.0, 1.0, 1.0]), ver["segment"], R, "t")
 
 
 def _point_function(cost: Cost) -> ca.Function:
@@ -190,6 +199,18 @@ def _naive_guess(planner: CollocationPlanner, problem: Problem, start, final, ho
     s = np.append(starts, 1.0)
     lerp = lambda t: start + t[..., None] * (final - start)  # noqa: E731
     return Guess(lerp(s), lerp(tc), np.zeros((planner.transcription.intervals, 2)), "naive")
+
+
+def _check_warm_start(plan, problem: Problem) -> None:
+    """InputError unless ``plan`` is a geometric-phase plan for the same k, radius, start and goal."""
+    if getattr(plan, "method", None) != "geometric":
+        raise InputError(f"warm_start = {plan!r:.60} is not allowed: give a geometric-phase Plan")
+    same = (plan.problem.k == problem.k and plan.problem.radius == problem.radius
+            and tuple(plan.problem.start) == tuple(problem.start)
+            and np.allclose(plan.problem.goal, problem.goal, rtol=0.0, atol=1e-12 * problem.radius))
+    if not same:
+        raise InputError(f"warm_start was planned for another problem ({plan.problem.describe()}); "
+                         f"this problem is {problem.describe()}")
 
 
 def _geometric_plan(problem: Problem):
@@ -242,6 +263,13 @@ class CollocationPlanner:
     verify_tol : float or None
         Largest certified residual of a returned solution; a larger one raises
         SolverError with status ``"Verification_Failed"``. None: report only.
+
+    Attributes
+    ----------
+    solver : casadi.Function
+        The IPOPT NLP solver (built once).
+    path_rows : ndarray of bool
+        Rows of the NLP's constraints that are the contact bound (the others are equalities).
     """
 
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre", cost: str = "path_length",
@@ -261,12 +289,11 @@ class CollocationPlanner:
         x = ca.SX.sym("x", 5)
         depth = ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])  # cos(polar angle), eq. (1)
         t0 = time.perf_counter()
-        nlp, self._path_rows = self.transcription.nlp(self.point, depth, N_PAR)
+        nlp, self.path_rows = self.transcription.nlp(self.point, depth, N_PAR)
         opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": self.tol,
                 "ipopt.constr_viol_tol": self.tol, "ipopt.max_iter": self.max_iter, "ipopt.mu_strategy": "adaptive"}
         self.solver = ca.nlpsol("collocation", "ipopt", nlp, opts)
         self.build_time_s = time.perf_counter() - t0
-        self._verifier = None
 
     # -- solve --------------------------------------------------------------------------
     def solve(self, problem: Problem, horizon: float = 1.0, guess: str = "warm", turns: int | None = None,
@@ -278,13 +305,17 @@ class CollocationPlanner:
         """
         if not isinstance(guess, str) or guess not in GUESSES:
             raise InputError(f"guess = {guess!r} is not allowed: choose one of {', '.join(GUESSES)}")
+        self._boundary(problem, 0 if turns is None else turns)       # bad input is refused before any work
+        horizon = check_range("horizon", horizon, 0.0, None, low_open=True)
+        check_range("smoothing", smoothing, 0.0, None)
+        if warm_start is not None:
+            _check_warm_start(warm_start, problem)
         t0 = time.perf_counter()
         if guess == "warm" and warm_start is None:
             warm_start = _geometric_plan(problem)
         if turns is None:
             turns = warm_start.branch if warm_start is not None else 0
         start, final = self._boundary(problem, turns)
-        horizon = check_range("horizon", horizon, 0.0, None, low_open=True)
         g = GUESSES[guess](self, problem, start, final, horizon, warm_start)
         return self._solve(problem, g, horizon, turns, smoothing, time.perf_counter() - t0)
 
@@ -309,12 +340,12 @@ class CollocationPlanner:
         horizon = check_range("horizon", horizon, 0.0, None, low_open=True)
         smoothing = check_range("smoothing", smoothing, 0.0, None)
         tr = self.transcription
-        par = self._par(problem.k, horizon, smoothing, problem.robot)
+        par = _parameters(problem.k, horizon, smoothing, problem.robot)
         c = self.contact_bound
         lbx, ubx = tr.bounds(start, final, [np.inf, np.inf, np.inf, c, c])
         x0 = np.clip(tr.pack(g), lbx, ubx)
-        lbg = np.where(self._path_rows, math.cos(c), 0.0)
-        ubg = np.where(self._path_rows, np.inf, 0.0)
+        lbg = np.where(self.path_rows, math.cos(c), 0.0)
+        ubg = np.where(self.path_rows, np.inf, 0.0)
         t0 = time.perf_counter()
         sol = self.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
         solve_time = time.perf_counter() - t0
@@ -358,33 +389,52 @@ class CollocationPlanner:
                                  measures=measures, certificate=cert, stats=stats, trajectory=traj, omega=ver["omega"])
 
     @staticmethod
-    def _par(k, horizon, smoothing, robot):
-        if robot is None:
-            return np.array([k, horizon, smoothing, 1.0, 1.0, 1.0])
-        return np.array([k, horizon, smoothing, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial])
+    def parameters(k, horizon, smoothing=SMOOTHING, robot=None) -> np.ndarray:
+        """The NLP parameter vector ``(k, T, eps, j_xx, j_zz, j_r)`` (inertias 1 without a robot)."""
+        return _parameters(k, horizon, smoothing, robot)
 
     # -- certification -------------------------------------------------------------------
-    def _verify_integrator(self):
-        """CVODES over one interval of normalized length 1/N, ``samples_per_interval`` outputs.
+    def verify(self, controls, k: float, horizon: float = 1.0, robot: Robot | None = None, x0=None) -> dict:
+        """:meth:`Certifier.verify` with this planner's intervals and samples per interval."""
+        return _verifier(self.transcription.intervals, self.samples_per_interval).verify(controls, k, horizon,
+                                                                                         robot, x0)
 
-        (One call per interval, with the interval's constant rates as a
-        parameter, so that CVODES restarts at every control jump.)
-        """
-        if self._verifier is None:
-            x = ca.SX.sym("x", 5)
-            w = ca.SX.sym("w", 2)
-            par = ca.SX.sym("par", N_PAR)
-            T = par[1]
-            xdot, _, omega = self.point(x, w, par)
-            rotor = model.rotor_rates(omega, x[3], x[4], x[2], par[3], par[4], par[5])
-            quad = ca.vertcat(ca.norm_2(xdot[:2]), ca.sumsqr(omega), ca.sumsqr(rotor))
-            m = self.samples_per_interval
-            grid = list(np.arange(1, m + 1) / (m * self.transcription.intervals))
-            opts = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 100000}
-            self._verifier = ca.integrator("verify", "cvodes", {"x": x, "p": ca.vertcat(w, par), "ode": T * xdot,
-                                                                "quad": T * quad}, 0.0, grid, opts)
-            self._omega = ca.Function("omega", [x, w, par], [omega])
-        return self._verifier
+    def simulate(self, controls, k: float, horizon: float = 1.0, x0=None) -> np.ndarray:
+        """The transcription as an implicit Runge-Kutta method with fixed controls (:meth:`Transcription.simulate`)."""
+        return self.transcription.simulate(self.point, N_PAR, controls, _parameters(k, horizon, 0.0, None), x0)
+
+
+def _parameters(k, horizon, smoothing, robot) -> np.ndarray:
+    """The NLP parameter vector ``(k, T, eps, j_xx, j_zz, j_r)`` (inertias 1 without a robot)."""
+    if robot is None:
+        return np.array([k, horizon, smoothing, 1.0, 1.0, 1.0])
+    return np.array([k, horizon, smoothing, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial])
+
+
+class Certifier:
+    """CVODES integration of the model with piecewise-constant contact rates, interval by interval.
+
+    One integrator call per interval of normalized length 1/N, with the interval's constant rates as a
+    parameter, so that CVODES restarts at every control jump; ``samples_per_interval`` outputs each.
+    Independent of the transcription: it integrates :func:`~rollplan.core.model.contact_rhs` itself.
+    """
+
+    def __init__(self, intervals: int, samples_per_interval: int) -> None:
+        self.intervals, self.samples_per_interval = intervals, samples_per_interval
+        x = ca.SX.sym("x", 5)
+        w = ca.SX.sym("w", 2)
+        par = ca.SX.sym("par", N_PAR)
+        T = par[1]
+        xdot = model.contact_rhs(x, w, par[0])
+        omega = model.realizable_omega(x[3], x[4], x[2], w[0], w[1], par[0])
+        rotor = model.rotor_rates(omega, x[3], x[4], x[2], par[3], par[4], par[5])
+        quad = ca.vertcat(ca.norm_2(xdot[:2]), ca.sumsqr(omega), ca.sumsqr(rotor))
+        m = samples_per_interval
+        grid = list(np.arange(1, m + 1) / (m * intervals))
+        opts = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 100000}
+        self._integrator = ca.integrator("verify", "cvodes", {"x": x, "p": ca.vertcat(w, par), "ode": T * xdot,
+                                                              "quad": T * quad}, 0.0, grid, opts)
+        self._omega = ca.Function("omega", [x, w, par], [omega])
 
     def verify(self, controls, k: float, horizon: float = 1.0, robot: Robot | None = None, x0=None) -> dict:
         """Integrate :func:`~rollplan.core.model.contact_rhs` from ``x0`` (default rest at the origin)
@@ -395,17 +445,15 @@ class CollocationPlanner:
         ``length`` [R], ``effort`` [rad^2/s], ``rotor`` [rad^2/s] (nan without
         robot) and ``peak`` [rad/s].
         """
-        F = self._verify_integrator()
         controls = np.asarray(controls, float)
-        N = self.transcription.intervals
+        N, m = self.intervals, self.samples_per_interval
         if controls.shape != (N, 2):
             raise InputError(f"controls of shape {controls.shape} are not allowed: expected ({N}, 2)")
-        m = self.samples_per_interval
-        par = self._par(k, horizon, 0.0, robot)
+        par = _parameters(k, horizon, 0.0, robot)
         x = np.zeros(5) if x0 is None else np.asarray(x0, float)
         xs, q = [x[:, None]], np.zeros(3)
         for w in controls:
-            r = F(x0=x, p=np.concatenate([w, par]))
+            r = self._integrator(x0=x, p=np.concatenate([w, par]))
             xi = np.array(r["xf"])
             xs.append(xi)
             q += np.array(r["qf"])[:, -1]
@@ -423,9 +471,10 @@ class CollocationPlanner:
                 "omega": om, "length": float(q[0]), "effort": float(q[1]),
                 "rotor": float(q[2]) if robot is not None else float("nan"), "peak": peak}
 
-    def simulate(self, controls, k: float, horizon: float = 1.0, x0=None) -> np.ndarray:
-        """The transcription as an implicit Runge-Kutta method with fixed controls (:meth:`Transcription.simulate`)."""
-        return self.transcription.simulate(self.point, N_PAR, controls, self._par(k, horizon, 0.0, None), x0)
+
+@lru_cache(maxsize=8)
+def _verifier(intervals: int, samples_per_interval: int) -> Certifier:
+    return Certifier(intervals, samples_per_interval)
 
 
 @lru_cache(maxsize=8)

@@ -1,43 +1,35 @@
-"""The case-study reproduction (Section III.C) against the paper's printed
-numbers, the closed form (36), an independent integrator (scipy DOP853), and
-brute-force geometry."""
+"""The paper's case study (Section III.C) reproduced (rollplan.studies.paper): against the paper's
+printed numbers, the closed form (36), an independent integrator (scipy DOP853 on the printed
+(28)-(30)), and brute-force geometry."""
 
 import json
 import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from rollplan.cli import main
-from rollplan.curves import figure_eight
 from rollplan.errors import InputError
-from rollplan.integrate import piece_rhs
-from rollplan.reproduce import (PAPER, CaseStudy, agrees, count_self_intersections, refine_root, run_case_study,
-                                write_reproduction)
+from rollplan.studies.paper import run_case_study, write_reproduction
+from rollplan.studies.paper.stages import CaseStudy, count_self_intersections, refine_root
+from rollplan.studies.paper.values import PAPER, agrees
 
+import references
 
-def eq36(a):
-    """h/R under pure rolling, eq. (36), typed from the paper."""
-    return 4 * a / math.sqrt(1 - a * a) * math.sin(math.pi * math.sqrt(1 - a * a))
-
-
+eq36 = references.shift_36
 A0 = brentq(lambda a: eq36(a) - 1.0, 0.45, 0.53, xtol=1e-15)  # independent of rollplan
 
 
 @pytest.fixture(scope="module")
 def dop853():
-    """(a, k, leaves) -> state (u_a, v_a, psi) after the given leaves of the symmetric figure eight, by DOP853."""
-    curve = figure_eight()
-    rhs = [piece_rhs(curve, i) for i in range(2)]
+    """(a, k, leaves) -> state (u_a, v_a, psi) after the given leaves of the symmetric figure eight, by DOP853
+    on the printed (28)-(30), (35)."""
 
     def trace(a, k, leaves=2):
         x = np.zeros(3)
-        for f in rhs[:leaves]:
-            sol = solve_ivp(lambda t, y: np.array(f(t, y, [a, a], k, 0.0)).ravel(), (0.0, 2 * np.pi), x,
-                            method="DOP853", rtol=1e-13, atol=1e-15)
-            x = sol.y[:, -1]
+        for side in (1.0, -1.0)[:leaves]:
+            x = references.leaf_end(a, side, k, 0.0, x, rtol=1e-13, atol=1e-15)
         return x
 
     return trace
@@ -53,7 +45,6 @@ def reduced(study):
     """A reduced reproduction: coarse sweeps, one self-intersection probe per interval."""
     return run_case_study(k_points=71, a_points=300, samples=200, crossing_samples=1000, crossings_per_interval=1,
                           study=study)
-
 
 
 def find(result, start):
@@ -162,7 +153,8 @@ def test_batch_equals_pointwise_dop853(study, dop853):
 
 
 @pytest.mark.parametrize("f,lo,hi", [(math.cos, 0.0, 3.0), (lambda x: x**3 - 2 * x - 5, 2.0, 3.0),
-                                     (lambda x: math.exp(x) - 10.0, 0.0, 5.0), (lambda x: math.tanh(x - 1.3) - 0.2, 0.0, 3.0)])
+                                     (lambda x: math.exp(x) - 10.0, 0.0, 5.0),
+                                     (lambda x: math.tanh(x - 1.3) - 0.2, 0.0, 3.0)])
 def test_refine_root_matches_brentq(f, lo, hi):
     assert abs(refine_root(f, lo, hi) - brentq(f, lo, hi, xtol=1e-15)) < 1e-10
 
@@ -221,12 +213,7 @@ def test_cli_reproduce_writes_everything(tmp_path, capsys):
     assert "reproduced" in capsys.readouterr().out
 
 
-def test_batches_report_progress(study, capsys):
-    from rollplan.cli import _StderrProgress
-
+def test_batches_report_progress(study):
     calls = []
     study.batch(A0, np.linspace(0.0, 3.0, 2 * study.chunk + 7), progress=lambda *c: calls.append(c))
     assert [c[1] for c in calls] == [study.chunk, 2 * study.chunk, 2 * study.chunk + 7]
-    shown = _StderrProgress(delay=0.0)
-    shown("h(k) sweep", 3, 3)
-    assert "h(k) sweep: 3/3" in capsys.readouterr().err

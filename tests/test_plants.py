@@ -1,5 +1,5 @@
-"""The rotor-driven simulation (rollplan.simulate): against a closed form, an
-independent numpy/scipy implementation, invariances, and the planner's motions."""
+"""The rotor-driven plant (rollplan.execution.plants): against a closed form, an independent
+numpy/scipy implementation of (2), (6)-(10), (11), invariances, and the planner's motions."""
 
 import numpy as np
 import pytest
@@ -7,9 +7,11 @@ from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 
 import rollplan
-from rollplan import InputError
-from rollplan.actuation import actuate
-from rollplan.simulate import rate_spline, simulate_rotors
+from rollplan import InputError, State
+from rollplan.execution.actuation import actuate
+from rollplan.execution.plants import rate_spline, simulate_rotors
+
+import references
 
 ROBOT = rollplan.Robot()
 
@@ -24,39 +26,29 @@ def test_spline_is_not_a_knot_cubic():
 
 
 def test_constant_rotor_rate_closed_form():
-    """phi_1_dot = c, phi_2_dot = 0 from rest: steady roll about n_1 = x, v_a = R J_r c t / Jxx, v_o = J_r c t / Jxx."""
+    """phi_1_dot = c, phi_2_dot = 0 from rest: steady roll about n_1 = x, v_a = R J_r c t / Jxx, v_o = J_r c t / Jxx
+    (states in State order (u_a, v_a, psi, u_o, v_o))."""
     c = 30.0
     T = 0.8 * ROBOT.j_xx / (ROBOT.rotor_inertia_axial * c)  # v_o reaches 0.8 rad
     t = np.linspace(0, T, 50)
     sim = simulate_rotors(ROBOT, t, np.column_stack([np.full(50, c), np.zeros(50)]))
     rate = ROBOT.rotor_inertia_axial * c / ROBOT.j_xx
-    expected = np.column_stack([0 * t, ROBOT.radius * rate * t, 0 * t, rate * t, 0 * t])
+    expected = np.column_stack([0 * t, ROBOT.radius * rate * t, 0 * t, 0 * t, rate * t])
     np.testing.assert_allclose(sim.state, expected, atol=1e-11)
     np.testing.assert_allclose(sim.omega, np.tile([-rate, 0, 0], (50, 1)), atol=1e-13)
 
 
 def _numpy_rhs(robot, spline):
-    """(6)-(10) with omega from (11): rotation matrices composed in numpy (independent of rollplan.model)."""
-    def rz(a):
-        return np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
-
-    def rx(a):
-        return np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
-
-    def ry(a):
-        return np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
-
+    """(6)-(10) with omega from (11): the printed equations and rotation matrices composed in numpy
+    (``references``; independent of rollplan.core.model). State order (u_a, v_a, psi, u_o, v_o)."""
     jc = np.array([robot.j_xx, robot.j_xx, robot.j_zz])
-    R = robot.radius
 
     def f(t, x):
-        u, v, psi = x[2], x[3], x[4]
-        rot = rz(psi).T @ rx(v).T @ ry(u).T
+        psi, u, v = x[2], x[3], x[4]
+        rot = references.orientation(u, v, psi)
         r1, r2 = spline(t)
         w = -robot.rotor_inertia_axial * (rot[:, 0] * r1 + rot[:, 1] * r2) / jc
-        roll = w[0] * np.sin(psi) + w[1] * np.cos(psi)
-        return [R * w[1], -R * w[0], -roll / np.cos(v), -w[0] * np.cos(psi) + w[1] * np.sin(psi),
-                -w[2] - roll * np.tan(v)]
+        return references.montana(w, u, v, psi, robot.radius)
 
     return f
 
@@ -94,8 +86,14 @@ def test_rotor_rates_reproduce_the_plan(target, steps, duration):
         assert abs(p.a - p.b) > 1e-3 * ROBOT.radius
     m = actuate(p, ROBOT, duration)
     assert m.time.size >= 2000
-    sim = simulate_rotors(ROBOT, m.time, m.rotor_rates, p.target)
+    sim = simulate_rotors(ROBOT, m.time, m.rotor_rates, p.goal)
     assert sim.arrival_error < 1e-6
+    assert np.array_equal(sim.final, sim.state[-1])
+    g, R = p.goal, ROBOT.radius   # the arrival error: lengths in units of R, psi wrapped, u_o and v_o
+    want = [(sim.final[0] - g.u_a) / R, (sim.final[1] - g.v_a) / R, references.wrap(sim.final[2] - g.psi),
+            sim.final[3], sim.final[4]]
+    assert np.allclose(sim.error, want, rtol=0, atol=1e-15)
+    assert sim.arrival_error == pytest.approx(np.linalg.norm(want), abs=1e-15)
     dev = np.abs(sim.state - m.state).max(axis=0)
     assert dev[:2].max() < 1e-6 * ROBOT.radius and dev[2:].max() < 1e-6
     np.testing.assert_allclose(sim.omega, m.omega, atol=1e-6 * np.abs(m.omega).max())
@@ -105,7 +103,7 @@ def test_wrong_k_misses_the_target():
     p = rollplan.plan((0.05, 0.08, 0.5), 2, robot=ROBOT)
     m = actuate(p, ROBOT, 6.0)
     heavier = rollplan.Robot(mass_total=1.3)  # k larger by ~7 %
-    sim = simulate_rotors(heavier, m.time, m.rotor_rates, p.target)
+    sim = simulate_rotors(heavier, m.time, m.rotor_rates, p.goal)
     assert sim.arrival_error > 1e-3
 
 
@@ -125,5 +123,16 @@ def test_many_steps_still_arrive():
     p = rollplan.plan((0.3, -0.2, 2.0), 6, robot=ROBOT)
     m = actuate(p, ROBOT, 30.0)
     assert m.time.size == 12 * 400 + 1
-    sim = simulate_rotors(ROBOT, m.time, m.rotor_rates, p.target)
+    sim = simulate_rotors(ROBOT, m.time, m.rotor_rates, p.goal)
     assert sim.arrival_error < 1e-6
+
+
+def test_restart_from_a_midway_state_continues_the_motion():
+    """x0: the simulation of [t_m, T] started from the state at t_m equals the second half of the whole run
+    (x0 in State order; the flow of (6)-(10), (11) composes)."""
+    t = np.linspace(0, 2, 201)
+    rates = np.column_stack([10 * np.sin(3 * t), 8 * np.cos(2 * t) - 8])
+    whole = simulate_rotors(ROBOT, t, rates, goal=State(0.01, 0.02, 0.3))
+    half = simulate_rotors(ROBOT, t[100:], rates[100:], x0=whole.state[100])
+    np.testing.assert_allclose(half.state, whole.state[100:], atol=1e-8)
+    assert half.error is None and half.arrival_error is None and whole.arrival_error > 0

@@ -1,4 +1,5 @@
-"""Robot files: the shipped default, the inertia ratio (14), and refusal of bad files (exit 2, naming the key)."""
+"""Robot parameters (rollplan.robot): the shipped default file, the inertia ratio (14), refusal of bad
+files (InputError and CLI exit 2, naming the key), and plans in metres with a robot."""
 
 import math
 import re
@@ -9,6 +10,8 @@ import rollplan
 from rollplan import InputError, Robot, load_robot
 from rollplan.cli import main
 from rollplan.robot import default_robot
+
+import references
 
 GOOD = {"radius": 0.12, "mass_total": 2.0, "mass_shell": 0.5, "rotor_inertia_axial": 3e-4,
         "rotor_inertia_transverse": 2e-4}
@@ -26,14 +29,14 @@ def test_default_file_is_documented_and_equals_defaults():
     text = files("rollplan").joinpath("data/default_robot.toml").read_text()
     assert default_robot() == Robot()
     for name in GOOD:
-        line = next(l for l in text.splitlines() if l.startswith(name))
+        line = next(row for row in text.splitlines() if row.startswith(name))
         assert re.search(r"#.*\[(m|kg|kg m\^2)\]", line), line  # each value documented with its unit
 
 
 def test_inertia_ratio_14():
     rob = Robot(**GOOD)
     jzz = 2 / 3 * 0.5 * 0.12**2 + 2 * 2e-4 + 3e-4
-    assert rob.k == pytest.approx(1 + 2.0 * 0.12**2 / jzz, rel=1e-15)  # (14) as printed
+    assert rob.k == pytest.approx(references.inertia_ratio(**GOOD), rel=1e-15)  # (14) as printed
     assert rob.j_xx == pytest.approx(jzz + 2.0 * 0.12**2, rel=1e-15)
     assert rob.as_dict()["k"] == rob.k
 
@@ -64,18 +67,19 @@ def test_bad_file_names_the_key(tmp_path, capsys, change, key):
     assert code == 2 and key in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
-def test_unreadable_and_invalid_files(tmp_path, capsys):
-    assert main(["plan", "--robot", str(tmp_path / "none.toml")]) == 2
-    assert "cannot be read" in capsys.readouterr().err
-    bad = tmp_path / "bad.toml"
-    bad.write_text("radius = = 1\n")
-    assert main(["plan", "--robot", str(bad)]) == 2
-    assert "not valid TOML" in capsys.readouterr().err
+def test_robot_file_not_utf8_exits_2_naming_the_file(tmp_path, capsys):
+    robot = tmp_path / "latin1-robot.toml"
+    robot.write_bytes("radius = 0.1  # Kreisel \u00e4\u00f6\n".encode("latin-1") + b"mass_total = 1.2\n")
+    code = main(["plan", "--to", "0.05", "0", "--robot", str(robot)])
+    err = capsys.readouterr().err
+    assert code == 2 and "latin1-robot.toml" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    with pytest.raises(InputError, match="latin1-robot.toml"):
+        load_robot(robot)
 
 
 def test_to_is_in_metres_with_a_robot(tmp_path):
     p = rollplan.plan((0.0, 0.12, 0.0), 1, robot=Robot(**GOOD))
-    assert p.radius == 0.12 and p.final[1] == pytest.approx(0.12, abs=1e-10)
+    assert p.radius == 0.12 and p.final.v_a == pytest.approx(0.12, abs=1e-10) and p.problem.unit == "m"
     # the same motion in units of R with the same k
     q = rollplan.plan((0.0, 1.0, 0.0), 1, k=Robot(**GOOD).k)
     assert p.a == pytest.approx(0.12 * q.a, rel=1e-9) and math.isclose(p.gamma, q.gamma, abs_tol=1e-9)

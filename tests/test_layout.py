@@ -1,0 +1,86 @@
+"""The package reads top-down: no import cycles between rollplan's modules, and no module imports
+another module's private names. Checked on the source (ast), and by importing every module in a
+fresh interpreter in dependency order."""
+
+import ast
+import subprocess
+import sys
+from graphlib import CycleError, TopologicalSorter
+from pathlib import Path
+
+import pytest
+
+import rollplan
+
+PACKAGE = Path(rollplan.__file__).resolve().parent
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def _imports(name: str):
+    """``(target module, imported name or None, line)`` of every import statement of a module, at any
+    depth (imports inside functions count too), relative imports resolved."""
+    path = MODULES[name]
+    package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name, None, node.lineno
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package[: len(package) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module
+            for alias in node.names:
+                yield target, alias.name, node.lineno
+
+
+def _graph() -> dict:
+    """Module -> the rollplan modules it imports (a ``from X import y`` of a submodule y counts as X.y)."""
+    graph = {}
+    for name in MODULES:
+        deps = set()
+        for target, item, _ in _imports(name):
+            if item is not None and f"{target}.{item}" in MODULES:
+                deps.add(f"{target}.{item}")
+            elif target in MODULES:
+                deps.add(target)
+        deps.discard(name)
+        graph[name] = deps
+    return graph
+
+
+def test_every_module_is_found():
+    assert {"rollplan", "rollplan.problem", "rollplan.result", "rollplan.core.model", "rollplan.cli",
+            "rollplan.planners.geometric.planner", "rollplan.planners.collocation.transcription",
+            "rollplan.studies.paper.stages", "rollplan.plots.paper"} <= set(MODULES)
+
+
+def test_no_module_imports_another_modules_private_names():
+    bad = [f"{MODULES[name].relative_to(PACKAGE.parent)}:{line}: from {target} import {item}"
+           for name in MODULES for target, item, line in _imports(name)
+           if item is not None and item.startswith("_") and not item.startswith("__")
+           and target != name and (target in MODULES or target.startswith("rollplan."))]
+    assert not bad, "private names imported across modules:\n" + "\n".join(bad)
+
+
+def test_import_graph_has_no_cycles():
+    graph = _graph()
+    try:
+        tuple(TopologicalSorter(graph).static_order())
+    except CycleError as exc:
+        pytest.fail(f"import cycle: {' -> '.join(exc.args[1])}")
+
+
+def test_modules_import_in_dependency_order_in_a_fresh_interpreter():
+    order = list(TopologicalSorter(_graph()).static_order())
+    code = "import importlib, sys\nfor m in sys.argv[1:]:\n    importlib.import_module(m)\n"
+    run = subprocess.run([sys.executable, "-c", code, *order], check=False, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr

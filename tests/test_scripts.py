@@ -1,0 +1,19 @@
+"""The scripts in scripts/ run on the package as it is (they are not part of the package's API)."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+
+@pytest.mark.slow
+def test_benchmark_script_runs(tmp_path):
+    script = Path(__file__).resolve().parent.parent / "scripts" / "benchmark.py"
+    subprocess.run([sys.executable, str(script), "--quick", "--no-jit", "--no-cold",
+                    "--out-dir", str(tmp_path)], check=True, capture_output=True, timeout=600)
+    text = (tmp_path / "benchmarks.md").read_text()
+    assert "evaluations/s" in text and "commit" in text and "speed-up" in text and "Profile" in text
+    assert "## Budgets" in text and "Collocation planner" in text and "C planner" in text
+    assert "load average at start" in text
+    assert (tmp_path / "benchmarks.json").stat().st_size > 0
