@@ -7,6 +7,7 @@ torque identity, and a simulation driven by the rotor rates alone (CVODES on the
 the printed (2), (6)-(10), (11)).
 """
 
+import json
 import math
 import re
 from dataclasses import replace
@@ -309,3 +310,93 @@ def test_bad_input(path, plan):
     with pytest.raises(InputError, match="at most 1000000"):
         actuate(plan, ROBOT, 12.0, samples=2_000_000)
     assert round_up(11.4724114) == pytest.approx(11.4725) and round_up(6.0) == 6.0
+
+
+# ----------------------------------------------------------------------------- the command: plan --timing
+
+ROBOT_TOML = """radius = 0.1
+mass_total = 1.2
+mass_shell = 0.4
+rotor_inertia_axial = 2.0e-4
+rotor_inertia_transverse = 1.2e-4
+max_rotor_rate = 300.0
+max_rotor_torque = 0.05
+"""
+
+
+def _run(capsys, *argv):
+    from rollplan.cli import main
+
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:  # argparse's own checks
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def robot_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("robot") / "limited.toml"
+    path.write_text(ROBOT_TOML)
+    return path
+
+
+@pytest.mark.slow
+def test_cli_time_optimal_json(robot_file, tmp_path, capsys):
+    """plan --timing time-optimal --json: time, rotor_rates, rotor_torques, duration; every sample within
+    the limits, one limit active almost everywhere, the rates alone reach the target (rotor_simulation)."""
+    out, fig = tmp_path / "to.json", tmp_path / "to.png"
+    code, text, err = _run(capsys, "plan", "--robot", robot_file, "--to", 0.05, 0.08, "--psi", 0.5, "--steps", 2,
+                           "--timing", "time-optimal", "--samples", 20000, "--json", out, "--timing-plot", fig)
+    assert code == 0, err
+    data = json.loads(out.read_text())
+    t, rates, torques = (np.asarray(data[k]) for k in ("time", "rotor_rates", "rotor_torques"))
+    assert t.size == 20001 and rates.shape == torques.shape == (t.size, 2)
+    assert data["duration"] == t[-1] == data["minimum_duration"] and data["timing"] == "time-optimal"
+    util = LIMITS.utilisation(rates, torques)
+    assert util.max() <= 1 + 1e-6 and np.mean(util > 0.99) > 0.9
+    assert data["rotor_simulation"]["position_error"] < 1e-5
+    assert data["robot"]["max_rotor_torque"] == 0.05 and data["segment"][-1] == 3
+    assert "shortest feasible duration with timing time-optimal is" in text and "100.0% of the limit" in text
+    assert fig.stat().st_size > 10000
+
+
+def test_cli_refuses_a_duration_beyond_the_limits(robot_file, capsys):
+    """A too short --duration exits 2 naming the limit and the shortest feasible duration; that duration
+    is then accepted."""
+    code, _, err = _run(capsys, "plan", "--robot", robot_file, "--to", 0.0, 0.1, "--duration", 3)
+    assert code == 2 and "max_rotor_torque = 0.05 N m" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+    shortest = re.search(r"shortest feasible duration is (\S+) s", err).group(1)
+    code, text, err = _run(capsys, "plan", "--robot", robot_file, "--to", 0.0, 0.1, "--duration", shortest)
+    assert code == 0 and "timing min-jerk" in text, err
+    code, _, err = _run(capsys, "plan", "--robot", robot_file, "--to", 0.0, 0.1, "--duration", 3,
+                        "--timing", "time-optimal")
+    assert code == 2 and "shortest feasible duration is" in err
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["--timing", "time-optimal"], "needs max_rotor_torque"),              # the default robot has no limits
+    (["--timing", "smooth-cruise"], "needs a duration, or limits"),
+    (["--timing", "fastest"], "invalid choice"),
+    (["--duration", "1e300"], "duration"),
+    (["--timing-plot", "x.png"], "--timing-plot needs"),
+    (["--k", "2.5", "--timing", "min-jerk", "--duration", "5"], "--robot"),
+])
+def test_cli_timing_errors(argv, match, capsys, tmp_path):
+    code, _, err = _run(capsys, "plan", "--to", 0.0, 0.1, *[a.replace("x.png", str(tmp_path / "x.png"))
+                                                             for a in argv])
+    assert code == 2 and match in err and "Traceback" not in err
+
+
+def test_cli_plan_file_with_limits_round_trip(robot_file, tmp_path, capsys):
+    """A plan file keeps the robot's limits; simulate reads it (and plan files without them, see test_cli)."""
+    from rollplan.io import load_rotor_plan
+
+    out = tmp_path / "p.json"
+    assert _run(capsys, "plan", "--robot", robot_file, "--to", 0.0, 0.1, "--timing", "smooth-cruise",
+                "--json", out)[0] == 0
+    assert load_rotor_plan(out).robot == ROBOT
+    code, text, _ = _run(capsys, "simulate", out)
+    assert code == 0 and float(re.search(r"position (\S+) R", text).group(1)) < 1e-5
