@@ -19,12 +19,6 @@ ROBOT = rollplan.Robot()
 
 
 @pytest.fixture(scope="module")
-def asym_plan():
-    """a != b (psi = 0.5), two steps: four leaves, three poles between them."""
-    return rollplan.plan((0.05, 0.08, 0.5), 2, robot=ROBOT)
-
-
-@pytest.fixture(scope="module")
 def path(asym_plan):
     return ContactPath.of_plan(asym_plan, ROBOT)
 

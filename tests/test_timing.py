@@ -45,8 +45,9 @@ PEAK_QUINTIC = 10 / math.sqrt(3)  # max |d2/dtau2 (10 tau^3 - 15 tau^4 + 6 tau^5
 
 
 @pytest.fixture(scope="module")
-def plan():
-    return rollplan.plan((0.05, 0.08, 0.5), 2, robot=ROBOT)
+def plan(asym_plan):
+    """The conftest's plan (made for the default robot; the limits do not change the plan)."""
+    return asym_plan
 
 
 @pytest.fixture(scope="module")

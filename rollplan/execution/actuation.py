@@ -88,7 +88,8 @@ from .limits import Limits
 from .path import ContactPath
 from .timing import TimeLaw, TimeProfile, get_law
 
-__all__ = ["Motion", "actuate", "sample_motion", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF", "MAX_SAMPLES"]
+__all__ = ["Motion", "actuate", "sample_motion", "samples_per_piece", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF",
+           "MAX_SAMPLES"]
 
 log = logging.getLogger(__name__)
 
@@ -175,6 +176,20 @@ class Motion:
         return Trajectory(self.time, self.state, self.segment, self.robot.radius, "t")
 
 
+def samples_per_piece(pieces: int, samples: int, per_piece: int, law: str = "") -> int:
+    """Samples per piece of a motion of ``pieces`` pieces: at least ``per_piece``, in all at least ``samples``.
+
+    InputError when ``samples`` is not a whole number >= 4 or the motion would need more than
+    :data:`MAX_SAMPLES` samples.
+    """
+    samples = check_whole("samples", samples, 4)
+    m = max(per_piece, math.ceil((samples - 1) / pieces))
+    if pieces * m + 1 > MAX_SAMPLES:
+        raise InputError(f"timing '{law}' of {pieces} half-steps needs {pieces * m + 1} samples (at least {m} per "
+                         f"half-step); at most {MAX_SAMPLES} are allowed: plan fewer steps or ask fewer samples")
+    return m
+
+
 def sample_motion(path: ContactPath, profile: TimeProfile, samples: int, goal=None,
                   per_piece: int = MIN_SAMPLES_PER_LEAF) -> Motion:
     """Sample a timed path uniformly in time: state, omega, rotor rates, angles and torques.
@@ -196,13 +211,9 @@ def sample_motion(path: ContactPath, profile: TimeProfile, samples: int, goal=No
     -------
     Motion
     """
-    samples = check_whole("samples", samples, 4)
     pieces = len(path.pieces)
-    m = max(per_piece, math.ceil((samples - 1) / pieces))
+    m = samples_per_piece(pieces, samples, per_piece, profile.law)
     total = pieces * m + 1
-    if total > MAX_SAMPLES:
-        raise InputError(f"timing '{profile.law}' of {pieces} half-steps needs {total} samples (at least {m} per "
-                         f"half-step); at most {MAX_SAMPLES} are allowed: plan fewer steps or fewer samples")
     T = profile.duration
     t = np.linspace(0.0, T, total)
     b = profile.breaks
@@ -263,7 +274,8 @@ def actuate(plan, robot: Robot, duration: float | None = None, samples: int = DE
         shortest feasible duration).
     """
     law = get_law(timing)
-    samples = check_whole("samples", samples, 4)
+    if hasattr(plan, "steps"):  # the sample count before the work
+        samples_per_piece(2 * plan.steps, samples, law.samples_per_piece, law.name)
     path = ContactPath.of_plan(plan, robot)
     profile = law.profile(path, Limits.of(robot), duration)
     return sample_motion(path, profile, samples, plan.goal, law.samples_per_piece)

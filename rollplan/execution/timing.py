@@ -337,7 +337,13 @@ class TimeLaw:
         """
         if not isinstance(path, TimingPath):
             raise InputError(f"path = {path!r:.60} is not allowed: give a ContactPath (or another TimingPath)")
-        return self.make(path, limits, self.check(limits, duration))
+        prof = self.make(path, limits, self.check(limits, duration))
+        low, high = DURATION_RANGE
+        if duration is None and not low <= prof.duration <= high:
+            hint = "give a duration" if prof.duration < low else "the limits are too small for this motion"
+            raise InputError(f"timing '{self.name}': the shortest feasible duration within {limits.describe()} is "
+                             f"{prof.duration:.6g} s, outside the accepted [{low:g}, {high:g}] s: {hint}")
+        return prof
 
     def check(self, limits: Limits, duration: float | None = None) -> float | None:
         """The checks of :meth:`profile` that need no path (cheap: call them before planning); the duration.
