@@ -293,7 +293,7 @@ def accel_bounds(A, B, x, tau):
     return lo, hi
 
 
-def torque_mvc(A, B, tau, top=1e12, iterations=200):
+def torque_mvc(A, B, tau, top=1e12, iterations=120):
     """Largest x = s'^2 at which some s'' meets every torque row, by bisection (A, B: (N, m)); inf if > top.
 
     The feasible x form an interval [0, x_max] (the set {(u, x)} is convex and holds (0, 0)).

@@ -143,13 +143,13 @@ def test_phase_plane_agrees_and_converges(plan_path):
     """The relative difference of the grid solution and the phase-plane integration falls with the grid size;
     the grid solution (feasible at its nodes) is the longer."""
     diffs = []
-    for n in (1000, 4000, 16000):
+    for n in (1000, 3000, 9000):
         grid = plan_path.grid(n)
         t_grid = solve_topp(grid, LIMITS).duration
         t_pp = references.phase_plane_topp(grid, LIMITS.max_rotor_rate, LIMITS.max_rotor_torque)["duration"]
         diffs.append((t_grid - t_pp) / t_pp)
     assert diffs[0] > diffs[1] > diffs[2] > 0
-    assert diffs[2] < 2e-4
+    assert diffs[2] < 3e-4
 
 
 def test_bang_bang(plan_path):

@@ -20,8 +20,9 @@ Output
     ``s(T) = L``, ``s'(0) = s'(T) = 0``, ``s' >= 0``, s and s' continuous, s''
     bounded and piecewise continuous, ``s' = 0`` at every corner; laws with
     ``stops_at_joints`` also have ``s' = s'' = 0`` at every joint. The rotor rates
-    ``G s'`` and torques ``A s'' + B s'^2`` stay within the limits (for
-    ``time-optimal`` to a relative 1e-6, see below).
+    ``G s'`` and torques ``A s'' + B s'^2`` stay within the limits (``time-optimal``:
+    exactly at its check points, and between them up to the discretisation error of
+    the check, see below).
 Limits
     :meth:`TimeLaw.minimum_duration` is the shortest T for which the law stays within
     the limits. A requested T below it raises :class:`rollplan.errors.InputError`
