@@ -67,14 +67,14 @@ def draw_phase_plane(ax, motions, velocity_limit=None, joints=(), reference=None
         tops.append(float(m.s_dot.max()))
     if reference is not None:
         label, s, sd = reference
-        ax.plot(s, sd, color="0.4", linestyle="--", linewidth=1.0, label=label)
+        ax.plot(s, sd, color="k", linestyle=(0, (3, 3)), linewidth=0.9, label=label, zorder=5)  # on top
     for sj in joints:
         ax.axvline(sj, color="0.7", linestyle=":", linewidth=0.8)
     ax.set_ylim(0, 1.15 * max(tops))
     ax.set_xlabel("contact arc length s [R]   (dotted: poles between half-steps)")
     ax.set_ylabel("s' [R/s]")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower center", fontsize=7, ncol=2)
+    ax.legend(loc="lower center", fontsize=7, ncol=3, framealpha=0.95)
 
 
 def plot_timing(motions, velocity_limit=None, title: str = "", reference=None) -> Figure:
