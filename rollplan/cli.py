@@ -69,14 +69,24 @@ def _fmt_plan(p, unit) -> str:
 
 def cmd_plan(args) -> int:
     _check_outputs(json=args.json, figure=args.plot)
+    if args.timing_plot is not None:
+        check_figure_path(args.timing_plot)
+    timed = args.duration is not None or args.timing is not None
+    if args.timing_plot is not None and not timed:
+        raise InputError("--timing-plot needs a timed motion: give --duration T or --timing NAME")
     k, robot = _k_or_robot(args)
-    if args.duration is not None and robot is None:
+    if timed and robot is None:
         if k is not None:
-            raise InputError("--duration needs the robot's inertias, not only k: give --robot FILE "
+            raise InputError("--duration and --timing need the robot's inertias, not only k: give --robot FILE "
                              "(or drop --k to use the default robot)")
         robot = default_robot()
         print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
               "lengths in m")
+    if timed:  # the law's needs, before planning
+        from .execution.limits import Limits
+        from .execution.timing import get_law
+
+        get_law(args.timing or "min-jerk").check(Limits.of(robot), args.duration)
     p = geometric.plan((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.all, args.method)
     unit = "m" if robot is not None else ("R" if args.radius is None else "units")
     g = p.goal
@@ -89,7 +99,7 @@ def cmd_plan(args) -> int:
     for i, alt in enumerate(p.alternatives, 1):
         print(f"alternative {i}:")
         print(_fmt_plan(alt, unit))
-    motion, extra = _timed(args, p, robot) if args.duration is not None else (None, {})
+    motion, extra = _timed(args, p, robot) if timed else (None, {})
     traj = p.sample() if (args.json or args.plot) else None
     if args.json:
         write_json(args.json, {**plan_to_dict(p, traj), **extra})
@@ -104,20 +114,39 @@ def cmd_plan(args) -> int:
 
         save_figure(plot_plan(p, traj, unit or "R"), args.plot)
         print(f"wrote {args.plot}")
+    if args.timing_plot:
+        from .execution.timing import velocity_limit
+        from .plots.timing import plot_timing
+
+        limit = velocity_limit(motion.path, motion.limits, motion.profile) if motion.limits.any else None
+        save_figure(plot_timing(motion, limit), args.timing_plot)
+        print(f"wrote {args.timing_plot}")
     return EXIT_OK
 
 
 def _timed(args, p, robot):
-    """``plan --duration``: rotor rates, angles and torques, checked by the rotor-only simulation."""
+    """``plan --duration / --timing``: rotor rates, angles and torques, checked by the rotor-only simulation."""
     from .execution.actuation import actuate
     from .execution.plants import simulate_rotors
+    from .execution.timing import round_up
     from .io import motion_to_dict
 
-    motion = actuate(p, robot, args.duration, args.samples)
+    timing = args.timing or "min-jerk"
+    motion = actuate(p, robot, args.duration, args.samples, timing)
     sim = simulate_rotors(robot, motion.time, motion.rotor_rates, p.goal)
-    print(f"  motion        T = {motion.duration:g} s, {motion.time.size} samples, rest-to-rest per half-step")
-    print(f"  rotors        max |rate| = {abs(motion.rotor_rates).max():.4g} rad/s   "
-          f"max |torque| = {abs(motion.rotor_torques).max():.4g} N m")
+    lim = motion.limits
+    print(f"  motion        T = {motion.duration:g} s, {motion.time.size} samples, timing {timing}"
+          f"{' (rest-to-rest per half-step)' if timing == 'min-jerk' else ''}")
+    if lim.any:
+        print(f"  limits        {lim.describe()}: the shortest feasible duration with timing {timing} is "
+              f"{round_up(motion.minimum_duration):.6g} s")
+    else:
+        print("  limits        none in the robot file (add max_rotor_rate [rad/s] and max_rotor_torque [N m] "
+              "to keep the motors within them)")
+    rate, torque = abs(motion.rotor_rates).max(), abs(motion.rotor_torques).max()
+    use_rate = f" ({rate / lim.max_rotor_rate:.1%} of the limit)" if lim.max_rotor_rate is not None else ""
+    use_torque = f" ({torque / lim.max_rotor_torque:.1%} of the limit)" if lim.max_rotor_torque is not None else ""
+    print(f"  rotors        max |rate| = {rate:.4g} rad/s{use_rate}   max |torque| = {torque:.4g} N m{use_torque}")
     print(f"  rotor-only    arrival error {sim.arrival_error:.2e} (position {sim.position_error:.2e} R; "
           "spline through the rotor rates, (11) and (6)-(10) by CVODES)")
     extra = motion_to_dict(motion)
@@ -358,6 +387,8 @@ def cmd_atlas(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .execution.timing import LAWS
+
     parser = _Parser(prog="rollplan", description=__doc__)
     parser.add_argument("-v", "--verbose", action="store_true", help="log the planner's progress")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -370,10 +401,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere and the plane "
                    "(with --duration: omega, rotor rates and torques in time)")
     p.add_argument("--duration", type=_number, default=None, metavar="T",
-                   help="time the plan rest-to-rest per half-step over T seconds and compute the rotor rates, "
-                        "angles and torques (uses the default robot unless --robot is given)")
+                   help="time the plan over T seconds (by default rest-to-rest per half-step, --timing min-jerk) "
+                        "and compute the rotor rates, angles and torques (uses the default robot unless --robot "
+                        "is given); refused if it would exceed the robot's max_rotor_rate or max_rotor_torque")
+    p.add_argument("--timing", choices=list(LAWS), default=None, metavar="NAME",
+                   help="timing law: " + "; ".join(f"{n}: {law.summary}" for n, law in LAWS.items())
+                        + ". Without --duration: the law's shortest duration within the robot's limits")
     p.add_argument("--samples", type=_whole, default=2000,
-                   help="least number of time samples with --duration (default 2000, >= 400 per half-step)")
+                   help="least number of time samples with --duration or --timing (default 2000; at least 400 "
+                        "per half-step for min-jerk, 3000 for the other laws)")
+    p.add_argument("--timing-plot", metavar="FILE.png",
+                   help="with --duration or --timing: rotor rates and torques in time with the robot's limits, "
+                        "and the phase plane (s, s') with the maximum velocity curve")
     p.set_defaults(func=cmd_plan)
 
     s = sub.add_parser("step", help="what one figure eight does: shift h and holonomy eta")
@@ -436,7 +475,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.ERROR, format="%(name)s: %(message)s")
     if (getattr(args, "command", None) in ("plan", "compare") and args.k is None and args.robot is None
-            and getattr(args, "duration", None) is None):
+            and getattr(args, "duration", None) is None and getattr(args, "timing", None) is None):
         args.k = DEFAULT_K
     try:
         return args.func(args)

@@ -13,7 +13,7 @@ import numpy as np
 from .errors import InputError
 from .execution.plants import check_samples
 from .problem import State
-from .robot import Robot
+from .robot import OPTIONAL_KEYS, Robot
 
 __all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict",
            "motion_to_dict", "RotorPlan", "load_rotor_plan"]
@@ -119,16 +119,21 @@ def plan_to_dict(plan, traj=None, include_alternatives=True) -> dict:
 def motion_to_dict(motion) -> dict:
     """The motion's keys of ``rollplan plan --duration T --json``: time series as lists of rows.
 
-    ``state`` rows are in :class:`~rollplan.problem.State` order (u_a, v_a, psi, u_o, v_o).
+    ``state`` rows are in :class:`~rollplan.problem.State` order (u_a, v_a, psi, u_o, v_o);
+    ``segment`` numbers the half-step of each sample; ``timing`` is the law's name and
+    ``minimum_duration`` its shortest duration within the robot's limits (null without limits).
     """
     return {
+        "timing": motion.timing,
         "duration": motion.duration,
+        "minimum_duration": motion.minimum_duration,
         "time": _f(motion.time),
         "omega": _rows(motion.omega),
         "rotor_rates": _rows(motion.rotor_rates),
         "rotor_angles": _rows(motion.rotor_angles),
         "rotor_torques": _rows(motion.rotor_torques),
         "state": _rows(motion.state),
+        "segment": [int(v) for v in motion.segment],
         "robot": motion.robot.as_dict(),
     }
 
@@ -174,10 +179,11 @@ def load_rotor_plan(path) -> RotorPlan:
             hint = " (make it with: rollplan plan ... --duration T --json FILE)" if key != "target" else ""
             raise InputError(f"plan file {str(path)!r} has no key {key!r}{hint}")
     rob = data["robot"]
-    names = [f.name for f in fields(Robot)]
+    names = [f.name for f in fields(Robot) if f.name not in OPTIONAL_KEYS]
     if not isinstance(rob, dict) or any(n not in rob for n in names):
         raise InputError(f"plan file {str(path)!r}: 'robot' must hold {', '.join(names)}")
-    robot = Robot(**{n: rob[n] for n in names})
+    # plan files written before the motors' limits existed have no such keys: unlimited
+    robot = Robot(**{n: rob[n] for n in [*names, *OPTIONAL_KEYS] if n in rob})
     tg = data["target"]
     try:
         goal = State(float(tg["u_a"]), float(tg["v_a"]), float(tg["psi"]))
