@@ -13,6 +13,11 @@ corrected and said so), and is what the tests compare rollplan's symbolic model 
   (35) rotated by gamma (31); :func:`rhs` and :func:`trace` -- (28)-(30) along the figure eight,
   integrated by scipy's DOP853 (an integrator that shares no code with rollplan);
 * :func:`n_step_gain` -- (33)-(34); :func:`shift_36` -- the closed form (36);
+* :func:`contact_point` -- (1); :func:`rolling_18_19` -- (18), (19);
+  :func:`rates_15_16_20` -- (15), (16), (20) for any contact path;
+  :func:`chart_rates` -- (24)-(27);
+  :func:`integrate_contact_path` -- (15), (16), (20) along a contact path given in time, by DOP853;
+  :func:`great_circle_path`, :func:`circle_path`, :func:`chart_path` -- contact paths typed here;
 * :func:`wrap` -- an angle reduced to (-pi, pi]; :func:`rotate` -- a plane vector turned;
   :func:`two_pi_fraction` -- 2 pi as an exact fraction to many digits (Chudnovsky's series in
   integer arithmetic).
@@ -199,3 +204,74 @@ def shift_36(a):
     a = np.asarray(a, float)
     c = np.sqrt(1 - a * a)
     return 4 * a / c * np.sin(np.pi * c)
+
+
+# ----------------------------------------------------------------------------- any contact path: (15), (16), (20)
+
+
+def rates_15_16_20(psi, u_o, v_o, du_o, dv_o, k, radius=1.0):
+    """(15), (16), (20) as printed: rates of (u_a, v_a, psi) for the contact rates (du_o, dv_o)."""
+    return np.array([-radius * np.cos(psi) * np.cos(v_o) * du_o + radius * np.sin(psi) * dv_o,
+                     radius * np.sin(psi) * np.cos(v_o) * du_o + radius * np.cos(psi) * dv_o,
+                     psi_dot(u_o, v_o, du_o, dv_o, k)])
+
+
+def rolling_18_19(u_o, v_o, psi, du_o, dv_o):
+    """(18), (19) as printed: the rolling components (omega_x, omega_y) from the contact rates."""
+    return (-du_o * np.cos(v_o) * np.sin(psi) - dv_o * np.cos(psi),
+            -du_o * np.cos(v_o) * np.cos(psi) + dv_o * np.sin(psi))
+
+
+def contact_point(u_o, v_o):
+    """(1) on the unit sphere: ``(-sin u cos v, sin v, -cos u cos v)``, shape (..., 3)."""
+    return np.stack([-np.sin(u_o) * np.cos(v_o), np.sin(v_o), -np.cos(u_o) * np.cos(v_o)], axis=-1)
+
+
+def chart_rates(point, dpoint):
+    """``(u_o, v_o, u_o', v_o')`` of a point moving on the unit sphere at ``dpoint``: (24)-(27) as printed."""
+    x, y, z = point
+    s = np.sqrt(1 - y * y)
+    v, u = np.arcsin(y), np.arctan2(-x / s, -z / s)                            # (24), (25)
+    c_u, c_v = np.array([z, 0.0, -x]), np.array([-x * y / s, s, -y * z / s])   # (26)
+    return u, v, c_u @ dpoint / (s * s), c_v @ dpoint                          # (27)
+
+
+def integrate_contact_path(path, x0, t_span, k, t_eval=None, rtol=1e-13, atol=1e-14):
+    """(15), (16), (20) integrated by DOP853 from ``x0 = (u_a, v_a, psi)`` along ``path(t) -> (u, v, u', v')``.
+
+    Returns scipy's solution object (``.y`` of shape (3, len(t_eval)))."""
+    sol = solve_ivp(lambda t, x: rates_15_16_20(x[2], *path(t), k), t_span, np.asarray(x0, float),
+                    method="DOP853", rtol=rtol, atol=atol, t_eval=t_eval)
+    assert sol.success, sol.message
+    return sol
+
+
+def great_circle_path(beta, sigma_0, sigma_1):
+    """The great circle through the south pole in the direction beta, polar angle from sigma_0 to sigma_1
+    as t runs over [0, 1]: a contact path for :func:`integrate_contact_path`."""
+    def path(t):
+        ang = sigma_0 + (sigma_1 - sigma_0) * t
+        c = np.array([np.sin(ang) * np.cos(beta), np.sin(ang) * np.sin(beta), -np.cos(ang)])
+        dc = (sigma_1 - sigma_0) * np.array([np.cos(ang) * np.cos(beta), np.cos(ang) * np.sin(beta), np.sin(ang)])
+        return chart_rates(c, dc)
+
+    return path
+
+
+def circle_path(a, side, gamma):
+    """The circle (35) of radius a (side +1: +y, -1: -y) rotated by gamma (31), t in [0, 2 pi]."""
+    return lambda t: chart_rates(*circle(a, t, side, gamma))
+
+
+def chart_path(u0, v0, cu, cv):
+    """A smooth path in the chart, t in [0, 1]: ``u = u0 + sum cu_j sin(2 pi j t)``,
+    ``v = v0 + sum cv_j (1 - cos(2 pi j t))``."""
+    cu, cv = np.asarray(cu, float), np.asarray(cv, float)
+    j = np.arange(1, cu.size + 1)
+
+    def path(t):
+        w = 2 * np.pi * j * t
+        return (u0 + cu @ np.sin(w), v0 + cv @ (1 - np.cos(w)),
+                cu @ (2 * np.pi * j * np.cos(w)), cv @ (2 * np.pi * j * np.sin(w)))
+
+    return path
