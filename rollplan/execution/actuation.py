@@ -2,20 +2,26 @@
 
 Time law
 --------
-A plan traces a closed curve ``n`` times; each trace is two leaves (half-steps),
-each leaf a smooth piece ``c(phi)``, ``phi in [0, 2 pi]`` (see :mod:`rollplan.curves`).
-Every leaf gets the same duration ``T_l = T / (2 n)`` and is traced with the
+A plan's contact path is a sequence of smooth pieces ``c(phi)``,
+``phi in [0, 2 pi]`` (:class:`rollplan.core.paths.PathPiece`): the two leaves
+(half-steps) of each of the ``n`` figure eights of a geometric-phase plan, and
+for a composed plan also the approach and departure rolls and the circles of a
+turn in place (:mod:`rollplan.planners.geometric.composed`). Every piece gets
+the same duration ``T_l = T / P`` (``P`` pieces) and is traced with the
 rest-to-rest (minimum-jerk) profile
 
     phi(t) = 2 pi s(tau),   s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5,   tau = (t - t_j) / T_l,
 
-so ``phi_dot`` and ``phi_ddot`` vanish at both ends of every leaf: the robot
-starts from rest, stops at the south pole between leaves, and does not start
-impulsively, as the momentum integral (11) assumes.
+so ``phi_dot`` and ``phi_ddot`` vanish at both ends of every piece: the robot
+starts from rest, stops at every joint of the contact path (the joints between
+the pieces of a composed plan are corners, where the contact path's tangent
+jumps; a time law that did not stop there would need an infinite angular
+acceleration), and does not start impulsively, as the momentum integral (11)
+assumes.
 
 Angular velocity and rotor rates
 --------------------------------
-Along a leaf the contact rates are ``(u_o_dot, v_o_dot) = (du_o/dphi, dv_o/dphi) phi_dot``
+Along a piece the contact rates are ``(u_o_dot, v_o_dot) = (du_o/dphi, dv_o/dphi) phi_dot``
 with (u_o, v_o) from (24)-(25); the rolling components of omega are (18)-(19),
 the spin is fixed by the realizability condition (13) (:func:`rollplan.model.realizable_omega`),
 and the rotor rates follow from the momentum integral (11)
@@ -73,29 +79,33 @@ import casadi as ca
 import numpy as np
 
 from ..core import model
-from ..core.curves import figure_eight, rotated_point
+from ..core.curves import rotated_point
 from ..core.integrate import piece_rhs
+from ..core.paths import CURVES
+from ..core.plane import wrap_exact
 from ..errors import InputError, check_range, check_whole
+from ..planners.geometric.composed import as_composed
 from ..problem import State
 from ..robot import Robot
 from .timing import rest_to_rest
 
-__all__ = ["Motion", "leaf_function", "actuate", "motion_to_dict", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF"]
+__all__ = ["Motion", "piece_function", "actuate", "motion_to_dict", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF"]
 
 log = logging.getLogger(__name__)
 
 #: Default total number of time samples of a motion (at least).
 DEFAULT_SAMPLES = 2000
-#: Least number of samples per leaf: a cubic spline through the rotor rates then drives the
+#: Least number of samples per piece (leaf): a cubic spline through the rotor rates then drives the
 #: rotor-only simulation to the target within ~1e-8 R (the error falls as h^4; see the tests).
 MIN_SAMPLES_PER_LEAF = 400
 
 
-@lru_cache(maxsize=4)
-def leaf_function(index: int) -> ca.Function:
-    """Geometry of one leaf of the figure eight, per unit ``phi_dot`` (all from :mod:`rollplan.model`).
+@lru_cache(maxsize=8)
+def piece_function(curve: str, index: int) -> ca.Function:
+    """Geometry of piece ``index`` of the curve ``CURVES[curve]``, per unit ``phi_dot`` (all from the model).
 
-    ``F(phi, psi, p[2], gamma, k, jxx, jzz, jr) -> (xdot[5], uv[2], w[3], g[2], a[2], da[2], n[3x2])``:
+    ``F(phi, psi, p[n], gamma, k, jxx, jzz, jr) -> (xdot[5], uv[2], w[3], g[2], a[2], da[2], n[3x2])``
+    with ``p`` the curve's parameters:
 
     * ``xdot`` -- d/dphi of (u_a, v_a, psi, rotor angle 1, rotor angle 2); the first three are (28)-(30)
       (units of R), the last two ``g``;
@@ -103,38 +113,39 @@ def leaf_function(index: int) -> ca.Function:
     * ``w`` -- omega / phi_dot, (18), (19), (13);
     * ``g`` -- rotor rates / phi_dot, (11);
     * ``a`` -- ``n_i . w + g_i`` (axial spin per phi_dot);
-    * ``da`` -- total derivative of ``a`` along the leaf, d/dphi with psi' from (30);
+    * ``da`` -- total derivative of ``a`` along the piece, d/dphi with psi' from (30);
     * ``n`` -- rotor axes n_1, n_2 in the plane frame, (3)-(4).
     """
-    curve = figure_eight()
+    c = CURVES[curve]
     phi, psi, gamma, k = (ca.SX.sym(n) for n in ("phi", "psi", "gamma", "k"))
-    p = ca.SX.sym("p", 2)
+    p = ca.SX.sym("p", c.n_params)
     jxx, jzz, jr = ca.SX.sym("jxx"), ca.SX.sym("jzz"), ca.SX.sym("jr")
-    w, u_o, v_o = model.curve_omega(rotated_point(curve.pieces[index], phi, p, gamma), phi, psi, k)
+    w, u_o, v_o = model.curve_omega(rotated_point(c.pieces[index], phi, p, gamma), phi, psi, k)
     g = model.rotor_rates(w, u_o, v_o, psi, jxx, jzz, jr)
     rot = model.orientation(u_o, v_o, psi)
     a = ca.vertcat(ca.dot(rot[:, 0], w), ca.dot(rot[:, 1], w)) + g
-    xdot3 = piece_rhs(curve, index)(phi, ca.vertcat(0, 0, psi), p, k, gamma)
+    xdot3 = piece_rhs(c, index)(phi, ca.vertcat(0, 0, psi), p, k, gamma)
     da = ca.jacobian(a, phi) + ca.jacobian(a, psi) * xdot3[2]
-    return ca.Function(f"leaf{index}", [phi, psi, p, gamma, k, jxx, jzz, jr],
+    return ca.Function(f"{curve}{index}", [phi, psi, p, gamma, k, jxx, jzz, jr],
                        [ca.vertcat(xdot3, g), ca.vertcat(u_o, v_o), w, g, a, da, rot[:, :2]],
                        ["phi", "psi", "p", "gamma", "k", "jxx", "jzz", "jr"],
                        ["xdot", "uv", "w", "g", "a", "da", "n"])
 
 
-@lru_cache(maxsize=4)
-def _leaf_integrator(index: int, samples: int):
-    """CVODES over one leaf in the normalized time tau in [0, 1], outputs at ``samples`` uniform points."""
+@lru_cache(maxsize=16)
+def _piece_integrator(curve: str, index: int, samples: int):
+    """CVODES over one piece in the normalized time tau in [0, 1], outputs at ``samples`` uniform points."""
+    n = CURVES[curve].n_params
     tau = ca.SX.sym("tau")
     x = ca.SX.sym("x", 5)
-    par = ca.SX.sym("par", 7)  # a, b, gamma, k, jxx, jzz, jr
+    par = ca.SX.sym("par", n + 5)  # curve parameters, gamma, k, jxx, jzz, jr
     s, ds, _ = rest_to_rest()(tau)
     # d/dtau x = phi'(tau) xdot(phi) with phi = 2 pi s(tau)
-    xdot = leaf_function(index)(2 * np.pi * s, x[2], par[0:2], par[2], par[3], par[4], par[5], par[6])[0]
+    xdot = piece_function(curve, index)(2 * np.pi * s, x[2], par[:n], *(par[n + i] for i in range(5)))[0]
     ode = 2 * np.pi * ds * xdot
     grid = np.linspace(0.0, 1.0, samples + 1)[1:]
     opts = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 200000}
-    return ca.integrator(f"leaf_time{index}_{samples}", "cvodes", {"t": tau, "x": x, "p": par, "ode": ode},
+    return ca.integrator(f"time_{curve}{index}_{samples}", "cvodes", {"t": tau, "x": x, "p": par, "ode": ode},
                          0.0, list(grid), opts)
 
 
@@ -150,12 +161,13 @@ class Motion:
     time : ndarray, shape (N,)
         Time [s], from 0 to ``duration``.
     phi : ndarray, shape (N,)
-        Parameter of the current leaf, ``2 pi s(tau)`` [rad].
+        Parameter of the current piece (leaf), ``2 pi s(tau)`` [rad].
     phi_dot : ndarray, shape (N,)
         Its rate [rad/s].
     leaf : ndarray, shape (N,), int
-        Index of the leaf (half-step) the sample belongs to, from 0 (a boundary
-        sample belongs to the leaf that ends there; sample 0 to leaf 0).
+        Index of the piece of the contact path (a leaf, a half-step, of a figure eight; a roll...)
+        the sample belongs to, from 0 (a boundary sample belongs to the piece that ends there;
+        sample 0 to piece 0).
     state : ndarray, shape (N, 5)
         Contact coordinates in :class:`~rollplan.problem.State` order (u_a [m], v_a [m], psi, u_o, v_o [rad]).
     omega : ndarray, shape (N, 3)
@@ -188,7 +200,7 @@ class Motion:
 
     @property
     def rest_indices(self) -> np.ndarray:
-        """Indices of the rest points: t = 0 and the end of every leaf."""
+        """Indices of the rest points: t = 0 and the end of every piece (leaf)."""
         return np.concatenate([[0], np.nonzero(np.diff(self.leaf) != 0)[0], [self.time.size - 1]])
 
 
@@ -197,24 +209,24 @@ def _samples_per_leaf(samples: int, leaves: int) -> int:
 
 
 def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES) -> Motion:
-    """Time a plan rest-to-rest per leaf and compute omega, rotor rates, angles and torques.
+    """Time a plan rest-to-rest per piece and compute omega, rotor rates, angles and torques.
 
-    Solves, for each leaf of the plan's figure eight, ``phi(t) = 2 pi s(tau)``
+    Solves, for each piece of the plan's contact path, ``phi(t) = 2 pi s(tau)``
     with the minimum-jerk ``s``; then omega from (18), (19), (13), the rotor
     rates from (11), the rotor angles by integration, and the torques from (T)
-    of the module docstring.
+    of the module docstring. The motion starts at the plan's start state.
 
     Parameters
     ----------
-    plan : rollplan.planners.geometric.Plan
-        A geometric-phase plan, made for this robot (same k and radius).
+    plan : Plan, ComposedPlan or Route
+        A geometric-phase plan (:mod:`rollplan.planners.geometric`), made for this robot (same k and radius).
     robot : Robot
         The robot's parameters.
     duration : float
-        Total time T > 0 [s]; each of the ``2 n`` leaves takes ``T / (2 n)``.
+        Total time T > 0 [s]; each of the P pieces (the ``2 n`` leaves of n figure eights) takes ``T / P``.
     samples : int
-        Least number of time samples (>= 3); rounded up to fill the leaves evenly,
-        with at least :data:`MIN_SAMPLES_PER_LEAF` per leaf.
+        Least number of time samples (>= 3); rounded up to fill the pieces evenly,
+        with at least :data:`MIN_SAMPLES_PER_LEAF` per piece.
 
     Returns
     -------
@@ -228,23 +240,31 @@ def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES)
     if not math.isclose(plan.radius, robot.radius, rel_tol=1e-12, abs_tol=0.0):
         raise InputError(f"the plan's radius = {plan.radius:g} differs from the robot's radius = {robot.radius:g}")
     R = robot.radius
-    leaves = 2 * plan.steps
-    m = _samples_per_leaf(samples, leaves)
-    t_leaf = duration / leaves
+    path = as_composed(plan)
+    start = path.problem.scaled(path.problem.start).array()
+    start[2], turns = wrap_exact(start[2])   # psi is an angle: integrate it reduced, report it as given
+    pieces = path.pieces
+    if not pieces:   # the empty motion: at rest at the start
+        time = np.linspace(0.0, duration, samples)
+        state = np.repeat(path.problem.start.array()[None, :], samples, axis=0)
+        zero = lambda m: np.zeros((samples, m))  # noqa: E731
+        return Motion(time, zero(1)[:, 0], zero(1)[:, 0], np.zeros(samples, int), state, zero(3), zero(2), zero(2),
+                      zero(2), robot, duration, plan.goal)
+    m = _samples_per_leaf(samples, len(pieces))
+    t_leaf = duration / len(pieces)
     jxx, jzz, jr = robot.j_xx, robot.j_zz, robot.rotor_inertia_axial
-    ab = [plan.a / R, plan.b / R]
-    par = np.array([ab[0], ab[1], plan.gamma, plan.k, jxx, jzz, jr])
     tau = np.linspace(0.0, 1.0, m + 1)
     s, ds, dds = (np.array(v).ravel() for v in rest_to_rest().map(m + 1)(tau[None, :]))
     phi, phi_dot, phi_ddot = 2 * np.pi * s, 2 * np.pi * ds / t_leaf, 2 * np.pi * dds / t_leaf**2
 
-    x = np.zeros(5)
+    x = np.concatenate([start[:3], [0.0, 0.0]])   # (u_a, v_a, psi) [R], rotor angles
     rows = {k: [] for k in ("time", "phi", "phi_dot", "phi_ddot", "leaf", "x", "uv", "w", "g", "a", "da")}
-    for j in range(leaves):
-        piece = j % 2
-        xs = np.array(_leaf_integrator(piece, m)(x0=x, p=par)["xf"])
+    for j, piece in enumerate(pieces):
+        par = np.array([*piece.params, piece.gamma, plan.k, jxx, jzz, jr])
+        xs = np.array(_piece_integrator(piece.curve, piece.index, m)(x0=x, p=par)["xf"])
         xs = np.hstack([x[:, None], xs])  # (5, m + 1)
-        out = leaf_function(piece).map(m + 1)(phi[None, :], xs[2][None, :], ab, plan.gamma, plan.k, jxx, jzz, jr)
+        out = piece_function(piece.curve, piece.index).map(m + 1)(
+            phi[None, :], xs[2][None, :], list(piece.params), piece.gamma, plan.k, jxx, jzz, jr)
         keep = slice(0, None) if j == 0 else slice(1, None)
         rows["time"].append((j + tau[keep]) * t_leaf)
         rows["phi"].append(phi[keep])
@@ -258,14 +278,14 @@ def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES)
     cat = {k: np.concatenate(v) for k, v in rows.items()}
     pd, pdd = cat["phi_dot"], cat["phi_ddot"]
     xs = cat["x"]
-    state = np.column_stack([xs[:, 0] * R, xs[:, 1] * R, xs[:, 2], cat["uv"]])
+    state = np.column_stack([xs[:, 0] * R, xs[:, 1] * R, xs[:, 2] + 2 * np.pi * turns, cat["uv"]])
     omega = pd[:, None] * cat["w"]
     rates = pd[:, None] * cat["g"]
     torques = jr * (pdd[:, None] * cat["a"] + pd[:, None] ** 2 * cat["da"])
     time = cat["time"]
     time[-1] = duration
-    log.info("motion: %d leaves x %d samples, T = %g s, max |rotor rate| = %.3g rad/s, max |torque| = %.3g N m",
-             leaves, m, duration, np.abs(rates).max(), np.abs(torques).max())
+    log.info("motion: %d pieces x %d samples, T = %g s, max |rotor rate| = %.3g rad/s, max |torque| = %.3g N m",
+             len(pieces), m, duration, np.abs(rates).max(), np.abs(torques).max())
     return Motion(time, cat["phi"], pd, cat["leaf"], state, omega, rates, xs[:, 3:5], torques, robot,
                   duration, plan.goal)
 
