@@ -111,7 +111,7 @@ def arrival_error(final, goal, radius: float = 1.0) -> np.ndarray:
 
 def arrival_residual(final, goal, radius: float = 1.0) -> float:
     """Euclidean norm of :func:`arrival_error`: the residual every certificate reports."""
-    return float(np.linalg.norm(arrival_error(final, goal, radius)))
+    return float(math.hypot(*arrival_error(final, goal, radius)))   # no overflow for distances of any size
 
 
 def check_k(k) -> float:

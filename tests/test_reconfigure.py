@@ -8,6 +8,7 @@ from functools import lru_cache
 
 import numpy as np
 import pytest
+from test_cli import run
 
 import rollplan
 from rollplan import InputError, NoPlanError, Problem, State
@@ -473,17 +474,6 @@ def test_collocation_warm_started_from_a_composed_plan():
     assert r2.certificate.passed
 
 
-def run(capsys, *argv):
-    from rollplan.cli import main
-
-    try:
-        code = main(list(argv))
-    except SystemExit as exc:  # argparse's own checks
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
 @pytest.mark.parametrize("argv,needle", [
     (["plan", "--to", "0", "1", "--contact", "1.6", "0"], "goal (u_o, v_o) = (1.6, 0)"),
     (["plan", "--to", "0", "1", "--contact", "1.5", "1.2"], "below 0.05"),
@@ -525,3 +515,27 @@ def test_command_times_simulates_and_animates_a_composed_plan(tmp_path, capsys):
     assert code == 0 and error < 1e-6
     code, _, _ = run(capsys, "animate", str(plan_file), "--out", str(tmp_path / "a.gif"), "--frames", "5")
     assert code == 0 and (tmp_path / "a.gif").stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_a_route_of_two_leg_searches_promptly(tmp_path):
+    """SIGINT while the legs are searched (IPOPT polishes and root solves inside CasADi): exit 130 at once."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    rows = "\n".join(f"{1e-6 * (i % 2)},{1e-6 * i},{0.5 * (i % 2)}" for i in range(1, 30))
+    path = tmp_path / "w.csv"
+    path.write_text(f"u_a,v_a,psi\n0,0,0\n{rows}\n")
+    # the command as a user's shell starts it: SIGINT handled by Python (a background test run ignores it)
+    code = ("import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+            "from rollplan.cli import main; sys.exit(main(sys.argv[1:]))")
+    p = subprocess.Popen([sys.executable, "-c", code, "route", str(path), "--k", "7.7"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    time.sleep(8.0)
+    assert p.poll() is None, "the route ended before the interrupt: make it longer"
+    t0 = time.perf_counter()
+    p.send_signal(signal.SIGINT)
+    err = p.communicate(timeout=60)[1]
+    assert p.returncode == 130 and "interrupted" in err and time.perf_counter() - t0 < 5.0

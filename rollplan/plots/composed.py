@@ -52,7 +52,7 @@ def plot_composed(plan, traj, unit="R") -> Figure:
     ax3.plot(traj.s, traj.psi, label="psi")
     ax3.plot(traj.s, traj.u_o, label="u_o")
     ax3.plot(traj.s, traj.v_o, label="v_o")
-    ax3.set_xlabel("path parameter (pi per piece; grey lines: joints, where the motion rests)")
+    ax3.set_xlabel("path parameter (pi per piece; grey: joints, at rest)")
     ax3.set_ylabel("[rad]")
     ax3.grid(True, alpha=0.3)
     ax3.legend(loc="best", fontsize=8)

@@ -61,6 +61,7 @@ from functools import lru_cache
 import numpy as np
 
 from ...core.integrate import DEFAULT_NODES
+from ...core.interrupt import interruptible, raise_if_interrupted
 from ...core.paths import PathIntegrator, allocate_samples, figure_eight_pieces
 from ...core.plane import compose, inverse, relative, wrap, wrap_exact
 from ...errors import InputError, NoPlanError, check_whole
@@ -251,7 +252,19 @@ class ComposedPlanner:
 
     def solve(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
         """Plan for ``problem``: a :class:`Plan` for a pole-to-pole problem from rest that one leg
-        serves (unless ``legs`` asks otherwise), else a :class:`ComposedPlan`; see :func:`plan`."""
+        serves (unless ``legs`` asks otherwise), else a :class:`ComposedPlan`; see :func:`plan`.
+        Ctrl-C stops it (KeyboardInterrupt), also inside a root solve."""
+        with interruptible():
+            return self._solve(problem, all_solutions, branch)
+
+    def _leg(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
+        """One leg of figure eights by the pole-to-pole planner (a Ctrl-C its root solver dropped is raised)."""
+        try:
+            return self.planner.solve(problem, all_solutions, branch)
+        finally:
+            raise_if_interrupted()
+
+    def _solve(self, problem: Problem, all_solutions: bool, branch: int | None):
         t0 = time.perf_counter()
         if not isinstance(problem, Problem):
             raise InputError(f"problem = {problem!r} is not allowed: give a rollplan.Problem")
@@ -263,7 +276,7 @@ class ComposedPlanner:
         one_only = self.legs == "one" or branch is not None
         if _pole_to_pole(problem) and self.legs != "two" and math.hypot(goal.u_a, goal.v_a) > IDENTITY_TOL:
             try:
-                found = self.planner.solve(problem, all_solutions, branch)
+                found = self._leg(problem, all_solutions, branch)
             except NoPlanError:
                 if one_only:
                     raise
@@ -320,7 +333,7 @@ class ComposedPlanner:
         one = None
         if legs != "two" and math.hypot(target[0], target[1]) > IDENTITY_TOL:
             try:
-                one = self.planner.solve(Problem(tuple(target), k=k, steps=steps), all_solutions, branch)
+                one = self._leg(Problem(tuple(target), k=k, steps=steps), all_solutions, branch)
             except NoPlanError as exc:
                 if legs == "one":
                     raise
@@ -351,8 +364,8 @@ class ComposedPlanner:
             b1 = round((c.chi1 - w[2]) / (2 * math.pi)) if restrict else None
             b2 = round((c.chi2 - t2[2]) / (2 * math.pi)) if restrict else None
             try:
-                p1 = self.planner.solve(Problem(tuple(w), k=k, steps=steps), branch=b1)
-                p2 = self.planner.solve(Problem(tuple(t2), k=k, steps=steps), branch=b2)
+                p1 = self._leg(Problem(tuple(w), k=k, steps=steps), branch=b1)
+                p2 = self._leg(Problem(tuple(t2), k=k, steps=steps), branch=b2)
             except NoPlanError:
                 tried.append({"estimate": c.length, "polished": c.polished, "found": False})
                 return None

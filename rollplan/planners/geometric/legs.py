@@ -53,6 +53,7 @@ import numpy as np
 
 from ...core.curves import A_MAX, figure_eight
 from ...core.integrate import DEFAULT_NODES, spectral_step
+from ...core.interrupt import raise_if_interrupted
 from ...core.plane import relative, rotate
 from .turn import leaf_maps
 
@@ -231,6 +232,7 @@ def two_leg_candidates(target, k: float, steps: int, count: int = 4) -> list:
         psi_m = psi_f + TWO_PI * round((steps * (e1 + e2) - psi_f) / TWO_PI)
         lbg, ubg = [0.0, -h_f] + ([] if tip else [0.0]), [0.0, h_f] + ([] if tip else [np.inf])
         sol = solver(x0=z0, p=[k, psi_m, h_f], lbx=LEAF_FLOOR, ubx=A_MAX, lbg=lbg, ubg=ubg)
+        raise_if_interrupted()
         z = np.array(sol["x"]).ravel()
         e1, r1, e2, r2 = (float(v) for v in info(z, [k, psi_m, h_f]))
         violation = max(abs(steps * (e1 + e2) - psi_m), abs(r1 - r2) - h_f, 0.0 if tip else h_f - r1 - r2, 0.0)

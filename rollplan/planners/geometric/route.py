@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...core.interrupt import interruptible
 from ...errors import InputError, NoPlanError
 from ...problem import Problem, State, arrival_residual
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
@@ -99,6 +100,11 @@ def plan_route(waypoints, steps: int = 1, k: float | None = None, robot: Robot |
     NoPlanError
         A leg has no plan (the message names it), or the route fails its certificate.
     """
+    with interruptible():
+        return _plan_route(waypoints, steps, k, robot, radius, legs, method, progress)
+
+
+def _plan_route(waypoints, steps, k, robot, radius, legs, method, progress) -> Route:
     t0 = time.perf_counter()
     wps = tuple(w if isinstance(w, Waypoint) else Waypoint(State.of(w, f"waypoint {i}"))
                 for i, w in enumerate(waypoints))
