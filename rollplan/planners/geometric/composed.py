@@ -280,18 +280,22 @@ class ComposedPlanner:
             except NoPlanError:
                 if one_only:
                     raise
-            else:
-                if self.legs != "shortest":
-                    return found
-                other = self._composed(problem, t0, all_solutions, None, "two", quiet=True)
-                return other if other is not None and other.path_length < found.path_length else found
+                return self._composed(problem, t0, False, None, "two")   # one leg has just failed
+            if self.legs == "shortest":
+                try:
+                    other = self._composed(problem, t0, False, None, "two")
+                except NoPlanError:
+                    other = None
+                if other is not None and other.path_length < found.path_length:
+                    return other
+            return found
         if arrival_residual(start, goal) <= IDENTITY_TOL:
             return self._result(problem, "empty", None, None, np.zeros(3), (), None, None, t0, {})
         return self._composed(problem, t0, all_solutions, branch, "one" if one_only else self.legs)
 
     # -- the composed motion ------------------------------------------------------------
-    def _composed(self, problem, t0, all_solutions, branch, legs, quiet=False):
-        """Rolls, figure eights for (F), certificate. ``quiet``: None instead of NoPlanError."""
+    def _composed(self, problem, t0, all_solutions, branch, legs):
+        """Rolls, figure eights for (F) by the policy ``legs``, certificate."""
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
         approach = StraightRoll.make(start.u_o, start.v_o, "approach")
         departure = StraightRoll.make(goal.u_o, goal.v_o, "departure")
@@ -304,8 +308,6 @@ class ComposedPlanner:
         try:
             mode, legs_found, turn, w = self._eights(problem, target, legs, all_solutions, branch, details)
         except NoPlanError as exc:
-            if quiet:
-                return None
             raise NoPlanError(f"no plan for {problem.describe()}: the figure eights must do (u_a, v_a, psi) = "
                               f"({target[0]:.6g}, {target[1]:.6g}, {target[2]:.6g}) from rest at the pole; {exc}") \
                 from None
@@ -323,16 +325,18 @@ class ComposedPlanner:
     def _eights(self, problem, target, legs, all_solutions, branch, details):
         """``(mode, leg plans, turn, intermediate)`` of the figure eights for ``target`` (units of R)."""
         k, steps = problem.k, problem.steps
-        if math.hypot(target[0], target[1]) <= IDENTITY_TOL and legs != "two":
+        pure_turn = math.hypot(target[0], target[1]) <= IDENTITY_TOL
+        if pure_turn and legs in ("fallback", "shortest"):
             try:
                 return "turn", (), turn_in_place(float(target[2]), k, steps), None
             except NoPlanError as exc:
-                if legs == "one":
-                    raise
                 details["turn"] = str(exc)
         one = None
-        if legs != "two" and math.hypot(target[0], target[1]) > IDENTITY_TOL:
+        if legs != "two":
             try:
+                if pure_turn:
+                    raise NoPlanError("one leg of identical figure eights turns in place for isolated angles "
+                                      "only (three equations for two unknowns); try legs='fallback'")
                 one = self._leg(Problem(tuple(target), k=k, steps=steps), all_solutions, branch)
             except NoPlanError as exc:
                 if legs == "one":
