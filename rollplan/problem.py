@@ -105,7 +105,8 @@ def arrival_error(final, goal, radius: float = 1.0) -> np.ndarray:
     wrapped to (-pi, pi] (psi is an angle), u_o and v_o are differences [rad].
     """
     f, g = np.asarray(final, float), np.asarray(goal, float)
-    d = f - g
+    with np.errstate(over="ignore"):   # states 1e308 apart are infinitely far apart
+        d = f - g
     return np.array([d[0] / radius, d[1] / radius, float(wrap(d[2])), d[3], d[4]])
 
 

@@ -299,8 +299,12 @@ class ComposedPlanner:
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
         approach = StraightRoll.make(start.u_o, start.v_o, "approach")
         departure = StraightRoll.make(goal.u_o, goal.v_o, "departure")
-        target = compose(compose(inverse(approach.element()), relative(start[:3], goal[:3])),
-                         inverse(departure.element()))   # (F)
+        with np.errstate(over="ignore", invalid="ignore"):
+            target = compose(compose(inverse(approach.element()), relative(start[:3], goal[:3])),
+                             inverse(departure.element()))   # (F)
+        if not np.all(np.isfinite(target)):
+            raise NoPlanError(f"no plan for {problem.describe()}: the displacement from start to goal overflows "
+                              "double precision")
         details: dict = {}
         if math.hypot(target[0], target[1]) <= IDENTITY_TOL and abs(float(wrap(target[2]))) <= IDENTITY_TOL:
             mode = "empty" if approach.empty and departure.empty else "rolls"

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.interrupt import interruptible
+from ...core.plane import wrap_exact
 from ...errors import InputError, NoPlanError
 from ...problem import Problem, State, arrival_residual
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
@@ -134,7 +135,8 @@ def _plan_route(waypoints, steps, k, robot, radius, legs, method, progress) -> R
     for i, w in enumerate(wps[1:]):
         done = np.flatnonzero(owner <= i)
         end = ends[done[-1] + 1] if done.size else ends[0]
-        residuals.append(arrival_residual(end, whole.scaled(w.state)))
+        goal = whole.scaled(w.state)
+        residuals.append(arrival_residual(end, goal._replace(psi=wrap_exact(goal.psi)[0])))   # psi of any size
     residuals = np.array(residuals)
     if not cert.passed or residuals.max() > planner.tol:
         raise NoPlanError(f"the route fails its certificate: worst waypoint residual {residuals.max():.2e} > "
