@@ -18,6 +18,9 @@ corrected and said so), and is what the tests compare rollplan's symbolic model 
   :func:`chart_rates` -- (24)-(27);
   :func:`integrate_contact_path` -- (15), (16), (20) along a contact path given in time, by DOP853;
   :func:`great_circle_path`, :func:`circle_path`, :func:`chart_path` -- contact paths typed here;
+  :func:`polar_contact` -- (u_o, v_o) of a point given by polar angle and direction;
+  :func:`composed_final` -- a composed motion integrated along its pieces (read from their curve names and
+  parameters only); :func:`replay` -- (15), (16), (20) along a sampled contact path alone;
 * :func:`wrap` -- an angle reduced to (-pi, pi]; :func:`rotate` -- a plane vector turned;
   :func:`two_pi_fraction` -- 2 pi as an exact fraction to many digits (Chudnovsky's series in
   integer arithmetic).
@@ -275,3 +278,55 @@ def chart_path(u0, v0, cu, cv):
                 cu @ (2 * np.pi * j * np.cos(w)), cv @ (2 * np.pi * j * np.sin(w)))
 
     return path
+
+
+def polar_contact(sigma, beta):
+    """(u_o, v_o) of the point at polar angle sigma from the south pole in the direction beta, by inverting (1)."""
+    c = np.array([np.sin(sigma) * np.cos(beta), np.sin(sigma) * np.sin(beta), -np.cos(sigma)])
+    return float(np.arctan2(-c[0], -c[2])), float(np.arcsin(c[1]))
+
+
+def piece_path(piece):
+    """The contact path of a piece of a composed plan and its parameter span, typed here from the piece's
+    ``curve`` name, ``index``, ``params`` and ``gamma`` alone: the great circle (``"great_circle"``,
+    polar angle from params[0] to params[1], direction gamma) or a circle (35) of the figure eight
+    (``"figure_eight"``: radius params[index], side +y for index 0, -y for 1) rotated by gamma (31)."""
+    if piece.curve == "great_circle":
+        return great_circle_path(piece.gamma, *piece.params), 1.0
+    assert piece.curve == "figure_eight", piece.curve
+    return circle_path(piece.params[piece.index], 1.0 if piece.index == 0 else -1.0, piece.gamma), 2 * np.pi
+
+
+def composed_final(pieces, start, k):
+    """The end state (5,) of a composed motion from ``start`` (5,), units of R: (15), (16), (20) by DOP853
+    along every piece (:func:`piece_path`), the contact point of the last piece's end."""
+    x, contact = np.asarray(start, float)[:3], np.asarray(start, float)[3:]
+    for piece in pieces:
+        path, span = piece_path(piece)
+        x = integrate_contact_path(path, x, (0.0, span), k).y[:, -1]
+        contact = np.array(path(span)[:2])
+    return np.concatenate([x, contact])
+
+
+def replay(u_o, v_o, segment, x0, k):
+    """(u_a, v_a, psi) at every sample of a sampled contact path, from (15), (16), (20) by DOP853 along
+    cubic splines of the sampled (u_o, v_o) alone, one spline per segment (from the last sample of the
+    one before), parametrized by the chord length of the contact points (1): shape (N, 3)."""
+    from scipy.interpolate import CubicSpline
+
+    u, v, seg = (np.asarray(a) for a in (u_o, v_o, segment))
+    out = np.zeros((u.size, 3))
+    out[0] = x = np.asarray(x0, float)
+    for j in range(int(seg.max()) + 1):
+        idx = np.flatnonzero(seg == j)
+        idx = np.r_[idx[0] - 1, idx[idx > 0]] if idx[0] > 0 else idx
+        if idx.size < 2:
+            continue
+        c = contact_point(u[idx], v[idx])
+        tau = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))]
+        su, sv = CubicSpline(tau, u[idx]), CubicSpline(tau, v[idx])
+        sol = integrate_contact_path(lambda t, su=su, sv=sv: (su(t), sv(t), su(t, 1), sv(t, 1)), x, (0.0, tau[-1]),
+                                     k, tau, rtol=1e-12, atol=1e-13)
+        out[idx[1:]] = sol.y[:, 1:].T
+        x = sol.y[:, -1]
+    return out

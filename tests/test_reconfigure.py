@@ -25,10 +25,7 @@ TOL = 1e-9
 SIGMA_MAX = math.acos(N3Z_MIN)
 
 
-def contact_at(sigma, beta):
-    """(u_o, v_o) of the point at polar angle sigma from the pole in the direction beta, by inverting (1)."""
-    c = np.array([np.sin(sigma) * np.cos(beta), np.sin(sigma) * np.sin(beta), -np.cos(sigma)])
-    return float(np.arctan2(-c[0], -c[2])), float(np.arcsin(c[1]))
+contact_at = ref.polar_contact
 
 
 def random_state(rng, reach=1.0):
@@ -36,22 +33,7 @@ def random_state(rng, reach=1.0):
             *contact_at(rng.uniform(0.0, SIGMA_MAX), rng.uniform(-np.pi, np.pi)))
 
 
-def reference_path(piece):
-    """The printed-equation path of a piece and its parameter span, from the piece's parameters only."""
-    if piece.curve == "great_circle":
-        return ref.great_circle_path(piece.gamma, *piece.params), 1.0
-    assert piece.curve == "figure_eight"
-    return ref.circle_path(piece.params[piece.index], 1.0 if piece.index == 0 else -1.0, piece.gamma), 2 * np.pi
-
-
-def reference_final(pieces, start, k):
-    """The end state (5,) of the motion along ``pieces`` from ``start`` (units of R), by DOP853."""
-    x, contact = np.asarray(start, float)[:3], np.asarray(start, float)[3:]
-    for piece in pieces:
-        path, span = reference_path(piece)
-        x = ref.integrate_contact_path(path, x, (0.0, span), k).y[:, -1]
-        contact = np.array(path(span)[:2])
-    return np.concatenate([x, contact])
+reference_final = ref.composed_final
 
 
 def reference_residual(p):
@@ -352,29 +334,6 @@ def test_route_of_states_and_its_leg_without_a_plan():
 # ----------------------------------------------------------------------------- the sampled trajectory
 
 
-def replay(traj, k):
-    """(15), (16), (20) integrated by DOP853 from the first sample along cubic splines of the sampled
-    (u_o, v_o), segment by segment (parametrized by the chord length of the contact points); returns the
-    sampled and the replayed (u_a, v_a, psi) at every sample."""
-    from scipy.interpolate import CubicSpline
-
-    u, v, seg = np.array(traj["u_o"]), np.array(traj["v_o"]), np.array(traj["segment"])
-    state = np.column_stack([traj["u_a"], traj["v_a"], traj["psi"]])
-    out = np.zeros_like(state)
-    out[0] = x = state[0]
-    for j in range(seg.max() + 1):
-        idx = np.flatnonzero(seg == j)
-        idx = np.r_[idx[0] - 1, idx[idx > 0]] if idx[0] > 0 else idx
-        c = ref.contact_point(u[idx], v[idx])
-        tau = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))]
-        su, sv = CubicSpline(tau, u[idx]), CubicSpline(tau, v[idx])
-        path = lambda t, su=su, sv=sv: (su(t), sv(t), su(t, 1), sv(t, 1))  # noqa: E731
-        sol = ref.integrate_contact_path(path, x, (0.0, tau[-1]), k, tau, rtol=1e-12, atol=1e-13)
-        out[idx[1:]] = sol.y[:, 1:].T
-        x = sol.y[:, -1]
-    return state, out
-
-
 @pytest.mark.parametrize("goal,start,steps,k", [
     ((0.5, 0.7, 0.8, 0.3, -0.2), (0.2, -0.1, 0.4, -0.5, 0.6), 2, 2.5),
     ((0.0, 0.0, 1.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0), 1, 5.0),      # turn in place
@@ -396,7 +355,8 @@ def test_json_trajectory_replays_to_the_goal(tmp_path, capsys, goal, start, step
     assert all(len(tr[n]) == 2001 for n in ("u_a", "v_a", "psi", "u_o", "v_o", "segment"))
     seg = np.array(tr["segment"])
     assert seg[0] == 0 and np.all(np.diff(seg) >= 0) and seg.max() + 1 == len(d["segments"])
-    sampled, replayed = replay(tr, k)
+    sampled = np.column_stack([tr["u_a"], tr["v_a"], tr["psi"]])
+    replayed = ref.replay(tr["u_o"], tr["v_o"], tr["segment"], sampled[0], k)
     err = sampled - replayed
     err[:, 2] = ref.wrap(err[:, 2])
     assert np.abs(err).max() < 1e-5
