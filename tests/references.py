@@ -326,7 +326,7 @@ def replay(u_o, v_o, segment, x0, k):
         tau = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))]
         su, sv = CubicSpline(tau, u[idx]), CubicSpline(tau, v[idx])
         sol = integrate_contact_path(lambda t, su=su, sv=sv: (su(t), sv(t), su(t, 1), sv(t, 1)), x, (0.0, tau[-1]),
-                                     k, tau, rtol=1e-12, atol=1e-13)
+                                     k, tau, rtol=1e-10, atol=1e-12)
         out[idx[1:]] = sol.y[:, 1:].T
         x = sol.y[:, -1]
     return out

@@ -28,7 +28,7 @@ The search, in leaf space:
 3. The best few bin pairs (apart in chi) are polished by IPOPT on the spectral
    step map: minimise ``a1 + b1 + a2 + b2`` subject to
    ``n (eta1 + eta2) = psi_f + 2 pi m`` and the triangle condition on the exact
-   ``r1, r2``, with a wall-time cap; an unpolished grid pair is kept when the
+   ``r1, r2``, with an iteration cap; an unpolished grid pair is kept when the
    cap runs out.
 4. Each leg is then solved exactly by the geometric-phase planner for its
    target, on the branch the candidate lies on (``branch=``), and the composed
@@ -66,8 +66,11 @@ A_MIN = 0.005
 R_BINS, CHI_BINS = 90, 120
 #: Smallest leaf radius of a polished candidate [R] (the optimum rests on it; module docstring).
 LEAF_FLOOR = 1e-3
-#: Wall-time cap of one IPOPT polish [s]; the unpolished grid pair is used when it runs out.
-POLISH_WALL_S = 0.5
+#: Iteration cap of one IPOPT polish; the unpolished grid pair is used
+#: when it runs out. An iteration cap, not a time cap, so that the result does not depend on the machine's load.
+POLISH_ITERATIONS = 60
+#: Wall-time cap of one polish [s]: only a guard against a pathological solve.
+POLISH_WALL_S = 5.0
 
 
 @dataclass(frozen=True)
@@ -205,7 +208,8 @@ def _polisher(steps: int, turn_in_place: bool):
     eta2, r2 = leg(z[2], z[3])
     g = [steps * (eta1 + eta2) - par[1], r1 - r2] + ([] if turn_in_place else [r1 + r2 - par[2]])
     opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": 1e-12,
-            "ipopt.constr_viol_tol": 1e-12, "ipopt.max_iter": 300, "ipopt.hessian_approximation": "limited-memory",
+            "ipopt.constr_viol_tol": 1e-12, "ipopt.max_iter": POLISH_ITERATIONS,
+            "ipopt.hessian_approximation": "limited-memory",
             "ipopt.max_wall_time": POLISH_WALL_S}
     solver = ca.nlpsol("two_legs", "ipopt", {"x": z, "p": par, "f": ca.sum1(z), "g": ca.vertcat(*g)}, opts)
     return solver, ca.Function("info", [z, par], [eta1, r1, eta2, r2])
