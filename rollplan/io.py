@@ -177,6 +177,7 @@ def route_to_dict(route, traj=None) -> dict:
     d = {
         "k": route.k, "radius": route.radius, "steps": route.steps,
         "start": route.problem.start.as_dict(), "goal": route.goal.as_dict(),
+        "target": {"u_a": route.goal.u_a, "v_a": route.goal.v_a, "psi": route.goal.psi},
         "waypoints": [{**w.state.as_dict(), "steps": w.steps, "label": w.label} for w in route.waypoints],
         "legs": [composed_to_dict(p, None, False) for p in route.plans],
         "waypoint_residuals": _f(route.waypoint_residuals),

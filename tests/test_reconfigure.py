@@ -476,6 +476,14 @@ def test_command_times_simulates_and_animates_a_composed_plan(tmp_path, capsys):
     assert code == 0 and error < 1e-6
     code, _, _ = run(capsys, "animate", str(plan_file), "--out", str(tmp_path / "a.gif"), "--frames", "5")
     assert code == 0 and (tmp_path / "a.gif").stat().st_size > 0
+    # a route timed the same way, simulated from its first waypoint
+    path = tmp_path / "w.csv"
+    path.write_text("u_a,v_a,psi,u_o,v_o\n0,0,0,0.1,0\n0.06,0.02,0.5,,\n0.06,0.02,-0.5,0,0.2\n")
+    route_file = tmp_path / "r.json"
+    code, _, _ = run(capsys, "route", str(path), "--duration", "15", "--json", str(route_file))
+    assert code == 0
+    code, out, _ = run(capsys, "simulate", str(route_file))
+    assert code == 0 and float(out.split("arrival error")[1].split()[0]) < 1e-6
 
 
 @pytest.mark.slow
