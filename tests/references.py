@@ -20,6 +20,14 @@ corrected and said so), and is what the tests compare rollplan's symbolic model 
   limits by forward/backward integration of the extremals in the phase plane (Bobrow, Dubowsky and
   Gibson 1985; Shin and McKay 1985; Pfeiffer and Johanni 1987), with the maximum velocity curve by
   bisection (:func:`torque_mvc`);
+* :func:`contact_point` -- (1); :func:`rolling_18_19` -- (18), (19);
+  :func:`rates_15_16_20` -- (15), (16), (20) for any contact path;
+  :func:`chart_rates` -- (24)-(27);
+  :func:`integrate_contact_path` -- (15), (16), (20) along a contact path given in time, by DOP853;
+  :func:`great_circle_path`, :func:`circle_path`, :func:`chart_path` -- contact paths typed here;
+  :func:`polar_contact` -- (u_o, v_o) of a point given by polar angle and direction;
+  :func:`composed_final` -- a composed motion integrated along its pieces (read from their curve names and
+  parameters only); :func:`replay` -- (15), (16), (20) along a sampled contact path alone;
 * :func:`wrap` -- an angle reduced to (-pi, pi]; :func:`rotate` -- a plane vector turned;
   :func:`two_pi_fraction` -- 2 pi as an exact fraction to many digits (Chudnovsky's series in
   integer arithmetic).
@@ -379,3 +387,126 @@ def phase_plane_topp(grid, max_rate, max_torque):
     den = r[:-1] + r[1:]
     duration = float(np.sum(2 * h / den)) if np.all(den > 0) else np.inf
     return {"s": s, "x": x, "K": K, "mvc": mvc, "duration": duration}
+
+
+# ----------------------------------------------------------------------------- any contact path: (15), (16), (20)
+
+
+def rates_15_16_20(psi, u_o, v_o, du_o, dv_o, k, radius=1.0):
+    """(15), (16), (20) as printed: rates of (u_a, v_a, psi) for the contact rates (du_o, dv_o)."""
+    return np.array([-radius * np.cos(psi) * np.cos(v_o) * du_o + radius * np.sin(psi) * dv_o,
+                     radius * np.sin(psi) * np.cos(v_o) * du_o + radius * np.cos(psi) * dv_o,
+                     psi_dot(u_o, v_o, du_o, dv_o, k)])
+
+
+def rolling_18_19(u_o, v_o, psi, du_o, dv_o):
+    """(18), (19) as printed: the rolling components (omega_x, omega_y) from the contact rates."""
+    return (-du_o * np.cos(v_o) * np.sin(psi) - dv_o * np.cos(psi),
+            -du_o * np.cos(v_o) * np.cos(psi) + dv_o * np.sin(psi))
+
+
+def contact_point(u_o, v_o):
+    """(1) on the unit sphere: ``(-sin u cos v, sin v, -cos u cos v)``, shape (..., 3)."""
+    return np.stack([-np.sin(u_o) * np.cos(v_o), np.sin(v_o), -np.cos(u_o) * np.cos(v_o)], axis=-1)
+
+
+def chart_rates(point, dpoint):
+    """``(u_o, v_o, u_o', v_o')`` of a point moving on the unit sphere at ``dpoint``: (24)-(27) as printed."""
+    x, y, z = point
+    s = np.sqrt(1 - y * y)
+    v, u = np.arcsin(y), np.arctan2(-x / s, -z / s)                            # (24), (25)
+    c_u, c_v = np.array([z, 0.0, -x]), np.array([-x * y / s, s, -y * z / s])   # (26)
+    return u, v, c_u @ dpoint / (s * s), c_v @ dpoint                          # (27)
+
+
+def integrate_contact_path(path, x0, t_span, k, t_eval=None, rtol=1e-13, atol=1e-14):
+    """(15), (16), (20) integrated by DOP853 from ``x0 = (u_a, v_a, psi)`` along ``path(t) -> (u, v, u', v')``.
+
+    Returns scipy's solution object (``.y`` of shape (3, len(t_eval)))."""
+    sol = solve_ivp(lambda t, x: rates_15_16_20(x[2], *path(t), k), t_span, np.asarray(x0, float),
+                    method="DOP853", rtol=rtol, atol=atol, t_eval=t_eval)
+    assert sol.success, sol.message
+    return sol
+
+
+def great_circle_path(beta, sigma_0, sigma_1):
+    """The great circle through the south pole in the direction beta, polar angle from sigma_0 to sigma_1
+    as t runs over [0, 1]: a contact path for :func:`integrate_contact_path`."""
+    def path(t):
+        ang = sigma_0 + (sigma_1 - sigma_0) * t
+        c = np.array([np.sin(ang) * np.cos(beta), np.sin(ang) * np.sin(beta), -np.cos(ang)])
+        dc = (sigma_1 - sigma_0) * np.array([np.cos(ang) * np.cos(beta), np.cos(ang) * np.sin(beta), np.sin(ang)])
+        return chart_rates(c, dc)
+
+    return path
+
+
+def circle_path(a, side, gamma):
+    """The circle (35) of radius a (side +1: +y, -1: -y) rotated by gamma (31), t in [0, 2 pi]."""
+    return lambda t: chart_rates(*circle(a, t, side, gamma))
+
+
+def chart_path(u0, v0, cu, cv):
+    """A smooth path in the chart, t in [0, 1]: ``u = u0 + sum cu_j sin(2 pi j t)``,
+    ``v = v0 + sum cv_j (1 - cos(2 pi j t))``."""
+    cu, cv = np.asarray(cu, float), np.asarray(cv, float)
+    j = np.arange(1, cu.size + 1)
+
+    def path(t):
+        w = 2 * np.pi * j * t
+        return (u0 + cu @ np.sin(w), v0 + cv @ (1 - np.cos(w)),
+                cu @ (2 * np.pi * j * np.cos(w)), cv @ (2 * np.pi * j * np.sin(w)))
+
+    return path
+
+
+def polar_contact(sigma, beta):
+    """(u_o, v_o) of the point at polar angle sigma from the south pole in the direction beta, by inverting (1)."""
+    c = np.array([np.sin(sigma) * np.cos(beta), np.sin(sigma) * np.sin(beta), -np.cos(sigma)])
+    return float(np.arctan2(-c[0], -c[2])), float(np.arcsin(c[1]))
+
+
+def piece_path(piece):
+    """The contact path of a piece of a composed plan and its parameter span, typed here from the piece's
+    ``curve`` name, ``index``, ``params`` and ``gamma`` alone: the great circle (``"great_circle"``,
+    polar angle from params[0] to params[1], direction gamma) or a circle (35) of the figure eight
+    (``"figure_eight"``: radius params[index], side +y for index 0, -y for 1) rotated by gamma (31)."""
+    if piece.curve == "great_circle":
+        return great_circle_path(piece.gamma, *piece.params), 1.0
+    assert piece.curve == "figure_eight", piece.curve
+    return circle_path(piece.params[piece.index], 1.0 if piece.index == 0 else -1.0, piece.gamma), 2 * np.pi
+
+
+def composed_final(pieces, start, k):
+    """The end state (5,) of a composed motion from ``start`` (5,), units of R: (15), (16), (20) by DOP853
+    along every piece (:func:`piece_path`), the contact point of the last piece's end."""
+    x, contact = np.asarray(start, float)[:3], np.asarray(start, float)[3:]
+    for piece in pieces:
+        path, span = piece_path(piece)
+        x = integrate_contact_path(path, x, (0.0, span), k).y[:, -1]
+        contact = np.array(path(span)[:2])
+    return np.concatenate([x, contact])
+
+
+def replay(u_o, v_o, segment, x0, k):
+    """(u_a, v_a, psi) at every sample of a sampled contact path, from (15), (16), (20) by DOP853 along
+    cubic splines of the sampled (u_o, v_o) alone, one spline per segment (from the last sample of the
+    one before), parametrized by the chord length of the contact points (1): shape (N, 3)."""
+    from scipy.interpolate import CubicSpline
+
+    u, v, seg = (np.asarray(a) for a in (u_o, v_o, segment))
+    out = np.zeros((u.size, 3))
+    out[0] = x = np.asarray(x0, float)
+    for j in range(int(seg.max()) + 1):
+        idx = np.flatnonzero(seg == j)
+        idx = np.r_[idx[0] - 1, idx[idx > 0]] if idx[0] > 0 else idx
+        if idx.size < 2:
+            continue
+        c = contact_point(u[idx], v[idx])
+        tau = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))]
+        su, sv = CubicSpline(tau, u[idx]), CubicSpline(tau, v[idx])
+        sol = integrate_contact_path(lambda t, su=su, sv=sv: (su(t), sv(t), su(t, 1), sv(t, 1)), x, (0.0, tau[-1]),
+                                     k, tau, rtol=1e-10, atol=1e-12)
+        out[idx[1:]] = sol.y[:, 1:].T
+        x = sol.y[:, -1]
+    return out

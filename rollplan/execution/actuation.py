@@ -4,10 +4,17 @@ Time law
 --------
 A plan's contact path is run along its path parameter s (the contact arc length,
 :mod:`rollplan.execution.path`) by a timing law of :mod:`rollplan.execution.timing`
-(``min-jerk`` by default: every half-step rest-to-rest in ``T / (2 n)`` with the
+(``min-jerk`` by default: every piece rest-to-rest in ``T / P`` with the
 minimum-jerk profile, as the momentum integral (11) assumes no impulsive start;
 ``time-optimal`` and the non-stop laws within the robot's ``max_rotor_rate`` and
-``max_rotor_torque``).
+``max_rotor_torque``). The path is that of any plan from its start state: the ``2 n``
+leaves of a pole-to-pole plan, or the pieces of a composed plan or a route
+(approach and departure rolls, figure eights, circles of a turn in place, legs;
+:func:`rollplan.planners.geometric.as_composed`). Every law rests at the start, at
+the goal and at every corner of the contact path (where a roll meets a figure eight,
+or the direction of the figure eights changes between legs or circles): there the
+angular velocity per unit speed jumps, so passing at a speed would need an infinite
+angular acceleration. The empty motion (start = goal) stays at rest for ``T``.
 
 Angular velocity and rotor rates
 --------------------------------
@@ -53,14 +60,15 @@ vector ``H_i`` projected on ``n_i``, which does not use the simplification above
 Samples and how to replay them
 ------------------------------
 A :class:`Motion` is sampled uniformly in time, at least the law's
-``samples_per_piece`` per half-step (so that a cubic spline through the rotor rates
+``samples_per_piece`` per piece on average (so that a cubic spline through the rotor rates
 drives the rotor-only simulation onto the target; see
 :mod:`rollplan.execution.timing`). The rotor rates and angles are continuous in
 time. The torques are piecewise continuous: for the non-stop laws they step at
-every pole passage by ``(B(S_j^+) - B(S_j^-)) s'^2`` (the curvature of the contact
-path jumps there), and the time-optimal torques are bang-bang with steps at the
-switches and piecewise-constant s''. A sample at a pole holds the value of the
-half-step that ends there. A plant driven by the torques should interpolate them
+every smooth joint passed at a speed (the poles of a figure eight) by
+``(B(S_j^+) - B(S_j^-)) s'^2`` (the curvature of the contact path jumps there),
+and the time-optimal torques are bang-bang with steps at the switches and
+piecewise-constant s''. A sample at a joint holds the value of the piece that
+ends there. A plant driven by the torques should interpolate them
 linearly between samples (not by a spline, which rings at the steps); integrated so
 (trapezoid rule), they reproduce the change of the axial momenta
 ``J_r (n_i . omega + phi_i_dot)`` between samples to O(h^2) where the torque is
@@ -85,7 +93,7 @@ from ..problem import State
 from ..result import Trajectory
 from ..robot import Robot
 from .limits import Limits
-from .path import ContactPath
+from .path import ContactPath, plan_pieces
 from .timing import TimeLaw, TimeProfile, get_law
 
 __all__ = ["Motion", "actuate", "sample_motion", "samples_per_piece", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF",
@@ -116,8 +124,9 @@ class Motion:
     s, s_dot, s_ddot : ndarray, shape (N,)
         Path parameter (contact arc length) [R] and its time derivatives [R/s, R/s^2].
     segment : ndarray, shape (N,), int
-        Piece (half-step) of the path each sample lies on, numbered as in
-        :class:`rollplan.result.Trajectory` (a sample at a joint belongs to the piece that ends there).
+        Piece of the contact path (a leaf, a half-step, of a figure eight; a roll; a circle of a turn)
+        each sample lies on, numbered as in :class:`rollplan.result.Trajectory` and the plan's
+        ``pieces`` (a sample at a joint belongs to the piece that ends there).
     state : ndarray, shape (N, 5)
         Contact coordinates in :class:`~rollplan.problem.State` order (u_a [m], v_a [m], psi, u_o, v_o [rad]).
     omega : ndarray, shape (N, 3)
@@ -137,11 +146,12 @@ class Motion:
     timing : str
         Name of the timing law.
     minimum_duration : float or None
-        The law's shortest duration within the robot's limits [s]; None without limits.
+        The law's shortest duration within the robot's limits [s]; None without limits (and for the
+        empty motion).
     profile : TimeProfile
         ``s(t)`` of the law.
-    path : ContactPath
-        The plan's path with the robot's rotor coefficients.
+    path : ContactPath or None
+        The plan's path with the robot's rotor coefficients (None for the empty motion).
     """
 
     time: np.ndarray
@@ -160,7 +170,7 @@ class Motion:
     timing: str
     minimum_duration: float | None
     profile: TimeProfile
-    path: ContactPath
+    path: ContactPath | None
 
     @property
     def limits(self) -> Limits:
@@ -185,8 +195,9 @@ def samples_per_piece(pieces: int, samples: int, per_piece: int, law: str = "") 
     samples = check_whole("samples", samples, 4)
     m = max(per_piece, math.ceil((samples - 1) / pieces))
     if pieces * m + 1 > MAX_SAMPLES:
-        raise InputError(f"timing '{law}' of {pieces} half-steps needs {pieces * m + 1} samples (at least {m} per "
-                         f"half-step); at most {MAX_SAMPLES} are allowed: plan fewer steps or ask fewer samples")
+        raise InputError(f"timing '{law}' of {pieces} pieces (half-steps, rolls) needs {pieces * m + 1} samples (at "
+                         f"least {m} per piece); at most {MAX_SAMPLES} are allowed: plan fewer steps or ask fewer "
+                         "samples")
     return m
 
 
@@ -243,15 +254,16 @@ def actuate(plan, robot: Robot, duration: float | None = None, samples: int = DE
             timing: str | TimeLaw = "min-jerk") -> Motion:
     """Time a plan by a law within the robot's limits and compute omega, rotor rates, angles and torques.
 
-    The plan's path along its contact arc length (:meth:`ContactPath.of_plan`) is run by the law
-    ``timing`` (:mod:`rollplan.execution.timing`); then omega from (18), (19), (13), the rotor
-    rates from (11), the rotor angles by integration along the path, and the torques from (T)
-    of the module docstring.
+    The plan's path from its start state along its contact arc length
+    (:meth:`ContactPath.of_plan`) is run by the law ``timing`` (:mod:`rollplan.execution.timing`);
+    then omega from (18), (19), (13), the rotor rates from (11), the rotor angles by integration
+    along the path, and the torques from (T) of the module docstring.
 
     Parameters
     ----------
-    plan : rollplan.planners.geometric.Plan
-        A geometric-phase plan, made for this robot (same k and radius).
+    plan : Plan, ComposedPlan or Route
+        A geometric-phase plan (:mod:`rollplan.planners.geometric`), made for this robot (same k and
+        radius): pole to pole, between any two states, or a route.
     robot : Robot
         The robot's parameters and its optional ``max_rotor_rate``, ``max_rotor_torque``.
     duration : float, optional
@@ -260,22 +272,40 @@ def actuate(plan, robot: Robot, duration: float | None = None, samples: int = DE
     samples : int
         Least number of time samples (>= 4); see :func:`sample_motion`.
     timing : str or TimeLaw
-        A name in :data:`rollplan.execution.timing.LAWS` (default ``"min-jerk"``: every leaf in
-        ``T / (2 n)``, rest-to-rest).
+        A name in :data:`rollplan.execution.timing.LAWS` (default ``"min-jerk"``: every piece in
+        ``T / P``, rest-to-rest).
 
     Returns
     -------
     Motion
+        Starting at the plan's start state. The empty motion (start = goal) is ``samples`` samples
+        at rest over the given duration.
 
     Raises
     ------
     InputError
         Bad input, or a duration that would exceed a limit (the message names the limit and the
-        shortest feasible duration).
+        shortest feasible duration); no duration for the empty motion.
     """
     law = get_law(timing)
-    if hasattr(plan, "steps"):  # the sample count before the work
-        samples_per_piece(2 * plan.steps, samples, law.samples_per_piece, law.name)
-    path = ContactPath.of_plan(plan, robot)
+    pieces, start = plan_pieces(plan, robot)
+    if not pieces:
+        return _at_rest(plan, robot, law, duration, samples)
+    samples_per_piece(len(pieces), samples, law.samples_per_piece, law.name)  # the sample count before the work
+    path = ContactPath(pieces, robot, start)
     profile = law.profile(path, Limits.of(robot), duration)
     return sample_motion(path, profile, samples, plan.goal, law.samples_per_piece)
+
+
+def _at_rest(plan, robot: Robot, law: TimeLaw, duration, samples: int) -> Motion:
+    """The empty motion: ``samples`` samples at the start state over ``duration``, every rate zero."""
+    duration = law.check(Limits.of(robot), duration)
+    if duration is None:
+        raise InputError("the plan is the empty motion (its start is its goal): it has no shortest duration; "
+                         "give a duration to stay at rest that long")
+    samples = check_whole("samples", samples, 4, MAX_SAMPLES)
+    zero = lambda m: np.zeros((samples, m)) if m else np.zeros(samples)  # noqa: E731
+    state = np.repeat(plan.problem.start.array()[None, :], samples, axis=0)
+    profile = TimeProfile(np.array([0.0, duration]), np.zeros((1, 1)), law.name, 0.0)
+    return Motion(np.linspace(0.0, duration, samples), zero(0), zero(0), zero(0), np.zeros(samples, int), state,
+                  zero(3), zero(2), zero(2), zero(2), robot, duration, plan.goal, law.name, None, profile, None)

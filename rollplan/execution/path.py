@@ -48,10 +48,20 @@ piece (psi' from (30)). The state (u_a, v_a, psi) and the rotor angles
 ``phi_i(s) = int G_i ds`` are integrated along the pieces by CVODES; all
 functions come from :mod:`rollplan.core.model` through :func:`curve_piece_function`.
 
-Other plans (e.g. composed of approach, figure eights and departure) give their
-pieces as :class:`PathPiece` objects built from :func:`curve_piece_function` of their
-curves, with a start state; the timing laws (:mod:`rollplan.execution.timing`) need
-nothing else.
+Plans of any start and goal
+---------------------------
+A composed plan (:mod:`rollplan.planners.geometric.composed`: approach roll, figure
+eights, turns in place, legs, departure roll) and a route give their contact path as
+pieces of the named curves of :data:`rollplan.core.paths.CURVES`, each traced at
+constant speed over ``phi in [0, 2 pi]``; :meth:`ContactPath.of_plan` makes every one a
+:class:`PathPiece` with ``c_j = length_j / (2 pi)`` (the leaf radius for a circle,
+``|sigma_1 - sigma_0| / (2 pi)`` for a roll along a great circle), so s is the contact arc
+length on every piece, and starts the path at the plan's start state. The joints where a
+roll meets a figure eight, where the direction gamma changes between two legs or two
+circles of a turn, or where a route turns back, are corners by the test on ``W`` above:
+every law rests there. psi of the start is reduced exactly to [-pi, pi]
+(:func:`rollplan.core.plane.wrap_exact`) for the integration and the whole turns are
+added back to the states reported, so a start psi of any size costs no accuracy.
 """
 
 from __future__ import annotations
@@ -64,13 +74,16 @@ import casadi as ca
 import numpy as np
 
 from ..core import model
-from ..core.curves import Curve, figure_eight, rotated_point
+from ..core.curves import Curve, rotated_point
 from ..core.integrate import piece_rhs
+from ..core.paths import CURVES
+from ..core.plane import wrap_exact
 from ..errors import InputError
+from ..planners.geometric.composed import as_composed
 from ..robot import Robot
 
-__all__ = ["SMOOTH_JOINT_RTOL", "curve_piece_function", "leaf_function", "PathPiece", "PathSample", "PathGrid",
-           "ContactPath"]
+__all__ = ["SMOOTH_JOINT_RTOL", "curve_piece_function", "piece_function", "leaf_function", "PathPiece", "PathSample",
+           "PathGrid", "ContactPath", "plan_pieces"]
 
 #: A joint is smooth when omega per unit s' (``W``) agrees on its two sides to this fraction of its size.
 SMOOTH_JOINT_RTOL = 1e-8
@@ -107,10 +120,18 @@ def curve_piece_function(curve: Curve, index: int) -> ca.Function:
                        ["xdot", "uv", "w", "g", "a", "da"])
 
 
-@lru_cache(maxsize=4)
+@lru_cache(maxsize=16)
+def piece_function(curve: str, index: int) -> ca.Function:
+    """:func:`curve_piece_function` of piece ``index`` of the curve named ``curve`` in
+    :data:`rollplan.core.paths.CURVES` (built once)."""
+    if curve not in CURVES:
+        raise InputError(f"curve = {curve!r:.40} is not allowed: choose one of {', '.join(CURVES)}")
+    return curve_piece_function(CURVES[curve], index)
+
+
 def leaf_function(index: int) -> ca.Function:
-    """:func:`curve_piece_function` of leaf ``index`` (0: circle a, 1: circle b) of the figure eight (31), (35)."""
-    return curve_piece_function(figure_eight(), index)
+    """:func:`piece_function` of leaf ``index`` (0: circle a, 1: circle b) of the figure eight (31), (35)."""
+    return piece_function("figure_eight", index)
 
 
 @dataclass(frozen=True)
@@ -219,7 +240,7 @@ class ContactPath:
     pieces : sequence of PathPiece
     robot : Robot
     start : (u_a, v_a, psi)
-        State at the start of the path [R, rad].
+        State at the start of the path [R, rad] (psi of any size, module docstring).
 
     Attributes
     ----------
@@ -247,6 +268,9 @@ class ContactPath:
         self.length = float(self.starts[-1])
         self._odes: dict = {}
         x = np.concatenate([np.asarray(start, float), [0.0, 0.0]])
+        if x.shape != (5,) or not np.all(np.isfinite(x)):
+            raise InputError(f"start = {start!r:.60} is not allowed: give three finite numbers (u_a, v_a, psi)")
+        x[2], self._turns = wrap_exact(x[2])   # integrate psi reduced; report it as given (module docstring)
         x0 = [x]
         for j, piece in enumerate(self.pieces):
             x = self._integrate(j, x, np.array([piece.phi_end]))[-1]
@@ -264,29 +288,19 @@ class ContactPath:
 
     @classmethod
     def of_plan(cls, plan, robot: Robot) -> ContactPath:
-        """The path of a geometric-phase plan: ``2 n`` leaves, arc length s (scale ``r_j`` per leaf).
+        """The path of a plan from its start state: its pieces along the contact arc length s.
 
         Parameters
         ----------
-        plan : rollplan.planners.geometric.Plan
-            Made for this robot (same k and radius).
+        plan : Plan, ComposedPlan or Route
+            A geometric-phase plan (:mod:`rollplan.planners.geometric`), made for this robot (same k
+            and radius), with at least one piece (see :func:`plan_pieces`).
         robot : Robot
         """
-        if not all(hasattr(plan, n) for n in ("a", "b", "gamma", "steps", "k", "radius")):
-            raise InputError(f"plan = {plan!r:.60} is not allowed: timing needs a geometric-phase plan "
-                             "(rollplan.plan)")
-        if not isinstance(robot, Robot):
-            raise InputError(f"robot = {robot!r:.60} is not allowed: give a rollplan.Robot")
-        if not math.isclose(plan.k, robot.k, rel_tol=1e-12, abs_tol=0.0):
-            raise InputError(f"the plan was made for k = {plan.k:.12g}, the robot has k = {robot.k:.12g}: "
-                             "plan with this robot")
-        if not math.isclose(plan.radius, robot.radius, rel_tol=1e-12, abs_tol=0.0):
-            raise InputError(f"the plan's radius = {plan.radius:g} differs from the robot's radius = "
-                             f"{robot.radius:g}")
-        ab = (plan.a / plan.radius, plan.b / plan.radius)
-        pieces = [PathPiece(leaf_function(j % 2), ab, float(plan.gamma), 2 * np.pi, ab[j % 2])
-                  for j in range(2 * plan.steps)]
-        return cls(pieces, robot)
+        pieces, start = plan_pieces(plan, robot)
+        if not pieces:
+            raise InputError("the plan is the empty motion (its start is its goal): it has no contact path")
+        return cls(pieces, robot, start)
 
     # ------------------------------------------------------------------ internals
     def _parameters(self, piece: PathPiece) -> np.ndarray:
@@ -367,7 +381,7 @@ class ContactPath:
             rows = sel[order]
             x = xs[inv]
             W[rows], G[rows], A[rows], B[rows] = w / c, g / c, jr * a / c, jr * da / c**2
-            state[rows] = np.column_stack([x[:, 0], x[:, 1], x[:, 2], uv])
+            state[rows] = np.column_stack([x[:, 0], x[:, 1], x[:, 2] + 2 * np.pi * self._turns, uv])
             angles[rows] = x[:, 3:5]
         return PathSample(s, seg, W, G, A, B, state, angles)
 
@@ -398,4 +412,36 @@ class ContactPath:
     @property
     def final_state(self) -> np.ndarray:
         """(u_a, v_a, psi, rotor angle 1, rotor angle 2) at the end of the path, by CVODES [R, rad]."""
-        return self._x0[-1].copy()
+        out = self._x0[-1].copy()
+        out[2] += 2 * np.pi * self._turns
+        return out
+
+
+def plan_pieces(plan, robot: Robot) -> tuple[list, tuple]:
+    """The pieces of a plan's contact path as :class:`PathPiece` objects, and its start ``(u_a, v_a, psi)`` [R, rad].
+
+    Every piece of :func:`rollplan.planners.geometric.as_composed` (leaves, rolls, circles of a
+    turn, legs; a route's legs one after the other) becomes a piece over ``phi in [0, 2 pi]``
+    with the scale ``length / (2 pi)`` (module docstring); no integration is done. The empty
+    motion (start = goal) has no pieces.
+
+    Raises
+    ------
+    InputError
+        Not a geometric-phase plan, not a Robot, or a plan made for another k or radius.
+    """
+    if not (hasattr(plan, "pieces") or all(hasattr(plan, n) for n in ("a", "b", "gamma", "steps"))) or \
+            not all(hasattr(plan, n) for n in ("k", "radius", "problem")):
+        raise InputError(f"plan = {plan!r:.60} is not allowed: timing needs a geometric-phase plan (rollplan.plan)")
+    if not isinstance(robot, Robot):
+        raise InputError(f"robot = {robot!r:.60} is not allowed: give a rollplan.Robot")
+    if not math.isclose(plan.k, robot.k, rel_tol=1e-12, abs_tol=0.0):
+        raise InputError(f"the plan was made for k = {plan.k:.12g}, the robot has k = {robot.k:.12g}: "
+                         "plan with this robot")
+    if not math.isclose(plan.radius, robot.radius, rel_tol=1e-12, abs_tol=0.0):
+        raise InputError(f"the plan's radius = {plan.radius:g} differs from the robot's radius = {robot.radius:g}")
+    composed = as_composed(plan)
+    pieces = [PathPiece(piece_function(p.curve, p.index), tuple(float(v) for v in p.params), float(p.gamma),
+                        2 * np.pi, p.length / (2 * np.pi)) for p in composed.pieces]
+    start = composed.problem.scaled(composed.problem.start)
+    return pieces, (start.u_a, start.v_a, start.psi)

@@ -51,7 +51,7 @@ def draw_phase_plane(ax, motions, velocity_limit=None, joints=(), reference=None
     velocity_limit : (s, s'_max), optional
         The maximum velocity curve [R, R/s] (inf where no limit binds).
     joints : sequence of float
-        s at the joints between half-steps (dotted verticals) [R].
+        s at the joints between pieces (half-steps, rolls) (dotted verticals) [R].
     reference : (label, s, s'), optional
         Another profile to draw dashed (e.g. an independent computation).
     """
@@ -70,8 +70,8 @@ def draw_phase_plane(ax, motions, velocity_limit=None, joints=(), reference=None
         ax.plot(s, sd, color="k", linestyle=(0, (3, 3)), linewidth=0.9, label=label, zorder=5)  # on top
     for sj in joints:
         ax.axvline(sj, color="0.7", linestyle=":", linewidth=0.8)
-    ax.set_ylim(0, 1.15 * max(tops))
-    ax.set_xlabel("contact arc length s [R]   (dotted: poles between half-steps)")
+    ax.set_ylim(0, 1.15 * max(tops) if max(tops) > 0 else 1.0)
+    ax.set_xlabel("contact arc length s [R]   (dotted: joints between pieces)")
     ax.set_ylabel("s' [R/s]")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="lower center", fontsize=7, ncol=3, framealpha=0.95)
@@ -99,9 +99,11 @@ def plot_timing(motions, velocity_limit=None, title: str = "", reference=None) -
         ax_r = fig.add_subplot(grid[0, col])
         ax_t = fig.add_subplot(grid[1, col], sharex=ax_r)
         draw_rates_torques(ax_r, ax_t, m, legend=col == 0)
-    draw_phase_plane(fig.add_subplot(grid[2, :]), motions, velocity_limit, motions[0].path.joints, reference)
+    path = motions[0].path   # None for the empty motion
+    draw_phase_plane(fig.add_subplot(grid[2, :]), motions, velocity_limit, () if path is None else path.joints,
+                     reference)
     m = motions[0]
     r = m.robot
     fig.suptitle(title or (f"R = {r.radius:g} m, k = {r.k:.4g}, {m.limits.describe()}; "
-                           f"{int(m.segment.max()) + 1} half-steps"), fontsize=10)
+                           f"{int(m.segment.max()) + 1} pieces"), fontsize=10)
     return fig
