@@ -13,10 +13,15 @@ Structure of (28)-(30) (each item is checked in ``tests/test_leafmap.py``):
    and moves by ``Rot(-psi0) d``.
 2. Mirror: the -y leaf is the +y leaf with ``y -> -y``; it turns psi by ``-E(r)`` and moves by
    ``conj(d(r))``.
-3. Hence one figure eight (+y leaf ``a``, then -y leaf ``b``) from zero turns psi by
+3. Symmetry: the leaf is symmetric under the reflection in the plane through the pole and its
+   centre (x -> -x, traced backwards), which makes ``exp(i E / 2) d`` real: ``d = rho(r)
+   exp(-i E / 2)`` with a real, signed ``rho`` (:func:`signed_length`).
+4. Hence one figure eight (+y leaf ``a``, then -y leaf ``b``) from zero turns psi by
    ``eta(a, b) = E(a) - E(b)`` and moves by ``S = d(a) + exp(-i E(a)) conj(d(b))``; the step's
    shift is ``h = |S| = |exp(i E(a)) d(a) + conj(d(b))|``. Rotating the curve by gamma about OZ
-   turns the displacement by ``+gamma``.
+   turns the displacement by ``+gamma``. With item 3,
+   ``h^2 = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta / 2)``: on a branch of (32), where eta is
+   fixed, h depends on the two leaves only through rho.
 
 Closed form of the turn. (30) is ``psi' = sin(v_o) u_o' + k w`` with ``w = (x y' - y x') / z`` on
 the sphere; on the circle ``w = c - c / (c^2 + r^2 cos phi)``, whose integral is
@@ -60,7 +65,7 @@ from ...core.curves import A_MAX
 from ...problem import K_MAX
 
 __all__ = ["ORDER", "BUCKETS", "panels_for", "gauss_nodes", "turn", "turn_dr", "turn_inverse",
-           "displacement", "leaf_values", "step_values"]
+           "displacement", "signed_length", "leaf_values", "step_values"]
 
 #: Gauss-Legendre nodes per panel.
 ORDER = 48
@@ -114,28 +119,72 @@ def turn_dr(r, k):
     return _TWO_PI * r / c * (1.0 - k * (1.0 + 1.0 / (s * s * s)))
 
 
+def _turn_u(u, k: float):
+    """E and dE/du as functions of u = r^2 (``dE/du = (pi / c) (1 - k (1 + s^-3))``)."""
+    c = np.sqrt(1.0 - u)
+    s = np.sqrt(1.0 - 2.0 * u)
+    return (_TWO_PI * u / (1.0 + c) - 2.0 * _TWO_PI * k * c * u / (s * (1.0 + s)),
+            math.pi / c * (1.0 - k * (1.0 + 1.0 / (s * s * s))))
+
+
+@lru_cache(maxsize=16)
+def _turn_table(k: float):
+    """E on 16385 values of u = r^2 in [0, A_MAX^2] (increasing u, decreasing E), for starts."""
+    u = np.linspace(0.0, A_MAX * A_MAX, 16385)
+    return u, turn(np.sqrt(u), k)
+
+
 def turn_inverse(e, k: float):
     """Radius ``r in [0, A_MAX]`` with ``E(r, k) = e`` for ``k >= 1/2`` (E strictly decreasing);
     nan where ``e`` is outside ``[E(A_MAX), 0]``.
 
-    Bisection (60 halvings) and two Newton steps with :func:`turn_dr`, kept in the bracket.
+    Two Newton steps in ``u = r^2`` (E is smooth in u) from a tabulated inverse; where that has
+    not reached rounding, safeguarded Newton, bisecting whenever a step leaves the bracket.
     """
     e = np.asarray(e, float)
     e_min = float(turn(A_MAX, k))
     inside = (e <= 0.0) & (e >= e_min)
-    lo = np.zeros(e.shape)
-    hi = np.full(e.shape, A_MAX)
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        right = turn(mid, k) > e           # E decreasing: the root lies to the right of mid
-        lo = np.where(right, mid, lo)
-        hi = np.where(right, hi, mid)
-    r = 0.5 * (lo + hi)
-    for _ in range(2):
+    et = np.clip(np.where(inside, e, 0.0), e_min, 0.0)
+    et = et.ravel()
+    lo = np.zeros(et.shape)
+    hi = np.full(et.shape, A_MAX * A_MAX)
+    grid_u, grid_e = _turn_table(float(k))
+    u = np.interp(-et, -grid_e, grid_u)                        # start: the tabulated inverse
+    interior = inside.ravel() & (et > e_min) & (et < 0.0)
+    u[et <= e_min] = A_MAX * A_MAX
+    u[et >= 0.0] = 0.0
+    for _ in range(2):                                          # Newton from the table, usually enough
+        f, df = _turn_u(u, k)
         with np.errstate(divide="ignore", invalid="ignore"):
-            nxt = r - (turn(r, k) - e) / turn_dr(r, k)
-        r = np.where(np.isfinite(nxt) & (nxt >= lo) & (nxt <= hi), nxt, r)
-    return np.where(inside, r, np.nan)
+            nxt = np.clip(u - (f - et) / df, 0.0, A_MAX * A_MAX)
+        u = np.where(interior & np.isfinite(nxt), nxt, u)
+    f, _ = _turn_u(u, k)
+    act = np.nonzero(interior & (np.abs(f - et) > 4e-16 * (1.0 + np.abs(et)) * (1.0 + k)))[0]
+    for _ in range(80):
+        if act.size == 0:
+            break
+        ua, la, ha = u[act], lo[act], hi[act]
+        c = np.sqrt(1.0 - ua)
+        s = np.sqrt(1.0 - 2.0 * ua)
+        f = _TWO_PI * ua / (1.0 + c) - 2.0 * _TWO_PI * k * c * ua / (s * (1.0 + s)) - et[act]
+        la = np.where(f > 0.0, ua, la)                           # E decreasing: root to the right
+        ha = np.where(f > 0.0, ha, ua)
+        df = math.pi / c * (1.0 - k * (1.0 + 1.0 / (s * s * s)))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            nxt = ua - f / df
+        bad = ~np.isfinite(nxt) | (nxt <= la) | (nxt >= ha)
+        nxt = np.where(bad, 0.5 * (la + ha), nxt)
+        lo[act], hi[act] = la, ha
+        u[act] = np.where(f == 0.0, ua, nxt)
+        go = (f != 0.0) & (np.abs(nxt - ua) > 1e-15 * nxt) & (ha - la > 1e-15 * ha)
+        act = act[go]
+    c = np.sqrt(1.0 - u)                                        # one last Newton step, inside the bracket
+    s = np.sqrt(1.0 - 2.0 * u)
+    f = _TWO_PI * u / (1.0 + c) - 2.0 * _TWO_PI * k * c * u / (s * (1.0 + s)) - et
+    with np.errstate(divide="ignore", invalid="ignore"):
+        nxt = u - f / (math.pi / c * (1.0 - k * (1.0 + 1.0 / (s * s * s))))
+    u = np.where(np.isfinite(nxt) & (nxt >= lo) & (nxt <= hi), nxt, u).reshape(e.shape)
+    return np.where(inside, np.sqrt(u), np.nan)
 
 
 def displacement(r, k: float, derivative: bool = False, chunk: int = 2048):
@@ -170,13 +219,24 @@ def displacement(r, k: float, derivative: bool = False, chunk: int = 2048):
     return (out, dout) if derivative else out
 
 
+def signed_length(r, k: float, derivative: bool = False):
+    """``rho(r, k) = Re(exp(i E / 2) d)``: the displacement of the +y leaf is ``d = rho exp(-i E / 2)``
+    (real ``rho``, item 3 of the module docstring); with ``derivative`` also ``d rho / dr``."""
+    r = np.atleast_1d(np.asarray(r, float))
+    half = np.exp(0.5j * turn(r, k))
+    if not derivative:
+        return (displacement(r, k) * half).real
+    d, dd = displacement(r, k, derivative=True)
+    return (d * half).real, ((dd + 0.5j * turn_dr(r, k) * d) * half).real
+
+
 def leaf_values(r, k: float):
     """``(d, E)`` of the +y leaf of radii ``r``: complex displacement and turn (arrays)."""
     return displacement(r, k), turn(r, k)
 
 
 def step_values(a, b, k: float, gamma: float = 0.0):
-    """One figure eight (+y leaf a, then -y leaf b) rotated by gamma, from zero (item 3 of the
+    """One figure eight (+y leaf a, then -y leaf b) rotated by gamma, from zero (item 4 of the
     module docstring): ``(u_a + i v_a, eta)`` as arrays, ``eta = E(a) - E(b)``,
     ``u_a + i v_a = exp(i gamma) (d(a) + exp(-i E(a)) conj(d(b)))``."""
     a, b = np.atleast_1d(np.asarray(a, float)), np.atleast_1d(np.asarray(b, float))

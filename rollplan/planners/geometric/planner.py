@@ -26,17 +26,27 @@ So, for a branch ``m`` (psi is an angle: ``n eta = psi + 2 pi m``), solve
 ``sin(eta/2) = 0`` the limit is ``h_des / n``, (34); see :mod:`rollplan.core.plane`),
 then ``gamma = arg(target) - arg(sum_j Rot(-j eta) D_bar)``.
 
-The pieces: solution branches are bracketed on tables of the two leaves (each
-leaf depends on one radius only; :mod:`.leaves`, :mod:`.brackets`), refined by
-a root solver chosen by name on the spectral step map (:mod:`.refine`), and
-certified by an independent integration of all ``n`` steps (:mod:`.certify`);
-a plan whose certified residual exceeds the tolerance is never returned.
+The pieces. For ``k >= 1/2`` (every physical robot) the roots of (32)-(33) are
+enumerated completely, branch by branch, as the roots of one scalar function
+of one leaf radius (:mod:`.enumerate`, whose docstring holds the completeness
+argument) on the accurate leaf map (:mod:`.leafmap`: the turn in closed form,
+the displacement by a Gauss rule accurate to K_MAX). The shortest plan is
+found by a bounded search: branches are visited in increasing order of the
+smallest ``a + b`` they can hold, the first root of each branch is its
+shortest, and the search stops when no branch left can beat the best
+certified plan. For ``k < 1/2`` the turn is not monotone and the branches are
+bracketed on tables of the two leaves instead (:mod:`.leaves`,
+:mod:`.brackets`) and refined by a root solver chosen by name (:mod:`.refine`),
+without the completeness guarantee. Every plan is certified by an independent
+integration of all ``n`` steps (:mod:`.certify`); a plan whose certified
+residual exceeds the tolerance is never returned.
 """
 
 from __future__ import annotations
 
 import logging
 import math
+import sys
 import time
 from collections import Counter
 from dataclasses import dataclass, field, replace
@@ -49,6 +59,7 @@ import numpy as np
 from ...core import model
 from ...core.curves import A_MAX, figure_eight, rotated_point
 from ...core.integrate import DEFAULT_NODES, spectral_step
+from ...core.interrupt import raise_if_interrupted
 from ...core.plane import n_step_sum, wrap, wrap_exact
 from ...errors import InputError, NoPlanError, SolverError, check_finite, check_range, check_whole
 from ...problem import Problem, State, arrival_residual, check_k
@@ -56,6 +67,8 @@ from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from .brackets import find_brackets
 from .certify import CvodesCertifier
+from .enumerate import K_MONOTONE, branches, roots
+from .leafmap import step_values
 from .leaves import LeafTables
 from .refine import SOLVER_ERROR_STATUSES, SOLVERS, step_residual
 
@@ -65,6 +78,8 @@ log = logging.getLogger(__name__)
 
 #: Default tolerance of the certified residual (units of R and rad).
 TOLERANCE = 1e-9
+#: Largest number of branches enumerated together.
+_CHUNK = 64
 #: Brackets whose tables' model root lies within this many cell widths of the cell centre are
 #: solved first (see :func:`.brackets.cell_start`).
 _PLAUSIBLE_OFFSET = 1.5
@@ -196,13 +211,14 @@ class GeometricPhasePlanner:
 
     # -- step map ------------------------------------------------------------------
     def step(self, a: float, b: float | None = None, *, k: float, gamma: float = 0.0) -> StepResult:
-        """One trace of the figure eight (a, b) rotated by gamma, from zero state."""
+        """One trace of the figure eight (a, b) rotated by gamma, from zero state, by the accurate leaf map
+        (:mod:`.leafmap`; within 1e-10 of an independent integration for 0 < a, b <= A_MAX, 0 <= k <= K_MAX)."""
         b = a if b is None else b
         a, b = (check_range(n, v, 0.0, A_MAX, low_open=True) for n, v in (("a", a), ("b", b)))
         k, gamma = check_k(k), check_finite("gamma", gamma)
-        x = np.array(self.step_map(ca.DM.zeros(3), ca.vertcat(a, b), k, gamma)).ravel()
-        return StepResult(a, b, k, gamma, x[:2].copy(), float(np.hypot(*x[:2])), float(x[2]),
-                          float(np.arctan2(x[1], x[0])))
+        shift, eta = step_values(a, b, k, gamma)
+        z = complex(shift[0])
+        return StepResult(a, b, k, gamma, np.array([z.real, z.imag]), abs(z), float(eta[0]), math.atan2(z.imag, z.real))
 
     def brackets(self, k: float, h_des: float, psi: float, steps: int, fine: bool = False) -> np.ndarray:
         """Cells bracketing roots of (32)-(33) for a shift h_des [R], psi in (-pi, pi].
@@ -230,6 +246,10 @@ class GeometricPhasePlanner:
         if h_des == 0.0:
             raise NoPlanError(f"no plan for {where}: the target is the start point, and rollplan plans "
                               "motions with a nonzero displacement")
+        target = (goal_r.u_a, goal_r.v_a, psi_des)
+        if k >= K_MONOTONE:
+            return self._solve_enumerated(problem, all_solutions, None if branch is None else branch + turns,
+                                          target, turns, t_start)
         brackets = self.brackets(k, h_des, psi_des, steps, fine=all_solutions)
         if branch is not None:
             brackets = brackets[brackets["m"] == branch + turns]
@@ -244,7 +264,6 @@ class GeometricPhasePlanner:
         # for all solutions or when the others give no plan.
         plausible = brackets["off"] <= _PLAUSIBLE_OFFSET
         passes = [brackets] if all_solutions else [brackets[plausible], brackets[~plausible]]
-        target = (goal_r.u_a, goal_r.v_a, psi_des)
         for rows in passes:
             if found:
                 break
@@ -262,6 +281,7 @@ class GeometricPhasePlanner:
                 x, status, iters, ok = self._solve([br["a_s"], br["b_s"]], [k, br["eta_m"], br["h_m"]], box_lo, box_hi)
                 solves += 1
                 statuses[str(status)] += 1
+                raise_if_interrupted()
                 if not ok or any(abs(x[0] - sa) < 1e-7 and abs(x[1] - sb) < 1e-7 for sa, sb, _ in seen):
                     continue
                 seen.append((float(x[0]), float(x[1]), m))
@@ -292,19 +312,82 @@ class GeometricPhasePlanner:
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
         return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
 
+    def _solve_enumerated(self, problem, all_solutions, branch, target, turns, t_start) -> Plan:
+        """Complete enumeration (``k >= 1/2``): every root of every branch (``all_solutions``) or the
+        bounded search for the shortest certified plan (module docstring; :mod:`.enumerate`)."""
+        k, steps = problem.k, problem.steps
+        h_des = math.hypot(target[0], target[1])
+        brs = branches(k, target[2], steps, h_des, branch)
+        where = problem.describe()
+        found, rejected, tried = [], [], 0
+        # branches in increasing order of the smallest a + b they can hold, in growing chunks; once a plan
+        # is certified, only lengths below it are searched, and no branch whose smallest a + b is not
+        # below it is visited (the first root of a branch in x is its shortest)
+        best = math.inf
+        bar = _progress(len(brs), f"search (k = {k:g}, {len(brs)} branches)")
+        visited = 0
+        try:
+            start, size = 0, 4
+            while start < len(brs):
+                chunk = [br for br in brs[start:start + size] if br.y0 < best]
+                start, size = start + size, min(2 * size, _CHUNK)
+                if not chunk:
+                    if not all_solutions:
+                        break       # y0 grows along brs: nothing left can be shorter
+                    continue
+                visited += len(chunk)
+                cands = roots(chunk, k, first_only=not all_solutions,
+                              lengths=(0.0, math.inf if all_solutions else best))
+                raise_if_interrupted()
+                for r in cands:
+                    if not all_solutions and r.a + r.b >= best:
+                        break
+                    queue = [r]
+                    while queue:   # a branch's next roots only if its first is rejected
+                        q = queue.pop(0)
+                        tried += 1
+                        cand = self._certified(problem, (q.a, q.b), q.m - turns, target, q.kind, 0)
+                        if cand[1].passed:
+                            found.append(cand)
+                            if not all_solutions:
+                                best = min(best, q.a + q.b)
+                            break
+                        log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual %.2e > %.0e",
+                                    q.m - turns, q.a, q.b, cand[1].residual, self.tol)
+                        rejected.append(cand[1].residual)
+                        if not all_solutions and q is r:
+                            queue = roots([next(b_ for b_ in chunk if b_.m == r.m)], k)[1:]
+                if bar is not None:
+                    bar.update(len(chunk))
+        finally:
+            if bar is not None:
+                bar.close()
+        elapsed = time.perf_counter() - t_start
+        if not found:
+            if rejected:
+                raise NoPlanError(f"no certified plan for {where}: {len(rejected)} root(s) of (32)-(33) found, but "
+                                  f"their certified residual (best {min(rejected):.1e}) exceeds {self.tol:.0e}; "
+                                  "try more steps")
+            raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R "
+                              f"({len(brs)} branches searched completely); try more steps")
+        found.sort(key=lambda c: c[0].a + c[0].b)
+        details = {"candidates": tried, "solves": len(found), "branches": visited, "roots": tried}
+        plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
+        return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
+
     def _certified(self, problem, x, m, target_r, status, iters):
         """Gamma from the geometry (module docstring), then the certificate: a tuple for :meth:`_plan`."""
         a, b = float(x[0]), float(x[1])
-        xf = np.array(self.step_map(ca.DM.zeros(3), x, problem.k, 0)).ravel()
-        eta = float(xf[2])
-        total = complex(xf[0], xf[1]) * n_step_sum(eta, problem.steps)
+        shift, eta = step_values(a, b, problem.k)
+        shift, eta = complex(shift[0]), float(eta[0])
+        total = shift * n_step_sum(eta, problem.steps)
         gamma = float(wrap(math.atan2(target_r[1], target_r[0]) - math.atan2(total.imag, total.real)))
         final_r = self.certifier.final(a, b, problem.k, gamma, problem.steps)
         goal_r = problem.scaled(problem.goal)
         residual = arrival_residual(final_r, State(goal_r.u_a, goal_r.v_a, target_r[2]))
         cert = Certificate(self.certifier.name, final_r.scaled(problem.radius), residual, 0.0, self.tol)
         stats = SolverStats(self.method, status, iters, 0.0)
-        return _Root(a, b, gamma, m, float(np.hypot(*xf[:2])), eta), cert, stats
+        return _Root(a, b, gamma, m, abs(shift), eta), cert, stats
 
     def _plan(self, problem, cand, stats) -> Plan:
         root, cert = cand[0], cand[1]
@@ -334,6 +417,15 @@ class GeometricPhasePlanner:
         start = np.zeros((1, 5))
         return Trajectory(np.concatenate([[0.0], theta]), np.vstack([start, state]),
                           np.concatenate([[0], segment]).astype(int), p.radius, "theta")
+
+
+def _progress(total: int, label: str):
+    """A tqdm bar on stderr that appears only if the search lasts over a second (None without tqdm)."""
+    try:
+        from tqdm import tqdm
+    except ImportError:  # pragma: no cover
+        return None
+    return tqdm(total=total, desc=label, file=sys.stderr, delay=1.0, leave=False)
 
 
 @lru_cache(maxsize=1)
