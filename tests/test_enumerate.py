@@ -1,0 +1,268 @@
+"""The accurate leaf map and the complete enumeration of the geometric-phase planner.
+
+Leaf map (:mod:`rollplan.planners.geometric.leafmap`): the closed-form turn, the Gauss rule of the
+displacement, the symmetry that makes ``exp(i E/2) d`` real, and ``step`` against scipy DOP853 on
+the printed equations (``tests/references.py``) over the accepted domain, up to (A_MAX, K_MAX).
+
+Enumeration (:mod:`rollplan.planners.geometric.enumerate`) against a brute force of its own: for
+each branch m, a dense scan in the first leaf radius a (uniform in the turn E(a) and in a, ten times
+finer than the planner's grid), b from ``E(b) = E(a) - eta_m`` by scipy's brentq on the closed form,
+h from the complex step map (not the rho form the planner uses), every sign change refined by
+brentq and every local minimum of ``|h^2 - h_m^2|`` checked for a close pair by scipy's bounded
+minimiser. Plans are certified by DOP853 over all n steps.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq, minimize_scalar
+
+import rollplan
+from rollplan import InputError
+from rollplan.core.curves import A_MAX
+from rollplan.core.plane import n_step_gain
+from rollplan.planners.geometric import enumerate as en
+from rollplan.planners.geometric import leafmap
+from rollplan.problem import K_MAX
+
+import references
+
+wrap = references.wrap
+
+
+# ----------------------------------------------------------------------------- leaf map
+
+
+@pytest.mark.parametrize("r,k", [(0.05, 0.0), (0.3, 2.5), (A_MAX, 2.5), (0.5, 10.0), (A_MAX, 20.0),
+                                 pytest.param(0.6899, 50.0, marks=pytest.mark.slow),
+                                 pytest.param(A_MAX, K_MAX, marks=pytest.mark.slow), (0.2, 0.3)])
+def test_leaf_turn_and_displacement_against_dop853(r, k):
+    """E(r, k) in closed form and d(r, k) by the Gauss rule against DOP853 on the printed (28)-(30)."""
+    ref = references.leaf_end(r, 1.0, k)
+    d = complex(leafmap.displacement(r, k)[0])
+    assert abs(float(leafmap.turn(r, k)) - ref[2]) < 1e-10
+    assert abs(d - complex(ref[0], ref[1])) < 1e-10
+
+
+def test_turn_derivative_inverse_and_monotonicity():
+    """dE/dr (closed form) against central differences; E strictly decreasing for k >= 1/2;
+    turn_inverse inverts E."""
+    r = np.linspace(0.01, A_MAX, 300)
+    for k in (0.5, 1.0, 2.5, 30.0, K_MAX):
+        e = leafmap.turn(r, k)
+        fd = (leafmap.turn(r + 1e-7, k) - leafmap.turn(r - 1e-7, k)) / 2e-7
+        assert np.allclose(leafmap.turn_dr(r, k), fd, rtol=1e-6, atol=1e-6)
+        assert np.all(np.diff(e) < 0)
+        assert np.abs(leafmap.turn_inverse(e, k) - r).max() < 1e-12
+    assert np.isnan(leafmap.turn_inverse(0.1, 2.5))
+
+
+def test_displacement_derivative_against_differences():
+    r = np.array([0.05, 0.3, 0.6, A_MAX - 1e-3])
+    for k in (0.0, 2.5, 30.0):
+        _, dd = leafmap.displacement(r, k, derivative=True)
+        h = 1e-7
+        fd = (leafmap.displacement(r + h, k) - leafmap.displacement(r - h, k)) / (2 * h)
+        assert np.all(np.abs(dd - fd) < 1e-5 * (1 + np.abs(dd)))
+
+
+def test_symmetry_exp_half_turn_times_displacement_is_real():
+    """The leaf's mirror symmetry: exp(i E / 2) d is real, checked on DOP853's leaf ends."""
+    for r, k in ((0.2, 2.5), (0.6, 5.0), (A_MAX, 20.0)):
+        ref = references.leaf_end(r, 1.0, k)
+        assert abs((complex(ref[0], ref[1]) * np.exp(0.5j * ref[2])).imag) < 1e-10
+    r = np.linspace(0.001, A_MAX, 400)
+    for k in (0.0, 2.5, 40.0):
+        d, e = leafmap.leaf_values(r, k)
+        assert np.abs((d * np.exp(0.5j * e)).imag).max() < 1e-12
+
+
+# the issue's cases: `rollplan step --a 0.69 --k 100`, step(0.6899, 0.05, k=50), (0.69, 0.69, k=20)
+@pytest.mark.parametrize("a,b,k,gamma", [pytest.param(A_MAX, A_MAX, K_MAX, 0.0, marks=pytest.mark.slow),
+                                         pytest.param(0.6899, 0.05, 50.0, 0.0, marks=pytest.mark.slow),
+                                         (A_MAX, A_MAX, 20.0, 0.0), (0.3, 0.4, 2.5, 0.7), (0.1, A_MAX, 30.0, -2.0),
+                                         (0.45, 0.2, 0.0, 1.0), (0.6, 0.3, 0.25, 0.0)])
+def test_step_against_dop853_over_the_domain(a, b, k, gamma):
+    s = rollplan.step(a, b, k=k, gamma=gamma)
+    ref = references.trace(a, b, k, gamma, 1)
+    assert np.abs(np.r_[s.shift, s.eta] - ref).max() < 1e-10
+    assert s.h == pytest.approx(math.hypot(ref[0], ref[1]), abs=1e-10)
+
+
+@pytest.mark.parametrize("kwargs,word", [(dict(a=0.7, k=2.5), "a"), (dict(a=0.3, k=100.5), "k"),
+                                         (dict(a=0.3, k=float("nan")), "k"), (dict(a=0.3, b=0.0, k=1.0), "b")])
+def test_step_refuses_outside_the_domain(kwargs, word):
+    with pytest.raises(InputError, match=word):
+        rollplan.step(**kwargs)
+
+
+# ----------------------------------------------------------------------------- brute force
+
+
+def _b_of(a, eta, k):
+    """b with E(b) = E(a) - eta: plain bisection on the closed form (vectorised), nan outside."""
+    a = np.asarray(a, float)
+    e_min = float(leafmap.turn(A_MAX, k))
+    target_e = leafmap.turn(a, k) - eta
+    lo, hi = np.zeros(a.shape), np.full(a.shape, A_MAX)
+    for _ in range(64):
+        mid = 0.5 * (lo + hi)
+        right = leafmap.turn(mid, k) > target_e
+        lo, hi = np.where(right, mid, lo), np.where(right, hi, mid)
+    return np.where((target_e >= e_min) & (target_e <= 0.0), 0.5 * (lo + hi), np.nan)
+
+
+def _g(a, eta, h_m, k):
+    """h(a, b(a))^2 - h_m^2 by the complex step map."""
+    s, _ = leafmap.step_values(a, _b_of(np.array([a]), eta, k), k)
+    return float(abs(s[0]) ** 2 - h_m * h_m)
+
+
+def _radius_of_turn(e, k):
+    return brentq(lambda r: float(leafmap.turn(r, k)) - e, 0.0, A_MAX, xtol=1e-15)
+
+
+def _brute_branch(eta, h_m, k, samples_per_rad, min_samples):
+    """Roots a of branch (eta, h_m) by the dense scan of the module docstring."""
+    e_min = float(leafmap.turn(A_MAX, k))
+    lo_e, hi_e = max(e_min, e_min + eta), min(0.0, eta)       # E(a) - eta within [E(A_MAX), 0]
+    if lo_e > hi_e:
+        return []
+    a_lo = _radius_of_turn(hi_e, k) if hi_e < 0 else 0.0
+    a_hi = _radius_of_turn(lo_e, k) if lo_e > e_min else A_MAX
+    n = max(min_samples, int(samples_per_rad * (hi_e - lo_e)))
+    grid = np.unique(np.concatenate([np.linspace(a_lo, a_hi, n), leafmap.turn_inverse(np.linspace(hi_e, lo_e, n), k)]))
+    grid = grid[(grid > 0) & np.isfinite(grid)]
+    bs = _b_of(grid, eta, k)
+    ok = np.isfinite(bs) & (bs > 0)
+    grid, bs = grid[ok], bs[ok]
+    shift, _ = leafmap.step_values(grid, bs, k)
+    f = np.abs(shift) ** 2 - h_m * h_m
+    roots = [brentq(_g, grid[i], grid[i + 1], args=(eta, h_m, k), xtol=1e-15, rtol=1e-15)
+             for i in np.nonzero(np.sign(f[:-1]) * np.sign(f[1:]) < 0)[0]]
+    # local minima of |f| without a sign change: a close pair or a tangency inside one interval
+    af = np.abs(f)
+    for i in np.nonzero((af[1:-1] < af[:-2]) & (af[1:-1] < af[2:]))[0] + 1:
+        if f[i - 1] * f[i] <= 0 or f[i] * f[i + 1] <= 0:
+            continue
+        sign = float(np.sign(f[i]))
+        res = minimize_scalar(lambda a, s=sign: s * _g(a, eta, h_m, k), bounds=(grid[i - 1], grid[i + 1]),
+                              method="bounded", options={"xatol": 1e-14})
+        if np.sign(_g(res.x, eta, h_m, k)) != sign:
+            roots.append(brentq(_g, grid[i - 1], res.x, args=(eta, h_m, k), xtol=1e-15, rtol=1e-15))
+            roots.append(brentq(_g, res.x, grid[i + 1], args=(eta, h_m, k), xtol=1e-15, rtol=1e-15))
+    return roots
+
+
+def _brute_roots(target, steps, k, branches=None, samples_per_rad=40, min_samples=4000):
+    """All (m, a, b) solving (32)-(33) by a dense scan in a (see the module docstring)."""
+    u, v, psi = target
+    psi = float(wrap(psi))
+    h_des = math.hypot(u, v)
+    lam = -float(leafmap.turn(A_MAX, k))
+    ms = range(math.ceil((-steps * lam - psi) / (2 * math.pi)), math.floor((steps * lam - psi) / (2 * math.pi)) + 1)
+    out = []
+    for m in (branches if branches is not None else ms):
+        eta = (psi + 2 * math.pi * m) / steps
+        gain = float(n_step_gain(eta, steps))
+        if gain < 1e-12 or abs(eta) > lam:
+            continue
+        for a in _brute_branch(eta, h_des / gain, k, samples_per_rad, min_samples):
+            out.append((m, a, float(_b_of(np.array([a]), eta, k)[0])))
+    return out
+
+
+def _enumerated(target, steps, k, branch=None):
+    u, v, psi = target
+    brs = en.branches(k, float(wrap(psi)), steps, math.hypot(u, v), branch)
+    return [(r.m, r.a, r.b) for r in en.roots(brs, k)]
+
+
+def _same_sets(brute, enum, tol=1e-7):
+    missed = [r for r in brute if not any(e[0] == r[0] and abs(e[1] - r[1]) < tol and abs(e[2] - r[2]) < tol
+                                          for e in enum)]
+    extra = [e for e in enum if not any(e[0] == r[0] and abs(e[1] - r[1]) < tol and abs(e[2] - r[2]) < tol
+                                        for r in brute)]
+    return missed, extra
+
+
+def _certified_by_dop853(target, steps, k, p):
+    x = references.trace(p.a, p.b, k, p.gamma, steps)
+    return max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2])))
+
+
+# the issue's three failures
+def test_named_failure_shortest_on_branch_minus_5():
+    """(0.0621, 0.0847, 2.4915), n = 5, k = 2.5: the shortest plan is L = 35.723 on m = -5 (a close
+    pair of roots in one cell of the old bracketing grid)."""
+    target = (0.0621, 0.0847, 2.4915)
+    p = rollplan.plan(target, steps=5, k=2.5, legs="one")
+    assert p.branch == -5 and p.path_length == pytest.approx(35.723, abs=5e-4)
+    assert _certified_by_dop853(target, 5, 2.5, p) < 1e-9
+
+
+def test_named_failure_branch_zero():
+    target = (-0.2724, 0.1488, -2.9291)
+    p = rollplan.plan(target, steps=3, k=2.5, branch=0, legs="one")
+    assert p.branch == 0 and p.path_length == pytest.approx(19.4840, abs=5e-5)
+    assert _certified_by_dop853(target, 3, 2.5, p) < 1e-9
+
+
+@pytest.mark.slow
+def test_named_failure_all_plans_complete():
+    """(0.2, 0.1, 2), n = 3, k = 2.5: at least 46 plans, the same set as the brute force."""
+    target = (0.2, 0.1, 2.0)
+    p = rollplan.plan(target, steps=3, k=2.5, all_solutions=True, legs="one")
+    plans = (p,) + p.alternatives
+    assert len(plans) >= 46
+    brute = _brute_roots(target, 3, 2.5)
+    enum = [(q.branch, q.a, q.b) for q in plans]
+    assert _same_sets(brute, enum) == ([], [])
+    assert all(_certified_by_dop853(target, 3, 2.5, q) < 1e-9 for q in plans[:5])
+
+
+@pytest.mark.parametrize("target,steps,k,branches", [
+    ((0.0621, 0.0847, 2.4915), 5, 2.5, [-5, -10, 0, 3]),
+    pytest.param((0.2, 0.1, 2.0), 3, 2.5, None, marks=pytest.mark.slow),
+    pytest.param((0.5, -0.3, 1.0), 2, 1.5, None, marks=pytest.mark.slow),
+    pytest.param((0.1, 0.4, -2.0), 1, 5.0, None, marks=pytest.mark.slow),
+    pytest.param((-0.3, 0.2, 0.4), 4, 10.0, [0, 1, -1, 5], marks=pytest.mark.slow),
+])
+def test_enumeration_against_brute_force(target, steps, k, branches):
+    """Every root on the branches, against the dense scan; neither misses one of the other's."""
+    psi = float(wrap(target[2]))
+    turns = round((target[2] - psi) / (2 * math.pi))
+    assert turns == 0
+    brute = _brute_roots(target, steps, k, branches=branches)
+    enum = []
+    for m in (branches if branches is not None else [None]):
+        enum += _enumerated(target, steps, k, m)
+    missed, extra = _same_sets(brute, enum)
+    assert missed == [] and extra == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("k", [1.5, 2.5, 5.0, 10.0, 20.0])
+def test_random_targets_default_is_the_shortest_and_all_complete(k):
+    """Random targets, n in 1..5: the enumeration equals the brute force on every branch that the
+    brute force scans (all for n <= 2 and k <= 5, the five of smallest |eta| otherwise), and the
+    default plan is the shortest root that DOP853 certifies."""
+    rng = np.random.default_rng(int(k * 10))
+    for _ in range(3):
+        steps = int(rng.integers(1, 6))
+        dist, direction, psi = rng.uniform(0.05, 1.5), rng.uniform(-np.pi, np.pi), rng.uniform(-np.pi, np.pi)
+        target = (dist * np.cos(direction), dist * np.sin(direction), psi)
+        brs = en.branches(k, psi, steps, dist)
+        sub = None if (steps <= 2 and k <= 5) else [b.m for b in brs[:5]]
+        brute = _brute_roots(target, steps, k, branches=sub)
+        enum = [(r.m, r.a, r.b) for r in en.roots([b for b in brs if sub is None or b.m in sub], k)]
+        assert _same_sets(brute, enum) == ([], [])
+        try:
+            p = rollplan.plan(target, steps=steps, k=k, legs="one")
+        except rollplan.NoPlanError:
+            assert not en.roots(brs, k)
+            continue
+        assert _certified_by_dop853(target, steps, k, p) < 1e-9
+        shortest = min(2 * math.pi * steps * (a + b) for _, a, b in brute) if brute else math.inf
+        assert p.path_length <= shortest + 1e-8
