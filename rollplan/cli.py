@@ -161,7 +161,10 @@ def cmd_plan(args) -> int:
               f"({g.u_a:g}, {g.v_a:g}, {g.psi:g})")
     print(_fmt_composed(p, unit) if composed else _fmt_plan(p, unit))
     details = p.stats.details
-    found = (f"{details['candidates']} brackets, {details['solves']} solves, " if "candidates" in details else "")
+    if "branches" in details:
+        found = f"{details['branches']} branches searched, {details['roots']} roots certified or rejected, "
+    else:
+        found = (f"{details['candidates']} brackets, {details['solves']} solves, " if "candidates" in details else "")
     print(f"  solver        {p.stats.method}: {p.stats.status}, {p.stats.iterations} iterations, {found}"
           f"{p.stats.time_s * 1e3:.1f} ms")
     for i, alt in enumerate(p.alternatives, 1):

@@ -49,8 +49,9 @@ from typing import NamedTuple
 import numpy as np
 
 from ...core.curves import A_MAX
+from ...core.interrupt import raise_if_interrupted
 from .brackets import target_shift
-from .leafmap import signed_length, turn, turn_dr, turn_inverse
+from .leafmap import progress, signed_length, turn, turn_dr, turn_inverse
 
 __all__ = ["K_MONOTONE", "PHASE_STEP", "HERMITE_REL", "SAFETY", "MIN_WIDTH", "Branch", "Root", "branches",
            "branch_values", "x_of_length", "roots"]
@@ -66,8 +67,9 @@ HERMITE_REL = 1e-2
 #: Factor between the Hermite error anywhere in a cell and at its midpoint.
 SAFETY = 4.0
 #: Table of rho: steps in the turn E [rad] and in r [R].
-TABLE_PHASE = 0.1
-TABLE_STEP = 0.004
+TABLE_PHASE = 0.25
+TABLE_STEP = 0.005
+_TABLE_CHUNK = 512
 #: Smallest cell width [R].
 MIN_WIDTH = 1e-10
 
@@ -155,7 +157,16 @@ def rho_table(k: float) -> RhoTable:
                         np.linspace(0.0, A_MAX, math.ceil(A_MAX / TABLE_STEP) + 1)])
     r = np.unique(np.clip(r[np.isfinite(r)], 0.0, A_MAX))
     mid = 0.5 * (r[:-1] + r[1:])
-    rho, drho = signed_length(np.concatenate([r, mid]), k, derivative=True)
+    both = np.concatenate([r, mid])
+    rho, drho = np.empty(both.size), np.empty(both.size)
+    bar = progress(both.size, f"leaf table (k = {k:g})")
+    for i in range(0, both.size, _TABLE_CHUNK):
+        rho[i:i + _TABLE_CHUNK], drho[i:i + _TABLE_CHUNK] = signed_length(both[i:i + _TABLE_CHUNK], k, derivative=True)
+        raise_if_interrupted()
+        if bar is not None:
+            bar.update(min(_TABLE_CHUNK, both.size - i))
+    if bar is not None:
+        bar.close()
     n = r.size
     t = RhoTable(float(k), r, rho[:n], drho[:n], 0.0)
     err = np.abs(rho_lookup(mid, t)[0] - rho[n:]).max()

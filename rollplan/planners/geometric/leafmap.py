@@ -57,6 +57,7 @@ follow it line by line.
 from __future__ import annotations
 
 import math
+import sys
 from functools import lru_cache
 
 import numpy as np
@@ -64,7 +65,7 @@ import numpy as np
 from ...core.curves import A_MAX
 from ...problem import K_MAX
 
-__all__ = ["ORDER", "BUCKETS", "panels_for", "gauss_nodes", "turn", "turn_dr", "turn_inverse",
+__all__ = ["ORDER", "BUCKETS", "progress", "panels_for", "gauss_nodes", "turn", "turn_dr", "turn_inverse",
            "displacement", "signed_length", "leaf_values", "step_values"]
 
 #: Gauss-Legendre nodes per panel.
@@ -75,6 +76,15 @@ BUCKETS = ((5.0, 2), (10.0, 3), (20.0, 4), (30.0, 6), (40.0, 7), (50.0, 9), (75.
 assert BUCKETS[-1][0] >= K_MAX
 
 _TWO_PI = 2.0 * math.pi
+
+
+def progress(total: int, label: str):
+    """A tqdm bar on stderr that appears only if the work lasts over a second (None without tqdm)."""
+    try:
+        from tqdm import tqdm
+    except ImportError:  # pragma: no cover
+        return None
+    return tqdm(total=total, desc=label, file=sys.stderr, delay=1.0, leave=False)
 
 
 def panels_for(k: float) -> int:

@@ -46,11 +46,10 @@ from __future__ import annotations
 
 import logging
 import math
-import sys
 import time
 from collections import Counter
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import NamedTuple
 
 import casadi as ca
@@ -68,7 +67,7 @@ from ...robot import Robot
 from .brackets import find_brackets
 from .certify import CvodesCertifier
 from .enumerate import K_MONOTONE, branches, roots
-from .leafmap import step_values
+from .leafmap import progress, step_values
 from .leaves import LeafTables
 from .refine import SOLVER_ERROR_STATUSES, SOLVERS, step_residual
 
@@ -184,7 +183,9 @@ class Plan(CertifiedMotion):
 class GeometricPhasePlanner:
     """Geometric-phase planner for repeated solves (problem class).
 
-    Builds the symbolic step map once; leaf tables are cached per k.
+    Builds nothing a plan does not use: the leaf map is plain numpy with per-k tables
+    (:func:`.enumerate.rho_table`); the spectral step map, the root solver and the leaf tables of
+    the bracketing path (``k < 1/2``) are built on first use.
 
     Parameters
     ----------
@@ -203,11 +204,25 @@ class GeometricPhasePlanner:
         self.tol = check_range("tol", tol, 0.0, 1e-3, low_open=True)
         self.nodes = check_whole("nodes", nodes, 4, 200)
         self.curve = figure_eight()
-        self.step_map = spectral_step(self.curve, self.nodes)
-        self.residual = step_residual(self.step_map)
-        self._solve = SOLVERS[method](self.residual)
-        self.tables = LeafTables()
         self.certifier = CvodesCertifier()
+
+    # -- the bracketing path (k < 1/2), built on first use ------------------------------
+    @cached_property
+    def step_map(self) -> ca.Function:
+        """The spectral step map of :mod:`rollplan.core.integrate` (the bracketing path and the atlas)."""
+        return spectral_step(self.curve, self.nodes)
+
+    @cached_property
+    def residual(self) -> ca.Function:
+        return step_residual(self.step_map)
+
+    @cached_property
+    def _solve(self):
+        return SOLVERS[self.method](self.residual)
+
+    @cached_property
+    def tables(self) -> LeafTables:
+        return LeafTables()
 
     # -- step map ------------------------------------------------------------------
     def step(self, a: float, b: float | None = None, *, k: float, gamma: float = 0.0) -> StepResult:
@@ -324,7 +339,7 @@ class GeometricPhasePlanner:
         # is certified, only lengths below it are searched, and no branch whose smallest a + b is not
         # below it is visited (the first root of a branch in x is its shortest)
         best = math.inf
-        bar = _progress(len(brs), f"search (k = {k:g}, {len(brs)} branches)")
+        bar = progress(len(brs), f"search (k = {k:g}, {len(brs)} branches)")
         visited = 0
         try:
             start, size = 0, 4
@@ -346,7 +361,7 @@ class GeometricPhasePlanner:
                     while queue:   # a branch's next roots only if its first is rejected
                         q = queue.pop(0)
                         tried += 1
-                        cand = self._certified(problem, (q.a, q.b), q.m - turns, target, q.kind, 0)
+                        cand = self._certified(problem, (q.a, q.b), q.m - turns, target, q.kind, 0, "enumeration")
                         if cand[1].passed:
                             found.append(cand)
                             if not all_solutions:
@@ -375,7 +390,7 @@ class GeometricPhasePlanner:
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
         return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
 
-    def _certified(self, problem, x, m, target_r, status, iters):
+    def _certified(self, problem, x, m, target_r, status, iters, method=None):
         """Gamma from the geometry (module docstring), then the certificate: a tuple for :meth:`_plan`."""
         a, b = float(x[0]), float(x[1])
         shift, eta = step_values(a, b, problem.k)
@@ -386,7 +401,7 @@ class GeometricPhasePlanner:
         goal_r = problem.scaled(problem.goal)
         residual = arrival_residual(final_r, State(goal_r.u_a, goal_r.v_a, target_r[2]))
         cert = Certificate(self.certifier.name, final_r.scaled(problem.radius), residual, 0.0, self.tol)
-        stats = SolverStats(self.method, status, iters, 0.0)
+        stats = SolverStats(method or self.method, status, iters, 0.0)
         return _Root(a, b, gamma, m, abs(shift), eta), cert, stats
 
     def _plan(self, problem, cand, stats) -> Plan:
@@ -417,15 +432,6 @@ class GeometricPhasePlanner:
         start = np.zeros((1, 5))
         return Trajectory(np.concatenate([[0.0], theta]), np.vstack([start, state]),
                           np.concatenate([[0], segment]).astype(int), p.radius, "theta")
-
-
-def _progress(total: int, label: str):
-    """A tqdm bar on stderr that appears only if the search lasts over a second (None without tqdm)."""
-    try:
-        from tqdm import tqdm
-    except ImportError:  # pragma: no cover
-        return None
-    return tqdm(total=total, desc=label, file=sys.stderr, delay=1.0, leave=False)
 
 
 @lru_cache(maxsize=1)
