@@ -69,6 +69,21 @@ def _fmt_plan(p, unit) -> str:
     return "\n".join(lines)
 
 
+def _fmt_all(p, unit) -> str:
+    """``--all``: one line per plan (the figure eights of one leg), shortest first, and the count."""
+    plans = [p] + list(p.alternatives)
+    lines = [f"all plans: {len(plans)} (shortest first; a, b [{unit}], gamma [rad], L = contact path [{unit}])",
+             f"  {'m':>6} {'a':>12} {'b':>12} {'gamma':>12} {'L':>12} {'residual':>9}"]
+    for q in plans:
+        e = q.legs[0] if getattr(q, "legs", None) else q
+        if not hasattr(e, "branch"):
+            lines.append(f"  {'-':>6} {'-':>12} {'-':>12} {'-':>12} {q.path_length:>12.6f} {q.residual:>9.1e}")
+            continue
+        lines.append(f"  {e.branch:>6d} {e.a:>12.9f} {e.b:>12.9f} {e.gamma:>12.9f} {q.path_length:>12.6f} "
+                     f"{q.residual:>9.1e}")
+    return "\n".join(lines)
+
+
 def _fmt_state(x) -> str:
     return "(" + ", ".join(f"{float(v):.9g}" for v in x) + ")"
 
@@ -148,8 +163,8 @@ def _plan_inputs(args):
 def cmd_plan(args) -> int:
     k, robot = _plan_inputs(args)
     goal = (args.to[0], args.to[1], args.psi, args.contact[0], args.contact[1])
-    p = geometric.plan(goal, args.steps, k, robot, args.radius, args.all, args.method, start=args.start,
-                       legs=args.legs)
+    p = geometric.plan(goal, args.steps, k, robot, args.radius, args.all, args.method, branch=args.branch,
+                       start=args.start, legs=args.legs)
     unit = "m" if robot is not None else ("R" if args.radius is None else "units")
     g = p.goal
     composed = hasattr(p, "pieces")
@@ -167,9 +182,8 @@ def cmd_plan(args) -> int:
         found = (f"{details['candidates']} brackets, {details['solves']} solves, " if "candidates" in details else "")
     print(f"  solver        {p.stats.method}: {p.stats.status}, {p.stats.iterations} iterations, {found}"
           f"{p.stats.time_s * 1e3:.1f} ms")
-    for i, alt in enumerate(p.alternatives, 1):
-        print(f"alternative {i}:")
-        print(_fmt_composed(alt, unit) if composed else _fmt_plan(alt, unit))
+    if args.all:
+        print(_fmt_all(p, unit))
     _write_results(args, p, robot, unit, composed_to_dict)
     return EXIT_OK
 
@@ -539,6 +553,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="figure eights: one leg, with a turn in place or two legs only where one leg has no plan "
                         "(fallback, default); also search two legs and keep the shorter (shortest); one; two")
     p.add_argument("--all", action="store_true", help="also list every other verified solution branch (one leg)")
+    p.add_argument("--branch", type=int, default=None, metavar="M",
+                   help="only branch M of n eta = psi + 2 pi M (one leg of figure eights)")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     p.add_argument("--json", metavar="FILE", help="write the plan as JSON")
     p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere and the plane "

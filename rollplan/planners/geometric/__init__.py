@@ -1,8 +1,11 @@
 """The geometric-phase planner: figure eights traced n times (Section III.B of the paper), and its
 extension to any start and goal state.
 
-Pieces: :mod:`.leaves` (tables of the two leaves per k), :mod:`.brackets`
-(cells bracketing roots of (32)-(33)), :mod:`.refine` (root solvers by name),
+Pieces: :mod:`.leafmap` (the accurate leaf map: closed-form turn, Gauss-rule
+displacement, up to K_MAX), :mod:`.enumerate` (complete enumeration of the roots
+of (32)-(33), one scalar equation per branch, for k >= 1/2), :mod:`.leaves`
+(tables of the two leaves per k) and :mod:`.brackets` (cells bracketing roots of
+(32)-(33)) with :mod:`.refine` (root solvers by name) for k < 1/2,
 :mod:`.certify` (independent integration of the whole motion), :mod:`.planner`
 (the pole-to-pole problem class :class:`GeometricPhasePlanner`); full
 reconfiguration: :mod:`.maneuvers` (approach and departure rolls), :mod:`.turn`
