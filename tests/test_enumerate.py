@@ -266,3 +266,56 @@ def test_random_targets_default_is_the_shortest_and_all_complete(k):
         assert _certified_by_dop853(target, steps, k, p) < 1e-9
         shortest = min(2 * math.pi * steps * (a + b) for _, a, b in brute) if brute else math.inf
         assert p.path_length <= shortest + 1e-8
+
+
+# ----------------------------------------------------------------------------- command line
+
+
+def _cli(capsys, *args):
+    from rollplan.cli import main
+    code = main(list(args))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_cli_step_at_the_corner_of_the_domain_and_beyond(capsys):
+    """`rollplan step --a 0.69 --k 100` prints the DOP853 shift; k above K_MAX is refused (exit 2)."""
+    code, out, _ = _cli(capsys, "step", "--a", "0.69", "--k", "100")
+    ref = references.trace(A_MAX, A_MAX, K_MAX)
+    u = float(out.split("u_a =")[1].split()[0])
+    v = float(out.split("v_a =")[1].split()[0])
+    assert code == 0 and abs(u - ref[0]) < 1e-10 and abs(v - ref[1]) < 1e-10
+    code, _, err = _cli(capsys, "step", "--a", "0.3", "--k", "100.5")
+    assert code == 2 and "k = 100.5" in err and "100" in err and len(err.strip().splitlines()) == 1
+
+
+def test_cli_branch_and_compact_all(capsys):
+    code, out, _ = _cli(capsys, "plan", "--to", "-0.2724", "0.1488", "--psi", "-2.9291", "--steps", "3",
+                        "--branch", "0")
+    assert code == 0 and "(branch m = 0)" in out and "path length   19.484014" in out
+    code, out, _ = _cli(capsys, "plan", "--to", "0", "1", "--k", "2.5", "--all")
+    count = int(out.split("all plans:")[1].split()[0])
+    rows = out.split("residual\n")[-1].strip().splitlines()
+    assert code == 0 and count == len(rows) > 1
+    lengths = [float(r.split()[4]) for r in rows]
+    assert lengths == sorted(lengths) and abs(lengths[0] - 2 * math.pi * 2 * 0.300428806) < 1e-5
+
+
+@pytest.mark.slow
+def test_ctrl_c_stops_a_high_k_plan_promptly():
+    """SIGINT during a K_MAX plan (table and search): exit 130 within a second or two."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    code = ("import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+            "from rollplan.cli import main; sys.exit(main(sys.argv[1:]))")
+    p = subprocess.Popen([sys.executable, "-c", code, "plan", "--to", "0", "1", "--k", "99.5"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    time.sleep(8.0)
+    assert p.poll() is None, "the plan ended before the interrupt"
+    t0 = time.perf_counter()
+    p.send_signal(signal.SIGINT)
+    p.communicate(timeout=60)
+    assert p.returncode == 130 and time.perf_counter() - t0 < 3.0
