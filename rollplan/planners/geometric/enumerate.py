@@ -42,8 +42,12 @@ Everything is a pure function of numpy arrays (the C planner ports it).
 
 from __future__ import annotations
 
+import hashlib
 import math
+import os
+import tempfile
 from functools import lru_cache
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -51,10 +55,11 @@ import numpy as np
 from ...core.curves import A_MAX
 from ...core.interrupt import raise_if_interrupted
 from .brackets import target_shift
+from . import leafmap
 from .leafmap import progress, signed_length, turn, turn_dr, turn_inverse
 
 __all__ = ["K_MONOTONE", "PHASE_STEP", "HERMITE_REL", "SAFETY", "MIN_WIDTH", "Branch", "Root", "branches",
-           "branch_values", "x_of_length", "roots"]
+           "branch_values", "x_of_length", "roots", "cache_dir", "rho_table"]
 
 #: Smallest k for which E is strictly decreasing on (0, A_MAX] (the reduction above).
 K_MONOTONE = 0.5
@@ -147,8 +152,50 @@ def rho_lookup(r, t: RhoTable):
     return h00 * g0 + h10 * w * p0 + h01 * g1 + h11 * w * p1, (d00 * g0 + d01 * g1) / w + d10 * p0 + d11 * p1
 
 
+def cache_dir() -> Path:
+    """Directory of the per-k tables: ``$ROLLPLAN_CACHE_DIR``, else ``$XDG_CACHE_HOME/rollplan``, else
+    ``~/.cache/rollplan``."""
+    if os.environ.get("ROLLPLAN_CACHE_DIR"):
+        return Path(os.environ["ROLLPLAN_CACHE_DIR"])
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rollplan"
+
+
+def _table_file(k: float) -> Path:
+    """Cache file of the table of k, keyed by the sources that define it and the table's parameters."""
+    h = hashlib.sha256()
+    for src in (__file__, leafmap.__file__):
+        h.update(Path(src).read_bytes())
+    h.update(repr((float(k), TABLE_PHASE, TABLE_STEP, SAFETY, np.__version__)).encode())
+    return cache_dir() / f"rho_table_{h.hexdigest()[:32]}.npz"
+
+
 @lru_cache(maxsize=8)
 def rho_table(k: float) -> RhoTable:
+    """Table of rho for inertia ratio k, from the disk cache (:func:`cache_dir`) or built and stored there
+    atomically (a cache that cannot be read or written is rebuilt or skipped)."""
+    path = _table_file(k)
+    try:
+        with np.load(path) as z:
+            return RhoTable(float(k), z["r"], z["rho"], z["drho"], float(z["eps"]))
+    except (OSError, KeyError, ValueError):
+        pass
+    t = _build_rho_table(k)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".rho_table.", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                np.savez(fh, r=t.r, rho=t.rho, drho=t.drho, eps=t.eps)
+            os.replace(tmp, path)
+        finally:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+    except OSError:
+        pass
+    return t
+
+
+def _build_rho_table(k: float) -> RhoTable:
     """Table of rho for inertia ratio k: radii uniform in the turn E (steps :data:`TABLE_PHASE`) and in r
     (:data:`TABLE_STEP`); ``eps`` is SAFETY times the largest error at the midpoints (where the error
     factor of cubic Hermite interpolation peaks) against the accurate map, plus rounding."""
