@@ -54,8 +54,8 @@ import numpy as np
 
 from ...core.curves import A_MAX
 from ...core.interrupt import raise_if_interrupted
-from .brackets import target_shift
 from . import leafmap
+from .brackets import target_shift
 from .leafmap import progress, signed_length, turn, turn_dr, turn_inverse
 
 __all__ = ["K_MONOTONE", "PHASE_STEP", "HERMITE_REL", "SAFETY", "MIN_WIDTH", "Branch", "Root", "branches",
