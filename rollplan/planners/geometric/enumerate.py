@@ -22,7 +22,8 @@ one, and a branch whose ``y(0)`` is not below the best length found cannot hold 
 Completeness argument. Per branch, g is sampled on a grid uniform in the phase ``E(x)`` (steps
 of :data:`PHASE_STEP` rad, the fastest rotation in F) and in x, then every cell is split at its
 midpoint while the cubic Hermite interpolant H of (g, g') at its ends misses g at the midpoint by
-more than :data:`HERMITE_REL` of the cell's largest |g| (down to :data:`MIN_WIDTH`). A cell is
+more than :data:`HERMITE_REL` of the cell's largest |g| and more than rounding (down to
+:data:`MIN_WIDTH`). A cell is
 *excluded* only if ``min |H| > SAFETY * |g(mid) - H(mid)| + floor`` over the cell (g has no zero
 there as long as the Hermite error anywhere in the cell is at most SAFETY times its value at the
 midpoint, where the error factor of cubic Hermite interpolation peaks, i.e. as long as the cell
@@ -329,7 +330,7 @@ def _cells(brs: list, k: float, x_lo, x_hi, table: RhoTable):
         gm, pm, _, _ = branch_values(xm, eta[o], hh[o], k, table)
         err = np.abs(gm - _hermite(g0, p0, g1, p1, x1 - x0, 0.5))
         big = np.maximum(np.maximum(np.abs(g0), np.abs(g1)), np.abs(gm))
-        s = (err > HERMITE_REL * big) & (x1 - x0 > MIN_WIDTH)
+        s = (err > HERMITE_REL * big) & (err > 1e-15 * (1.0 + hh[o] ** 2)) & (x1 - x0 > MIN_WIDTH)
         keep = ~s
         done.append((o[keep], x0[keep], x1[keep], g0[keep], p0[keep], g1[keep], p1[keep], gm[keep], err[keep]))
         o = np.concatenate([o[s], o[s]])
@@ -460,15 +461,15 @@ def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)
             gc = branch_values(xc, eta[owner[cand]], hh[owner[cand]], k, table)[0]
             ref = vals[cand, j]
             pair = gc * ref < 0
-            for q in np.nonzero(pair)[0]:
-                i = np.nonzero(cand)[0][q]
-                for a_, b_ in ((side_lo[i], xc[q]), (xc[q], side_hi[i])):
-                    ga = branch_values(np.array([a_]), eta[owner[i]], hh[owner[i]], k, table)[0]
-                    xr = _bracketed(np.array([a_]), np.array([b_]), ga, eta[owner[i]:owner[i] + 1],
-                                    hh[owner[i]:owner[i] + 1], k, table)
-                    found_x.append(xr)
-                    found_o.append(owner[i:i + 1])
-                    found_kind.append("simple")
+            if pair.any():   # two roots, one on each side of the critical point, all pairs at once
+                idx = np.nonzero(cand)[0][pair]
+                lo2 = np.concatenate([side_lo[idx], xc[pair]])
+                hi2 = np.concatenate([xc[pair], side_hi[idx]])
+                own2 = np.concatenate([owner[idx], owner[idx]])
+                g_lo = branch_values(lo2, eta[own2], hh[own2], k, table)[0]
+                found_x.append(_bracketed(lo2, hi2, g_lo, eta[own2], hh[own2], k, table))
+                found_o.append(own2)
+                found_kind += ["simple"] * int(own2.size)
             tang = ~pair & (np.abs(gc) <= 1e-13 * (1.0 + hh[owner[cand]] ** 2) + eps_g)
             found_x.append(xc[tang])
             found_o.append(owner[cand][tang])
