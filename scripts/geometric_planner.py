@@ -25,7 +25,6 @@ import datetime
 import json
 import math
 import os
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -39,7 +38,7 @@ from rollplan.planners.geometric import enumerate as en
 from rollplan.planners.geometric.brackets import target_shift
 from rollplan.problem import K_MAX
 
-from benchmark import git_commit, machine, scipy_plan, scipy_step  # noqa: E402  (scripts/ is on the path)
+from benchmark import _median_time, git_commit, machine, scipy_plan, scipy_step  # noqa: E402  (scripts/ is on the path)
 
 PLAN_TARGETS = [((0.0, 1.0, 0.0), 1), ((0.5, 0.3, 0.4), 2), ((1.0, -0.5, 1.0), 3), ((0.2, 0.2, -0.3), 1)]
 STEP_CASES = [(A_MAX, A_MAX, K_MAX), (0.6899, 0.05, 50.0), (A_MAX, A_MAX, 20.0), (A_MAX, A_MAX, 30.0),
@@ -47,12 +46,7 @@ STEP_CASES = [(A_MAX, A_MAX, K_MAX), (0.6899, 0.05, 50.0), (A_MAX, A_MAX, 20.0),
 
 
 def _median(fn, repeats):
-    ts = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t)
-    return statistics.median(ts)
+    return _median_time(fn, repeats)[0]
 
 
 def section_failures(quick):

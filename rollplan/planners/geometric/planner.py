@@ -310,10 +310,7 @@ class GeometricPhasePlanner:
                 found.sort(key=lambda c: c[0].a + c[0].b)
         elapsed = time.perf_counter() - t_start
         if not found:
-            if rejected:
-                raise NoPlanError(f"no certified plan for {where}: {len(rejected)} root(s) of (32)-(33) found, but "
-                                  f"their certified residual (best {min(rejected):.1e}) exceeds {self.tol:.0e}; "
-                                  "try more steps")
+            self._raise_if_rejected(where, rejected)
             errors = Counter({s: c for s, c in statuses.items() if s in SOLVER_ERROR_STATUSES})
             if errors:
                 status = errors.most_common(1)[0][0]
@@ -326,6 +323,13 @@ class GeometricPhasePlanner:
         details = {"candidates": int(len(brackets)), "solves": solves}
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
         return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
+
+    def _raise_if_rejected(self, where: str, rejected: list) -> None:
+        """NoPlanError naming the best certified residual when roots were found but none certified."""
+        if rejected:
+            raise NoPlanError(f"no certified plan for {where}: {len(rejected)} root(s) of (32)-(33) found, but "
+                              f"their certified residual (best {min(rejected):.1e}) exceeds {self.tol:.0e}; "
+                              "try more steps")
 
     def _solve_enumerated(self, problem, all_solutions, branch, target, turns, t_start) -> Plan:
         """Complete enumeration (``k >= 1/2``): every root of every branch (``all_solutions``) or the
@@ -379,10 +383,7 @@ class GeometricPhasePlanner:
                 bar.close()
         elapsed = time.perf_counter() - t_start
         if not found:
-            if rejected:
-                raise NoPlanError(f"no certified plan for {where}: {len(rejected)} root(s) of (32)-(33) found, but "
-                                  f"their certified residual (best {min(rejected):.1e}) exceeds {self.tol:.0e}; "
-                                  "try more steps")
+            self._raise_if_rejected(where, rejected)
             raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R "
                               f"({len(brs)} branches searched completely); try more steps")
         found.sort(key=lambda c: c[0].a + c[0].b)
