@@ -10,30 +10,38 @@ the larger: ``E(y) = E(x) - e``, so
     y(x) = E^-1(E(x) - e),   0 <= x <= x_end = E^-1(E(A_MAX) + e),   dy/dx = E'(x) / E'(y) in [0, 1]
 
 (``|E'|`` grows with r), ``(a, b) = (x, y)`` if ``eta_m >= 0`` and ``(y, x)`` otherwise. The
-branch is one smooth curve, parametrised by x, and (33) on it is the scalar equation
+branch is one smooth curve, parametrised by x. With the leaf's symmetry (``d = rho exp(-i E/2)``,
+real rho; :mod:`.leafmap`, items 3-4), ``h^2 = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta_m / 2)``
+with ``eta_m`` fixed on the branch, so (33) on it is the scalar equation
 
-    g(x) = |F(a(x), b(x))|^2 - h_m^2 = 0,
+    g(x) = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta_m / 2) - h_m^2 = 0,
 
-with ``g'`` from ``E'`` (closed form) and ``d'`` (:func:`.leafmap.displacement`). Along the
-branch ``a + b = x + y(x)`` grows with x, and its smallest value ``y(0) = E^-1(-e)`` grows with
-``e``: the shortest plan is the first root in x of the branch with the smallest ``e`` that has
-one, and a branch whose ``y(0)`` is not below the best length found cannot hold a shorter plan.
+with ``g'`` from ``E'`` (closed form) and ``rho'``. rho depends on one radius and k only, so it is
+tabulated once per k (:func:`rho_table`: cubic Hermite in r on radii uniform in E and in r, its
+interpolation error bounded by ``eps``, SAFETY times the largest error at the midpoints against the
+accurate map) and cached on disk. Along the branch ``a + b = x + y(x)`` grows with x, and its
+smallest value ``y(0) = E^-1(-e)`` grows with ``e``: the shortest plan on a branch is its first root
+in x, and a branch whose ``y(0)`` is not below the best length found cannot hold a shorter plan.
 
-Completeness argument. Per branch, g is sampled on a grid uniform in the phase ``E(x)`` (steps
-of :data:`PHASE_STEP` rad, the fastest rotation in F) and in x, then every cell is split at its
-midpoint while the cubic Hermite interpolant H of (g, g') at its ends misses g at the midpoint by
-more than :data:`HERMITE_REL` of the cell's largest |g| and more than rounding (down to
-:data:`MIN_WIDTH`). A cell is
-*excluded* only if ``min |H| > SAFETY * |g(mid) - H(mid)| + floor`` over the cell (g has no zero
-there as long as the Hermite error anywhere in the cell is at most SAFETY times its value at the
-midpoint, where the error factor of cubic Hermite interpolation peaks, i.e. as long as the cell
-resolves g's fourth derivative, which the splitting enforces). Every other cell is examined on g
-itself: each sign change of g between the ends and the critical points of H is a root (brentq);
-where g does not change sign but H has an extremum near zero (a close pair or a tangency), the
-critical point of g is located (brentq on g') and gives two roots, or a double root if
-``g = 0`` there to rounding. So every root of g in ``0 < x <= x_end``, on every branch, is found:
-simple roots, close pairs down to what double precision separates, and tangencies; the
-certificate (:mod:`.certify`) then accepts or rejects each plan.
+Completeness argument. Per branch, g (on the table) is sampled on a grid uniform in the phase
+``E(x)`` (steps of :data:`PHASE_STEP` rad) and in x, then every cell is split at its midpoint while
+the cubic Hermite interpolant H of (g, g') at its ends misses g at the midpoint by more than
+:data:`HERMITE_REL` of the cell's largest |g| and more than rounding (down to :data:`MIN_WIDTH`).
+A cell is *excluded* only if ``min |H| > SAFETY * |g(mid) - H(mid)| + floor`` over the cell, with
+``floor`` covering rounding and the table's error carried into g. g has no zero there as long as
+the Hermite error anywhere in the cell is at most SAFETY times its value at the midpoint (where the
+error factor of cubic Hermite interpolation peaks), i.e. as long as the cell resolves g's fourth
+derivative, which the splitting enforces; and the true g differs from the tabulated one by less
+than the floor. Every other cell is examined: each sign change of g between the ends and the
+critical points of H is a root (bracketed Newton); where g keeps its sign but H has an extremum,
+the critical point of g is located (bracketed secant on g') and gives two roots (a close pair) or
+a double root (a tangency) if ``|g|`` is within the floor there. The roots are then polished by
+Newton on g of the accurate map. So every root of (32)-(33) with ``0 < x <= x_end``, on every
+branch, is found: simple roots, close pairs down to what the floor separates, and tangencies; the
+certificate (:mod:`.certify`) then accepts or rejects each plan. The argument is not interval
+arithmetic: it rests on the midpoint error estimating the Hermite error within SAFETY in resolved
+cells (and likewise for the table); ``tests/test_enumerate.py`` checks the result against an
+independent dense brute force.
 
 For ``k < 1/2`` E is not monotone on ``(0, A_MAX]`` and this parametrisation does not apply:
 the planner falls back to bracketing (:mod:`.brackets`), without this guarantee.
