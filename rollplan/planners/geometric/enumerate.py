@@ -384,56 +384,11 @@ def _bracketed(lo, hi, glo, eta, h, k: float, table, which: int = 0, iters: int 
     return x
 
 
-def _polish(x, eta, h, k: float, x_end, iters: int = 6):
-    """Newton on g of the accurate map from the table's roots (a few steps; a step that would leave
-    [0, x_end] or grow is not taken): the roots to rounding on the accurate map."""
-    x = x.copy()
-    if x.size == 0:
-        return x
-    g, dg, _, _ = branch_values(x, eta, h, k)
-    for _ in range(iters):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            nxt = np.clip(x - g / dg, 0.0, x_end)
-        ok = np.isfinite(nxt)
-        if not ok.any():
-            break
-        g2, dg2, _, _ = branch_values(np.where(ok, nxt, x), eta, h, k)
-        better = ok & (np.abs(g2) < np.abs(g))
-        x = np.where(better, nxt, x)
-        g, dg = np.where(better, g2, g), np.where(better, dg2, dg)
-        if not better.any():
-            break
-    return x
-
-
-def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)) -> list:
-    """Every root of g on the branches ``brs`` with ``0 < x <= x_end`` and ``lengths[0] <= a + b <=
-    lengths[1]`` (:class:`Root`, sorted by ``a + b``); with ``first_only`` only the first root of
-    each branch in x (its shortest plan). See the module docstring for why none is missed."""
-    brs = [br for br in brs if br.x_end > 0.0]
-    if not brs:
-        return []
-    eta = np.array([br.eta for br in brs])
-    hh = np.array([br.h for br in brs])
-    x_lo = x_of_length(lengths[0], brs, k) if lengths[0] > 0.0 else np.zeros(len(brs))
-    x_hi = x_of_length(lengths[1], brs, k) if math.isfinite(lengths[1]) else np.array([br.x_end for br in brs])
-    table = rho_table(float(k))
-    c = _cells(brs, k, x_lo, x_hi, table)
-    if c is None:
-        return []
-    o, x0, x1, g0, p0, g1, p1, gm, err = (c[n] for n in ("own", "x0", "x1", "g0", "p0", "g1", "p1", "gm", "err"))
+def _examine(act, c, crit, eta, hh, k, table, eps_g):
+    """Roots in the active cells ``act`` of :func:`_cells` output ``c`` (see the module docstring):
+    arrays of x, branch index and kind."""
+    o, x0, x1, g0, p0, g1, p1 = (c[n] for n in ("own", "x0", "x1", "g0", "p0", "g1", "p1"))
     w = x1 - x0
-    crit = _critical(g0, p0, g1, p1, w)
-    hcrit = _hermite(g0[:, None], p0[:, None], g1[:, None], p1[:, None], w[:, None], np.nan_to_num(crit))
-    hc = np.where(np.isnan(crit), np.inf, np.abs(hcrit))
-    crosses = (~np.isnan(crit) & (hcrit * g0[:, None] <= 0)).any(axis=1)    # H changes sign inside
-    eps_g = 8.0 * float(np.abs(table.rho).max()) * table.eps + table.eps ** 2   # table error carried into g
-    floor = 1e-13 * (1.0 + hh[o] ** 2) + eps_g
-    low = np.minimum(np.minimum(np.abs(g0), np.abs(g1)), hc.min(axis=1))
-    sign_change = (np.sign(g0) != np.sign(g1)) | (np.sign(g0) != np.sign(gm))
-    act = np.nonzero(sign_change | crosses | (low <= SAFETY * err + floor))[0]
-    if act.size == 0:
-        return []
     # sub-intervals of the active cells: ends and the Hermite critical points
     pts = np.column_stack([x0[act], x0[act, None] + w[act, None] * crit[act], x1[act]])   # (n, 4), nan = none
     pts = np.where(np.isnan(pts), x1[act, None], pts)                                   # collapse to the end
@@ -484,6 +439,72 @@ def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)
             found_kind += ["double"] * int(tang.sum())
     xr, orr = np.concatenate(found_x), np.concatenate(found_o)
     kinds = np.array(found_kind, dtype=object)
+    return xr, orr, kinds
+
+def _polish(x, eta, h, k: float, x_end, iters: int = 6):
+    """Newton on g of the accurate map from the table's roots (a few steps; a step that would leave
+    [0, x_end] or grow is not taken): the roots to rounding on the accurate map."""
+    x = x.copy()
+    if x.size == 0:
+        return x
+    g, dg, _, _ = branch_values(x, eta, h, k)
+    for _ in range(iters):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            nxt = np.clip(x - g / dg, 0.0, x_end)
+        ok = np.isfinite(nxt)
+        if not ok.any():
+            break
+        g2, dg2, _, _ = branch_values(np.where(ok, nxt, x), eta, h, k)
+        better = ok & (np.abs(g2) < np.abs(g))
+        x = np.where(better, nxt, x)
+        g, dg = np.where(better, g2, g), np.where(better, dg2, dg)
+        if not better.any():
+            break
+    return x
+
+
+def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)) -> list:
+    """Every root of g on the branches ``brs`` with ``0 < x <= x_end`` and ``lengths[0] <= a + b <=
+    lengths[1]`` (:class:`Root`, sorted by ``a + b``); with ``first_only`` only the first root of
+    each branch in x (its shortest plan). See the module docstring for why none is missed."""
+    brs = [br for br in brs if br.x_end > 0.0]
+    if not brs:
+        return []
+    eta = np.array([br.eta for br in brs])
+    hh = np.array([br.h for br in brs])
+    x_lo = x_of_length(lengths[0], brs, k) if lengths[0] > 0.0 else np.zeros(len(brs))
+    x_hi = x_of_length(lengths[1], brs, k) if math.isfinite(lengths[1]) else np.array([br.x_end for br in brs])
+    table = rho_table(float(k))
+    c = _cells(brs, k, x_lo, x_hi, table)
+    if c is None:
+        return []
+    o, x0, x1, g0, p0, g1, p1, gm, err = (c[n] for n in ("own", "x0", "x1", "g0", "p0", "g1", "p1", "gm", "err"))
+    w = x1 - x0
+    crit = _critical(g0, p0, g1, p1, w)
+    hcrit = _hermite(g0[:, None], p0[:, None], g1[:, None], p1[:, None], w[:, None], np.nan_to_num(crit))
+    hc = np.where(np.isnan(crit), np.inf, np.abs(hcrit))
+    crosses = (~np.isnan(crit) & (hcrit * g0[:, None] <= 0)).any(axis=1)    # H changes sign inside
+    eps_g = 8.0 * float(np.abs(table.rho).max()) * table.eps + table.eps ** 2   # table error carried into g
+    floor = 1e-13 * (1.0 + hh[o] ** 2) + eps_g
+    low = np.minimum(np.minimum(np.abs(g0), np.abs(g1)), hc.min(axis=1))
+    sign_change = (np.sign(g0) != np.sign(g1)) | (np.sign(g0) != np.sign(gm))
+    act = np.nonzero(sign_change | crosses | (low <= SAFETY * err + floor))[0]
+    if act.size == 0:
+        return []
+    if not first_only:
+        xr, orr, kinds = _examine(act, c, crit, eta, hh, k, table, eps_g)
+    else:   # the active cells of each branch in order, a few at a time, until it has a root
+        rank = np.arange(act.size) - np.searchsorted(o[act], o[act])
+        parts, done, start = [], np.zeros(len(brs), bool), 0
+        while True:
+            sel = act[(rank >= start) & (rank < start + 2) & ~done[o[act]]]
+            if sel.size == 0:
+                break
+            part = _examine(sel, c, crit, eta, hh, k, table, eps_g)
+            parts.append(part)
+            done[part[1][part[0] > 0.0]] = True
+            start += 2
+        xr, orr, kinds = (np.concatenate([q[j] for q in parts]) for j in range(3))
     ok = xr > 0.0
     xr, orr, kinds = xr[ok], orr[ok], kinds[ok]
     order = np.lexsort((xr, orr))
