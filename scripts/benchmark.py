@@ -57,8 +57,10 @@ from scipy.optimize import least_squares
 import rollplan
 from rollplan import Problem
 from rollplan.core.curves import A_MAX
+from rollplan.core.plane import wrap
 from rollplan.io import write_atomic, write_json
 from rollplan.planners import geometric
+from rollplan.planners.geometric.brackets import target_shift
 
 import bench_codegen
 import bench_collocation
@@ -159,7 +161,9 @@ def _bracket_of(planner, p, target):
         if (int(br["m"]) == p.branch and abs(p.a - br["a0"]) <= br["da"] + 1e-12
                 and abs(p.b - br["b0"]) <= br["db"] + 1e-12):
             return (br["a_s"], br["b_s"]), br["eta_m"], br["h_m"]
-    raise RuntimeError("bracket of the plan not found")
+    # the complete enumeration finds plans the bracketing misses: start 1e-3 from the plan on its branch
+    eta_m = (float(wrap(target[2])) + 2 * math.pi * p.branch) / p.steps
+    return (min(p.a + 1e-3, A_MAX), max(p.b - 1e-3, 1e-6)), eta_m, float(target_shift(h_des, eta_m, p.steps))
 
 
 def _cold_plan_ms(target, steps, k):
