@@ -263,8 +263,8 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     rest_readings : int
         Closed loop: the state used for a re-plan is the mean of this many sensor readings at the
         rest point (0: the last sample of the run, as measured).
-    progress : callable(str), optional
-        Called after each applied piece of motion.
+    progress : callable(label, done, total), optional
+        Called after each applied figure eight (open loop: once).
 
     Returns
     -------
@@ -328,7 +328,7 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
         ctl.apply(motion, end, {"figure_eights_left": steps - j, "mode": getattr(current, "mode", "one"),
                                 "k": robot_est.k, "applied": "all" if last else "first figure eight"})
         if progress:
-            progress(f"figure eight {j + 1}/{rounds if closed_loop else steps} applied, t = {ctl.t0:.4g} s")
+            progress("closed loop, figure eights" if closed_loop else "open loop", j + 1, rounds)
     time, state, meas, rates, torques, seg = ctl.arrays()
     final = State(*(float(v) for v in state[-1]))
     err = arrival_error(final, goal, R)
