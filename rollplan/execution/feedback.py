@@ -155,7 +155,8 @@ class _Controller:
     """Runs the plant piece after piece, keeping the true state, the records and the estimators."""
 
     def __init__(self, real: Robot, plant: str, disturbances, closed_loop: bool, window: int, estimate_friction: bool,
-                 x0):
+                 x0, servo_gain: float = 0.0):
+        self.servo_gain = servo_gain
         self.real, self.plant, self.dist, self.closed_loop = real, plant, tuple(disturbances), closed_loop
         self.by_name = by_name(self.dist, plant)
         self.x = np.asarray(x0, float)
@@ -180,8 +181,10 @@ class _Controller:
         else:
             torques = motion.rotor_torques[sl] + self.friction_hat * rates
             run = run_torques(self.real, t, torques, self.x, self.p, self.phi, self.dist, n, breaks,
-                              commanded_p0=self.P)
+                              commanded_p0=self.P, servo_gain=self.servo_gain,
+                              reference_rates=rates if self.servo_gain > 0 else None)
             self.P = run.commanded_momenta[-1]
+            torques = run.commanded
         keep = slice(1, None) if self.parts else slice(None)
         self.parts.append((t[keep], run.state[keep], run.measured[keep], run.rotor_rates[keep], torques[keep],
                            np.full(t[keep].size, n)))
@@ -235,7 +238,7 @@ def _pieces(plan):
 def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, *, plant: str = "rates",
             closed_loop: bool = True, disturbances=(), samples_per_piece: int = DEFAULT_SAMPLES_PER_PIECE,
             window: int = DEFAULT_WINDOW, estimate_friction: bool = True, rest_readings: int = 0,
-            progress=None) -> Execution:
+            servo_gain: float = 0.0, progress=None) -> Execution:
     """Execute a geometric-phase plan on ``real_robot``, open or closed loop (module docstring).
 
     Parameters
@@ -263,6 +266,8 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     rest_readings : int
         Closed loop: the state used for a re-plan is the mean of this many sensor readings at the
         rest point (0: the last sample of the run, as measured).
+    servo_gain : float
+        Torque plant: gain K >= 0 [N m s/rad] of a proportional rotor-rate loop around the planned rates.
     progress : callable(label, done, total), optional
         Called after each applied figure eight (open loop: once).
 
@@ -298,7 +303,11 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
         raise InputError("closed-loop execution needs a plan of figure eights (turns in place are not supported)")
     start, goal, steps = plan.problem.start, plan.goal, plan.steps
     R = real_robot.radius
-    ctl = _Controller(real_robot, plant, disturbances, closed_loop, window, estimate_friction, start.array())
+    servo_gain = check_finite("servo_gain", servo_gain)
+    if servo_gain < 0:
+        raise InputError(f"servo_gain = {servo_gain!r} is not allowed: it must be >= 0")
+    ctl = _Controller(real_robot, plant, disturbances, closed_loop, window, estimate_friction, start.array(),
+                      servo_gain)
 
     def timed(p, robot):
         n = len(_pieces(p))

@@ -381,7 +381,8 @@ def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Functio
 
 def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0), disturbances=(),
                 segment: int = 0, breaks=(), interpolation: str = "spline", commanded_p0=None,
-                reltol: float = 1e-12, abstol: float = 1e-14) -> PlantRun:
+                servo_gain: float = 0.0, reference_rates=None, reltol: float = 1e-12,
+                abstol: float = 1e-14) -> PlantRun:
     """The torque-driven plant: integrate ``dp/dt = tau - c phi_dot``, (O) and Montana (6)-(10) by CVODES.
 
     Parameters
@@ -398,10 +399,14 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     breaks, interpolation : how the torque samples are interpolated (:func:`input_function`)
     commanded_p0 : (2,), optional
         Start value of ``commanded_momenta`` (default ``p0``).
+    servo_gain : float
+        Gain K >= 0 [N m s/rad] of a proportional rotor-rate loop (a motor driver's velocity loop):
+        with ``reference_rates`` (N, 2) the commanded torque is ``torques + K (reference - phi_dot)``.
 
     Returns
     -------
     PlantRun
+        ``commanded`` holds the commanded torques (with the servo's share).
     """
     d = by_name(disturbances, "torques")
     t, torques = check_samples(t, torques)
@@ -410,20 +415,26 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     noise = d["torque_noise"].draw(t.size, segment) if "torque_noise" in d else np.zeros((t.size, 2))
     tau = input_function(t, torques, breaks, interpolation)
     tau_noise = input_function(t, noise, (), "linear")
+    servo_gain = _nonnegative("servo_gain", servo_gain)
+    if servo_gain > 0 and reference_rates is None:
+        raise InputError("servo_gain > 0 needs reference_rates")
     time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
     x, p = z[0:5], z[5:7]
     omega, phi_dot = model.omega_from_momenta(p, x[3], x[4], x[2], robot.j_xx, robot.j_zz, robot.rotor_inertia_axial)
     cmd = tau(time)
+    if servo_gain > 0:
+        cmd = cmd + servo_gain * (input_function(t, reference_rates, breaks, interpolation)(time) - phi_dot)
     ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], robot.radius), cmd + tau_noise(time) - c * phi_dot,
                      phi_dot, cmd)
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
     integ = ca.integrator("torque_plant", "cvodes", {"t": time, "x": z, "ode": ode}, float(t[0]), list(t[1:]), opts)
     z0 = np.concatenate([x0, p0, phi0, p0 if commanded_p0 is None else commanded_p0]).astype(float)
     zs = np.hstack([z0[:, None], np.array(integ(x0=z0)["xf"])]).T
-    om, pd = (np.array(v).T for v in ca.Function("out", [z], [omega, phi_dot]).map(t.size)(zs.T))
+    om, pd, cm = (np.array(v).T for v in ca.Function("out", [time, z], [omega, phi_dot, cmd]).map(t.size)(t[None, :],
+                                                                                                         zs.T))
     state = zs[:, 0:5]
     return PlantRun("torques", t, state, measure(state, d, robot.radius, segment), om, pd, zs[:, 7:9], zs[:, 5:7],
-                    torques, zs[:, 9:11])
+                    cm, zs[:, 9:11])
 
 
 #: Plants by name.
