@@ -5,9 +5,12 @@ by DOP853 on the printed equations, the command line."""
 import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
+from scipy.interpolate import CubicSpline
 
 import rollplan
 from rollplan import InputError
@@ -121,16 +124,9 @@ def test_applied_rates_reproduce_the_final_state_independently(runs):
     t, rates = ex.time, ex.rotor_rates
     assert np.all(np.diff(t) > 0)
     f = references.rotor_driven_rhs(REAL.j_xx, REAL.j_zz, REAL.rotor_inertia_axial, REAL.radius,
-                                    references_spline(t, rates))
-    from scipy.integrate import solve_ivp
+                                    CubicSpline(t, rates, axis=0))
     sol = solve_ivp(f, (t[0], t[-1]), np.zeros(5), method="DOP853", rtol=1e-11, atol=1e-14)
     assert np.abs(sol.y[:, -1] - np.array(ex.final)).max() < 1e-6 * REAL.radius
-
-
-def references_spline(t, y):
-    from scipy.interpolate import CubicSpline
-
-    return CubicSpline(t, y, axis=0)
 
 
 def test_execution_json_keys(runs):
@@ -205,7 +201,7 @@ def test_cli_closed_loop_json(plan_file, capsys):
     d, f, real = plan_file
     out = str(d / "cl.json")
     assert main(["simulate", f, "--robot", real, "--closed-loop", "--json", out]) == 0
-    data = json.loads(open(out).read())
+    data = json.loads(Path(out).read_text())
     for key in ("time", "rotor_rates", "rotor_torques", "final", "arrival_error", "estimates",
                 "open_loop_arrival_error"):
         assert key in data
@@ -231,7 +227,7 @@ def test_cli_closed_loop_bad_input_exits_2(plan_file, extra, match, capsys):
 
 def test_cli_closed_loop_refuses_a_file_without_steps(plan_file, capsys):
     d, f, real = plan_file
-    data = json.loads(open(f).read())
+    data = json.loads(Path(f).read_text())
     del data["steps"]
     bad = str(d / "nosteps.json")
     write_json(bad, data)
