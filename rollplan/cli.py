@@ -343,8 +343,8 @@ def _noise(args):
     from .execution.plants import disturbance
 
     sigma = check_finite("--noise", args.noise)
-    if sigma < 0 or sigma > 1:
-        raise InputError(f"--noise {args.noise!r} is not allowed: it must lie in [0, 1] (R and rad)")
+    if sigma < 0 or sigma > 0.1:
+        raise InputError(f"--noise {args.noise!r} is not allowed: it must lie in [0, 0.1] (R and rad per sample)")
     seed = check_whole("--seed", args.seed, 0, 2**63 - 1)
     return (disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=seed),) if sigma > 0 else ()
 
@@ -642,7 +642,8 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--plant", choices=("rates", "torques"), default="rates",
                    help="drive the robot by rotor rates (default) or by motor torques")
     m.add_argument("--noise", type=_number, default=0.0, metavar="SIGMA",
-                   help="measurement noise: standard deviation on u_a, v_a [R] and the angles [rad] (default 0)")
+                   help="measurement noise: standard deviation on u_a, v_a [R] and the angles [rad], "
+                        "at most 0.1 (default 0)")
     m.add_argument("--seed", type=_whole, default=0, help="seed of the noise (default 0)")
     m.set_defaults(func=cmd_simulate)
 

@@ -211,7 +211,7 @@ def test_cli_closed_loop_json(plan_file, capsys):
 
 
 @pytest.mark.parametrize("extra, match", [
-    (["--noise", "nan"], "--noise"), (["--noise", "-1"], "--noise"), (["--noise", "2"], "--noise"),
+    (["--noise", "nan"], "--noise"), (["--noise", "-1"], "--noise"), (["--noise", "0.5"], "--noise"),
     (["--plant", "torques", "--seed", "-3"], "--seed"),
 ])
 def test_cli_closed_loop_bad_input_exits_2(plan_file, extra, match, capsys):

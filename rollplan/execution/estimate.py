@@ -29,8 +29,9 @@ any figure eight gives both (the spin omega_z of (13) is nonzero off the pole).
 Torque-driven robot: Jxx - J_r, Jzz - J_r, J_r and the bearing friction
 ------------------------------------------------------------------------------
 With commanded torques the controller knows ``P_i(t) = int_0^t tau_i dt`` (from rest) and,
-with encoders, the rotor angles ``Phi_i(t) = phi_i(t) - phi_i(0)``; by (T'),
-``p_i = P_i - c_i Phi_i``. (O) of :func:`rollplan.core.model.omega_from_momenta`, integrated over a window, is linear in
+with encoders, the rotor angles ``Phi_i(t) = phi_i(t) - phi_i(0)``; by
+``dp_i/dt = tau_i - c_i phi_i_dot`` (:mod:`rollplan.execution.plants`), ``p_i = P_i - c_i Phi_i``.
+(O) of :func:`rollplan.core.model.omega_from_momenta`, integrated over a window, is linear in
 ``theta = (X, Z, J_r, c_1, c_2)``, ``X = Jxx - J_r``, ``Z = Jzz - J_r``:
 
     X (W_x, W_y, 0) + Z (0, 0, W_z) + J_r V - c_1 Q_1 - c_2 Q_2 = -S,

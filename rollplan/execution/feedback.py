@@ -327,9 +327,9 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
             measured = measure(ctl.x, ctl.by_name, R, 10**6 + j, rest_readings) if rest_readings else ctl.measured
             try:
                 current = make_plan(goal, steps - j, robot=robot_est, start=State(*measured))
-            except NoPlanError as exc:
-                raise NoPlanError(f"re-planning {steps - j} figure eights from the measured state "
-                                  f"{tuple(round(float(v), 6) for v in measured)} failed: {exc}") from None
+            except (NoPlanError, InputError) as exc:
+                raise type(exc)(f"re-planning {steps - j} figure eights from the measured state "
+                                f"{tuple(round(float(v), 6) for v in measured)} failed: {exc}") from None
         estimates.append(_estimate_dict(robot_est, friction))
         motion = timed(current, robot_est)
         last = j == rounds - 1
