@@ -207,6 +207,13 @@ def test_cli_closed_loop_json(plan_file, capsys):
         assert key in data
     assert data["arrival_error"] <= max(1e-3, 0.05 * data["open_loop_arrival_error"])
     assert data["open_loop_arrival_error"] > 1e-2
+    # the applied rotor rates of OUT alone, DOP853 on the printed equations of the real robot
+    t, rates = np.array(data["time"]), np.array(data["rotor_rates"])
+    f = references.rotor_driven_rhs(REAL.j_xx, REAL.j_zz, REAL.rotor_inertia_axial, REAL.radius,
+                                    CubicSpline(t, rates, axis=0))
+    sol = solve_ivp(f, (t[0], t[-1]), np.zeros(5), method="DOP853", rtol=1e-11, atol=1e-14)
+    final = np.array([data["final"][n] for n in rollplan.STATE_NAMES])
+    assert np.abs(sol.y[:, -1] - final).max() < 1e-6 * REAL.radius
     assert "closed loop" in capsys.readouterr().out
 
 
