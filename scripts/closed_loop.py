@@ -8,12 +8,13 @@
    open against closed loop, with and without measurement noise (median and 95th percentile).
 3. The torque-driven plant against the rate-driven one on the same plans.
 
-Run: ``python scripts/closed_loop.py [--out-dir results] [--seeds 10] [--workers 2] [--quick]``.
+Run: ``python scripts/closed_loop.py [--out-dir results] [--seeds 10] [--workers 2] [--quick] [--replot]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import subprocess
@@ -163,6 +164,11 @@ def table_mc(rows, noise):
     return out
 
 
+def figure_title(seeds) -> str:
+    return (f"rate plant, {STEPS} figure eights, random goals 1.5-3 R away, {seeds} seeds a point; "
+            f"noise: {NOISE:g} R / rad per sample")
+
+
 def commit() -> str:
     try:
         return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
@@ -178,9 +184,14 @@ def main():
     ap.add_argument("--torque-seeds", type=int, default=5, help="runs per row of the torque plant (default 5)")
     ap.add_argument("--workers", type=int, default=2, help="processes (default 2)")
     ap.add_argument("--quick", action="store_true", help="2 seeds, errors 1 and 10 %% only (a smoke test)")
+    ap.add_argument("--replot", action="store_true", help="only draw closed_loop.png again from closed_loop.json")
     args = ap.parse_args()
     out = Path(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if args.replot:
+        data = json.loads((out / "closed_loop.json").read_text())
+        save_figure(plot_closed_loop(data["monte_carlo_rates"], figure_title(data["seeds"])), out / "closed_loop.png")
+        return
     errors = (0.01, 0.10) if args.quick else ERRORS
     seeds = 2 if args.quick else args.seeds
     tseeds = 1 if args.quick else args.torque_seeds
@@ -192,8 +203,7 @@ def main():
     tvr, mismatch = torque_vs_rate()
     wall = time.perf_counter() - t0
 
-    fig = plot_closed_loop(mc_rows, f"rate plant, {STEPS} figure eights, random goals 1.5-3 R away, "
-                                    f"{seeds} seeds a point; noise: {NOISE:g} R / rad per sample")
+    fig = plot_closed_loop(mc_rows, figure_title(seeds))
     save_figure(fig, out / "closed_loop.png")
     write_json(out / "closed_loop.json", {"issue_case": issue, "monte_carlo_rates": mc_rows,
                                           "monte_carlo_torques": tq_rows, "runs_rates": mc_runs,

@@ -35,9 +35,8 @@ def plot_closed_loop(rows, title: str = "") -> Figure:
         ax.set_yscale("log")
         ax.set_xscale("log")
         ax.set_xlabel(f"error of {'k' if kind == 'k' else 'the rotor inertia J_r'} [%]")
-        ax.set_ylabel("arrival error [R and rad] (median; dotted: 95th percentile)")
+        ax.set_ylabel("arrival error [R, rad]")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
-    if title:
-        fig.suptitle(title, fontsize=10)
+    fig.suptitle((title + "\n" if title else "") + "lines: median; dotted: 95th percentile", fontsize=9)
     return fig
