@@ -240,3 +240,16 @@ def test_cli_closed_loop_refuses_a_file_without_steps(plan_file, capsys):
     write_json(bad, data)
     assert main(["simulate", bad, "--closed-loop"]) == 2
     assert "steps" in capsys.readouterr().err
+
+
+def test_open_loop_on_the_exact_robot_is_the_plan(asym_plan):
+    """Open loop on the model itself: arrives, and the rate plant's reported torques (spline derivative of the
+    simulated axial momenta (P)) are the plan's torques (T) computed by AD along the path."""
+    robot = rollplan.Robot()
+    ex = execute(asym_plan, robot, robot, 2.5, closed_loop=False)
+    m = actuate(asym_plan, robot, 10.0, samples=ex.time.size)
+    np.testing.assert_allclose(ex.time, m.time, atol=1e-12)
+    assert ex.arrival_error < 1e-8
+    assert np.abs(ex.rotor_torques - m.rotor_torques).max() < 1e-5 * np.abs(m.rotor_torques).max()
+    t = execute(asym_plan, robot, robot, 2.5, plant="torques", closed_loop=False)
+    assert t.arrival_error < 1e-8

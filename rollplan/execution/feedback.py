@@ -177,7 +177,7 @@ class _Controller:
         breaks = [int(i) for i in joints(motion) if 0 < i < end]
         if self.plant == "rates":
             run = run_rates(self.real, t, rates, self.x, self.dist, n, self.phi)
-            torques = CubicSpline(t, run.momenta, axis=0)(t, 1)
+            torques = _piecewise_derivative(t, run.momenta, breaks)
         else:
             torques = motion.rotor_torques[sl] + self.friction_hat * rates
             run = run_torques(self.real, t, torques, self.x, self.p, self.phi, self.dist, n, breaks,
@@ -209,6 +209,16 @@ class _Controller:
 
     def arrays(self):
         return [np.concatenate(c) for c in zip(*self.parts)]
+
+
+def _piecewise_derivative(t, y, breaks) -> np.ndarray:
+    """d/dt of samples by not-a-knot cubic splines, one per piece between the sample indices ``breaks``
+    (the joints, where the rate plant's momenta have a kink); a joint sample takes the piece that ends there."""
+    out = np.empty_like(y)
+    edges = [0, *breaks, t.size - 1]
+    for a, b in reversed(list(zip(edges[:-1], edges[1:]))):
+        out[a:b + 1] = CubicSpline(t[a:b + 1], y[a:b + 1], axis=0)(t[a:b + 1], 1)
+    return out
 
 
 def joints(motion) -> np.ndarray:
