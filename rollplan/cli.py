@@ -371,8 +371,8 @@ def _simulate_executed(args, rp, robot) -> int:
     print(f"  final         u_a = {f[0]:.12g} m  v_a = {f[1]:.12g} m  psi = {f[2]:.12g} rad"
           f"  u_o = {f[3]:.3g}  v_o = {f[4]:.3g}")
     print(f"  target        u_a = {g.u_a:.12g} m  v_a = {g.v_a:.12g} m  psi = {g.psi:.12g} rad")
-    print(f"  arrival error {run.arrival_error:.3e} (position {run.position_error:.3e} R, psi {e[2]:.3e} rad); "
-          f"open loop {opened.arrival_error:.3e}")
+    print(f"  arrival error {run.arrival_error:.3e} (position {run.position_error:.3e} R, psi {e[2]:.3e} rad)"
+          + (f"; open loop {opened.arrival_error:.3e}" if args.closed_loop else ""))
     if args.closed_loop:
         print("  estimated k   " + ", ".join(f"{d['k']:.9g}" for d in run.estimates if "k" in d))
     if args.json:
