@@ -341,6 +341,66 @@ def cmd_reproduce(args) -> int:
     return EXIT_OK
 
 
+def _file_plan(rp, name):
+    """The plan of a plan file made again for its own robot (the controller's model), and its duration per piece."""
+    data = rp.data
+    if "waypoints" in data:
+        raise InputError("closed-loop execution of a route is not supported: give a plan file of 'rollplan plan'")
+    try:
+        steps = check_whole("steps", data.get("steps"), 1)
+        duration = check_finite("duration", data.get("duration"))
+    except InputError as exc:
+        raise InputError(f"plan file {str(name)!r}: {exc} (make it with: rollplan plan ... --duration T --json FILE)") \
+            from None
+    p = geometric.plan(rp.goal, steps, robot=rp.robot, start=rp.start)
+    return p, duration / len(as_composed(p).pieces)
+
+
+def _noise(args):
+    from .execution.plants import disturbance
+
+    sigma = check_finite("--noise", args.noise)
+    if sigma < 0 or sigma > 0.1:
+        raise InputError(f"--noise {args.noise!r} is not allowed: it must lie in [0, 0.1] (R and rad per sample)")
+    seed = check_whole("--seed", args.seed, 0, 2**63 - 1)
+    return (disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=seed),) if sigma > 0 else ()
+
+
+def _simulate_executed(args, rp, robot) -> int:
+    """``rollplan simulate --closed-loop`` and ``--plant torques``: open and closed loop on the chosen plant."""
+    from .execution.feedback import execute
+
+    dist = _noise(args)
+    plan, piece = _file_plan(rp, args.plan_file)
+    runs = []
+    for closed in (False, True)[:1 + bool(args.closed_loop)]:
+        progress = _Progress()
+        try:
+            runs.append(execute(plan, rp.robot, robot, piece, plant=args.plant, closed_loop=closed, disturbances=dist,
+                                progress=progress))
+        finally:
+            progress.close()
+    opened, run = runs[0], runs[-1]
+    f, g, e = run.final, rp.goal, run.error
+    print(f"rollplan simulate: {args.plant} plant, {'closed' if args.closed_loop else 'open'} loop, "
+          f"{plan.steps} figure eights of {2 * piece:g} s (min-jerk per piece), robot k = {robot.k:.9g} "
+          f"(planned k = {rp.robot.k:.9g}){', measurement noise %g' % args.noise if dist else ''}")
+    print(f"  final         u_a = {f[0]:.12g} m  v_a = {f[1]:.12g} m  psi = {f[2]:.12g} rad"
+          f"  u_o = {f[3]:.3g}  v_o = {f[4]:.3g}")
+    print(f"  target        u_a = {g.u_a:.12g} m  v_a = {g.v_a:.12g} m  psi = {g.psi:.12g} rad")
+    print(f"  arrival error {run.arrival_error:.3e} (position {run.position_error:.3e} R, psi {e[2]:.3e} rad)"
+          + (f"; open loop {opened.arrival_error:.3e}" if args.closed_loop else ""))
+    if args.closed_loop:
+        print("  estimated k   " + ", ".join(f"{d['k']:.9g}" for d in run.estimates if "k" in d))
+    if args.json:
+        d = run.to_dict()
+        d.update({"open_loop_arrival_error": opened.arrival_error, "robot": robot.as_dict(),
+                  "model_robot": rp.robot.as_dict(), "noise": args.noise, "seed": args.seed})
+        write_json(args.json, d)
+        print(f"wrote {args.json}")
+    return EXIT_OK
+
+
 def cmd_simulate(args) -> int:
     from .execution.plants import simulate_rotors
     from .io import load_rotor_plan
@@ -349,6 +409,8 @@ def cmd_simulate(args) -> int:
         check_writable(args.json)
     rp = load_rotor_plan(args.plan_file)
     robot = load_robot(args.robot) if args.robot else rp.robot
+    if args.closed_loop or args.plant != "rates" or args.noise:
+        return _simulate_executed(args, rp, robot)
     sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
     e = sim.error
     f, g = sim.final, rp.goal
@@ -594,6 +656,14 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
     m.add_argument("--robot", metavar="FILE.toml", help="simulate this (real) robot instead of the planned one")
     m.add_argument("--json", metavar="FILE", help="write the simulated final state and errors as JSON")
+    m.add_argument("--closed-loop", action="store_true",
+                   help="measure after each figure eight, estimate the robot, re-plan the rest (re-timed min-jerk)")
+    m.add_argument("--plant", choices=("rates", "torques"), default="rates",
+                   help="drive the robot by rotor rates (default) or by motor torques")
+    m.add_argument("--noise", type=_number, default=0.0, metavar="SIGMA",
+                   help="measurement noise: standard deviation on u_a, v_a [R] and the angles [rad], "
+                        "at most 0.1 (default 0)")
+    m.add_argument("--seed", type=_whole, default=0, help="seed of the noise (default 0)")
     m.set_defaults(func=cmd_simulate)
 
     a = sub.add_parser("animate", help="animate the sphere rolling under the plan's rotor rates (GIF)")

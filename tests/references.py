@@ -7,7 +7,9 @@ corrected and said so), and is what the tests compare rollplan's symbolic model 
   n_1, n_2, n_3 as printed in (3)-(5);
 * :func:`montana` -- Montana's contact kinematics (6)-(10); :func:`omega_from_rates` -- (6), (7),
   (10) inverted for the angular velocity; :func:`rotor_driven_rhs` -- (6)-(10) driven by rotor rates
-  through (11);
+  through (11); :func:`torque_driven_rhs` -- (6)-(10) driven by motor torques, (11) and the rotors'
+  axial momenta solved together as one linear system; :func:`momentum_about_contact` -- the angular
+  momentum of shell and rotors about the contact point from a sampled motion alone;
 * :func:`realizability` -- the left side of the realizability condition (13);
 * :func:`inertia_ratio` -- (14); :func:`psi_dot` -- (20);
 * :func:`curve_rhs` -- the curve ODE (28)-(30) with c_u, c_v of (26); :func:`circle` -- the circle
@@ -149,6 +151,57 @@ def rotor_driven_rhs(j_xx, j_zz, j_r, radius, rates):
         return montana(w, u, v, psi, radius)
 
     return f
+
+
+def torque_driven_rhs(j_xx, j_zz, j_r, radius, torques, friction=(0.0, 0.0)):
+    """Right side ``f(t, z)`` of the torque-driven robot for solve_ivp, ``z = (state (5), p (2))``.
+
+    ``torques(t) -> (tau_1, tau_2)``. At every instant omega and the rotor rates solve the 5x5
+    linear system of the momentum integral (11), ``Jc omega + J_r (n_1 phi_1_dot + n_2 phi_2_dot) = 0``,
+    and the axial momenta ``J_r (n_i . omega + phi_i_dot) = p_i`` (numpy's solve; not the closed
+    form); then ``p_i' = tau_i - c_i phi_i_dot`` (Euler's law on the rotor axis with viscous bearing
+    friction) and Montana's (6)-(10). Returns ``f`` and ``rates(z) -> (omega, phi_dot)``.
+    """
+    jc = np.diag([j_xx, j_xx, j_zz])
+    c = np.asarray(friction, float)
+
+    def rates(z):
+        rot = orientation(z[3], z[4], z[2])
+        a = np.zeros((5, 5))
+        a[:3, :3] = jc
+        a[:3, 3], a[:3, 4] = j_r * rot[:, 0], j_r * rot[:, 1]
+        a[3, :3], a[4, :3] = j_r * rot[:, 0], j_r * rot[:, 1]
+        a[3, 3] = a[4, 4] = j_r
+        sol = np.linalg.solve(a, np.array([0.0, 0.0, 0.0, z[5], z[6]]))
+        return sol[:3], sol[3:]
+
+    def f(t, z):
+        w, pd = rates(z)
+        return np.concatenate([montana(w, z[3], z[4], z[2], radius), np.asarray(torques(t), float) - c * pd])
+
+    return f, rates
+
+
+def momentum_about_contact(t, state, rotor_rates, j_xx, j_zz, j_r, mass_total, radius):
+    """Angular momentum of shell and rotors about the contact point, plane frame, from a sampled motion (N, 3).
+
+    omega from ``R_dot R^T`` of the orientation (2) along the sampled (u_o, v_o, psi) (cubic splines),
+    the centre's velocity from the sampled (u_a, v_a); ``L_P = Jzz omega + J_r (n_1 phi_1_dot + n_2
+    phi_2_dot) + (C - P) x M v_C`` with ``C - P = R e_z``: the locked system's momentum about its centre
+    (isotropic inertia Jzz, Section II) plus the rotors' relative spin plus the moment of the linear
+    momentum. (``Jxx = Jzz + M R^2`` (14) is not used: ``j_xx`` is accepted for symmetry of the call.)
+    """
+    from scipy.interpolate import CubicSpline
+
+    t, x = np.asarray(t, float), np.asarray(state, float)
+    rot = np.array([orientation(u, v, p) for u, v, p in zip(x[:, 3], x[:, 4], x[:, 2])])
+    rdot = CubicSpline(t, rot, axis=0)(t, 1)
+    what = np.einsum("nij,nkj->nik", rdot, rot)
+    omega = np.column_stack([what[:, 2, 1], what[:, 0, 2], what[:, 1, 0]])
+    vc = np.column_stack([CubicSpline(t, x[:, :2], axis=0)(t, 1), np.zeros(t.size)])
+    r = np.asarray(rotor_rates, float)
+    lp = j_zz * omega + j_r * (rot[:, :, 0] * r[:, :1] + rot[:, :, 1] * r[:, 1:2])
+    return lp + np.cross(np.array([0.0, 0.0, radius]), mass_total * vc), omega
 
 
 def realizability(n3, omega, k):

@@ -37,3 +37,13 @@ def test_reconfiguration_script_runs(tmp_path):
     text = (tmp_path / "reconfiguration.md").read_text()
     assert "## Turning in place" in text and "DOP853" in text and "## A route of five waypoints" in text
     assert (tmp_path / "composed.png").stat().st_size > 0 and (tmp_path / "reconfiguration.json").stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_closed_loop_script_runs(tmp_path):
+    script = Path(__file__).resolve().parent.parent / "scripts" / "closed_loop.py"
+    subprocess.run([sys.executable, str(script), "--quick", "--out-dir", str(tmp_path)], check=True,
+                   capture_output=True, timeout=1800)
+    text = (tmp_path / "closed_loop.md").read_text()
+    assert "## 1. The issue's robot" in text and "## 2. Monte Carlo" in text and "## 3. Torque-driven" in text
+    assert (tmp_path / "closed_loop.png").stat().st_size > 0 and (tmp_path / "closed_loop.json").stat().st_size > 0

@@ -8,7 +8,10 @@ Morinaga and Yamamoto (the paper), numbered as there:
 * angular velocity from contact rates, :math:`\\hat\\omega = \\dot R R^T` (18)-(19);
 * the dynamic-realizability condition (12)-(13), solved for :math:`\\omega_z`;
 * the inertia ratio ``k`` (14) and the rotor rates from the momentum integral (11);
-* the curve-parameterized ODE (28)-(30) for any spherical curve.
+* the curve-parameterized ODE (28)-(30) for any spherical curve;
+* the torque-driven dynamics: the left side of (11) (the angular momentum about
+  the contact point), the rotors' axial momenta (P) and (11) solved for omega
+  given those momenta, (O) of :func:`omega_from_momenta`.
 
 Nothing is typed twice: (17) and (20) are *composed* from (10), (13), (18),
 (19); (28)-(30) are composed from (6), (7), (10) with the contact rates of a
@@ -47,6 +50,10 @@ __all__ = [
     "omega_from_rotor_rates",
     "contact_points",
     "orientations",
+    "momentum_about_contact",
+    "rotor_axial_momenta",
+    "omega_from_momenta",
+    "omega_line_element",
 ]
 
 
@@ -253,3 +260,98 @@ def omega_from_rotor_rates(phi_dot, u_o, v_o, psi, j_xx, j_zz, j_r):
     rot = orientation(u_o, v_o, psi)
     m = -j_r * (rot[:, 0] * phi_dot[0] + rot[:, 1] * phi_dot[1])
     return ca.vertcat(m[0] / j_xx, m[1] / j_xx, m[2] / j_zz)
+
+
+def momentum_about_contact(omega, phi_dot, u_o, v_o, psi, j_xx, j_zz, j_r):
+    """Left side of (11): the total angular momentum of shell and rotors about the contact point.
+
+    ``L_P = J_c omega + J_r (n_1 phi_1_dot + n_2 phi_2_dot)`` in the plane frame, ``J_c = diag(Jxx, Jxx, Jzz)``.
+
+    Why it is conserved (and zero for a motion from rest, which is (11)): gravity acts at the
+    centre C, vertically above the contact point P, and the contact force acts at P; the moving
+    reference point P has the velocity of C, parallel to the linear momentum ``M v_C``. So no
+    external moment about P changes ``L_P``. Friction in the rotor bearings and the motor torques
+    are internal moments between rotor and shell and do not change it either.
+
+    Composed from the model, not retyped: on the orthonormal axes n_1, n_2, n_3 of (2),
+    ``n_i . J_c omega = -J_r g_i(omega)`` (i = 1, 2) with g the rotor rates of (11)
+    (:func:`rotor_rates`) and ``n_3 . J_c omega = Jzz r(omega)`` with r the left side of (13)
+    (:func:`realizability_residual`), hence
+
+        L_P = J_r sum_i n_i (phi_i_dot - g_i(omega)) + Jzz r(omega) n_3:
+
+    (11) holds exactly when the rotors turn at the rates of (11) and the motion satisfies (13).
+
+    Parameters
+    ----------
+    omega : (3,) angular velocity of the shell, plane frame [rad/s]
+    phi_dot : (2,) rotor rates relative to the shell [rad/s]
+    u_o, v_o, psi : contact coordinates [rad]
+    j_xx, j_zz, j_r : inertias [kg m^2]
+
+    Returns
+    -------
+    (3,) CasADi expression [kg m^2/s].
+    """
+    rot = orientation(u_o, v_o, psi)
+    g = rotor_rates(omega, u_o, v_o, psi, j_xx, j_zz, j_r)
+    r = realizability_residual(omega, u_o, v_o, psi, j_xx / j_zz)
+    return j_r * (rot[:, 0] * (phi_dot[0] - g[0]) + rot[:, 1] * (phi_dot[1] - g[1])) + j_zz * r * rot[:, 2]
+
+
+def rotor_axial_momenta(omega, phi_dot, u_o, v_o, psi, j_r):
+    """Absolute axial spin momenta of the rotors, ``p_i = J_r (n_i . omega + phi_i_dot)`` (P).
+
+    Their time derivatives are the motor torques, (T) of :mod:`rollplan.execution.actuation`.
+    """
+    rot = orientation(u_o, v_o, psi)
+    return j_r * (ca.vertcat(ca.dot(rot[:, 0], omega), ca.dot(rot[:, 1], omega)) + phi_dot)
+
+
+def _affine_solve(residual, unknown):
+    """The value of ``unknown`` that zeroes a residual affine in it: ``-J^-1 r(0)``, J by AD."""
+    jac = ca.jacobian(residual, unknown)
+    r0 = ca.substitute(residual, unknown, ca.DM.zeros(unknown.shape))
+    return ca.solve(jac, -r0)
+
+
+def omega_from_momenta(p, u_o, v_o, psi, j_xx, j_zz, j_r):
+    """Angular velocity and rotor rates from the rotors' axial momenta: (11) with (P), solved.
+
+    Substituting ``phi_i_dot = p_i / J_r - n_i . omega`` of (P) into (11) gives
+
+        [J_c - J_r (n_1 n_1^T + n_2 n_2^T)] omega = -(n_1 p_1 + n_2 p_2),          (O)
+
+    and since ``n_1 n_1^T + n_2 n_2^T = I - n_3 n_3^T`` the matrix is
+    ``A = diag(Jxx - J_r, Jxx - J_r, Jzz - J_r) + J_r n_3 n_3^T``. With
+    ``Jzz - J_r = 2/3 m_o R^2 + 2 J_p > 0`` (14) it is symmetric positive definite for every
+    orientation, eigenvalues in ``[Jzz - J_r, Jxx]``: the inertia about the contact point with the
+    rotors free to spin. Both solves (of (P) for phi_dot, of (11) for omega) are of affine maps,
+    built by automatic differentiation of :func:`rotor_axial_momenta` and
+    :func:`momentum_about_contact`; nothing is retyped.
+
+    Returns
+    -------
+    omega : (3,) CasADi expression [rad/s], plane frame
+    phi_dot : (2,) CasADi expression, rotor rates relative to the shell [rad/s]
+    """
+    sym = ca.MX if any(isinstance(v, ca.MX) for v in (p, u_o, v_o, psi, j_xx, j_zz, j_r)) else ca.SX
+    w, pd = sym.sym("w", 3), sym.sym("pd", 2)
+    pd_of_w = _affine_solve(rotor_axial_momenta(w, pd, u_o, v_o, psi, j_r) - p, pd)
+    omega = _affine_solve(momentum_about_contact(w, pd_of_w, u_o, v_o, psi, j_xx, j_zz, j_r), w)
+    return omega, ca.substitute(pd_of_w, w, omega)
+
+
+@lru_cache(maxsize=8)
+def omega_line_element(R: float = 1.0) -> ca.Function:
+    """``L(x) -> (3, 3)`` with ``omega dt = L(x) d(u_a, v_a, psi)``: Montana's (6), (7), (10) inverted.
+
+    Rows (6), (7), (10) of :func:`montana` are linear in omega, ``M_3(x) omega``, with
+    ``det M_3 = -R^2`` wherever ``cos v_o != 0``; M_3 is taken by AD and inverted. ``int omega dt``
+    along a measured motion is then a line integral along the state path, needing no time
+    derivative of the data. ``x`` is a state (u_a, v_a, psi, u_o, v_o).
+    """
+    x, w = ca.SX.sym("x", 5), ca.SX.sym("w", 3)
+    rates = montana(w, x[3], x[4], x[2], float(R))
+    m3 = ca.jacobian(ca.vertcat(rates[0], rates[1], rates[2]), w)
+    return ca.Function("omega_line_element", [x], [ca.inv(m3)], ["x"], ["L"])

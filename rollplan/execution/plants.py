@@ -1,4 +1,4 @@
-"""Plants: forward simulation of the robot driven by its rotors alone.
+"""Plants: forward simulation of the robot driven by its rotors alone, by rates or by torques.
 
 Given only sampled rotor rates ``phi_1_dot(t), phi_2_dot(t)`` and the robot,
 the angular velocity of the sphere is recovered from the momentum integral
@@ -8,22 +8,55 @@ kinematics (6)-(10) (:func:`rollplan.model.montana`) are integrated in time by
 CVODES. The rates between samples come from an interpolating cubic spline
 (CasADi's ``bspline`` interpolant, not-a-knot). Nothing of the planner is
 used: this is the paper's "verified under simulation".
+
+Two plants share one result, :class:`PlantRun` (:data:`PLANTS`):
+
+``rates`` (:func:`run_rates`)
+    the rotors follow the commanded rates exactly (ideal velocity servos): :func:`simulate_rotors`.
+``torques`` (:func:`run_torques`)
+    the motors apply torques. State: the contact coordinates, the rotors' absolute axial
+    momenta ``p_i = J_r (n_i . omega + phi_i_dot)`` (P) and the rotor angles. By (T) of
+    :mod:`rollplan.execution.actuation`, ``dp_i/dt = tau_i - c_i phi_i_dot`` (with an optional
+    viscous bearing friction ``c_i`` on the rate relative to the shell: an internal moment, so the
+    momentum about the contact point stays conserved). omega and phi_dot follow from p by (11)
+    solved with (P), (O) of :func:`rollplan.core.model.omega_from_momenta`, and the contact
+    coordinates by Montana's (6)-(10). Driven by ``tau = dp/dt`` of a rate-driven motion, (O) gives
+    back the same omega, so the two plants agree (the tests check it). The total angular momentum
+    about the contact point is conserved because gravity acts above the contact point, the contact
+    force acts at it, and the point moves parallel to the linear momentum
+    (:func:`rollplan.core.model.momentum_about_contact`); the rotors exchange momentum with the shell.
+
+Torque samples between sample times: timed torques have a kink (min-jerk) or a step (the non-stop
+and time-optimal laws) at the joints of the contact path, so one spline across a joint converges
+only as h^2 or rings. :func:`input_function` splits the samples at given ``breaks`` (the joints,
+``Motion.rest_indices`` for min-jerk) into not-a-knot cubic splines, or interpolates linearly.
+
+Disturbances (:data:`DISTURBANCES`, by name with parameters and a seed, :func:`disturbance`):
+``friction`` (bearing friction, torque plant), ``measurement`` (white noise on every measured state
+sample; the true state is not changed), ``torque_noise`` (torque plant) and ``rate_noise`` (rate
+plant): white noise on every input sample. Every draw is ``numpy.random.default_rng([seed,
+segment, tag])``, so a controller that runs the plant segment after segment gets independent,
+reproducible draws.
 """
 
 from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from ..core import model
-from ..errors import InputError
+from ..errors import InputError, check_finite
 from ..problem import State, arrival_error
 from ..robot import Robot
 
-__all__ = ["Simulation", "rate_spline", "check_samples", "simulate_rotors"]
+__all__ = ["Simulation", "rate_spline", "check_samples", "simulate_rotors", "Friction", "MeasurementNoise",
+           "TorqueNoise", "RateNoise", "DISTURBANCES", "disturbance", "PlantRun", "input_function", "run_rates",
+           "run_torques", "PLANTS", "PLANT_NAMES", "by_name", "measure", "rotor_momenta"]
 
 log = logging.getLogger(__name__)
 
@@ -129,3 +162,281 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
         pos = float(np.hypot(err[0], err[1]))
         log.info("rotor-driven simulation: arrival error %.3e (position %.3e R)", arr, pos)
     return Simulation(t, xs, omegas, final, err, arr, pos)
+
+
+_TAG = {"measurement": 1, "torque_noise": 2, "rate_noise": 3, "rest": 4}
+
+
+def _nonnegative(name, value) -> float:
+    v = check_finite(name, value)
+    if v < 0:
+        raise InputError(f"{name} = {value!r} is not allowed: it must be >= 0")
+    return v
+
+
+@dataclass(frozen=True)
+class Friction:
+    """Viscous bearing friction ``-c_i phi_i_dot`` on rotor i's rate relative to the shell [N m s/rad]; torque plant."""
+
+    c: tuple = (0.0, 0.0)
+    name = "friction"
+
+    def __post_init__(self):
+        c = tuple(np.atleast_1d(self.c)) if np.ndim(self.c) else (self.c, self.c)
+        if len(c) != 2:
+            raise InputError(f"friction c = {self.c!r} is not allowed: give one number or two")
+        object.__setattr__(self, "c", tuple(_nonnegative("friction c", v) for v in c))
+
+
+@dataclass(frozen=True)
+class MeasurementNoise:
+    """White noise on every measured state: ``sigma_length`` [R] on u_a, v_a, ``sigma_angle`` [rad] on the angles."""
+
+    sigma_length: float = 0.0
+    sigma_angle: float = 0.0
+    seed: int = 0
+    name = "measurement"
+
+    def __post_init__(self):
+        object.__setattr__(self, "sigma_length", _nonnegative("measurement sigma_length", self.sigma_length))
+        object.__setattr__(self, "sigma_angle", _nonnegative("measurement sigma_angle", self.sigma_angle))
+
+    def draw(self, n: int, radius: float, segment: int, tag: str = "measurement") -> np.ndarray:
+        """``(n, 5)`` noise for n samples of segment ``segment`` [m, m, rad, rad, rad]."""
+        rng = np.random.default_rng([int(self.seed), int(segment), _TAG[tag]])
+        return rng.normal(size=(n, 5)) * np.array([self.sigma_length * radius] * 2 + [self.sigma_angle] * 3)
+
+
+@dataclass(frozen=True)
+class TorqueNoise:
+    """White noise of standard deviation ``sigma`` [N m] on every torque sample; torque plant."""
+
+    sigma: float = 0.0
+    seed: int = 0
+    name = "torque_noise"
+
+    def __post_init__(self):
+        object.__setattr__(self, "sigma", _nonnegative("torque_noise sigma", self.sigma))
+
+    def draw(self, n: int, segment: int) -> np.ndarray:
+        return np.random.default_rng([int(self.seed), int(segment), _TAG[self.name]]).normal(0.0, self.sigma, (n, 2))
+
+
+@dataclass(frozen=True)
+class RateNoise(TorqueNoise):
+    """White noise of standard deviation ``sigma`` [rad/s] on every rotor-rate sample; rate plant."""
+
+    name = "rate_noise"
+
+    def __post_init__(self):
+        object.__setattr__(self, "sigma", _nonnegative("rate_noise sigma", self.sigma))
+
+
+#: Disturbances by name.
+DISTURBANCES = {"friction": Friction, "measurement": MeasurementNoise, "torque_noise": TorqueNoise,
+                "rate_noise": RateNoise}
+_NOT_FOR = {"rates": ("friction", "torque_noise"), "torques": ("rate_noise",)}
+
+
+def disturbance(name: str, **params):
+    """A disturbance by name, e.g. ``disturbance("measurement", sigma_length=1e-3, sigma_angle=1e-3, seed=3)``."""
+    if name not in DISTURBANCES:
+        raise InputError(f"disturbance {name!r} is not known: choose one of {', '.join(DISTURBANCES)}")
+    try:
+        return DISTURBANCES[name](**params)
+    except TypeError as exc:
+        raise InputError(f"disturbance {name!r}: {exc}") from None
+
+
+def by_name(disturbances, plant: str) -> dict:
+    """``{name: disturbance}``; InputError for a name given twice or one that does not apply to ``plant``."""
+    if plant not in PLANT_NAMES:
+        raise InputError(f"plant {plant!r} is not known: choose one of {', '.join(PLANT_NAMES)}")
+    out = {}
+    for d in disturbances:
+        if d.name in out:
+            raise InputError(f"disturbance {d.name!r} is given twice")
+        if d.name in _NOT_FOR[plant]:
+            raise InputError(f"disturbance {d.name!r} does not apply to the {plant} plant")
+        out[d.name] = d
+    return out
+
+
+def measure(state, disturbances: dict, radius: float, segment: int, readings: int = 0) -> np.ndarray:
+    """What the sensors report for ``state`` (N, 5): the state plus measurement noise, if any.
+
+    ``readings > 0``: ``state`` is one state at rest, and the result is the mean of that many
+    independent readings (drawn apart from the per-sample noise), as a controller that waits at a
+    rest point and averages its sensor would see it.
+    """
+    m = disturbances.get("measurement")
+    state = np.asarray(state, float)
+    if m is None:
+        return state.copy()
+    if readings > 0:
+        return state + m.draw(int(readings), radius, segment, "rest").mean(axis=0)
+    return state + m.draw(state.shape[0], radius, segment)
+
+
+@dataclass(frozen=True)
+class PlantRun:
+    """What a plant did over one input series, one row per sample time.
+
+    Attributes
+    ----------
+    plant : str
+        ``"rates"`` or ``"torques"``.
+    time : ndarray (N,) [s]
+    state : ndarray (N, 5)
+        True state (u_a [m], v_a [m], psi, u_o, v_o [rad]).
+    measured : ndarray (N, 5)
+        What the sensors report (``state`` plus measurement noise, if any).
+    omega : ndarray (N, 3)
+        Angular velocity of the shell, plane frame [rad/s].
+    rotor_rates : ndarray (N, 2)
+        Rotor rates relative to the shell as realised [rad/s].
+    rotor_angles : ndarray (N, 2)
+        Rotor angles [rad], continuing from the run's start value.
+    momenta : ndarray (N, 2)
+        The rotors' absolute axial momenta (P) [N m s].
+    commanded : ndarray (N, 2)
+        The input as commanded, before noise: rotor rates [rad/s] or torques [N m].
+    commanded_momenta : ndarray (N, 2) or None
+        Torque plant: the start value plus the integral of the commanded torque [N m s].
+    """
+
+    plant: str
+    time: np.ndarray
+    state: np.ndarray
+    measured: np.ndarray
+    omega: np.ndarray
+    rotor_rates: np.ndarray
+    rotor_angles: np.ndarray
+    momenta: np.ndarray
+    commanded: np.ndarray
+    commanded_momenta: np.ndarray | None = None
+
+
+@lru_cache(maxsize=1)
+def _momenta_function() -> ca.Function:
+    x, w, pd, jr = ca.SX.sym("x", 5), ca.SX.sym("w", 3), ca.SX.sym("pd", 2), ca.SX.sym("jr")
+    return ca.Function("p_of", [x, w, pd, jr], [model.rotor_axial_momenta(w, pd, x[3], x[4], x[2], jr)])
+
+
+def rotor_momenta(robot: Robot, state, omega, rotor_rates) -> np.ndarray:
+    """The rotors' axial momenta (P) along samples: ``(N, 2)`` [N m s]."""
+    state, omega, rotor_rates = (np.atleast_2d(np.asarray(a, float)) for a in (state, omega, rotor_rates))
+    f = _momenta_function().map(state.shape[0])
+    return np.array(f(state.T, omega.T, rotor_rates.T, robot.rotor_inertia_axial)).T
+
+
+def run_rates(robot: Robot, t, rates, x0=None, disturbances=(), segment: int = 0, phi0=(0.0, 0.0)) -> PlantRun:
+    """The rate-driven plant: :func:`simulate_rotors` from ``x0``, with the ``measurement`` and ``rate_noise``
+    disturbances.
+
+    Parameters
+    ----------
+    robot : Robot
+        The real robot.
+    t : (N,) sample times [s]; rates : (N, 2) commanded rotor rates [rad/s]
+    x0 : (5,) start state [m, m, rad, rad, rad] (default zero), at rest
+    disturbances : iterable of disturbances
+    segment : int
+        Index of this run in a sequence (decorrelates the noise draws).
+    phi0 : (2,) rotor angles at ``t[0]`` [rad]
+    """
+    d = by_name(disturbances, "rates")
+    t, rates = check_samples(t, rates)
+    applied = rates + (d["rate_noise"].draw(t.size, segment) if "rate_noise" in d else 0.0)
+    sim = simulate_rotors(robot, t, applied, x0=x0)
+    angles = np.asarray(phi0, float) + CubicSpline(t, applied, axis=0).antiderivative()(t)
+    p = rotor_momenta(robot, sim.state, sim.omega, applied)
+    return PlantRun("rates", t, sim.state, measure(sim.state, d, robot.radius, segment), sim.omega, applied, angles,
+                    p, rates)
+
+
+def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Function:
+    """``f(t) -> (m,)`` through the samples ``(t, y)``: splines split at the sample indices ``breaks``, or linear.
+
+    ``"spline"``: a not-a-knot cubic spline per piece between breaks (fourth order where the input
+    is smooth; a piece needs 4 samples); ``"linear"``: linear interpolation (second order, and no
+    ringing at a step of the input). Outside ``[t[0], t[-1]]`` the end pieces extrapolate.
+    """
+    t, y = np.asarray(t, float), np.asarray(y, float)
+    if interpolation == "linear":
+        return ca.interpolant("input", "linear", [t], y.ravel(order="C"))
+    if interpolation != "spline":
+        raise InputError(f"interpolation {interpolation!r} is not known: choose spline or linear")
+    cuts = sorted({int(b) for b in breaks if 0 < int(b) < t.size - 1})
+    edges = [0, *cuts, t.size - 1]
+    if any(e1 - e0 < 3 for e0, e1 in zip(edges, edges[1:])):
+        raise InputError("every piece of the input between breaks needs at least 4 samples")
+    tt = ca.MX.sym("t")
+    expr = None
+    for e0, e1 in reversed(list(zip(edges, edges[1:]))):
+        piece = rate_spline(t[e0:e1 + 1], y[e0:e1 + 1])(tt)
+        expr = piece if expr is None else ca.if_else(tt < t[e1], piece, expr)
+    return ca.Function("input", [tt], [expr])
+
+
+def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0), disturbances=(),
+                segment: int = 0, breaks=(), interpolation: str = "spline", commanded_p0=None,
+                servo_gain: float = 0.0, reference_rates=None, reltol: float = 1e-12,
+                abstol: float = 1e-14) -> PlantRun:
+    """The torque-driven plant: integrate ``dp/dt = tau - c phi_dot``, (O) and Montana (6)-(10) by CVODES.
+
+    Parameters
+    ----------
+    robot : Robot
+        The real robot (Jxx, Jzz, J_r, R).
+    t : (N,) sample times [s]; torques : (N, 2) commanded motor torques [N m]
+    x0 : (5,) start state (default zero)
+    p0 : (2,) the rotors' axial momenta at ``t[0]`` [N m s] (zero at rest)
+    phi0 : (2,) rotor angles at ``t[0]`` [rad]
+    disturbances : ``friction``, ``torque_noise``, ``measurement``
+    segment : int
+        Index of this run in a sequence (decorrelates the noise draws).
+    breaks, interpolation : how the torque samples are interpolated (:func:`input_function`)
+    commanded_p0 : (2,), optional
+        Start value of ``commanded_momenta`` (default ``p0``).
+    servo_gain : float
+        Gain K >= 0 [N m s/rad] of a proportional rotor-rate loop (a motor driver's velocity loop):
+        with ``reference_rates`` (N, 2) the commanded torque is ``torques + K (reference - phi_dot)``.
+
+    Returns
+    -------
+    PlantRun
+        ``commanded`` holds the commanded torques (with the servo's share).
+    """
+    d = by_name(disturbances, "torques")
+    t, torques = check_samples(t, torques)
+    x0 = np.zeros(5) if x0 is None else np.asarray(x0, float)
+    c = np.array(d["friction"].c if "friction" in d else (0.0, 0.0))
+    noise = d["torque_noise"].draw(t.size, segment) if "torque_noise" in d else np.zeros((t.size, 2))
+    tau = input_function(t, torques, breaks, interpolation)
+    tau_noise = input_function(t, noise, (), "linear")
+    servo_gain = _nonnegative("servo_gain", servo_gain)
+    if servo_gain > 0 and reference_rates is None:
+        raise InputError("servo_gain > 0 needs reference_rates")
+    time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
+    x, p = z[0:5], z[5:7]
+    omega, phi_dot = model.omega_from_momenta(p, x[3], x[4], x[2], robot.j_xx, robot.j_zz, robot.rotor_inertia_axial)
+    cmd = tau(time)
+    if servo_gain > 0:
+        cmd = cmd + servo_gain * (input_function(t, reference_rates, breaks, interpolation)(time) - phi_dot)
+    ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], robot.radius), cmd + tau_noise(time) - c * phi_dot,
+                     phi_dot, cmd)
+    opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
+    integ = ca.integrator("torque_plant", "cvodes", {"t": time, "x": z, "ode": ode}, float(t[0]), list(t[1:]), opts)
+    z0 = np.concatenate([x0, p0, phi0, p0 if commanded_p0 is None else commanded_p0]).astype(float)
+    zs = np.hstack([z0[:, None], np.array(integ(x0=z0)["xf"])]).T
+    om, pd, cm = (np.array(v).T for v in ca.Function("out", [time, z], [omega, phi_dot, cmd]).map(t.size)(t[None, :],
+                                                                                                         zs.T))
+    state = zs[:, 0:5]
+    return PlantRun("torques", t, state, measure(state, d, robot.radius, segment), om, pd, zs[:, 7:9], zs[:, 5:7],
+                    cm, zs[:, 9:11])
+
+
+#: Plants by name.
+PLANTS = {"rates": run_rates, "torques": run_torques}
+PLANT_NAMES = tuple(PLANTS)

@@ -1,0 +1,355 @@
+"""Closed-loop execution: measure after every figure eight, re-estimate the robot, re-plan the rest.
+
+A plan of n figure eights from a start state to a goal (any two full states, issue 12's
+composed planner) is executed on a real robot that is not exactly the model.
+
+Open loop (``closed_loop=False``)
+    The whole plan, timed for the model robot, is applied at once; nothing is measured.
+
+Closed loop (``closed_loop=True``)
+    The motion is applied one figure eight at a time. Before figure eight j > 0 (0-based):
+
+    1. measure the full state ``(u_a, v_a, psi, u_o, v_o)`` at rest, at the end of the previous
+       figure eight (with measurement noise, optionally averaged over ``rest_readings`` readings);
+    2. update the estimate of the robot from everything observed so far
+       (:class:`~rollplan.execution.estimate.RatioEstimator`, Jxx/J_r and Jzz/J_r, on the rate
+       plant; :class:`~rollplan.execution.estimate.InertiaEstimator`, Jxx, Jzz, J_r and the
+       bearing friction, on the torque plant) and build the estimated robot
+       (:func:`robot_from_inertias`); an unphysical estimate is refused and the previous robot kept;
+    3. plan the rest, ``n - j`` figure eights, from the measured state to the goal with the
+       estimated robot (:func:`rollplan.planners.geometric.plan`: the contact point is a little off
+       the pole after a figure eight on a mismatched robot, so the plan starts with an approach roll
+       whose own motion the figure eights compensate), time it with the min-jerk law (every piece
+       rest to rest, ``piece_duration`` each) on the estimated robot, and apply the approach and
+       the first figure eight (all of it, departure included, when it is the last).
+
+    The controller commands what the plant takes: the rotor rates of the timed re-plan (rate
+    plant), or its torques plus the feed-forward ``c_hat phi_dot`` of the estimated friction
+    (torque plant). Why figure eights: their ends are rest points near the pole, where a
+    measurement is clean and the remainder is again a whole number of figure eights. After the
+    last figure eight nothing is corrected: with n = 1 the closed loop is the open loop.
+
+The estimated robot reproduces the real one exactly where the plant can tell: the rate-driven
+motion depends only on ``Jxx/J_r`` and ``Jzz/J_r`` (divide (11) by J_r), so with rates the estimate
+keeps the model's J_r and scales Jxx, Jzz.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from ..errors import InputError, NoPlanError, check_finite, check_whole
+from ..problem import STATE_NAMES, State, arrival_error
+from ..robot import Robot
+from .actuation import actuate
+from .estimate import InertiaEstimator, RatioEstimator
+from .plants import PLANT_NAMES, by_name, measure, run_rates, run_torques
+
+__all__ = ["joints", "robot_from_inertias", "Execution", "execute", "DEFAULT_SAMPLES_PER_PIECE", "DEFAULT_WINDOW"]
+
+#: Time samples per piece (leaf, roll) of the commanded series.
+DEFAULT_SAMPLES_PER_PIECE = 400
+#: Estimator window in sample intervals (8 windows per piece at the default sampling).
+DEFAULT_WINDOW = 50
+
+
+def robot_from_inertias(radius: float, j_xx: float, j_zz: float, j_r: float, like: Robot | None = None) -> Robot:
+    """A :class:`~rollplan.robot.Robot` with the given Jxx, Jzz, J_r: all that (11), (13), (14) and (T) use.
+
+    ``M = (Jxx - Jzz) / R^2``; the split of ``Jzz - J_r = 2/3 m_o R^2 + 2 J_p`` (14) between shell
+    and transverse rotor inertia enters no equation: J_p is taken from ``like`` when that leaves
+    ``0 < m_o <= M``, otherwise ``m_o = min(M, 3/2 (Jzz - J_r) / R^2) / 2`` and J_p takes the rest.
+    The limits of ``like`` are kept.
+    """
+    if not (j_xx > j_zz > j_r > 0):
+        raise InputError(f"inertias Jxx = {j_xx:g}, Jzz = {j_zz:g}, J_r = {j_r:g} are not allowed: "
+                         "they must satisfy Jxx > Jzz > J_r > 0")
+    r2 = radius * radius
+    mass = (j_xx - j_zz) / r2
+    jp = like.rotor_inertia_transverse if like is not None else 0.25 * (j_zz - j_r)
+    m_o = 1.5 * (j_zz - 2 * jp - j_r) / r2
+    if not 0 < m_o <= mass:
+        m_o = 0.5 * min(mass, 1.5 * (j_zz - j_r) / r2)
+        jp = 0.5 * (j_zz - j_r - 2.0 / 3.0 * m_o * r2)
+    limits = {} if like is None else {"max_rotor_rate": like.max_rotor_rate, "max_rotor_torque": like.max_rotor_torque}
+    return Robot(radius=radius, mass_total=mass, mass_shell=m_o, rotor_inertia_axial=j_r,
+                 rotor_inertia_transverse=jp, **limits)
+
+
+@dataclass
+class Execution:
+    """A plan executed on a (real) robot, open or closed loop.
+
+    Arrays have one row per sample, the segments concatenated (a shared boundary sample once).
+
+    Attributes
+    ----------
+    plant : str
+        ``"rates"`` or ``"torques"``.
+    closed_loop : bool
+    goal : State
+        [m, rad].
+    time : (N,) [s]
+    state : (N, 5)
+        True state (u_a, v_a, psi, u_o, v_o) [m, m, rad, rad, rad].
+    measured : (N, 5)
+        What the sensors reported.
+    rotor_rates : (N, 2)
+        Rotor rates relative to the shell as applied [rad/s] (rate plant: the commands plus any rate noise).
+    rotor_torques : (N, 2)
+        Torque plant: the torques commanded (with the friction feed-forward); rate plant: the rate of
+        change of the rotors' axial momenta (P), i.e. the torques the motors delivered [N m].
+    segment : (N,) int
+        Index into ``segments`` of each sample.
+    segments : list of dict
+        One per applied piece of motion: start and end time, the figure eights left, the plan's mode.
+    estimates : list of dict
+        The robot used for each figure eight (the model robot before any data): k, Jxx/J_r, Jzz/J_r,
+        Jxx, Jzz, J_r (and the friction on the torque plant); ``rejected`` when an estimate was refused.
+    final : State
+    error : (5,) :func:`rollplan.problem.arrival_error` of ``final`` to ``goal``
+    arrival_error, position_error : float [R and rad; R]
+    """
+
+    plant: str
+    closed_loop: bool
+    goal: State
+    time: np.ndarray
+    state: np.ndarray
+    measured: np.ndarray
+    rotor_rates: np.ndarray
+    rotor_torques: np.ndarray
+    segment: np.ndarray
+    segments: list = field(default_factory=list)
+    estimates: list = field(default_factory=list)
+    final: State = None
+    error: np.ndarray = None
+    arrival_error: float = None
+    position_error: float = None
+
+    def to_dict(self) -> dict:
+        """The keys of ``rollplan simulate --closed-loop --json``."""
+        rows = lambda a: [[float(v) for v in r] for r in np.asarray(a)]  # noqa: E731
+        return {"plant": self.plant, "closed_loop": self.closed_loop, "goal": self.goal.as_dict(),
+                "time": [float(v) for v in self.time], "rotor_rates": rows(self.rotor_rates),
+                "rotor_torques": rows(self.rotor_torques), "state": rows(self.state),
+                "segment": [int(v) for v in self.segment], "final": self.final.as_dict(),
+                "error": dict(zip(STATE_NAMES, map(float, self.error))), "arrival_error": self.arrival_error,
+                "position_error": self.position_error, "estimates": self.estimates, "segments": self.segments}
+
+
+def _estimate_dict(robot: Robot, friction=None) -> dict:
+    jr = robot.rotor_inertia_axial
+    d = {"k": robot.k, "alpha": robot.j_xx / jr, "beta": robot.j_zz / jr, "j_xx": robot.j_xx, "j_zz": robot.j_zz,
+         "j_r": jr}
+    if friction is not None:
+        d["friction"] = [float(c) for c in friction]
+    return d
+
+
+class _Controller:
+    """Runs the plant piece after piece, keeping the true state, the records and the estimators."""
+
+    def __init__(self, real: Robot, plant: str, disturbances, closed_loop: bool, window: int, estimate_friction: bool,
+                 x0, servo_gain: float = 0.0):
+        self.servo_gain = servo_gain
+        self.real, self.plant, self.dist, self.closed_loop = real, plant, tuple(disturbances), closed_loop
+        self.by_name = by_name(self.dist, plant)
+        self.x = np.asarray(x0, float)
+        self.p = np.zeros(2)       # true rotor momenta
+        self.P = np.zeros(2)       # integral of the commanded torques since rest
+        self.phi = np.zeros(2)     # rotor angles since rest
+        self.t0 = 0.0
+        self.parts, self.segments = [], []
+        self.friction_hat = np.zeros(2)
+        self.ratios = RatioEstimator(real.radius, window)
+        self.inertias = InertiaEstimator(real.radius, window, friction=estimate_friction)
+
+    def apply(self, motion, end: int, info: dict):
+        """Apply samples ``0..end`` of a timed motion; returns the run."""
+        sl = slice(0, end + 1)
+        t = self.t0 + motion.time[sl]
+        rates, n = motion.rotor_rates[sl], len(self.segments)
+        breaks = [int(i) for i in joints(motion) if 0 < i < end]
+        if self.plant == "rates":
+            run = run_rates(self.real, t, rates, self.x, self.dist, n, self.phi)
+            torques = _piecewise_derivative(t, run.momenta, breaks)
+        else:
+            torques = motion.rotor_torques[sl] + self.friction_hat * rates
+            run = run_torques(self.real, t, torques, self.x, self.p, self.phi, self.dist, n, breaks,
+                              commanded_p0=self.P, servo_gain=self.servo_gain,
+                              reference_rates=rates if self.servo_gain > 0 else None)
+            self.P = run.commanded_momenta[-1]
+            torques = run.commanded
+        keep = slice(1, None) if self.parts else slice(None)
+        self.parts.append((t[keep], run.state[keep], run.measured[keep], run.rotor_rates[keep], torques[keep],
+                           np.full(t[keep].size, n)))
+        self.segments.append({"t0": float(t[0]), "t1": float(t[-1]), **info})
+        self.measured = run.measured[-1].copy()
+        self.x, self.p, self.phi, self.t0 = run.state[-1].copy(), run.momenta[-1], run.rotor_angles[-1], float(t[-1])
+        if self.closed_loop:
+            if self.plant == "rates":
+                self.ratios.add(run.time, run.measured, run.commanded)
+            else:
+                self.inertias.add(run.time, run.measured, run.commanded_momenta, run.rotor_angles)
+        return run
+
+    def estimate(self, model_robot: Robot) -> tuple[Robot, np.ndarray | None]:
+        R = self.real.radius
+        if self.plant == "rates":
+            e = self.ratios.estimate()
+            jr = model_robot.rotor_inertia_axial
+            return robot_from_inertias(R, e.alpha * jr, e.beta * jr, jr, like=model_robot), None
+        e = self.inertias.estimate()
+        return robot_from_inertias(R, e.j_xx, e.j_zz, e.j_r, like=model_robot), np.array(e.friction)
+
+    def arrays(self):
+        return [np.concatenate(c) for c in zip(*self.parts)]
+
+
+def _piecewise_derivative(t, y, breaks) -> np.ndarray:
+    """d/dt of samples by not-a-knot cubic splines, one per piece between the sample indices ``breaks``
+    (the joints, where the rate plant's momenta have a kink); a joint sample takes the piece that ends there."""
+    out = np.empty_like(y)
+    edges = [0, *breaks, t.size - 1]
+    for a, b in reversed(list(zip(edges[:-1], edges[1:]))):
+        out[a:b + 1] = CubicSpline(t[a:b + 1], y[a:b + 1], axis=0)(t[a:b + 1], 1)
+    return out
+
+
+def joints(motion) -> np.ndarray:
+    """Sample indices of the joints between the pieces of a timed motion (where its ``segment`` changes).
+
+    A sample at a joint belongs to the piece that ends there; with the min-jerk law these are rest
+    points, and the breaks at which torque samples must be split (:func:`~.plants.input_function`).
+    """
+    return np.nonzero(np.diff(motion.segment) != 0)[0]
+
+
+def _first_eight_end(motion, pieces) -> int:
+    """Sample index where the first figure eight (after any leading approach roll) of a timed plan ends."""
+    lead = 0
+    while lead < len(pieces) and pieces[lead].kind == "approach":
+        lead += 1
+    ends = [*joints(motion), motion.time.size - 1]
+    return int(ends[min(lead + 1, len(ends) - 1)])
+
+
+def _pieces(plan):
+    from ..planners.geometric import as_composed
+
+    return as_composed(plan).pieces
+
+
+def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, *, plant: str = "rates",
+            closed_loop: bool = True, disturbances=(), samples_per_piece: int = DEFAULT_SAMPLES_PER_PIECE,
+            window: int = DEFAULT_WINDOW, estimate_friction: bool = True, rest_readings: int = 0,
+            servo_gain: float = 0.0, progress=None) -> Execution:
+    """Execute a geometric-phase plan on ``real_robot``, open or closed loop (module docstring).
+
+    Parameters
+    ----------
+    plan : Plan or ComposedPlan
+        Made for ``model_robot`` (:func:`rollplan.plan` with ``robot=model_robot``): its start, goal
+        and number of figure eights are what is executed.
+    model_robot : Robot
+        What the controller believes before any measurement.
+    real_robot : Robot
+        The simulated real robot (same radius: it is measured).
+    piece_duration : float
+        Duration of every piece (leaf, roll) [s]; each is timed rest to rest by the min-jerk law.
+    plant : str
+        ``"rates"`` or ``"torques"`` (:data:`rollplan.execution.plants.PLANTS`).
+    closed_loop : bool
+    disturbances : iterable
+        Disturbances of :mod:`rollplan.execution.plants`, with their seeds.
+    samples_per_piece : int
+        Time samples per piece of the commanded series (>= 50).
+    window : int
+        Estimator window in sample intervals.
+    estimate_friction : bool
+        Torque plant: also estimate the bearing friction and feed it forward.
+    rest_readings : int
+        Closed loop: the state used for a re-plan is the mean of this many sensor readings at the
+        rest point (0: the last sample of the run, as measured).
+    servo_gain : float
+        Torque plant: gain K >= 0 [N m s/rad] of a proportional rotor-rate loop around the planned rates.
+    progress : callable(label, done, total), optional
+        Called after each applied figure eight (open loop: once).
+
+    Returns
+    -------
+    Execution
+
+    Raises
+    ------
+    InputError
+        Bad input; NoPlanError: a re-plan from a measured state found no plan.
+    """
+    from ..planners.geometric import plan as make_plan
+
+    if plant not in PLANT_NAMES:
+        raise InputError(f"plant {plant!r} is not known: choose one of {', '.join(PLANT_NAMES)}")
+    for name, rob in (("model_robot", model_robot), ("real_robot", real_robot)):
+        if not isinstance(rob, Robot):
+            raise InputError(f"{name} = {rob!r:.60} is not allowed: give a rollplan.Robot")
+    if not math.isclose(model_robot.radius, real_robot.radius, rel_tol=1e-12):
+        raise InputError(f"the model's radius {model_robot.radius:g} m and the real robot's "
+                         f"{real_robot.radius:g} m differ: the radius is measured, give the same")
+    piece_duration = check_finite("piece_duration", piece_duration)
+    if not piece_duration > 0:
+        raise InputError(f"piece_duration = {piece_duration!r} is not allowed: it must be > 0")
+    samples_per_piece = check_whole("samples_per_piece", samples_per_piece, 50, 100_000)
+    window = check_whole("window", window, 4, 100_000)
+    rest_readings = check_whole("rest_readings", rest_readings, 0, 1_000_000)
+    pieces = _pieces(plan)
+    if not pieces:
+        raise InputError("the plan is the empty motion (its start is its goal): nothing to execute")
+    if any(p.kind not in ("approach", "leaf", "departure") for p in pieces):
+        raise InputError("closed-loop execution needs a plan of figure eights (turns in place are not supported)")
+    start, goal, steps = plan.problem.start, plan.goal, plan.steps
+    R = real_robot.radius
+    servo_gain = check_finite("servo_gain", servo_gain)
+    if servo_gain < 0:
+        raise InputError(f"servo_gain = {servo_gain!r} is not allowed: it must be >= 0")
+    ctl = _Controller(real_robot, plant, disturbances, closed_loop, window, estimate_friction, start.array(),
+                      servo_gain)
+
+    def timed(p, robot):
+        n = len(_pieces(p))
+        return actuate(p, robot, n * piece_duration, samples=n * samples_per_piece)
+
+    robot_est, friction, estimates = model_robot, None, []
+    current = plan
+    rounds = steps if closed_loop else 1
+    for j in range(rounds):
+        if j > 0:
+            try:
+                robot_est, friction = ctl.estimate(model_robot)
+                if friction is not None:
+                    ctl.friction_hat = friction
+            except InputError as exc:
+                estimates.append({"rejected": str(exc)})
+            measured = measure(ctl.x, ctl.by_name, R, 10**6 + j, rest_readings) if rest_readings else ctl.measured
+            try:
+                current = make_plan(goal, steps - j, robot=robot_est, start=State(*measured))
+            except (NoPlanError, InputError) as exc:
+                raise type(exc)(f"re-planning {steps - j} figure eights from the measured state "
+                                f"{tuple(round(float(v), 6) for v in measured)} failed: {exc}") from None
+        estimates.append(_estimate_dict(robot_est, friction))
+        motion = timed(current, robot_est)
+        last = j == rounds - 1
+        end = motion.time.size - 1 if last else _first_eight_end(motion, _pieces(current))
+        ctl.apply(motion, end, {"figure_eights_left": steps - j, "mode": getattr(current, "mode", "one"),
+                                "k": robot_est.k, "applied": "all" if last else "first figure eight"})
+        if progress:
+            progress("closed loop, figure eights" if closed_loop else "open loop", j + 1, rounds)
+    time, state, meas, rates, torques, seg = ctl.arrays()
+    final = State(*(float(v) for v in state[-1]))
+    err = arrival_error(final, goal, R)
+    return Execution(plant, closed_loop, goal, time, state, meas, rates, torques, seg, ctl.segments, estimates,
+                     final, err, float(np.linalg.norm(err)), float(np.hypot(err[0], err[1])))
