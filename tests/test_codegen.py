@@ -28,13 +28,11 @@ DEGREE = STEPS // (len(figure_eight().pieces[0].breaks) - 1)
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    out = tmp_path_factory.mktemp("c") / "planner"
-    g = codegen.generate(out)
-    run = subprocess.run(["make", "-C", str(out), "plan_demo", "librollplan.so"], check=False, capture_output=True,
-                         text=True)
+def built(generated_c):
+    run = subprocess.run(["make", "-C", str(generated_c.out), "plan_demo", "librollplan.so"], check=False,
+                         capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
-    return g
+    return generated_c
 
 
 @pytest.fixture(scope="module")

@@ -328,6 +328,10 @@ def _check_prefix(prefix) -> str:
     return prefix
 
 
+#: Files for the microcontroller builds (QEMU's mps2-an500 and mps2-an386 boards), copied into the output.
+_EMBEDDED = ("startup.c", "mps2-common.ld", "mps2-an500.ld", "mps2-an386.ld", "planner_only.c", "stack_bound.py")
+
+
 def _template(name: str) -> str:
     return (Path(__file__).with_name("c_templates") / name).read_text()
 
@@ -383,6 +387,9 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@MAX_CELLS@": str(_MAX_CELLS),
         "@TOL@": repr(_TOL),
         "@STEPS_PER_LEAF@": str(int(steps_per_leaf)),
+        "@REAL@": "double",
+        "@QEMU_TOL@": "1e-12",
+        "@M4F_EXTRA@": "",
     }
 
     def fill(text: str) -> str:
@@ -397,12 +404,13 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         f"{prefix}_planner.c": fill(_template("planner.c")),
         "plan_demo.c": fill(_template("plan_demo.c")),
         "Makefile": fill(_template("Makefile")),
+        **{name: fill(_template(name)) for name in _EMBEDDED},
     }
     written = []
     for name, text in files.items():
         write_atomic(out / name, text.encode())
         written.append(out / name)
-    code_bytes = sum(len(t.encode()) for n, t in files.items() if n != "Makefile")
+    code_bytes = sum(len(t.encode()) for n, t in files.items() if n.endswith((".c", ".h")))
     work = sizes["sz_w"]
     log.info("wrote %s: %d bytes of C, %d doubles of work memory", out, code_bytes, work)
     return GeneratedCode(out, prefix, int(steps_per_leaf), tuple(written), code_bytes, len(model_c.encode()), work)
