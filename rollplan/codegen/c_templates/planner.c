@@ -14,6 +14,14 @@
 #define MAX_ITER @MAX_ITER@
 #define MAX_CELLS @MAX_CELLS@
 #define TOL @TOL@
+#define K_MAX @PREFIX_UPPER@_K_MAX
+#define MAX_STEPS @PREFIX_UPPER@_MAX_STEPS
+#define CERT_TOL @PREFIX_UPPER@_CERT_TOL
+#define CERT_DELTA @CERT_DELTA@
+#define CERT_BASE @CERT_BASE@
+#define CERT_SAFETY @CERT_SAFETY@
+#define NPANEL @NPANEL@                /* panels of each leaf (the spectral step map's) */
+#define CERT_MAX_PANEL_STEPS 2048      /* bounds the certificate's time; k <= K_MAX needs far fewer */
 #define MIN_STEP (1.0 / 256.0)  /* smallest damping factor of the line search (9 trials) */
 #define PI 3.14159265358979323846
 
@@ -27,6 +35,11 @@ static double s_leaf0[3 * NR], s_leaf1[3 * NR];
 static float s_eta[(NR + 1) * (NR + 1)], s_h[(NR + 1) * (NR + 1)];
 /* Radii of the table rows/columns [R]: 0, then the generated function's grid. */
 static const double s_radii[NR + 1] = {@RADII@};
+
+/* Panel boundaries of each leaf in phi [rad]. */
+static const double s_breaks[NPANEL + 1] = {@BREAKS@};
+/* RK8 steps per panel of each leaf for the certificate (set per plan). */
+static int s_counts[2][NPANEL];
 
 /* Angle wrapped to (-pi, pi]. */
 static double wrap(double x) {
@@ -109,6 +122,93 @@ static int newton(double x[2], double k, double eta_m, double h_m, double tol, d
     return nr <= tol;
 }
 
+/* The curve ODE (28)-(30) along leaf `leaf` at phi (generated). Returns 0 on success. */
+static int curve_rhs(int leaf, double phi, const double x[3], const double ab[2], double k, double gamma,
+                     double xdot[3]) {
+    s_arg[0] = &phi;
+    s_arg[1] = x;
+    s_arg[2] = ab;
+    s_arg[3] = &k;
+    s_arg[4] = &gamma;
+    s_res[0] = xdot;
+    return leaf ? @PREFIX@_rhs1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rhs0(s_arg, s_res, s_iw, s_w, 0);
+}
+
+/* `n` equal RK8 steps (generated) over [t0, t0 + n h] along leaf `leaf`, x in place. */
+static int rk8_steps(int leaf, double x[3], double t0, double h, int n, const double ab[2], double k, double gamma) {
+    double t, xn[3];
+    int q;
+    for (q = 0; q < n; ++q) {
+        t = t0 + q * h;
+        s_arg[0] = x;
+        s_arg[1] = &t;
+        s_arg[2] = &h;
+        s_arg[3] = ab;
+        s_arg[4] = &k;
+        s_arg[5] = &gamma;
+        s_res[0] = xn;
+        if (leaf ? @PREFIX@_rk8_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8_0(s_arg, s_res, s_iw, s_w, 0)) return 1;
+        x[0] = xn[0];
+        x[1] = xn[1];
+        x[2] = xn[2];
+    }
+    return 0;
+}
+
+int @PREFIX@_certify(double a, double b, double gamma, int steps, double k, double u, double v, double psi,
+                     double final[3], double *residual, double *bound) {
+    const double zero[3] = {0.0, 0.0, 0.0};
+    double ab[2], xc[3] = {0.0, 0.0, 0.0}, xf[3] = {0.0, 0.0, 0.0}, xd[3], w, rate, n;
+    int leaf, j, q, s;
+    if (residual) *residual = INFINITY;
+    if (bound) *bound = INFINITY;
+    if (!(isfinite(a) && isfinite(b) && isfinite(gamma) && isfinite(u) && isfinite(v) && isfinite(psi))
+        || !(a > 0.0 && a <= @PREFIX_UPPER@_A_MAX && b > 0.0 && b <= @PREFIX_UPPER@_A_MAX)
+        || !(k >= 0.0 && k <= K_MAX) || steps < 1 || steps > MAX_STEPS)
+        return @PREFIX_UPPER@_BAD_INPUT;
+    ab[0] = a;
+    ab[1] = b;
+    /* steps per panel from the turn rate psi', which does not depend on the state */
+    for (leaf = 0; leaf < 2; ++leaf) {
+        for (j = 0; j < NPANEL; ++j) {
+            w = s_breaks[j + 1] - s_breaks[j];
+            rate = 0.0;
+            for (q = 0; q <= 4; ++q) {
+                if (curve_rhs(leaf, s_breaks[j] + 0.25 * q * w, zero, ab, k, gamma, xd) || !isfinite(xd[2]))
+                    return @PREFIX_UPPER@_NOT_CERTIFIED;
+                rate = fmax(rate, fabs(xd[2]));
+            }
+            n = ceil(w * (CERT_BASE + rate) / CERT_DELTA);
+            s_counts[leaf][j] = n > CERT_MAX_PANEL_STEPS ? CERT_MAX_PANEL_STEPS : (int)n;
+        }
+    }
+    for (s = 0; s < steps; ++s) {
+        for (leaf = 0; leaf < 2; ++leaf) {
+            for (j = 0; j < NPANEL; ++j) {
+                int nj = s_counts[leaf][j];
+                w = s_breaks[j + 1] - s_breaks[j];
+                if (rk8_steps(leaf, xc, s_breaks[j], w / nj, nj, ab, k, gamma)
+                    || rk8_steps(leaf, xf, s_breaks[j], w / (2 * nj), 2 * nj, ab, k, gamma))
+                    return @PREFIX_UPPER@_NOT_CERTIFIED;
+            }
+        }
+    }
+    if (final) {
+        final[0] = xf[0];
+        final[1] = xf[1];
+        final[2] = xf[2];
+    }
+    /* step doubling: |x_2N - x_N| / (2^8 - 1) estimates the error of x_2N for an order-8 method; divided by
+     * CERT_SAFETY only, a margin for steps not yet in the asymptotic regime */
+    w = sqrt((xf[0] - xc[0]) * (xf[0] - xc[0]) + (xf[1] - xc[1]) * (xf[1] - xc[1]) + (xf[2] - xc[2]) * (xf[2] - xc[2]))
+        / CERT_SAFETY;
+    rate = wrap(xf[2] - psi);
+    n = sqrt((xf[0] - u) * (xf[0] - u) + (xf[1] - v) * (xf[1] - v) + rate * rate);
+    if (residual) *residual = n;
+    if (bound) *bound = w;
+    return isfinite(n + w) && n + w <= CERT_TOL ? @PREFIX_UPPER@_OK : @PREFIX_UPPER@_NOT_CERTIFIED;
+}
+
 /* The table depends on k only; a robot has one k, so it is kept for the last k. */
 static int s_have_table = 0;
 static double s_table_k = 0.0;
@@ -180,16 +280,38 @@ static void start(int i, int j, double eta_m, double h_m, double x[2]) {
     x[1] = clamp(s_radii[j] + (0.5 + dj) * (s_radii[j + 1] - s_radii[j]));
 }
 
+/* gamma = arg(target) - arg(sum_{j<n} exp(-i j eta) shift), and the step map's prediction of the miss. */
+static double rotation(double u, double v, double psi, int steps, const double shift[2], double eta,
+                       double *predicted) {
+    double sr = 0.0, si = 0.0, tr, ti, gamma, c, s, fu, fv, dr;
+    int i;
+    for (i = 0; i < steps; ++i) {
+        sr += cos(i * eta);
+        si -= sin(i * eta);
+    }
+    tr = sr * shift[0] - si * shift[1];
+    ti = sr * shift[1] + si * shift[0];
+    gamma = wrap(atan2(v, u) - atan2(ti, tr));
+    /* n steps of the step map, the displacement turned by gamma */
+    c = cos(gamma);
+    s = sin(gamma);
+    fu = c * tr - s * ti;
+    fv = s * tr + c * ti;
+    dr = wrap(steps * eta - psi);
+    *predicted = sqrt((fu - u) * (fu - u) + (fv - v) * (fv - v) + dr * dr);
+    return gamma;
+}
+
 int @PREFIX@_plan(double u, double v, double psi, int steps, double k, @PREFIX@_plan_t *plan) {
     double h_des, eta_m, h_m, num, den, tol, x[2], shift[2], eta = 0.0, res_norm = INFINITY;
-    double tr, ti, sr, si, fu, fv, gamma, c, s, dr = 1.0;
     double cand_lower[MAX_CELLS];
-    int cand[MAX_CELLS], ncand = 0, sum, i, j, iters, cells = 0, found = 0;
+    int cand[MAX_CELLS], ncand = 0, sum, i, j, iters, cells = 0, converged = 0, status;
     if (plan == NULL) return @PREFIX_UPPER@_BAD_INPUT;
     plan->a = plan->b = plan->gamma = plan->eta = plan->h = NAN;
-    plan->residual = INFINITY;
+    plan->residual = plan->bound = plan->predicted = INFINITY;
     plan->iterations = plan->cells = 0;
-    if (!(isfinite(u) && isfinite(v) && isfinite(psi) && isfinite(k)) || steps < 1 || k < 0.0)
+    if (!(isfinite(u) && isfinite(v) && isfinite(psi)) || !(k >= 0.0 && k <= K_MAX) || steps < 1
+        || steps > MAX_STEPS)
         return @PREFIX_UPPER@_BAD_INPUT;
     h_des = hypot(u, v);
     if (!(h_des > 0.0)) return @PREFIX_UPPER@_BAD_INPUT;
@@ -220,37 +342,36 @@ int @PREFIX@_plan(double u, double v, double psi, int steps, double k, @PREFIX@_
             cand[q] = i * NR + j;
         }
     }
-    for (sum = 0; sum < ncand && !found; ++sum) {
+    /* the first converged root whose certificate holds, in the order of the cells */
+    for (sum = 0; sum < ncand; ++sum) {
+        double gamma, predicted, residual, bound;
         ++cells;
         start(cand[sum] / NR, cand[sum] % NR, eta_m, h_m, x);
-        found = newton(x, k, eta_m, h_m, tol, &res_norm, &iters, shift, &eta);
+        if (!newton(x, k, eta_m, h_m, tol, &res_norm, &iters, shift, &eta)) {
+            if (!converged) {
+                plan->a = x[0];
+                plan->b = x[1];
+                plan->iterations = iters;
+                plan->predicted = res_norm;
+            }
+            continue;
+        }
+        converged = 1;
+        gamma = rotation(u, v, psi, steps, shift, eta, &predicted);
+        status = @PREFIX@_certify(x[0], x[1], gamma, steps, k, u, v, psi, NULL, &residual, &bound);
         plan->a = x[0];
         plan->b = x[1];
+        plan->gamma = gamma;
+        plan->eta = eta;
+        plan->h = hypot(shift[0], shift[1]);
         plan->iterations = iters;
-        plan->residual = res_norm;
+        plan->predicted = predicted;
+        plan->residual = residual;
+        plan->bound = bound;
+        plan->cells = cells;
+        if (status == @PREFIX_UPPER@_OK) return @PREFIX_UPPER@_OK;
     }
     plan->cells = cells;
     if (!cells) return @PREFIX_UPPER@_NO_PLAN;
-    if (!found) return @PREFIX_UPPER@_NO_CONVERGENCE;
-    /* gamma = arg(target) - arg(sum_{j<n} exp(-i j eta) shift) */
-    sr = 0.0;
-    si = 0.0;
-    for (i = 0; i < steps; ++i) {
-        sr += cos(i * eta);
-        si -= sin(i * eta);
-    }
-    tr = sr * shift[0] - si * shift[1];
-    ti = sr * shift[1] + si * shift[0];
-    gamma = wrap(atan2(v, u) - atan2(ti, tr));
-    /* prediction of the generated step map: n steps, the displacement turned by gamma */
-    c = cos(gamma);
-    s = sin(gamma);
-    fu = c * tr - s * ti;
-    fv = s * tr + c * ti;
-    dr = wrap(steps * eta - psi);
-    plan->gamma = gamma;
-    plan->eta = eta;
-    plan->h = hypot(shift[0], shift[1]);
-    plan->residual = sqrt((fu - u) * (fu - u) + (fv - v) * (fv - v) + dr * dr);
-    return @PREFIX_UPPER@_OK;
+    return converged ? @PREFIX_UPPER@_NOT_CERTIFIED : @PREFIX_UPPER@_NO_CONVERGENCE;
 }

@@ -28,6 +28,11 @@
  *   @PREFIX@_leaf_table(k) -> leaf0[3x@TABLE_RADII@], leaf1[3x@TABLE_RADII@]
  *       coarse (u_a, v_a, psi) of each leaf alone at @TABLE_RADII@ fixed radii graded
  *       towards A_MAX, used by the planner to bracket a root.
+ *   @PREFIX@_rhs0(phi, x[3], p[2], k, gamma) -> xdot[3], @PREFIX@_rhs1(...)
+ *       the curve ODE (28)-(30) along the first (+y) and the second (-y) leaf of the figure
+ *       eight with radii p = (a, b) rotated by gamma, x = (u_a, v_a, psi).
+ *   @PREFIX@_rk8_0(x[3], t, h, p[2], k, gamma) -> x_next[3], @PREFIX@_rk8_1(...)
+ *       one step of the eighth-order Runge-Kutta formula of Dormand and Prince of it.
  */
 #ifndef @PREFIX_UPPER@_H
 #define @PREFIX_UPPER@_H
@@ -38,14 +43,23 @@
 extern "C" {
 #endif
 
-/* Status codes (equal to the exit codes of the `rollplan` command). */
-#define @PREFIX_UPPER@_OK 0             /* converged plan */
-#define @PREFIX_UPPER@_BAD_INPUT 2      /* non-finite input, steps < 1, k < 0 or zero shift */
+/* Status codes (equal to the exit codes of plan_demo and, for 0, 2, 3, of the `rollplan` command). */
+#define @PREFIX_UPPER@_OK 0             /* a plan whose certificate holds: residual + bound <= CERT_TOL */
+#define @PREFIX_UPPER@_BAD_INPUT 2      /* non-finite input, steps outside [1, MAX_STEPS], k outside
+                                           [0, K_MAX] (the range this code was generated for), zero shift */
 #define @PREFIX_UPPER@_NO_PLAN 3        /* no grid cell brackets a root of branch m = 0 */
 #define @PREFIX_UPPER@_NO_CONVERGENCE 4 /* Newton did not converge from any bracketing cell */
+#define @PREFIX_UPPER@_NOT_CERTIFIED 5  /* Newton converged, but no converged plan passed the certificate */
 
 /* Largest admissible leaf radius [R] (the equator of the body frame is singular). */
 #define @PREFIX_UPPER@_A_MAX @A_MAX@
+/* Largest inertia ratio k accepted: the generated step map is accurate to 1e-10 up to it (checked by
+ * `rollplan codegen --k-max`). */
+#define @PREFIX_UPPER@_K_MAX @K_MAX@
+/* Largest number of figure-eight steps of a plan. */
+#define @PREFIX_UPPER@_MAX_STEPS @MAX_STEPS@
+/* Tolerance of the certificate: |final - target| + error bound <= CERT_TOL [R and rad]. */
+#define @PREFIX_UPPER@_CERT_TOL @CERT_TOL@
 
 /* A plan: trace the figure eight (a, b) rotated by gamma about OZ, n times. */
 typedef struct {
@@ -54,8 +68,11 @@ typedef struct {
     double gamma;      /* rotation of the figure eight about OZ, eq. (31) [rad], in (-pi, pi] */
     double eta;        /* holonomy of one step [rad] (= psi / n on branch m = 0) */
     double h;          /* shift of one step [R] */
-    double residual;   /* |final - target| predicted by the generated step map composed n times
-                          (u_a, v_a in R, psi in rad) */
+    double residual;   /* certificate: |final - target| (u_a, v_a in R, psi wrapped, in rad) of the whole
+                          n-step motion integrated from rest by fixed-step RK8 (@PREFIX@_certify) */
+    double bound;      /* certificate: step-doubling estimate of the error of that integration, with a
+                          margin (see @PREFIX@_certify) */
+    double predicted;  /* |final - target| predicted by the planner's own step map composed n times */
     int iterations;    /* Newton iterations of the accepted solve */
     int cells;         /* bracketing cells tried */
 } @PREFIX@_plan_t;
@@ -67,16 +84,33 @@ typedef struct {
  * (h_des / steps when eta = 0), h_des = |(u, v)|; then
  * gamma = atan2(v, u) - arg(sum_{j<steps} exp(-i j eta) shift(a, b)).
  *
+ * A converged root is certified by @PREFIX@_certify; a plan that fails is never returned as
+ * @PREFIX_UPPER@_OK (the search goes on with the next cell, and ends with NOT_CERTIFIED).
  * Brackets the root on the coarse leaf table (the @MAX_CELLS@ bracketing cells of smallest
  * a + b, in that order), refines by a damped Newton iteration on @PREFIX@_step_jac from a
  * start interpolated in the cell (at most @MAX_ITER@ iterations per cell). The table
  * depends on k only and is kept for the last k, so repeated plans for one robot skip
  * it. Deterministic; static memory only; not reentrant (one static work area).
- * Bounded time: at most @MAX_CELLS@ x @MAX_ITER@ x 9 evaluations of @PREFIX@_step_jac (a plan
- * typically takes 3-6, a failing one a few hundred). Returns one of the status codes above; `plan` is filled in on
+ * Bounded time: at most @MAX_CELLS@ x @MAX_ITER@ x 9 evaluations of @PREFIX@_step_jac and
+ * @MAX_CELLS@ certificates (a plan typically takes a few evaluations and one certificate). Returns one of the status codes above; `plan` is filled in on
  * @PREFIX_UPPER@_OK (and holds the last iterate otherwise).
  */
 int @PREFIX@_plan(double u, double v, double psi, int steps, double k, @PREFIX@_plan_t *plan);
+
+/*
+ * Certificate of a plan: integrate the n-step motion (figure eight (a, b) rotated by gamma, traced
+ * `steps` times from rest at the origin) with the generated RK8 steps, the right side (28)-(30) as
+ * it is (independent of the planner's step map and its quadrature). Each panel of a leaf of width w
+ * gets N = ceil(w (@CERT_BASE@ + max|psi'|) / @CERT_DELTA@) equal steps (psi' sampled at 5 points; it does not
+ * depend on the state); the motion is integrated with N and with 2N steps per panel, `bound` is
+ * |x_2N - x_N| / @CERT_SAFETY@ (step doubling: the error of x_2N of an order-8 method is about
+ * |x_2N - x_N| / 255; dividing by @CERT_SAFETY@ only leaves a margin) and `residual` is
+ * |x_2N - (u, v, psi)| (psi wrapped). `final` (may be NULL) receives x_2N.
+ * Returns @PREFIX_UPPER@_OK if residual + bound <= CERT_TOL, @PREFIX_UPPER@_NOT_CERTIFIED otherwise,
+ * @PREFIX_UPPER@_BAD_INPUT for arguments outside the ranges of @PREFIX@_plan.
+ */
+int @PREFIX@_certify(double a, double b, double gamma, int steps, double k, double u, double v, double psi,
+                     double final[3], double *residual, double *bound);
 
 /* Drop the leaf table kept for the last k (the next plan recomputes it). */
 void @PREFIX@_forget_table(void);
