@@ -45,3 +45,11 @@ def generated_c(tmp_path_factory):
     from rollplan import codegen
 
     return codegen.generate(tmp_path_factory.mktemp("c") / "planner")
+
+
+@pytest.fixture(scope="session")
+def generated_c_float(tmp_path_factory):
+    """The C planner written by ``rollplan codegen --real float`` (single precision)."""
+    from rollplan import codegen
+
+    return codegen.generate(tmp_path_factory.mktemp("c") / "planner_f32", real="float")

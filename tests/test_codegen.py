@@ -17,6 +17,7 @@ from rollplan.cli import main
 from rollplan.codegen.c_library import (
     CERT_TOL,
     DEFAULT_K_MAX,
+    FLOAT_CERT_TOL,
     TABLE_STEPS_PER_LEAF,
     generated_functions,
     reference_plan,
@@ -328,7 +329,7 @@ def _fuzz_inputs(rng, count, many_steps):
         yield float(u), float(v), float(psi), steps, float(k)
 
 
-def _fuzz(built, seed, count, many_steps):
+def _fuzz(built, seed, count, many_steps, tol=CERT_TOL):
     """No wrong plan with exit 0: every plan the C planner returns lands within the tolerance when
     integrated by DOP853 on the printed equations; every other outcome is a documented status."""
     rng = np.random.default_rng(seed)
@@ -341,10 +342,10 @@ def _fuzz(built, seed, count, many_steps):
             assert run.stdout == "" and run.stderr.count("\n") == 1
             continue
         a, b, gamma, residual, bound = (float(x) for x in run.stdout.split())
-        assert 0 < a <= A_MAX and 0 < b <= A_MAX and residual + bound <= CERT_TOL
+        assert 0 < a <= A_MAX and 0 < b <= A_MAX and residual + bound <= tol
         x = references.trace(a, b, k, gamma, steps)
         miss = np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)])
-        assert miss <= CERT_TOL + 1e-11 * steps, (u, v, psi, steps, k, miss)
+        assert miss <= tol + 1e-11 * steps, (u, v, psi, steps, k, miss)
     return outcomes
 
 
@@ -357,3 +358,25 @@ def test_fuzz_no_wrong_plan_with_exit_0(built):
 def test_fuzz_no_wrong_plan_with_exit_0_more(built):
     outcomes = _fuzz(built, 6, 80, 40)
     assert outcomes.count(0) >= 10
+
+
+@pytest.fixture(scope="module")
+def built_float(generated_c_float):
+    run = subprocess.run(["make", "-C", str(generated_c_float.out), "plan_demo"], check=False, capture_output=True,
+                         text=True)
+    assert run.returncode == 0, run.stderr
+    return generated_c_float
+
+
+def test_float_build_has_no_double_and_certifies_to_its_tolerance(built_float, built):
+    """Single precision: the same plan as the double build to float accuracy, and a fuzz test at 1e-4."""
+    text = (built_float.out / "rollplan_model.c").read_text() + (built_float.out / "rollplan_planner.c").read_text()
+    code = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+    assert "#define casadi_real float" in text
+    assert not re.search(r"\b(sin|cos|sqrt|atan2|hypot|fabs|fmod)\s*\(", code)
+    assert "ROLLPLAN_CERT_TOL 0.0001f" in (built_float.out / "rollplan.h").read_text()
+    for target in TARGETS:
+        f32, f64 = (demo(b, *target) for b in (built_float, built))
+        assert f32.returncode == f64.returncode == 0
+        assert np.max(np.abs(np.array(f32.stdout.split()[:3], float) - np.array(f64.stdout.split()[:3], float))) < 1e-4
+    assert 0 in _fuzz(built_float, 7, 10, 3, FLOAT_CERT_TOL)

@@ -119,3 +119,19 @@ def test_make_size_reports_flash_ram_and_stack(boards):
         assert re.search(rf"{t} planner firmware .*flash \d+ B, RAM \d+ B", run.stdout)
         assert re.search(rf"{t} static stack bound: rollplan_plan: \d+ bytes", run.stdout)
         assert re.search(rf"{t} measured stack of plan_demo .*: \d+ bytes", run.stdout)
+
+
+def test_float_build_on_the_cortex_m4f(generated_c_float):
+    """`rollplan codegen --real float`: built with -Wdouble-promotion -Werror, no double operation in the library
+    (check-static), and `make qemu` prints the host's float plan on both boards."""
+    out = generated_c_float.out
+    assert "M4F_EXTRA = -Wdouble-promotion" in (out / "Makefile").read_text()
+    said = ""
+    for goal in ("check-static", "qemu"):
+        run = subprocess.run(["make", "-s", "-C", str(out), "-j2", goal], capture_output=True, text=True, timeout=900,
+                             check=False)
+        assert run.returncode == 0, run.stdout + run.stderr
+        said += run.stdout
+    assert "no double operation in the float library" in said and "both boards print the host's" in said
+    got = qemu("m4f", out / "build" / "m4f" / "plan_demo.elf", PAPER)
+    assert got.returncode == 0 and abs(float(got.stdout.split()[0]) - 0.300429) < 1e-5

@@ -24,7 +24,7 @@ int main(int argc, char **argv) {
     if (argc != 6 || !number(argv[1], &u) || !number(argv[2], &v) || !number(argv[3], &psi)
         || !number(argv[4], &steps_d) || !number(argv[5], &k)) {
         fprintf(stderr, "usage: %s U V PSI STEPS K   (finite numbers; STEPS a whole number in [1, %d], "
-                "0 <= K <= %g)\n", argv[0], @PREFIX_UPPER@_MAX_STEPS, @PREFIX_UPPER@_K_MAX);
+                "0 <= K <= %g)\n", argv[0], @PREFIX_UPPER@_MAX_STEPS, (double)@PREFIX_UPPER@_K_MAX);
         return @PREFIX_UPPER@_BAD_INPUT;
     }
     if (steps_d < 1 || steps_d > @PREFIX_UPPER@_MAX_STEPS || steps_d != floor(steps_d)) {
@@ -32,31 +32,33 @@ int main(int argc, char **argv) {
                 @PREFIX_UPPER@_MAX_STEPS);
         return @PREFIX_UPPER@_BAD_INPUT;
     }
-    if (!(k >= 0.0 && k <= @PREFIX_UPPER@_K_MAX)) {
+    if (!(k >= 0.0 && k <= (double)@PREFIX_UPPER@_K_MAX)) {
         fprintf(stderr, "%s: K = %s is not allowed: this planner was generated for 0 <= K <= %g "
-                "(rollplan codegen --k-max)\n", argv[0], argv[5], @PREFIX_UPPER@_K_MAX);
+                "(rollplan codegen --k-max)\n", argv[0], argv[5], (double)@PREFIX_UPPER@_K_MAX);
         return @PREFIX_UPPER@_BAD_INPUT;
     }
-    status = @PREFIX@_plan(u, v, psi, (int)steps_d, k, &plan);
+    /* ranges checked in double above, before the conversion to casadi_real (@REAL@ in this build) */
+    status = @PREFIX@_plan((casadi_real)u, (casadi_real)v, (casadi_real)psi, (int)steps_d, (casadi_real)k, &plan);
     switch (status) {
     case @PREFIX_UPPER@_OK:
-        printf("%.17g %.17g %.17g %.3e %.3e\n", plan.a, plan.b, plan.gamma, plan.residual, plan.bound);
+        printf("%.17g %.17g %.17g %.3e %.3e\n", (double)plan.a, (double)plan.b, (double)plan.gamma,
+               (double)plan.residual, (double)plan.bound);
         return 0;
     case @PREFIX_UPPER@_BAD_INPUT:
         fprintf(stderr, "%s: bad input: the target (U, V) must be away from the origin\n", argv[0]);
         break;
     case @PREFIX_UPPER@_NO_PLAN:
         fprintf(stderr, "%s: no plan: no root of branch m = 0 with 0 < a, b <= %g; try more steps\n", argv[0],
-                @PREFIX_UPPER@_A_MAX);
+                (double)@PREFIX_UPPER@_A_MAX);
         break;
     case @PREFIX_UPPER@_NOT_CERTIFIED:
         fprintf(stderr, "%s: not certified: the best converged plan (a %.6g, b %.6g) misses by %.3e with an "
-                "integration error bound %.3e (tolerance %g)\n", argv[0], plan.a, plan.b, plan.residual, plan.bound,
-                @PREFIX_UPPER@_CERT_TOL);
+                "integration error bound %.3e (tolerance %g)\n", argv[0], (double)plan.a, (double)plan.b,
+                (double)plan.residual, (double)plan.bound, (double)@PREFIX_UPPER@_CERT_TOL);
         break;
     default:
         fprintf(stderr, "%s: no convergence after %d cells (last residual %.3e)\n", argv[0], plan.cells,
-                plan.predicted);
+                (double)plan.predicted);
         break;
     }
     return status;

@@ -3,7 +3,7 @@
  * inputs are volatile so that nothing is folded at compile time. */
 #include "@PREFIX@.h"
 
-static volatile double s_in[5] = {0, 1, 0, 1, 2.5};
+static volatile casadi_real s_in[5] = {0, 1, 0, 1, 2.5};
 
 int main(int argc, char **argv) {
     @PREFIX@_plan_t plan;
