@@ -1,5 +1,7 @@
 """The scripts in scripts/ run on the package as it is (they are not part of the package's API)."""
 
+import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -37,3 +39,15 @@ def test_reconfiguration_script_runs(tmp_path):
     text = (tmp_path / "reconfiguration.md").read_text()
     assert "## Turning in place" in text and "DOP853" in text and "## A route of five waypoints" in text
     assert (tmp_path / "composed.png").stat().st_size > 0 and (tmp_path / "reconfiguration.json").stat().st_size > 0
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(any(shutil.which(t) is None for t in ("arm-none-eabi-gcc", "qemu-system-arm", "make", "cc"))
+                    and os.environ.get("ROLLPLAN_REQUIRE_EMBEDDED") != "1", reason="needs the ARM toolchain and QEMU")
+def test_embedded_report_script_runs(tmp_path):
+    script = Path(__file__).resolve().parent.parent / "scripts" / "embedded_report.py"
+    subprocess.run([sys.executable, str(script), "--no-host", "--out-dir", str(tmp_path)], check=True,
+                   capture_output=True, timeout=1800)
+    text = (tmp_path / "embedded.md").read_text()
+    assert "| double | m7 (mps2-an500) |" in text and "| float | m4f (mps2-an386) |" in text
+    assert "Instructions per plan" in text and (tmp_path / "embedded.json").stat().st_size > 0
