@@ -382,17 +382,18 @@ def _check_k_max(k_max, steps_per_leaf: int, step: ca.Function) -> float:
 
     The step map's error grows with k and with the leaf radii (the turn rate psi' peaks as the leaf
     nears the singular equator); it is measured against fine RK8 traces (:func:`rk8_trace`) at the
-    corners of the admissible box, ``a, b in {0.05, A_MAX}``, for ``k = k_max``.
+    corners of the admissible box, ``a, b in {0.05, A_MAX}``, for ``k in {0, k_max / 2, k_max}``.
     """
     if isinstance(k_max, bool) or not isinstance(k_max, (int, float, np.integer, np.floating)) \
             or not 0.0 <= float(k_max) <= K_MAX:
         raise InputError(f"k_max = {k_max!r} is not allowed: it must be a number in [0, {K_MAX:g}]")
     k_max = float(k_max)
     worst = 0.0
-    for ab in ((A_MAX, A_MAX), (A_MAX, 0.05), (0.05, A_MAX)):
-        ref = rk8_trace(ab, k_max)
-        shift, eta, _ = (np.array(v).ravel() for v in step(ab, k_max))
-        worst = max(worst, float(np.max(np.abs(np.concatenate([shift, eta]) - ref))))
+    for k in (0.0, 0.5 * k_max, k_max):
+        for ab in ((A_MAX, A_MAX), (A_MAX, 0.05), (0.05, A_MAX)):
+            ref = rk8_trace(ab, k)
+            shift, eta, _ = (np.array(v).ravel() for v in step(ab, k))
+            worst = max(worst, float(np.max(np.abs(np.concatenate([shift, eta]) - ref))))
     if not worst <= STEP_MAP_TOL:
         raise InputError(f"k_max = {k_max:g} is not allowed with {steps_per_leaf} steps per leaf: the step map "
                          f"is off by {worst:.1e} (more than {STEP_MAP_TOL:g}) near A_MAX; give more steps per leaf "
