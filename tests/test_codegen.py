@@ -309,6 +309,7 @@ def test_certificate_refuses_a_wrong_plan_and_bad_arguments(clib):
         assert certify(clib, *args, (0.0, 1.0, 0.0))[0] == 2
 
 
+@pytest.mark.slow
 def test_k_max_is_checked_at_generation(tmp_path):
     with pytest.raises(InputError, match="k_max = 10 is not allowed with 240 steps per leaf"):
         codegen.generate(tmp_path / "a", k_max=10)
@@ -368,6 +369,7 @@ def built_float(generated_c_float):
     return generated_c_float
 
 
+@pytest.mark.slow
 def test_float_build_has_no_double_and_certifies_to_its_tolerance(built_float, built):
     """Single precision: the same plan as the double build to float accuracy, and a fuzz test at 1e-4."""
     text = (built_float.out / "rollplan_model.c").read_text() + (built_float.out / "rollplan_planner.c").read_text()
