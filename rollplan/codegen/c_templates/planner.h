@@ -46,8 +46,8 @@ extern "C" {
 
 /* Status codes (equal to the exit codes of plan_demo and, for 0, 2, 3, of the `rollplan` command). */
 #define @PREFIX_UPPER@_OK 0             /* a plan whose certificate holds: residual + bound <= CERT_TOL */
-#define @PREFIX_UPPER@_BAD_INPUT 2      /* non-finite input, steps outside [1, MAX_STEPS], k outside
-                                           [0, K_MAX] (the range this code was generated for), zero shift */
+#define @PREFIX_UPPER@_BAD_INPUT 2      /* non-finite input, steps outside [1, MAX_STEPS], k outside [0, K_MAX]
+                                   (the range this code was generated for), zero shift */
 #define @PREFIX_UPPER@_NO_PLAN 3        /* no grid cell brackets a root of branch m = 0 */
 #define @PREFIX_UPPER@_NO_CONVERGENCE 4 /* Newton did not converge from any bracketing cell */
 #define @PREFIX_UPPER@_NOT_CERTIFIED 5  /* Newton converged, but no converged plan passed the certificate */
@@ -93,8 +93,9 @@ typedef struct {
  * depends on k only and is kept for the last k, so repeated plans for one robot skip
  * it. Deterministic; static memory only; not reentrant (one static work area).
  * Bounded time: at most @MAX_CELLS@ x @MAX_ITER@ x 9 evaluations of @PREFIX@_step_jac and
- * @MAX_CELLS@ certificates (a plan typically takes a few evaluations and one certificate). Returns one of the status codes above; `plan` is filled in on
- * @PREFIX_UPPER@_OK (and holds the last iterate otherwise).
+ * @MAX_CELLS@ certificates, each proportional to `steps` (a plan typically takes a few evaluations
+ * and one certificate). Returns one of the status codes above; `plan` is filled in on
+ * @PREFIX_UPPER@_OK (and holds the last converged or the last iterate otherwise).
  */
 int @PREFIX@_plan(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k, @PREFIX@_plan_t *plan);
 
