@@ -49,8 +49,9 @@ the last k.
 Every converged root is certified on board before it is returned (``<prefix>_certify``): the whole
 n-step motion is integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_step`
 of the state-dependent right side (28)-(30), :func:`certificate_functions`), at N and 2N steps per
-panel with N from the turn rate psi' on the panel; the error bound is the step-doubling difference
-over ``CERT_SAFETY``; a plan is returned only if residual + bound <= ``CERT_TOL``. This shares
+panel with N from the turn rate psi' on the panel (doubled again, up to 3 times, while the outcome is
+undecided); the error bound is the step-doubling difference over ``CERT_SAFETY``; a plan is returned
+only if residual + bound <= ``CERT_TOL``. This shares
 neither the heading structure nor the quadrature of the step map, so a step map that is wrong
 (beyond its accurate range, or by a bug) cannot certify its own plan. The generated code accepts
 ``0 <= k <= k_max``, a generation option refused unless the step map is accurate to

@@ -107,7 +107,9 @@ int @PREFIX@_plan(casadi_real u, casadi_real v, casadi_real psi, int steps, casa
  * depend on the state); the motion is integrated with N and with 2N steps per panel, `bound` is
  * |x_2N - x_N| / @CERT_SAFETY@ (step doubling: the error of x_2N of an order-8 method is about
  * |x_2N - x_N| / 255; dividing by @CERT_SAFETY@ only leaves a margin) and `residual` is
- * |x_2N - (u, v, psi)| (psi wrapped). `final` (may be NULL) receives x_2N.
+ * |x_2N - (u, v, psi)| (psi wrapped). While that is undecided (residual - bound <= CERT_TOL <
+ * residual + bound), the steps are doubled again (x_2N becomes the coarse run), at most 3 times.
+ * `final` (may be NULL) receives the finest run.
  * Returns @PREFIX_UPPER@_OK if residual + bound <= CERT_TOL, @PREFIX_UPPER@_NOT_CERTIFIED otherwise,
  * @PREFIX_UPPER@_BAD_INPUT for arguments outside the ranges of @PREFIX@_plan.
  */
