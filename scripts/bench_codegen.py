@@ -76,17 +76,22 @@ static double now_us(void) {
     return t.tv_sec * 1e6 + t.tv_nsec / 1e3;
 }
 /* Mean over the targets of the best of reps plans (the machine is shared); with forget,
- * the leaf table is recomputed for every plan (a new k each time). */
-static double run(int reps, int forget, int *fails) {
+ * the leaf table is recomputed for every plan (a new k each time). With cert, the time of
+ * the certificate of the plan alone (@PREFIX@_certify). */
+static double run(int reps, int forget, int cert, int *fails) {
     int n = (int)(sizeof T / sizeof T[0]), r, i;
     @PREFIX@_plan_t p;
-    double total = 0.0, best, t;
+    double total = 0.0, best, t, res, bound;
     for (i = 0; i < n; ++i) {
         *fails += @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p) != 0;
         for (best = 1e300, r = 0; r < reps; ++r) {
             if (forget) @PREFIX@_forget_table();
             t = now_us();
-            @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p);
+            if (cert)
+                @PREFIX@_certify(p.a, p.b, p.gamma, (int)T[i][3], T[i][4], T[i][0], T[i][1], T[i][2], NULL,
+                                 &res, &bound);
+            else
+                @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p);
             t = now_us() - t;
             if (t < best) best = t;
         }
@@ -96,8 +101,8 @@ static double run(int reps, int forget, int *fails) {
 }
 int main(int argc, char **argv) {
     int reps = argc > 1 ? atoi(argv[1]) : 20, fails = 0;
-    double cold = run(reps, 1, &fails), warm = run(reps, 0, &fails);
-    printf("%.3f %.3f %d\n", cold, warm, fails / 2);
+    double cold = run(reps, 1, 0, &fails), warm = run(reps, 0, 0, &fails), cert = run(reps, 0, 1, &fails);
+    printf("%.3f %.3f %.3f %d\n", cold, warm, cert, fails / 3);
     return 0;
 }
 """
@@ -114,7 +119,7 @@ def time_plans(out: Path, prefix: str = "rollplan", targets=TARGETS, reps: int =
     """Microseconds per C plan, mean over ``targets`` of the best of ``reps`` runs (built with -O2).
 
     Returns (us with the leaf table recomputed for every plan, us with the table
-    kept from the previous plan of the same k, failed plans).
+    kept from the previous plan of the same k, us of the plan's certificate alone, failed plans).
     """
     text = _BENCH_C.replace("@PREFIX@", prefix).replace(
         "@TARGETS@", ", ".join("{" + ", ".join(repr(float(x)) for x in t) + "}" for t in targets))
@@ -123,8 +128,8 @@ def time_plans(out: Path, prefix: str = "rollplan", targets=TARGETS, reps: int =
     subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(exe), str(out / "bench.c"),
                     str(out / f"{prefix}_planner.c"),
                     str(out / f"{prefix}_model.c"), "-lm"], check=True, capture_output=True)
-    cold, warm, fails = subprocess.run([str(exe), str(reps)], check=True, capture_output=True, text=True).stdout.split()
-    return float(cold), float(warm), int(fails)
+    out = subprocess.run([str(exe), str(reps)], check=True, capture_output=True, text=True).stdout.split()
+    return float(out[0]), float(out[1]), float(out[2]), int(out[3])
 
 
 def python_plan_times(targets=TARGETS) -> list:
@@ -149,7 +154,8 @@ def measure(steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, reps: int = 20
 
     ``targets`` are (u, v, psi, steps, k) tuples. Keys of the result: ``c_us_per_plan``
     (leaf table recomputed for every plan, i.e. a new k each time),
-    ``c_us_per_plan_same_k`` (table kept between plans of equal k), ``c_code_bytes``
+    ``c_us_per_plan_same_k`` (table kept between plans of equal k), ``c_us_certificate`` (the on-board
+    certificate of the plan alone, included in the plan times), ``c_code_bytes``
     (generated .c and .h), ``c_static_lib_bytes``, ``plan_demo_bytes``,
     ``c_work_doubles`` (static work memory), ``python_ms_per_plan`` (mean over the targets),
     ``python_ms_per_target`` (one plan of each target).
@@ -157,10 +163,11 @@ def measure(steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, reps: int = 20
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "c"
         g = build(out, steps_per_leaf)
-        cold, warm, fails = time_plans(out, targets=targets, reps=reps)
+        cold, warm, cert, fails = time_plans(out, targets=targets, reps=reps)
         binary = (out / "plan_demo").stat().st_size
         lib = (out / "librollplan.a").stat().st_size
     res = {"steps_per_leaf": steps_per_leaf, "c_us_per_plan": cold, "c_us_per_plan_same_k": warm,
+           "c_us_certificate": cert, "c_us_per_plan_same_k_without_certificate": warm - cert,
            "c_failed_plans": fails,
            "c_code_bytes": g.code_bytes, "c_model_bytes": g.model_bytes, "c_static_lib_bytes": lib,
            "plan_demo_bytes": binary, "c_work_doubles": g.work_doubles, "targets": len(targets)}
@@ -195,7 +202,7 @@ def plan_error(steps_per_leaf: int, targets=None) -> dict:
                                  capture_output=True, text=True, check=False)
             if run.returncode:
                 return {"steps_per_leaf": steps_per_leaf, "failed": f"{(u, v, psi, n, k)}: {run.stderr.strip()}"}
-            a, b, gamma, _ = (float(x) for x in run.stdout.split())
+            a, b, gamma = (float(x) for x in run.stdout.split()[:3])
             final = planner.certifier.final(a, b, k, gamma, n)
             worst = max(worst, Problem((u, v, psi), k=k, steps=n).residual(final))
             q = codegen.reference_plan((u, v, psi), n, k, near=(a, b))
@@ -204,8 +211,9 @@ def plan_error(steps_per_leaf: int, targets=None) -> dict:
     return {"steps_per_leaf": steps_per_leaf, "verified_residual": worst, "gap_to_python": gap}
 
 
-def accuracy(levels=(120, 160, 200, 240)) -> list:
-    """Step-map error and plan exactness against steps per leaf."""
+def accuracy(levels=(240, 280, 320)) -> list:
+    """Step-map error and plan exactness against steps per leaf (fewer than 240 are refused for k <= 5:
+    the step map is not accurate to 1e-10 near A_MAX, see ``codegen.generate(k_max=...)``)."""
     points_k5 = [(0.69, 0.69, 2.5), (0.69, 0.3, 2.5), (0.1, 0.5, 0.0), (0.5, 0.69, 5.0), (0.3, 0.53, 2.5)]
     points_k10 = [(0.5, 0.69, 10.0)]
     rows = []

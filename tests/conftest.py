@@ -37,3 +37,19 @@ def scipy_trace():
 def asym_plan():
     """A plan for the default robot with a != b (psi = 0.5), two steps: four leaves, three poles between them."""
     return rollplan.plan((0.05, 0.08, 0.5), 2, robot=rollplan.Robot())
+
+
+@pytest.fixture(scope="session")
+def generated_c(tmp_path_factory):
+    """The C planner written by ``rollplan codegen`` with its defaults (``test_codegen``, ``test_embedded``)."""
+    from rollplan import codegen
+
+    return codegen.generate(tmp_path_factory.mktemp("c") / "planner")
+
+
+@pytest.fixture(scope="session")
+def generated_c_float(tmp_path_factory):
+    """The C planner written by ``rollplan codegen --real float`` (single precision)."""
+    from rollplan import codegen
+
+    return codegen.generate(tmp_path_factory.mktemp("c") / "planner_f32", real="float")

@@ -3,6 +3,7 @@ independent references."""
 
 from __future__ import annotations
 
+import ctypes
 import re
 import shutil
 import subprocess
@@ -13,10 +14,19 @@ import pytest
 
 from rollplan import codegen
 from rollplan.cli import main
-from rollplan.codegen.c_library import TABLE_STEPS_PER_LEAF, generated_functions, reference_plan, table_radii
+from rollplan.codegen.c_library import (
+    CERT_TOL,
+    DEFAULT_K_MAX,
+    FLOAT_CERT_TOL,
+    TABLE_STEPS_PER_LEAF,
+    generated_functions,
+    reference_plan,
+    table_radii,
+)
 from rollplan.core import model
-from rollplan.core.curves import figure_eight
+from rollplan.core.curves import A_MAX, figure_eight
 from rollplan.core.integrate import CvodesIntegrator, spectral_step
+from rollplan.errors import InputError
 
 import references
 
@@ -28,13 +38,11 @@ DEGREE = STEPS // (len(figure_eight().pieces[0].breaks) - 1)
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory):
-    out = tmp_path_factory.mktemp("c") / "planner"
-    g = codegen.generate(out)
-    run = subprocess.run(["make", "-C", str(out), "plan_demo", "librollplan.so"], check=False, capture_output=True,
-                         text=True)
+def built(generated_c):
+    run = subprocess.run(["make", "-C", str(generated_c.out), "plan_demo", "librollplan.so"], check=False,
+                         capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
-    return g
+    return generated_c
 
 
 @pytest.fixture(scope="module")
@@ -63,13 +71,15 @@ def _values(f, args):
     return [np.array(x) for x in f.call(list(args))]
 
 
-@pytest.mark.parametrize("name", ["rollplan_omega_z", "rollplan_rotor_rates", "rollplan_montana"])
+@pytest.mark.parametrize("name", ["rollplan_omega_z", "rollplan_rotor_rates", "rollplan_montana", "rollplan_rhs0",
+                                  "rollplan_rhs1", "rollplan_rk8_0", "rollplan_rk8_1"])
 def test_model_functions_match_symbolic_twin(built, twins, name):
     rng = np.random.default_rng(1)
     c_fun, twin = external(built, name), twins[name]
     for _ in range(5):
         args = [rng.uniform(-1, 1, twin.size1_in(i)) for i in range(twin.n_in())]
         args = [a + 2.0 if twin.name_in(i) in ("j_xx", "j_zz", "j_r", "k") else a for i, a in enumerate(args)]
+        args = [0.3 + 0.3 * a if twin.name_in(i) == "p" else a for i, a in enumerate(args)]   # leaf radii
         for got, want in zip(_values(c_fun, args), _values(twin, args)):
             np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-14)
         # Jacobian of the compiled function by central differences against the symbolic Jacobian
@@ -168,8 +178,8 @@ def _check_plan(built, planner, target):
     u, v, psi, n, k = target
     run = demo(built, u, v, psi, n, k)
     assert run.returncode == 0, run.stderr
-    a, b, gamma, residual = (float(x) for x in run.stdout.split())
-    assert residual < 1e-10
+    a, b, gamma, residual, bound = (float(x) for x in run.stdout.split())
+    assert residual + bound <= 1e-9
     # exact when integrated accurately (CVODES, independent of the step map)
     final = planner.certifier.final(a, b, k, gamma, n)
     err = [final.u_a - u, final.v_a - v, float(references.wrap(final.psi - psi)), final.u_o, final.v_o]
@@ -204,6 +214,7 @@ def test_plan_demo_reproduces_paper_radius(built):
 @pytest.mark.parametrize("args, status", [
     (("x", 1, 0, 1, 2.5), 2), ((0, 1, 0, 0, 2.5), 2), ((0, 1, 0, 1.5, 2.5), 2), ((0, 1, 0, 1, -1), 2),
     ((0, 0, 0, 1, 2.5), 2), ((0, 1, 0, 1), 2), ((0, 1, "nan", 1, 2.5), 2),
+    ((0, 2, 0, 1, 50), 2), ((0, 1, 0, 1, 5.000001), 2), ((0, 1, 0, 1001, 2.5), 2), ((0, 1, 0, 1, "inf"), 2),
     ((30, 0, 0, 1, 2.5), 3),        # farther than any figure eight reaches in one step
     ((0, 1, 6.2, 2, 2.5), 3),       # sin(psi/2) small: branch m = 0 needs h = 24 R
 ])
@@ -214,10 +225,13 @@ def test_plan_demo_reports_bad_input_and_no_plan(built, args, status):
 
 
 def test_cli_codegen(tmp_path, capsys):
-    assert main(["codegen", "--out", str(tmp_path / "c"), "--prefix", "rp", "--steps-per-leaf", "100"]) == 0
+    assert main(["codegen", "--out", str(tmp_path / "c"), "--prefix", "rp", "--k-max", "2.5"]) == 0
     assert (tmp_path / "c" / "rp.h").exists() and (tmp_path / "c" / "rp_model.c").exists()
     assert "bytes" in capsys.readouterr().out
     assert main(["codegen", "--out", str(tmp_path / "d"), "--steps-per-leaf", "33"]) == 2
+    assert main(["codegen", "--out", str(tmp_path / "d"), "--steps-per-leaf", "100"]) == 2   # inaccurate near A_MAX
+    with pytest.raises(SystemExit, match="2"):
+        main(["codegen", "--out", str(tmp_path / "d"), "--k-max", "nan"])
     assert main(["codegen", "--out", str(tmp_path / "d"), "--prefix", "9x"]) == 2
     assert main(["codegen", "--out", str(tmp_path / "no" / "such")]) == 2
     assert "not allowed" in capsys.readouterr().err
@@ -233,8 +247,9 @@ def test_plan_demo_no_convergence_is_nonzero(built):
 
 @pytest.mark.slow
 def test_generated_prefix_builds_and_plans(tmp_path):
+    """A planner generated for k <= 10 (320 steps per leaf): other prefix, and certified plans at k = 10."""
     out = tmp_path / "rp"
-    codegen.generate(out, 160, "rp")
+    codegen.generate(out, 320, "rp", k_max=10)
     run = subprocess.run(["make", "-C", str(out)], check=False, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert (out / "librp.a").exists()
@@ -242,3 +257,129 @@ def test_generated_prefix_builds_and_plans(tmp_path):
                          text=True)
     a, b = (float(x) for x in run.stdout.split()[:2])
     assert abs(a - 0.300429) < 5e-7 and abs(b - 0.300429) < 5e-7
+    for u, v, psi, n in ((0.0, 2.0, 0.0, 1), (0.5, -0.3, 1.0, 2)):
+        run = subprocess.run([str(out / "plan_demo"), *map(str, (u, v, psi, n, 10))], check=False,
+                             capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        a, b, gamma = (float(x) for x in run.stdout.split()[:3])
+        x = references.trace(a, b, 10.0, gamma, n)
+        assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) <= CERT_TOL
+    run = subprocess.run([str(out / "plan_demo"), "0", "2", "0", "1", "10.5"], check=False, capture_output=True)
+    assert run.returncode == 2
+
+
+# ----------------------------------------------------------------------------- the on-board certificate
+
+@pytest.fixture(scope="module")
+def clib(built):
+    lib = ctypes.CDLL(str(built.out / "librollplan.so"))
+    d, p = ctypes.c_double, ctypes.POINTER(ctypes.c_double)
+    lib.rollplan_certify.argtypes = [d, d, d, ctypes.c_int, d, d, d, d, p, p, p]
+    lib.rollplan_certify.restype = ctypes.c_int
+    return lib
+
+
+def certify(clib, a, b, gamma, steps, k, target):
+    final, residual, bound = (ctypes.c_double * 3)(), ctypes.c_double(), ctypes.c_double()
+    status = clib.rollplan_certify(a, b, gamma, steps, k, *target, final, ctypes.byref(residual), ctypes.byref(bound))
+    return status, np.array(final), residual.value, bound.value
+
+
+@pytest.mark.parametrize("a, b, gamma, steps, k", [
+    (0.3004288061954572, 0.3004288061954572, 0.93188347081455891, 1, 2.5), (0.69, 0.69, 0.3, 1, DEFAULT_K_MAX),
+    (0.05, 0.69, -2.0, 2, DEFAULT_K_MAX), (0.2, 0.45, 1.0, 3, 0.0), (0.6, 0.1, 3.0, 1, 1.5),
+    (0.685, 0.2, 0.0, 1, 1.0)])   # near A_MAX at small k: certified only after the steps are doubled again
+def test_certificate_final_state_is_within_its_bound(clib, a, b, gamma, steps, k):
+    """The RK8 certificate's final state against DOP853 on the printed (28)-(30) (rtol 1e-13)."""
+    ref = references.trace(a, b, k, gamma, steps)
+    status, final, residual, bound = certify(clib, a, b, gamma, steps, k, ref)
+    assert status == 0
+    err = np.linalg.norm(final - ref)
+    assert err <= bound + 1e-11 * steps          # DOP853's own error at rtol 1e-13
+    assert abs(residual - err) <= 1e-11 * steps and bound < CERT_TOL
+
+
+def test_certificate_refuses_a_wrong_plan_and_bad_arguments(clib):
+    a, gamma = 0.3004288061954572, 0.93188347081455891
+    assert certify(clib, a, a, gamma, 1, 2.5, (0.0, 1.0, 0.0))[0] == 0
+    status, _, residual, _ = certify(clib, a + 1e-7, a, gamma, 1, 2.5, (0.0, 1.0, 0.0))
+    assert status == 5 and residual > CERT_TOL
+    assert certify(clib, a, a, gamma + 1e-8, 1, 2.5, (0.0, 1.0, 0.0))[0] == 5
+    for args in ((0.7, a, gamma, 1, 2.5), (a, 0.0, gamma, 1, 2.5), (a, a, gamma, 0, 2.5), (a, a, gamma, 1, 5.5),
+                 (a, a, float("nan"), 1, 2.5), (a, a, gamma, 1001, 2.5)):
+        assert certify(clib, *args, (0.0, 1.0, 0.0))[0] == 2
+
+
+@pytest.mark.slow
+def test_k_max_is_checked_at_generation(tmp_path):
+    with pytest.raises(InputError, match="k_max = 10 is not allowed with 240 steps per leaf"):
+        codegen.generate(tmp_path / "a", k_max=10)
+    for bad in (-1, 101, float("nan"), "5", True):
+        with pytest.raises(InputError, match="k_max"):
+            codegen.generate(tmp_path / "b", k_max=bad)
+    assert main(["codegen", "--out", str(tmp_path / "c"), "--k-max", "30"]) == 2
+
+
+def _fuzz_inputs(rng, count, many_steps):
+    special = {"u": [0.0, 1e-300, -1e-9, 1e3, 3.0], "psi": [0.0, 1e-300, np.pi, -np.pi, 50.0, 1e6],
+               "steps": [1, 2, many_steps], "k": [0.0, 1e-300, DEFAULT_K_MAX, 2.5]}
+    for _ in range(count):
+        u, v = (rng.choice(special["u"]) if rng.random() < 0.2 else rng.uniform(-3, 3) for _ in range(2))
+        psi = rng.choice(special["psi"]) if rng.random() < 0.2 else rng.uniform(-4, 4)
+        steps = int(rng.choice(special["steps"])) if rng.random() < 0.2 else int(rng.integers(1, 5))
+        k = rng.choice(special["k"]) if rng.random() < 0.2 else rng.uniform(0, DEFAULT_K_MAX)
+        yield float(u), float(v), float(psi), steps, float(k)
+
+
+def _fuzz(built, seed, count, many_steps, tol=CERT_TOL):
+    """No wrong plan with exit 0: every plan the C planner returns lands within the tolerance when
+    integrated by DOP853 on the printed equations; every other outcome is a documented status."""
+    rng = np.random.default_rng(seed)
+    outcomes = []
+    for u, v, psi, steps, k in _fuzz_inputs(rng, count, many_steps):
+        run = demo(built, repr(u), repr(v), repr(psi), steps, repr(k))
+        assert run.returncode in (0, 2, 3, 4, 5), (u, v, psi, steps, k, run.stderr)
+        outcomes.append(run.returncode)
+        if run.returncode:
+            assert run.stdout == "" and run.stderr.count("\n") == 1
+            continue
+        a, b, gamma, residual, bound = (float(x) for x in run.stdout.split())
+        assert 0 < a <= A_MAX and 0 < b <= A_MAX and residual + bound <= tol
+        x = references.trace(a, b, k, gamma, steps)
+        miss = np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)])
+        assert miss <= tol + 1e-11 * steps, (u, v, psi, steps, k, miss)
+    return outcomes
+
+
+def test_fuzz_no_wrong_plan_with_exit_0(built):
+    """Fast subset: extreme u, v, psi, k; few steps (DOP853 checks every plan, at ~50 ms per leaf)."""
+    assert 0 in _fuzz(built, 5, 10, 3)
+
+
+@pytest.mark.slow
+def test_fuzz_no_wrong_plan_with_exit_0_more(built):
+    outcomes = _fuzz(built, 6, 80, 40)
+    assert outcomes.count(0) >= 10
+
+
+@pytest.fixture(scope="module")
+def built_float(generated_c_float):
+    run = subprocess.run(["make", "-C", str(generated_c_float.out), "plan_demo"], check=False, capture_output=True,
+                         text=True)
+    assert run.returncode == 0, run.stderr
+    return generated_c_float
+
+
+@pytest.mark.slow
+def test_float_build_has_no_double_and_certifies_to_its_tolerance(built_float, built):
+    """Single precision: the same plan as the double build to float accuracy, and a fuzz test at 1e-4."""
+    text = (built_float.out / "rollplan_model.c").read_text() + (built_float.out / "rollplan_planner.c").read_text()
+    code = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+    assert "#define casadi_real float" in text
+    assert not re.search(r"\b(sin|cos|sqrt|atan2|hypot|fabs|fmod)\s*\(", code)
+    assert "ROLLPLAN_CERT_TOL 0.0001f" in (built_float.out / "rollplan.h").read_text()
+    for target in TARGETS:
+        f32, f64 = (demo(b, *target) for b in (built_float, built))
+        assert f32.returncode == f64.returncode == 0
+        assert np.max(np.abs(np.array(f32.stdout.split()[:3], float) - np.array(f64.stdout.split()[:3], float))) < 1e-4
+    assert 0 in _fuzz(built_float, 7, 10, 3, FLOAT_CERT_TOL)

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
 
 from rollplan.core.curves import A_MAX, Curve, Piece, figure_eight
-from rollplan.core.integrate import CvodesIntegrator, piece_rhs, spectral_step
+from rollplan.core.integrate import CvodesIntegrator, piece_rhs, rk8_step, spectral_step
 from rollplan.problem import Problem
 
 import references
@@ -187,3 +187,16 @@ def test_pluggable_curve_matches_scipy():
                         [0, 0, 0], method="DOP853", rtol=1e-13, atol=1e-15).y[:, -1]
         assert np.abs(spectral - ref).max() < 1e-10
         assert np.hypot(*spectral[:2]) > 1e-3  # it does move the robot
+
+
+def test_rk8_step_has_order_eight():
+    """Fixed-step RK8 on x' = x cos t (closed form exp(sin t)): the error falls 2^8-fold per halving."""
+    t, x, c = ca.SX.sym("t"), ca.SX.sym("x"), ca.SX.sym("c")
+    step = rk8_step(ca.Function("f", [t, x, c], [c * x * ca.cos(t)]))
+    errors = []
+    for n in (4, 8, 16):
+        y = 1.0
+        for i in range(n):
+            y = float(step(y, i * 2.0 / n, 2.0 / n, 1.0))
+        errors.append(abs(y - np.exp(np.sin(2.0))))
+    assert 2**7.5 < errors[0] / errors[1] < 2**8.5 and 2**7.5 < errors[1] / errors[2] < 2**8.5

@@ -1,5 +1,7 @@
 """The scripts in scripts/ run on the package as it is (they are not part of the package's API)."""
 
+import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -19,11 +21,16 @@ def test_benchmark_script_runs(tmp_path):
     assert (tmp_path / "benchmarks.json").stat().st_size > 0
 
 
+def run_script(name: str, out_dir, *args: str, timeout: float = 900) -> None:
+    """Run scripts/NAME with ``args`` and ``--out-dir out_dir``; fails on a nonzero exit."""
+    script = Path(__file__).resolve().parent.parent / "scripts" / name
+    subprocess.run([sys.executable, str(script), *args, "--out-dir", str(out_dir)], check=True, capture_output=True,
+                   timeout=timeout)
+
+
 @pytest.mark.slow
 def test_timing_table_script_runs(tmp_path):
-    script = Path(__file__).resolve().parent.parent / "scripts" / "timing_table.py"
-    subprocess.run([sys.executable, str(script), "--quick", "--out-dir", str(tmp_path)], check=True,
-                   capture_output=True, timeout=900)
+    run_script("timing_table.py", tmp_path, "--quick")
     text = (tmp_path / "timing.md").read_text()
     assert "of the shortest min-jerk duration under the same limits" in text and "| default (4.86) |" in text
     assert "## Convergence in the grid size" in text and (tmp_path / "timing.json").stat().st_size > 0
@@ -31,9 +38,7 @@ def test_timing_table_script_runs(tmp_path):
 
 @pytest.mark.slow
 def test_reconfiguration_script_runs(tmp_path):
-    script = Path(__file__).resolve().parent.parent / "scripts" / "reconfiguration.py"
-    subprocess.run([sys.executable, str(script), "--quick", "--out-dir", str(tmp_path)], check=True,
-                   capture_output=True, timeout=900)
+    run_script("reconfiguration.py", tmp_path, "--quick")
     text = (tmp_path / "reconfiguration.md").read_text()
     assert "## Turning in place" in text and "DOP853" in text and "## A route of five waypoints" in text
     assert (tmp_path / "composed.png").stat().st_size > 0 and (tmp_path / "reconfiguration.json").stat().st_size > 0
@@ -47,3 +52,13 @@ def test_closed_loop_script_runs(tmp_path):
     text = (tmp_path / "closed_loop.md").read_text()
     assert "## 1. The issue's robot" in text and "## 2. Monte Carlo" in text and "## 3. Torque-driven" in text
     assert (tmp_path / "closed_loop.png").stat().st_size > 0 and (tmp_path / "closed_loop.json").stat().st_size > 0
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(any(shutil.which(t) is None for t in ("arm-none-eabi-gcc", "qemu-system-arm", "make", "cc"))
+                    and os.environ.get("ROLLPLAN_REQUIRE_EMBEDDED") != "1", reason="needs the ARM toolchain and QEMU")
+def test_embedded_report_script_runs(tmp_path):
+    run_script("embedded_report.py", tmp_path, "--no-host", timeout=1800)
+    text = (tmp_path / "embedded.md").read_text()
+    assert "| double | m7 (mps2-an500) |" in text and "| float | m4f (mps2-an386) |" in text
+    assert "Instructions per plan" in text and (tmp_path / "embedded.json").stat().st_size > 0

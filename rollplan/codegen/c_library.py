@@ -44,14 +44,26 @@ bracketing cells of the leaf table in order of their smallest ``a + b`` (as the
 Python planner orders its brackets), from the targets interpolated linearly in
 the cell, then sets ``gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift)``
 (see :mod:`rollplan.planners.geometric`). The table depends on k only and is kept for
-the last k. Static memory only, a bounded number of iterations, and a status
-code (0 ok, 2 bad input, 3 no bracket, 4 no convergence).
+the last k.
+
+Every converged root is certified on board before it is returned (``<prefix>_certify``): the whole
+n-step motion is integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_step`
+of the state-dependent right side (28)-(30), :func:`certificate_functions`), at N and 2N steps per
+panel with N from the turn rate psi' on the panel (doubled again, up to 3 times, while the outcome is
+undecided); the error bound is the step-doubling difference over ``CERT_SAFETY``; a plan is returned
+only if residual + bound <= ``CERT_TOL``. This shares
+neither the heading structure nor the quadrature of the step map, so a step map that is wrong
+(beyond its accurate range, or by a bug) cannot certify its own plan. The generated code accepts
+``0 <= k <= k_max``, a generation option refused unless the step map is accurate to
+``STEP_MAP_TOL`` up to it. Static memory only, a bounded number of iterations, and a status code
+(0 certified plan, 2 bad input, 3 no bracket, 4 no convergence, 5 not certified).
 """
 
 from __future__ import annotations
 
 import logging
 import os
+import re
 import tempfile
 from dataclasses import dataclass
 from functools import lru_cache
@@ -62,10 +74,11 @@ import numpy as np
 
 from ..core import model
 from ..core.curves import A_MAX, figure_eight
-from ..core.integrate import check_heading_structure, heading_free_rates, piece_rhs, spectral_leaf
+from ..core.integrate import check_heading_structure, heading_free_rates, piece_rhs, rk8_step, spectral_leaf
 from ..errors import InputError, NoPlanError
 from ..io import write_atomic
 from ..planners.geometric import plan as gp_plan
+from ..problem import K_MAX, MAX_STEPS
 
 __all__ = [
     "DEFAULT_STEPS_PER_LEAF",
@@ -77,6 +90,10 @@ __all__ = [
     "leaf_function",
     "step_functions",
     "table_function",
+    "certificate_functions",
+    "DEFAULT_K_MAX",
+    "CERT_TOL",
+    "FLOAT_CERT_TOL",
     "generated_functions",
     "generate",
     "reference_plan",
@@ -84,21 +101,37 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-#: Node intervals per leaf of the generated step map (10 graded panels x degree 20).
-DEFAULT_STEPS_PER_LEAF = 200
+#: Node intervals per leaf of the generated step map (10 graded panels x degree 24): accurate to STEP_MAP_TOL
+#: on the whole admissible box for k <= DEFAULT_K_MAX (results/codegen_accuracy.json).
+DEFAULT_STEPS_PER_LEAF = 240
 #: Node intervals per leaf of the coarse bracketing table (10 panels x degree 4).
 TABLE_STEPS_PER_LEAF = 40
 #: Radii of the bracketing table on (0, A_MAX], graded towards A_MAX (see :func:`table_radii`).
 TABLE_RADII = 64
 #: Inertia ratio for which the table's radii equidistribute the turn of psi.
 _TABLE_K = 2.5
+#: Default largest inertia ratio k the generated planner accepts (``generate(k_max=...)``): the step map at
+#: the default steps per leaf is checked to :data:`STEP_MAP_TOL` up to it when the code is generated.
+DEFAULT_K_MAX = 5.0
+#: Accuracy the step map must have on ``0 < a, b <= A_MAX``, ``k <= k_max`` for :func:`generate` to accept k_max.
+STEP_MAP_TOL = 1e-10
+#: Tolerance of the on-board certificate: residual + error bound [R and rad] (the project's tolerance).
+CERT_TOL = 1e-9
+#: Steps of the RK8 certificate: a panel of width w gets ceil(w (CERT_BASE + max |psi'|) / CERT_DELTA) of them.
+CERT_DELTA = 0.8
+CERT_BASE = 3.0
+#: The certificate's error bound is |x_2N - x_N| / CERT_SAFETY (Richardson's estimate for order 8 divides by 255).
+CERT_SAFETY = 16.0
+#: Tolerance of the certificate of a single-precision build (``generate(real="float")``): float rounding
+#: alone leaves errors of 1e-6 R, and more near A_MAX, so such plans are good to this, not to CERT_TOL.
+FLOAT_CERT_TOL = 1e-4
 #: Default name prefix of the generated C symbols and files.
 DEFAULT_PREFIX = "rollplan"
 
 # Planner constants (written into the C code).
 _MAX_ITER = 25
 _MAX_CELLS = 12
-_TOL = 1e-13
+_TOL = {"double": 1e-13, "float": 5e-6}
 _A_MIN = 1e-6
 
 
@@ -290,9 +323,83 @@ def table_function(prefix: str = DEFAULT_PREFIX, steps_per_leaf: int = TABLE_STE
     return ca.Function(f"{prefix}_leaf_table", [k], [leaf0, leaf1], ["k"], ["leaf0", "leaf1"])
 
 
+def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
+    """The curve ODE (28)-(30) and one RK8 step of it, per leaf, for the on-board certificate.
+
+    Returns
+    -------
+    list of casadi.Function
+        ``<prefix>_rhs<i>(phi, x[3], p[2], k, gamma) -> xdot[3]``: (28)-(30) along leaf ``i`` of the
+        figure eight (31), (35) rotated by gamma (:func:`rollplan.core.integrate.piece_rhs`), for
+        i = 0, 1; then ``<prefix>_rk8_<i>(x[3], t, h, p[2], k, gamma) -> x_next[3]``: one step of the
+        eighth-order Runge-Kutta formula (:func:`rollplan.core.integrate.rk8_step`) of it.
+
+    The C certificate integrates the whole n-step motion with these steps from the start state, the
+    state-dependent right side as it is (no use of the heading structure the planner's step map
+    relies on, no Chebyshev quadrature), so its result is independent of the planner's.
+    """
+    curve = figure_eight()
+    rhs = [piece_rhs(curve, i) for i in range(len(curve.pieces))]
+    named = [ca.Function(f"{prefix}_rhs{i}", f.sx_in(), f.call(f.sx_in()), f.name_in(), f.name_out())
+             for i, f in enumerate(rhs)]
+    steps = []
+    for i, f in enumerate(rhs):
+        rk = rk8_step(f)
+        steps.append(ca.Function(f"{prefix}_rk8_{i}", rk.sx_in(), rk.call(rk.sx_in()), rk.name_in(), rk.name_out()))
+    return named + steps
+
+
 def generated_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX) -> list:
     """Every function that :func:`generate` writes to C, in order (the symbolic twins)."""
-    return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix), table_function(prefix)]
+    return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix), table_function(prefix),
+            *certificate_functions(prefix)]
+
+
+def rk8_trace(ab, k: float, gamma: float = 0.0, delta: float = 0.1, x0=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """(u_a, v_a, psi) after one trace of the figure eight by fixed RK8 steps, as the C certificate does it.
+
+    Each panel of a leaf gets ``ceil(w (CERT_BASE + max |psi'|) / delta)`` equal steps (``max |psi'|`` over five
+    points of the panel; psi' of (30) does not depend on the state). The C certificate uses
+    ``delta = CERT_DELTA`` and step doubling; :func:`generate` uses a small ``delta`` to check the step map.
+    """
+    curve = figure_eight()
+    x = np.asarray(x0, float)
+    p = np.asarray(ab, float)
+    for i, piece in enumerate(curve.pieces):
+        f = piece_rhs(curve, i)
+        step = rk8_step(f)
+        for b0, b1 in zip(piece.breaks[:-1], piece.breaks[1:]):
+            w = b1 - b0
+            rate = max(abs(float(f(b0 + q * w / 4, ca.DM.zeros(3), p, k, gamma)[2])) for q in range(5))
+            n = int(np.ceil(w * (CERT_BASE + rate) / delta))
+            phis = b0 + np.arange(n) * (w / n)
+            xs = step.mapaccum(n)(x, phis.reshape(1, -1), w / n, p, k, gamma)
+            x = np.array(xs[:, -1]).ravel()
+    return x
+
+
+def _check_k_max(k_max, steps_per_leaf: int, step: ca.Function) -> float:
+    """``k_max`` as a float if the step map is accurate to STEP_MAP_TOL up to it; InputError otherwise.
+
+    The step map's error grows with k and with the leaf radii (the turn rate psi' peaks as the leaf
+    nears the singular equator); it is measured against fine RK8 traces (:func:`rk8_trace`) at the
+    corners of the admissible box, ``a, b in {0.05, A_MAX}``, for ``k in {0, k_max / 2, k_max}``.
+    """
+    if isinstance(k_max, bool) or not isinstance(k_max, (int, float, np.integer, np.floating)) \
+            or not 0.0 <= float(k_max) <= K_MAX:
+        raise InputError(f"k_max = {k_max!r} is not allowed: it must be a number in [0, {K_MAX:g}]")
+    k_max = float(k_max)
+    worst = 0.0
+    for k in (0.0, 0.5 * k_max, k_max):
+        for ab in ((A_MAX, A_MAX), (A_MAX, 0.05), (0.05, A_MAX)):
+            ref = rk8_trace(ab, k)
+            shift, eta, _ = (np.array(v).ravel() for v in step(ab, k))
+            worst = max(worst, float(np.max(np.abs(np.concatenate([shift, eta]) - ref))))
+    if not worst <= STEP_MAP_TOL:
+        raise InputError(f"k_max = {k_max:g} is not allowed with {steps_per_leaf} steps per leaf: the step map "
+                         f"is off by {worst:.1e} (more than {STEP_MAP_TOL:g}) near A_MAX; give more steps per leaf "
+                         f"or a smaller k_max")
+    return k_max
 
 
 def reference_plan(target, steps: int, k: float, near=None):
@@ -322,17 +429,53 @@ _PRAGMA = """/* Generated by rollplan.codegen from the symbolic model with CasAD
 """
 
 
+_COMMENT_OR_STRING = re.compile(r'/\*.*?\*/|//[^\n]*|"(?:\\.|[^"\\])*"', re.S)
+_LITERAL = re.compile(r"(?<![\w.])((?:\d+\.\d*|\.\d+)(?:[eE][+-]?\d+)?|\d+[eE][+-]?\d+)(?![\w.])")
+_MATH = ("sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sinh", "cosh", "tanh", "exp", "log", "pow", "sqrt",
+         "hypot", "fabs", "floor", "ceil", "fmod", "fmin", "fmax", "copysign")
+_MATH_CALL = re.compile(r"(?<![\w.])(" + "|".join(_MATH) + r")(\s*\()")
+
+
+def _to_float(code: str) -> str:
+    """C code with every floating literal suffixed ``f`` and the double math functions by their float names.
+
+    CasADi's CodeGenerator with ``casadi_real = float`` changes the typedef only: it still writes double
+    literals and ``sin``, ``sqrt`` ..., which promote every expression to double (software double on a
+    single-precision FPU). Comments and string literals are left alone. (``<tgmath.h>`` would do this,
+    but newlib's does not compile with GCC.) The Makefile's ``-Wdouble-promotion -Werror`` and
+    ``make check-static`` check that nothing double is left.
+    """
+    out, i = [], 0
+    for m in _COMMENT_OR_STRING.finditer(code):
+        out.append(_MATH_CALL.sub(r"\1f\2", _LITERAL.sub(r"\1f", code[i:m.start()])))
+        out.append(m.group(0))
+        i = m.end()
+    out.append(_MATH_CALL.sub(r"\1f\2", _LITERAL.sub(r"\1f", code[i:])))
+    return "".join(out)
+
+
+def _check_real(real) -> str:
+    if real not in ("double", "float"):
+        raise InputError(f"real = {real!r} is not allowed: it must be 'double' or 'float'")
+    return real
+
+
 def _check_prefix(prefix) -> str:
     if not isinstance(prefix, str) or not prefix.isidentifier() or not prefix.isascii() or prefix.startswith("_"):
         raise InputError(f"prefix = {prefix!r} is not allowed: it must be a C identifier (letters, digits, _)")
     return prefix
 
 
+#: Files for the microcontroller builds (QEMU's mps2-an500 and mps2-an386 boards), copied into the output.
+_EMBEDDED = ("startup.c", "mps2-common.ld", "mps2-an500.ld", "mps2-an386.ld", "planner_only.c", "stack_bound.py")
+
+
 def _template(name: str) -> str:
     return (Path(__file__).with_name("c_templates") / name).read_text()
 
 
-def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX) -> GeneratedCode:
+def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX,
+             k_max: float = DEFAULT_K_MAX, real: str = "double") -> GeneratedCode:
     """Write the C99 library, ``plan_demo.c`` and a ``Makefile`` into folder ``out``.
 
     Parameters
@@ -343,12 +486,19 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         Node intervals per leaf of the step map (a multiple of the 10 panels).
     prefix : str
         Prefix of the C symbols and file names.
+    k_max : float
+        Largest inertia ratio the generated planner accepts (status 2 above it); refused unless the
+        step map is accurate to STEP_MAP_TOL up to it (:func:`_check_k_max`).
+    real : {"double", "float"}
+        C type of every number (``casadi_real``). ``"float"`` is for single-precision FPUs (Cortex-M4F):
+        no double operation is left, and plans are certified to FLOAT_CERT_TOL, not CERT_TOL.
 
     Returns
     -------
     GeneratedCode
     """
     prefix = _check_prefix(prefix)
+    real = _check_real(real)
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InputError(f"output folder {str(out)!r} is a file")
@@ -357,16 +507,21 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
             raise InputError(f"output folder {str(out)!r} cannot be created: {str(out.parent)!r} does not exist")
         out.mkdir()
     funcs = generated_functions(steps_per_leaf, prefix)
-    step, step_jac, table = funcs[3], funcs[4], funcs[5]
+    step = funcs[3]
+    k_max = _check_k_max(k_max, steps_per_leaf, step)
+    curve = figure_eight()
+    breaks = curve.pieces[0].breaks
+    if any(tuple(piece.breaks) != tuple(breaks) for piece in curve.pieces):
+        raise ValueError("the C certificate assumes the leaves share their panels")
     lib = f"{prefix}_model"
-    cg = ca.CodeGenerator(f"{lib}.c", {"with_header": True})
+    cg = ca.CodeGenerator(f"{lib}.c", {"with_header": True, "casadi_real": real})
     for f in funcs:
         cg.add(f)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(tmp + os.sep)
         model_c = _PRAGMA + (Path(tmp) / f"{lib}.c").read_text()
         model_h = (Path(tmp) / f"{lib}.h").read_text()
-    sizes = {name: max(int(getattr(f, name)()) for f in (step, step_jac, table))
+    sizes = {name: max(int(getattr(f, name)()) for f in funcs[3:])
              for name in ("sz_arg", "sz_res", "sz_iw", "sz_w")}
     subs = {
         "@PREFIX@": prefix,
@@ -381,8 +536,22 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@A_MIN@": repr(_A_MIN),
         "@MAX_ITER@": str(_MAX_ITER),
         "@MAX_CELLS@": str(_MAX_CELLS),
-        "@TOL@": repr(_TOL),
+        "@TOL@": repr(_TOL[real]),
         "@STEPS_PER_LEAF@": str(int(steps_per_leaf)),
+        "@REAL@": real,
+        "@K_MAX@": repr(k_max),
+        "@MAX_STEPS@": str(MAX_STEPS),
+        "@CERT_TOL@": repr(CERT_TOL if real == "double" else FLOAT_CERT_TOL),
+        "@REAL_TINY@": "DBL_MIN" if real == "double" else "FLT_MIN",
+        "@ACCURACY@": "plans are certified to 1e-9." if real == "double" else
+                      f"single precision: plans are certified to {FLOAT_CERT_TOL:g} (R and rad) only.",
+        "@CERT_DELTA@": repr(CERT_DELTA),
+        "@CERT_BASE@": repr(CERT_BASE),
+        "@CERT_SAFETY@": repr(CERT_SAFETY),
+        "@NPANEL@": str(len(breaks) - 1),
+        "@BREAKS@": ", ".join(repr(float(b)) for b in breaks),
+        "@QEMU_TOL@": "1e-12" if real == "double" else "1e-5",
+        "@M4F_EXTRA@": "" if real == "double" else "-Wdouble-promotion",
     }
 
     def fill(text: str) -> str:
@@ -390,19 +559,25 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
             text = text.replace(key, value)
         return text
 
+    if real == "float":
+        model_c = _to_float(model_c)
+    glue = {name: fill(_template(template)) for name, template in
+            ((f"{prefix}.h", "planner.h"), (f"{prefix}_planner.c", "planner.c"))}
+    if real == "float":
+        glue = {name: _to_float(text) for name, text in glue.items()}
     files = {
         f"{lib}.c": model_c,
         f"{lib}.h": model_h,
-        f"{prefix}.h": fill(_template("planner.h")),
-        f"{prefix}_planner.c": fill(_template("planner.c")),
+        **glue,
         "plan_demo.c": fill(_template("plan_demo.c")),
         "Makefile": fill(_template("Makefile")),
+        **{name: fill(_template(name)) for name in _EMBEDDED},
     }
     written = []
     for name, text in files.items():
         write_atomic(out / name, text.encode())
         written.append(out / name)
-    code_bytes = sum(len(t.encode()) for n, t in files.items() if n != "Makefile")
+    code_bytes = sum(len(t.encode()) for n, t in files.items() if n.endswith((".c", ".h")))
     work = sizes["sz_w"]
     log.info("wrote %s: %d bytes of C, %d doubles of work memory", out, code_bytes, work)
     return GeneratedCode(out, prefix, int(steps_per_leaf), tuple(written), code_bytes, len(model_c.encode()), work)

@@ -35,7 +35,7 @@ from . import model
 from .curves import Curve, rotated_point
 
 __all__ = ["DEFAULT_NODES", "piece_rhs", "heading_free_rates", "check_heading_structure", "chebyshev_matrices",
-           "spectral_leaf", "spectral_step", "CvodesIntegrator"]
+           "spectral_leaf", "spectral_step", "CvodesIntegrator", "rk8_step"]
 
 #: Chebyshev degree per panel of the spectral integrator.
 DEFAULT_NODES = 32
@@ -230,3 +230,39 @@ class CvodesIntegrator:
                 x = xs[:, -1]
         grid = np.linspace(0.0, 2.0 * np.pi, samples + 1)[1:]
         return np.tile(grid, steps * len(ints)), np.vstack(out)
+
+
+def rk8_step(f: ca.Function) -> ca.Function:
+    """One step of the explicit eighth-order Runge-Kutta formula of Dormand and Prince.
+
+    The 12-stage order-8 formula of DOP853 (Hairer, Norsett, Wanner, *Solving Ordinary Differential
+    Equations I*, 2nd ed., Springer 1993, II.10), with scipy's coefficients, used at fixed steps: no
+    error control inside; callers estimate the error by step doubling.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        ``f(t, x, *params) -> x'`` (e.g. :func:`piece_rhs`, ``t = phi``).
+
+    Returns
+    -------
+    casadi.Function
+        ``step(x, t, h, *params) -> x(t + h)`` (SX).
+    """
+    from scipy.integrate._ivp import dop853_coefficients as dop
+
+    x, t, h = ca.SX.sym("x", f.size1_in(1)), ca.SX.sym("t"), ca.SX.sym("h")
+    params = [ca.SX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(2, f.n_in())]
+    stages = []
+    for s in range(dop.N_STAGES):
+        xs = x
+        for j in range(s):
+            if dop.A[s, j] != 0.0:
+                xs = xs + h * float(dop.A[s, j]) * stages[j]
+        stages.append(f(t + float(dop.C[s]) * h, xs, *params))
+    x_new = x
+    for s in range(dop.N_STAGES):
+        if dop.B[s] != 0.0:
+            x_new = x_new + h * float(dop.B[s]) * stages[s]
+    return ca.Function(f"{f.name()}_rk8", [x, t, h, *params], [x_new],
+                       ["x", "t", "h", *[f.name_in(i) for i in range(2, f.n_in())]], ["x_next"])
