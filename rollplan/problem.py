@@ -20,7 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .core.plane import wrap
+from .core.plane import wrap, wrap_exact
 from .errors import InputError, check_finite, check_range, check_whole
 from .robot import Robot
 
@@ -98,11 +98,14 @@ def arrival_error(final, goal, radius: float = 1.0) -> np.ndarray:
     """How far ``final`` is from ``goal``, entry by entry: shape (5,), in :class:`State` order.
 
     Lengths are divided by ``radius`` (units of R), psi is the difference
-    wrapped to (-pi, pi] (psi is an angle), u_o and v_o are differences [rad].
+    wrapped to (-pi, pi] (psi is an angle; each is first reduced exactly by
+    :func:`~rollplan.core.plane.wrap_exact`, so a goal psi of 1e8 or 1e16 is
+    compared to full accuracy), u_o and v_o are differences [rad].
     """
     f, g = np.asarray(final, float), np.asarray(goal, float)
     d = f - g
-    return np.array([d[0] / radius, d[1] / radius, float(wrap(d[2])), d[3], d[4]])
+    d_psi = float(wrap(wrap_exact(f[2])[0] - wrap_exact(g[2])[0]))
+    return np.array([d[0] / radius, d[1] / radius, d_psi, d[3], d[4]])
 
 
 def arrival_residual(final, goal, radius: float = 1.0) -> float:

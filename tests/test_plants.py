@@ -3,7 +3,6 @@ numpy/scipy implementation of (2), (6)-(10), (11), invariances, and the planner'
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 
 import rollplan
@@ -38,30 +37,14 @@ def test_constant_rotor_rate_closed_form():
     np.testing.assert_allclose(sim.omega, np.tile([-rate, 0, 0], (50, 1)), atol=1e-13)
 
 
-def _numpy_rhs(robot, spline):
-    """(6)-(10) with omega from (11): the printed equations and rotation matrices composed in numpy
-    (``references``; independent of rollplan.core.model). State order (u_a, v_a, psi, u_o, v_o)."""
-    jc = np.array([robot.j_xx, robot.j_xx, robot.j_zz])
-
-    def f(t, x):
-        psi, u, v = x[2], x[3], x[4]
-        rot = references.orientation(u, v, psi)
-        r1, r2 = spline(t)
-        w = -robot.rotor_inertia_axial * (rot[:, 0] * r1 + rot[:, 1] * r2) / jc
-        return references.montana(w, u, v, psi, robot.radius)
-
-    return f
-
-
 def test_against_scipy_dop853():
     t = np.linspace(0, 3, 301)
     rates = np.column_stack([20 * np.sin(2 * t) * t, -15 * np.sin(3 * t) + 5 * t])
     sim = simulate_rotors(ROBOT, t, rates)
-    f = _numpy_rhs(ROBOT, CubicSpline(t, rates, bc_type="not-a-knot"))
-    ref = solve_ivp(f, (0, 3), np.zeros(5), method="DOP853", rtol=1e-12, atol=1e-14, t_eval=t)
-    assert ref.success
-    assert np.abs(ref.y[:, -1]).max() > 0.1  # a real motion
-    np.testing.assert_allclose(sim.state, ref.y.T, atol=1e-9)
+    # (6)-(10) with omega from (11), the printed equations and (2) composed in numpy (references)
+    ref = references.rotor_drive(ROBOT.as_dict(), t, rates)
+    assert np.abs(ref[-1]).max() > 0.1  # a real motion
+    np.testing.assert_allclose(sim.state, ref, atol=1e-9)
 
 
 def test_scaling_all_inertias_changes_nothing():

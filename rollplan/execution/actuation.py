@@ -72,15 +72,19 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from .. import interrupts
 from ..core import model
 from ..core.curves import figure_eight, rotated_point
 from ..core.integrate import piece_rhs
-from ..errors import InputError, check_range, check_whole
+from ..errors import InputError, NoPlanError, check_range, check_whole
+from ..planners.geometric import Plan
 from ..problem import State
 from ..robot import Robot
+from .plants import Simulation, simulate_rotors
 from .timing import rest_to_rest
 
-__all__ = ["Motion", "leaf_function", "actuate", "motion_to_dict", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF"]
+__all__ = ["Motion", "leaf_function", "actuate", "motion_to_dict", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF",
+           "MAX_SAMPLES", "MIN_DURATION", "MAX_DURATION", "MOTION_TOLERANCE", "check_timing", "certify_motion"]
 
 log = logging.getLogger(__name__)
 
@@ -89,6 +93,13 @@ DEFAULT_SAMPLES = 2000
 #: Least number of samples per leaf: a cubic spline through the rotor rates then drives the
 #: rotor-only simulation to the target within ~1e-8 R (the error falls as h^4; see the tests).
 MIN_SAMPLES_PER_LEAF = 400
+#: Most time samples a motion may ask for (a plan of 1000 steps needs 800 000 at the least per leaf).
+MAX_SAMPLES = 10**6
+#: Shortest and longest duration of a motion [s]: outside, rotor rates and torques (which scale as 1/T and
+#: 1/T^2) leave every motor's reach by far, and the time samples approach under- and overflow.
+MIN_DURATION, MAX_DURATION = 1e-6, 1e9
+#: Largest arrival error (units of R and rad) of the rotor-only simulation of a motion (its certificate).
+MOTION_TOLERANCE = 1e-6
 
 
 @lru_cache(maxsize=4)
@@ -192,6 +203,12 @@ class Motion:
         return np.concatenate([[0], np.nonzero(np.diff(self.leaf) != 0)[0], [self.time.size - 1]])
 
 
+def check_timing(duration, samples) -> tuple:
+    """``(duration, samples)`` of :func:`actuate` if allowed, else InputError (checked before any work)."""
+    return (check_range("duration", duration, MIN_DURATION, MAX_DURATION),
+            check_whole("samples", samples, 3, MAX_SAMPLES))
+
+
 def _samples_per_leaf(samples: int, leaves: int) -> int:
     return max(MIN_SAMPLES_PER_LEAF, math.ceil((samples - 1) / leaves))
 
@@ -211,17 +228,21 @@ def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES)
     robot : Robot
         The robot's parameters.
     duration : float
-        Total time T > 0 [s]; each of the ``2 n`` leaves takes ``T / (2 n)``.
+        Total time T [s] in [:data:`MIN_DURATION`, :data:`MAX_DURATION`]; each of the
+        ``2 n`` leaves takes ``T / (2 n)``.
     samples : int
-        Least number of time samples (>= 3); rounded up to fill the leaves evenly,
-        with at least :data:`MIN_SAMPLES_PER_LEAF` per leaf.
+        Least number of time samples, in [3, :data:`MAX_SAMPLES`]; rounded up to fill the
+        leaves evenly, with at least :data:`MIN_SAMPLES_PER_LEAF` per leaf.
 
     Returns
     -------
     Motion
     """
-    duration = check_range("duration", duration, 0.0, None, low_open=True)
-    samples = check_whole("samples", samples, 3)
+    if not isinstance(plan, Plan):
+        raise InputError(f"plan = {plan!r:.60} is not allowed: give a geometric-phase Plan (rollplan.plan)")
+    if not isinstance(robot, Robot):
+        raise InputError(f"robot = {robot!r:.60} is not allowed: give a rollplan.Robot")
+    duration, samples = check_timing(duration, samples)
     if not math.isclose(plan.k, robot.k, rel_tol=1e-12, abs_tol=0.0):
         raise InputError(f"the plan was made for k = {plan.k:.12g}, the robot has k = {robot.k:.12g}: "
                          "plan with this robot")
@@ -242,7 +263,7 @@ def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES)
     rows = {k: [] for k in ("time", "phi", "phi_dot", "phi_ddot", "leaf", "x", "uv", "w", "g", "a", "da")}
     for j in range(leaves):
         piece = j % 2
-        xs = np.array(_leaf_integrator(piece, m)(x0=x, p=par)["xf"])
+        xs = np.array(interrupts.call(_leaf_integrator(piece, m), x0=x, p=par)["xf"])
         xs = np.hstack([x[:, None], xs])  # (5, m + 1)
         out = leaf_function(piece).map(m + 1)(phi[None, :], xs[2][None, :], ab, plan.gamma, plan.k, jxx, jzz, jr)
         keep = slice(0, None) if j == 0 else slice(1, None)
@@ -264,10 +285,29 @@ def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES)
     torques = jr * (pdd[:, None] * cat["a"] + pd[:, None] ** 2 * cat["da"])
     time = cat["time"]
     time[-1] = duration
+    if not (np.all(np.isfinite(rates)) and np.all(np.isfinite(torques))):
+        raise InputError(f"duration = {duration!r} is not allowed for this plan: the rotor rates or torques overflow")
     log.info("motion: %d leaves x %d samples, T = %g s, max |rotor rate| = %.3g rad/s, max |torque| = %.3g N m",
              leaves, m, duration, np.abs(rates).max(), np.abs(torques).max())
     return Motion(time, cat["phi"], pd, cat["leaf"], state, omega, rates, xs[:, 3:5], torques, robot,
                   duration, plan.goal)
+
+
+def certify_motion(motion: Motion, tol: float = MOTION_TOLERANCE) -> Simulation:
+    """A motion's certificate: drive the robot by its sampled rotor rates alone and compare with the goal.
+
+    Runs :func:`~rollplan.execution.plants.simulate_rotors` (the momentum integral
+    (11) and (6)-(10) by CVODES, nothing of the planner); returns the simulation if
+    its arrival error is at most ``tol``, else raises NoPlanError: a motion that its
+    own rotors do not carry to the goal is never reported as a success.
+    """
+    tol = check_range("tol", tol, 0.0, None, low_open=True)
+    sim = simulate_rotors(motion.robot, motion.time, motion.rotor_rates, motion.goal)
+    if not sim.arrival_error <= tol:
+        raise NoPlanError(f"the motion over T = {motion.duration!r} s misses the goal when driven by its rotor rates "
+                          f"alone: arrival error {sim.arrival_error:.2e} > {tol:.0e}; try more samples or another "
+                          "duration")
+    return sim
 
 
 def motion_to_dict(motion: Motion) -> dict:
