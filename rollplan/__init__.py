@@ -10,16 +10,39 @@ It implements, on one symbolic CasADi model, the geometric-phase planner of
 direct-collocation optimal-control planner for the same :class:`Problem`.
 """
 
-from .core.curves import A_MAX, Curve, Piece, circle_point, figure_eight
-from .errors import InputError, NoPlanError, SolverError
-from .execution.actuation import Motion, actuate
-from .execution.plants import Simulation, simulate_rotors
-from .planners import METHODS, solve
-from .planners.collocation import CollocationPlanner, CollocationResult, collocate
-from .planners.geometric import SOLVERS, GeometricPhasePlanner, Plan, StepResult, plan, step
-from .problem import STATE_NAMES, Problem, State
-from .result import Certificate, Measures, PlanResult, SolverStats, Trajectory
-from .robot import Robot, default_robot, load_robot
+import os as _os
+import signal as _signal
+import sys as _sys
+import threading as _threading
+
+
+def _interrupted_at_start(signum, frame):
+    print("rollplan: interrupted", file=_sys.stderr)
+    raise SystemExit(130)
+
+
+# Started as the `rollplan` command (or `python -m rollplan...`): Ctrl-C while the modules below load (a
+# second or two, casadi and matplotlib) exits 130 with one line instead of an import traceback. The handler
+# is restored at the end of this file; imported by a program, nothing changes.
+_AT_START = (bool(_sys.argv) and (_os.path.basename(_sys.argv[0]) == "rollplan" or _sys.argv[0] == "-m")
+             and _threading.current_thread() is _threading.main_thread()
+             and _signal.getsignal(_signal.SIGINT) is _signal.default_int_handler)
+if _AT_START:
+    _signal.signal(_signal.SIGINT, _interrupted_at_start)
+
+from .core.curves import A_MAX, Curve, Piece, circle_point, figure_eight  # noqa: E402
+from .errors import InputError, NoPlanError, SolverError  # noqa: E402
+from .execution.actuation import Motion, actuate  # noqa: E402
+from .execution.plants import Simulation, simulate_rotors  # noqa: E402
+from .planners import METHODS, solve  # noqa: E402
+from .planners.collocation import CollocationPlanner, CollocationResult, collocate  # noqa: E402
+from .planners.geometric import SOLVERS, GeometricPhasePlanner, Plan, StepResult, plan, step  # noqa: E402
+from .problem import STATE_NAMES, Problem, State  # noqa: E402
+from .result import Certificate, Measures, PlanResult, SolverStats, Trajectory  # noqa: E402
+from .robot import Robot, default_robot, load_robot  # noqa: E402
+
+if _AT_START:
+    _signal.signal(_signal.SIGINT, _signal.default_int_handler)
 
 __version__ = "0.1.0"
 

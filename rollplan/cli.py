@@ -1,25 +1,36 @@
-"""The ``rollplan`` command. Exit codes: 0 success, 2 bad input, 3 no plan, 4 solver failure."""
+"""The ``rollplan`` command. Exit codes: 0 success, 2 bad input, 3 no plan, 4 solver failure, 130 interrupted
+(Ctrl-C)."""
 
 from __future__ import annotations
 
 import argparse
 import logging
+import re
 import sys
+from contextlib import ExitStack
 
 from .core.curves import A_MAX
-from .errors import InputError, NoPlanError, SolverError, check_finite
+from .errors import InputError, NoPlanError, SolverError
+from .inputs import parse_number, parse_whole
 from .io import check_figure_path, check_writable, plan_to_dict, save_figure, write_json
+from .outputs import claim
 from .planners import geometric
 from .problem import STATE_NAMES
 from .robot import default_robot, load_robot
 
-EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER = 0, 2, 3, 4
+EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
 #: k of ``plan`` and ``compare`` when neither --k nor --robot is given (the paper's case study).
 DEFAULT_K = 2.5
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports bad input in one line with exit code 2."""
+    """argparse that reports bad input in one line with exit code 2, and takes ``-1e-3`` for a number."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        # argparse's own pattern misses exponents (-1e-3) and would read them as options
+        self._negative_number_matcher = re.compile(r"^-(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$"
+                                                   r"|^-(?i:inf|infinity|nan)$")
 
     def error(self, message):
         self.exit(EXIT_INPUT, f"{self.prog}: error: {message}\n")
@@ -27,24 +38,34 @@ class _Parser(argparse.ArgumentParser):
 
 def _number(text: str) -> float:
     try:
-        return check_finite("value", float(text))
-    except (ValueError, InputError):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number") from None
+        return parse_number(text, "value")
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("value = ")) from None
 
 
 def _whole(text: str) -> int:
     try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        return parse_whole(text, "value")
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("value = ")) from None
 
 
-def _check_outputs(json=None, figure=None) -> None:
-    """Refuse unwritable output paths and unknown figure formats before any computation."""
+class _Claims:
+    """The outputs the running command holds (:func:`rollplan.outputs.claim`), released when it ends."""
+
+    stack: ExitStack | None = None
+
+
+def _check_outputs(json=None, figure=None, inputs=()) -> None:
+    """Refuse unwritable output paths, unknown figure formats and outputs that are inputs before any
+    computation, and hold the outputs (a second process writing one of them is refused)."""
     if json is not None:
-        check_writable(json)
+        check_writable(json, inputs=inputs)
     if figure is not None:
         check_figure_path(figure)
+        check_writable(figure, "figure", inputs=inputs)
+    if _Claims.stack is not None:
+        _Claims.stack.enter_context(claim(json, figure))
 
 
 def _k_or_robot(args):
@@ -68,8 +89,12 @@ def _fmt_plan(p, unit) -> str:
 
 
 def cmd_plan(args) -> int:
-    _check_outputs(json=args.json, figure=args.plot)
+    _check_outputs(json=args.json, figure=args.plot, inputs=[args.robot])
     k, robot = _k_or_robot(args)
+    if args.duration is not None:
+        from .execution.actuation import check_timing
+
+        check_timing(args.duration, args.samples)
     if args.duration is not None and robot is None:
         if k is not None:
             raise InputError("--duration needs the robot's inertias, not only k: give --robot FILE "
@@ -109,12 +134,11 @@ def cmd_plan(args) -> int:
 
 def _timed(args, p, robot):
     """``plan --duration``: rotor rates, angles and torques, checked by the rotor-only simulation."""
-    from .execution.actuation import actuate
-    from .execution.plants import simulate_rotors
+    from .execution.actuation import actuate, certify_motion
     from .io import motion_to_dict
 
     motion = actuate(p, robot, args.duration, args.samples)
-    sim = simulate_rotors(robot, motion.time, motion.rotor_rates, p.goal)
+    sim = certify_motion(motion)
     print(f"  motion        T = {motion.duration:g} s, {motion.time.size} samples, rest-to-rest per half-step")
     print(f"  rotors        max |rate| = {abs(motion.rotor_rates).max():.4g} rad/s   "
           f"max |torque| = {abs(motion.rotor_torques).max():.4g} N m")
@@ -127,8 +151,7 @@ def _timed(args, p, robot):
 
 
 def cmd_step(args) -> int:
-    if args.json is not None:
-        check_writable(args.json)
+    _check_outputs(json=args.json)
     r = geometric.step(args.a, args.b, k=args.k, gamma=args.gamma)
     u, v = r.shift
     # final psi of one step equals eta
@@ -189,8 +212,7 @@ def cmd_simulate(args) -> int:
     from .execution.plants import simulate_rotors
     from .io import load_rotor_plan
 
-    if args.json is not None:
-        check_writable(args.json)
+    _check_outputs(json=args.json, inputs=[args.plan_file, args.robot])
     rp = load_rotor_plan(args.plan_file)
     robot = load_robot(args.robot) if args.robot else rp.robot
     sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal)
@@ -217,7 +239,9 @@ def cmd_animate(args) -> int:
     from .io import load_rotor_plan
     from .plots.animation import make_animation
 
-    check_writable(args.out)
+    _check_outputs(json=args.out, inputs=[args.plan_file])
+    if not args.out.lower().endswith(".gif"):
+        raise InputError(f"--out {args.out!r} is not allowed: animate writes a GIF; give a name ending in .gif")
     if not 2 <= args.frames <= 2000:
         raise InputError(f"--frames {args.frames} is not allowed: it must lie in [2, 2000]")
     if not 1 <= args.fps <= 100:
@@ -236,7 +260,7 @@ def _fmt_row(name, a, b, fmt):
 def cmd_compare(args) -> int:
     from .studies import comparison
 
-    _check_outputs(json=args.json, figure=args.plot)
+    _check_outputs(json=args.json, figure=args.plot, inputs=[args.robot])
     k, robot = _k_or_robot(args)
     c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
                            args.cost, args.intervals, args.degree, args.scheme, args.guess, args.contact_bound)
@@ -334,7 +358,7 @@ def cmd_batch(args) -> int:
     except KeyboardInterrupt:
         print(f"\nrollplan: interrupted; finished lines are kept in {args.out}: rerun with --resume",
               file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
     print(f"rollplan batch: {r.total} targets, {r.skipped} already done, {r.planned} planned "
           f"({r.failed} failed) in {r.time_s:.1f} s; wrote {args.out}")
     return EXIT_OK
@@ -439,7 +463,15 @@ def main(argv=None) -> int:
             and getattr(args, "duration", None) is None):
         args.k = DEFAULT_K
     try:
-        return args.func(args)
+        with ExitStack() as stack:
+            _Claims.stack = stack
+            return args.func(args)
+    except KeyboardInterrupt:  # Ctrl-C, also inside the solvers (rollplan.interrupts)
+        print("rollplan: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except MemoryError:
+        print("rollplan: error: not enough memory for this input", file=sys.stderr)
+        return EXIT_INPUT
     except InputError as exc:
         print(f"rollplan: error: {exc}", file=sys.stderr)
         return EXIT_INPUT
@@ -452,6 +484,8 @@ def main(argv=None) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return EXIT_OK
+    finally:
+        _Claims.stack = None
 
 
 if __name__ == "__main__":

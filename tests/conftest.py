@@ -7,6 +7,8 @@ That rollplan's symbolic model agrees with the printed equations is tested on it
 ``tests/test_model.py`` and ``tests/test_integrate.py``.
 """
 
+import contextlib
+import subprocess
 import sys
 from pathlib import Path
 
@@ -30,3 +32,25 @@ def scipy_trace():
     """Independent reference: (u_a, v_a, psi) after ``steps`` figure eights (a, b) rotated by gamma,
     from zero, by DOP853 on the printed (28)-(30), (35) (units of R, rad)."""
     return references.trace
+
+
+def fill(path):
+    """Write zeros to ``path`` until the disk is full."""
+    with open(path, "wb", buffering=0) as fh, contextlib.suppress(OSError):
+        while True:
+            fh.write(b"\0" * 512)
+
+
+@pytest.fixture
+def full_disk(tmp_path):
+    """A folder on a 1 MiB tmpfs filled to the last byte (root only: mount)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(disk)], capture_output=True,
+                      check=False).returncode:
+        pytest.skip("cannot mount a tmpfs (needs root)")
+    try:
+        fill(disk / "filler")
+        yield disk
+    finally:
+        subprocess.run(["umount", str(disk)], check=False)

@@ -227,10 +227,12 @@ def test_numbers_in_rows_follow_the_command_line_rules(tmp_path):
     assert status[4][0] == "failed" and "whole number" in status[4][1]
 
 
-SLOW_ROWS = [  # each takes a fraction of a second to a few seconds; failures of every kind included
-    ("0", "1", "0", "1", "2.5", "a"), ("0.4", "0.3", "0.5", "2", "1", "b"), ("x", "1", "0", "1", "2", "bad"),
-    ("0.2", "-0.5", "-1", "2", "4", "c"), ("0", "40", "0", "1", "0", "far"), ("-0.6", "0.1", "2", "3", "2.5", "d"),
-    ("0.5", "0.5", "0.2", "1", "6", "e"), ("0.1", "0.9", "-0.3", "2", "3", "f"), ("1", "0", "0.7", "3", "5", "g"),
+SLOW_ROWS = [  # a new k per row (the leaf tables are built per k): a second or more each; failures of every kind
+    ("0", "1", "0", "1", "2.5", "a"), ("0.4", "0.3", "0.5", "2", "1.3", "b"), ("x", "1", "0", "1", "2", "bad"),
+    ("0.2", "-0.5", "-1", "2", "4.1", "c"), ("0", "40", "0", "1", "0", "far"), ("-0.6", "0.1", "2", "3", "3.7", "d"),
+    ("0.5", "0.5", "1", "5", "8.2", "e"), ("0.1", "0.9", "-0.3", "2", "3.1", "f"), ("1", "0", "0.7", "3", "5.3", "g"),
+    ("0.3", "0.8", "2.5", "4", "9.6", "h"), ("1.5", "1", "-2", "6", "6.4", "i"),
+    ("-0.2", "0.7", "1.2", "3", "7.1", "j"),
 ]
 
 
@@ -243,21 +245,24 @@ def _batch_process(csv_path, out, jobs):
 @pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL])
 def test_interrupted_at_random_moments_and_resumed_equals_an_uninterrupted_run(tmp_path, sig):
-    """Run the batch, stop it by SIGINT (Ctrl-C) or SIGKILL at random moments, resume, again and again: the
-    final output equals an uninterrupted run line for line (up to the solvers' wall-clock times). A SIGINT
-    exits 130 within two seconds and never records the row in flight as failed."""
-    csv_path = write_csv(tmp_path / "t.csv", SLOW_ROWS)
+    """Run the batch, stop it by SIGINT (Ctrl-C) or SIGKILL at random moments from its start (imports,
+    planner construction, planning, writing), resume, again and again: the final output equals an
+    uninterrupted run line for line (up to the solvers' wall-clock times). A SIGINT exits 130 with one line
+    and no traceback (within a second in the solvers; CasADi's construction of a solver, a few seconds on a
+    loaded machine, is not interruptible) and never records the row in flight as failed."""
+    rows = SLOW_ROWS
+    csv_path = write_csv(tmp_path / "t.csv", rows)
     reference = tmp_path / "reference.jsonl"
-    run_batch(csv_path, reference, jobs=1)
+    t0 = time.perf_counter()
+    proc = _batch_process(csv_path, reference, jobs=1)
+    assert proc.wait(timeout=600) == 0
+    whole = time.perf_counter() - t0          # the moments are drawn over a whole run, start-up included
     out = tmp_path / "out.jsonl"
     rng = random.Random(16 + sig)
     history = []
-    for attempt in range(6):
+    for attempt in range(8):
         proc = _batch_process(csv_path, out, jobs=1 + attempt % 2)
-        t0 = time.perf_counter()
-        while not out.exists() and proc.poll() is None and time.perf_counter() - t0 < 120:
-            time.sleep(0.05)
-        delay = rng.uniform(0.0, 4.0)
+        delay = rng.uniform(0.3, whole)
         time.sleep(delay)
         if sig == signal.SIGKILL:
             os.killpg(proc.pid, signal.SIGKILL)
@@ -268,15 +273,16 @@ def test_interrupted_at_random_moments_and_resumed_equals_an_uninterrupted_run(t
         history.append((delay, proc.returncode, len(read_output(out))))
         if sig == signal.SIGINT:
             assert proc.returncode in (0, 130), (history, err)
-            assert time.perf_counter() - t_sig < 2.0 or proc.returncode == 0, history
-            assert "Traceback" not in err
+            assert time.perf_counter() - t_sig < 10.0, history
+            assert "Traceback" not in err and (proc.returncode == 0 or "interrupted" in err.strip().splitlines()[-1])
         with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGKILL)   # pool workers of a killed run
         assert all(d["error"] != "RuntimeError" for d in read_output(out) if d["status"] == "failed"), history
     proc = _batch_process(csv_path, out, jobs=2)
     _, err = proc.communicate(timeout=600)
     assert proc.returncode == 0, err
-    assert out.read_text().count("\n") == len(SLOW_ROWS)
+    print("interrupted runs (delay [s], exit code, finished lines):", history)
+    assert out.read_text().count("\n") == len(rows)
     assert without_times(read_lines(out)) == without_times(read_lines(reference)), history
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.jsonl", "reference.jsonl", "t.csv"]
 

@@ -2,7 +2,6 @@
 and folders, names too long and inputs, lock an output against a second writer, survive a full disk with one
 line, clean up after a killed writer, and sync line output in batches."""
 
-import contextlib
 import errno
 import json
 import os
@@ -12,6 +11,7 @@ import sys
 import textwrap
 
 import pytest
+from conftest import fill
 
 from rollplan.cli import main
 from rollplan.errors import InputError, OutputError
@@ -108,28 +108,6 @@ def test_animate_out_must_be_a_gif(tmp_path, capsys):
 
 
 # ----------------------------------------------------------------------------- disk full
-
-
-def fill(path):
-    """Write zeros to ``path`` until the disk is full."""
-    with open(path, "wb", buffering=0) as fh, contextlib.suppress(OSError):
-        while True:
-            fh.write(b"\0" * 512)
-
-
-@pytest.fixture
-def full_disk(tmp_path):
-    """A folder on a 1 MiB tmpfs filled to the last byte (root only: mount)."""
-    disk = tmp_path / "disk"
-    disk.mkdir()
-    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(disk)], capture_output=True,
-                      check=False).returncode:
-        pytest.skip("cannot mount a tmpfs (needs root)")
-    try:
-        fill(disk / "filler")
-        yield disk
-    finally:
-        subprocess.run(["umount", str(disk)], check=False)
 
 
 def test_disk_full_is_one_line_and_leaves_nothing(full_disk, tmp_path, capsys):

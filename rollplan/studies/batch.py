@@ -40,7 +40,9 @@ import hashlib
 import json
 import logging
 import multiprocessing
+import signal
 import sys
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -151,9 +153,20 @@ def plan_row(index: int, row: dict, method: str = "ipopt", problem: str | None =
 
 def _ignore_sigint():
     """Worker initializer: Ctrl-C is handled by the parent, which stops the pool."""
-    import signal
-
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _start_pool(processes: int):
+    """Worker processes that ignore Ctrl-C from the start (the parent stops them): SIGINT is ignored while
+    they are spawned, and an ignored signal stays ignored through exec, also while they import rollplan."""
+    ctx = multiprocessing.get_context("spawn")
+    if threading.current_thread() is not threading.main_thread():
+        return ctx.Pool(processes, initializer=_ignore_sigint)
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        return ctx.Pool(processes, initializer=_ignore_sigint)
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _plan_job(job):
@@ -279,8 +292,7 @@ def _run(table, out: Path, jobs, resume, overwrite, method, progress) -> BatchRe
             if jobs == 1 or len(todo) <= 1:
                 results = map(_plan_job, todo)
             else:
-                ctx = multiprocessing.get_context("spawn")
-                pool = ctx.Pool(min(jobs, len(todo)), initializer=_ignore_sigint)
+                pool = _start_pool(min(jobs, len(todo)))
                 results = pool.imap(_plan_job, todo, chunksize=1)   # yields in input order
             if report:
                 report(count, len(rows), failed)
