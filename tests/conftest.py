@@ -54,3 +54,20 @@ def full_disk(tmp_path):
         yield disk
     finally:
         subprocess.run(["umount", str(disk)], check=False)
+
+
+def run(capsys, *argv):
+    """``rollplan argv`` in this process: (exit code, stdout, stderr)."""
+    from rollplan.cli import main
+
+    try:
+        code = main(list(argv))
+    except SystemExit as exc:  # argparse's own checks
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def one_line(err):
+    """True if ``err`` is one line and no traceback (how every refusal is reported)."""
+    return len(err.strip().splitlines()) == 1 and "Traceback" not in err

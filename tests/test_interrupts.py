@@ -77,6 +77,7 @@ def test_interrupts_call_passes_results_and_errors_through():
     assert interrupts.call(interrupts.call, max, 1, 2) == 2   # nested
 
 
+@pytest.mark.slow
 def test_planner_is_interrupted_not_sent_to_another_branch():
     """k = 99 plans for minutes (many brackets); a Ctrl-C stops it with KeyboardInterrupt, not a NoPlanError,
     SolverError or a plan on a longer branch."""

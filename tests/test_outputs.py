@@ -11,26 +11,12 @@ import sys
 import textwrap
 
 import pytest
-from conftest import fill
+from conftest import fill, one_line, run
 
-from rollplan.cli import main
 from rollplan.errors import InputError, OutputError
 from rollplan.outputs import LineWriter, check_writable, claim, make_folder, write_atomic
 
 STEP = ["step", "--a", "0.3", "--k", "2.5", "--json"]
-
-
-def run(capsys, *argv):
-    try:
-        code = main(list(argv))
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def one_line(err):
-    return len(err.strip().splitlines()) == 1 and "Traceback" not in err
 
 
 def test_replaced_file_keeps_its_mode(tmp_path, capsys):
@@ -110,6 +96,7 @@ def test_animate_out_must_be_a_gif(tmp_path, capsys):
 # ----------------------------------------------------------------------------- disk full
 
 
+@pytest.mark.slow
 def test_disk_full_is_one_line_and_leaves_nothing(full_disk, tmp_path, capsys):
     """plan --json, step --json, atlas, batch and codegen onto a full disk: exit 2, one line, no temporary
     left; an existing output is left as it was."""
@@ -132,6 +119,7 @@ def test_disk_full_is_one_line_and_leaves_nothing(full_disk, tmp_path, capsys):
     assert leftovers == []
 
 
+@pytest.mark.slow
 def test_file_size_limit_is_one_line(tmp_path):
     """The same in a process with a file size limit (EFBIG; works without root)."""
     out = tmp_path / "p.json"

@@ -12,26 +12,13 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from conftest import one_line, run
 
 import rollplan
 from rollplan import GeometricPhasePlanner, InputError, Problem, Robot, State
-from rollplan.cli import main
 from rollplan.problem import arrival_error
 
 import references
-
-
-def run(capsys, *argv):
-    try:
-        code = main(list(argv))
-    except SystemExit as exc:
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def one_line(err):
-    return len(err.strip().splitlines()) == 1 and "Traceback" not in err
 
 
 def angle_gap(a, b):
@@ -195,6 +182,7 @@ def test_fractions_are_numbers():
 # ----------------------------------------------------------------------------- hangs
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("argv", [["plan", "--robot", "{fifo}"], ["simulate", "{fifo}"],
                                   ["animate", "{fifo}", "--out", "{dir}/a.gif"],
                                   ["batch", "{fifo}", "--out", "{dir}/o.jsonl"]])
