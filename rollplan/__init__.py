@@ -36,10 +36,24 @@ from .execution.actuation import Motion, actuate  # noqa: E402
 from .execution.plants import Simulation, simulate_rotors  # noqa: E402
 from .planners import METHODS, solve  # noqa: E402
 from .planners.collocation import CollocationPlanner, CollocationResult, collocate  # noqa: E402
-from .planners.geometric import SOLVERS, GeometricPhasePlanner, Plan, StepResult, plan, step  # noqa: E402
-from .problem import STATE_NAMES, Problem, State  # noqa: E402
+from .planners.geometric import (  # noqa: E402
+    LEGS,
+    SOLVERS,
+    ComposedPlan,
+    ComposedPlanner,
+    GeometricPhasePlanner,
+    Plan,
+    Route,
+    StepResult,
+    as_composed,
+    plan,
+    plan_route,
+    step,
+)
+from .problem import N3Z_MIN, STATE_NAMES, Problem, State  # noqa: E402
 from .result import Certificate, Measures, PlanResult, SolverStats, Trajectory  # noqa: E402
 from .robot import Robot, default_robot, load_robot  # noqa: E402
+from .waypoints import read_waypoints  # noqa: E402
 
 if _AT_START:
     _signal.signal(_signal.SIGINT, _signal.default_int_handler)
@@ -49,10 +63,11 @@ __version__ = "0.1.0"
 __all__ = [
     "A_MAX", "Curve", "Piece", "circle_point", "figure_eight",
     "InputError", "NoPlanError", "SolverError",
-    "STATE_NAMES", "State", "Problem",
+    "STATE_NAMES", "N3Z_MIN", "State", "Problem",
     "Certificate", "Measures", "PlanResult", "SolverStats", "Trajectory",
     "METHODS", "solve",
     "SOLVERS", "GeometricPhasePlanner", "Plan", "StepResult", "plan", "step",
+    "LEGS", "ComposedPlanner", "ComposedPlan", "as_composed", "Route", "plan_route", "read_waypoints",
     "CollocationPlanner", "CollocationResult", "collocate",
     "Robot", "load_robot", "default_robot",
     "Motion", "actuate", "Simulation", "simulate_rotors",

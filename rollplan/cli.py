@@ -5,18 +5,21 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import re
 import sys
 from contextlib import ExitStack
 
 from .core.curves import A_MAX
-from .errors import InputError, NoPlanError, SolverError
-from .inputs import parse_number, parse_whole
-from .io import check_figure_path, check_writable, plan_to_dict, save_figure, write_json
+from .errors import InputError, NoPlanError, SolverError, check_whole
+from .inputs import parse_number, parse_whole, show_path
+from .io import check_figure_path, check_writable, composed_to_dict, route_to_dict, save_figure, write_json
 from .outputs import claim
 from .planners import geometric
+from .planners.geometric import as_composed
 from .problem import STATE_NAMES
 from .robot import default_robot, load_robot
+from .waypoints import read_waypoints
 
 EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
 #: k of ``plan`` and ``compare`` when neither --k nor --robot is given (the paper's case study).
@@ -54,16 +57,25 @@ class _Claims:
     """The outputs the running command holds (:func:`rollplan.outputs.claim`), released when it ends."""
 
     stack: ExitStack | None = None
+    files: dict = {}   # real path of each output of the running command -> the name given
 
 
 def _check_outputs(json=None, figure=None, inputs=()) -> None:
-    """Refuse unwritable output paths, unknown figure formats and outputs that are inputs before any
-    computation, and hold the outputs (a second process writing one of them is refused)."""
+    """Refuse unwritable output paths, unknown figure formats, outputs that are inputs and two outputs that are
+    one file before any computation, and hold the outputs (a second process writing one of them is refused)."""
     if json is not None:
         check_writable(json, inputs=inputs)
     if figure is not None:
         check_figure_path(figure)
         check_writable(figure, "figure", inputs=inputs)
+    for name in (json, figure):
+        if name is None:
+            continue
+        real = os.path.realpath(name)
+        if real in _Claims.files:
+            raise InputError(f"output {show_path(name)} is the same file as output "
+                             f"{show_path(_Claims.files[real])}: give each output its own name")
+        _Claims.files[real] = name
     if _Claims.stack is not None:
         _Claims.stack.enter_context(claim(json, figure))
 
@@ -88,60 +100,199 @@ def _fmt_plan(p, unit) -> str:
     return "\n".join(lines)
 
 
-def cmd_plan(args) -> int:
-    _check_outputs(json=args.json, figure=args.plot, inputs=[args.robot])
-    k, robot = _k_or_robot(args)
-    if args.duration is not None:
-        from .execution.actuation import check_timing
+def _fmt_state(x) -> str:
+    return "(" + ", ".join(f"{float(v):.9g}" for v in x) + ")"
 
-        check_timing(args.duration, args.samples)
-    if args.duration is not None and robot is None:
+
+def _fmt_composed(p, unit) -> str:
+    """The lines of a composed plan (rollplan.planners.geometric.composed.ComposedPlan)."""
+    R = p.radius
+    what = {"empty": "the start is the goal: no motion", "rolls": "the approach and departure rolls alone",
+            "one": "one leg of figure eights", "turn": "turn in place by pairs of equal circles",
+            "two": "two legs of figure eights through an intermediate pole state"}[p.mode]
+    lines = [f"  mode          {p.mode}: {what}"]
+    if p.approach is not None:
+        lines.append(f"  approach      roll of {p.approach.sigma * R:.9g} {unit} to the pole along the great circle "
+                     f"(direction beta = {p.approach.beta:.6g} rad)")
+    if p.legs or p.turn is not None:
+        t = p.target
+        lines.append(f"  eights do     (u_a, v_a, psi) = ({t[0] * R:.9g}, {t[1] * R:.9g}, {t[2]:.9g}) "
+                     "from rest at the pole")
+    for i, leg in enumerate(p.legs, 1):
+        s = R / leg.radius
+        lines.append(f"  leg {i}         {leg.steps} x figure eight a = {leg.a * s:.9g} {unit}   b = {leg.b * s:.9g} "
+                     f"{unit}   gamma = {leg.gamma:.9g} rad   (branch m = {leg.branch})")
+    if p.turn is not None:
+        tr = p.turn
+        lines.append(f"  turn          {tr.steps} pair(s) of circles b = {tr.b * R:.9g} {unit} "
+                     f"({'+y' if tr.side == 0 else '-y'} side), eta = {tr.eta:.9g} rad each")
+    if p.departure is not None:
+        lines.append(f"  departure     roll of {p.departure.sigma * R:.9g} {unit} from the pole along the great "
+                     f"circle (direction beta = {p.departure.beta:.6g} rad)")
+    lines += [f"  path length   {p.path_length:.9g} {unit} in {len(p.pieces)} pieces",
+              f"  final         {_fmt_state(p.final)}",
+              f"  residual      {p.residual:.2e} ({p.certificate.method}, the whole motion from the start state)"]
+    return "\n".join(lines)
+
+
+def _is_timed(args) -> bool:
+    return args.duration is not None or args.timing is not None
+
+
+def _check_timing_outputs(args, inputs=()) -> None:
+    """--timing-plot of ``plan`` and ``route``: a figure path, and a timed motion to draw."""
+    if args.timing_plot is not None:
+        _check_outputs(figure=args.timing_plot, inputs=inputs)
+        if not _is_timed(args):
+            raise InputError("--timing-plot needs a timed motion: give --duration T or --timing NAME")
+
+
+def _robot_for_duration(args, k, robot):
+    """The robot of ``--duration`` / ``--timing`` (the default robot unless --robot is given), with the timing
+    law's needs (limits, duration) checked before planning."""
+    if not _is_timed(args):
+        return robot
+    if robot is None:
         if k is not None:
-            raise InputError("--duration needs the robot's inertias, not only k: give --robot FILE "
+            raise InputError("--duration and --timing need the robot's inertias, not only k: give --robot FILE "
                              "(or drop --k to use the default robot)")
-        robot = default_robot()
+        robot = default = default_robot()
+    else:
+        default = None
+    from .execution.limits import Limits
+    from .execution.timing import get_law
+
+    get_law(args.timing or "min-jerk").check(Limits.of(robot), args.duration)
+    if default is not None:
         print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
               "lengths in m")
-    p = geometric.plan((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.all, args.method)
+    return robot
+
+
+def _plan_inputs(args, inputs=()):
+    """The checks of ``plan`` and ``route`` before any work: outputs (never one of ``inputs`` or the robot
+    file), samples, the robot and the timing law's needs; returns ``(k, robot)``."""
+    from .execution.actuation import MAX_SAMPLES
+
+    inputs = [*inputs, args.robot]
+    _check_outputs(json=args.json, figure=args.plot, inputs=inputs)
+    _check_timing_outputs(args, inputs)
+    check_whole("samples", args.samples, 2, MAX_SAMPLES)
+    k, robot = _k_or_robot(args)
+    return k, _robot_for_duration(args, k, robot)
+
+
+def cmd_plan(args) -> int:
+    k, robot = _plan_inputs(args)
+    goal = (args.to[0], args.to[1], args.psi, args.contact[0], args.contact[1])
+    p = geometric.plan(goal, args.steps, k, robot, args.radius, args.all, args.method, start=args.start,
+                       legs=args.legs)
     unit = "m" if robot is not None else ("R" if args.radius is None else "units")
     g = p.goal
-    print(f"rollplan: k = {p.k:.9g}, R = {p.radius:g}, steps = {p.steps}, target (u_a, v_a, psi) = "
-          f"({g.u_a:g}, {g.v_a:g}, {g.psi:g})")
-    print(_fmt_plan(p, unit))
-    print(f"  solver        {p.stats.method}: {p.stats.status}, {p.stats.iterations} iterations, "
-          f"{p.stats.details['candidates']} brackets, {p.stats.details['solves']} solves, "
+    composed = hasattr(p, "pieces")
+    if composed or tuple(p.problem.start) != (0.0,) * 5:
+        print(f"rollplan: k = {p.k:.9g}, R = {p.radius:g}, steps = {p.steps}, from (u_a, v_a, psi, u_o, v_o) = "
+              f"{_fmt_state(p.problem.start)} to {_fmt_state(g)}")
+    else:
+        print(f"rollplan: k = {p.k:.9g}, R = {p.radius:g}, steps = {p.steps}, target (u_a, v_a, psi) = "
+              f"({g.u_a:g}, {g.v_a:g}, {g.psi:g})")
+    print(_fmt_composed(p, unit) if composed else _fmt_plan(p, unit))
+    details = p.stats.details
+    found = (f"{details['candidates']} brackets, {details['solves']} solves, " if "candidates" in details else "")
+    print(f"  solver        {p.stats.method}: {p.stats.status}, {p.stats.iterations} iterations, {found}"
           f"{p.stats.time_s * 1e3:.1f} ms")
     for i, alt in enumerate(p.alternatives, 1):
         print(f"alternative {i}:")
-        print(_fmt_plan(alt, unit))
-    motion, extra = _timed(args, p, robot) if args.duration is not None else (None, {})
-    traj = p.sample() if (args.json or args.plot) else None
+        print(_fmt_composed(alt, unit) if composed else _fmt_plan(alt, unit))
+    _write_results(args, p, robot, unit, composed_to_dict)
+    return EXIT_OK
+
+
+def _write_results(args, p, robot, unit, to_dict) -> None:
+    """--duration/--timing, --json, --plot and --timing-plot of ``plan`` and ``route``: ``args.samples``
+    trajectory samples in all."""
+    motion, extra = _timed(args, p, robot) if _is_timed(args) else (None, {})
+    traj = as_composed(p).sample(args.samples) if (args.json or args.plot) else None
     if args.json:
-        write_json(args.json, {**plan_to_dict(p, traj), **extra})
+        write_json(args.json, {**to_dict(p, traj), **extra})
         print(f"wrote {args.json}")
     if args.plot and motion is not None:
         from .plots.motion import plot_motion
 
         save_figure(plot_motion(motion, p, traj, unit), args.plot)
         print(f"wrote {args.plot}")
-    elif args.plot:
+    elif args.plot and not hasattr(p, "pieces"):
         from .plots.plan import plot_plan
 
         save_figure(plot_plan(p, traj, unit or "R"), args.plot)
         print(f"wrote {args.plot}")
+    elif args.plot:
+        from .plots.composed import plot_composed
+
+        save_figure(plot_composed(p, traj, unit or "R"), args.plot)
+        print(f"wrote {args.plot}")
+    if args.timing_plot:
+        from .execution.timing import velocity_limit
+        from .plots.timing import plot_timing
+
+        moving = motion.path is not None and motion.limits.any
+        limit = velocity_limit(motion.path, motion.limits, motion.profile) if moving else None
+        save_figure(plot_timing(motion, limit), args.timing_plot)
+        print(f"wrote {args.timing_plot}")
+
+
+def cmd_route(args) -> int:
+    k, robot = _plan_inputs(args, inputs=[args.waypoints])
+    waypoints = read_waypoints(args.waypoints)
+    print(f"rollplan route: {len(waypoints)} waypoints from {args.waypoints}")
+    # a bar on a terminal only: piped or captured, stderr holds nothing but the one line of a refusal
+    progress = _Progress() if sys.stderr.isatty() else None
+    try:
+        r = geometric.plan_route(waypoints, args.steps, k, robot, args.radius, args.legs, args.method,
+                                 progress=None if progress is None else
+                                 (lambda done, total: progress("legs", done, total)))
+    finally:  # Ctrl-C: exit 130 in main()
+        if progress is not None:
+            progress.close()
+    unit = "m" if robot is not None else ("R" if args.radius is None else "units")
+    print(f"rollplan route: k = {r.k:.9g}, R = {r.radius:g}, {len(r.plans)} legs, default steps = {r.steps}")
+    for i, (p, w, res) in enumerate(zip(r.plans, r.waypoints[1:], r.waypoint_residuals), 1):
+        label = f" {w.label!r}" if w.label else ""
+        print(f"  leg {i} to waypoint {i + 1}{label} {_fmt_state(w.state)}: {getattr(p, 'mode', 'one')}, "
+              f"{p.path_length:.6g} {unit}, waypoint residual {res:.2e}")
+    print(f"  path length   {r.path_length:.9g} {unit} in {len(r.pieces)} pieces")
+    print(f"  final         {_fmt_state(r.final)}")
+    print(f"  residual      {r.residual:.2e} ({r.certificate.method}, the whole route from the first waypoint)")
+    print(f"  time          {r.stats.time_s:.2f} s")
+    _write_results(args, r, robot, unit, route_to_dict)
     return EXIT_OK
 
 
 def _timed(args, p, robot):
-    """``plan --duration``: rotor rates, angles and torques, checked by the rotor-only simulation."""
+    """``--duration`` / ``--timing``: rotor rates, angles and torques, checked by the rotor-only simulation
+    from the plan's start state."""
     from .execution.actuation import actuate, certify_motion
+    from .execution.timing import round_up
     from .io import motion_to_dict
 
-    motion = actuate(p, robot, args.duration, args.samples)
+    timing = args.timing or "min-jerk"
+    motion = actuate(p, robot, args.duration, args.samples, timing)
     sim = certify_motion(motion)
-    print(f"  motion        T = {motion.duration:g} s, {motion.time.size} samples, rest-to-rest per half-step")
-    print(f"  rotors        max |rate| = {abs(motion.rotor_rates).max():.4g} rad/s   "
-          f"max |torque| = {abs(motion.rotor_torques).max():.4g} N m")
+    lim = motion.limits
+    print(f"  motion        T = {motion.duration:g} s, {motion.time.size} samples, timing {timing}"
+          f"{' (rest-to-rest per piece: leaf, roll)' if timing == 'min-jerk' else ''}")
+    if motion.path is None:
+        print("  limits        none needed: the plan is the empty motion (at rest)")
+    elif lim.any:
+        print(f"  limits        {lim.describe()}: the shortest feasible duration with timing {timing} is "
+              f"{round_up(motion.minimum_duration):.6g} s")
+    else:
+        print("  limits        none in the robot file (add max_rotor_rate [rad/s] and max_rotor_torque [N m] "
+              "to keep the motors within them)")
+    rate, torque = abs(motion.rotor_rates).max(), abs(motion.rotor_torques).max()
+    use_rate = f" ({rate / lim.max_rotor_rate:.1%} of the limit)" if lim.max_rotor_rate is not None else ""
+    use_torque = f" ({torque / lim.max_rotor_torque:.1%} of the limit)" if lim.max_rotor_torque is not None else ""
+    print(f"  rotors        max |rate| = {rate:.4g} rad/s{use_rate}   max |torque| = {torque:.4g} N m{use_torque}")
     print(f"  rotor-only    arrival error {sim.arrival_error:.2e} (position {sim.position_error:.2e} R; "
           "spline through the rotor rates, (11) and (6)-(10) by CVODES)")
     extra = motion_to_dict(motion)
@@ -215,7 +366,7 @@ def cmd_simulate(args) -> int:
     _check_outputs(json=args.json, inputs=[args.plan_file, args.robot])
     rp = load_rotor_plan(args.plan_file)
     robot = load_robot(args.robot) if args.robot else rp.robot
-    sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal)
+    sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
     e = sim.error
     f, g = sim.final, rp.goal
     print(f"rollplan simulate: {rp.time.size} samples over {rp.time[-1] - rp.time[0]:g} s, robot k = {robot.k:.9g}"
@@ -247,7 +398,7 @@ def cmd_animate(args) -> int:
     if not 1 <= args.fps <= 100:
         raise InputError(f"--fps {args.fps} is not allowed: it must lie in [1, 100]")
     rp = load_rotor_plan(args.plan_file)
-    sim = simulate_rotors(rp.robot, rp.time, rp.rotor_rates, rp.goal)
+    sim = simulate_rotors(rp.robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
     make_animation(rp.time, sim.state, rp.rotor_rates, rp.robot, rp.goal, args.out, args.frames, args.fps)
     print(f"wrote {args.out}")
     return EXIT_OK
@@ -381,24 +532,67 @@ def cmd_atlas(args) -> int:
     return EXIT_OK
 
 
+def _add_timing_options(parser) -> None:
+    """--duration, --timing, --samples and --timing-plot of ``plan`` and ``route``."""
+    from .execution.timing import LAWS
+
+    parser.add_argument("--duration", type=_number, default=None, metavar="T",
+                        help="time the motion over T seconds (by default rest-to-rest per piece: leaf, roll; "
+                             "--timing min-jerk) and compute the rotor rates, angles and torques (uses the default "
+                             "robot unless --robot is given); refused if it would exceed the robot's "
+                             "max_rotor_rate or max_rotor_torque")
+    parser.add_argument("--timing", choices=list(LAWS), default=None, metavar="NAME",
+                        help="timing law: " + "; ".join(f"{n}: {law.summary}" for n, law in LAWS.items())
+                             + ". Every law rests at the corners of the contact path (where a roll meets the figure "
+                               "eights). Without --duration: the law's shortest duration within the robot's limits")
+    parser.add_argument("--samples", type=_whole, default=2000,
+                        help="samples of the trajectory in --json and --plot, in all (default 2000); with "
+                             "--duration or --timing also the least number of time samples (at least 400 per "
+                             "piece for min-jerk, 3000 for the other laws)")
+    parser.add_argument("--timing-plot", metavar="FILE.png",
+                        help="with --duration or --timing: rotor rates and torques in time with the robot's limits, "
+                             "and the phase plane (s, s') with the maximum velocity curve")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="rollplan", description=__doc__)
     parser.add_argument("-v", "--verbose", action="store_true", help="log the planner's progress")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    p = sub.add_parser("plan", help="plan a motion to a target by tracing a figure eight n times")
-    _add_target_options(p, to_default=(0.0, 1.0), steps_help="number of figure eights n >= 1 (default 1)")
-    p.add_argument("--all", action="store_true", help="also list every other verified solution branch")
+    p = sub.add_parser("plan", help="plan a motion between two states by figure eights (and rolls, turns, legs)")
+    _add_target_options(p, to_default=(0.0, 1.0), steps_help="number of figure eights n >= 1 per leg (default 1)")
+    p.add_argument("--from", dest="start", nargs=5, type=_number, default=(0.0,) * 5,
+                   metavar=("U_A", "V_A", "PSI", "U_O", "V_O"),
+                   help="start state (default 0 0 0 0 0: at rest at the origin, contact at the south pole); "
+                        "off the pole psi is the contact angle of (2), not a yaw")
+    p.add_argument("--contact", nargs=2, type=_number, default=(0.0, 0.0), metavar=("U_O", "V_O"),
+                   help="goal contact point on the sphere [rad] (default 0 0, the south pole); "
+                        "cos(u_o) cos(v_o) >= 0.05")
+    p.add_argument("--legs", choices=geometric.LEGS, default="fallback",
+                   help="figure eights: one leg, with a turn in place or two legs only where one leg has no plan "
+                        "(fallback, default); also search two legs and keep the shorter (shortest); one; two")
+    p.add_argument("--all", action="store_true", help="also list every other verified solution branch (one leg)")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     p.add_argument("--json", metavar="FILE", help="write the plan as JSON")
     p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere and the plane "
                    "(with --duration: omega, rotor rates and torques in time)")
-    p.add_argument("--duration", type=_number, default=None, metavar="T",
-                   help="time the plan rest-to-rest per half-step over T seconds and compute the rotor rates, "
-                        "angles and torques (uses the default robot unless --robot is given)")
-    p.add_argument("--samples", type=_whole, default=2000,
-                   help="least number of time samples with --duration (default 2000, >= 400 per half-step)")
+    _add_timing_options(p)
     p.set_defaults(func=cmd_plan)
+
+    w = sub.add_parser("route", help="plan a route through waypoints (a CSV file), leg by leg, certified as one")
+    w.add_argument("waypoints", metavar="WAYPOINTS.csv",
+                   help="header u_a,v_a,psi[,u_o,v_o][,steps][,label]; one waypoint a row, the first is the start")
+    w.add_argument("--steps", type=_whole, default=1, help="figure eights per leg where a row does not say (default 1)")
+    g = w.add_mutually_exclusive_group()
+    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default %g)" % DEFAULT_K)
+    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
+    w.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+    w.add_argument("--legs", choices=geometric.LEGS, default="fallback", help="as for plan (default fallback)")
+    w.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
+    w.add_argument("--json", metavar="FILE", help="write the route as JSON")
+    w.add_argument("--plot", metavar="FILE.png", help="draw the route's contact path")
+    _add_timing_options(w)
+    w.set_defaults(func=cmd_route)
 
     s = sub.add_parser("step", help="what one figure eight does: shift h and holonomy eta")
     s.add_argument("--a", type=_number, required=True, help="first leaf radius [R], 0 < a <= %g" % A_MAX)
@@ -459,12 +653,12 @@ def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.ERROR, format="%(name)s: %(message)s")
-    if (getattr(args, "command", None) in ("plan", "compare") and args.k is None and args.robot is None
-            and getattr(args, "duration", None) is None):
+    if (getattr(args, "command", None) in ("plan", "compare", "route") and args.k is None and args.robot is None
+            and getattr(args, "duration", None) is None and getattr(args, "timing", None) is None):
         args.k = DEFAULT_K
     try:
         with ExitStack() as stack:
-            _Claims.stack = stack
+            _Claims.stack, _Claims.files = stack, {}
             return args.func(args)
     except KeyboardInterrupt:  # Ctrl-C, also inside the solvers (rollplan.interrupts)
         print("rollplan: interrupted", file=sys.stderr)

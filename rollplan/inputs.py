@@ -280,16 +280,20 @@ class CsvTable:
         Line number (from 1) of each row in the file.
     problems : list of str or None
         For each row, what is wrong with its shape (more or fewer fields than the header), else None.
+    header_line : int
+        Line number (from 1) of the header.
     """
 
     header: tuple
     rows: list
     lines: list
     problems: list
+    header_line: int = 1
 
 
-def read_csv(path, what: str = "CSV file", required=(), max_bytes: int = 1 << 28) -> CsvTable:
-    """Read a CSV file with a header row (see :func:`read_text`); blank lines are skipped.
+def read_csv(path, what: str = "CSV file", required=(), max_bytes: int = 1 << 28, comments: bool = False) -> CsvTable:
+    """Read a CSV file with a header row (see :func:`read_text`); blank lines are skipped, and with
+    ``comments`` also lines whose first field starts with ``#``.
 
     The header must name every column of ``required``, and no column twice or
     not at all. A row with more or fewer fields than the header is kept, with
@@ -299,14 +303,16 @@ def read_csv(path, what: str = "CSV file", required=(), max_bytes: int = 1 << 28
     where = f"{what} {show_path(path)}"
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
-        header = None
+        header, header_line = None, 1
         rows, lines, problems = [], [], []
         for fields in reader:
             if not fields or (len(fields) == 1 and not fields[0].strip()):
                 continue
             fields = [f.strip() for f in fields]
+            if comments and fields[0].startswith("#"):
+                continue
             if header is None:
-                header = _check_header(fields, where, required)
+                header, header_line = _check_header(fields, where, required), reader.line_num
                 continue
             problem = None
             if len(fields) != len(header):
@@ -321,7 +327,7 @@ def read_csv(path, what: str = "CSV file", required=(), max_bytes: int = 1 << 28
         raise InputError(f"{where}, line {reader.line_num}: not valid CSV: {exc}") from None
     if header is None:
         raise InputError(f"{where} is empty: it needs a header naming the columns {', '.join(required)}")
-    return CsvTable(tuple(header), rows, lines, problems)
+    return CsvTable(tuple(header), rows, lines, problems, header_line)
 
 
 def _check_header(fields, where: str, required) -> list:

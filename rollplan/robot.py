@@ -27,12 +27,11 @@ from .core import model
 from .errors import InputError, check_range, show
 from .inputs import load_toml, show_path
 
-__all__ = ["Key", "ROBOT_KEYS", "PHYSICAL_RULES", "Robot", "robot_from_mapping", "load_robot", "default_robot",
-           "DEFAULT_ROBOT_FILE"]
+__all__ = ["Key", "ROBOT_KEYS", "OPTIONAL_KEYS", "PHYSICAL_RULES", "Robot", "robot_from_mapping", "load_robot",
+           "default_robot", "DEFAULT_ROBOT_FILE"]
 
 #: The shipped default robot (package data, same values as ``Robot()``), documented in the file.
 DEFAULT_ROBOT_FILE = "data/default_robot.toml"
-
 
 @dataclass(frozen=True)
 class Key:
@@ -54,7 +53,13 @@ ROBOT_KEYS = (
     Key("mass_shell", "kg", 1e-12, 1e9, doc="mass m_o of the spherical shell"),
     Key("rotor_inertia_axial", "kg m^2", 1e-40, 1e18, doc="J_r, one rotor about its spin axis"),
     Key("rotor_inertia_transverse", "kg m^2", 1e-40, 1e18, doc="J_p, one rotor about a transverse axis"),
+    Key("max_rotor_rate", "rad/s", 1e-6, 1e9, required=False,
+        doc="largest rotor rate |phi_i_dot| of either motor (absent: unlimited)"),
+    Key("max_rotor_torque", "N m", 1e-12, 1e9, required=False,
+        doc="largest motor torque |tau_i| of either motor (absent: unlimited)"),
 )
+#: Keys of a robot file that may be absent (absent means unlimited): the motors' limits.
+OPTIONAL_KEYS = tuple(k.name for k in ROBOT_KEYS if not k.required)
 
 
 def _shell_within_total(r):
@@ -105,6 +110,13 @@ class Robot:
         Moment of inertia J_r of one rotor about its spin axis [kg m^2].
     rotor_inertia_transverse : float
         Moment of inertia J_p of one rotor about a transverse axis [kg m^2].
+    max_rotor_rate : float or None
+        Largest rotor rate |phi_i_dot| either motor can run [rad/s]; None (the key
+        absent from the file) means unlimited. Optional.
+    max_rotor_torque : float or None
+        Largest motor torque |tau_i| either motor can give [N m]; None means
+        unlimited. Optional. The timing laws of :mod:`rollplan.execution.timing` keep
+        the rotor rates and torques within both.
     """
 
     radius: float = 0.1
@@ -112,6 +124,8 @@ class Robot:
     mass_shell: float = 0.4
     rotor_inertia_axial: float = 2.0e-4
     rotor_inertia_transverse: float = 1.2e-4
+    max_rotor_rate: float | None = None
+    max_rotor_torque: float | None = None
 
     def __post_init__(self) -> None:
         for key in ROBOT_KEYS:
@@ -144,7 +158,9 @@ class Robot:
         return float(self._ratio()[2])
 
     def as_dict(self) -> dict:
-        d = {f.name: getattr(self, f.name) for f in fields(self)}
+        """The fields (limits only when set) and k."""
+        d = {f.name: getattr(self, f.name) for f in fields(self)
+             if f.name not in OPTIONAL_KEYS or getattr(self, f.name) is not None}
         d["k"] = self.k
         return d
 

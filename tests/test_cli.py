@@ -145,9 +145,10 @@ def test_cli_rejects_steps_and_k_outside_the_rules(capsys, argv, needle):
     assert code == 2 and needle in err and one_line(err)
 
 
-def test_cli_target_at_the_start_point_exits_3(capsys):
-    code, _, err = run(capsys, "plan", "--to", "0", "0", "--psi", "1", "--k", "2.5")
-    assert code == 3 and one_line(err)
+def test_cli_turn_in_place_is_planned(capsys):
+    """``--to 0 0 --psi 1`` (once refused): a turn in place by a pair of circles, certified."""
+    code, out, _ = run(capsys, "plan", "--to", "0", "0", "--psi", "1", "--k", "2.5")
+    assert code == 0 and "mode          turn" in out and "residual" in out
 
 
 @pytest.mark.parametrize("name,ext", [("x.unknownext", "unknownext"), ("x.json", "json")])

@@ -1,11 +1,13 @@
 """Property-based tests (hypothesis) of what users give rollplan: command-line arguments, robot files, batch CSV
-files and plan JSON files, valid and not. Whatever the input:
+files, route waypoint files and plan JSON files, valid and not. Whatever the input:
 
 * the exit code is 0, 2 or 3 (success, bad input, no plan) -- never 1 (a traceback) nor 4;
 * nothing on stderr is a traceback or a CasADi "NaN detected" warning;
 * a refusal (exit 2) or no plan (exit 3) is exactly one line on stderr;
 * every plan reported with exit 0 is certified: its figure eight, integrated by DOP853 on the paper's printed
-  equations (``references``, independent of rollplan), reaches the target within 1e-9 R and rad.
+  equations (``references``, independent of rollplan), reaches the target within 1e-9 R and rad; a plan or
+  route between any two states: its pieces (rolls, leaves, circles), integrated by DOP853 on the printed
+  (15), (16), (20) from its start state, end at its goal within 1e-9.
 
 The commands run in this process (fast); stdout and stderr are captured at the file-descriptor level, so the
 messages of CasADi's C++ code and of SUNDIALS are seen too. Targets and robots are drawn where planning takes
@@ -92,6 +94,22 @@ def angle_gap(a: float, b: float) -> float:
     return float(min(d, two_pi - d))
 
 
+def certify_pieces(d, goal, start=None):
+    """The pieces of a plan or route JSON (``segments``: curve, index, params in units of R, gamma), integrated
+    from ``start`` (default the file's ``start``) by DOP853 on the printed (15), (16), (20), reach ``goal``
+    (u_a, v_a, psi, u_o, v_o) [plan unit, rad] within 1e-9 (units of R, rad)."""
+    from types import SimpleNamespace
+
+    R = d["radius"]
+    scale = np.array([R, R, 1.0, 1.0, 1.0])
+    x0 = np.array([d["start"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")] if start is None else start) / scale
+    pieces = [SimpleNamespace(**seg) for seg in d["segments"]]
+    final = references.composed_final(pieces, x0, d["k"]) if pieces else x0
+    gap = np.asarray(final) - np.asarray(goal, float) / scale
+    gap[2] = angle_gap(final[2], goal[2])
+    assert np.linalg.norm(gap) < 1.05e-9, (gap, d["segments"][:4], goal)
+
+
 def certify(fe, k, steps, radius, target):
     """The figure eight (a, b, gamma) in the plan's length unit, traced ``steps`` times by DOP853 on the
     printed equations, reaches ``target`` (u_a, v_a, psi) within 1e-9 (units of R, rad)."""
@@ -119,10 +137,20 @@ def number_text(draw, low, high):
                        st.sampled_from(["0", "1001", "2.5", "1e0", "x", "\uff12"])),
        k=st.one_of(st.none(), number_text(0, 10), number_text(0, 10), st.sampled_from(["-1", "100.5", "1e9"])),
        radius=st.one_of(st.none(), st.none(), number_text(1e-3, 1e3), st.sampled_from(["0", "-1"])),
-       method=st.sampled_from(["ipopt", "newton"]))
-def test_plan_arguments(tmp_path_factory, u, v, psi, steps, k, radius, method):
+       method=st.sampled_from(["ipopt", "newton"]),
+       start=st.one_of(st.none(), st.none(), st.tuples(number_text(-1, 1), number_text(-1, 1), number_text(-3, 3),
+                                                       number_text(-0.6, 0.6), number_text(-0.6, 0.6))),
+       contact=st.one_of(st.none(), st.none(), st.tuples(number_text(-0.6, 0.6), number_text(-1.6, 1.6))),
+       legs=st.sampled_from([None, None, "one", "fallback", "two"]))
+def test_plan_arguments(tmp_path_factory, u, v, psi, steps, k, radius, method, start, contact, legs):
     out = tmp_path_factory.mktemp("plan") / "p.json"
     argv = ["plan", "--to", u, v, f"--psi={psi}", "--steps", steps, "--method", method, "--json", str(out)]
+    if start is not None:
+        argv += ["--from", *start]
+    if contact is not None:
+        argv += ["--contact", *contact]
+    if legs is not None:
+        argv += ["--legs", legs]
     if k is not None:
         argv += [f"--k={k}"]
     if radius is not None:
@@ -132,8 +160,11 @@ def test_plan_arguments(tmp_path_factory, u, v, psi, steps, k, radius, method):
     if code == 0:
         d = json.loads(out.read_text())
         tg = d["target"]
-        certify(d["figure_eight"], d["k"], d["steps"], d["radius"], (tg["u_a"], tg["v_a"], tg["psi"]))
         assert (tg["u_a"], tg["v_a"], tg["psi"]) == (float(u), float(v), float(psi))
+        goal = (float(u), float(v), float(psi), *(map(float, contact) if contact is not None else (0.0, 0.0)))
+        certify_pieces(d, goal, [float(x) for x in start] if start is not None else [0.0] * 5)
+        if "figure_eight" in d and start is None and contact is None and d["mode"] == "one":
+            certify(d["figure_eight"], d["k"], d["steps"], d["radius"], (tg["u_a"], tg["v_a"], tg["psi"]))
     else:
         assert not out.exists()
 
@@ -155,6 +186,7 @@ def test_step_arguments(a, b, k, gamma):
 # ----------------------------------------------------------------------------- robot files
 
 ROBOT_KEYS = ("radius", "mass_total", "mass_shell", "rotor_inertia_axial", "rotor_inertia_transverse")
+LIMIT_KEYS = ("max_rotor_rate", "max_rotor_torque")
 
 
 def toml_value():
@@ -182,8 +214,11 @@ def robot_text(draw):
     kind = draw(st.sampled_from(["plausible", "plausible", "changed", "garbage"]))
     robot = draw(plausible_robot())
     entries = {key: repr(value) for key, value in robot.items()}
+    if draw(st.booleans()):
+        entries["max_rotor_rate"] = repr(draw(st.floats(50.0, 1000.0)))
+        entries["max_rotor_torque"] = repr(draw(st.floats(0.01, 1.0)))
     if kind == "changed":
-        for key in draw(st.lists(st.sampled_from(ROBOT_KEYS + ("colour",)), min_size=1, max_size=3)):
+        for key in draw(st.lists(st.sampled_from(ROBOT_KEYS + LIMIT_KEYS + ("colour",)), min_size=1, max_size=3)):
             if draw(st.booleans()) and key in entries:
                 del entries[key]
             else:
@@ -280,12 +315,21 @@ def test_batch_files(tmp_path_factory, csv_file):
 # ----------------------------------------------------------------------------- plan JSON files
 
 
-@pytest.fixture(scope="module")
-def plan_json(tmp_path_factory):
-    """A plan with its motion (default robot), as written by plan --duration."""
-    out = tmp_path_factory.mktemp("planjson") / "plan.json"
-    code, _, err = run_cli(["plan", "--to", "0.03", "0.05", "--psi", "0.3", "--duration", "4", "--samples", "800",
-                            "--json", str(out)])
+@pytest.fixture(scope="module", params=["pole", "composed"])
+def plan_json(tmp_path_factory, request):
+    """A plan with its motion, as written by plan --duration: pole to pole (default robot), or from a start off
+    the pole timed by the smooth-cruise law within a robot's motor limits."""
+    folder = tmp_path_factory.mktemp("planjson")
+    out = folder / "plan.json"
+    if request.param == "pole":
+        argv = ["plan", "--to", "0.03", "0.05", "--psi", "0.3", "--duration", "4", "--samples", "800"]
+    else:
+        (folder / "r.toml").write_text("radius = 0.1\nmass_total = 1.2\nmass_shell = 0.4\nrotor_inertia_axial = 2e-4\n"
+                                       "rotor_inertia_transverse = 1.2e-4\nmax_rotor_rate = 300.0\n"
+                                       "max_rotor_torque = 0.05\n")
+        argv = ["plan", "--robot", str(folder / "r.toml"), "--from", "0", "0", "0", "0.2", "0", "--to", "0.03",
+                "0.05", "--psi", "0.3", "--timing", "smooth-cruise", "--samples", "800"]
+    code, _, err = run_cli([*argv, "--json", str(out)])
     assert code == 0, err
     return out
 
@@ -311,11 +355,11 @@ def plan_file(draw, path):
     data = json.loads(path.read_text())
     kind = draw(st.sampled_from(["same", "drop", "replace", "robot", "scale", "text", "text"]))
     if kind == "drop":
-        del data[draw(st.sampled_from(["time", "rotor_rates", "robot", "target"]))]
+        del data[draw(st.sampled_from(["time", "rotor_rates", "robot", "target", "start", "goal"]))]
     elif kind == "replace":
-        data[draw(st.sampled_from(["time", "rotor_rates", "robot", "target"]))] = draw(json_value())
+        data[draw(st.sampled_from(["time", "rotor_rates", "robot", "target", "start", "goal"]))] = draw(json_value())
     elif kind == "robot":
-        key = draw(st.sampled_from([*ROBOT_KEYS, "k", "colour"]))
+        key = draw(st.sampled_from([*ROBOT_KEYS, *LIMIT_KEYS, "k", "colour"]))
         data["robot"][key] = draw(json_value())
     elif kind == "scale":
         factor = 10.0 ** draw(st.integers(-300, 300))
@@ -359,6 +403,69 @@ def test_plan_files(tmp_path_factory, plan_json, data, command):
         if kind == "same":
             assert sim["arrival_error"] < 1e-6
             d = json.loads(raw)
-            ref = references.rotor_drive(d["robot"], np.asarray(d["time"]), np.asarray(d["rotor_rates"]))
+            x0 = [d["start"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")]
+            ref = references.rotor_drive(d["robot"], np.asarray(d["time"]), np.asarray(d["rotor_rates"]), x0)
             # two cubic splines through the same samples, two integrators: agree far below the 1e-6 tolerance
             assert np.allclose([sim["final"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")], ref[-1], atol=1e-8)
+
+
+# ----------------------------------------------------------------------------- route waypoint files
+
+WAYPOINT_COLUMNS = ["u_a", "v_a", "psi", "u_o", "v_o", "steps", "label"]
+
+
+@st.composite
+def waypoints_csv(draw):
+    """A waypoints file: plausible rows near the pole (a move, a turn, a state off the pole) or mutated ones."""
+    header = list(WAYPOINT_COLUMNS)
+    change = draw(st.sampled_from(["none", "none", "none", "extra", "shuffle", "drop", "duplicate"]))
+    if change == "extra":
+        header.append(draw(st.sampled_from(["note", ""])))
+    elif change == "shuffle":
+        header = draw(st.permutations(header))
+    elif change == "drop":
+        header.remove(draw(st.sampled_from(WAYPOINT_COLUMNS)))
+    elif change == "duplicate":
+        header.append(draw(st.sampled_from(WAYPOINT_COLUMNS)))
+    values = {"u_a": number_text(-0.5, 0.5), "v_a": number_text(-0.5, 0.5), "psi": number_text(-2, 2),
+              "u_o": st.one_of(st.just(""), number_text(-0.4, 0.4), st.just("1.56")),
+              "v_o": st.one_of(st.just(""), number_text(-0.4, 0.4)),
+              "steps": st.one_of(st.just(""), st.just(""), st.integers(1, 2).map(str), st.sampled_from(["0", "x"])),
+              "label": st.text(alphabet="ab ,\"#", max_size=5)}
+    rows = []
+    for i in range(draw(st.integers(0, 3))):
+        row = [draw(values.get(h, st.text(alphabet="abc ,", max_size=5))) for h in header]
+        if i == 0 and "steps" in header and draw(st.integers(0, 3)) != 0:
+            row[header.index("steps")] = ""
+        if draw(st.integers(0, 9)) == 0:
+            row = row[:-1] if draw(st.booleans()) else row + ["9"]
+        rows.append(row)
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    if draw(st.booleans()):
+        buf.write("# waypoints\n")
+    writer.writerow(header)
+    writer.writerows(rows)
+    data = buf.getvalue().encode()
+    if draw(st.booleans()):
+        data = b"\xef\xbb\xbf" + data
+    return data
+
+
+@FUZZ
+@given(data=waypoints_csv(), k=st.sampled_from(["2.5", "5"]))
+def test_route_files(tmp_path_factory, data, k):
+    folder = tmp_path_factory.mktemp("route")
+    (folder / "w.csv").write_bytes(data)
+    out = folder / "r.json"
+    code, _, err = run_cli(["route", str(folder / "w.csv"), "--k", k, "--legs", "one", "--json", str(out)])
+    check_exit(code, err)
+    if code == 0:
+        d = json.loads(out.read_text())
+        goal = [d["goal"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")]
+        certify_pieces(d, goal)
+        first = d["waypoints"][0]
+        assert [d["start"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")] == \
+            [first[n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")]
+    else:
+        assert not out.exists()

@@ -37,6 +37,12 @@ def test_constant_rotor_rate_closed_form():
     np.testing.assert_allclose(sim.omega, np.tile([-rate, 0, 0], (50, 1)), atol=1e-13)
 
 
+def _numpy_rhs(robot, spline):
+    """(6)-(10) with omega from (11): the printed equations and rotation matrices composed in numpy
+    (``references``; independent of rollplan.core.model). State order (u_a, v_a, psi, u_o, v_o)."""
+    return references.rotor_driven_rhs(robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, robot.radius, spline)
+
+
 def test_against_scipy_dop853():
     t = np.linspace(0, 3, 301)
     rates = np.column_stack([20 * np.sin(2 * t) * t, -15 * np.sin(3 * t) + 5 * t])

@@ -105,22 +105,27 @@ def test_other_public_classes_validate_their_options():
 
 
 def test_short_duration_is_served_or_refused_never_a_failed_motion_with_exit_0(tmp_path, capsys):
-    """`--duration 1e-6` printed "rotor-only arrival error 1.00e+00" and exited 0: the rotor simulation now
-    runs in normalized time, so the motion reaches its goal, which an independent DOP853 simulation of the
-    JSON's rotor rates confirms; durations whose rates or torques overflow are refused before any work."""
+    """`--duration 1e-6` printed "rotor-only arrival error 1.00e+00" and exited 0: the shortest accepted
+    duration is served (the rotor simulation runs in normalized time, so the motion reaches its goal, which an
+    independent DOP853 simulation of the JSON's rotor rates confirms); shorter and longer ones, and durations
+    whose rates or torques overflow, are refused before any work."""
+    from rollplan.execution.timing import DURATION_RANGE
+
     out = tmp_path / "p.json"
-    code, text, err = run(capsys, "plan", "--to", "0", "0.1", "--duration", "1e-6", "--json", str(out))
+    shortest = repr(DURATION_RANGE[0])
+    code, text, err = run(capsys, "plan", "--to", "0", "0.1", "--duration", shortest, "--json", str(out))
     assert code == 0, err
     d = json.loads(out.read_text())
     assert d["rotor_simulation"]["arrival_error"] < 1e-6
     final = references.rotor_drive(d["robot"], np.asarray(d["time"]), np.asarray(d["rotor_rates"]))[-1]
     assert math.hypot(final[0] - 0.0, final[1] - 0.1) / d["radius"] < 1e-6
     assert code == 0 and run(capsys, "simulate", str(out))[0] == 0
-    for duration in ("1e-300", "1e308", "0", "-1"):
+    for duration in ("1e-6", "1e-300", "1e308", repr(DURATION_RANGE[1] * 1.5), "0", "-1"):
         code, text, err = run(capsys, "plan", "--to", "0", "0.1", "--duration", duration)
         assert code == 2 and "duration" in err and one_line(err) and text == ""   # refused before planning
-    code, text, err = run(capsys, "plan", "--to", "0", "0.1", "--duration", "5", "--samples", "10000000000")
-    assert code == 2 and "samples" in err and one_line(err) and text == ""
+    for argv in (["--duration", "5"], ["--duration", "5", "--json", str(out)], []):
+        code, text, err = run(capsys, "plan", "--to", "0", "0.1", *argv, "--samples", "10000000000")
+        assert code == 2 and "samples" in err and one_line(err) and text == ""
 
 
 def test_a_motion_that_misses_is_not_a_success(monkeypatch, capsys):
@@ -185,7 +190,7 @@ def test_fractions_are_numbers():
 @pytest.mark.slow
 @pytest.mark.parametrize("argv", [["plan", "--robot", "{fifo}"], ["simulate", "{fifo}"],
                                   ["animate", "{fifo}", "--out", "{dir}/a.gif"],
-                                  ["batch", "{fifo}", "--out", "{dir}/o.jsonl"]])
+                                  ["batch", "{fifo}", "--out", "{dir}/o.jsonl"], ["route", "{fifo}"]])
 def test_a_fifo_as_input_is_refused_without_blocking(tmp_path, argv):
     """A FIFO given as --robot, or to simulate/animate/batch, blocked for ever (in a separate process with a
     time limit: a hang fails the test instead of stopping the suite)."""
@@ -270,3 +275,172 @@ def test_numbers_other_than_ascii_decimals_are_refused(capsys, value):
 def test_limits_are_printed_exactly(capsys, argv, needle):
     code, _, err = run(capsys, *argv)
     assert code == 2 and needle in err and one_line(err)
+
+
+# ----------------------------------------------------------------------------- the commands of issues 12 and 17
+
+
+ROUTE = "u_a,v_a,psi,u_o,v_o,steps,label\n0,0,0,,,,home\n0.5,0,0,,,1,a\n"
+LIMITED = ("radius = 0.1\nmass_total = 1.2\nmass_shell = 0.4\nrotor_inertia_axial = 2e-4\n"
+           "rotor_inertia_transverse = 1.2e-4\nmax_rotor_rate = 300.0\nmax_rotor_torque = 0.05\n")
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["plan", "--from", "0", "0", "0", "1_0", "0", "--to", "0", "1"], "'1_0'"),
+    (["plan", "--contact", "\uff10", "0", "--to", "0", "1"], "'\uff10'"),
+    (["plan", "--contact", "0", "nan", "--to", "0", "1"], "'nan'"),
+    (["plan", "--from", "0", "0", "1e400", "0", "0", "--to", "0", "1"], "'1e400'"),
+    (["plan", "--contact", "1.5707963267948966", "0", "--to", "0", "1"], "pi/2"),
+    (["plan", "--to", "0", "1", "--timing", "min-jerk", "--duration", "1e-6"], "duration"),
+    (["plan", "--to", "0", "1", "--timing", "time-optimal"], "max_rotor_torque"),
+    (["plan", "--to", "0", "1", "--timing-plot", "t.png"], "--timing-plot needs a timed motion"),
+    (["plan", "--to", "0", "1", "--duration", "5", "--timing-plot", "t.unknownext"], "extension"),
+    (["route", "{dir}/none.csv"], "does not exist"),
+    (["route", "{dir}"], "is a directory"),
+    (["route", "{route}", "--samples", "10000000000"], "samples"),
+    (["route", "{route}", "--k", "100.00000000000001"], "k = 100.00000000000001 is not allowed"),
+])
+def test_new_options_go_through_the_input_layer(tmp_path, capsys, argv, needle):
+    """--from, --contact, --timing, --timing-plot and route read numbers and files as every other command:
+    one line naming the value, exit 2, before any work."""
+    (tmp_path / "w.csv").write_text(ROUTE)
+    argv = [a.format(dir=tmp_path, route=tmp_path / "w.csv") for a in argv]
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and needle in err and one_line(err), err
+    assert "wrote" not in out
+
+
+def test_negative_exponents_in_from_and_contact(capsys):
+    code, out, err = run(capsys, "plan", "--from", "-1e-3", "0", "-2e-1", "-1e-2", "0", "--to", "0", "1",
+                         "--contact", "-1e-1", "0", "--k", "2.5")
+    assert code == 0, err
+    assert "from (u_a, v_a, psi, u_o, v_o) = (-0.001, 0, -0.2, -0.01, 0)" in out
+
+
+def test_route_outputs_never_replace_the_waypoints_or_a_read_only_file(tmp_path, capsys):
+    route = tmp_path / "w.csv"
+    route.write_text(ROUTE)
+    for flag in ("--json", "--plot"):
+        name = route if flag == "--json" else tmp_path / "w.png"
+        if flag == "--plot":
+            name.symlink_to(route)
+        code, _, err = run(capsys, "route", str(route), flag, str(name))
+        assert code == 2 and "is the input file" in err and one_line(err), err
+    assert route.read_text() == ROUTE
+    ro = tmp_path / "ro.json"
+    ro.write_text("keep")
+    ro.chmod(0o444)
+    code, _, err = run(capsys, "route", str(route), "--json", str(ro))
+    assert code == 2 and "read-only" in err and one_line(err)
+    (tmp_path / "w2.png").symlink_to(route)
+    code, _, err = run(capsys, "route", str(route), "--duration", "3", "--timing-plot", str(tmp_path / "w2.png"))
+    assert code == 2 and "is the input file" in err and one_line(err), err
+    assert ro.read_text() == "keep" and route.read_text() == ROUTE
+
+
+def test_route_reads_a_bom_and_comments(tmp_path, capsys):
+    route = tmp_path / "w.csv"
+    route.write_bytes(b"\xef\xbb\xbf# a route\n" + ROUTE.encode())
+    code, out, err = run(capsys, "route", str(route), "--json", str(tmp_path / "r.json"))
+    assert code == 0, err
+    d = json.loads((tmp_path / "r.json").read_text())
+    assert d["residual"] < 1e-9 and len(d["waypoints"]) == 2
+
+
+@pytest.mark.parametrize("key, value", [("max_rotor_rate", "1e300"), ("max_rotor_rate", "1e-300"),
+                                        ("max_rotor_torque", "inf"), ("max_rotor_torque", "1e-320"),
+                                        ("max_rotor_rate", "-300.0")])
+def test_motor_limits_have_ranges(tmp_path, capsys, key, value):
+    """max_rotor_rate and max_rotor_torque are keys of ROBOT_KEYS with a range (a limit of 1e300 rad/s or
+    1e-320 N m is no motor), checked in robot files and in plan files."""
+    robot = tmp_path / "r.toml"
+    robot.write_text(LIMITED.replace(f"{key} = ", f"{key} = {value}\n# ", 1))
+    code, _, err = run(capsys, "plan", "--robot", str(robot), "--to", "0", "0.05", "--duration", "5")
+    assert code == 2 and key in err and one_line(err), err
+    with pytest.raises(InputError, match=key):
+        Robot(**{key: float(value)})
+
+
+def test_timed_route_is_certified_by_its_rotors_and_read_back(tmp_path, capsys):
+    """A route timed within the motors' limits: its rotor rates alone carry the robot from the first waypoint
+    to the last (DOP853 on the printed equations, independent of rollplan), and `simulate` reads it back."""
+    robot = tmp_path / "r.toml"
+    robot.write_text(LIMITED)
+    route = tmp_path / "w.csv"
+    route.write_text("u_a,v_a,psi\n0,0,0\n0.05,0,0\n0.05,0.05,0.5\n")
+    out = tmp_path / "r.json"
+    code, text, err = run(capsys, "route", str(route), "--robot", str(robot), "--timing", "smooth-cruise",
+                          "--json", str(out))
+    assert code == 0, err
+    d = json.loads(out.read_text())
+    final = references.rotor_drive(d["robot"], np.asarray(d["time"]), np.asarray(d["rotor_rates"]))[-1]
+    assert math.hypot(final[0] - 0.05, final[1] - 0.05) / d["radius"] < 1e-6 and angle_gap(final[2], 0.5) < 1e-6
+    rates, torques = np.abs(d["rotor_rates"]), np.abs(d["rotor_torques"])
+    assert rates.max() <= 300.0 * (1 + 1e-9) and torques.max() <= 0.05 * (1 + 1e-6)
+    assert run(capsys, "simulate", str(out))[0] == 0
+
+
+def test_a_timed_motion_that_misses_is_not_a_success_for_any_law(monkeypatch, capsys, tmp_path):
+    """certify_motion (the rotor-only simulation from the motion's start) guards every timing law."""
+    from rollplan.execution import actuation
+
+    real = actuation.sample_motion
+
+    def halved(*args, **kwargs):
+        m = real(*args, **kwargs)
+        object.__setattr__(m, "rotor_rates", m.rotor_rates / 2)
+        return m
+
+    monkeypatch.setattr(actuation, "sample_motion", halved)
+    robot = tmp_path / "r.toml"
+    robot.write_text(LIMITED)
+    for law in ("min-jerk", "smooth-cruise"):
+        code, _, err = run(capsys, "plan", "--robot", str(robot), "--from", "0", "0", "0", "0.2", "0",
+                           "--to", "0.05", "0", "--timing", law)
+        assert code == 3 and "misses the goal" in err and one_line(err), err
+
+
+def test_actuate_refuses_wrong_types_and_durations():
+    p = rollplan.plan((0, 0.05, 0), robot=Robot())
+    for call in (lambda: rollplan.actuate(None, Robot(), 1.0), lambda: rollplan.actuate(p, {"radius": 0.1}, 1.0),
+                 lambda: rollplan.actuate(p, Robot(), "1"), lambda: rollplan.actuate(p, Robot(), 1e-6),
+                 lambda: rollplan.actuate(p, Robot(), float("nan")), lambda: rollplan.actuate(p, Robot(), 1.0, "9"),
+                 lambda: rollplan.actuate(p, Robot(), 1.0, 10**12),
+                 lambda: rollplan.actuate(p, Robot(), 1.0, 100, ["x"]),
+                 lambda: rollplan.actuate(p, Robot(), None)):
+        with pytest.raises(InputError) as err:
+            call()
+        assert "\n" not in str(err.value)
+
+
+
+def test_two_outputs_of_one_command_are_two_files(tmp_path, capsys):
+    """--json, --plot and --timing-plot naming one file (directly or by a link) would overwrite each other."""
+    out = tmp_path / "p.png"
+    (tmp_path / "link.png").symlink_to(out)
+    for argv in (["--json", str(out), "--plot", str(out)], ["--plot", str(out), "--duration", "5",
+                                                            "--timing-plot", str(tmp_path / "link.png")]):
+        code, text, err = run(capsys, "plan", "--to", "0", "0.05", *argv)
+        assert code == 2 and "same file" in err and one_line(err) and text == "", err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("call, needle", [
+    (lambda: rollplan.plan_route(None, k=2.5), "waypoints"), (lambda: rollplan.plan_route(5, k=2.5), "waypoints"),
+    (lambda: rollplan.plan_route([None, None], k=2.5), "waypoint 0"),
+    (lambda: rollplan.plan_route([(0, 0, 0), (0.5, 0, 0)], k=2.5, progress=5), "progress"),
+    (lambda: rollplan.plan_route([(0, 0, 0), (0.5, 0, 0)], k=2.5, legs=[]), "legs"),
+    (lambda: rollplan.plan_route([(0, 0, 0), (0.5, 0, 0)], k=2.5, method={}), "method"),
+    (lambda: rollplan.plan((0, 1, 0), k=2.5, start="x"), "start"),
+    (lambda: rollplan.plan((0, 1, 0), k=2.5, legs=["one"]), "legs"),
+    (lambda: rollplan.read_waypoints(None), "waypoints file"),
+    (lambda: rollplan.as_composed(None), "plan"),
+    (lambda: rollplan.ComposedPlanner(tol=float("nan")), "tol"),
+    (lambda: rollplan.Robot(max_rotor_rate="1"), "max_rotor_rate"),
+])
+def test_wrong_types_in_the_new_api_are_input_errors(call, needle):
+    """plan_route(None) raised TypeError, legs=[] 'unhashable type'; every public function of issues 12 and
+    17 refuses in one line."""
+    with pytest.raises(InputError, match=needle) as err:
+        call()
+    assert "\n" not in str(err.value)

@@ -35,9 +35,9 @@ def sphere_axes(ax, radius=1.0, unit="R", title="contact path on the sphere"):
     ax.set_title(title)
 
 
-def plane_axes(ax, target=None, unit="R", title="contact path on the plane"):
+def plane_axes(ax, target=None, unit="R", title="contact path on the plane", start=(0.0, 0.0)):
     """Start and target marks, labels, equal aspect, grid and legend of a plane view."""
-    ax.plot([0], [0], "ko", markersize=4, label="start")
+    ax.plot([start[0]], [start[1]], "ko", markersize=4, label="start")
     if target is not None:
         ax.plot([target[0]], [target[1]], "k*", markersize=10, label="target")
     ax.set_xlabel(f"u_a [{unit}]")
@@ -60,4 +60,4 @@ def draw_plane_path(ax, traj, target=None, unit="R"):
     """Contact path on the plane, first half-steps red, second blue."""
     for s, e, leaf in segments(traj):
         ax.plot(traj.u_a[s:e + 1], traj.v_a[s:e + 1], color=LEAF_COLORS[leaf % 2], linewidth=1.4)
-    plane_axes(ax, target, unit)
+    plane_axes(ax, target, unit, start=(traj.u_a[0], traj.v_a[0]))

@@ -16,7 +16,7 @@ def _rests(ax, motion):
 
 
 def draw_time_series(ax, motion, values, labels, ylabel, title, scale=1.0):
-    """Columns of ``values`` against time; thin grey lines mark the rest points between leaves."""
+    """Columns of ``values`` against time; thin grey lines mark the rest points (stops between pieces)."""
     _rests(ax, motion)
     for col, label in zip(np.asarray(values).T, labels):
         ax.plot(motion.time, col * scale, linewidth=1.2, label=label)
@@ -48,7 +48,7 @@ def plot_motion(motion, plan=None, traj=None, unit="m") -> Figure:
         draw_time_series(axes[1, 1], motion, motion.rotor_angles / (2 * np.pi), ["$\\varphi_1$", "$\\varphi_2$"],
                          "rotor angle [turns]", "rotor angles")
     r = motion.robot
-    fig.suptitle(f"T = {motion.duration:g} s, {int(motion.leaf.max()) + 1} half-steps (rest-to-rest, minimum jerk); "
+    fig.suptitle(f"T = {motion.duration:g} s, {int(motion.segment.max()) + 1} pieces (timing {motion.timing}); "
                  f"R = {r.radius:g} m, k = {r.k:.4g}, $J_r$ = {r.rotor_inertia_axial:.3g} kg m$^2$")
     fig.tight_layout()
     return fig
