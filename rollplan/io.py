@@ -16,7 +16,7 @@ from .execution.plants import check_samples
 from .inputs import load_json, show_path
 from .outputs import check_figure_path, check_writable, save_figure, write_atomic, write_json
 from .planners.geometric.composed import as_composed
-from .problem import State
+from .problem import State, check_contact
 from .robot import Robot, robot_from_mapping
 
 __all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict",
@@ -204,6 +204,8 @@ def load_rotor_plan(path) -> RotorPlan:
         if "goal" in data:
             goal = State.of(data["goal"], "goal")
         start = State.of(data["start"], "start") if "start" in data else State()
+        for name, state in (("start", start), ("goal", goal)):   # the region plans start and end in
+            check_contact(state.u_o, state.v_o, name)
         t = np.asarray(data["time"], float)
         rates = np.asarray(data["rotor_rates"], float)
     except InputError as exc:

@@ -109,8 +109,8 @@ def arrival_error(final, goal, radius: float = 1.0) -> np.ndarray:
     f, g = np.asarray(final, float), np.asarray(goal, float)
     with np.errstate(over="ignore"):   # states 1e308 apart are infinitely far apart
         d = f - g
-    d_psi = float(wrap(wrap_exact(f[2])[0] - wrap_exact(g[2])[0]))
-    return np.array([d[0] / radius, d[1] / radius, d_psi, d[3], d[4]])
+        d_psi = float(wrap(wrap_exact(f[2])[0] - wrap_exact(g[2])[0]))
+        return np.array([d[0] / radius, d[1] / radius, d_psi, d[3], d[4]])
 
 
 def arrival_residual(final, goal, radius: float = 1.0) -> float:

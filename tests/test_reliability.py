@@ -8,6 +8,7 @@ import math
 import os
 import subprocess
 import sys
+import warnings
 from fractions import Fraction
 
 import numpy as np
@@ -126,22 +127,6 @@ def test_short_duration_is_served_or_refused_never_a_failed_motion_with_exit_0(t
     for argv in (["--duration", "5"], ["--duration", "5", "--json", str(out)], []):
         code, text, err = run(capsys, "plan", "--to", "0", "0.1", *argv, "--samples", "10000000000")
         assert code == 2 and "samples" in err and one_line(err) and text == ""
-
-
-def test_a_motion_that_misses_is_not_a_success(monkeypatch, capsys):
-    """Whatever makes a motion miss its goal (here: its rotor rates halved), the command does not exit 0."""
-    from rollplan.execution import actuation
-
-    real = actuation.actuate
-
-    def halved(*args, **kwargs):
-        m = real(*args, **kwargs)
-        object.__setattr__(m, "rotor_rates", m.rotor_rates / 2)
-        return m
-
-    monkeypatch.setattr(actuation, "actuate", halved)
-    code, _, err = run(capsys, "plan", "--to", "0", "0.1", "--duration", "5")
-    assert code == 3 and "misses the goal" in err and one_line(err)
 
 
 def test_motion_api_refuses_wrong_types():
@@ -380,8 +365,9 @@ def test_timed_route_is_certified_by_its_rotors_and_read_back(tmp_path, capsys):
     assert run(capsys, "simulate", str(out))[0] == 0
 
 
-def test_a_timed_motion_that_misses_is_not_a_success_for_any_law(monkeypatch, capsys, tmp_path):
-    """certify_motion (the rotor-only simulation from the motion's start) guards every timing law."""
+def test_a_motion_that_misses_is_not_a_success(monkeypatch, capsys, tmp_path):
+    """Whatever makes a motion miss its goal (here: its rotor rates halved), the command does not exit 0:
+    certify_motion (the rotor-only simulation from the motion's start) guards every plan and timing law."""
     from rollplan.execution import actuation
 
     real = actuation.sample_motion
@@ -394,9 +380,10 @@ def test_a_timed_motion_that_misses_is_not_a_success_for_any_law(monkeypatch, ca
     monkeypatch.setattr(actuation, "sample_motion", halved)
     robot = tmp_path / "r.toml"
     robot.write_text(LIMITED)
-    for law in ("min-jerk", "smooth-cruise"):
-        code, _, err = run(capsys, "plan", "--robot", str(robot), "--from", "0", "0", "0", "0.2", "0",
-                           "--to", "0.05", "0", "--timing", law)
+    for argv in (["--to", "0", "0.1", "--duration", "5"],
+                 *(["--robot", str(robot), "--from", "0", "0", "0", "0.2", "0", "--to", "0.05", "0", "--timing", law]
+                   for law in ("min-jerk", "smooth-cruise"))):
+        code, _, err = run(capsys, "plan", *argv)
         assert code == 3 and "misses the goal" in err and one_line(err), err
 
 
@@ -444,3 +431,27 @@ def test_wrong_types_in_the_new_api_are_input_errors(call, needle):
     with pytest.raises(InputError, match=needle) as err:
         call()
     assert "\n" not in str(err.value)
+
+
+def test_plan_files_with_a_start_or_goal_outside_the_region(tmp_path, capsys):
+    """A plan file's start and goal are states of the region plans start and end in (a start at u_o = pi/2 was
+    simulated from a singular pose, exit 0); a start 1e308 m away gives an infinite arrival error without an
+    overflow warning on stderr."""
+    out = tmp_path / "p.json"
+    code, _, err = run(capsys, "plan", "--from", "0", "0", "0", "0.2", "0", "--to", "0.03", "0.05", "--duration", "4",
+                       "--samples", "800", "--json", str(out))
+    assert code == 0, err
+    d = json.loads(out.read_text())
+    assert d["start"]["u_o"] == 0.2
+    for key, change, needle in (("start", {"u_o": math.pi / 2}, "below pi/2"), ("start", {"u_o": 3.0}, "below pi/2"),
+                                ("goal", {"u_o": 1.5, "v_o": 1.5}, "below 0.05")):
+        bad = tmp_path / f"{key}.json"
+        bad.write_text(json.dumps({**d, key: {**d[key], **change}}))
+        code, _, err = run(capsys, "simulate", str(bad))
+        assert code == 2 and needle in err and str(bad.name) in err and one_line(err), err
+    far = tmp_path / "far.json"
+    far.write_text(json.dumps({**d, "start": {**d["start"], "u_a": 1e308}}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)   # an overflow warning fails the test
+        code, text, err = run(capsys, "simulate", str(far))
+    assert code == 0 and err == "" and "arrival error inf" in text
