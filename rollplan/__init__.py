@@ -10,25 +10,12 @@ It implements, on one symbolic CasADi model, the geometric-phase planner of
 direct-collocation optimal-control planner for the same :class:`Problem`.
 """
 
-import os as _os
-import signal as _signal
-import sys as _sys
-import threading as _threading
+from . import interrupts as _interrupts
 
-
-def _interrupted_at_start(signum, frame):
-    print("rollplan: interrupted", file=_sys.stderr)
-    raise SystemExit(130)
-
-
-# Started as the `rollplan` command (or `python -m rollplan...`): Ctrl-C while the modules below load (a
-# second or two, casadi and matplotlib) exits 130 with one line instead of an import traceback. The handler
-# is restored at the end of this file; imported by a program, nothing changes.
-_AT_START = (bool(_sys.argv) and (_os.path.basename(_sys.argv[0]) == "rollplan" or _sys.argv[0] == "-m")
-             and _threading.current_thread() is _threading.main_thread()
-             and _signal.getsignal(_signal.SIGINT) is _signal.default_int_handler)
-if _AT_START:
-    _signal.signal(_signal.SIGINT, _interrupted_at_start)
+# Started as the `rollplan` command (or `python -m rollplan.cli`): Ctrl-C while the modules load (a second or
+# two, casadi and matplotlib) exits 130 with one line instead of an import traceback, until rollplan.cli.main
+# takes over (rollplan.interrupts.guard_start_up); imported by a program, nothing changes.
+_GUARDED = _interrupts.guard_start_up()
 
 from .core.curves import A_MAX, Curve, Piece, circle_point, figure_eight  # noqa: E402
 from .errors import InputError, NoPlanError, SolverError  # noqa: E402
@@ -55,8 +42,8 @@ from .result import Certificate, Measures, PlanResult, SolverStats, Trajectory  
 from .robot import Robot, default_robot, load_robot  # noqa: E402
 from .waypoints import read_waypoints  # noqa: E402
 
-if _AT_START:
-    _signal.signal(_signal.SIGINT, _signal.default_int_handler)
+if _GUARDED and not _interrupts.cli_follows():   # python -m rollplan.<another module>: guard no longer
+    _interrupts.end_start_up()
 
 __version__ = "0.1.0"
 

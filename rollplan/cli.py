@@ -10,6 +10,7 @@ import re
 import sys
 from contextlib import ExitStack
 
+from . import interrupts
 from .core.curves import A_MAX
 from .errors import InputError, NoPlanError, SolverError, check_whole
 from .inputs import parse_number, parse_whole, show_path
@@ -650,8 +651,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        interrupts.end_start_up()   # from here Ctrl-C is KeyboardInterrupt: exit 130 below
+        args = build_parser().parse_args(argv)
+    except KeyboardInterrupt:
+        print("rollplan: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     logging.basicConfig(level=logging.INFO if args.verbose else logging.ERROR, format="%(name)s: %(message)s")
     if (getattr(args, "command", None) in ("plan", "compare", "route") and args.k is None and args.robot is None
             and getattr(args, "duration", None) is None and getattr(args, "timing", None) is None):

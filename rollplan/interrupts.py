@@ -18,14 +18,22 @@ call if a signal arrived during it, whatever the solver returned. It changes
 the handler only in the main thread and only while Python's default handler is
 installed (a program with its own SIGINT handler, or a worker process that
 ignores SIGINT, is left alone).
+
+Start-up: :func:`guard_start_up` (called first thing by ``rollplan/__init__.py``)
+makes a Ctrl-C while the modules load exit 130 with one line when the program
+is the ``rollplan`` command or ``python -m rollplan.cli``; :func:`end_start_up`
+(first thing in :func:`rollplan.cli.main`, inside its Ctrl-C handling) gives
+SIGINT back to Python's default handler.
 """
 
 from __future__ import annotations
 
+import os
 import signal
+import sys
 import threading
 
-__all__ = ["call"]
+__all__ = ["call", "guard_start_up", "cli_follows", "end_start_up"]
 
 class _State:
     pending = False   # SIGINT arrived during the outermost call
@@ -60,3 +68,35 @@ def call(function, *args, **kwargs):
     if _State.pending:
         raise KeyboardInterrupt
     return result
+
+
+def _interrupted_at_start(signum, frame):
+    print("rollplan: interrupted", file=sys.stderr)
+    raise SystemExit(130)
+
+
+def cli_follows() -> bool:
+    """True if this program is the ``rollplan`` command or ``python -m rollplan.cli`` (rollplan.cli.main runs
+    next)."""
+    argv = getattr(sys, "orig_argv", sys.argv)
+    script = os.path.basename(sys.argv[0]) if sys.argv else ""
+    return script == "rollplan" or any(argv[i:i + 2] == ["-m", "rollplan.cli"] for i in range(len(argv)))
+
+
+def guard_start_up() -> bool:
+    """Install the start-up handler (module docstring) if this program is the command or ``python -m`` of a
+    rollplan module, in the main thread, with Python's default handler; True if installed."""
+    started = cli_follows() or (bool(sys.argv) and sys.argv[0] == "-m")
+    if not (started and threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
+        return False
+    signal.signal(signal.SIGINT, _interrupted_at_start)
+    return True
+
+
+def end_start_up() -> None:
+    """Give SIGINT back to Python's default handler if the start-up handler holds it (else nothing)."""
+    if threading.current_thread() is threading.main_thread() and \
+            signal.getsignal(signal.SIGINT) is _interrupted_at_start:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+

@@ -136,3 +136,25 @@ def test_ctrl_c_stops_the_solver_loop_with_exit_130(delay):
     assert code == 130, err
     assert elapsed < 2.0
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("launcher", ["module", "script"])
+def test_ctrl_c_during_start_up_is_one_line_and_exit_130(launcher):
+    """SIGINT while `python -m rollplan.cli` compiled and ran cli.py (after the package had loaded) gave a
+    KeyboardInterrupt traceback and exit -2: the start-up guard now holds until cli.main takes over. Moments from
+    0.3 s (the interpreter's own start-up, before rollplan's first line, is Python's) to well into planning."""
+    if launcher == "module":
+        command = [sys.executable, "-m", "rollplan.cli"]
+    else:
+        command = [os.path.join(os.path.dirname(sys.executable), "rollplan")]
+        if not os.path.exists(command[0]):
+            pytest.skip("the rollplan console script is not installed next to this Python")
+    for delay in (0.3, 0.6, 0.9, 1.2, 1.6, 2.0, 2.5, 3.5):
+        proc = subprocess.Popen([*command, "plan", "--to", "0", "1", "--k", "99"], stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
+        time.sleep(delay)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+        assert proc.returncode == 130, (delay, proc.returncode, err)
+        assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted", (delay, err)
