@@ -10,13 +10,20 @@ It implements, on one symbolic CasADi model, the geometric-phase planner of
 direct-collocation optimal-control planner for the same :class:`Problem`.
 """
 
-from .core.curves import A_MAX, Curve, Piece, circle_point, figure_eight
-from .errors import InputError, NoPlanError, SolverError
-from .execution.actuation import Motion, actuate
-from .execution.plants import Simulation, simulate_rotors
-from .planners import METHODS, solve
-from .planners.collocation import CollocationPlanner, CollocationResult, collocate
-from .planners.geometric import (
+from . import interrupts as _interrupts
+
+# Started as the `rollplan` command (or `python -m rollplan.cli`): Ctrl-C while the modules load (a second or
+# two, casadi and matplotlib) exits 130 with one line instead of an import traceback, until rollplan.cli.main
+# takes over (rollplan.interrupts.guard_start_up); imported by a program, nothing changes.
+_GUARDED = _interrupts.guard_start_up()
+
+from .core.curves import A_MAX, Curve, Piece, circle_point, figure_eight  # noqa: E402
+from .errors import InputError, NoPlanError, SolverError  # noqa: E402
+from .execution.actuation import Motion, actuate  # noqa: E402
+from .execution.plants import Simulation, simulate_rotors  # noqa: E402
+from .planners import METHODS, solve  # noqa: E402
+from .planners.collocation import CollocationPlanner, CollocationResult, collocate  # noqa: E402
+from .planners.geometric import (  # noqa: E402
     LEGS,
     SOLVERS,
     ComposedPlan,
@@ -30,10 +37,13 @@ from .planners.geometric import (
     plan_route,
     step,
 )
-from .problem import N3Z_MIN, STATE_NAMES, Problem, State
-from .result import Certificate, Measures, PlanResult, SolverStats, Trajectory
-from .robot import Robot, default_robot, load_robot
-from .waypoints import read_waypoints
+from .problem import N3Z_MIN, STATE_NAMES, Problem, State  # noqa: E402
+from .result import Certificate, Measures, PlanResult, SolverStats, Trajectory  # noqa: E402
+from .robot import Robot, default_robot, load_robot  # noqa: E402
+from .waypoints import read_waypoints  # noqa: E402
+
+if _GUARDED and not _interrupts.cli_follows():   # python -m rollplan.<another module>: guard no longer
+    _interrupts.end_start_up()
 
 __version__ = "0.1.0"
 

@@ -1,27 +1,40 @@
-"""The ``rollplan`` command. Exit codes: 0 success, 2 bad input, 3 no plan, 4 solver failure."""
+"""The ``rollplan`` command. Exit codes: 0 success, 2 bad input, 3 no plan, 4 solver failure, 130 interrupted
+(Ctrl-C)."""
 
 from __future__ import annotations
 
 import argparse
 import logging
+import os
+import re
 import sys
+from contextlib import ExitStack
 
+from . import interrupts
 from .core.curves import A_MAX
 from .errors import InputError, NoPlanError, SolverError, check_finite, check_whole
+from .inputs import parse_number, parse_whole, show_path
 from .io import check_figure_path, check_writable, composed_to_dict, route_to_dict, save_figure, write_json
+from .outputs import claim
 from .planners import geometric
 from .planners.geometric import as_composed
 from .problem import STATE_NAMES
 from .robot import default_robot, load_robot
 from .waypoints import read_waypoints
 
-EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER = 0, 2, 3, 4
+EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
 #: k of ``plan`` and ``compare`` when neither --k nor --robot is given (the paper's case study).
 DEFAULT_K = 2.5
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports bad input in one line with exit code 2."""
+    """argparse that reports bad input in one line with exit code 2, and takes ``-1e-3`` for a number."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        # argparse's own pattern misses exponents (-1e-3) and would read them as options
+        self._negative_number_matcher = re.compile(r"^-(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$"
+                                                   r"|^-(?i:inf|infinity|nan)$")
 
     def error(self, message):
         self.exit(EXIT_INPUT, f"{self.prog}: error: {message}\n")
@@ -29,24 +42,43 @@ class _Parser(argparse.ArgumentParser):
 
 def _number(text: str) -> float:
     try:
-        return check_finite("value", float(text))
-    except (ValueError, InputError):
-        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number") from None
+        return parse_number(text, "value")
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("value = ")) from None
 
 
 def _whole(text: str) -> int:
     try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        return parse_whole(text, "value")
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("value = ")) from None
 
 
-def _check_outputs(json=None, figure=None) -> None:
-    """Refuse unwritable output paths and unknown figure formats before any computation."""
+class _Claims:
+    """The outputs the running command holds (:func:`rollplan.outputs.claim`), released when it ends."""
+
+    stack: ExitStack | None = None
+    files: dict = {}   # real path of each output of the running command -> the name given
+
+
+def _check_outputs(json=None, figure=None, inputs=()) -> None:
+    """Refuse unwritable output paths, unknown figure formats, outputs that are inputs and two outputs that are
+    one file before any computation, and hold the outputs (a second process writing one of them is refused)."""
     if json is not None:
-        check_writable(json)
+        check_writable(json, inputs=inputs)
     if figure is not None:
         check_figure_path(figure)
+        check_writable(figure, "figure", inputs=inputs)
+    for name in (json, figure):
+        if name is None:
+            continue
+        real = os.path.realpath(name)
+        if real in _Claims.files:
+            raise InputError(f"output {show_path(name)} is the same file as output "
+                             f"{show_path(_Claims.files[real])}: give each output its own name")
+        _Claims.files[real] = name
+    if _Claims.stack is not None:
+        _Claims.stack.enter_context(claim(json, figure))
 
 
 def _k_or_robot(args):
@@ -123,10 +155,10 @@ def _is_timed(args) -> bool:
     return args.duration is not None or args.timing is not None
 
 
-def _check_timing_outputs(args) -> None:
+def _check_timing_outputs(args, inputs=()) -> None:
     """--timing-plot of ``plan`` and ``route``: a figure path, and a timed motion to draw."""
     if args.timing_plot is not None:
-        check_figure_path(args.timing_plot)
+        _check_outputs(figure=args.timing_plot, inputs=inputs)
         if not _is_timed(args):
             raise InputError("--timing-plot needs a timed motion: give --duration T or --timing NAME")
 
@@ -140,22 +172,28 @@ def _robot_for_duration(args, k, robot):
         if k is not None:
             raise InputError("--duration and --timing need the robot's inertias, not only k: give --robot FILE "
                              "(or drop --k to use the default robot)")
-        robot = default_robot()
-        print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
-              "lengths in m")
+        robot = default = default_robot()
+    else:
+        default = None
     from .execution.limits import Limits
     from .execution.timing import get_law
 
     get_law(args.timing or "min-jerk").check(Limits.of(robot), args.duration)
+    if default is not None:
+        print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
+              "lengths in m")
     return robot
 
 
-def _plan_inputs(args):
-    """The checks of ``plan`` and ``route`` before any work: outputs, samples, the robot and the timing law's
-    needs; returns ``(k, robot)``."""
-    _check_outputs(json=args.json, figure=args.plot)
-    _check_timing_outputs(args)
-    check_whole("samples", args.samples, 2, 10**7)
+def _plan_inputs(args, inputs=()):
+    """The checks of ``plan`` and ``route`` before any work: outputs (never one of ``inputs`` or the robot
+    file), samples, the robot and the timing law's needs; returns ``(k, robot)``."""
+    from .execution.actuation import MAX_SAMPLES
+
+    inputs = [*inputs, args.robot]
+    _check_outputs(json=args.json, figure=args.plot, inputs=inputs)
+    _check_timing_outputs(args, inputs)
+    check_whole("samples", args.samples, 2, MAX_SAMPLES)
     k, robot = _k_or_robot(args)
     return k, _robot_for_duration(args, k, robot)
 
@@ -222,18 +260,18 @@ def _write_results(args, p, robot, unit, to_dict) -> None:
 
 
 def cmd_route(args) -> int:
-    k, robot = _plan_inputs(args)
+    k, robot = _plan_inputs(args, inputs=[args.waypoints])
     waypoints = read_waypoints(args.waypoints)
-    progress = _Progress()
-    print(f"rollplan route: {len(waypoints)} waypoints from {args.waypoints}", file=sys.stderr)
+    print(f"rollplan route: {len(waypoints)} waypoints from {args.waypoints}")
+    # a bar on a terminal only: piped or captured, stderr holds nothing but the one line of a refusal
+    progress = _Progress() if sys.stderr.isatty() else None
     try:
         r = geometric.plan_route(waypoints, args.steps, k, robot, args.radius, args.legs, args.method,
-                                 progress=lambda done, total: progress("legs", done, total))
-    except KeyboardInterrupt:
-        progress.close()
-        print("\nrollplan: interrupted", file=sys.stderr)
-        return 130
-    progress.close()
+                                 progress=None if progress is None else
+                                 (lambda done, total: progress("legs", done, total)))
+    finally:  # Ctrl-C: exit 130 in main()
+        if progress is not None:
+            progress.close()
     unit = "m" if robot is not None else ("R" if args.radius is None else "units")
     print(f"rollplan route: k = {r.k:.9g}, R = {r.radius:g}, {len(r.plans)} legs, default steps = {r.steps}")
     for i, (p, w, res) in enumerate(zip(r.plans, r.waypoints[1:], r.waypoint_residuals), 1):
@@ -251,14 +289,13 @@ def cmd_route(args) -> int:
 def _timed(args, p, robot):
     """``--duration`` / ``--timing``: rotor rates, angles and torques, checked by the rotor-only simulation
     from the plan's start state."""
-    from .execution.actuation import actuate
-    from .execution.plants import simulate_rotors
+    from .execution.actuation import actuate, certify_motion
     from .execution.timing import round_up
     from .io import motion_to_dict
 
     timing = args.timing or "min-jerk"
     motion = actuate(p, robot, args.duration, args.samples, timing)
-    sim = simulate_rotors(robot, motion.time, motion.rotor_rates, p.goal, x0=p.problem.start.array())
+    sim = certify_motion(motion)
     lim = motion.limits
     print(f"  motion        T = {motion.duration:g} s, {motion.time.size} samples, timing {timing}"
           f"{' (rest-to-rest per piece: leaf, roll)' if timing == 'min-jerk' else ''}")
@@ -283,8 +320,7 @@ def _timed(args, p, robot):
 
 
 def cmd_step(args) -> int:
-    if args.json is not None:
-        check_writable(args.json)
+    _check_outputs(json=args.json)
     r = geometric.step(args.a, args.b, k=args.k, gamma=args.gamma)
     u, v = r.shift
     # final psi of one step equals eta
@@ -405,8 +441,7 @@ def cmd_simulate(args) -> int:
     from .execution.plants import simulate_rotors
     from .io import load_rotor_plan
 
-    if args.json is not None:
-        check_writable(args.json)
+    _check_outputs(json=args.json, inputs=[args.plan_file, args.robot])
     rp = load_rotor_plan(args.plan_file)
     robot = load_robot(args.robot) if args.robot else rp.robot
     if args.closed_loop or args.plant != "rates" or args.noise:
@@ -435,7 +470,9 @@ def cmd_animate(args) -> int:
     from .io import load_rotor_plan
     from .plots.animation import make_animation
 
-    check_writable(args.out)
+    _check_outputs(json=args.out, inputs=[args.plan_file])
+    if not args.out.lower().endswith(".gif"):
+        raise InputError(f"--out {args.out!r} is not allowed: animate writes a GIF; give a name ending in .gif")
     if not 2 <= args.frames <= 2000:
         raise InputError(f"--frames {args.frames} is not allowed: it must lie in [2, 2000]")
     if not 1 <= args.fps <= 100:
@@ -454,7 +491,7 @@ def _fmt_row(name, a, b, fmt):
 def cmd_compare(args) -> int:
     from .studies import comparison
 
-    _check_outputs(json=args.json, figure=args.plot)
+    _check_outputs(json=args.json, figure=args.plot, inputs=[args.robot])
     k, robot = _k_or_robot(args)
     c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
                            args.cost, args.intervals, args.degree, args.scheme, args.guess, args.contact_bound)
@@ -552,7 +589,7 @@ def cmd_batch(args) -> int:
     except KeyboardInterrupt:
         print(f"\nrollplan: interrupted; finished lines are kept in {args.out}: rerun with --resume",
               file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
     print(f"rollplan batch: {r.total} targets, {r.skipped} already done, {r.planned} planned "
           f"({r.failed} failed) in {r.time_s:.1f} s; wrote {args.out}")
     return EXIT_OK
@@ -708,14 +745,26 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        interrupts.end_start_up()   # from here Ctrl-C is KeyboardInterrupt: exit 130 below
+        args = build_parser().parse_args(argv)
+    except KeyboardInterrupt:
+        print("rollplan: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     logging.basicConfig(level=logging.INFO if args.verbose else logging.ERROR, format="%(name)s: %(message)s")
     if (getattr(args, "command", None) in ("plan", "compare", "route") and args.k is None and args.robot is None
             and getattr(args, "duration", None) is None and getattr(args, "timing", None) is None):
         args.k = DEFAULT_K
     try:
-        return args.func(args)
+        with ExitStack() as stack:
+            _Claims.stack, _Claims.files = stack, {}
+            return args.func(args)
+    except KeyboardInterrupt:  # Ctrl-C, also inside the solvers (rollplan.interrupts)
+        print("rollplan: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except MemoryError:
+        print("rollplan: error: not enough memory for this input", file=sys.stderr)
+        return EXIT_INPUT
     except InputError as exc:
         print(f"rollplan: error: {exc}", file=sys.stderr)
         return EXIT_INPUT
@@ -725,12 +774,11 @@ def main(argv=None) -> int:
     except SolverError as exc:
         print(f"rollplan: solver failed ({exc.status}): {exc}", file=sys.stderr)
         return EXIT_SOLVER
-    except KeyboardInterrupt:
-        print("\nrollplan: interrupted", file=sys.stderr)
-        return 130
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return EXIT_OK
+    finally:
+        _Claims.stack = None
 
 
 if __name__ == "__main__":

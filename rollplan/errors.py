@@ -8,11 +8,20 @@ from numbers import Integral, Real
 
 import numpy as np
 
-__all__ = ["InputError", "NoPlanError", "SolverError", "show", "check_finite", "check_range", "check_whole"]
+__all__ = ["InputError", "OutputError", "NoPlanError", "SolverError", "show", "show_limit", "check_finite",
+           "check_range", "check_whole", "check_choice", "check_flag"]
 
 
 class InputError(ValueError):
     """A user-supplied value is not allowed. The message is one line."""
+
+
+class OutputError(InputError):
+    """An output cannot be written (read-only, locked by another writer, disk full, name too long...).
+
+    A kind of :class:`InputError` (the command exits 2 with one line): the
+    user chose where to write. The message is one line.
+    """
 
 
 class NoPlanError(RuntimeError):
@@ -31,6 +40,23 @@ def show(value, width: int = 40) -> str:
     """``repr(value)``, shortened to ``width`` characters for a one-line message."""
     text = repr(value)
     return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def show_limit(x) -> str:
+    """A limit of an allowed range, printed exactly: ``100``, ``0.69``, ``1.5707963267948966``.
+
+    Whole numbers print without a fraction; every other float prints as its
+    shortest round-trip ``repr``, so a refused value is never shown beside a
+    limit rounded to look like it.
+    """
+    if isinstance(x, Integral) and not isinstance(x, bool):
+        return str(int(x))
+    x = float(x)
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    if x.is_integer() and abs(x) < 1e16:
+        return str(int(x))
+    return repr(x)
 
 
 def check_finite(name: str, value) -> float:
@@ -57,8 +83,8 @@ def check_range(name: str, value, low=None, high=None, low_open=False, high_open
     bad_low = low is not None and (x <= low if low_open else x < low)
     bad_high = high is not None and (x >= high if high_open else x > high)
     if bad_low or bad_high:
-        lo = "-inf" if low is None else f"{low:g}"
-        hi = "inf" if high is None else f"{high:g}"
+        lo = "-inf" if low is None else show_limit(low)
+        hi = "inf" if high is None else show_limit(high)
         span = ("(" if low_open or low is None else "[") + f"{lo}, {hi}" + (")" if high_open or high is None else "]")
         raise InputError(f"{name} = {x!r} is not allowed: it must lie in {span}")
     return x
@@ -75,3 +101,17 @@ def check_whole(name: str, value, low=None, high=None) -> int:
         span = f">= {low}" if high is None else (f"<= {high}" if low is None else f"in [{low}, {high}]")
         raise InputError(f"{name} = {show(value)} is not allowed: it must be a whole number {span}")
     return int(value)
+
+
+def check_choice(name: str, value, choices) -> str:
+    """Return ``value`` if it is one of the names ``choices`` (strings); InputError listing them otherwise."""
+    if not isinstance(value, str) or value not in choices:
+        raise InputError(f"{name} = {show(value)} is not allowed: choose one of {', '.join(choices)}")
+    return value
+
+
+def check_flag(name: str, value) -> bool:
+    """Return ``value`` if it is a bool (True or False); InputError otherwise (no truthy strings or numbers)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{name} = {show(value)} is not allowed: it must be True or False")
+    return bool(value)

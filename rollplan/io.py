@@ -1,88 +1,29 @@
-"""Files: atomic output, the JSON forms of results, and reading plan files back."""
+"""Files of results: the JSON forms of results, and reading plan files back.
+
+Writing goes through :mod:`rollplan.outputs` (atomic, locked, never over an
+input; its names are re-exported here), reading through :mod:`rollplan.inputs`
+(regular files, size and depth caps, finite numbers only).
+"""
 
 from __future__ import annotations
 
-import json
-import os
-import tempfile
-from dataclasses import dataclass, fields
-from pathlib import Path
+from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import InputError
 from .execution.plants import check_samples
+from .inputs import load_json, show_path
+from .outputs import check_figure_path, check_writable, save_figure, write_atomic, write_json
 from .planners.geometric.composed import as_composed
-from .problem import State
-from .robot import OPTIONAL_KEYS, Robot
+from .problem import State, check_contact
+from .robot import Robot, robot_from_mapping
 
 __all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict",
-           "composed_to_dict", "route_to_dict", "motion_to_dict", "RotorPlan", "load_rotor_plan"]
+           "composed_to_dict", "route_to_dict", "motion_to_dict", "RotorPlan", "load_rotor_plan", "MAX_PLAN_BYTES"]
 
-
-def check_writable(path) -> Path:
-    """The real path behind ``path`` (symlinks followed), or InputError unless it can be written.
-
-    An existing target must be a regular file: a device, FIFO or socket is
-    refused rather than replaced by the atomic rename.
-    """
-    p = Path(os.path.realpath(path)) if os.path.islink(path) else Path(path)
-    folder = p.parent if str(p.parent) else Path(".")
-    if p.is_dir():
-        raise InputError(f"output path {str(path)!r} is a directory")
-    if p.exists() and not p.is_file():
-        raise InputError(f"output path {str(path)!r} is not allowed: it exists and is not a regular file")
-    if not folder.is_dir():
-        raise InputError(f"output path {str(p)!r} is not writable: folder {str(folder)!r} does not exist")
-    if not os.access(folder, os.W_OK):
-        raise InputError(f"output path {str(p)!r} is not writable: no permission in {str(folder)!r}")
-    return p
-
-
-def write_atomic(path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and an atomic rename.
-
-    A symlink is written through: its target gets the data, the link stays.
-    """
-    p = check_writable(path)
-    fd, tmp = tempfile.mkstemp(dir=p.parent if str(p.parent) else ".", prefix=f".{p.name}.", suffix=".tmp")
-    try:
-        umask = os.umask(0)
-        os.umask(umask)
-        os.fchmod(fd, 0o666 & ~umask)  # mkstemp makes 0600; give the file the usual mode
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, p)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def write_json(path, obj) -> None:
-    write_atomic(path, (json.dumps(obj, indent=1, allow_nan=False) + "\n").encode())
-
-
-def check_figure_path(path) -> Path:
-    """``check_writable`` plus a file format matplotlib can write, judged by the suffix."""
-    from matplotlib.figure import Figure
-
-    formats = Figure().canvas.get_supported_filetypes()
-    suffix = Path(path).suffix.lstrip(".").lower()
-    if suffix not in formats:
-        ext = ("." + suffix) if suffix else "(none)"
-        raise InputError(f"figure path {str(path)!r} is not allowed: its extension {ext!r} "
-                         f"is not a figure format; use one of {', '.join('.' + f for f in sorted(formats))}")
-    return check_writable(path)
-
-
-def save_figure(fig, path, dpi=120) -> None:
-    """Save a matplotlib figure atomically (format from the suffix)."""
-    import io
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format=Path(path).suffix.lstrip(".") or "png", dpi=dpi)
-    write_atomic(path, buf.getvalue())
+#: Largest plan file read back (a plan of 1000 steps timed with 10^6 samples fits).
+MAX_PLAN_BYTES = 1 << 30
 
 
 def _f(x):
@@ -242,36 +183,37 @@ class RotorPlan:
 
 
 def load_rotor_plan(path) -> RotorPlan:
-    """Read a plan written by ``rollplan plan --duration T --json FILE``; InputError if it lacks the motion."""
-    try:
-        with open(path, encoding="utf-8") as fh:
-            data = json.load(fh)
-    except OSError as exc:
-        raise InputError(f"plan file {str(path)!r} cannot be read: {exc.strerror}") from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputError(f"plan file {str(path)!r} is not valid JSON: {exc}") from None
+    """Read a plan written by ``rollplan plan --duration T --json FILE``; InputError (naming the file) if it
+    is not one: not a regular UTF-8 JSON file, or without the motion, or with a robot, target or samples
+    that are not allowed."""
+    where = f"plan file {show_path(path)}"
+    data = load_json(path, "plan file", MAX_PLAN_BYTES)
     if not isinstance(data, dict):
-        raise InputError(f"plan file {str(path)!r} is not a rollplan plan (a JSON object)")
+        raise InputError(f"{where} is not a rollplan plan (a JSON object)")
     for key in ("time", "rotor_rates", "robot", "target"):
         if key not in data:
             hint = " (make it with: rollplan plan ... --duration T --json FILE)" if key != "target" else ""
-            raise InputError(f"plan file {str(path)!r} has no key {key!r}{hint}")
-    rob = data["robot"]
-    names = [f.name for f in fields(Robot) if f.name not in OPTIONAL_KEYS]
-    if not isinstance(rob, dict) or any(n not in rob for n in names):
-        raise InputError(f"plan file {str(path)!r}: 'robot' must hold {', '.join(names)}")
+            raise InputError(f"{where} has no key {key!r}{hint}")
     # plan files written before the motors' limits existed have no such keys: unlimited
-    robot = Robot(**{n: rob[n] for n in [*names, *OPTIONAL_KEYS] if n in rob})
+    robot = robot_from_mapping(data["robot"], f"{where}: 'robot'", derived=("k",))
     tg = data["target"]
+    if not isinstance(tg, dict):
+        raise InputError(f"{where}: 'target' must be an object with u_a, v_a, psi")
     try:
-        goal = State(float(tg["u_a"]), float(tg["v_a"]), float(tg["psi"]))
+        goal = State.of({n: tg[n] for n in ("u_a", "v_a", "psi")}, "target")
         if "goal" in data:
             goal = State.of(data["goal"], "goal")
         start = State.of(data["start"], "start") if "start" in data else State()
+        for name, state in (("start", start), ("goal", goal)):   # the region plans start and end in
+            check_contact(state.u_o, state.v_o, name)
         t = np.asarray(data["time"], float)
         rates = np.asarray(data["rotor_rates"], float)
-    except (TypeError, KeyError, ValueError, InputError):
-        raise InputError(f"plan file {str(path)!r}: 'target', 'start', 'goal', 'time' or 'rotor_rates' is "
-                         "malformed") from None
-    t, rates = check_samples(t, rates)
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
+    except (TypeError, KeyError, ValueError):
+        raise InputError(f"{where}: 'target', 'start', 'goal', 'time' or 'rotor_rates' is malformed") from None
+    try:
+        t, rates = check_samples(t, rates)
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
     return RotorPlan(robot, t, rates, goal, data, start)

@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .core.plane import wrap
+from .core.plane import wrap, wrap_exact
 from .errors import InputError, check_finite, check_range, check_whole
 from .robot import Robot
 
@@ -102,12 +102,15 @@ def arrival_error(final, goal, radius: float = 1.0) -> np.ndarray:
     """How far ``final`` is from ``goal``, entry by entry: shape (5,), in :class:`State` order.
 
     Lengths are divided by ``radius`` (units of R), psi is the difference
-    wrapped to (-pi, pi] (psi is an angle), u_o and v_o are differences [rad].
+    wrapped to (-pi, pi] (psi is an angle; each is first reduced exactly by
+    :func:`~rollplan.core.plane.wrap_exact`, so a goal psi of 1e8 or 1e16 is
+    compared to full accuracy), u_o and v_o are differences [rad].
     """
     f, g = np.asarray(final, float), np.asarray(goal, float)
     with np.errstate(over="ignore"):   # states 1e308 apart are infinitely far apart
         d = f - g
-    return np.array([d[0] / radius, d[1] / radius, float(wrap(d[2])), d[3], d[4]])
+        d_psi = float(wrap(wrap_exact(f[2])[0] - wrap_exact(g[2])[0]))
+        return np.array([d[0] / radius, d[1] / radius, d_psi, d[3], d[4]])
 
 
 def arrival_residual(final, goal, radius: float = 1.0) -> float:
@@ -137,11 +140,11 @@ def check_contact(u_o, v_o, name: str = "contact") -> tuple[float, float]:
     """
     u, v = check_finite(f"{name} u_o", u_o), check_finite(f"{name} v_o", v_o)
     if abs(u) >= math.pi / 2 or abs(v) >= math.pi / 2:
-        raise InputError(f"{name} (u_o, v_o) = ({u:g}, {v:g}) is not allowed: |u_o| and |v_o| must be below "
+        raise InputError(f"{name} (u_o, v_o) = ({u!r}, {v!r}) is not allowed: |u_o| and |v_o| must be below "
                          "pi/2 (the lower hemisphere)")
     n3z = math.cos(u) * math.cos(v)
     if n3z < N3Z_MIN:
-        raise InputError(f"{name} (u_o, v_o) = ({u:g}, {v:g}) is not allowed: cos(u_o) cos(v_o) = {n3z:.4g} is "
+        raise InputError(f"{name} (u_o, v_o) = ({u!r}, {v!r}) is not allowed: cos(u_o) cos(v_o) = {n3z!r} is "
                          f"below {N3Z_MIN:g}; the contact point must lie within "
                          f"{math.degrees(math.acos(N3Z_MIN)):.2f} deg of the south pole")
     return u, v

@@ -17,22 +17,29 @@ Format::
   empty); at least two rows. Lengths in the unit of the plan (R, or metres with
   a robot), angles in rad. A row with ``u_a, v_a, psi`` only is a position with
   a heading (contact at the pole), one with ``u_o, v_o`` a full state.
-* Every error names the file and the line, on one line.
+* The file is read by :func:`rollplan.inputs.read_csv` (a regular UTF-8 file,
+  a column named once) and numbers are read as on the command line
+  (:func:`rollplan.inputs.parse_number`). Every error names the file and the
+  line, on one line.
 """
 
 from __future__ import annotations
 
-import csv
 from dataclasses import dataclass
 
-from .errors import InputError, check_finite
+from .errors import InputError
+from .inputs import parse_number, parse_whole, read_csv, show_path
 from .problem import STATE_NAMES, State, check_contact, check_steps
 
-__all__ = ["COLUMNS", "Waypoint", "read_waypoints"]
+__all__ = ["COLUMNS", "MAX_WAYPOINTS", "Waypoint", "read_waypoints"]
 
 #: Columns a waypoints file may have.
 COLUMNS = (*STATE_NAMES, "steps", "label")
 _REQUIRED = ("u_a", "v_a", "psi")
+#: Most waypoints of a file (a route plans and certifies them one leg after the other).
+MAX_WAYPOINTS = 10_000
+#: Largest waypoints file read.
+MAX_WAYPOINTS_BYTES = 1 << 24
 
 
 @dataclass(frozen=True)
@@ -60,58 +67,36 @@ def _row(cells: dict, first: bool) -> Waypoint:
         cell = cells.get(name, "")
         if cell == "" and name in _REQUIRED:
             raise InputError(f"{name} is empty")
-        try:
-            value = float(cell) if cell != "" else 0.0
-        except ValueError:
-            raise InputError(f"{name} = {cell!r} is not a number") from None
-        values.append(check_finite(name, value))
+        values.append(parse_number(cell, name) if cell != "" else 0.0)
     state = State(*values)
     check_contact(state.u_o, state.v_o, "waypoint")
     steps = None
     if cells.get("steps", "") != "":
         if first:
             raise InputError("the first row is the start: its steps cell must be empty")
-        try:
-            steps = int(cells["steps"])
-        except ValueError:
-            raise InputError(f"steps = {cells['steps']!r} is not a whole number") from None
-        steps = check_steps(steps)
+        steps = check_steps(parse_whole(cells["steps"], "steps"))
     return Waypoint(state, steps, cells.get("label", ""))
 
 
 def read_waypoints(path) -> list:
-    """The waypoints of a CSV file (module docstring); InputError naming the file and the line otherwise."""
-    name = str(path)
-    try:
-        with open(path, encoding="utf-8", newline="") as fh:
-            lines = fh.read().splitlines()
-    except OSError as exc:
-        raise InputError(f"waypoints file {name!r} cannot be read: {exc.strerror}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"waypoints file {name!r} is not a text file (UTF-8)") from None
-    rows = [(i + 1, line) for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")]
-    if not rows:
-        raise InputError(f"waypoints file {name!r} has no header row (columns {', '.join(COLUMNS)})")
-    parsed = list(csv.reader([line for _, line in rows]))
-    head_no, header = rows[0][0], [c.strip() for c in parsed[0]]
-    where = f"{name} line {head_no}"
-    unknown = [c for c in header if c not in COLUMNS]
+    """The waypoints of a CSV file (module docstring; read by :func:`rollplan.inputs.read_csv`: a regular
+    UTF-8 file, numbers as on the command line); InputError naming the file and the line otherwise."""
+    where = f"waypoints file {show_path(path)}"
+    table = read_csv(path, "waypoints file", _REQUIRED, MAX_WAYPOINTS_BYTES, comments=True)
+    unknown = [c for c in table.header if c not in COLUMNS]
     if unknown:
-        raise InputError(f"{where}: unknown column {unknown[0]!r}; allowed: {', '.join(COLUMNS)}")
-    missing = [c for c in _REQUIRED if c not in header]
-    if missing:
-        raise InputError(f"{where}: missing column {missing[0]!r}")
-    if len(set(header)) != len(header):
-        raise InputError(f"{where}: a column is named twice")
+        raise InputError(f"{where}, line {table.header_line}: unknown column {unknown[0]!r}; allowed: "
+                         f"{', '.join(COLUMNS)}")
+    if len(table.rows) > MAX_WAYPOINTS:
+        raise InputError(f"{where} has {len(table.rows)} waypoints: at most {MAX_WAYPOINTS} are allowed")
     out = []
-    for (line_no, _), cells in zip(rows[1:], parsed[1:]):
-        cells = [c.strip() for c in cells]
+    for cells, line, problem in zip(table.rows, table.lines, table.problems):
         try:
-            if len(cells) != len(header):
-                raise InputError(f"{len(cells)} cells, the header has {len(header)}")
-            out.append(_row(dict(zip(header, cells)), not out))
+            if problem is not None:   # "line N has m field(s), the header n"
+                raise InputError(problem.removeprefix(f"line {line} "))
+            out.append(_row(cells, not out))
         except InputError as exc:
-            raise InputError(f"{name} line {line_no}: {exc}") from None
+            raise InputError(f"{where}, line {line}: {exc}") from None
     if len(out) < 2:
-        raise InputError(f"waypoints file {name!r}: a route needs at least two waypoints (the first is the start)")
+        raise InputError(f"{where}: a route needs at least two waypoints (the first is the start)")
     return out

@@ -7,6 +7,8 @@ That rollplan's symbolic model agrees with the printed equations is tested on it
 ``tests/test_model.py`` and ``tests/test_integrate.py``.
 """
 
+import contextlib
+import subprocess
 import sys
 from pathlib import Path
 
@@ -53,3 +55,42 @@ def generated_c_float(tmp_path_factory):
     from rollplan import codegen
 
     return codegen.generate(tmp_path_factory.mktemp("c") / "planner_f32", real="float")
+
+
+def fill(path):
+    """Write zeros to ``path`` until the disk is full."""
+    with open(path, "wb", buffering=0) as fh, contextlib.suppress(OSError):
+        while True:
+            fh.write(b"\0" * 512)
+
+
+@pytest.fixture
+def full_disk(tmp_path):
+    """A folder on a 1 MiB tmpfs filled to the last byte (root only: mount)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(disk)], capture_output=True,
+                      check=False).returncode:
+        pytest.skip("cannot mount a tmpfs (needs root)")
+    try:
+        fill(disk / "filler")
+        yield disk
+    finally:
+        subprocess.run(["umount", str(disk)], check=False)
+
+
+def run(capsys, *argv):
+    """``rollplan argv`` in this process: (exit code, stdout, stderr)."""
+    from rollplan.cli import main
+
+    try:
+        code = main(list(argv))
+    except SystemExit as exc:  # argparse's own checks
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def one_line(err):
+    """True if ``err`` is one line and no traceback (how every refusal is reported)."""
+    return len(err.strip().splitlines()) == 1 and "Traceback" not in err

@@ -11,7 +11,9 @@ corrected and said so), and is what the tests compare rollplan's symbolic model 
   axial momenta solved together as one linear system; :func:`momentum_about_contact` -- the angular
   momentum of shell and rotors about the contact point from a sampled motion alone;
 * :func:`realizability` -- the left side of the realizability condition (13);
-* :func:`inertia_ratio` -- (14); :func:`psi_dot` -- (20);
+* :func:`inertia_ratio` -- (14); :func:`composite_inertias` -- Jxx, Jzz of Section II; :func:`psi_dot` -- (20);
+* :func:`rotor_drive` -- the robot driven by sampled rotor rates alone: omega from (11), then (6)-(10), by
+  DOP853 with the rates interpolated by scipy's not-a-knot cubic spline;
 * :func:`curve_rhs` -- the curve ODE (28)-(30) with c_u, c_v of (26); :func:`circle` -- the circle
   (35) rotated by gamma (31); :func:`rhs` and :func:`trace` -- (28)-(30) along the figure eight,
   integrated by scipy's DOP853 (an integrator that shares no code with rollplan);
@@ -214,6 +216,39 @@ def inertia_ratio(radius, mass_total, mass_shell, rotor_inertia_axial, rotor_ine
     """(14) as printed: ``k = 1 + M R^2 / (2/3 m_o R^2 + 2 J_p + J_r)``."""
     return 1 + mass_total * radius**2 / (2 / 3 * mass_shell * radius**2 + 2 * rotor_inertia_transverse
                                          + rotor_inertia_axial)
+
+
+def composite_inertias(radius, mass_total, mass_shell, rotor_inertia_axial, rotor_inertia_transverse):
+    """(Jxx, Jzz) as printed under (11): ``Jzz = 2/3 m_o R^2 + 2 J_p + J_r``, ``Jxx = Jzz + M R^2``."""
+    j_zz = 2 / 3 * mass_shell * radius**2 + 2 * rotor_inertia_transverse + rotor_inertia_axial
+    return j_zz + mass_total * radius**2, j_zz
+
+
+def rotor_drive(robot: dict, t, rates, x0=None, rtol=1e-12, atol=1e-14):
+    """States (N, 5) at the times ``t`` of the robot driven by the sampled rotor ``rates`` (N, 2) alone.
+
+    ``robot`` holds the five parameters of Section II by rollplan's key names. omega from (11),
+    ``Jc omega = -J_r (n_1 phi_1' + n_2 phi_2')`` with n_1, n_2 the columns of (2), drives (6)-(10);
+    DOP853 integrates them with the rates interpolated by scipy's not-a-knot cubic spline.
+    """
+    from scipy.interpolate import CubicSpline
+
+    keys = ("radius", "mass_total", "mass_shell", "rotor_inertia_axial", "rotor_inertia_transverse")
+    j_xx, j_zz = composite_inertias(*(robot[k] for k in keys))
+    jc, jr, radius = np.array([j_xx, j_xx, j_zz]), robot["rotor_inertia_axial"], robot["radius"]
+    t = np.asarray(t, float)
+    spline = CubicSpline(t, np.asarray(rates, float), bc_type="not-a-knot")
+
+    def f(time, x):
+        psi, u, v = x[2], x[3], x[4]
+        rot = orientation(u, v, psi)
+        r1, r2 = spline(time)
+        return montana(-jr * (rot[:, 0] * r1 + rot[:, 1] * r2) / jc, u, v, psi, radius)
+
+    x0 = np.zeros(5) if x0 is None else np.asarray(x0, float)
+    sol = solve_ivp(f, (t[0], t[-1]), x0, method="DOP853", rtol=rtol, atol=atol, t_eval=t)
+    assert sol.success, sol.message
+    return sol.y.T
 
 
 def psi_dot(u_o, v_o, du_o, dv_o, k):

@@ -1,7 +1,14 @@
 """Batch planning (rollplan.studies.batch): input order kept, failures recorded, interruption and resume,
 the plans checked by (36) and the printed (28)-(30) integrated by DOP853 (``references``)."""
 
+import contextlib
 import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
 
 import pytest
 
@@ -107,3 +114,192 @@ def test_cli_batch(tmp_path, capsys):
     assert "steps" in capsys.readouterr().err
     assert cli.main(["batch", str(tmp_path / "none.csv"), "--out", str(tmp_path / "q.jsonl")]) == 2
     assert cli.main(["batch", str(csv_path), "--out", str(tmp_path / "q.jsonl"), "--jobs", "0"]) == 2
+
+
+# ----------------------------------------------------------------------------- resume by content, locks, inputs
+
+
+def without_times(lines):
+    """The lines with the solvers' wall-clock times removed (the only field that differs between runs)."""
+    out = []
+    for d in lines:
+        d = json.loads(json.dumps(d))
+        if "solver" in d:
+            d["solver"].pop("time_s")
+        out.append(d)
+    return out
+
+
+def read_lines(path):
+    return [json.loads(x) for x in path.read_text().splitlines()]
+
+
+def test_resume_matches_rows_by_content_not_position(tmp_path):
+    """Insert a row at the top, edit one, delete one: resume plans exactly the new and the edited rows, keeps
+    the others (renumbered), and the output equals a fresh run of the new file."""
+    csv_path, out = write_csv(tmp_path / "t.csv"), tmp_path / "plans.jsonl"
+    run_batch(csv_path, out)
+    old = {d["input"]["note"]: d for d in read_lines(out)}
+    new_rows = [("0.1", "0.2", "0.3", "1", "0", "inserted")] + [r for r in ROWS if r[5] != "bad steps"]
+    new_rows[2] = ("0.3", "-0.4", "0.25", "2", "0", "ok")          # psi edited: planned again
+    write_csv(csv_path, new_rows)
+    r = run_batch(csv_path, out, resume=True)
+    assert (r.total, r.skipped, r.planned) == (6, 4, 2)
+    lines = read_lines(out)
+    assert [d["index"] for d in lines] == list(range(6))
+    assert lines[0]["input"]["note"] == "inserted" and lines[0]["status"] == "ok"
+    assert lines[2]["final"]["psi"] == pytest.approx(0.25, abs=1e-9)           # the edited row's own plan
+    assert lines[1]["figure_eight"] == old["paper"]["figure_eight"]            # kept, renumbered
+    fresh = tmp_path / "fresh.jsonl"
+    run_batch(csv_path, fresh)
+    assert without_times(lines) == without_times(read_lines(fresh))
+    # the kept lines are the very same bytes apart from their index
+    assert lines[1]["solver"]["time_s"] == old["paper"]["solver"]["time_s"]
+
+
+def test_same_row_twice_is_planned_once_and_written_twice(tmp_path):
+    csv_path, out = write_csv(tmp_path / "t.csv", [ROWS[0], ROWS[1], ROWS[0]]), tmp_path / "p.jsonl"
+    run_batch(csv_path, out)
+    r = run_batch(csv_path, out, resume=True)
+    assert (r.skipped, r.planned) == (3, 0)
+    lines = read_lines(out)
+    assert lines[0]["key"] == lines[2]["key"] and lines[0]["figure_eight"] == lines[2]["figure_eight"]
+
+
+def test_output_is_never_the_targets_file(tmp_path, capsys):
+    csv_path = write_csv(tmp_path / "t.csv")
+    before = csv_path.read_bytes()
+    for flags in ([], ["--resume"], ["--overwrite"]):
+        assert cli.main(["batch", str(csv_path), "--out", str(csv_path), *flags, "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert "is the input file" in err and len(err.strip().splitlines()) == 1
+    assert csv_path.read_bytes() == before
+
+
+def test_resume_and_overwrite_exclude_each_other(tmp_path, capsys):
+    csv_path = write_csv(tmp_path / "t.csv")
+    assert cli.main(["batch", str(csv_path), "--out", str(tmp_path / "o.jsonl"), "--resume", "--overwrite"]) == 2
+    assert "exclude each other" in capsys.readouterr().err
+    with pytest.raises(InputError, match="exclude each other"):
+        run_batch(csv_path, tmp_path / "o.jsonl", resume=True, overwrite=True)
+
+
+def test_resume_refuses_a_file_that_is_not_a_batch_output(tmp_path):
+    csv_path, out = write_csv(tmp_path / "t.csv"), tmp_path / "notes.txt"
+    out.write_text("my notes\nmore notes\n")
+    with pytest.raises(InputError, match="not a rollplan batch output"):
+        run_batch(csv_path, out, resume=True)
+    assert out.read_text() == "my notes\nmore notes\n"
+
+
+def test_targets_file_rules(tmp_path, capsys):
+    """Directory, duplicated column, BOM, rows of the wrong length, an over-long field: one line or a failed
+    row, never a traceback."""
+    out = tmp_path / "o.jsonl"
+    assert cli.main(["batch", str(tmp_path), "--out", str(out)]) == 2
+    assert "is a directory" in capsys.readouterr().err
+    dup = tmp_path / "dup.csv"
+    dup.write_text("u_a,v_a,psi,steps,k,k\n0,1,0,1,0,5\n")
+    assert cli.main(["batch", str(dup), "--out", str(out)]) == 2
+    assert "column 'k' appears twice" in capsys.readouterr().err
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbfu_a,v_a,psi,steps,k\n0,1,0,1,0\n0,1,0\n0,1,0,1,0,9\n")
+    r = run_batch(bom, out)
+    lines = read_lines(out)
+    assert (r.total, r.failed) == (3, 2) and lines[0]["status"] == "ok"
+    assert "has 3 field(s), the header 5" in lines[1]["reason"] and "has 6 field(s)" in lines[2]["reason"]
+    huge = tmp_path / "huge.csv"
+    huge.write_text("u_a,v_a,psi,steps,k,note\n0,1,0,1,0," + "x" * 200000 + "\n")
+    assert cli.main(["batch", str(huge), "--out", str(tmp_path / "h.jsonl")]) == 2
+    err = capsys.readouterr().err
+    assert "longer than 131072" in err and len(err.strip().splitlines()) == 1
+
+
+def test_numbers_in_rows_follow_the_command_line_rules(tmp_path):
+    rows = [("-1e-3", "1", "0", "1", "0", "exponent"), ("\uff10", "1", "0", "1", "0", "full width"),
+            ("0", "1_0", "0", "1", "0", "underscore"), ("0", "1", "nan", "1", "0", "nan"),
+            ("0", "1", "0", "1e0", "0", "steps exponent")]
+    csv_path, out = write_csv(tmp_path / "t.csv", rows), tmp_path / "o.jsonl"
+    run_batch(csv_path, out)
+    status = [(d["status"], d.get("reason", "")) for d in read_lines(out)]
+    assert status[0][0] == "ok"
+    assert all(s == "failed" and "decimal number" in reason for s, reason in status[1:4])
+    assert status[4][0] == "failed" and "whole number" in status[4][1]
+
+
+SLOW_ROWS = [  # a new k per row (the leaf tables are built per k): a second or more each; failures of every kind
+    ("0", "1", "0", "1", "2.5", "a"), ("0.4", "0.3", "0.5", "2", "1.3", "b"), ("x", "1", "0", "1", "2", "bad"),
+    ("0.2", "-0.5", "-1", "2", "4.1", "c"), ("0", "40", "0", "1", "0", "far"), ("-0.6", "0.1", "2", "3", "3.7", "d"),
+    ("0.5", "0.5", "1", "5", "8.2", "e"), ("0.1", "0.9", "-0.3", "2", "3.1", "f"), ("1", "0", "0.7", "3", "5.3", "g"),
+    ("0.3", "0.8", "2.5", "4", "9.6", "h"), ("1.5", "1", "-2", "6", "6.4", "i"),
+    ("-0.2", "0.7", "1.2", "3", "7.1", "j"),
+]
+
+
+def _batch_process(csv_path, out, jobs):
+    return subprocess.Popen([sys.executable, "-m", "rollplan.cli", "batch", str(csv_path), "--out", str(out),
+                             "--resume", "--quiet", "--jobs", str(jobs)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL])
+def test_interrupted_at_random_moments_and_resumed_equals_an_uninterrupted_run(tmp_path, sig):
+    """Run the batch, stop it by SIGINT (Ctrl-C) or SIGKILL at random moments from its start (imports,
+    planner construction, planning, writing), resume, again and again: the final output equals an
+    uninterrupted run line for line (up to the solvers' wall-clock times). A SIGINT exits 130 with one line
+    and no traceback (within a second in the solvers; CasADi's construction of a solver, a few seconds on a
+    loaded machine, is not interruptible) and never records the row in flight as failed."""
+    rows = SLOW_ROWS
+    csv_path = write_csv(tmp_path / "t.csv", rows)
+    reference = tmp_path / "reference.jsonl"
+    t0 = time.perf_counter()
+    proc = _batch_process(csv_path, reference, jobs=1)
+    assert proc.wait(timeout=600) == 0
+    whole = time.perf_counter() - t0          # the moments are drawn over a whole run, start-up included
+    out = tmp_path / "out.jsonl"
+    rng = random.Random(16 + sig)
+    history = []
+    for attempt in range(8):
+        proc = _batch_process(csv_path, out, jobs=1 + attempt % 2)
+        delay = rng.uniform(0.3, whole)
+        time.sleep(delay)
+        if sig == signal.SIGKILL:
+            os.killpg(proc.pid, signal.SIGKILL)
+        else:
+            proc.send_signal(signal.SIGINT)
+        t_sig = time.perf_counter()
+        _, err = proc.communicate(timeout=120)
+        history.append((delay, proc.returncode, len(read_output(out))))
+        if sig == signal.SIGINT:
+            assert proc.returncode in (0, 130), (history, err)
+            assert time.perf_counter() - t_sig < 10.0, history
+            assert "Traceback" not in err and (proc.returncode == 0 or "interrupted" in err.strip().splitlines()[-1])
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)   # pool workers of a killed run
+        assert all(d["error"] != "RuntimeError" for d in read_output(out) if d["status"] == "failed"), history
+    proc = _batch_process(csv_path, out, jobs=2)
+    _, err = proc.communicate(timeout=600)
+    assert proc.returncode == 0, err
+    print("interrupted runs (delay [s], exit code, finished lines):", history)
+    assert out.read_text().count("\n") == len(rows)
+    assert without_times(read_lines(out)) == without_times(read_lines(reference)), history
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.jsonl", "reference.jsonl", "t.csv"]
+
+
+@pytest.mark.slow
+def test_second_batch_on_the_same_output_is_refused(tmp_path, capsys):
+    csv_path, out = write_csv(tmp_path / "t.csv", SLOW_ROWS), tmp_path / "out.jsonl"
+    first = _batch_process(csv_path, out, jobs=1)
+    try:
+        t0 = time.perf_counter()
+        while not out.exists() and time.perf_counter() - t0 < 120:
+            time.sleep(0.05)
+        assert cli.main(["batch", str(csv_path), "--out", str(out), "--resume", "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert f"being written by another process (pid {first.pid})" in err and len(err.strip().splitlines()) == 1
+        assert cli.main(["batch", str(csv_path), "--out", str(out), "--overwrite", "--quiet"]) == 2
+    finally:
+        _, err = first.communicate(timeout=600)
+    assert first.returncode == 0, err
+    assert [d["index"] for d in read_lines(out)] == list(range(len(SLOW_ROWS)))

@@ -13,26 +13,13 @@ import time
 
 import numpy as np
 import pytest
+from conftest import one_line, run
 
 from rollplan import InputError, Robot, State
 from rollplan.cli import _Progress, main
 from rollplan.io import load_rotor_plan
 
 import references
-
-
-def run(capsys, *argv):
-    try:
-        code = main(list(argv))
-    except SystemExit as exc:  # argparse's own checks
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def one_line(err):
-    return len(err.strip().splitlines()) == 1 and "Traceback" not in err
-
 
 # ----------------------------------------------------------------------------- plan and step
 

@@ -224,6 +224,35 @@ def test_plan_demo_reports_bad_input_and_no_plan(built, args, status):
     assert run.stdout == "" and run.stderr.count("\n") == 1
 
 
+@pytest.mark.parametrize("args, needle", [
+    (("0", "0x10", "0", "1", "2.5"), "usage"),          # hexadecimal is not a decimal number (strtod reads 16)
+    (("0", "1", "0", "1", "1e308"), "K = 1e308"),       # beyond K_MAX: bad input, not "no convergence"
+    (("0", "1", "0", "1", "100.5"), "[0, 100]"),
+    (("0", "1", "0", "1001", "2.5"), "[1, 1000]"),
+    (("0", "1", "0", "1", "inf"), "usage"), ((" 0", "1", "0", "1", "2.5"), "usage"),
+    (("0", "1_0", "0", "1", "2.5"), "usage"), (("0", "1e400", "0", "1", "2.5"), "usage"),
+])
+def test_plan_demo_reads_numbers_as_rollplan_does(built, args, needle):
+    """Regression: plan_demo read "0x10" as 16 and exited 4 for K = 1e308; now the command line's rules."""
+    run = demo(built, *args)
+    assert run.returncode == 2 and needle in run.stderr and run.stderr.count("\n") == 1 and run.stdout == ""
+
+
+def test_plan_demo_accepts_exponents(built):
+    run = demo(built, "-1e-3", "1e0", "0", "1", "2.5e0")
+    assert run.returncode == 0, run.stderr
+
+
+def test_codegen_limits_and_read_only_targets(tmp_path, capsys):
+    """--steps-per-leaf 1e9 (MemoryError) and a 5000-character --prefix (a traceback) are refused in one
+    line before anything is written."""
+    for argv in (["--steps-per-leaf", "1000000000"], ["--prefix", "a" * 5000]):
+        assert main(["codegen", "--out", str(tmp_path / "c"), *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "Traceback" not in err
+    assert not (tmp_path / "c").exists()
+
+
 def test_cli_codegen(tmp_path, capsys):
     assert main(["codegen", "--out", str(tmp_path / "c"), "--prefix", "rp", "--k-max", "2.5"]) == 0
     assert (tmp_path / "c" / "rp.h").exists() and (tmp_path / "c" / "rp_model.c").exists()

@@ -217,3 +217,14 @@ def test_batches_report_progress(study):
     calls = []
     study.batch(A0, np.linspace(0.0, 3.0, 2 * study.chunk + 7), progress=lambda *c: calls.append(c))
     assert [c[1] for c in calls] == [study.chunk, 2 * study.chunk, 2 * study.chunk + 7]
+
+
+def test_reproduction_onto_a_full_disk_is_one_line(reduced, full_disk):
+    """Regression: reproduce onto a full disk was a traceback; now OutputError (the CLI exits 2), no
+    temporary left."""
+    from rollplan.errors import OutputError
+
+    with pytest.raises(OutputError, match="disk is full") as err:
+        write_reproduction(reduced, full_disk, figures=False)
+    assert "\n" not in str(err.value)
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler"]

@@ -102,3 +102,66 @@ def test_to_is_in_metres_with_a_robot(tmp_path):
     # the same motion in units of R with the same k
     q = rollplan.plan((0.0, 1.0, 0.0), 1, k=Robot(**GOOD).k)
     assert p.a == pytest.approx(0.12 * q.a, rel=1e-9) and math.isclose(p.gamma, q.gamma, abs_tol=1e-9)
+
+
+# ----------------------------------------------------------------------------- what a robot may be
+
+
+@pytest.mark.parametrize("change, needle", [
+    ({"rotor_inertia_axial": 5e-4}, "perpendicular-axis"),          # J_r > 2 J_p: no body of revolution
+    ({"mass_shell": 2.0}, "leaves no mass for the rotors"),         # rotors with inertia and no mass
+    ({"radius": 0.01}, "exceeds 2 (mass_total - mass_shell) radius^2"),   # too much inertia for the sphere
+    ({"radius": 1e-320}, "radius = 1e-320"),                       # k would underflow to 1
+    ({"radius": 1e308}, "radius = 1e+308"),                        # R^2 would overflow
+    ({"mass_total": 10**400}, "mass_total"),                       # an integer no double holds
+])
+def test_impossible_robots_are_refused(tmp_path, capsys, change, needle):
+    entries = {**GOOD, **change}
+    with pytest.raises(InputError, match=re.escape(needle)):
+        Robot(**entries)
+    path = write(tmp_path, entries)
+    code = main(["plan", "--robot", str(path), "--to", "0", "0.1"])
+    err = capsys.readouterr().err
+    assert code == 2 and needle in err and "robot.toml" in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_limits_are_physical():
+    """J_r = 2 J_p (a flat disc) and rotor inertias at the largest the rotor mass can have are allowed."""
+    disc = Robot(**{**GOOD, "rotor_inertia_axial": 2 * GOOD["rotor_inertia_transverse"]})
+    assert disc.k == pytest.approx(references.inertia_ratio(**{**GOOD, "rotor_inertia_axial": 4e-4}), rel=1e-15)
+    rim = 2 * (GOOD["mass_total"] - GOOD["mass_shell"]) * GOOD["radius"] ** 2   # J_r + 2 J_p at most
+    Robot(**{**GOOD, "rotor_inertia_axial": rim / 2, "rotor_inertia_transverse": rim / 4})
+    with pytest.raises(InputError):
+        Robot(**{**GOOD, "rotor_inertia_axial": rim / 2, "rotor_inertia_transverse": rim / 4 * (1 + 1e-9)})
+
+
+def test_every_robot_of_the_project_is_possible():
+    from rollplan.robot import PHYSICAL_RULES
+
+    for robot in (Robot(), default_robot(), Robot(**GOOD), Robot(0.15, 2.0, 0.6, 4.0e-4, 2.5e-4)):
+        assert all(rule(robot) is None for rule in PHYSICAL_RULES)
+
+
+def test_the_table_of_keys_is_the_robot():
+    """ROBOT_KEYS lists exactly the fields of Robot, in order, each with a unit and a range (issue 17 adds
+    optional keys to the table)."""
+    from dataclasses import fields
+
+    from rollplan.robot import ROBOT_KEYS
+
+    assert [k.name for k in ROBOT_KEYS] == [f.name for f in fields(Robot)]
+    assert all(k.unit and 0 < k.low < k.high for k in ROBOT_KEYS)
+
+
+def test_robot_in_a_plan_file_is_checked_naming_the_file(tmp_path, capsys):
+    from rollplan.io import load_rotor_plan
+
+    plan = tmp_path / "plan.json"
+    plan.write_text('{"time": [0, 1, 2, 3], "rotor_rates": [[0, 0], [0, 0], [0, 0], [0, 0]], '
+                    '"target": {"u_a": 0, "v_a": 0.1, "psi": 0}, "robot": {"radius": "0.1", "mass_total": 1.2, '
+                    '"mass_shell": 0.4, "rotor_inertia_axial": 2e-4, "rotor_inertia_transverse": 1.2e-4, "k": 4.9}}')
+    with pytest.raises(InputError, match=r"plan file '.*plan.json': 'robot': radius = '0.1' is not allowed"):
+        load_rotor_plan(plan)
+    assert main(["simulate", str(plan)]) == 2
+    err = capsys.readouterr().err
+    assert "plan.json" in err and "radius" in err and len(err.strip().splitlines()) == 1

@@ -75,14 +75,16 @@ import numpy as np
 from ..core import model
 from ..core.curves import A_MAX, figure_eight
 from ..core.integrate import check_heading_structure, heading_free_rates, piece_rhs, rk8_step, spectral_leaf
-from ..errors import InputError, NoPlanError
-from ..io import write_atomic
+from ..errors import InputError, NoPlanError, OutputError, show_limit
+from ..outputs import check_writable, make_folder, write_atomic
 from ..planners.geometric import plan as gp_plan
 from ..problem import K_MAX, MAX_STEPS
 
 __all__ = [
     "DEFAULT_STEPS_PER_LEAF",
     "DEFAULT_PREFIX",
+    "MAX_STEPS_PER_LEAF",
+    "MAX_PREFIX_CHARS",
     "TABLE_RADII",
     "TABLE_STEPS_PER_LEAF",
     "GeneratedCode",
@@ -127,6 +129,10 @@ CERT_SAFETY = 16.0
 FLOAT_CERT_TOL = 1e-4
 #: Default name prefix of the generated C symbols and files.
 DEFAULT_PREFIX = "rollplan"
+#: Most node intervals per leaf (the accuracy of the step map stops improving long before).
+MAX_STEPS_PER_LEAF = 2000
+#: Longest prefix (it starts every C symbol and file name).
+MAX_PREFIX_CHARS = 64
 
 # Planner constants (written into the C code).
 _MAX_ITER = 25
@@ -197,9 +203,9 @@ def model_functions(prefix: str = DEFAULT_PREFIX) -> list:
 
 def _degree(steps_per_leaf, panels: int) -> int:
     if isinstance(steps_per_leaf, bool) or not isinstance(steps_per_leaf, (int, np.integer)) \
-            or steps_per_leaf < 2 * panels or steps_per_leaf % panels:
-        raise InputError(f"steps per leaf = {steps_per_leaf!r} is not allowed: it must be a multiple of "
-                         f"{panels} (the curve's panels), at least {2 * panels}")
+            or not 2 * panels <= steps_per_leaf <= MAX_STEPS_PER_LEAF or steps_per_leaf % panels:
+        raise InputError(f"steps per leaf = {steps_per_leaf!r:.40} is not allowed: it must be a multiple of "
+                         f"{panels} (the curve's panels) in [{2 * panels}, {MAX_STEPS_PER_LEAF}]")
     return int(steps_per_leaf) // panels
 
 
@@ -461,8 +467,10 @@ def _check_real(real) -> str:
 
 
 def _check_prefix(prefix) -> str:
-    if not isinstance(prefix, str) or not prefix.isidentifier() or not prefix.isascii() or prefix.startswith("_"):
-        raise InputError(f"prefix = {prefix!r} is not allowed: it must be a C identifier (letters, digits, _)")
+    if not isinstance(prefix, str) or not prefix.isidentifier() or not prefix.isascii() or prefix.startswith("_") \
+            or len(prefix) > MAX_PREFIX_CHARS:
+        raise InputError(f"prefix = {prefix!r:.60} is not allowed: it must be a C identifier (letters, digits, _) "
+                         f"of at most {MAX_PREFIX_CHARS} characters")
     return prefix
 
 
@@ -499,28 +507,30 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     """
     prefix = _check_prefix(prefix)
     real = _check_real(real)
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"output folder {str(out)!r} is a file")
-    if not out.exists():
-        if not out.parent.is_dir() and str(out.parent):
-            raise InputError(f"output folder {str(out)!r} cannot be created: {str(out.parent)!r} does not exist")
-        out.mkdir()
+    _degree(steps_per_leaf, len(figure_eight().pieces[0].breaks) - 1)   # refused before anything is written
     funcs = generated_functions(steps_per_leaf, prefix)
     step = funcs[3]
-    k_max = _check_k_max(k_max, steps_per_leaf, step)
+    k_max = _check_k_max(k_max, steps_per_leaf, step)                  # refused before anything is written
     curve = figure_eight()
     breaks = curve.pieces[0].breaks
     if any(tuple(piece.breaks) != tuple(breaks) for piece in curve.pieces):
         raise ValueError("the C certificate assumes the leaves share their panels")
     lib = f"{prefix}_model"
+    names = (f"{lib}.c", f"{lib}.h", f"{prefix}.h", f"{prefix}_planner.c", "plan_demo.c", "Makefile", *_EMBEDDED)
+    out = make_folder(out)
+    for name in names:
+        check_writable(out / name)
     cg = ca.CodeGenerator(f"{lib}.c", {"with_header": True, "casadi_real": real})
     for f in funcs:
         cg.add(f)
-    with tempfile.TemporaryDirectory() as tmp:
-        cg.generate(tmp + os.sep)
-        model_c = _PRAGMA + (Path(tmp) / f"{lib}.c").read_text()
-        model_h = (Path(tmp) / f"{lib}.h").read_text()
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            cg.generate(tmp + os.sep)
+            model_c = _PRAGMA + (Path(tmp) / f"{lib}.c").read_text()
+            model_h = (Path(tmp) / f"{lib}.h").read_text()
+    except (OSError, RuntimeError) as exc:
+        raise OutputError(f"CasADi's generated code cannot be written to a temporary folder ({tempfile.gettempdir()}): "
+                          f"{str(exc).splitlines()[-1][:100]}") from None
     sizes = {name: max(int(getattr(f, name)()) for f in funcs[3:])
              for name in ("sz_arg", "sz_res", "sz_iw", "sz_w")}
     subs = {
@@ -540,7 +550,7 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@STEPS_PER_LEAF@": str(int(steps_per_leaf)),
         "@REAL@": real,
         "@K_MAX@": repr(k_max),
-        "@MAX_STEPS@": str(MAX_STEPS),
+        "@MAX_STEPS@": show_limit(MAX_STEPS),
         "@CERT_TOL@": repr(CERT_TOL if real == "double" else FLOAT_CERT_TOL),
         "@REAL_TINY@": "DBL_MIN" if real == "double" else "FLT_MIN",
         "@ACCURACY@": "plans are certified to 1e-9." if real == "double" else

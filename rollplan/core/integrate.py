@@ -31,6 +31,8 @@ import casadi as ca
 import numpy as np
 from numpy.polynomial import chebyshev as cheb
 
+from .. import interrupts
+from ..errors import InputError, check_choice, check_range
 from . import model
 from .curves import Curve, rotated_point
 
@@ -194,6 +196,13 @@ class CvodesIntegrator:
     abstol: float = 1e-13
     multistep: str = "adams"
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.curve, Curve):
+            raise InputError(f"curve = {self.curve!r:.60} is not allowed: give a rollplan.Curve")
+        for name in ("reltol", "abstol"):
+            object.__setattr__(self, name, check_range(name, getattr(self, name), 0.0, 1e-3, low_open=True))
+        check_choice("multistep", self.multistep, ("adams", "bdf"))
+
     def piece_integrator(self, index: int, grid):
         """A CasADi integrator of piece ``index`` with outputs at ``grid`` (in (0, 2 pi])."""
         f = piece_rhs(self.curve, index)
@@ -225,7 +234,7 @@ class CvodesIntegrator:
         out = []
         for _ in range(steps):
             for integ in ints:
-                xs = np.array(integ(x0=x, p=p)["xf"])
+                xs = np.array(interrupts.call(integ, x0=x, p=p)["xf"])
                 out.append(xs.T)
                 x = xs[:, -1]
         grid = np.linspace(0.0, 2.0 * np.pi, samples + 1)[1:]

@@ -22,6 +22,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from .. import interrupts
 from . import model
 from .curves import Piece, figure_eight, great_circle, rotated_point
 from .integrate import CvodesIntegrator
@@ -138,7 +139,8 @@ class PathIntegrator:
     def run(self, piece: PathPiece, x, k: float, count: int = 1) -> np.ndarray:
         """States (count, 3) at ``count`` uniform piece parameters in (0, 2 pi], from ``x`` (3,)."""
         p = [*piece.params, k, piece.gamma]
-        return np.array(self._integrator(piece.curve, piece.index, count)(x0=np.asarray(x, float), p=p)["xf"]).T
+        integ = self._integrator(piece.curve, piece.index, count)
+        return np.array(interrupts.call(integ, x0=np.asarray(x, float), p=p)["xf"]).T
 
     def ends(self, pieces, start, k: float) -> np.ndarray:
         """The state (5,) at the start and at the end of every piece: shape (P + 1, 5), units of R."""

@@ -88,16 +88,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, check_whole
+from ..errors import InputError, NoPlanError, check_range, check_whole
 from ..problem import State
 from ..result import Trajectory
 from ..robot import Robot
 from .limits import Limits
 from .path import ContactPath, plan_pieces
+from .plants import Simulation, simulate_rotors
 from .timing import TimeLaw, TimeProfile, get_law
 
-__all__ = ["Motion", "actuate", "sample_motion", "samples_per_piece", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF",
-           "MAX_SAMPLES"]
+__all__ = ["Motion", "actuate", "sample_motion", "samples_per_piece", "certify_motion", "DEFAULT_SAMPLES",
+           "MIN_SAMPLES_PER_LEAF", "MAX_SAMPLES", "MOTION_TOLERANCE"]
 
 log = logging.getLogger(__name__)
 
@@ -108,6 +109,8 @@ DEFAULT_SAMPLES = 2000
 MIN_SAMPLES_PER_LEAF = get_law("min-jerk").samples_per_piece
 #: Largest number of samples of a motion.
 MAX_SAMPLES = 1_000_000
+#: Largest arrival error (units of R and rad) of the rotor-only simulation of a motion (its certificate).
+MOTION_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -240,7 +243,7 @@ def sample_motion(path: ContactPath, profile: TimeProfile, samples: int, goal=No
     rates = ps.G * sd[:, None]
     torques = ps.A * sdd[:, None] + ps.B * sd[:, None] ** 2
     if not (np.all(np.isfinite(rates)) and np.all(np.isfinite(torques))):
-        raise InputError(f"duration = {T:g} s is not allowed: the rotor rates or torques overflow")
+        raise InputError(f"duration = {T!r} s is not allowed: the rotor rates or torques overflow")
     if goal is None:
         fin = path.final_state
         goal = State(fin[0] * R, fin[1] * R, fin[2])
@@ -309,3 +312,22 @@ def _at_rest(plan, robot: Robot, law: TimeLaw, duration, samples: int) -> Motion
     profile = TimeProfile(np.array([0.0, duration]), np.zeros((1, 1)), law.name, 0.0)
     return Motion(np.linspace(0.0, duration, samples), zero(0), zero(0), zero(0), np.zeros(samples, int), state,
                   zero(3), zero(2), zero(2), zero(2), robot, duration, plan.goal, law.name, None, profile, None)
+
+
+def certify_motion(motion: Motion, tol: float = MOTION_TOLERANCE) -> Simulation:
+    """A motion's certificate: drive the robot by its sampled rotor rates alone, from the motion's start
+    state, and compare with the goal.
+
+    Runs :func:`~rollplan.execution.plants.simulate_rotors` (the momentum integral
+    (11) and (6)-(10) by CVODES, nothing of the planner or of the timing law);
+    returns the simulation if its arrival error is at most ``tol``, else raises
+    NoPlanError: a motion that its own rotors do not carry to the goal is never
+    reported as a success.
+    """
+    tol = check_range("tol", tol, 0.0, None, low_open=True)
+    sim = simulate_rotors(motion.robot, motion.time, motion.rotor_rates, motion.goal, x0=motion.state[0])
+    if not sim.arrival_error <= tol:
+        raise NoPlanError(f"the motion over T = {motion.duration!r} s misses the goal when driven by its rotor rates "
+                          f"alone: arrival error {sim.arrival_error:.2e} > {tol:.0e}; try more samples or another "
+                          "duration")
+    return sim

@@ -73,6 +73,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from .. import interrupts
 from ..core import model
 from ..core.curves import Curve, rotated_point
 from ..core.integrate import piece_rhs
@@ -328,7 +329,7 @@ class ContactPath:
         if pos.any():
             piece = self.pieces[j]
             integ = ca.integrator(f"path{j}", "cvodes", self._ode(piece), 0.0, list(phis[pos]), _CVODES)
-            out[pos] = np.array(integ(x0=x0, p=self._parameters(piece))["xf"]).T
+            out[pos] = np.array(interrupts.call(integ, x0=x0, p=self._parameters(piece))["xf"]).T
         return out
 
     # ------------------------------------------------------------------ public
@@ -439,7 +440,7 @@ def plan_pieces(plan, robot: Robot) -> tuple[list, tuple]:
         raise InputError(f"the plan was made for k = {plan.k:.12g}, the robot has k = {robot.k:.12g}: "
                          "plan with this robot")
     if not math.isclose(plan.radius, robot.radius, rel_tol=1e-12, abs_tol=0.0):
-        raise InputError(f"the plan's radius = {plan.radius:g} differs from the robot's radius = {robot.radius:g}")
+        raise InputError(f"the plan's radius = {plan.radius!r} differs from the robot's radius = {robot.radius!r}")
     composed = as_composed(plan)
     pieces = [PathPiece(piece_function(p.curve, p.index), tuple(float(v) for v in p.params), float(p.gamma),
                         2 * np.pi, p.length / (2 * np.pi)) for p in composed.pieces]

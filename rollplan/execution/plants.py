@@ -37,6 +37,11 @@ sample; the true state is not changed), ``torque_noise`` (torque plant) and ``ra
 plant): white noise on every input sample. Every draw is ``numpy.random.default_rng([seed,
 segment, tag])``, so a controller that runs the plant segment after segment gets independent,
 reproducible draws.
+
+The integration runs in the normalized time ``tau = (t - t_0) / (t_N - t_0)``
+in [0, 1], with the rates multiplied by the duration (rotor turns per unit
+tau): the same motion timed over a microsecond or a year is the same
+computation, at the same accuracy.
 """
 
 from __future__ import annotations
@@ -49,14 +54,20 @@ import casadi as ca
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from .. import interrupts
 from ..core import model
-from ..errors import InputError, check_finite
+from ..core.plane import wrap_exact
+from ..errors import InputError, SolverError, check_finite
 from ..problem import State, arrival_error
 from ..robot import Robot
 
-__all__ = ["Simulation", "rate_spline", "check_samples", "simulate_rotors", "Friction", "MeasurementNoise",
+__all__ = ["Simulation", "rate_spline", "check_samples", "simulate_rotors", "MAX_TURN", "Friction", "MeasurementNoise",
            "TorqueNoise", "RateNoise", "DISTURBANCES", "disturbance", "PlantRun", "input_function", "run_rates",
            "run_torques", "PLANTS", "PLANT_NAMES", "by_name", "measure", "rotor_momenta"]
+
+#: Largest rotation of the sphere [rad] that sampled rotor rates may ask for (bounded from the rates by
+#: (11)); a real plan turns the sphere by a few rad per figure eight.
+MAX_TURN = 1e6
 
 log = logging.getLogger(__name__)
 
@@ -113,6 +124,8 @@ def check_samples(t, rates):
         raise InputError("t and rates must be finite numbers")
     if np.any(np.diff(t) <= 0):
         raise InputError("t is not allowed: sample times must increase strictly")
+    if not np.isfinite(t[-1] - t[0]):
+        raise InputError("t is not allowed: its span t[-1] - t[0] overflows")
     return t, rates
 
 
@@ -141,19 +154,36 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
     -------
     Simulation
     """
+    if not isinstance(robot, Robot):
+        raise InputError(f"robot = {robot!r:.60} is not allowed: give a rollplan.Robot")
     t, rates = check_samples(t, rates)
-    x0 = np.zeros(5) if x0 is None else np.asarray(x0, float)
-    spline = rate_spline(t, rates)
-    x = ca.MX.sym("x", 5)
-    time = ca.MX.sym("t")
+    x0 = State.of(np.zeros(5) if x0 is None else x0, "x0").array()
+    x0[2] = wrap_exact(x0[2])[0]   # psi is an angle: reduced exactly, so a large one loses no accuracy
     jxx, jzz, jr, R = robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, robot.radius
+    span = float(t[-1] - t[0])
+    tau = (t - t[0]) / span
+    tau[-1] = 1.0
+    if np.any(np.diff(tau) <= 0):
+        raise InputError("t is not allowed: sample times lie too close together for their span")
+    turns = rates * span                            # rotor turn per unit tau [rad]
+    mean = 0.5 * (np.abs(turns[1:]) + np.abs(turns[:-1])).sum(axis=1) @ np.diff(tau)
+    if not np.all(np.isfinite(turns)) or mean * jr / jzz > MAX_TURN:
+        raise InputError(f"the rotor rates are not allowed: they would turn the sphere by about "
+                         f"{mean * jr / jzz:.3g} rad, more than {MAX_TURN:g} rad (not the rates of a plan)")
+    spline = rate_spline(tau, turns)
+    x = ca.MX.sym("x", 5)
+    time = ca.MX.sym("tau")
     omega = model.omega_from_rotor_rates(spline(time), x[3], x[4], x[2], jxx, jzz, jr)
     ode = model.montana(omega, x[3], x[4], x[2], R)
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
-    integ = ca.integrator("rotor_sim", "cvodes", {"t": time, "x": x, "ode": ode}, float(t[0]), list(t[1:]), opts)
-    xs = np.hstack([x0[:, None], np.array(integ(x0=x0)["xf"])]).T
-    om = ca.Function("omega", [time, x], [omega]).map(t.size)
-    omegas = np.array(om(t[None, :], xs.T)).T
+    integ = ca.integrator("rotor_sim", "cvodes", {"t": time, "x": x, "ode": ode}, 0.0, list(tau[1:]), opts)
+    try:
+        xs = np.hstack([x0[:, None], np.array(interrupts.call(integ, x0=x0)["xf"])]).T
+    except RuntimeError as exc:
+        raise SolverError(f"CVODES could not integrate the rotor-driven motion: {str(exc).splitlines()[-1][:120]}",
+                          "CVODES_failed") from None
+    om = ca.Function("omega", [time, x], [omega / span]).map(t.size)
+    omegas = np.array(om(tau[None, :], xs.T)).T
     final = State(*(float(v) for v in xs[-1]))
     err = arr = pos = None
     if goal is not None:

@@ -370,7 +370,7 @@ class TimeLaw:
         return self.profile(path, limits, None).duration
 
     def _refuse(self, duration, needed: str, limit: str, shortest: float):
-        raise InputError(f"duration = {duration:g} s is not allowed with timing '{self.name}': it needs {needed} > "
+        raise InputError(f"duration = {duration!r} s is not allowed with timing '{self.name}': it needs {needed} > "
                          f"{limit}; the shortest feasible duration is {round_up(shortest):.6g} s")
 
 
@@ -394,11 +394,11 @@ class ScaledLaw(TimeLaw):
             if limits.max_rotor_rate is not None:
                 need = rho_rate / duration
                 worst.append((need / limits.max_rotor_rate, f"{need:.4g} rad/s",
-                              f"max_rotor_rate = {limits.max_rotor_rate:g} rad/s"))
+                              f"max_rotor_rate = {limits.max_rotor_rate!r} rad/s"))
             if limits.max_rotor_torque is not None:
                 need = rho_torque / duration**2
                 worst.append((need / limits.max_rotor_torque, f"{need:.4g} N m",
-                              f"max_rotor_torque = {limits.max_rotor_torque:g} N m"))
+                              f"max_rotor_torque = {limits.max_rotor_torque!r} N m"))
             _, needed, limit = max(worst)
             self._refuse(duration, needed, limit, shortest)
         return replace(unit.stretched(duration), minimum_duration=shortest)
@@ -552,7 +552,7 @@ class TimeOptimal(TimeLaw):
         if duration is None:
             return prof
         if duration < shortest * (1 - 1e-9):
-            raise InputError(f"duration = {duration:g} s is not allowed with timing '{self.name}': within "
+            raise InputError(f"duration = {duration!r} s is not allowed with timing '{self.name}': within "
                              f"{limits.describe()} the shortest feasible duration is {round_up(shortest):.6g} s")
         return prof.stretched(duration / shortest)
 

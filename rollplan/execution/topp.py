@@ -58,6 +58,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import interrupts
 from ..errors import InputError, SolverError
 from .limits import Limits, rate_bound, torque_bound
 from .path import PathGrid
@@ -295,8 +296,8 @@ def _solve_casadi(grid: PathGrid, limits: Limits, tol: float = 1e-12) -> np.ndar
     inner = mvc[mvc > 0]
     x_guess = 1e-2 * np.minimum(mvc, inner.min() if inner.size else 1.0)
     c_guess = np.where(ub_x > 0, np.maximum(0.5 * np.sqrt(x_guess), 1e-6), 0.0)
-    sol = solver(x0=np.concatenate([x_guess, c_guess]), lbx=np.zeros(2 * n),
-                 ubx=np.concatenate([ub_x, np.sqrt(ub_x)]), lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
+    sol = interrupts.call(solver, x0=np.concatenate([x_guess, c_guess]), lbx=np.zeros(2 * n),
+                          ubx=np.concatenate([ub_x, np.sqrt(ub_x)]), lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
     st = solver.stats()
     if not st["success"]:
         raise SolverError(f"IPOPT did not solve the time-optimal problem: {st['return_status']}", st["return_status"])

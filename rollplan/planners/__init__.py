@@ -19,7 +19,7 @@ method: the class is built with keyword options only (all defaulted), and its
 
 from __future__ import annotations
 
-from ..errors import InputError
+from ..errors import check_choice
 from ..problem import Problem
 from .collocation import CollocationPlanner
 from .geometric import ComposedPlanner
@@ -32,6 +32,5 @@ METHODS = {"geometric": ComposedPlanner, "collocation": CollocationPlanner}
 
 def solve(problem: Problem, method: str = "geometric", **options):
     """Solve ``problem`` by the method named ``method``; ``options`` go to its planner class."""
-    if not isinstance(method, str) or method not in METHODS:
-        raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(METHODS)}")
+    check_choice("method", method, METHODS)
     return METHODS[method](**options).solve(problem)

@@ -19,8 +19,9 @@ import tempfile
 import numpy as np
 from matplotlib.figure import Figure
 
+from ..errors import OutputError
 from ..execution.poses import animation_frames
-from ..io import write_atomic
+from ..outputs import write_atomic
 
 __all__ = ["make_animation"]
 
@@ -96,9 +97,14 @@ def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps:
         return shell + axes + [path, on_shell, cursor]
 
     anim = FuncAnimation(fig, update, frames=frames, blit=False)
-    with tempfile.TemporaryDirectory() as tmp:
-        name = os.path.join(tmp, "anim.gif")
-        anim.save(name, writer=PillowWriter(fps=fps))
-        with open(name, "rb") as fh:
-            write_atomic(out, fh.read())
+    try:
+        with tempfile.TemporaryDirectory() as tmp:   # Pillow writes to a file name: rendered there, then copied
+            name = os.path.join(tmp, "anim.gif")
+            anim.save(name, writer=PillowWriter(fps=fps))
+            with open(name, "rb") as fh:
+                data = fh.read()
+    except OSError as exc:
+        raise OutputError(f"the animation cannot be rendered in the temporary folder {tempfile.gettempdir()!r}: "
+                          f"{exc.strerror or exc}") from None
+    write_atomic(out, data)
     log.info("wrote %d frames to %s", frames, out)

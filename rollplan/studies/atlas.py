@@ -32,6 +32,9 @@ from ..problem import check_k, check_steps
 
 __all__ = ["Atlas", "atlas_function", "compute_atlas", "atlas_to_dict", "n_step_totals"]
 
+#: Grid points evaluated per block (each block takes well under a second).
+_BLOCK = 2048
+
 
 @dataclass(frozen=True)
 class Atlas:
@@ -115,8 +118,16 @@ def compute_atlas(k: float, steps: int = 1, resolution: int = 81, planner=None, 
     aa, bb = np.meshgrid(r, r, indexing="ij")
     pts = np.vstack([aa.ravel(), bb.ravel()])
     threads = threads or os.cpu_count() or 1
-    batch = fun.map(pts.shape[1], "thread", threads) if threads > 1 else fun.map(pts.shape[1])
-    h, eta, det = (np.array(v).reshape(resolution, resolution) for v in batch(pts, k))
+    # in blocks of grid rows: a map does not poll for Ctrl-C, so Python sees it between blocks
+    rows = max(1, _BLOCK // resolution)
+    size = rows * resolution
+    batch = fun.map(size, "thread", threads) if threads > 1 else fun.map(size)
+    out = np.zeros((3, pts.shape[1]))
+    for lo in range(0, pts.shape[1], size):
+        block = pts[:, lo:lo + size]
+        padded = np.pad(block, ((0, 0), (0, size - block.shape[1])), mode="edge")
+        out[:, lo:lo + block.shape[1]] = np.vstack([np.array(v) for v in batch(padded, k)])[:, :block.shape[1]]
+    h, eta, det = (row.reshape(resolution, resolution) for row in out)
     total_h, total_psi = n_step_totals(h, eta, int(steps))
     s = np.sign(det)
     corners = np.stack([s[:-1, :-1], s[1:, :-1], s[:-1, 1:], s[1:, 1:]])

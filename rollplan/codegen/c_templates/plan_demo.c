@@ -1,20 +1,39 @@
 /* plan_demo U V PSI STEPS K -- print one line "a b gamma residual bound" of the embedded plan: leaf
  * radii [R], rotation [rad], and its certificate (residual of the RK8 integration of the whole motion
  * and the integration's error bound, see @PREFIX@_certify).
+ * Numbers are ASCII decimals as on rollplan's command line (2.5, -1e-3; no hex, inf, nan or spaces);
+ * STEPS is a whole number in [1, @MAX_STEPS@], K lies in [0, @K_MAX@] (rollplan codegen --k-max).
  * Exit status: 0 certified plan, 2 bad input, 3 no bracket on branch m = 0, 4 no convergence,
  * 5 no converged plan passed the certificate. */
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 
 #include "@PREFIX@.h"
 
+/* 1 if text is [+-] digits [. digits] [(e|E) [+-] digits] with at least one digit before the exponent */
+static int decimal(const char *s) {
+    int digits = 0;
+    if (*s == '+' || *s == '-') s++;
+    for (; *s >= '0' && *s <= '9'; s++) digits++;
+    if (*s == '.') {
+        for (s++; *s >= '0' && *s <= '9'; s++) digits++;
+    }
+    if (!digits) return 0;
+    if (*s == 'e' || *s == 'E') {
+        s++;
+        if (*s == '+' || *s == '-') s++;
+        if (!(*s >= '0' && *s <= '9')) return 0;
+        while (*s >= '0' && *s <= '9') s++;
+    }
+    return *s == '\0';
+}
+
 static int number(const char *text, double *x) {
     char *end;
-    errno = 0;
-    *x = strtod(text, &end);
-    return end != text && *end == '\0' && errno == 0 && isfinite(*x);
+    if (!decimal(text)) return 0;
+    *x = strtod(text, &end);   /* underflow gives 0 (as in rollplan); overflow gives inf, refused */
+    return end != text && *end == '\0' && isfinite(*x);
 }
 
 int main(int argc, char **argv) {
@@ -23,18 +42,18 @@ int main(int argc, char **argv) {
     int status;
     if (argc != 6 || !number(argv[1], &u) || !number(argv[2], &v) || !number(argv[3], &psi)
         || !number(argv[4], &steps_d) || !number(argv[5], &k)) {
-        fprintf(stderr, "usage: %s U V PSI STEPS K   (finite numbers; STEPS a whole number in [1, %d], "
-                "0 <= K <= %g)\n", argv[0], @PREFIX_UPPER@_MAX_STEPS, (double)@PREFIX_UPPER@_K_MAX);
+        fprintf(stderr, "usage: %s U V PSI STEPS K   (decimal numbers such as 2.5 or -1e-3; STEPS a whole number "
+                "in [1, @MAX_STEPS@], K in [0, @K_MAX@])\n", argv[0]);
         return @PREFIX_UPPER@_BAD_INPUT;
     }
     if (steps_d < 1 || steps_d > @PREFIX_UPPER@_MAX_STEPS || steps_d != floor(steps_d)) {
-        fprintf(stderr, "%s: STEPS = %s is not allowed: it must be a whole number in [1, %d]\n", argv[0], argv[4],
-                @PREFIX_UPPER@_MAX_STEPS);
+        fprintf(stderr, "%s: STEPS = %s is not allowed: it must be a whole number in [1, @MAX_STEPS@]\n", argv[0],
+                argv[4]);
         return @PREFIX_UPPER@_BAD_INPUT;
     }
     if (!(k >= 0.0 && k <= (double)@PREFIX_UPPER@_K_MAX)) {
-        fprintf(stderr, "%s: K = %s is not allowed: this planner was generated for 0 <= K <= %g "
-                "(rollplan codegen --k-max)\n", argv[0], argv[5], (double)@PREFIX_UPPER@_K_MAX);
+        fprintf(stderr, "%s: K = %s is not allowed: it must lie in [0, @K_MAX@] (the range this planner was "
+                "generated for: rollplan codegen --k-max)\n", argv[0], argv[5]);
         return @PREFIX_UPPER@_BAD_INPUT;
     }
     /* ranges checked in double above, before the conversion to casadi_real (@REAL@ in this build) */

@@ -53,8 +53,10 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from ... import interrupts
 from ...core import model
-from ...errors import InputError, SolverError, check_range, check_whole
+from ...core.plane import wrap_exact
+from ...errors import InputError, SolverError, check_choice, check_range, check_whole
 from ...problem import Problem, State
 from ...result import Certificate, CertifiedMotion, Measures, SolverStats, Trajectory
 from ...robot import Robot
@@ -290,8 +292,7 @@ class CollocationPlanner:
                  contact_bound: float = CONTACT_BOUND, tol: float = 1e-10, max_iter: int = 500,
                  verify_samples: int = 1000, verify_tol: float | None = TOLERANCE) -> None:
         self.transcription = Transcription(intervals, degree, scheme)
-        if not isinstance(cost, str) or cost not in COSTS:
-            raise InputError(f"cost = {cost!r} is not allowed: choose one of {', '.join(COSTS)}")
+        check_choice("cost", cost, COSTS)
         self.cost = COSTS[cost]
         self.contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
         self.verify_tol = None if verify_tol is None else check_range("verify_tol", verify_tol, 0.0, None, True)
@@ -317,8 +318,7 @@ class CollocationPlanner:
         ``guess`` names an initial guess in :data:`GUESSES`; ``warm_start`` is the
         geometric-phase plan the ``"warm"`` guess follows (planned for the problem if None).
         """
-        if not isinstance(guess, str) or guess not in GUESSES:
-            raise InputError(f"guess = {guess!r} is not allowed: choose one of {', '.join(GUESSES)}")
+        check_choice("guess", guess, GUESSES)
         self._boundary(problem, 0 if turns is None else turns)       # bad input is refused before any work
         horizon = check_range("horizon", horizon, 0.0, None, low_open=True)
         check_range("smoothing", smoothing, 0.0, None)
@@ -352,7 +352,11 @@ class CollocationPlanner:
                                  f"collocation's contact_bound = {self.contact_bound:.4g} rad: raise contact_bound")
         start = problem.scaled(problem.start).array()
         final = problem.scaled(problem.goal).array()
-        final[2] += 2 * math.pi * turns
+        # psi is an angle: start and goal reduced exactly by whole turns (a psi of 1e8 keeps full accuracy);
+        # the motion turns psi by goal - start + 2 pi turns, as given
+        start[2], start_turns = wrap_exact(start[2])
+        reduced, goal_turns = wrap_exact(final[2])
+        final[2] = reduced + 2 * math.pi * (turns + goal_turns - start_turns)
         return start, final
 
     def _solve(self, problem, g: Guess, horizon, turns, smoothing, guess_time) -> CollocationResult:
@@ -367,7 +371,7 @@ class CollocationPlanner:
         lbg = np.where(self.path_rows, math.cos(c), 0.0)
         ubg = np.where(self.path_rows, np.inf, 0.0)
         t0 = time.perf_counter()
-        sol = self.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
+        sol = interrupts.call(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
         solve_time = time.perf_counter() - t0
         st = self.solver.stats()
         status, iters = str(st["return_status"]), int(st["iter_count"])
@@ -440,7 +444,9 @@ class Certifier:
     """
 
     def __init__(self, intervals: int, samples_per_interval: int) -> None:
-        self.intervals, self.samples_per_interval = intervals, samples_per_interval
+        self.intervals = check_whole("intervals", intervals, 1, 100000)
+        self.samples_per_interval = check_whole("samples_per_interval", samples_per_interval, 1, 10**6)
+        intervals, samples_per_interval = self.intervals, self.samples_per_interval
         x = ca.SX.sym("x", 5)
         w = ca.SX.sym("w", 2)
         par = ca.SX.sym("par", N_PAR)
@@ -473,7 +479,7 @@ class Certifier:
         x = np.zeros(5) if x0 is None else np.asarray(x0, float)
         xs, q = [x[:, None]], np.zeros(3)
         for w in controls:
-            r = self._integrator(x0=x, p=np.concatenate([w, par]))
+            r = interrupts.call(self._integrator, x0=x, p=np.concatenate([w, par]))
             xi = np.array(r["xf"])
             xs.append(xi)
             q += np.array(r["qf"])[:, -1]

@@ -22,7 +22,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ...errors import InputError, check_whole
+from ... import interrupts
+from ...errors import InputError, check_choice, check_whole
 
 __all__ = ["SCHEMES", "Guess", "Transcription"]
 
@@ -72,8 +73,7 @@ class Transcription:
     def __post_init__(self) -> None:
         object.__setattr__(self, "intervals", check_whole("intervals", self.intervals, 1, 100000))
         object.__setattr__(self, "degree", check_whole("degree", self.degree, 1, 9))
-        if not isinstance(self.scheme, str) or self.scheme not in SCHEMES:
-            raise InputError(f"scheme = {self.scheme!r} is not allowed: choose one of {', '.join(SCHEMES)}")
+        check_choice("scheme", self.scheme, SCHEMES)
 
     def coefficients(self):
         """``tau`` (d + 1,) = [0, tau_1..tau_d] and :func:`casadi.collocation_coeff`'s ``C`` (d + 1, d),
@@ -211,7 +211,7 @@ class Transcription:
         x = np.zeros(5) if x0 is None else np.asarray(x0, float)
         out = [x]
         for i in range(N):
-            z = rf(np.tile(x, d), np.concatenate([x, controls[i], [1.0 / N], par]))
+            z = interrupts.call(rf, np.tile(x, d), np.concatenate([x, controls[i], [1.0 / N], par]))
             x = np.array(end(z, x)).ravel()
             out.append(x)
         return np.array(out)

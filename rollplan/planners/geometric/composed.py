@@ -61,7 +61,6 @@ from functools import lru_cache
 import numpy as np
 
 from ...core.integrate import DEFAULT_NODES
-from ...core.interrupt import interruptible, raise_if_interrupted
 from ...core.paths import PathIntegrator, allocate_samples, figure_eight_pieces
 from ...core.plane import compose, inverse, relative, wrap, wrap_exact
 from ...errors import InputError, NoPlanError, check_whole
@@ -253,16 +252,12 @@ class ComposedPlanner:
     def solve(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
         """Plan for ``problem``: a :class:`Plan` for a pole-to-pole problem from rest that one leg
         serves (unless ``legs`` asks otherwise), else a :class:`ComposedPlan`; see :func:`plan`.
-        Ctrl-C stops it (KeyboardInterrupt), also inside a root solve."""
-        with interruptible():
-            return self._solve(problem, all_solutions, branch)
+        Ctrl-C stops it (KeyboardInterrupt), also inside a root solve (:mod:`rollplan.interrupts`)."""
+        return self._solve(problem, all_solutions, branch)
 
     def _leg(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
-        """One leg of figure eights by the pole-to-pole planner (a Ctrl-C its root solver dropped is raised)."""
-        try:
-            return self.planner.solve(problem, all_solutions, branch)
-        finally:
-            raise_if_interrupted()
+        """One leg of figure eights by the pole-to-pole planner."""
+        return self.planner.solve(problem, all_solutions, branch)
 
     def _solve(self, problem: Problem, all_solutions: bool, branch: int | None):
         t0 = time.perf_counter()

@@ -51,9 +51,9 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from ... import interrupts
 from ...core.curves import A_MAX, figure_eight
 from ...core.integrate import DEFAULT_NODES, spectral_step
-from ...core.interrupt import raise_if_interrupted
 from ...core.plane import relative, rotate
 from .turn import leaf_maps
 
@@ -235,8 +235,7 @@ def two_leg_candidates(target, k: float, steps: int, count: int = 4) -> list:
         e1, _, e2, _ = (float(v) for v in info(z0, [k, 0.0, h_f]))
         psi_m = psi_f + TWO_PI * round((steps * (e1 + e2) - psi_f) / TWO_PI)
         lbg, ubg = [0.0, -h_f] + ([] if tip else [0.0]), [0.0, h_f] + ([] if tip else [np.inf])
-        sol = solver(x0=z0, p=[k, psi_m, h_f], lbx=LEAF_FLOOR, ubx=A_MAX, lbg=lbg, ubg=ubg)
-        raise_if_interrupted()
+        sol = interrupts.call(solver, x0=z0, p=[k, psi_m, h_f], lbx=LEAF_FLOOR, ubx=A_MAX, lbg=lbg, ubg=ubg)
         z = np.array(sol["x"]).ravel()
         e1, r1, e2, r2 = (float(v) for v in info(z, [k, psi_m, h_f]))
         violation = max(abs(steps * (e1 + e2) - psi_m), abs(r1 - r2) - h_f, 0.0 if tip else h_f - r1 - r2, 0.0)

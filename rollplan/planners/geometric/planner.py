@@ -60,7 +60,16 @@ from ...core.curves import A_MAX, figure_eight, rotated_point
 from ...core.integrate import DEFAULT_NODES, spectral_step
 from ...core.interrupt import raise_if_interrupted
 from ...core.plane import n_step_sum, wrap, wrap_exact
-from ...errors import InputError, NoPlanError, SolverError, check_finite, check_range, check_whole
+from ...errors import (
+    InputError,
+    NoPlanError,
+    SolverError,
+    check_choice,
+    check_finite,
+    check_flag,
+    check_range,
+    check_whole,
+)
 from ...problem import Problem, State, arrival_residual, check_k
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
@@ -198,9 +207,7 @@ class GeometricPhasePlanner:
     """
 
     def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE) -> None:
-        if not isinstance(method, str) or method not in SOLVERS:
-            raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
-        self.method = method
+        self.method = check_choice("method", method, SOLVERS)
         self.tol = check_range("tol", tol, 0.0, 1e-3, low_open=True)
         self.nodes = check_whole("nodes", nodes, 4, 200)
         self.curve = figure_eight()
@@ -251,6 +258,7 @@ class GeometricPhasePlanner:
         if tuple(problem.start) != tuple(State()) or not problem.goal.at_pole:
             raise InputError("the geometric-phase planner plans from rest at the origin (start = 0) to a goal "
                              "with the contact point at the south pole (u_o = v_o = 0)")
+        all_solutions = check_flag("all_solutions", all_solutions)
         if branch is not None:
             branch = check_whole("branch", branch)
         k, steps = problem.k, problem.steps
@@ -491,8 +499,7 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
         The root solver broke down (an internal IPOPT error; carries its status). A bracket
         whose solve does not converge is taken to hold no root.
     """
-    if not isinstance(method, str) or method not in SOLVERS:
-        raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
+    check_choice("method", method, SOLVERS)
     problem = Problem(target, k=k, robot=robot, radius=radius, steps=steps)
     return default_planner(method).solve(problem, all_solutions, branch)
 

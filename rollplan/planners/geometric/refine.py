@@ -14,6 +14,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from ... import interrupts
 from ...core.curves import A_MAX
 
 __all__ = ["SOLVERS", "SOLVER_ERROR_STATUSES", "ROOT_TOL", "step_residual"]
@@ -39,13 +40,15 @@ def _ipopt_solver(residual: ca.Function):
     ab = ca.SX.sym("ab", 2)
     par = ca.SX.sym("par", 3)
     nlp = {"x": ab, "p": par, "f": 0, "g": residual(ab, par)}
-    opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
+    # show_eval_warnings: the Jacobian of |shift| is 0/0 where the shift of a step vanishes (targets near
+    # the start point); IPOPT treats that NaN as a failed evaluation and steps back. Expected, not news.
+    opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "show_eval_warnings": False,
             "ipopt.tol": 1e-13, "ipopt.constr_viol_tol": 1e-13, "ipopt.max_iter": 60,
             "ipopt.hessian_approximation": "limited-memory"}
     solver = ca.nlpsol("gp_ipopt", "ipopt", nlp, opts)
 
     def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
-        sol = solver(x0=x0, p=par_value, lbx=lbx, ubx=ubx, lbg=0, ubg=0)
+        sol = interrupts.call(solver, x0=x0, p=par_value, lbx=lbx, ubx=ubx, lbg=0, ubg=0)
         st = solver.stats()
         # Where eta is steep near A_MAX IPOPT may stop short of its tolerance at a point that
         # solves (32)-(33) to rounding ("Search_Direction_Becomes_Too_Small"); such a point is a
@@ -62,7 +65,7 @@ def _newton_solver(residual: ca.Function):
                         "show_eval_warnings": False})  # NaN outside the admissible range is a failed solve
 
     def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
-        x = np.array(rf(x0, par_value)).ravel()
+        x = np.array(interrupts.call(rf, x0, par_value)).ravel()
         st = rf.stats()
         ok = bool(st["success"]) and bool(np.all((x >= lbx) & (x <= ubx)))
         # Newton cannot tell a bracket without a root from a failure: both are "no root" here.

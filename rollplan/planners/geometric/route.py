@@ -14,19 +14,19 @@ since the waypoint demands that contact point.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from ...core.interrupt import interruptible
 from ...core.plane import wrap_exact
-from ...errors import InputError, NoPlanError
+from ...errors import InputError, NoPlanError, show
 from ...problem import Problem, State, arrival_residual
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from ...waypoints import Waypoint
-from .composed import DEFAULT_SAMPLES, as_composed, certify_path, default_composed_planner, sample_path
+from .composed import DEFAULT_SAMPLES, LEGS, as_composed, certify_path, default_composed_planner, sample_path
+from .refine import SOLVERS
 
 __all__ = ["Route", "plan_route"]
 
@@ -101,12 +101,19 @@ def plan_route(waypoints, steps: int = 1, k: float | None = None, robot: Robot |
     NoPlanError
         A leg has no plan (the message names it), or the route fails its certificate.
     """
-    with interruptible():
-        return _plan_route(waypoints, steps, k, robot, radius, legs, method, progress)
+    return _plan_route(waypoints, steps, k, robot, radius, legs, method, progress)
 
 
 def _plan_route(waypoints, steps, k, robot, radius, legs, method, progress) -> Route:
     t0 = time.perf_counter()
+    if isinstance(waypoints, (str, bytes)) or not isinstance(waypoints, (Sequence, np.ndarray)):
+        raise InputError(f"waypoints = {show(waypoints)} is not allowed: give a sequence of Waypoint or of states")
+    if progress is not None and not callable(progress):
+        raise InputError(f"progress = {show(progress)} is not allowed: give a function progress(done, total) or None")
+    if not isinstance(legs, str) or legs not in LEGS:
+        raise InputError(f"legs = {show(legs)} is not allowed: choose one of {', '.join(LEGS)}")
+    if not isinstance(method, str) or method not in SOLVERS:
+        raise InputError(f"method = {show(method)} is not allowed: choose one of {', '.join(SOLVERS)}")
     wps = tuple(w if isinstance(w, Waypoint) else Waypoint(State.of(w, f"waypoint {i}"))
                 for i, w in enumerate(waypoints))
     if len(wps) < 2:

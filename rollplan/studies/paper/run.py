@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ...errors import InputError, check_whole
-from ...io import check_writable, save_figure, write_atomic, write_json
+from ...outputs import check_writable, make_folder, save_figure, write_atomic, write_json
 from ...plots.paper import case_study_figures
 from .report import case_study_rows, markdown
 from .stages import (
@@ -166,14 +166,9 @@ def write_reproduction(result: CaseStudyResult, out, figures: bool = True) -> li
 
 def reproduce(out, progress: Progress | None = None, **options) -> CaseStudyResult:
     """Reproduce Section III.C into the folder ``out`` (created if missing); see :func:`run_case_study`."""
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {str(out)!r} is not allowed: it is a file, give a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(f"--out {str(out)!r} cannot be created: {exc.strerror}") from None
-    check_writable(out / "reproduction.json")  # fail now, not after the computation
+    out = make_folder(out, parents=True)
+    for name in (*FIGURES, "reproduction.json", "REPRODUCTION.md"):
+        check_writable(out / name)  # fail now, not after the computation
     result = run_case_study(progress=progress, **options)
     t0 = time.perf_counter()
     write_reproduction(result, out)

@@ -1,0 +1,102 @@
+"""Ctrl-C that reaches the solvers: a SIGINT during IPOPT, CVODES or a CasADi root finder stops the program.
+
+What CasADi does with SIGINT (CasADi 3.6-3.8, checked in ``tests/test_interrupts.py``):
+while a solver runs, CasADi polls Python for pending signals (once per IPOPT
+iteration, once per right-hand-side evaluation of CVODES). When Python's
+handler raises KeyboardInterrupt, CasADi aborts the solver, but it does not
+pass the KeyboardInterrupt on: IPOPT returns with status
+``NonIpopt_Exception_Thrown`` and a warning on stderr, CVODES raises a
+RuntimeError (``CV_RHSFUNC_FAIL``). A caller would take either for a failed
+solve: the geometric planner would try the next branch (and return a longer
+plan, or go on for minutes), a batch would record the row in flight as
+failed. Evaluations of plain CasADi Functions (``map``) do not poll; Python
+raises KeyboardInterrupt as soon as they return.
+
+:func:`call` runs one solver call with a SIGINT handler that records the
+signal before raising KeyboardInterrupt, and raises KeyboardInterrupt after the
+call if a signal arrived during it, whatever the solver returned. It changes
+the handler only in the main thread and only while Python's default handler is
+installed (a program with its own SIGINT handler, or a worker process that
+ignores SIGINT, is left alone).
+
+Start-up: :func:`guard_start_up` (called first thing by ``rollplan/__init__.py``)
+makes a Ctrl-C while the modules load exit 130 with one line when the program
+is the ``rollplan`` command or ``python -m rollplan.cli``; :func:`end_start_up`
+(first thing in :func:`rollplan.cli.main`, inside its Ctrl-C handling) gives
+SIGINT back to Python's default handler.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+
+__all__ = ["call", "guard_start_up", "cli_follows", "end_start_up"]
+
+class _State:
+    pending = False   # SIGINT arrived during the outermost call
+    depth = 0         # nesting of calls
+
+
+def _record(signum, frame):
+    _State.pending = True
+    raise KeyboardInterrupt
+
+
+def call(function, *args, **kwargs):
+    """``function(*args, **kwargs)``, raising KeyboardInterrupt if SIGINT arrived during it (module docstring)."""
+    install = (_State.depth == 0 and threading.current_thread() is threading.main_thread()
+               and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+    previous = None
+    if _State.depth == 0:
+        _State.pending = False
+    if install:
+        previous = signal.signal(signal.SIGINT, _record)
+    _State.depth += 1
+    try:
+        result = function(*args, **kwargs)
+    except Exception:
+        if _State.pending:
+            raise KeyboardInterrupt from None
+        raise
+    finally:
+        _State.depth -= 1
+        if install:
+            signal.signal(signal.SIGINT, previous)
+    if _State.pending:
+        raise KeyboardInterrupt
+    return result
+
+
+def _interrupted_at_start(signum, frame):
+    print("rollplan: interrupted", file=sys.stderr)
+    raise SystemExit(130)
+
+
+def cli_follows() -> bool:
+    """True if this program is the ``rollplan`` command or ``python -m rollplan.cli`` (rollplan.cli.main runs
+    next)."""
+    argv = getattr(sys, "orig_argv", sys.argv)
+    script = os.path.basename(sys.argv[0]) if sys.argv else ""
+    return script == "rollplan" or any(argv[i:i + 2] == ["-m", "rollplan.cli"] for i in range(len(argv)))
+
+
+def guard_start_up() -> bool:
+    """Install the start-up handler (module docstring) if this program is the command or ``python -m`` of a
+    rollplan module, in the main thread, with Python's default handler; True if installed."""
+    started = cli_follows() or (bool(sys.argv) and sys.argv[0] == "-m")
+    if not (started and threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
+        return False
+    signal.signal(signal.SIGINT, _interrupted_at_start)
+    return True
+
+
+def end_start_up() -> None:
+    """Give SIGINT back to Python's default handler if the start-up handler holds it (else nothing)."""
+    if threading.current_thread() is threading.main_thread() and \
+            signal.getsignal(signal.SIGINT) is _interrupted_at_start:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+

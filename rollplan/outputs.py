@@ -1,0 +1,408 @@
+"""Writing outputs: atomically, one writer at a time, never over an input, with one line when it cannot.
+
+* :func:`check_writable` -- before any computation: the output is a regular
+  file or absent, not read-only, in an existing writable folder, its name fits
+  the file system, and it is none of the command's input files.
+* :func:`write_atomic` -- the data goes to a temporary file next to the output,
+  is synced, and replaces the output by one rename: a reader sees the old file
+  or the new one, never a part. A replaced file keeps its permission bits; a
+  symlink is written through (its target is replaced, the link stays).
+* :func:`claim` -- a lock per output (``flock`` on a lock file next to it,
+  removed on release): a second process that would write the same output is
+  refused at once (:class:`~rollplan.errors.OutputError`, exit 2) instead of
+  interleaving or silently replacing the first one's work. Re-entrant within
+  a process; released by the kernel if the process dies.
+* :class:`LineWriter` -- line-oriented output (batch): every line reaches the
+  file at once (a killed process keeps every finished line); ``fsync`` in
+  batches.
+* :func:`make_folder` -- an output folder, created if missing.
+
+Every failure of the file system (disk full, file size limit, read-only file
+system, a name too long, permissions) is an :class:`~rollplan.errors.OutputError`
+with one line; a temporary file is never left behind by a failed write, and a
+writer that was killed leaves only temporaries that the next writer of the
+same output removes.
+"""
+
+from __future__ import annotations
+
+import errno
+import fcntl
+import hashlib
+import json
+import os
+import re
+import stat
+import tempfile
+import threading
+import time
+from contextlib import contextmanager, suppress
+from pathlib import Path
+
+from .errors import InputError, OutputError
+from .inputs import check_path, show_path
+
+__all__ = ["check_writable", "write_atomic", "write_json", "check_figure_path", "save_figure", "claim",
+           "LineWriter", "make_folder"]
+
+_RANDOM = 8            # characters tempfile adds to a temporary name
+_TMP_SUFFIX = ".tmp"
+_LOCK_SUFFIX = ".lock"
+
+
+def _failure(what: str, path, exc: OSError) -> OutputError:
+    """One line for an OSError met while writing ``path``."""
+    reasons = {errno.ENOSPC: "the disk is full", errno.EDQUOT: "the disk quota is exhausted",
+               errno.EFBIG: "the file is larger than this process may write (file size limit)",
+               errno.EROFS: "the file system is read-only", errno.EACCES: "permission denied",
+               errno.EPERM: "permission denied", errno.ENAMETOOLONG: "the name is too long for the file system",
+               errno.ENOENT: "its folder does not exist", errno.ENOTDIR: "a part of the path is not a folder"}
+    reason = reasons.get(exc.errno, exc.strerror or str(exc))
+    return OutputError(f"{what} {show_path(path)} cannot be written: {reason}")
+
+
+def _read_only(st: os.stat_result, path) -> bool:
+    """No write permission: no write bit at all (refused even for root), or none for this user."""
+    return (st.st_mode & 0o222) == 0 or not os.access(path, os.W_OK)
+
+
+def _name_max(folder: Path) -> int:
+    try:
+        return int(os.pathconf(folder, "PC_NAME_MAX"))
+    except (OSError, ValueError):
+        return 255
+
+
+def _sibling_stem(target: Path) -> str:
+    """A hidden name stem for files next to ``target`` (temporaries, the lock) that fits the file system.
+
+    ``.NAME.`` when it leaves room for a random part and a suffix, else a shortened
+    name with a hash of the whole name (distinct for distinct outputs).
+    """
+    name = target.name
+    room = _name_max(target.parent) - _RANDOM - len(_TMP_SUFFIX) - 3
+    if len(name.encode()) <= room:
+        return f".{name}."
+    digest = hashlib.sha1(name.encode(errors="surrogateescape")).hexdigest()[:10]
+    short = name.encode(errors="surrogateescape")[: max(0, room - 12)].decode(errors="ignore")
+    return f".{short}~{digest}."
+
+
+def _target(path) -> Path:
+    """The file that writing ``path`` replaces: a symlink's target (followed), else the path itself."""
+    return Path(os.path.realpath(path)) if os.path.islink(path) else Path(path)
+
+
+def check_writable(path, what: str = "output", inputs=()) -> Path:
+    """The file that writing ``path`` replaces, or OutputError (one line) unless it can be written.
+
+    An existing output must be a writable regular file; its folder must exist
+    and be writable; its name must fit the file system; it must not be one of
+    ``inputs`` (paths of the command's input files; None entries are skipped).
+    """
+    text = check_path(path, what)
+    if text.endswith(os.sep):
+        raise OutputError(f"{what} {show_path(text)} ends with {os.sep!r}: give a file name")
+    p = _target(text)
+    folder = p.parent
+    try:
+        st = os.stat(p)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        if exc.errno != errno.ENAMETOOLONG:
+            raise _failure(what, text, exc) from None
+        st = None   # said below, with the sizes
+    if st is not None:
+        if stat.S_ISDIR(st.st_mode):
+            raise OutputError(f"{what} {show_path(text)} is a directory: give a file name")
+        if not stat.S_ISREG(st.st_mode):
+            raise OutputError(f"{what} {show_path(text)} is not allowed: it exists and is not a regular file")
+        if _read_only(st, p):
+            raise OutputError(f"{what} {show_path(text)} is read-only: make it writable or choose another name")
+    try:
+        fst = os.stat(folder)
+    except OSError:
+        raise OutputError(f"{what} {show_path(text)} is not writable: folder {show_path(folder)} does not exist") \
+            from None
+    if not stat.S_ISDIR(fst.st_mode):
+        raise OutputError(f"{what} {show_path(text)} is not writable: {show_path(folder)} is not a folder")
+    if _read_only(fst, folder):
+        raise OutputError(f"{what} {show_path(text)} is not writable: no permission to write in folder "
+                          f"{show_path(folder)}")
+    size, limit = len(p.name.encode(errors="surrogateescape")), _name_max(folder)
+    if size > limit:
+        raise OutputError(f"{what} {show_path(text)} is not writable: its name has {size} bytes, the file system "
+                          f"allows {limit}")
+    for source in inputs:
+        if source is None:
+            continue
+        try:
+            same = st is not None and os.path.samefile(p, source)
+        except OSError:
+            same = False
+        if same:
+            raise OutputError(f"{what} {show_path(text)} is the input file {show_path(source)}: choose another name "
+                              "(inputs are never overwritten)")
+    return p
+
+
+# ----------------------------------------------------------------------------- locks
+
+_held: dict = {}                 # real path of an output -> [fd, lock path, count]
+_held_guard = threading.Lock()
+
+
+def _lock_path(target: Path) -> Path:
+    return target.parent / (_sibling_stem(target) + "lock")
+
+
+def _stale_temporaries(target: Path) -> None:
+    """Remove temporaries of ``target`` left by a killed writer (called with its lock held)."""
+    stem = _sibling_stem(target)
+    pattern = re.compile(re.escape(stem) + r"[a-z0-9_]{%d}" % _RANDOM + re.escape(_TMP_SUFFIX))
+    try:
+        names = os.listdir(target.parent)
+    except OSError:
+        return
+    for name in names:
+        if name.startswith(stem) and pattern.fullmatch(name):
+            with suppress(OSError):
+                os.unlink(target.parent / name)
+
+
+def _acquire(path, what: str) -> str:
+    target = _target(check_path(path, what))
+    key = os.path.realpath(target)
+    with _held_guard:
+        if key in _held:
+            _held[key][2] += 1
+            return key
+        lock = _lock_path(target)
+        for _ in range(20):
+            try:
+                fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o644)
+            except OSError as exc:
+                raise _failure(what, path, exc) from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                if exc.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                    break  # the file system cannot lock (ENOLCK, EOPNOTSUPP): write unlocked, as before locks
+                owner = ""
+                with suppress(OSError):
+                    owner = os.read(fd, 32).decode(errors="replace").strip()
+                os.close(fd)
+                pid = f" (pid {owner})" if owner.isdigit() else ""
+                raise OutputError(f"{what} {show_path(path)} is being written by another process{pid}: wait "
+                                  "for it to finish or choose another name") from None
+            try:  # the lock file may have been removed by its last holder since we opened it: then retry
+                same = os.path.samestat(os.fstat(fd), os.stat(lock))
+            except OSError:
+                same = False
+            if same:
+                break
+            os.close(fd)
+        else:
+            raise OutputError(f"{what} {show_path(path)}: its lock file {show_path(lock)} keeps changing")
+        with suppress(OSError):  # the pid is only for the message of a refused second writer
+            os.ftruncate(fd, 0)
+            os.write(fd, f"{os.getpid()}\n".encode())
+        _held[key] = [fd, lock, 1]
+    _stale_temporaries(target)
+    return key
+
+
+def _release(key: str) -> None:
+    with _held_guard:
+        entry = _held[key]
+        entry[2] -= 1
+        if entry[2]:
+            return
+        del _held[key]
+    fd, lock, _ = entry
+    with suppress(OSError):
+        os.unlink(lock)   # while still locked: a waiting opener sees another inode and retries
+    os.close(fd)
+
+
+@contextmanager
+def claim(*paths, what: str = "output"):
+    """Hold the lock of each output in ``paths`` (None skipped) for the ``with`` block.
+
+    Raises OutputError at once if another process holds one of them. Re-entrant:
+    a path this process holds already is not locked again.
+    """
+    keys = []
+    try:
+        for p in paths:
+            if p is not None:
+                keys.append(_acquire(p, what))
+        yield
+    finally:
+        for key in reversed(keys):
+            _release(key)
+
+
+# ----------------------------------------------------------------------------- writing
+
+
+def _new_mode(target: Path) -> int:
+    try:
+        return stat.S_IMODE(os.stat(target).st_mode)
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def _sync_folder(folder: Path) -> None:
+    try:
+        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def write_atomic(path, data: bytes, what: str = "output") -> None:
+    """Write ``data`` to ``path`` through a synced temporary file and one atomic rename (module docstring).
+
+    Raises OutputError (one line) if the output cannot be written; the old file
+    is then left as it was.
+    """
+    target = check_writable(path, what)
+    with claim(path, what=what):
+        fd, tmp = -1, None
+        try:
+            fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=_sibling_stem(target), suffix=_TMP_SUFFIX)
+            os.fchmod(fd, _new_mode(target))
+            view = memoryview(data)
+            while view:
+                view = view[os.write(fd, view):]
+            os.fsync(fd)
+            os.close(fd)
+            fd = -1
+            os.replace(tmp, target)
+            tmp = None
+        except OSError as exc:
+            raise _failure(what, path, exc) from None
+        finally:
+            if fd >= 0:
+                os.close(fd)
+            if tmp is not None and os.path.exists(tmp):
+                os.unlink(tmp)
+        _sync_folder(target.parent)
+
+
+def write_json(path, obj, what: str = "output") -> None:
+    """Write ``obj`` as indented JSON (finite numbers only) with :func:`write_atomic`."""
+    write_atomic(path, (json.dumps(obj, indent=1, allow_nan=False) + "\n").encode(), what)
+
+
+def check_figure_path(path, what: str = "figure") -> Path:
+    """:func:`check_writable` plus a file format matplotlib can write, judged by the suffix."""
+    from matplotlib.figure import Figure
+
+    text = check_path(path, what)
+    formats = Figure().canvas.get_supported_filetypes()
+    suffix = Path(text).suffix.lstrip(".").lower()
+    if suffix not in formats:
+        ext = ("." + suffix) if suffix else "(none)"
+        raise InputError(f"figure path {show_path(text)} is not allowed: its extension {ext!r} "
+                         f"is not a figure format; use one of {', '.join('.' + f for f in sorted(formats))}")
+    return check_writable(path, what)
+
+
+def save_figure(fig, path, dpi=120) -> None:
+    """Save a matplotlib figure atomically (format from the suffix)."""
+    import io
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format=Path(path).suffix.lstrip(".").lower() or "png", dpi=dpi)
+    write_atomic(path, buf.getvalue(), "figure")
+
+
+class LineWriter:
+    """Append lines to an existing output file: each line reaches the file at once, fsync in batches.
+
+    Each :meth:`write` is one ``write`` call on a file opened for appending, so
+    a killed process keeps every finished line (at most the line being written
+    is torn). ``fsync`` runs every ``sync_every`` lines or ``sync_seconds``
+    seconds and at :meth:`close`, which bounds what a power loss can take.
+    Hold the output's :func:`claim` while writing.
+    """
+
+    def __init__(self, path, what: str = "output", sync_every: int = 64, sync_seconds: float = 1.0) -> None:
+        self.path, self.what = path, what
+        self.sync_every, self.sync_seconds = sync_every, sync_seconds
+        self._unsynced, self._synced_at = 0, time.monotonic()
+        try:
+            self._fd = os.open(path, os.O_WRONLY | os.O_APPEND | getattr(os, "O_CLOEXEC", 0))
+        except OSError as exc:
+            raise _failure(what, path, exc) from None
+
+    def write(self, line: str) -> None:
+        view = memoryview(line.encode())
+        try:
+            while view:
+                view = view[os.write(self._fd, view):]
+            self._unsynced += 1
+            if self._unsynced >= self.sync_every or time.monotonic() - self._synced_at >= self.sync_seconds:
+                self.sync()
+        except OSError as exc:
+            raise _failure(self.what, self.path, exc) from None
+
+    def sync(self) -> None:
+        if self._unsynced:
+            os.fsync(self._fd)
+        self._unsynced, self._synced_at = 0, time.monotonic()
+
+    def close(self) -> None:
+        if self._fd < 0:
+            return
+        try:
+            self.sync()
+        except OSError as exc:
+            raise _failure(self.what, self.path, exc) from None
+        finally:
+            os.close(self._fd)
+            self._fd = -1
+
+    def __enter__(self) -> LineWriter:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def make_folder(path, what: str = "output folder", parents: bool = False) -> Path:
+    """The output folder ``path``, created if missing (with ``parents``, its missing parents too; otherwise
+    its parent must exist); OutputError unless it is a writable folder."""
+    text = check_path(path, what)
+    p = Path(text)
+    if p.exists() and not p.is_dir():
+        raise OutputError(f"{what} {show_path(text)} is a file: give a folder")
+    if not p.exists():
+        parent = next((q for q in p.absolute().parents if q.exists()), None)
+        if parent is not None and parent.is_dir() and _read_only(os.stat(parent), parent):
+            raise OutputError(f"{what} {show_path(text)} cannot be created: no permission to write in folder "
+                              f"{show_path(parent)}")
+        try:
+            p.mkdir(parents=parents)
+        except FileNotFoundError:
+            raise OutputError(f"{what} {show_path(text)} cannot be created: folder {show_path(p.parent)} "
+                              "does not exist") from None
+        except OSError as exc:
+            raise _failure(what, text, exc) from None
+    try:
+        st = os.stat(p)
+    except OSError as exc:
+        raise _failure(what, text, exc) from None
+    if _read_only(st, p):
+        raise OutputError(f"{what} {show_path(text)} cannot be written: no permission to write in it")
+    return p

@@ -1,0 +1,160 @@
+"""Ctrl-C reaches the solvers (rollplan.interrupts): what CasADi does with SIGINT inside IPOPT and CVODES
+(it swallows it), that rollplan turns it into KeyboardInterrupt within a second, and that the command exits 130
+with one line, never a traceback, a failed row or another plan."""
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from rollplan import interrupts
+from rollplan.planners.geometric import GeometricPhasePlanner
+
+
+def interrupt_after(seconds):
+    """SIGINT to this process from a timer thread (Python runs the handler in the main thread); the timer's
+    ``sent`` list receives the perf_counter time of the signal."""
+    def send():
+        timer.sent.append(time.perf_counter())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(seconds, send)
+    timer.sent = []
+    timer.start()
+    return timer
+
+
+def endless_ipopt():
+    """An NLP that IPOPT works on for minutes (a long Rosenbrock chain to an unreachable tolerance)."""
+    n = 2000
+    x = ca.SX.sym("x", n)
+    f = ca.sum1(100 * (x[1:] - x[:-1] ** 2) ** 2 + (1 - x[:-1]) ** 2)
+    opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": 10**6,
+            "ipopt.tol": 1e-300, "ipopt.hessian_approximation": "limited-memory"}
+    solver = ca.nlpsol("endless", "ipopt", {"x": x, "f": f}, opts)
+    return solver, {"x0": -np.ones(n)}
+
+
+def endless_cvodes():
+    """An ODE that CVODES integrates for minutes (a forced oscillator over a long horizon)."""
+    x, t = ca.SX.sym("x", 2), ca.SX.sym("t")
+    ode = ca.vertcat(x[1], -x[0] * (1 + ca.sin(t) ** 2))
+    integ = ca.integrator("endless", "cvodes", {"x": x, "t": t, "ode": ode}, 0.0, [1e7],
+                          {"reltol": 1e-14, "abstol": 1e-14, "max_num_steps": 10**9})
+    return integ, {"x0": [1.0, 0.0]}
+
+
+def test_casadi_swallows_sigint_in_ipopt_and_cvodes():
+    """The behaviour rollplan designs around: IPOPT returns (status NonIpopt_Exception_Thrown), CVODES raises
+    RuntimeError; neither passes the KeyboardInterrupt on."""
+    solver, args = endless_ipopt()
+    interrupt_after(0.5)
+    t0 = time.perf_counter()
+    solver(**args)
+    assert solver.stats()["return_status"] == "NonIpopt_Exception_Thrown"
+    assert time.perf_counter() - t0 < 5
+    integ, args = endless_cvodes()
+    interrupt_after(0.5)
+    with pytest.raises(RuntimeError, match="CV_RHSFUNC_FAIL"):
+        integ(**args)
+
+
+@pytest.mark.parametrize("make", [endless_ipopt, endless_cvodes])
+def test_interrupts_call_raises_keyboard_interrupt_within_a_second(make):
+    function, args = make()
+    interrupt_after(0.5)
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        interrupts.call(function, **args)
+    assert time.perf_counter() - t0 < 1.5
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored
+
+
+def test_interrupts_call_passes_results_and_errors_through():
+    assert interrupts.call(lambda a, b=0: a + b, 1, b=2) == 3
+    with pytest.raises(ZeroDivisionError):
+        interrupts.call(lambda: 1 / 0)
+    assert interrupts.call(interrupts.call, max, 1, 2) == 2   # nested
+
+
+@pytest.mark.slow
+def test_planner_is_interrupted_not_sent_to_another_branch():
+    """k = 99 plans for minutes (many brackets); a Ctrl-C stops it with KeyboardInterrupt, not a NoPlanError,
+    SolverError or a plan on a longer branch."""
+    planner = GeometricPhasePlanner()
+    from rollplan import Problem
+
+    timer = interrupt_after(8.0)
+    with pytest.raises(KeyboardInterrupt):
+        planner.solve(Problem((0.0, 1.0, 0.0), k=99.0))
+    # within a second on an idle machine; the bound leaves room for a loaded one (2.5 s seen at load 5 on 2 cores)
+    assert time.perf_counter() - timer.sent[0] < 5.0
+
+
+def run_and_interrupt(argv, delay, wait_for=None):
+    """Run the command; ``delay`` seconds after its stderr shows ``wait_for`` (or after the start), SIGINT.
+    Returns (exit code, seconds from the signal to the exit, stdout, stderr)."""
+    proc = subprocess.Popen([sys.executable, "-m", "rollplan.cli", *argv], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    lines = []
+    seen = threading.Event()
+    if wait_for is None:
+        seen.set()
+
+    def read():
+        for line in proc.stderr:
+            lines.append(line)
+            if wait_for is not None and wait_for in line:
+                seen.set()
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    assert seen.wait(120), "".join(lines)
+    time.sleep(delay)
+    proc.send_signal(signal.SIGINT)
+    t0 = time.perf_counter()
+    out = proc.stdout.read()
+    proc.wait(timeout=60)
+    elapsed = time.perf_counter() - t0
+    reader.join(10)
+    return proc.returncode, elapsed, out, "".join(lines)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay", [0.3, 2.1, 5.7])
+def test_ctrl_c_stops_the_solver_loop_with_exit_130(delay):
+    """`plan --to 0 1 --k 99` solves bracket after bracket for minutes; SIGINT at any moment of the loop exits
+    130 within a second or two (the machine may be loaded), with "rollplan: interrupted" as the last line on
+    stderr (after CasADi's own notices) and no traceback."""
+    code, elapsed, _, err = run_and_interrupt(["-v", "plan", "--to", "0", "1", "--k", "99"], delay, "brackets")
+    assert code == 130, err
+    assert elapsed < 2.0
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("launcher", ["module", "script"])
+def test_ctrl_c_during_start_up_is_one_line_and_exit_130(launcher):
+    """SIGINT while `python -m rollplan.cli` compiled and ran cli.py (after the package had loaded) gave a
+    KeyboardInterrupt traceback and exit -2: the start-up guard now holds until cli.main takes over. Moments from
+    0.3 s (the interpreter's own start-up, before rollplan's first line, is Python's) to well into planning."""
+    if launcher == "module":
+        command = [sys.executable, "-m", "rollplan.cli"]
+    else:
+        command = [os.path.join(os.path.dirname(sys.executable), "rollplan")]
+        if not os.path.exists(command[0]):
+            pytest.skip("the rollplan console script is not installed next to this Python")
+    for delay in (0.3, 0.6, 0.9, 1.2, 1.6, 2.0, 2.5, 3.5):
+        proc = subprocess.Popen([*command, "plan", "--to", "0", "1", "--k", "99"], stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
+        time.sleep(delay)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+        assert proc.returncode == 130, (delay, proc.returncode, err)
+        assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted", (delay, err)

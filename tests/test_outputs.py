@@ -1,0 +1,214 @@
+"""The output layer (rollplan.outputs): atomic writes that keep a replaced file's mode, refuse read-only files
+and folders, names too long and inputs, lock an output against a second writer, survive a full disk with one
+line, clean up after a killed writer, and sync line output in batches."""
+
+import errno
+import json
+import os
+import stat
+import subprocess
+import sys
+import textwrap
+
+import pytest
+from conftest import fill, one_line, run
+
+from rollplan.errors import InputError, OutputError
+from rollplan.outputs import LineWriter, check_writable, claim, make_folder, write_atomic
+
+STEP = ["step", "--a", "0.3", "--k", "2.5", "--json"]
+
+
+def test_replaced_file_keeps_its_mode(tmp_path, capsys):
+    out = tmp_path / "s.json"
+    out.write_text("old")
+    out.chmod(0o600)
+    assert run(capsys, *STEP, str(out))[0] == 0
+    assert stat.S_IMODE(out.stat().st_mode) == 0o600 and json.loads(out.read_text())["a"] == 0.3
+    out.chmod(0o640)
+    write_atomic(out, b"new")
+    assert stat.S_IMODE(out.stat().st_mode) == 0o640 and out.read_bytes() == b"new"
+
+
+def test_read_only_file_and_folder_are_refused(tmp_path, capsys):
+    out = tmp_path / "ro.json"
+    out.write_text("keep")
+    out.chmod(0o444)
+    code, _, err = run(capsys, *STEP, str(out))
+    assert code == 2 and "read-only" in err and one_line(err)
+    assert out.read_text() == "keep"
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        code, _, err = run(capsys, *STEP, str(folder / "x.json"))
+        assert code == 2 and "no permission" in err and one_line(err)
+        code, _, err = run(capsys, "codegen", "--out", str(folder / "c"))
+        assert code == 2 and one_line(err)
+        code, _, err = run(capsys, "codegen", "--out", str(folder))
+        assert code == 2 and one_line(err)
+    finally:
+        folder.chmod(0o755)
+    assert list(folder.iterdir()) == []
+
+
+def test_long_names(tmp_path, capsys):
+    """A legal 255-byte name is written (its temporary and lock names are shortened); a longer one is
+    refused before any work, in one line."""
+    name = "x" * 250 + ".json"
+    code, _, err = run(capsys, *STEP, str(tmp_path / name))
+    assert code == 0, err
+    assert json.loads((tmp_path / name).read_text())["a"] == 0.3
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+    code, _, err = run(capsys, *STEP, str(tmp_path / ("y" * 300 + ".json")))
+    assert code == 2 and "name has 305 bytes" in err and one_line(err)
+
+
+def test_empty_and_directory_outputs(tmp_path, capsys):
+    code, _, err = run(capsys, *STEP, "")
+    assert code == 2 and "name is empty" in err and one_line(err)
+    code, _, err = run(capsys, *STEP, str(tmp_path))
+    assert code == 2 and "is a directory" in err and one_line(err)
+
+
+def test_inputs_are_never_overwritten(tmp_path, capsys):
+    robot = tmp_path / "robot.toml"
+    robot.write_text("radius = 0.1\nmass_total = 1.2\nmass_shell = 0.4\nrotor_inertia_axial = 2e-4\n"
+                     "rotor_inertia_transverse = 1.2e-4\n")
+    before = robot.read_bytes()
+    code, _, err = run(capsys, "plan", "--robot", str(robot), "--to", "0", "0.05", "--json", str(robot))
+    assert code == 2 and "is the input file" in err and one_line(err)
+    link = tmp_path / "link.toml"
+    link.symlink_to(robot)
+    code, _, err = run(capsys, "plan", "--robot", str(link), "--to", "0", "0.05", "--json", str(robot))
+    assert code == 2 and "is the input file" in err
+    assert robot.read_bytes() == before
+    with pytest.raises(OutputError, match="input file"):
+        check_writable(link, inputs=[robot])
+
+
+def test_animate_out_must_be_a_gif(tmp_path, capsys):
+    code, _, err = run(capsys, "animate", str(tmp_path / "plan.json"), "--out", str(tmp_path / "x.png"))
+    assert code == 2 and ".gif" in err and one_line(err)
+    assert not (tmp_path / "x.png").exists()
+
+
+# ----------------------------------------------------------------------------- disk full
+
+
+@pytest.mark.slow
+def test_disk_full_is_one_line_and_leaves_nothing(full_disk, tmp_path, capsys):
+    """plan --json, step --json, atlas, batch and codegen onto a full disk: exit 2, one line, no temporary
+    left; an existing output is left as it was."""
+    old = full_disk / "old.json"
+    targets = tmp_path / "t.csv"
+    targets.write_text("u_a,v_a,psi,steps,k\n0,1,0,1,2.5\n")
+    commands = [["plan", "--to", "0", "1", "--k", "2.5", "--json", str(full_disk / "p.json")],
+                [*STEP, str(old)],
+                ["atlas", "--k", "2.5", "--resolution", "5", "--out", str(full_disk / "a.png")],
+                ["batch", str(targets), "--out", str(full_disk / "b.jsonl"), "--jobs", "1", "--quiet"],
+                ["codegen", "--out", str(full_disk / "c")]]
+    (full_disk / "filler").unlink()
+    old.write_text("old")
+    fill(full_disk / "filler")
+    for argv in commands:
+        code, _, err = run(capsys, *argv)
+        assert code == 2 and "disk is full" in err and one_line(err), (argv, err)
+    assert old.read_text() == "old"
+    leftovers = [p.name for p in full_disk.rglob("*") if p.name.endswith((".tmp", ".lock"))]
+    assert leftovers == []
+
+
+@pytest.mark.slow
+def test_file_size_limit_is_one_line(tmp_path):
+    """The same in a process with a file size limit (EFBIG; works without root)."""
+    out = tmp_path / "p.json"
+    code = ("import resource, sys\nresource.setrlimit(resource.RLIMIT_FSIZE, (200, 200))\n"
+            "from rollplan.cli import main\nsys.exit(main(sys.argv[1:]))\n")
+    r = subprocess.run([sys.executable, "-c", code, *STEP, str(out)], capture_output=True, text=True, timeout=300,
+                       check=False)
+    assert r.returncode == 2 and "file size limit" in r.stderr and one_line(r.stderr), r.stderr
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_os_errors_become_output_errors(tmp_path, monkeypatch):
+    def full(fd, data):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(os, "write", full)
+    with pytest.raises(OutputError, match="disk is full") as err:
+        write_atomic(tmp_path / "x.json", b"data")
+    assert isinstance(err.value, InputError) and "\n" not in str(err.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+# ----------------------------------------------------------------------------- locks
+
+
+HOLD = textwrap.dedent("""
+    import sys, time
+    from rollplan.outputs import claim
+    with claim(sys.argv[1]):
+        print("held", flush=True)
+        time.sleep(60)
+""")
+
+
+def test_a_second_writer_is_refused_while_the_first_holds_the_output(tmp_path, capsys):
+    out = tmp_path / "s.json"
+    holder = subprocess.Popen([sys.executable, "-c", HOLD, str(out)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        code, _, err = run(capsys, *STEP, str(out))
+        assert code == 2 and "being written by another process" in err and f"pid {holder.pid}" in err
+        assert one_line(err) and not out.exists()
+        with pytest.raises(OutputError, match="another process"):
+            write_atomic(out, b"x")
+    finally:
+        holder.kill()
+        holder.wait()
+    # a killed holder leaves its lock file, but not its lock
+    assert run(capsys, *STEP, str(out))[0] == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.json"]
+
+
+def test_claims_are_reentrant_and_removed(tmp_path):
+    out = tmp_path / "x.jsonl"
+    with claim(out), claim(out):
+        write_atomic(out, b"a\n")
+        assert (tmp_path / ".x.jsonl.lock").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.jsonl"]
+
+
+def test_temporaries_of_a_killed_writer_are_removed_by_the_next(tmp_path):
+    out = tmp_path / "x.json"
+    stale = tmp_path / ".x.json.k3j_9a0z.tmp"
+    other = tmp_path / ".x.json.b.k3j_9a0z.tmp"       # another output's (x.json.b) temporary: kept
+    stale.write_text("half")
+    other.write_text("half")
+    write_atomic(out, b"{}")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [other.name, "x.json"]
+
+
+def test_line_writer_syncs_in_batches(tmp_path, monkeypatch):
+    out = tmp_path / "x.jsonl"
+    out.write_text("")
+    calls = []
+    real = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: (calls.append(fd), real(fd)))
+    with LineWriter(out, sync_every=10, sync_seconds=3600) as w:
+        for i in range(25):
+            w.write(f"{i}\n")
+            assert out.read_text().count("\n") == i + 1   # each line reaches the file at once
+    assert len(calls) == 3   # after 10, 20, and at close
+    assert out.read_text() == "".join(f"{i}\n" for i in range(25))
+
+
+def test_make_folder(tmp_path):
+    assert make_folder(tmp_path / "a").is_dir()
+    with pytest.raises(OutputError, match="does not exist"):
+        make_folder(tmp_path / "b" / "c")
+    assert make_folder(tmp_path / "b" / "c", parents=True).is_dir()
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(OutputError, match="is a file"):
+        make_folder(tmp_path / "f")
