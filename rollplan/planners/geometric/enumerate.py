@@ -62,7 +62,6 @@ from typing import NamedTuple
 import numpy as np
 
 from ...core.curves import A_MAX
-from ...core.interrupt import raise_if_interrupted
 from . import leafmap
 from .brackets import target_shift
 from .leafmap import progress, signed_length, turn, turn_dr, turn_inverse
@@ -218,7 +217,6 @@ def _build_rho_table(k: float) -> RhoTable:
     bar = progress(both.size, f"leaf table (k = {k:g})")
     for i in range(0, both.size, _TABLE_CHUNK):
         rho[i:i + _TABLE_CHUNK], drho[i:i + _TABLE_CHUNK] = signed_length(both[i:i + _TABLE_CHUNK], k, derivative=True)
-        raise_if_interrupted()
         if bar is not None:
             bar.update(min(_TABLE_CHUNK, both.size - i))
     if bar is not None:

@@ -58,7 +58,6 @@ import numpy as np
 from ...core import model
 from ...core.curves import A_MAX, figure_eight, rotated_point
 from ...core.integrate import DEFAULT_NODES, spectral_step
-from ...core.interrupt import raise_if_interrupted
 from ...core.plane import n_step_sum, wrap, wrap_exact
 from ...errors import (
     InputError,
@@ -304,7 +303,6 @@ class GeometricPhasePlanner:
                 x, status, iters, ok = self._solve([br["a_s"], br["b_s"]], [k, br["eta_m"], br["h_m"]], box_lo, box_hi)
                 solves += 1
                 statuses[str(status)] += 1
-                raise_if_interrupted()
                 if not ok or any(abs(x[0] - sa) < 1e-7 and abs(x[1] - sb) < 1e-7 for sa, sb, _ in seen):
                     continue
                 seen.append((float(x[0]), float(x[1]), m))
@@ -365,7 +363,6 @@ class GeometricPhasePlanner:
                 visited += len(chunk)
                 cands = roots(chunk, k, first_only=not all_solutions,
                               lengths=(0.0, math.inf if all_solutions else best))
-                raise_if_interrupted()
                 for r in cands:
                     if not all_solutions and r.a + r.b >= best:
                         break
