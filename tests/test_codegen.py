@@ -227,7 +227,7 @@ def test_plan_demo_reports_bad_input_and_no_plan(built, args, status):
 @pytest.mark.parametrize("args, needle", [
     (("0", "0x10", "0", "1", "2.5"), "usage"),          # hexadecimal is not a decimal number (strtod reads 16)
     (("0", "1", "0", "1", "1e308"), "K = 1e308"),       # beyond K_MAX: bad input, not "no convergence"
-    (("0", "1", "0", "1", "100.5"), "[0, 100]"),
+    (("0", "1", "0", "1", "100.5"), f"[0, {DEFAULT_K_MAX!r}]"),   # the k range fixed at generation
     (("0", "1", "0", "1001", "2.5"), "[1, 1000]"),
     (("0", "1", "0", "1", "inf"), "usage"), ((" 0", "1", "0", "1", "2.5"), "usage"),
     (("0", "1_0", "0", "1", "2.5"), "usage"), (("0", "1e400", "0", "1", "2.5"), "usage"),
