@@ -175,8 +175,11 @@ def test_robot_from_inertias_round_trip():
         r = robot_from_inertias(rob.radius, rob.j_xx, rob.j_zz, rob.rotor_inertia_axial, like=rob)
         assert (r.j_xx, r.j_zz, r.rotor_inertia_axial) == pytest.approx(
             (rob.j_xx, rob.j_zz, rob.rotor_inertia_axial), rel=1e-14)
-    r = robot_from_inertias(0.1, 0.013, 0.003, 0.0029, like=MODEL)  # the model's J_p would make m_o < 0
-    assert (r.j_xx, r.j_zz, r.rotor_inertia_axial) == pytest.approx((0.013, 0.003, 0.0029), rel=1e-14)
+    r = robot_from_inertias(0.1, 0.013, 0.003, 0.0014, like=MODEL)  # the model's J_p would make m_o < 0
+    assert (r.j_xx, r.j_zz, r.rotor_inertia_axial) == pytest.approx((0.013, 0.003, 0.0014), rel=1e-14)
+    assert r.rotor_inertia_axial <= 2 * r.rotor_inertia_transverse
+    with pytest.raises(InputError, match="possible robot"):     # Jzz < 2 J_r: no body of revolution has it
+        robot_from_inertias(0.1, 0.013, 0.003, 0.0029)
     with pytest.raises(InputError, match="Jxx > Jzz > J_r"):
         robot_from_inertias(0.1, 0.003, 0.013, 0.0029)
 
