@@ -20,10 +20,10 @@ from .planners.geometric import SOLVERS, GeometricPhasePlanner, Plan, StepResult
 from .problem import STATE_NAMES, Problem, State
 from .result import Certificate, Measures, PlanResult, SolverStats, Trajectory
 from .robot import Robot, default_robot, load_robot
-
-__version__ = "0.1.0"
+from .version import __version__
 
 __all__ = [
+    "__version__",
     "A_MAX", "Curve", "Piece", "circle_point", "figure_eight",
     "InputError", "NoPlanError", "SolverError",
     "STATE_NAMES", "State", "Problem",
