@@ -1,0 +1,41 @@
+"""The one colour convention of rollplan's figures: a colour means the same thing in every figure.
+
+============================  ===========================================================
+``LEAF``                      1st half-step (leaf of radius a) red, 2nd (radius b) blue,
+                              as in the paper's figures
+``PLANNER``                   geometric phase brown, direct collocation orange
+``ROTOR``                     rotor 1 (axis n1) purple, rotor 2 (axis n2) green: rates,
+                              angles, torques and the rotor axes in the animation
+``AXIS_N3``                   the body axis n3 (no rotor) grey
+``OMEGA``                     components x, y, z of the angular velocity: olive, cyan, pink
+``PLANNED``, ``SIMULATED``    a planned motion (grey, dashed) against a simulated one (black)
+``MARK``                      start and target marks, the fold of the atlas: black
+``COMPUTED``, ``PRINTED``     a value computed by rollplan (black) and the value printed in
+                              the paper (magenta)
+============================  ===========================================================
+
+Every figure that uses a colour names it in a legend (or a colour bar for maps).
+"""
+
+from __future__ import annotations
+
+__all__ = ["LEAF", "LEAF_LABELS", "PLANNER", "PLANNER_LABELS", "ROTOR", "ROTOR_LABELS", "AXIS_N3", "OMEGA",
+           "OMEGA_LABELS", "PLANNED", "SIMULATED", "MARK", "REST",
+           "COMPUTED", "PRINTED"]
+
+LEAF = ("tab:red", "tab:blue")
+LEAF_LABELS = ("1st half-step (leaf a)", "2nd half-step (leaf b)")
+PLANNER = {"geometric_phase": "tab:brown", "collocation": "tab:orange"}
+PLANNER_LABELS = {"geometric_phase": "geometric phase", "collocation": "collocation"}
+ROTOR = ("tab:purple", "tab:green")
+ROTOR_LABELS = ("rotor 1 (axis n1)", "rotor 2 (axis n2)")
+AXIS_N3 = "tab:gray"
+OMEGA = ("tab:olive", "tab:cyan", "tab:pink")
+OMEGA_LABELS = ("$\\omega_x$", "$\\omega_y$", "$\\omega_z$")
+PLANNED = "0.55"
+SIMULATED = "black"
+MARK = "black"
+COMPUTED = "black"
+PRINTED = "magenta"
+#: Thin vertical lines at the rest instants between leaves of a timed motion.
+REST = "0.85"
