@@ -352,11 +352,11 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InputError(f"output folder {str(out)!r} is a file")
+    if not out.exists() and not out.parent.is_dir() and str(out.parent):
+        raise InputError(f"output folder {str(out)!r} cannot be created: {str(out.parent)!r} does not exist")
+    funcs = generated_functions(steps_per_leaf, prefix)  # checks steps_per_leaf before the folder is made
     if not out.exists():
-        if not out.parent.is_dir() and str(out.parent):
-            raise InputError(f"output folder {str(out)!r} cannot be created: {str(out.parent)!r} does not exist")
         out.mkdir()
-    funcs = generated_functions(steps_per_leaf, prefix)
     step, step_jac, table = funcs[3], funcs[4], funcs[5]
     lib = f"{prefix}_model"
     cg = ca.CodeGenerator(f"{lib}.c", {"with_header": True})
