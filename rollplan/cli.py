@@ -1,28 +1,46 @@
-"""The ``rollplan`` command. Exit codes: 0 success, 2 bad input, 3 no plan, 4 solver failure."""
+"""The rollplan command: exact motion planning for a spherical robot driven by two internal rotors.
+
+Exit codes: 0 success, 2 bad input, 3 no plan, 4 solver failure; batch: 1 when some rows failed,
+3 when every row failed. `--json -` writes the JSON document to stdout and the summary to stderr.
+Lengths are printed in the unit in use (R, or m with --robot or --radius), summaries with 6
+significant digits (JSON files in full precision); long work shows its progress on stderr.
+"""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import json
 import logging
+import re
 import sys
 
 from .core.curves import A_MAX
 from .errors import InputError, NoPlanError, SolverError, check_finite
-from .io import check_figure_path, check_writable, plan_to_dict, save_figure, write_json
+from .io import check_figure_path, check_writable, plan_to_dict, save_figure, tagged, write_json
 from .planners import geometric
-from .problem import STATE_NAMES
+from .problem import DEFAULT_K, K_MAX, MAX_STEPS, STATE_NAMES
+from .progress import Progress, reporting
 from .robot import default_robot, load_robot
+from .version import __version__
 
-EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER = 0, 2, 3, 4
-#: k of ``plan`` and ``compare`` when neither --k nor --robot is given (the paper's case study).
-DEFAULT_K = 2.5
+EXIT_OK, EXIT_SOME_FAILED, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
+#: What a residual is (printed next to every residual and arrival error).
+NORM = "Euclidean norm; lengths in R, angles in rad"
+#: Numbers as argparse should see them: also in exponent form (-1e-3) and -inf/-nan (refused later by the
+#: number check, with a clear message, instead of being taken for an option).
+_NEGATIVE_NUMBER = re.compile(r"^-([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports bad input in one line with exit code 2."""
+    """argparse that takes negative numbers in any form and reports bad input in one line with exit code 2."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message):
-        self.exit(EXIT_INPUT, f"{self.prog}: error: {message}\n")
+        self.exit(EXIT_INPUT, f"{self.prog}: error: {message} (see: {self.prog} --help)\n")
 
 
 def _number(text: str) -> float:
@@ -40,11 +58,27 @@ def _whole(text: str) -> int:
 
 
 def _check_outputs(json=None, figure=None) -> None:
-    """Refuse unwritable output paths and unknown figure formats before any computation."""
-    if json is not None:
+    """Refuse unwritable output paths and unknown figure formats before any computation (``-`` is stdout)."""
+    if json is not None and json != "-":
         check_writable(json)
     if figure is not None:
         check_figure_path(figure)
+
+
+def _emit_json(args, obj, unit: str) -> None:
+    """Write ``obj`` (with ``version`` and ``units``) to ``--json FILE``, or to stdout for ``--json -``."""
+    doc = tagged(obj, unit)
+    if args.json == "-":
+        args.stdout.write(json.dumps(doc, indent=1, allow_nan=False) + "\n")
+        args.stdout.flush()
+    else:
+        write_json(args.json, doc)
+        print(f"wrote {args.json}")
+
+
+def _g(x) -> str:
+    """A number in a summary: 6 significant digits."""
+    return f"{x:.6g}"
 
 
 def _k_or_robot(args):
@@ -55,14 +89,15 @@ def _k_or_robot(args):
 
 
 def _fmt_plan(p, unit) -> str:
+    f = p.final
     lines = [
-        f"  figure eight  a = {p.a:.9g} {unit}   b = {p.b:.9g} {unit}   gamma = {p.gamma:.9g} rad"
+        f"  figure eight  a = {_g(p.a)} {unit}   b = {_g(p.b)} {unit}   gamma = {_g(p.gamma)} rad"
         f"   (branch m = {p.branch})",
-        f"  one step      h = {p.h:.9g} {unit}   eta = {p.eta:.9g} rad",
-        f"  path length   {p.path_length:.9g} {unit}",
-        f"  final         u_a = {p.final.u_a:.12g}  v_a = {p.final.v_a:.12g}  psi = {p.final.psi:.12g}"
-        f"  u_o = {p.final.u_o:.3g}  v_o = {p.final.v_o:.3g}",
-        f"  residual      {p.residual:.2e} ({p.certificate.method}, independent of the planner)",
+        f"  one step      h = {_g(p.h)} {unit}   eta = {_g(p.eta)} rad",
+        f"  path length   {_g(p.path_length)} {unit}",
+        f"  final         u_a = {_g(f.u_a)} {unit}  v_a = {_g(f.v_a)} {unit}  psi = {_g(f.psi)} rad"
+        f"  u_o = {f.u_o:.3g} rad  v_o = {f.v_o:.3g} rad",
+        f"  residual      {p.residual:.2e} ({NORM}; {p.certificate.method}, independent of the planner)",
     ]
     return "\n".join(lines)
 
@@ -78,10 +113,10 @@ def cmd_plan(args) -> int:
         print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
               "lengths in m")
     p = geometric.plan((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.all, args.method)
-    unit = "m" if robot is not None else ("R" if args.radius is None else "units")
+    unit = p.problem.unit
     g = p.goal
-    print(f"rollplan: k = {p.k:.9g}, R = {p.radius:g}, steps = {p.steps}, target (u_a, v_a, psi) = "
-          f"({g.u_a:g}, {g.v_a:g}, {g.psi:g})")
+    print(f"rollplan: k = {_g(p.k)}, R = {_g(p.radius)} {'m' if unit == 'm' else '(lengths in units of R)'}, "
+          f"steps = {p.steps}, target (u_a, v_a, psi) = ({_g(g.u_a)} {unit}, {_g(g.v_a)} {unit}, {_g(g.psi)} rad)")
     print(_fmt_plan(p, unit))
     print(f"  solver        {p.stats.method}: {p.stats.status}, {p.stats.iterations} iterations, "
           f"{p.stats.details['candidates']} brackets, {p.stats.details['solves']} solves, "
@@ -92,8 +127,7 @@ def cmd_plan(args) -> int:
     motion, extra = _timed(args, p, robot) if args.duration is not None else (None, {})
     traj = p.sample() if (args.json or args.plot) else None
     if args.json:
-        write_json(args.json, {**plan_to_dict(p, traj), **extra})
-        print(f"wrote {args.json}")
+        _emit_json(args, {**plan_to_dict(p, traj), **extra}, unit)
     if args.plot and motion is not None:
         from .plots.motion import plot_motion
 
@@ -102,7 +136,7 @@ def cmd_plan(args) -> int:
     elif args.plot:
         from .plots.plan import plot_plan
 
-        save_figure(plot_plan(p, traj, unit or "R"), args.plot)
+        save_figure(plot_plan(p, traj, unit), args.plot)
         print(f"wrote {args.plot}")
     return EXIT_OK
 
@@ -115,11 +149,11 @@ def _timed(args, p, robot):
 
     motion = actuate(p, robot, args.duration, args.samples)
     sim = simulate_rotors(robot, motion.time, motion.rotor_rates, p.goal)
-    print(f"  motion        T = {motion.duration:g} s, {motion.time.size} samples, rest-to-rest per half-step")
-    print(f"  rotors        max |rate| = {abs(motion.rotor_rates).max():.4g} rad/s   "
-          f"max |torque| = {abs(motion.rotor_torques).max():.4g} N m")
-    print(f"  rotor-only    arrival error {sim.arrival_error:.2e} (position {sim.position_error:.2e} R; "
-          "spline through the rotor rates, (11) and (6)-(10) by CVODES)")
+    print(f"  motion        T = {_g(motion.duration)} s, {motion.time.size} samples, rest-to-rest per half-step")
+    print(f"  rotors        max |rate| = {_g(abs(motion.rotor_rates).max())} rad/s   "
+          f"max |torque| = {_g(abs(motion.rotor_torques).max())} N m")
+    print(f"  rotor-only    arrival error {sim.arrival_error:.2e} ({NORM}), position error "
+          f"{sim.position_error * robot.radius:.2e} m (spline through the rotor rates, (11) and (6)-(10) by CVODES)")
     extra = motion_to_dict(motion)
     extra["rotor_simulation"] = {"arrival_error": sim.arrival_error, "position_error": sim.position_error,
                                  "final": [float(v) for v in sim.final]}
@@ -127,41 +161,17 @@ def _timed(args, p, robot):
 
 
 def cmd_step(args) -> int:
-    if args.json is not None:
-        check_writable(args.json)
+    _check_outputs(json=args.json)
     r = geometric.step(args.a, args.b, k=args.k, gamma=args.gamma)
     u, v = r.shift
     # final psi of one step equals eta
-    print(f"rollplan step: a = {r.a:g} R, b = {r.b:g} R, k = {r.k:g}, gamma = {r.gamma:g} rad")
-    print(f"  h = {r.h:.12g} R   eta = {r.eta:.12g} rad   direction = {r.direction:.12g} rad")
-    print(f"  final u_a = {u:.12g} R   v_a = {v:.12g} R   psi = {r.eta:.12g} rad")
+    print(f"rollplan step: a = {_g(r.a)} R, b = {_g(r.b)} R, k = {_g(r.k)}, gamma = {_g(r.gamma)} rad")
+    print(f"  h = {_g(r.h)} R   eta = {_g(r.eta)} rad   direction = {_g(r.direction)} rad")
+    print(f"  final u_a = {_g(u)} R   v_a = {_g(v)} R   psi = {_g(r.eta)} rad")
     if args.json:
-        write_json(args.json, {"a": r.a, "b": r.b, "k": r.k, "gamma": r.gamma, "h": r.h, "eta": r.eta,
-                               "direction": r.direction, "final": {"u_a": float(u), "v_a": float(v), "psi": r.eta}})
-        print(f"wrote {args.json}")
+        _emit_json(args, {"a": r.a, "b": r.b, "k": r.k, "gamma": r.gamma, "h": r.h, "eta": r.eta,
+                          "direction": r.direction, "final": {"u_a": float(u), "v_a": float(v), "psi": r.eta}}, "R")
     return EXIT_OK
-
-
-class _Progress:
-    """``progress(label, done, total)`` drawn as one tqdm bar per label on stderr."""
-
-    def __init__(self) -> None:
-        from tqdm import tqdm
-
-        self._tqdm = tqdm
-        self._bars: dict = {}
-
-    def __call__(self, label: str, done: int, total: int) -> None:
-        bar = self._bars.get(label)
-        if bar is None:
-            bar = self._bars[label] = self._tqdm(total=total, desc=label, file=sys.stderr)
-        bar.total = total
-        bar.update(done - bar.n)
-
-    def close(self) -> None:
-        for bar in self._bars.values():
-            bar.close()
-        self._bars.clear()
 
 
 def cmd_reproduce(args) -> int:
@@ -170,45 +180,62 @@ def cmd_reproduce(args) -> int:
     from .studies.paper import reproduce
 
     t0 = time.perf_counter()
-    progress = _Progress()
     print(f"rollplan reproduce: Section III.C of the paper into {args.out}", file=sys.stderr)
-    try:
+    with Progress() as progress:
         result = reproduce(args.out, progress=progress)
-    finally:
-        progress.close()
     width = max(len(r.quantity) for r in result.rows)
     for r in result.rows:
-        print(f"  {r.quantity:<{width}}  paper {r.paper:<11.9g} computed {r.computed:<16.12g} {r.status}")
+        print(f"  {r.quantity:<{width}}  paper {r.paper:<11.9g} computed {r.computed:<12.6g} {r.status}")
     n_ok = sum(r.status == "reproduced" for r in result.rows)
     print(f"{n_ok} of {len(result.rows)} reproduced, {len(result.rows) - n_ok} discrepancies "
           f"(evidence in {args.out}/REPRODUCTION.md); {time.perf_counter() - t0:.1f} s")
     return EXIT_OK
 
 
+def _planned_states(rp):
+    """The plan file's planned states at its sample times, (N, 5), or None if it has none usable."""
+    import numpy as np
+
+    try:
+        state = np.asarray(rp.data.get("state"), float)
+    except (TypeError, ValueError):
+        return None
+    ok = state.shape == (rp.time.size, 5) and np.all(np.isfinite(state))
+    return state if ok else None
+
+
 def cmd_simulate(args) -> int:
     from .execution.plants import simulate_rotors
     from .io import load_rotor_plan
 
-    if args.json is not None:
-        check_writable(args.json)
+    _check_outputs(json=args.json, figure=args.plot)
     rp = load_rotor_plan(args.plan_file)
     robot = load_robot(args.robot) if args.robot else rp.robot
     sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal)
     e = sim.error
     f, g = sim.final, rp.goal
-    print(f"rollplan simulate: {rp.time.size} samples over {rp.time[-1] - rp.time[0]:g} s, robot k = {robot.k:.9g}"
-          f"{' (planned k = %.9g)' % rp.robot.k if args.robot else ''}")
-    print(f"  final         u_a = {f[0]:.12g} m  v_a = {f[1]:.12g} m  psi = {f[2]:.12g} rad"
-          f"  u_o = {f[3]:.3g}  v_o = {f[4]:.3g}")
-    print(f"  target        u_a = {g.u_a:.12g} m  v_a = {g.v_a:.12g} m  psi = {g.psi:.12g} rad")
-    print(f"  arrival error {sim.arrival_error:.3e} (position {sim.position_error:.3e} R = "
-          f"{sim.position_error * robot.radius:.3e} m, psi {e[2]:.3e} rad, u_o {e[3]:.1e}, v_o {e[4]:.1e})")
+    print(f"rollplan simulate: {rp.time.size} samples over {_g(rp.time[-1] - rp.time[0])} s, robot k = {_g(robot.k)}"
+          f"{' (planned k = %s)' % _g(rp.robot.k) if args.robot else ''}, R = {_g(robot.radius)} m")
+    print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
+          f"  u_o = {f[3]:.3g} rad  v_o = {f[4]:.3g} rad")
+    print(f"  target        u_a = {_g(g.u_a)} m  v_a = {_g(g.v_a)} m  psi = {_g(g.psi)} rad")
+    print(f"  arrival error {sim.arrival_error:.3e} ({NORM}): position {sim.position_error * robot.radius:.3e} m, "
+          f"psi {e[2]:.3e} rad, u_o {e[3]:.1e} rad, v_o {e[4]:.1e} rad")
     if args.json:
-        write_json(args.json, {"final": dict(zip(STATE_NAMES, map(float, sim.final))),
-                               "arrival_error": sim.arrival_error, "position_error": sim.position_error,
-                               "error": dict(zip(STATE_NAMES, map(float, e))),
-                               "robot": robot.as_dict()})
-        print(f"wrote {args.json}")
+        _emit_json(args, {"final": dict(zip(STATE_NAMES, map(float, sim.final))),
+                          "arrival_error": sim.arrival_error, "position_error": sim.position_error,
+                          "position_error_m": sim.position_error * robot.radius,
+                          "error": dict(zip(STATE_NAMES, map(float, e))),
+                          "error_units": "u_a, v_a and position_error in R; psi (wrapped), u_o, v_o in rad",
+                          "robot": robot.as_dict()}, "m")
+    if args.plot:
+        from .plots.motion import plot_simulation
+
+        title = (f"rotor-driven simulation of {args.plan_file}: arrival error {sim.arrival_error:.2e} ({NORM}), "
+                 f"position error {sim.position_error * robot.radius:.2e} m")
+        save_figure(plot_simulation(sim.time, sim.state, rp.rotor_rates, g, _planned_states(rp), robot, title),
+                    args.plot)
+        print(f"wrote {args.plot}")
     return EXIT_OK
 
 
@@ -224,13 +251,15 @@ def cmd_animate(args) -> int:
         raise InputError(f"--fps {args.fps} is not allowed: it must lie in [1, 100]")
     rp = load_rotor_plan(args.plan_file)
     sim = simulate_rotors(rp.robot, rp.time, rp.rotor_rates, rp.goal)
-    make_animation(rp.time, sim.state, rp.rotor_rates, rp.robot, rp.goal, args.out, args.frames, args.fps)
+    with Progress(unit="frames") as progress:
+        make_animation(rp.time, sim.state, rp.rotor_rates, rp.robot, rp.goal, args.out, args.frames, args.fps,
+                       progress=progress)
     print(f"wrote {args.out}")
     return EXIT_OK
 
 
 def _fmt_row(name, a, b, fmt):
-    return f"  {name:<30s} {format(a, fmt):>20s} {format(b, fmt):>20s}"
+    return f"  {name:<34s} {format(a, fmt):>20s} {format(b, fmt):>20s}"
 
 
 def cmd_compare(args) -> int:
@@ -242,35 +271,40 @@ def cmd_compare(args) -> int:
                            args.cost, args.intervals, args.degree, args.scheme, args.guess, args.contact_bound)
     p, r, prob = c.plan, c.result, c.problem
     gm, om = c.plan_measures, r.measures
-    unit = "m" if robot is not None else ("R" if args.radius is None else "units")
+    unit = prob.unit
     effort = "rotor effort int|phi'|^2 dt" if robot is not None else "effort int|omega|^2 dt"
     g, tr = prob.goal, r.transcription
-    print(f"rollplan compare: k = {prob.k:.9g}, R = {prob.radius:g}, T = {c.horizon:g} s, target (u_a, v_a, psi) = "
-          f"({g.u_a:g}, {g.v_a:g}, {g.psi:g})")
-    print(f"  geometric phase: {prob.steps} figure eight(s), a = {p.a:.6g}, b = {p.b:.6g}, "
-          f"gamma = {p.gamma:.6g}, timed t ~ theta")
+    print(f"rollplan compare: k = {_g(prob.k)}, R = {_g(prob.radius)} {'m' if unit == 'm' else '(lengths in R)'}, "
+          f"T = {_g(c.horizon)} s, target (u_a, v_a, psi) = ({_g(g.u_a)} {unit}, {_g(g.v_a)} {unit}, {_g(g.psi)} rad)")
+    print(f"  geometric phase: {prob.steps} figure eight(s), a = {_g(p.a)} {unit}, b = {_g(p.b)} {unit}, "
+          f"gamma = {_g(p.gamma)} rad, timed t ~ theta")
     print(f"  collocation: cost {r.cost}, {tr.scheme} d = {tr.degree}, N = {tr.intervals}, {r.guess} guess, "
           f"psi turns m = {r.turns}")
-    print(f"  {'':<30s} {'geometric phase':>20s} {'collocation':>20s}")
-    print(_fmt_row(f"contact path length [{unit or '-'}]", gm.path_length, om.path_length, ".6g"))
+    print(f"  {'':<34s} {'geometric phase':>20s} {'collocation':>20s}")
+    print(_fmt_row(f"contact path length [{unit}]", gm.path_length, om.path_length, ".6g"))
     print(_fmt_row(f"{effort} [rad^2/s]", c.effort(gm), c.effort(om), ".6g"))
     print(_fmt_row("peak |omega| [rad/s]", gm.peak_omega, om.peak_omega, ".6g"))
-    print(_fmt_row("final residual (CVODES)", p.residual, r.residual, ".2e"))
+    print(_fmt_row("residual (CVODES, Euclidean norm)", p.residual, r.residual, ".2e"))
     print(_fmt_row("solve time [ms]", p.stats.time_s * 1e3, r.stats.time_s * 1e3, ".1f"))
     print(_fmt_row("iterations", p.stats.iterations, r.stats.iterations, "d"))
     print(_fmt_row("status", p.stats.status, r.stats.status, "s"))
+    print(f"  (residuals: {NORM})")
     if r.guess == "warm":
         print(f"  (collocation time is IPOPT's; its warm start took another "
               f"{r.stats.details['guess_time_s'] * 1e3:.1f} ms)")
     if args.json:
-        write_json(args.json, comparison.comparison_to_dict(c))
-        print(f"wrote {args.json}")
+        _emit_json(args, comparison.comparison_to_dict(c), unit)
     if args.plot:
         from .plots.compare import plot_comparison
 
-        save_figure(plot_comparison(c, unit or "R"), args.plot)
+        save_figure(plot_comparison(c, unit, comparison.comparison_series(c)), args.plot)
         print(f"wrote {args.plot}")
     return EXIT_OK
+
+
+_K_HELP = "inertia ratio k in [0, %g] (default %g, the paper's case)" % (K_MAX, DEFAULT_K)
+_STEPS = "in [1, %d]" % MAX_STEPS
+_JSON_HELP = "write {} as JSON to FILE (- for stdout; the summary then goes to stderr)"
 
 
 def _add_target_options(parser, to_default, steps_help) -> None:
@@ -284,29 +318,32 @@ def _add_target_options(parser, to_default, steps_help) -> None:
     parser.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
     parser.add_argument("--steps", type=_whole, default=1, help=steps_help)
     g = parser.add_mutually_exclusive_group()
-    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default %g)" % DEFAULT_K)
+    g.add_argument("--k", type=_number, default=None, help=_K_HELP)
     g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
-    parser.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+    parser.add_argument("--radius", type=_number, default=None,
+                        help="sphere radius R > 0 [m]; lengths are then in metres (default: lengths in units of R, "
+                             "or the robot's radius)")
 
 
 def _add_compare_parser(sub) -> None:
     from .planners import collocation
 
     c = sub.add_parser("compare", help="geometric-phase plan versus direct-collocation optimum, side by side")
-    _add_target_options(c, to_default=None, steps_help="figure eights n >= 1 of the geometric plan (default 1)")
+    _add_target_options(c, to_default=None, steps_help=f"figure eights n {_STEPS} of the geometric plan (default 1)")
     c.add_argument("--cost", choices=sorted(collocation.COSTS), default="path_length",
                    help="collocation cost (default path_length; rotor_effort needs --robot)")
-    c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T [s] of both motions (default 1)")
-    c.add_argument("--intervals", type=_whole, default=100, help="collocation intervals N (default 100)")
-    c.add_argument("--degree", type=_whole, default=3, help="collocation degree d (default 3)")
+    c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T > 0 [s] of both motions (default 1)")
+    c.add_argument("--intervals", type=_whole, default=100, help="collocation intervals N in [1, 100000] (default 100)")
+    c.add_argument("--degree", type=_whole, default=3, help="collocation degree d in [1, 9] (default 3)")
     c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
     c.add_argument("--guess", choices=sorted(collocation.GUESSES), default="warm",
                    help="collocation initial guess: warm (the geometric plan) or naive (straight line)")
     c.add_argument("--contact-bound", type=_number, default=collocation.CONTACT_BOUND, metavar="RAD",
-                   help="collocation: largest polar angle of the contact point from the south pole "
+                   help="collocation: largest polar angle of the contact point from the south pole, in (0, pi/2) "
                         "(default %.4g rad = 75 deg)" % collocation.CONTACT_BOUND)
-    c.add_argument("--json", metavar="FILE", help="write both results as JSON")
-    c.add_argument("--plot", metavar="FILE.png", help="overlay both contact paths on the plane and the sphere")
+    c.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("both results"))
+    c.add_argument("--plot", metavar="FILE.png", help="both contact paths on the sphere and the plane, and omega "
+                   "(and with --robot the rotor rates) of both motions in time")
     c.set_defaults(func=cmd_compare)
 
 
@@ -323,65 +360,111 @@ def cmd_codegen(args) -> int:
 
 
 def cmd_batch(args) -> int:
-    import os
-
     from .studies.batch import run_batch
+    from .studies.executor import ExecutorError, cpu_count
 
     try:
-        jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
+        jobs = args.jobs if args.jobs is not None else cpu_count()
         r = run_batch(args.targets, args.out, jobs, args.resume, args.overwrite, args.method,
-                      progress=not args.quiet)
+                      progress=not args.quiet, scheduler=args.scheduler)
     except KeyboardInterrupt:
         print(f"\nrollplan: interrupted; finished lines are kept in {args.out}: rerun with --resume",
               file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
+    except ExecutorError as exc:
+        print(f"rollplan: the cluster failed: {exc}; finished lines are kept in {args.out}: rerun with --resume",
+              file=sys.stderr)
+        return EXIT_SOLVER
     print(f"rollplan batch: {r.total} targets, {r.skipped} already done, {r.planned} planned "
           f"({r.failed} failed) in {r.time_s:.1f} s; wrote {args.out}")
+    if r.total and r.failed_total == r.total:
+        print(f"rollplan: every row failed ({r.failed_total} of {r.total}); see 'reason' in {args.out}",
+              file=sys.stderr)
+        return EXIT_NOPLAN
+    if r.failed_total:
+        print(f"rollplan: {r.failed_total} of {r.total} rows failed; see 'reason' in {args.out}", file=sys.stderr)
+        return EXIT_SOME_FAILED
     return EXIT_OK
+
+
+def _per_k(path, k, several: bool):
+    return path.replace("{k}", f"{k:g}") if several else path
 
 
 def cmd_atlas(args) -> int:
     from .plots.atlas import plot_atlas
-    from .studies.atlas import atlas_to_dict, compute_atlas
+    from .studies.atlas import atlas_to_dict, compute_atlases
 
-    _check_outputs(json=args.json, figure=args.out)
-    at = compute_atlas(args.k, args.steps, args.resolution)
-    save_figure(plot_atlas(at), args.out)
-    print(f"rollplan atlas: k = {at.k:g}, steps = {at.steps}, {at.a.size} x {at.b.size} grid on (0, {at.a[-1]:g}]^2")
-    print(f"  shift per step h in [{at.h.min():.6g}, {at.h.max():.6g}] R, holonomy eta in "
-          f"[{at.eta.min():.6g}, {at.eta.max():.6g}] rad, {at.fold_cells} grid cells on the fold det = 0")
-    print(f"wrote {args.out}")
-    if args.json:
-        write_json(args.json, atlas_to_dict(at))
-        print(f"wrote {args.json}")
+    several = len(args.k) > 1
+    for path in (args.out, args.json):
+        if several and path not in (None, "-") and "{k}" not in path:
+            raise InputError(f"output path {path!r} is not allowed with several --k values: put {{k}} in it "
+                             "(e.g. atlas_k{k}.png)")
+    if several and args.json == "-":
+        raise InputError("--json - is not allowed with several --k values: give a file name with {k}")
+    for k in args.k:
+        _check_outputs(json=None if args.json is None else _per_k(args.json, k, several),
+                       figure=_per_k(args.out, k, several))
+    with Progress(unit="blocks", delay=1.0) as progress:
+        atlases = compute_atlases(args.k, args.steps, args.resolution, scheduler=args.scheduler, progress=progress)
+    for at in atlases:
+        out = _per_k(args.out, at.k, several)
+        save_figure(plot_atlas(at), out)
+        print(f"rollplan atlas: k = {_g(at.k)}, steps = {at.steps}, {at.a.size} x {at.b.size} grid on "
+              f"(0, {_g(at.a[-1])} R]^2")
+        print(f"  shift per step h in [{_g(at.h.min())}, {_g(at.h.max())}] R, holonomy eta in "
+              f"[{_g(at.eta.min())}, {_g(at.eta.max())}] rad, {at.fold_cells} grid cells on the fold det = 0")
+        print(f"wrote {out}")
+        if args.json:
+            _emit_json(argparse.Namespace(json=_per_k(args.json, at.k, several), stdout=args.stdout),
+                       atlas_to_dict(at), "R")
     return EXIT_OK
 
 
+_BATCH_EPILOG = """\
+TARGETS.csv: a header, then one target per line; columns u_a, v_a (required), psi (default 0),
+steps (default 1), k (default 2.5); an empty cell takes the default; more columns are carried into
+the output; blank lines and lines starting with # are skipped. Example:
+
+  # u_a, v_a in units of R, psi in rad
+  u_a,v_a,psi,steps,k
+  0,1,0,1,2.5
+  0.5,0.3,0.4,2,
+  -0.2,0.6
+
+exit status: 0 every row planned, 1 some rows failed, 3 every row failed (each failed row has
+"status": "failed" and a "reason" in the output), 2 bad input, 4 the cluster failed, 130 interrupted
+(finished lines are kept: rerun with --resume).
+"""
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="rollplan", description=__doc__)
+    parser = _Parser(prog="rollplan", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"rollplan {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log the planner's progress")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
 
     p = sub.add_parser("plan", help="plan a motion to a target by tracing a figure eight n times")
-    _add_target_options(p, to_default=(0.0, 1.0), steps_help="number of figure eights n >= 1 (default 1)")
+    _add_target_options(p, to_default=(0.0, 1.0), steps_help=f"number of figure eights n {_STEPS} (default 1)")
     p.add_argument("--all", action="store_true", help="also list every other verified solution branch")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
-    p.add_argument("--json", metavar="FILE", help="write the plan as JSON")
-    p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere and the plane "
-                   "(with --duration: omega, rotor rates and torques in time)")
+    p.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the plan"))
+    p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere (from below) and the "
+                   "plane, and psi along it (with --duration: omega, rotor rates and torques in time)")
     p.add_argument("--duration", type=_number, default=None, metavar="T",
-                   help="time the plan rest-to-rest per half-step over T seconds and compute the rotor rates, "
+                   help="time the plan rest-to-rest per half-step over T > 0 seconds and compute the rotor rates, "
                         "angles and torques (uses the default robot unless --robot is given)")
     p.add_argument("--samples", type=_whole, default=2000,
-                   help="least number of time samples with --duration (default 2000, >= 400 per half-step)")
+                   help="least number of time samples with --duration, >= 3 (default 2000; at least 400 per "
+                        "half-step are taken)")
     p.set_defaults(func=cmd_plan)
 
     s = sub.add_parser("step", help="what one figure eight does: shift h and holonomy eta")
     s.add_argument("--a", type=_number, required=True, help="first leaf radius [R], 0 < a <= %g" % A_MAX)
-    s.add_argument("--b", type=_number, default=None, help="second leaf radius [R] (default a)")
-    s.add_argument("--k", type=_number, required=True, help="inertia ratio k >= 0")
+    s.add_argument("--b", type=_number, default=None, help="second leaf radius [R], 0 < b <= %g (default a)" % A_MAX)
+    s.add_argument("--k", type=_number, default=DEFAULT_K, help=_K_HELP)
     s.add_argument("--gamma", type=_number, default=0.0, help="rotation about OZ [rad] (default 0)")
-    s.add_argument("--json", metavar="FILE", help="write the result as JSON")
+    s.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the result"))
     s.set_defaults(func=cmd_step)
 
     r = sub.add_parser("reproduce", help="regenerate the paper's case study (Figs 6-12, table, report)")
@@ -392,14 +475,16 @@ def build_parser() -> argparse.ArgumentParser:
     m = sub.add_parser("simulate", help="drive the robot by the plan's rotor rates alone and report the arrival error")
     m.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
     m.add_argument("--robot", metavar="FILE.toml", help="simulate this (real) robot instead of the planned one")
-    m.add_argument("--json", metavar="FILE", help="write the simulated final state and errors as JSON")
+    m.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the simulated final state and errors"))
+    m.add_argument("--plot", metavar="FILE.png", help="the simulated motion against the plan: paths, psi, deviation "
+                   "in time, and the rotor rates that drove it")
     m.set_defaults(func=cmd_simulate)
 
     a = sub.add_parser("animate", help="animate the sphere rolling under the plan's rotor rates (GIF)")
     a.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
     a.add_argument("--out", metavar="FILE.gif", required=True, help="output animation (GIF)")
-    a.add_argument("--frames", type=_whole, default=100, help="number of frames (default 100)")
-    a.add_argument("--fps", type=_whole, default=20, help="frames per second (default 20)")
+    a.add_argument("--frames", type=_whole, default=100, help="number of frames in [2, 2000] (default 100)")
+    a.add_argument("--fps", type=_whole, default=20, help="frames per second in [1, 100] (default 20)")
     a.set_defaults(func=cmd_animate)
 
     _add_compare_parser(sub)
@@ -407,47 +492,83 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("codegen", help="write a self-contained C99 planner (CasADi code generation)")
     c.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
     c.add_argument("--steps-per-leaf", type=_whole, default=200,
-                   help="node intervals per leaf of the step map, a multiple of 10 (default 200)")
-    c.add_argument("--prefix", default="rollplan", help="prefix of the C symbols and files (default rollplan)")
+                   help="node intervals per leaf of the step map, a multiple of 10, at least 20 (default 200)")
+    c.add_argument("--prefix", default="rollplan", help="prefix of the C symbols and files, a C identifier "
+                   "(default rollplan)")
     c.set_defaults(func=cmd_codegen)
 
-    b = sub.add_parser("batch", help="plan every target of a CSV file (u_a, v_a, psi, steps, k) in parallel")
-    b.add_argument("targets", metavar="TARGETS.csv", help="CSV with header u_a, v_a, psi, steps, k")
-    b.add_argument("--out", required=True, metavar="PLANS.jsonl", help="output: one JSON line per target")
-    b.add_argument("--jobs", type=_whole, default=None, help="worker processes (default: number of cores)")
+    b = sub.add_parser("batch", help="plan every target of a CSV file (u_a, v_a, psi, steps, k) in parallel",
+                       epilog=_BATCH_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    b.add_argument("targets", metavar="TARGETS.csv", help="CSV with header u_a, v_a[, psi, steps, k] (see below)")
+    b.add_argument("--out", required=True, metavar="PLANS.jsonl", help="output: one JSON line per target, in order")
+    b.add_argument("--jobs", type=_whole, default=None, help="worker processes >= 1 (default: number of cores)")
+    b.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="plan on a Dask distributed cluster instead, e.g. tcp://host:8786 (needs: pip install "
+                        "'rollplan[distributed]'; workers: dask worker ADDRESS --nthreads 1)")
     b.add_argument("--resume", action="store_true", help="keep the lines in --out and plan only the missing rows")
     b.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     b.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
-    b.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+    b.add_argument("--quiet", action="store_true", help="no progress on stderr")
     b.set_defaults(func=cmd_batch)
 
+    from .studies.atlas import DEFAULT_RESOLUTION, MAX_RESOLUTION
+
     t = sub.add_parser("atlas", help="maps of h(a, b) and eta(a, b) with contours and the fold of the step map")
-    t.add_argument("--k", type=_number, required=True, help="inertia ratio k >= 0")
-    t.add_argument("--steps", type=_whole, default=1, help="also map what n figure eights reach (default 1)")
-    t.add_argument("--resolution", type=_whole, default=81, help="grid points per axis (default 81)")
+    t.add_argument("--k", type=_number, nargs="+", default=[DEFAULT_K], metavar="K",
+                   help=_K_HELP + "; several values sweep over k (then put {k} in --out and --json)")
+    t.add_argument("--steps", type=_whole, default=1, help=f"also map what n figure eights reach, n {_STEPS} "
+                   "(default 1)")
+    t.add_argument("--resolution", type=_whole, default=DEFAULT_RESOLUTION,
+                   help=f"grid points per axis in [2, {MAX_RESOLUTION}] (default {DEFAULT_RESOLUTION})")
     t.add_argument("--out", required=True, metavar="FILE.png", help="figure")
-    t.add_argument("--json", metavar="FILE", help="write the maps as JSON")
+    t.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the maps"))
+    t.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="evaluate the grid on a Dask distributed cluster (pip install 'rollplan[distributed]')")
     t.set_defaults(func=cmd_atlas)
     return parser
 
 
+#: ``name='value'`` or ``name=True`` in a message of the Python API: an option to name in command-line syntax.
+_API_OPTION = re.compile(r"\b([a-z][a-z_]*)=(?:'([^']*)'|True\b)")
+
+
+def _cli_syntax(message: str, args) -> str:
+    """A message of the API with its option hints in command-line syntax (``guess='warm'`` -> ``--guess warm``),
+    for the options the command has."""
+    def sub(m):
+        if m.group(1) not in vars(args):
+            return m.group(0)
+        flag = "--" + m.group(1).replace("_", "-")
+        return flag if m.group(2) is None else f"{flag} {m.group(2)}"
+
+    return _API_OPTION.sub(sub, message)
+
+
 def main(argv=None) -> int:
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if not argv:   # a bare `rollplan`: say what it can do
+        parser.print_help(sys.stderr)
+        return EXIT_INPUT
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.ERROR, format="%(name)s: %(message)s")
     if (getattr(args, "command", None) in ("plan", "compare") and args.k is None and args.robot is None
             and getattr(args, "duration", None) is None):
         args.k = DEFAULT_K
+    args.stdout = sys.stdout
+    to_stdout = getattr(args, "json", None) == "-"
     try:
-        return args.func(args)
+        with contextlib.redirect_stdout(sys.stderr) if to_stdout else contextlib.nullcontext(), \
+                Progress(delay=2.0) as progress, reporting(progress):
+            return args.func(args)
     except InputError as exc:
-        print(f"rollplan: error: {exc}", file=sys.stderr)
+        print(f"rollplan: error: {_cli_syntax(str(exc), args)}", file=sys.stderr)
         return EXIT_INPUT
     except NoPlanError as exc:
-        print(f"rollplan: no plan: {exc}", file=sys.stderr)
+        print(f"rollplan: no plan: {_cli_syntax(str(exc), args)}", file=sys.stderr)
         return EXIT_NOPLAN
     except SolverError as exc:
-        print(f"rollplan: solver failed ({exc.status}): {exc}", file=sys.stderr)
+        print(f"rollplan: solver failed ({exc.status}): {_cli_syntax(str(exc), args)}", file=sys.stderr)
         return EXIT_SOLVER
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()

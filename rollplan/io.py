@@ -14,8 +14,10 @@ from .errors import InputError
 from .execution.plants import check_samples
 from .problem import State
 from .robot import Robot
+from .version import __version__
 
 __all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict",
+           "UNITS", "tagged",
            "motion_to_dict", "RotorPlan", "load_rotor_plan"]
 
 
@@ -82,6 +84,19 @@ def save_figure(fig, path, dpi=120) -> None:
     buf = io.BytesIO()
     fig.savefig(buf, format=Path(path).suffix.lstrip(".") or "png", dpi=dpi)
     write_atomic(path, buf.getvalue())
+
+
+#: Units of every JSON output except the length (``tagged`` adds it): SI, angles in radians.
+UNITS = {"angle": "rad", "time": "s", "angular_rate": "rad/s", "torque": "N m", "mass": "kg",
+         "inertia": "kg m^2",
+         "residual": "Euclidean norm of the arrival error (u_a/R, v_a/R, psi wrapped, u_o, v_o): lengths in R, "
+                     "angles in rad"}
+
+
+def tagged(obj: dict, length_unit: str) -> dict:
+    """``obj`` with the fields ``version`` (of rollplan) and ``units`` (``length``: ``"R"`` or ``"m"``,
+    and :data:`UNITS`) in front: the form of every JSON document rollplan writes."""
+    return {"version": __version__, "units": {"length": length_unit, **UNITS}, **obj}
 
 
 def _f(x):

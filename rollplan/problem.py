@@ -24,8 +24,8 @@ from .core.plane import wrap
 from .errors import InputError, check_finite, check_range, check_whole
 from .robot import Robot
 
-__all__ = ["STATE_NAMES", "State", "Problem", "K_MAX", "MAX_STEPS", "check_k", "check_steps", "arrival_error",
-           "arrival_residual"]
+__all__ = ["STATE_NAMES", "State", "Problem", "K_MAX", "MAX_STEPS", "DEFAULT_K", "check_k", "check_steps",
+           "arrival_error", "arrival_residual"]
 
 #: Names of the state's entries, in the one order used everywhere (arrays, JSON, CSV).
 STATE_NAMES = ("u_a", "v_a", "psi", "u_o", "v_o")
@@ -33,6 +33,8 @@ STATE_NAMES = ("u_a", "v_a", "psi", "u_o", "v_o")
 K_MAX = 100.0
 #: Largest number of figure-eight steps a plan may have.
 MAX_STEPS = 1000
+#: k when none is given on the command line or in a batch row: the paper's case study (Section III.C).
+DEFAULT_K = 2.5
 
 
 class State(NamedTuple):
@@ -175,10 +177,9 @@ class Problem:
 
     @property
     def unit(self) -> str:
-        """Name of the length unit: ``"m"`` with a robot, ``"R"`` for the unit sphere, else ``"units"``."""
-        if self.robot is not None and self.radius == self.robot.radius:
-            return "m"
-        return "R" if self.radius == 1.0 else "units"
+        """Name of the length unit: ``"R"`` for the unit sphere without a robot, else ``"m"`` (a robot's
+        radius is in metres, and so is a radius given without one)."""
+        return "R" if self.robot is None and self.radius == 1.0 else "m"
 
     def scaled(self, state: State) -> State:
         """A state of this problem in units of R (lengths divided by the radius)."""
@@ -190,10 +191,10 @@ class Problem:
 
     def describe(self) -> str:
         """One line naming the problem, for messages."""
-        g = self.goal
-        where = f"(u_a, v_a, psi) = ({g.u_a:g}, {g.v_a:g}, {g.psi:g})"
+        g, u = self.goal, self.unit
+        where = f"(u_a, v_a, psi) = ({g.u_a:g} {u}, {g.v_a:g} {u}, {g.psi:g} rad)"
         if not g.at_pole:
-            where += f", contact (u_o, v_o) = ({g.u_o:g}, {g.v_o:g})"
+            where += f", contact (u_o, v_o) = ({g.u_o:g} rad, {g.v_o:g} rad)"
         if tuple(self.start) != tuple(State()):
             where = f"from {tuple(float(v) for v in self.start)} to " + where
         return f"{where} in {self.steps} step(s) with k = {self.k:g}"
