@@ -231,7 +231,7 @@ def cmd_simulate(args) -> int:
     if args.plot:
         from .plots.motion import plot_simulation
 
-        title = (f"rotor-driven simulation of {args.plan_file}: arrival error {sim.arrival_error:.2e} ({NORM}), "
+        title = (f"rotor-driven simulation of {args.plan_file}: arrival error {sim.arrival_error:.2e} ({NORM}),\n"
                  f"position error {sim.position_error * robot.radius:.2e} m")
         save_figure(plot_simulation(sim.time, sim.state, rp.rotor_rates, g, _planned_states(rp), robot, title),
                     args.plot)

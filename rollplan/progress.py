@@ -20,7 +20,7 @@ import time
 from contextlib import contextmanager
 from contextvars import ContextVar
 
-__all__ = ["Progress", "DEFAULT_INTERVAL", "report", "reporting"]
+__all__ = ["Progress", "DEFAULT_INTERVAL", "report", "reporting", "silence"]
 
 #: Seconds between two plain progress lines when the stream is not a terminal.
 DEFAULT_INTERVAL = 10.0
@@ -172,3 +172,8 @@ def reporting(progress):
         yield progress
     finally:
         _CURRENT.reset(token)
+
+
+def silence() -> None:
+    """Stop :func:`report` in this context for good (a worker process forked from a reporting parent)."""
+    _CURRENT.set(None)

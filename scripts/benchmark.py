@@ -60,6 +60,7 @@ from rollplan.core.curves import A_MAX
 from rollplan.io import write_atomic, write_json
 from rollplan.planners import geometric
 
+import bench_batch
 import bench_codegen
 import bench_collocation
 
@@ -530,10 +531,33 @@ def section_budgets(ctx):
     return {"title": "Budgets", "rows": rows, "notes": notes, "top": True}
 
 
+def section_batch(ctx):
+    """Batch planning (issue 18): --jobs 2 against --jobs 1 on 200 targets (``scripts/bench_batch.py``)."""
+    m = bench_batch.measure(20 if ctx["quick"] else 200, 1 if ctx["quick"] else 3, cold=ctx["cold"])
+    rows = []
+    for kind, what in (("cold", "whole command `rollplan batch`, cold"),
+                       ("warm", "planning phase, planner built (run_batch)")):
+        if kind not in m:
+            continue
+        r = m[kind]
+        rows.append({"measurement": what, "--jobs 1 median [s]": r["jobs1_median_s"],
+                     "--jobs 2 median [s]": r["jobs2_median_s"], "speed-up median": r["speedup_median"],
+                     "speed-up min..max": f"{r['speedup_min']:.2f}..{r['speedup_max']:.2f}",
+                     f"budget >= {bench_batch.BUDGET_SPEEDUP:g}x": _status(r["speedup_median"]
+                                                                            >= bench_batch.BUDGET_SPEEDUP)})
+    notes = [f"{m['targets']} targets ({m['failed_rows']} without a plan), {m['repeats']} repeat(s) alternating the "
+             f"order of the two runs; the same lines from both: {m['same_lines']}. Load average at the end "
+             f"{', '.join(f'{x:.2f}' for x in m['load_average'] or [])} on {m['cores']} cores.",
+             "Cold: Python start, imports and the planner's construction are paid once in both runs (the --jobs 2 "
+             "workers are forked after the parent built the planner), so they bound the cold speed-up; warm: "
+             "the throughput of a long batch."]
+    return {"title": "Batch planning: --jobs 2 against --jobs 1", "rows": rows, "notes": notes, "summary": m}
+
+
 #: The benchmark, in order. Append new sections here; :func:`section_budgets` reads the others' summaries and
 #: is shown first in the report.
 SECTIONS = [section_plan, section_step_map, section_collocation, section_c_planner, section_memory, section_profile,
-            section_budgets]
+            section_batch, section_budgets]
 
 
 # ----------------------------------------------------------------------------- report
@@ -670,7 +694,7 @@ def main(argv=None):
            "single_evals": 100 if args.quick else 1000, "check_points": 4 if args.quick else 8,
            "jit": not args.no_jit, "jit_flags": args.jit_flags, "cold": not args.no_cold,
            "coll_repeats": 1 if args.quick else 11, "coll_targets": 2 if args.quick else len(bench_collocation.TARGETS),
-           "c_reps": 3 if args.quick else 20}
+           "c_reps": 3 if args.quick else 20, "quick": args.quick}
     v = geometric.default_planner().certifier.integrator
     ctx["verifier"] = f"{v.multistep.capitalize()}, rtol {v.reltol:g}, atol {v.abstol:g}"
     mach = machine()

@@ -9,7 +9,6 @@ import re
 import stat
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -311,6 +310,30 @@ def test_simulate_other_robot(planned, tmp_path, capsys):
     assert err > 1e-3
 
 
+def test_simulate_plot_and_json_metadata(planned, tmp_path, capsys):
+    import rollplan
+
+    _, _, out, data = planned
+    assert data["version"] == rollplan.__version__ and data["units"]["length"] == "m"
+    assert data["units"]["torque"] == "N m"
+    png, js = tmp_path / "sim.png", tmp_path / "sim.json"
+    capsys.readouterr()
+    assert main(["simulate", str(out), "--plot", str(png), "--json", str(js)]) == 0
+    text = capsys.readouterr().out
+    assert png.read_bytes()[:4] == b"\x89PNG" and png.stat().st_size > 20000
+    d = json.loads(js.read_text())
+    assert d["version"] == rollplan.__version__ and d["units"]["length"] == "m"
+    assert d["position_error_m"] == pytest.approx(d["position_error"] * 0.15)
+    assert "Euclidean norm" in text and re.search(r"position \S+ m", text)
+
+
+def test_plan_duration_prints_torques_in_n_m_and_position_error_in_m(tmp_path, capsys):
+    code, out, _ = run(capsys, "plan", "--to", "0", "0.1", "--duration", "5")
+    assert code == 0
+    assert re.search(r"max \|torque\| = \S+ N m", out)
+    assert re.search(r"position error \S+ m ", out) and " R;" not in out
+
+
 def test_default_robot_when_no_file(tmp_path, capsys):
     out = tmp_path / "p.json"
     assert main(["plan", "--to", "0", "0.1", "--duration", "5", "--json", str(out)]) == 0
@@ -341,3 +364,115 @@ def test_animate_writes_a_gif(planned, tmp_path):
 
     assert gif.read_bytes()[:6] in (b"GIF89a", b"GIF87a")
     assert Image.open(gif).n_frames == 3
+
+
+# ----------------------------------------------------------------------------- Unix conventions (issue 18)
+
+def test_json_dash_pipes_into_a_json_parser():
+    """`--json -` writes only the JSON document to stdout (the summary goes to stderr): piped into a parser."""
+    reader = "import json, sys; d = json.load(sys.stdin); print(d['h'], d['eta'], d['version'], d['units']['length'])"
+    cmd = f"{sys.executable} -m rollplan.cli step --a 0.3 --b 0.4 --json - | {sys.executable} -c \"{reader}\""
+    r = subprocess.run(cmd, shell=True, check=True, capture_output=True, text=True, timeout=300)
+    h, eta, version, unit = r.stdout.split()
+    ref = references.trace(0.3, 0.4, 2.5)   # k defaults to 2.5
+    assert float(h) == pytest.approx(np.hypot(ref[0], ref[1]), abs=1e-10)
+    assert float(eta) == pytest.approx(ref[2], abs=1e-10)
+    assert unit == "R"
+    import rollplan
+
+    assert version == rollplan.__version__
+
+
+def test_json_dash_in_process_keeps_stdout_pure(capsys):
+    code, out, err = run(capsys, "plan", "--to", "0.5", "0.3", "--psi", "0.4", "--json", "-")
+    assert code == 0
+    d = json.loads(out)   # nothing but the document on stdout
+    assert d["final"]["u_a"] == pytest.approx(0.5, abs=1e-9) and len(d["trajectory"]["theta"]) > 100
+    assert "figure eight" in err and "residual" in err and "wrote" not in err
+    assert not os.path.exists("-")
+
+
+def test_version():
+    from importlib.metadata import version
+
+    import rollplan
+
+    r = subprocess.run([sys.executable, "-m", "rollplan.cli", "--version"], check=True, capture_output=True,
+                       text=True, timeout=120)
+    assert r.stdout.strip() == f"rollplan {rollplan.__version__}" == f"rollplan {version('rollplan')}"
+
+
+def test_bare_command_prints_usage(capsys):
+    code, out, err = run(capsys)
+    assert code == 2 and out == ""
+    assert err.startswith("usage: rollplan")
+    for command in ("plan", "step", "reproduce", "simulate", "animate", "compare", "codegen", "batch", "atlas"):
+        assert f"\n    {command} " in err
+
+
+@pytest.mark.parametrize("argv, target", [
+    (["--to", "-1e-3", "1", "--psi", "-2e-1"], (-1e-3, 1.0, -0.2)),
+    (["--to", "-.5", "-3E-1", "--psi", "-1E+0"], (-0.5, -0.3, -1.0)),
+])
+def test_negative_numbers_in_exponent_form(tmp_path, capsys, argv, target):
+    js = tmp_path / "p.json"
+    code, _, err = run(capsys, "plan", *argv, "--json", str(js))
+    assert code == 0, err
+    d = json.loads(js.read_text())
+    assert (d["target"]["u_a"], d["target"]["v_a"], d["target"]["psi"]) == target
+    fe = d["figure_eight"]
+    x = references.trace(fe["a"], fe["b"], 2.5, fe["gamma"], steps=d["steps"])
+    assert x[:2] == pytest.approx(target[:2], abs=1e-9)
+    assert np.cos(x[2] - target[2]) == pytest.approx(1.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("value", ["-inf", "-nan", "-Infinity"])
+def test_negative_non_numbers_are_refused_as_numbers(capsys, value):
+    code, _, err = run(capsys, "plan", "--to", value, "1")
+    assert code == 2 and value in err and "not a finite number" in err and one_line(err)
+
+
+def test_errors_point_to_help(capsys):
+    code, _, err = run(capsys, "step", "--a")
+    assert code == 2 and "(see: rollplan step --help)" in err and one_line(err)
+
+
+def test_k_defaults_to_the_papers_case(tmp_path, capsys):
+    js = tmp_path / "s.json"
+    assert run(capsys, "step", "--a", "0.3", "--json", str(js))[0] == 0
+    d = json.loads(js.read_text())
+    assert d["k"] == 2.5
+    assert d["eta"] == pytest.approx(references.trace(0.3, 0.3, 2.5)[2], abs=1e-10)
+    assert run(capsys, "atlas", "--resolution", "3", "--out", str(tmp_path / "a.png"), "--json",
+               str(tmp_path / "a.json"))[0] == 0
+    assert json.loads((tmp_path / "a.json").read_text())["k"] == 2.5
+
+
+@pytest.mark.parametrize("command, needles", [
+    ("plan", ["[0, 100]", "[1, 1000]", "default 2.5", "- for stdout"]),
+    ("step", ["0 < a <= 0.69", "0 < b <= 0.69", "[0, 100]"]),
+    ("atlas", ["[0, 100]", "[2, 1000]", "[1, 1000]", "--scheduler"]),
+    ("animate", ["[2, 2000]", "[1, 100]"]),
+    ("compare", ["[1, 100000]", "[1, 9]", "(0, pi/2)"]),
+    ("batch", ["--scheduler", ">= 1", "exit status"]),
+])
+def test_limits_are_in_the_help(capsys, command, needles):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for needle in needles:
+        assert needle in text, needle
+
+
+def test_lengths_are_printed_in_the_unit_in_use(capsys):
+    code, out, _ = run(capsys, "plan", "--to", "0", "0.1", "--radius", "0.1")
+    assert code == 0
+    assert "R = 0.1 m" in out and "a = 0.0300429 m" in out and "units" not in out
+    assert re.search(r"final +u_a = \S+ m +v_a = 0.1 m +psi = \S+ rad", out)
+    assert "Euclidean norm; lengths in R, angles in rad" in out
+
+
+def test_summaries_have_six_significant_digits(capsys):
+    _, out, _ = run(capsys, "plan")
+    for number in re.findall(r"= (-?[0-9.]+(?:e[-+][0-9]+)?) (?:R|rad)\b", out):
+        assert len(number.split("e")[0].replace("-", "").replace(".", "").lstrip("0")) <= 6, number

@@ -30,11 +30,13 @@ __all__ = ["make_animation"]
 log = logging.getLogger(__name__)
 
 
-def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps: int = 20, progress=None) -> None:
+def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps: int = 20, progress=None,
+                   dpi: float | None = None) -> None:
     """Write a GIF of the sphere rolling (see module docstring) to ``out`` atomically.
 
     ``state`` (N, 5) in :class:`~rollplan.problem.State` order at ``time``; ``goal`` (u_a, v_a, ...) [m];
-    ``progress(label, done, total)`` is called after each frame written.
+    ``progress(label, done, total)`` is called after each frame written; ``dpi`` scales the frames
+    (default: matplotlib's).
     """
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.lines import Line2D
@@ -74,16 +76,15 @@ def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps:
     axes = [ax.plot([], [], [], color=c, linewidth=2.2)[0] for c in axis_colors]
     path = ax.plot([], [], [], color=SIMULATED, linewidth=1.4)[0]
     on_shell = ax.plot([], [], [], color=SIMULATED, linewidth=1.0, linestyle="--")[0]
-    ax.set_title("sphere rolling under its rotors", fontsize=10)
     handles = [Line2D([], [], color=c, linewidth=2.2, label=lab) for c, lab in
                zip(axis_colors, ("body axis n1 (rotor 1)", "body axis n2 (rotor 2)", "body axis n3"))]
     handles += [Line2D([], [], color=SIMULATED, linewidth=1.4, label="contact path on the plane"),
                 Line2D([], [], color=SIMULATED, linewidth=1.0, linestyle="--", label="contact path on the shell"),
                 Line2D([], [], color=MARK, marker="o", markersize=4, linestyle="", label="start"),
                 Line2D([], [], color=MARK, marker="*", markersize=10, linestyle="", label="target")]
-    ax.legend(handles=handles, loc="upper left", fontsize=7, bbox_to_anchor=(-0.05, 1.0))
-    stamp = ax.text2D(0.98, 0.02, "", transform=ax.transAxes, ha="right", va="bottom", fontsize=10,
-                      family="monospace")
+    ax.legend(handles=handles, loc="upper left", fontsize=7, bbox_to_anchor=(-0.12, 0.93))
+    stamp = fig.text(0.27, 0.985, "", ha="center", va="top", fontsize=11, family="monospace",
+                     bbox={"boxstyle": "round,pad=0.3", "fc": "white", "ec": "0.6"})
 
     for i in range(2):
         ax2.plot(time, rates[:, i], label=f"$\\dot\\varphi_{i + 1}$, {ROTOR_LABELS[i]}", color=ROTOR[i])
@@ -111,14 +112,14 @@ def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps:
         c = centre[:, None] + R * 1.01 * rot[i] @ contact[upto].T
         on_shell.set_data_3d(c[0], c[1], c[2])
         cursor.set_xdata([t[i], t[i]])
-        stamp.set_text(f"t = {t[i]:{width}.2f} s of {time[-1]:.2f} s")
+        stamp.set_text(f"sphere rolling under its rotors, t = {t[i]:{width}.2f} s of {time[-1]:.2f} s")
         return shell + axes + [path, on_shell, cursor, stamp]
 
     anim = FuncAnimation(fig, update, frames=frames, blit=False)
     report = None if progress is None else (lambda i, n: progress("animation frames", i + 1, n))
     with tempfile.TemporaryDirectory() as tmp:
         name = os.path.join(tmp, "anim.gif")
-        anim.save(name, writer=PillowWriter(fps=fps), progress_callback=report)
+        anim.save(name, writer=PillowWriter(fps=fps), progress_callback=report, dpi=dpi)
         with open(name, "rb") as fh:
             write_atomic(out, fh.read())
     log.info("wrote %d frames to %s", frames, out)

@@ -62,8 +62,11 @@ def sphere_axes(ax, radius=1.0, unit="R", title="contact path on the sphere (bod
     ax.plot_wireframe(radius * np.cos(u) * np.sin(v), radius * np.sin(u) * np.sin(v), radius * np.cos(v),
                       color="0.88", linewidth=0.4)
     ax.set_proj_type("ortho")
-    for setter in (ax.set_xlim, ax.set_ylim, ax.set_zlim):
+    for setter, ticks in ((ax.set_xlim, ax.set_xticks), (ax.set_ylim, ax.set_yticks), (ax.set_zlim, ax.set_zticks)):
         setter(-radius, radius)
+        ticks([-radius, 0.0, radius])
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.pane.set_alpha(0.0)
     ax.set_box_aspect((1, 1, 1))
     ax.set_xlabel(f"x [{unit}]")
     ax.set_ylabel(f"y [{unit}]")

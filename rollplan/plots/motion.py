@@ -106,10 +106,14 @@ def plot_simulation(time, simulated, rates, goal, planned=None, robot=None, titl
     ax = axes[1, 0]
     if planned is not None:
         dev = np.hypot(sim[:, 0] - planned[:, 0], sim[:, 1] - planned[:, 1])
-        ax.semilogy(time, np.maximum(dev, 1e-16), color=SIMULATED, linewidth=1.0,
+        dpsi = np.abs(sim[:, 2] - planned[:, 2])
+        both = np.concatenate([dev, dpsi])
+        floor = max(1e-15, float(np.percentile(both[both > 0], 5)) / 10) if np.any(both > 0) else 1e-15
+        ax.semilogy(time, np.maximum(dev, floor), color=SIMULATED, linewidth=1.0,
                     label="distance of the contact points [m]")
-        ax.semilogy(time, np.maximum(np.abs(sim[:, 2] - planned[:, 2]), 1e-16), color=SIMULATED, linestyle=":",
+        ax.semilogy(time, np.maximum(dpsi, floor), color=SIMULATED, linestyle=":",
                     linewidth=1.0, label="|psi difference| [rad]")
+        ax.set_ylim(bottom=floor)
         ax.set_title("simulated minus planned")
         ax.set_ylabel("deviation [m] or [rad]")
         ax.legend(loc="best", fontsize=8)

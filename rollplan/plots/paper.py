@@ -31,13 +31,15 @@ def contact_figure(plan, traj, title: str) -> Figure:
         Figure title.
     """
     fig = Figure(figsize=(16, 5.4), layout="constrained")
-    ax1 = fig.add_subplot(1, 3, 1, projection="3d")
+    fig.get_layout_engine().set(wspace=0.12)
+    grid = fig.add_gridspec(1, 3, width_ratios=[0.8, 1, 1])
+    ax1 = fig.add_subplot(grid[0], projection="3d")
     draw_sphere_path(ax1, traj, plan.radius)
     ax1.view_init(elev=-25, azim=-50)  # from below: the paths lie around the south pole
-    ax1.set_title("contact path on the sphere (body frame, 3-D from below)")
-    ax1.legend(handles=leaf_handles(), loc="upper left", fontsize=8)
-    draw_bottom_view(fig.add_subplot(1, 3, 2), traj, plan.radius, "R")
-    draw_plane_path(fig.add_subplot(1, 3, 3), traj, plan.goal[:2], "R")
+    ax1.set_title("on the sphere in 3-D, from below", pad=28)
+    ax1.legend(handles=leaf_handles(), loc="lower left", fontsize=8)
+    draw_bottom_view(fig.add_subplot(grid[1]), traj, plan.radius, "R")
+    draw_plane_path(fig.add_subplot(grid[2]), traj, plan.goal[:2], "R")
     fig.suptitle(title)
     return fig
 

@@ -240,50 +240,51 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
     if out.exists() and not (resume or overwrite):
         raise InputError(f"output file {str(out)!r} exists: pass resume=True to continue it or overwrite=True "
                          "to replace it")
-    done_lines = read_output(out) if resume else []
-    if resume and out.exists():
-        # rewrite without torn/malformed lines and duplicates, sorted, before appending
-        seen = {}
-        for d in done_lines:
-            if 0 <= d["index"] < len(rows):
-                seen.setdefault(d["index"], d)
-        done_lines = [seen[i] for i in sorted(seen)]
-        write_atomic(out, "".join(_dump(d) for d in done_lines).encode())
-    else:
-        write_atomic(out, b"")
-    have = {d["index"] for d in done_lines}
-    kept_failed = sum(d.get("status") != "ok" for d in done_lines)
-    todo = [(i, row, method) for i, row in enumerate(rows) if i not in have]
-    shown = Progress(unit="targets") if progress is True else None
-    report = ((lambda done, total, failed: shown("batch", done, total, failed=failed)) if shown is not None
-              else (progress or None))
-    start = time.perf_counter()
-    failed = 0
-    done = len(have)
-    in_order = not have or max(have) < (todo[0][0] if todo else len(rows))
-    try:
-        with executor, open(out, "a", encoding="utf-8") as fh:
-            results = executor.map(_plan_job, todo, on_error=_lost_row)
-            if report:
-                report(done, len(rows), failed)
-            synced = time.monotonic()
-            try:
-                for d in results:
-                    fh.write(_dump(d))
+    with executor:   # connects to a scheduler (and checks its workers) before the output is touched
+        done_lines = read_output(out) if resume else []
+        if resume and out.exists():
+            # rewrite without torn/malformed lines and duplicates, sorted, before appending
+            seen = {}
+            for d in done_lines:
+                if 0 <= d["index"] < len(rows):
+                    seen.setdefault(d["index"], d)
+            done_lines = [seen[i] for i in sorted(seen)]
+            write_atomic(out, "".join(_dump(d) for d in done_lines).encode())
+        else:
+            write_atomic(out, b"")
+        have = {d["index"] for d in done_lines}
+        kept_failed = sum(d.get("status") != "ok" for d in done_lines)
+        todo = [(i, row, method) for i, row in enumerate(rows) if i not in have]
+        shown = Progress(unit="targets") if progress is True else None
+        report = ((lambda done, total, failed: shown("batch", done, total, failed=failed)) if shown is not None
+                  else (progress or None))
+        start = time.perf_counter()
+        failed = 0
+        done = len(have)
+        in_order = not have or max(have) < (todo[0][0] if todo else len(rows))
+        try:
+            with open(out, "a", encoding="utf-8") as fh:
+                results = executor.map(_plan_job, todo, on_error=_lost_row)
+                if report:
+                    report(done, len(rows), failed)
+                synced = time.monotonic()
+                try:
+                    for d in results:
+                        fh.write(_dump(d))
+                        fh.flush()
+                        if time.monotonic() - synced >= FSYNC_INTERVAL:
+                            os.fsync(fh.fileno())
+                            synced = time.monotonic()
+                        done += 1
+                        failed += d["status"] != "ok"
+                        if report:
+                            report(done, len(rows), failed)
+                finally:
                     fh.flush()
-                    if time.monotonic() - synced >= FSYNC_INTERVAL:
-                        os.fsync(fh.fileno())
-                        synced = time.monotonic()
-                    done += 1
-                    failed += d["status"] != "ok"
-                    if report:
-                        report(done, len(rows), failed)
-            finally:
-                fh.flush()
-                os.fsync(fh.fileno())
-    finally:
-        if shown is not None:
-            shown.close()
+                    os.fsync(fh.fileno())
+        finally:
+            if shown is not None:
+                shown.close()
     if not in_order:
         lines = read_output(out)
         lines.sort(key=lambda d: d["index"])

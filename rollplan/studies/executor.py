@@ -42,16 +42,19 @@ import threading
 from collections.abc import Callable, Iterable, Iterator
 
 from ..errors import InputError, check_whole
+from ..progress import silence
 from ..version import __version__
 
-__all__ = ["Executor", "ExecutorError", "map_in_order", "DASK_EXTRA", "CONNECT_TIMEOUT"]
+__all__ = ["Executor", "ExecutorError", "map_in_order", "DASK_EXTRA", "CONNECT_TIMEOUT", "WORKERS_TIMEOUT"]
 
 log = logging.getLogger(__name__)
 
 #: How a user installs the Dask backend.
 DASK_EXTRA = "pip install 'rollplan[distributed]'"
-#: Seconds to wait for a scheduler to answer, and for it to have at least one worker.
-CONNECT_TIMEOUT = 30.0
+#: Seconds to wait for a scheduler to answer.
+CONNECT_TIMEOUT = 10.0
+#: Seconds to wait for a scheduler to have at least one worker.
+WORKERS_TIMEOUT = 60.0
 
 _TASK_LOCK = threading.Lock()
 
@@ -61,8 +64,10 @@ class ExecutorError(RuntimeError):
 
 
 def _ignore_sigint() -> None:
-    """Worker initializer: Ctrl-C is handled by the parent, which stops the pool."""
+    """Worker initializer: Ctrl-C is handled by the parent, which stops the pool; progress is the parent's to
+    show (a forked worker inherits the parent's reporter)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    silence()
 
 
 def _spawned_worker_init(warm) -> None:
@@ -208,8 +213,14 @@ def _connect(address: str):
     """A Dask client on ``address`` with at least one worker running this version of rollplan."""
     try:
         from distributed import Client
+        from distributed.comm import get_address_host_port
     except ImportError:
         raise InputError(f"--scheduler needs Dask distributed, an optional extra: {DASK_EXTRA}") from None
+    try:
+        get_address_host_port(address)   # a malformed address, before a client is made
+    except (ValueError, TypeError) as exc:
+        raise InputError(f"scheduler = {address!r} is not a scheduler address ({exc}); give e.g. 'tcp://host:8786'"
+                         ) from None
     try:
         client = Client(address, timeout=CONNECT_TIMEOUT, set_as_default=False)
     except (OSError, TimeoutError, ValueError) as exc:
@@ -217,9 +228,9 @@ def _connect(address: str):
                          ) from None
     try:
         try:
-            client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
+            client.wait_for_workers(1, timeout=WORKERS_TIMEOUT)
         except TimeoutError:
-            raise InputError(f"scheduler = {address!r} has no workers (waited {CONNECT_TIMEOUT:g} s); start some "
+            raise InputError(f"scheduler = {address!r} has no workers (waited {WORKERS_TIMEOUT:g} s); start some "
                              f"with: dask worker {address} --nthreads 1") from None
         try:
             versions = client.run(_worker_version)
