@@ -20,7 +20,7 @@ from .errors import InputError, NoPlanError, SolverError, check_finite
 from .io import check_figure_path, check_writable, plan_to_dict, save_figure, tagged, write_json
 from .planners import geometric
 from .problem import DEFAULT_K, K_MAX, MAX_STEPS, STATE_NAMES
-from .progress import Progress, reporting
+from .progress import Progress, report, reporting
 from .robot import default_robot, load_robot
 from .version import __version__
 
@@ -112,6 +112,10 @@ def cmd_plan(args) -> int:
         robot = default_robot()
         print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
               "lengths in m")
+    stages = ["planning"] + ["timing"] * (args.duration is not None) + ["sampling"] * bool(args.json or args.plot) + \
+        ["writing JSON"] * bool(args.json) + ["drawing"] * bool(args.plot)
+    stage = lambda name: report("plan", stages.index(name), len(stages), stage=name)  # noqa: E731
+    stage("planning")
     p = geometric.plan((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.all, args.method)
     unit = p.problem.unit
     g = p.goal
@@ -124,10 +128,18 @@ def cmd_plan(args) -> int:
     for i, alt in enumerate(p.alternatives, 1):
         print(f"alternative {i}:")
         print(_fmt_plan(alt, unit))
+    if args.duration is not None:
+        stage("timing")
     motion, extra = _timed(args, p, robot) if args.duration is not None else (None, {})
+    if args.json or args.plot:
+        stage("sampling")
     traj = p.sample() if (args.json or args.plot) else None
     if args.json:
+        stage("writing JSON")
         _emit_json(args, {**plan_to_dict(p, traj), **extra}, unit)
+    if args.plot:
+        stage("drawing")
+    report("plan", len(stages), len(stages), stage="done")
     if args.plot and motion is not None:
         from .plots.motion import plot_motion
 

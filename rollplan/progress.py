@@ -63,7 +63,7 @@ class _Lines:
         self.finished = final
         elapsed = now - self.start
         pct = f" ({100.0 * done / total:.0f}%)" if total > 0 else ""
-        extra = "".join(f", {v} {k}" for k, v in postfix.items())
+        extra = "".join(f", {v}" if isinstance(v, str) else f", {v} {k}" for k, v in postfix.items())
         left = ""
         if 0 < done < total and elapsed > 0:
             left = f", about {_seconds(elapsed * (total - done) / done)} left"
@@ -114,7 +114,8 @@ class Progress:
         Show a label only once its work has lasted this long [s] (0: at once).
 
     Use as a context manager, or call :meth:`close` at the end; extra keyword
-    arguments of a report (e.g. ``failed=2``) are shown after the count. A
+    arguments of a report are shown after the count (``failed=2`` as "2 failed",
+    ``stage="writing"`` as "writing"). A
     report whose ``done`` is below the last one of its label starts that label anew.
     """
 
