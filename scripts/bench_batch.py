@@ -12,6 +12,15 @@ shared, so runs of one repeat see the same load), reported as min and median:
   planner and the leaf tables of k have been built (the forked workers of ``--jobs 2`` start with
   them), i.e. the throughput of a long batch.
 
+Wall times on a shared machine measure the share of the CPU a run gets, not what it needs: with
+Linux's autogroup scheduling (``/proc/sys/kernel/sched_autogroup_enabled``) all processes of one
+session share one fair share, so while other sessions keep the cores busy two workers get no
+more CPU than one. So the CPU time of every run (its own and its workers', from ``getrusage``)
+is measured too, and from it the speed-up on an otherwise idle machine is estimated: the serial
+part (start-up, measured by a run on one row) once, the rest shared by the two workers,
+``cpu1 / (start + (cpu2 - start) / 2)`` for the cold command and ``cpu1 / (cpu2 / 2)`` warm. That
+is an estimate from measured CPU times, labelled as such, not a wall-clock measurement.
+
 The targets are drawn once from a fixed seed: (u_a, v_a) uniform in the disk of radius 1.2 R,
 psi uniform in [-1, 1] rad, steps uniform in {1, 2, 3}, k = 2.5; rows that have no plan count
 as they would in a user's batch. Both runs must write the same lines (solver times aside).
@@ -22,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -55,21 +65,31 @@ def _lines(path: Path) -> list:
     return out
 
 
-def _cold(csv: Path, out: Path, jobs: int) -> float:
+def _cpu(who) -> float:
+    r = resource.getrusage(who)
+    return r.ru_utime + r.ru_stime
+
+
+def _cold(csv: Path, out: Path, jobs: int) -> tuple:
+    """(wall, CPU) seconds of the command in a new process (its workers' CPU included)."""
     cmd = [sys.executable, "-m", "rollplan.cli", "batch", str(csv), "--out", str(out), "--jobs", str(jobs),
            "--quiet", "--overwrite"]
+    c = _cpu(resource.RUSAGE_CHILDREN)
     t = time.perf_counter()
     r = subprocess.run(cmd, capture_output=True, text=True, check=False, timeout=3600)
     elapsed = time.perf_counter() - t
     if r.returncode not in (0, 1):
         raise RuntimeError(f"{' '.join(cmd)} exited {r.returncode}: {r.stderr}")
-    return elapsed
+    return elapsed, _cpu(resource.RUSAGE_CHILDREN) - c
 
 
-def _warm(csv: Path, out: Path, jobs: int) -> float:
+def _warm(csv: Path, out: Path, jobs: int) -> tuple:
+    """(wall, CPU) seconds of run_batch in this process (the forked workers' CPU included)."""
     from rollplan.studies.batch import run_batch
 
-    return run_batch(csv, out, jobs=jobs, overwrite=True).time_s
+    c = _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN)
+    wall = run_batch(csv, out, jobs=jobs, overwrite=True).time_s
+    return wall, _cpu(resource.RUSAGE_SELF) + _cpu(resource.RUSAGE_CHILDREN) - c
 
 
 def measure(n_targets: int = 200, repeats: int = 3, cold: bool = True) -> dict:
@@ -85,6 +105,11 @@ def measure(n_targets: int = 200, repeats: int = 3, cold: bool = True) -> dict:
         times = {(kind, j): [] for kind in kinds for j in (1, 2)}
         planner = default_planner("ipopt")
         planner.tables.cells(2.5, False)   # the warm runs start with the planner and the tables of k = 2.5
+        start_cpu = []
+        if cold:
+            one = tmp / "one.csv"
+            write_targets(one, 1)
+            start_cpu = [_cold(one, tmp / "one.jsonl", 1)[1] for _ in range(repeats)]
         for rep in range(repeats):
             for j in ((1, 2) if rep % 2 == 0 else (2, 1)) if cold else ():
                 times["cold", j].append(_cold(csv, tmp / f"cold{j}.jsonl", j))
@@ -93,14 +118,20 @@ def measure(n_targets: int = 200, repeats: int = 3, cold: bool = True) -> dict:
         runs = [_lines(tmp / f"{kind}{j}.jsonl") for kind in kinds for j in (1, 2)]
         same = all(r == runs[0] for r in runs)
         failed = sum(d["status"] != "ok" for d in runs[0])
+    autogroup = Path("/proc/sys/kernel/sched_autogroup_enabled")
     out = {"targets": n_targets, "failed_rows": failed, "repeats": repeats, "same_lines": same,
-           "cores": os.cpu_count(), "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None}
+           "cores": os.cpu_count(), "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
+           "autogroup": autogroup.read_text().strip() == "1" if autogroup.exists() else None}
     for kind in kinds:
-        t1, t2 = times[kind, 1], times[kind, 2]
-        ratios = [a / b for a, b in zip(t1, t2)]
-        out[kind] = {"jobs1_s": t1, "jobs2_s": t2, "jobs1_median_s": statistics.median(t1),
-                     "jobs2_median_s": statistics.median(t2), "speedup_median": statistics.median(ratios),
-                     "speedup_min": min(ratios), "speedup_max": max(ratios)}
+        w1, w2 = [w for w, _ in times[kind, 1]], [w for w, _ in times[kind, 2]]
+        c1, c2 = statistics.median(c for _, c in times[kind, 1]), statistics.median(c for _, c in times[kind, 2])
+        serial = statistics.median(start_cpu) if kind == "cold" else 0.0
+        ratios = [a / b for a, b in zip(w1, w2)]
+        out[kind] = {"jobs1_s": w1, "jobs2_s": w2, "jobs1_median_s": statistics.median(w1),
+                     "jobs2_median_s": statistics.median(w2), "speedup_median": statistics.median(ratios),
+                     "speedup_min": min(ratios), "speedup_max": max(ratios),
+                     "jobs1_cpu_s": c1, "jobs2_cpu_s": c2, "serial_cpu_s": serial,
+                     "idle_speedup_estimate": c1 / (serial + (c2 - serial) / 2)}
     return out
 
 

@@ -219,6 +219,7 @@ def test_cli_codegen(tmp_path, capsys):
     assert "bytes" in capsys.readouterr().out
     assert main(["codegen", "--out", str(tmp_path / "d"), "--steps-per-leaf", "33"]) == 2
     assert main(["codegen", "--out", str(tmp_path / "d"), "--prefix", "9x"]) == 2
+    assert not (tmp_path / "d").exists()   # a refused run leaves no empty folder behind
     assert main(["codegen", "--out", str(tmp_path / "no" / "such")]) == 2
     assert "not allowed" in capsys.readouterr().err
 
