@@ -1,7 +1,9 @@
 #!/usr/bin/env python
 """Batch planning: `--jobs 2` against `--jobs 1` on the same targets.
 
-    python scripts/bench_batch.py [--targets 200] [--repeats 3]
+    python scripts/bench_batch.py [--targets 200] [--repeats 3] [--out results/bench_batch.md]
+
+(``scripts/benchmark.py`` runs the same measurement as its section "Batch planning".)
 
 Two measurements, each repeated with the order of the two runs alternating (the machine is
 shared, so runs of one repeat see the same load), reported as min and median:
@@ -135,14 +137,43 @@ def measure(n_targets: int = 200, repeats: int = 3, cold: bool = True) -> dict:
     return out
 
 
+def to_markdown(m: dict, command: str) -> str:
+    """The measurement as a small report (what results/bench_batch.md holds)."""
+    import datetime
+    import platform
+
+    out = ["# Batch planning: --jobs 2 against --jobs 1", "",
+           f"- date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M UTC}; command: `{command}`",
+           f"- machine: {platform.platform()}, {m['cores']} cores; load average at the end "
+           f"{', '.join(f'{x:.2f}' for x in m['load_average'] or [])}; autogroup scheduling "
+           f"{'on' if m['autogroup'] else 'off'}",
+           f"- {m['targets']} targets ({m['failed_rows']} without a plan), {m['repeats']} repeats alternating the "
+           f"order of the runs; both write the same lines (solver times aside): {m['same_lines']}", "",
+           "| measurement | --jobs 1 [s] | --jobs 2 [s] | wall speed-up (median, min..max) "
+           "| CPU --jobs 1 / --jobs 2 [s] | serial CPU [s] | idle speed-up, estimate from CPU |",
+           "|---|---|---|---|---|---|---|"]
+    for kind, what in (("cold", "whole command, cold"), ("warm", "planning phase, planner built")):
+        if kind in m:
+            r = m[kind]
+            out.append(f"| {what} | {', '.join(f'{x:.1f}' for x in r['jobs1_s'])} | "
+                       f"{', '.join(f'{x:.1f}' for x in r['jobs2_s'])} | {r['speedup_median']:.2f} "
+                       f"({r['speedup_min']:.2f}..{r['speedup_max']:.2f}) | {r['jobs1_cpu_s']:.2f} / "
+                       f"{r['jobs2_cpu_s']:.2f} | {r['serial_cpu_s']:.2f} | {r['idle_speedup_estimate']:.2f} |")
+    out += ["", __doc__[__doc__.index("Two measurements"):].strip(), ""]
+    return "\n".join(out)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--targets", type=int, default=200)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--out", default=None, help="also write the report (markdown) and its .json beside it")
     args = ap.parse_args(argv)
-    print(json.dumps(measure(args.targets, args.repeats), indent=1))
+    m = measure(args.targets, args.repeats)
+    print(json.dumps(m, indent=1))
+    if args.out:
+        from rollplan.io import write_atomic, write_json
+
+        write_atomic(args.out, to_markdown(m, " ".join(["python"] + sys.argv)).encode())
+        write_json(Path(args.out).with_suffix(".json"), m)
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

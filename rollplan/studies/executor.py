@@ -34,6 +34,7 @@ Backends:
 
 from __future__ import annotations
 
+import gc
 import logging
 import multiprocessing
 import os
@@ -178,7 +179,13 @@ class Executor:
         if method == "fork":
             if self.warm is not None:
                 self.warm()   # built once here; the forked workers share it
-            self._pool = ctx.Pool(workers, initializer=_ignore_sigint)
+            # Objects moved to the permanent generation are not traversed by the workers' garbage collector,
+            # so their pages stay shared instead of being copied into every worker.
+            gc.freeze()
+            try:
+                self._pool = ctx.Pool(workers, initializer=_ignore_sigint)
+            finally:
+                gc.unfreeze()
         else:
             self._pool = ctx.Pool(workers, initializer=_spawned_worker_init, initargs=(self.warm,))
         log.info("%d worker processes (%s)", workers, method)
