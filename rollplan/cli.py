@@ -571,7 +571,7 @@ def main(argv=None) -> int:
     to_stdout = getattr(args, "json", None) == "-"
     try:
         with contextlib.redirect_stdout(sys.stderr) if to_stdout else contextlib.nullcontext(), \
-                Progress(delay=2.0) as progress, reporting(progress):
+                Progress(delay=5.0) as progress, reporting(progress):
             return args.func(args)
     except InputError as exc:
         print(f"rollplan: error: {_cli_syntax(str(exc), args)}", file=sys.stderr)
