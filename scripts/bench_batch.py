@@ -177,3 +177,7 @@ def main(argv=None) -> int:
         write_atomic(args.out, to_markdown(m, " ".join(["python"] + sys.argv)).encode())
         write_json(Path(args.out).with_suffix(".json"), m)
     return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
