@@ -78,8 +78,8 @@ def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps:
     on_shell = ax.plot([], [], [], color=SIMULATED, linewidth=1.0, linestyle="--")[0]
     handles = [Line2D([], [], color=c, linewidth=2.2, label=lab) for c, lab in
                zip(axis_colors, ("body axis n1 (rotor 1)", "body axis n2 (rotor 2)", "body axis n3"))]
-    handles += [Line2D([], [], color=SIMULATED, linewidth=1.4, label="contact path on the plane"),
-                Line2D([], [], color=SIMULATED, linewidth=1.0, linestyle="--", label="contact path on the shell"),
+    handles += [Line2D([], [], color=SIMULATED, linewidth=1.4, label="simulated contact path, plane"),
+                Line2D([], [], color=SIMULATED, linewidth=1.0, linestyle="--", label="simulated contact path, shell"),
                 Line2D([], [], color=MARK, marker="o", markersize=4, linestyle="", label="start"),
                 Line2D([], [], color=MARK, marker="*", markersize=10, linestyle="", label="target")]
     ax.legend(handles=handles, loc="upper left", fontsize=7, bbox_to_anchor=(-0.12, 0.93))

@@ -33,15 +33,17 @@ def _draw_paths(fig, c, unit):
     plane_axes(ax2, c.problem.goal[:2], unit, "contact paths on the plane", handles=handles)
 
 
-def draw_comparison_series(fig, series: dict, horizon_label: str = "time t [s]") -> None:
+def draw_comparison_series(fig, series: dict, horizon_label: str = "time t [s]", labels: dict | None = None) -> None:
     """Time series of several motions on one set of panels of ``fig`` (a Figure or SubFigure).
 
     ``series`` maps a motion's name (``"geometric_phase"``, ``"collocation"``, or
     any other) to a mapping with ``"t"`` (N,) [s], ``"omega"`` (N, 3) [rad/s]
     and optionally ``"rotor_rates"`` (N, 2) [rad/s]. Panels: each component of
     omega and ``|omega|``, then each rotor rate when every motion has them; one
-    colour per motion (:data:`.colors.PLANNER` for the two planners).
+    colour per motion (:data:`.colors.PLANNER` for the two planners); ``labels``
+    optionally maps a motion's name to its legend entry.
     """
+    labels = labels or {}
     rates = all(s.get("rotor_rates") is not None for s in series.values())
     rows = 2 if rates else 1
     axes = np.atleast_2d(fig.subplots(rows, 4))
@@ -56,7 +58,8 @@ def draw_comparison_series(fig, series: dict, horizon_label: str = "time t [s]")
             ax.set_visible(False)
     for ax, value, ylabel in panels:
         for name, s in series.items():
-            ax.plot(np.asarray(s["t"]), value(s), color=_color(name), linewidth=1.1, label=_label(name))
+            ax.plot(np.asarray(s["t"]), value(s), color=_color(name), linewidth=1.1,
+                    label=labels.get(name, _label(name)))
         ax.set_ylabel(ylabel)
         ax.set_xlabel(horizon_label)
         ax.grid(True, alpha=0.3)
@@ -80,8 +83,11 @@ def plot_comparison(c, unit: str = "R", series: dict | None = None) -> Figure:
         fig = Figure(figsize=(16, 12), layout="constrained")
         top, bottom = fig.subfigures(2, 1, height_ratios=[1.1, 1.0])
         _draw_paths(top, c, unit)
-        draw_comparison_series(bottom, series)
-        bottom.suptitle("in time (geometric phase timed with t proportional to theta)")
+        efforts = {"geometric_phase": c.plan_measures.effort, "collocation": c.result.measures.effort}
+        labels = {name: f"{_label(name)}: effort int |omega|^2 dt = {e:.6g} rad^2/s" for name, e in efforts.items()}
+        draw_comparison_series(bottom, series, labels=labels)
+        bottom.suptitle("in time (geometric phase timed with t proportional to theta; the collocation's control, "
+                        "the contact rates, is constant on each of its N intervals)")
     fig.suptitle(title)
     return fig
 
