@@ -16,13 +16,15 @@ import re
 import sys
 
 from .core.curves import A_MAX
-from .errors import InputError, NoPlanError, SolverError, check_finite
-from .io import check_figure_path, check_writable, plan_to_dict, save_figure, tagged, write_json
+from .errors import InputError, NoPlanError, SolverError, check_finite, check_whole
+from .io import check_figure_path, check_writable, composed_to_dict, route_to_dict, save_figure, tagged, write_json
 from .planners import geometric
+from .planners.geometric import as_composed
 from .problem import DEFAULT_K, K_MAX, MAX_STEPS, STATE_NAMES
 from .progress import Progress, report, reporting
 from .robot import default_robot, load_robot
 from .version import __version__
+from .waypoints import read_waypoints
 
 EXIT_OK, EXIT_SOME_FAILED, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
 #: What a residual is (printed next to every residual and arrival error).
@@ -102,68 +104,207 @@ def _fmt_plan(p, unit) -> str:
     return "\n".join(lines)
 
 
-def cmd_plan(args) -> int:
-    _check_outputs(json=args.json, figure=args.plot)
-    k, robot = _k_or_robot(args)
-    if args.duration is not None and robot is None:
+def _fmt_state(x, unit) -> str:
+    """A state (u_a, v_a, psi, u_o, v_o) with its units: lengths in ``unit``, angles in rad."""
+    units = (unit, unit, "rad", "rad", "rad")
+    return "(" + ", ".join(f"{_g(float(v))} {u}" for v, u in zip(x, units)) + ")"
+
+
+def _fmt_composed(p, unit) -> str:
+    """The lines of a composed plan (rollplan.planners.geometric.composed.ComposedPlan)."""
+    R = p.radius
+    what = {"empty": "the start is the goal: no motion", "rolls": "the approach and departure rolls alone",
+            "one": "one leg of figure eights", "turn": "turn in place by pairs of equal circles",
+            "two": "two legs of figure eights through an intermediate pole state"}[p.mode]
+    lines = [f"  mode          {p.mode}: {what}"]
+    if p.approach is not None:
+        lines.append(f"  approach      roll of {_g(p.approach.sigma * R)} {unit} to the pole along the great circle "
+                     f"(direction beta = {_g(p.approach.beta)} rad)")
+    if p.legs or p.turn is not None:
+        t = p.target
+        lines.append(f"  eights do     (u_a, v_a, psi) = ({_g(t[0] * R)} {unit}, {_g(t[1] * R)} {unit}, "
+                     f"{_g(t[2])} rad) from rest at the pole")
+    for i, leg in enumerate(p.legs, 1):
+        s = R / leg.radius
+        lines.append(f"  leg {i}         {leg.steps} x figure eight a = {_g(leg.a * s)} {unit}   b = {_g(leg.b * s)} "
+                     f"{unit}   gamma = {_g(leg.gamma)} rad   (branch m = {leg.branch})")
+    if p.turn is not None:
+        tr = p.turn
+        lines.append(f"  turn          {tr.steps} pair(s) of circles b = {_g(tr.b * R)} {unit} "
+                     f"({'+y' if tr.side == 0 else '-y'} side), eta = {_g(tr.eta)} rad each")
+    if p.departure is not None:
+        lines.append(f"  departure     roll of {_g(p.departure.sigma * R)} {unit} from the pole along the great "
+                     f"circle (direction beta = {_g(p.departure.beta)} rad)")
+    lines += [f"  path length   {_g(p.path_length)} {unit} in {len(p.pieces)} pieces",
+              f"  final         {_fmt_state(p.final, unit)}",
+              f"  residual      {p.residual:.2e} ({NORM}; {p.certificate.method}, the whole motion from the start "
+              "state)"]
+    return "\n".join(lines)
+
+
+def _is_timed(args) -> bool:
+    return args.duration is not None or args.timing is not None
+
+
+def _check_timing_outputs(args) -> None:
+    """--timing-plot of ``plan`` and ``route``: a figure path, and a timed motion to draw."""
+    if args.timing_plot is not None:
+        check_figure_path(args.timing_plot)
+        if not _is_timed(args):
+            raise InputError("--timing-plot needs a timed motion: give --duration T or --timing NAME")
+
+
+def _robot_for_duration(args, k, robot):
+    """The robot of ``--duration`` / ``--timing`` (the default robot unless --robot is given), with the timing
+    law's needs (limits, duration) checked before planning."""
+    if not _is_timed(args):
+        return robot
+    if robot is None:
         if k is not None:
-            raise InputError("--duration needs the robot's inertias, not only k: give --robot FILE "
+            raise InputError("--duration and --timing need the robot's inertias, not only k: give --robot FILE "
                              "(or drop --k to use the default robot)")
         robot = default_robot()
         print("rollplan: no --robot given: using the default robot (rollplan/data/default_robot.toml); "
               "lengths in m")
-    stages = ["planning"] + ["timing"] * (args.duration is not None) + ["sampling"] * bool(args.json or args.plot) + \
-        ["writing JSON"] * bool(args.json) + ["drawing"] * bool(args.plot)
-    stage = lambda name: report("plan", stages.index(name), len(stages), stage=name)  # noqa: E731
-    stage("planning")
-    p = geometric.plan((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.all, args.method)
+    from .execution.limits import Limits
+    from .execution.timing import get_law
+
+    get_law(args.timing or "min-jerk").check(Limits.of(robot), args.duration)
+    return robot
+
+
+def _plan_inputs(args):
+    """The checks of ``plan`` and ``route`` before any work: outputs, samples, the robot and the timing law's
+    needs; returns ``(k, robot)``."""
+    _check_outputs(json=args.json, figure=args.plot)
+    _check_timing_outputs(args)
+    check_whole("samples", args.samples, 2, 10**7)
+    k, robot = _k_or_robot(args)
+    return k, _robot_for_duration(args, k, robot)
+
+
+def _stage(args, command: str, name: str) -> None:
+    """Report the stage ``name`` of ``plan`` or ``route`` as progress (so long work is never silent)."""
+    stages = ["planning"] + ["timing"] * _is_timed(args) + ["sampling"] * bool(args.json or args.plot) + \
+        ["writing JSON"] * bool(args.json) + ["drawing"] * bool(args.plot or args.timing_plot) + ["done"]
+    report(command, stages.index(name), len(stages) - 1, stage=name)
+
+
+def cmd_plan(args) -> int:
+    k, robot = _plan_inputs(args)
+    goal = (args.to[0], args.to[1], args.psi, args.contact[0], args.contact[1])
+    _stage(args, "plan", "planning")
+    p = geometric.plan(goal, args.steps, k, robot, args.radius, args.all, args.method, start=args.start,
+                       legs=args.legs)
     unit = p.problem.unit
     g = p.goal
-    print(f"rollplan: k = {_g(p.k)}, R = {_g(p.radius)} {'m' if unit == 'm' else '(lengths in units of R)'}, "
-          f"steps = {p.steps}, target (u_a, v_a, psi) = ({_g(g.u_a)} {unit}, {_g(g.v_a)} {unit}, {_g(g.psi)} rad)")
-    print(_fmt_plan(p, unit))
-    print(f"  solver        {p.stats.method}: {p.stats.status}, {p.stats.iterations} iterations, "
-          f"{p.stats.details['candidates']} brackets, {p.stats.details['solves']} solves, "
+    composed = hasattr(p, "pieces")
+    radius = f"R = {_g(p.radius)} {'m' if unit == 'm' else '(lengths in units of R)'}"
+    if composed or tuple(p.problem.start) != (0.0,) * 5:
+        print(f"rollplan: k = {_g(p.k)}, {radius}, steps = {p.steps}, from (u_a, v_a, psi, u_o, v_o) = "
+              f"{_fmt_state(p.problem.start, unit)} to {_fmt_state(g, unit)}")
+    else:
+        print(f"rollplan: k = {_g(p.k)}, {radius}, steps = {p.steps}, target (u_a, v_a, psi) = "
+              f"({_g(g.u_a)} {unit}, {_g(g.v_a)} {unit}, {_g(g.psi)} rad)")
+    print(_fmt_composed(p, unit) if composed else _fmt_plan(p, unit))
+    details = p.stats.details
+    found = (f"{details['candidates']} brackets, {details['solves']} solves, " if "candidates" in details else "")
+    print(f"  solver        {p.stats.method}: {p.stats.status}, {p.stats.iterations} iterations, {found}"
           f"{p.stats.time_s * 1e3:.1f} ms")
     for i, alt in enumerate(p.alternatives, 1):
         print(f"alternative {i}:")
-        print(_fmt_plan(alt, unit))
-    if args.duration is not None:
-        stage("timing")
-    motion, extra = _timed(args, p, robot) if args.duration is not None else (None, {})
+        print(_fmt_composed(alt, unit) if composed else _fmt_plan(alt, unit))
+    _write_results(args, p, robot, unit, composed_to_dict, "plan")
+    return EXIT_OK
+
+
+def _write_results(args, p, robot, unit, to_dict, command) -> None:
+    """--duration/--timing, --json, --plot and --timing-plot of ``plan`` and ``route``: ``args.samples``
+    trajectory samples in all; each stage reported as progress."""
+    if _is_timed(args):
+        _stage(args, command, "timing")
+    motion, extra = _timed(args, p, robot) if _is_timed(args) else (None, {})
     if args.json or args.plot:
-        stage("sampling")
-    traj = p.sample() if (args.json or args.plot) else None
+        _stage(args, command, "sampling")
+    traj = as_composed(p).sample(args.samples) if (args.json or args.plot) else None
     if args.json:
-        stage("writing JSON")
-        _emit_json(args, {**plan_to_dict(p, traj), **extra}, unit)
-    if args.plot:
-        stage("drawing")
-    report("plan", len(stages), len(stages), stage="done")
+        _stage(args, command, "writing JSON")
+        _emit_json(args, {**to_dict(p, traj), **extra}, unit)
+    if args.plot or args.timing_plot:
+        _stage(args, command, "drawing")
     if args.plot and motion is not None:
         from .plots.motion import plot_motion
 
         save_figure(plot_motion(motion, p, traj, unit), args.plot)
         print(f"wrote {args.plot}")
-    elif args.plot:
+    elif args.plot and not hasattr(p, "pieces"):
         from .plots.plan import plot_plan
 
         save_figure(plot_plan(p, traj, unit), args.plot)
         print(f"wrote {args.plot}")
+    elif args.plot:
+        from .plots.composed import plot_composed
+
+        save_figure(plot_composed(p, traj, unit), args.plot)
+        print(f"wrote {args.plot}")
+    if args.timing_plot:
+        from .execution.timing import velocity_limit
+        from .plots.timing import plot_timing
+
+        moving = motion.path is not None and motion.limits.any
+        limit = velocity_limit(motion.path, motion.limits, motion.profile) if moving else None
+        save_figure(plot_timing(motion, limit), args.timing_plot)
+        print(f"wrote {args.timing_plot}")
+
+
+def cmd_route(args) -> int:
+    k, robot = _plan_inputs(args)
+    waypoints = read_waypoints(args.waypoints)
+    print(f"rollplan route: {len(waypoints)} waypoints from {args.waypoints}", file=sys.stderr)
+    r = geometric.plan_route(waypoints, args.steps, k, robot, args.radius, args.legs, args.method,
+                             progress=lambda done, total: report("route", done, total, stage="legs"))
+    unit = r.problem.unit
+    print(f"rollplan route: k = {_g(r.k)}, R = {_g(r.radius)} {'m' if unit == 'm' else '(lengths in units of R)'}, "
+          f"{len(r.plans)} legs, default steps = {r.steps}")
+    for i, (p, w, res) in enumerate(zip(r.plans, r.waypoints[1:], r.waypoint_residuals), 1):
+        label = f" {w.label!r}" if w.label else ""
+        print(f"  leg {i} to waypoint {i + 1}{label} {_fmt_state(w.state, unit)}: {getattr(p, 'mode', 'one')}, "
+              f"{_g(p.path_length)} {unit}, waypoint residual {res:.2e}")
+    print(f"  path length   {_g(r.path_length)} {unit} in {len(r.pieces)} pieces")
+    print(f"  final         {_fmt_state(r.final, unit)}")
+    print(f"  residual      {r.residual:.2e} ({NORM}; {r.certificate.method}, the whole route from the first "
+          "waypoint)")
+    print(f"  time          {r.stats.time_s:.2f} s")
+    _write_results(args, r, robot, unit, route_to_dict, "route")
     return EXIT_OK
 
 
 def _timed(args, p, robot):
-    """``plan --duration``: rotor rates, angles and torques, checked by the rotor-only simulation."""
+    """``--duration`` / ``--timing``: rotor rates, angles and torques, checked by the rotor-only simulation
+    from the plan's start state."""
     from .execution.actuation import actuate
     from .execution.plants import simulate_rotors
+    from .execution.timing import round_up
     from .io import motion_to_dict
 
-    motion = actuate(p, robot, args.duration, args.samples)
-    sim = simulate_rotors(robot, motion.time, motion.rotor_rates, p.goal)
-    print(f"  motion        T = {_g(motion.duration)} s, {motion.time.size} samples, rest-to-rest per half-step")
-    print(f"  rotors        max |rate| = {_g(abs(motion.rotor_rates).max())} rad/s   "
-          f"max |torque| = {_g(abs(motion.rotor_torques).max())} N m")
+    timing = args.timing or "min-jerk"
+    motion = actuate(p, robot, args.duration, args.samples, timing)
+    sim = simulate_rotors(robot, motion.time, motion.rotor_rates, p.goal, x0=p.problem.start.array())
+    lim = motion.limits
+    print(f"  motion        T = {_g(motion.duration)} s, {motion.time.size} samples, timing {timing}"
+          f"{' (rest-to-rest per piece: leaf, roll)' if timing == 'min-jerk' else ''}")
+    if motion.path is None:
+        print("  limits        none needed: the plan is the empty motion (at rest)")
+    elif lim.any:
+        print(f"  limits        {lim.describe()}: the shortest feasible duration with timing {timing} is "
+              f"{_g(round_up(motion.minimum_duration))} s")
+    else:
+        print("  limits        none in the robot file (add max_rotor_rate [rad/s] and max_rotor_torque [N m] "
+              "to keep the motors within them)")
+    rate, torque = abs(motion.rotor_rates).max(), abs(motion.rotor_torques).max()
+    use_rate = f" ({rate / lim.max_rotor_rate:.1%} of the limit)" if lim.max_rotor_rate is not None else ""
+    use_torque = f" ({torque / lim.max_rotor_torque:.1%} of the limit)" if lim.max_rotor_torque is not None else ""
+    print(f"  rotors        max |rate| = {_g(rate)} rad/s{use_rate}   max |torque| = {_g(torque)} N m{use_torque}")
     print(f"  rotor-only    arrival error {sim.arrival_error:.2e} ({NORM}), position error "
           f"{sim.position_error * robot.radius:.2e} m (spline through the rotor rates, (11) and (6)-(10) by CVODES)")
     extra = motion_to_dict(motion)
@@ -223,7 +364,7 @@ def cmd_simulate(args) -> int:
     _check_outputs(json=args.json, figure=args.plot)
     rp = load_rotor_plan(args.plan_file)
     robot = load_robot(args.robot) if args.robot else rp.robot
-    sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal)
+    sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
     e = sim.error
     f, g = sim.final, rp.goal
     print(f"rollplan simulate: {rp.time.size} samples over {_g(rp.time[-1] - rp.time[0])} s, robot k = {_g(robot.k)}"
@@ -262,7 +403,7 @@ def cmd_animate(args) -> int:
     if not 1 <= args.fps <= 100:
         raise InputError(f"--fps {args.fps} is not allowed: it must lie in [1, 100]")
     rp = load_rotor_plan(args.plan_file)
-    sim = simulate_rotors(rp.robot, rp.time, rp.rotor_rates, rp.goal)
+    sim = simulate_rotors(rp.robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
     with Progress(unit="frames") as progress:
         make_animation(rp.time, sim.state, rp.rotor_rates, rp.robot, rp.goal, args.out, args.frames, args.fps,
                        progress=progress)
@@ -450,26 +591,72 @@ exit status: 0 every row planned, 1 some rows failed, 3 every row failed (each f
 """
 
 
+def _add_timing_options(parser) -> None:
+    """--duration, --timing, --samples and --timing-plot of ``plan`` and ``route``."""
+    from .execution.timing import LAWS
+
+    parser.add_argument("--duration", type=_number, default=None, metavar="T",
+                        help="time the motion over T seconds (by default rest-to-rest per piece: leaf, roll; "
+                             "--timing min-jerk) and compute the rotor rates, angles and torques (uses the default "
+                             "robot unless --robot is given); refused if it would exceed the robot's "
+                             "max_rotor_rate or max_rotor_torque")
+    parser.add_argument("--timing", choices=list(LAWS), default=None, metavar="NAME",
+                        help="timing law: " + "; ".join(f"{n}: {law.summary}" for n, law in LAWS.items())
+                             + ". Every law rests at the corners of the contact path (where a roll meets the figure "
+                               "eights). Without --duration: the law's shortest duration within the robot's limits")
+    parser.add_argument("--samples", type=_whole, default=2000,
+                        help="samples of the trajectory in --json and --plot, in all (default 2000); with "
+                             "--duration or --timing also the least number of time samples (at least 400 per "
+                             "piece for min-jerk, 3000 for the other laws)")
+    parser.add_argument("--timing-plot", metavar="FILE.png",
+                        help="with --duration or --timing: rotor rates and torques in time with the robot's limits, "
+                             "and the phase plane (s, s') with the maximum velocity curve")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="rollplan", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--version", action="version", version=f"rollplan {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log the planner's progress")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
 
-    p = sub.add_parser("plan", help="plan a motion to a target by tracing a figure eight n times")
-    _add_target_options(p, to_default=(0.0, 1.0), steps_help=f"number of figure eights n {_STEPS} (default 1)")
-    p.add_argument("--all", action="store_true", help="also list every other verified solution branch")
+    p = sub.add_parser("plan", help="plan a motion between two states by figure eights (and rolls, turns, legs)")
+    _add_target_options(p, to_default=(0.0, 1.0), steps_help=f"number of figure eights n {_STEPS} per leg (default 1)")
+    p.add_argument("--from", dest="start", nargs=5, type=_number, default=(0.0,) * 5,
+                   metavar=("U_A", "V_A", "PSI", "U_O", "V_O"),
+                   help="start state (default 0 0 0 0 0: at rest at the origin, contact at the south pole); "
+                        "lengths in the unit in use, angles in rad; off the pole psi is the contact angle of (2), "
+                        "not a yaw")
+    p.add_argument("--contact", nargs=2, type=_number, default=(0.0, 0.0), metavar=("U_O", "V_O"),
+                   help="goal contact point on the sphere [rad] (default 0 0, the south pole); "
+                        "cos(u_o) cos(v_o) >= 0.05")
+    p.add_argument("--legs", choices=geometric.LEGS, default="fallback",
+                   help="figure eights: one leg, with a turn in place or two legs only where one leg has no plan "
+                        "(fallback, default); also search two legs and keep the shorter (shortest); one; two")
+    p.add_argument("--all", action="store_true", help="also list every other verified solution branch (one leg)")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     p.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the plan"))
     p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere (from below) and the "
-                   "plane, and psi along it (with --duration: omega, rotor rates and torques in time)")
-    p.add_argument("--duration", type=_number, default=None, metavar="T",
-                   help="time the plan rest-to-rest per half-step over T > 0 seconds and compute the rotor rates, "
-                        "angles and torques (uses the default robot unless --robot is given)")
-    p.add_argument("--samples", type=_whole, default=2000,
-                   help="least number of time samples with --duration, >= 3 (default 2000; at least 400 per "
-                        "half-step are taken)")
+                   "plane, and psi along it (with --duration or --timing: omega, rotor rates and torques in time)")
+    _add_timing_options(p)
     p.set_defaults(func=cmd_plan)
+
+    w = sub.add_parser("route", help="plan a route through waypoints (a CSV file), leg by leg, certified as one")
+    w.add_argument("waypoints", metavar="WAYPOINTS.csv",
+                   help="header u_a,v_a,psi[,u_o,v_o][,steps][,label]; one waypoint a row, the first is the start")
+    w.add_argument("--steps", type=_whole, default=1,
+                   help=f"figure eights n {_STEPS} per leg where a row does not say (default 1)")
+    g = w.add_mutually_exclusive_group()
+    g.add_argument("--k", type=_number, default=None, help=_K_HELP)
+    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
+    w.add_argument("--radius", type=_number, default=None,
+                   help="sphere radius R > 0 [m]; lengths are then in metres (default: lengths in units of R, "
+                        "or the robot's radius)")
+    w.add_argument("--legs", choices=geometric.LEGS, default="fallback", help="as for plan (default fallback)")
+    w.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
+    w.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the route"))
+    w.add_argument("--plot", metavar="FILE.png", help="draw the route's contact path")
+    _add_timing_options(w)
+    w.set_defaults(func=cmd_route)
 
     s = sub.add_parser("step", help="what one figure eight does: shift h and holonomy eta")
     s.add_argument("--a", type=_number, required=True, help="first leaf radius [R], 0 < a <= %g" % A_MAX)
@@ -564,8 +751,8 @@ def main(argv=None) -> int:
         return EXIT_INPUT
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.ERROR, format="%(name)s: %(message)s")
-    if (getattr(args, "command", None) in ("plan", "compare") and args.k is None and args.robot is None
-            and getattr(args, "duration", None) is None):
+    if (getattr(args, "command", None) in ("plan", "compare", "route") and args.k is None and args.robot is None
+            and getattr(args, "duration", None) is None and getattr(args, "timing", None) is None):
         args.k = DEFAULT_K
     args.stdout = sys.stdout
     to_stdout = getattr(args, "json", None) == "-"
@@ -582,6 +769,9 @@ def main(argv=None) -> int:
     except SolverError as exc:
         print(f"rollplan: solver failed ({exc.status}): {_cli_syntax(str(exc), args)}", file=sys.stderr)
         return EXIT_SOLVER
+    except KeyboardInterrupt:
+        print("\nrollplan: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return EXIT_OK

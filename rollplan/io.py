@@ -12,13 +12,14 @@ import numpy as np
 
 from .errors import InputError
 from .execution.plants import check_samples
+from .planners.geometric.composed import as_composed
 from .problem import State
-from .robot import Robot
+from .robot import OPTIONAL_KEYS, Robot
 from .version import __version__
 
 __all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict",
            "UNITS", "tagged",
-           "motion_to_dict", "RotorPlan", "load_rotor_plan"]
+           "composed_to_dict", "route_to_dict", "motion_to_dict", "RotorPlan", "load_rotor_plan"]
 
 
 def check_writable(path) -> Path:
@@ -108,7 +109,10 @@ def _rows(a):
 
 
 def plan_to_dict(plan, traj=None, include_alternatives=True) -> dict:
-    """A geometric-phase plan as the JSON object of ``rollplan plan --json``."""
+    """A geometric-phase plan as the JSON object of ``rollplan plan --json`` (a composed plan:
+    :func:`composed_to_dict`)."""
+    if hasattr(plan, "pieces"):
+        return composed_to_dict(plan, traj, include_alternatives)
     g = plan.goal
     d = {
         "k": plan.k,
@@ -131,19 +135,95 @@ def plan_to_dict(plan, traj=None, include_alternatives=True) -> dict:
     return d
 
 
+def _leg_to_dict(leg, radius) -> dict:
+    """One leg of figure eights of a composed plan, lengths in the composed plan's unit."""
+    scale = radius / leg.radius
+    return {"kind": "figure_eights", "steps": leg.steps, "a": leg.a * scale, "b": leg.b * scale,
+            "gamma": leg.gamma, "branch": leg.branch, "h": leg.h * scale, "eta": leg.eta,
+            "target": {n: float(v) * (scale if n != "psi" else 1.0) for n, v in zip(("u_a", "v_a", "psi"), leg.goal)},
+            "path_length": leg.path_length * scale, "residual": leg.residual}
+
+
+def composed_to_dict(plan, traj=None, include_alternatives=True) -> dict:
+    """A plan as the JSON object of ``rollplan plan --json``, for any start and goal.
+
+    ``start``, ``goal``, ``final`` are states; ``mode`` says how the figure eights were found;
+    ``approach``/``departure`` are the rolls (null at the pole); ``legs`` the legs of figure eights or
+    the circle pairs of a turn in place; ``segments`` the pieces of the contact path, in the order of
+    the trajectory's ``segment`` numbers. One-leg plans also carry the keys of a pole-to-pole plan
+    (``figure_eight``, ``step``, ``branch``); ``target`` is the goal's ``(u_a, v_a, psi)``.
+    """
+    c = as_composed(plan)
+    R = c.radius
+    g = c.goal
+    legs = [_leg_to_dict(leg, R) for leg in c.legs]
+    if c.turn is not None:
+        legs.append(c.turn.as_dict(R))
+    roll = lambda r: None if r is None else {k: v * (R if k != "beta" else 1.0) for k, v in r.as_dict().items()}  # noqa: E731
+    d = {
+        "k": c.k, "radius": R, "steps": c.steps,
+        "start": c.problem.start.as_dict(), "goal": g.as_dict(),
+        "target": {"u_a": g.u_a, "v_a": g.v_a, "psi": g.psi},
+        "mode": c.mode,
+        "approach": roll(c.approach), "departure": roll(c.departure),
+        "eights_target": {n: float(v) * (R if n != "psi" else 1.0) for n, v in zip(("u_a", "v_a", "psi"), c.target)},
+        "intermediate": None if c.intermediate is None else _f(c.intermediate * [R, R, 1.0]),
+        "legs": legs,
+        "segments": [dict(p.as_dict(), length=p.length * R) for p in c.pieces],
+        "final": c.final.as_dict(), "residual": c.residual, "certificate": c.certificate.as_dict(),
+        "path_length": c.path_length, "solver": c.stats.as_dict(),
+    }
+    if len(c.legs) == 1 and c.turn is None:
+        leg = legs[0]
+        d.update({"figure_eight": {"a": leg["a"], "b": leg["b"], "gamma": leg["gamma"]},
+                  "step": {"h": leg["h"], "eta": leg["eta"]}, "branch": leg["branch"]})
+    if traj is not None:
+        d["trajectory"] = traj.as_dict()
+    alternatives = getattr(plan, "alternatives", ())
+    if include_alternatives and alternatives:
+        d["alternatives"] = [plan_to_dict(p, None, False) for p in alternatives]
+    return d
+
+
+def route_to_dict(route, traj=None) -> dict:
+    """A route as the JSON object of ``rollplan route --json``: the waypoints, every leg (as
+    :func:`composed_to_dict`, without trajectory), the waypoint residuals of the one-pass
+    certificate, and the whole route's ``final``, ``residual`` and ``trajectory``."""
+    d = {
+        "k": route.k, "radius": route.radius, "steps": route.steps,
+        "start": route.problem.start.as_dict(), "goal": route.goal.as_dict(),
+        "target": {"u_a": route.goal.u_a, "v_a": route.goal.v_a, "psi": route.goal.psi},
+        "waypoints": [{**w.state.as_dict(), "steps": w.steps, "label": w.label} for w in route.waypoints],
+        "legs": [composed_to_dict(p, None, False) for p in route.plans],
+        "waypoint_residuals": _f(route.waypoint_residuals),
+        "final": route.final.as_dict(), "residual": route.residual, "certificate": route.certificate.as_dict(),
+        "path_length": route.path_length, "solver": route.stats.as_dict(),
+        "segments": [dict(p.as_dict(), length=p.length * route.radius, leg=int(i))
+                     for p, i in zip(route.pieces, route.leg_of_piece)],
+    }
+    if traj is not None:
+        d["trajectory"] = traj.as_dict()
+    return d
+
+
 def motion_to_dict(motion) -> dict:
     """The motion's keys of ``rollplan plan --duration T --json``: time series as lists of rows.
 
-    ``state`` rows are in :class:`~rollplan.problem.State` order (u_a, v_a, psi, u_o, v_o).
+    ``state`` rows are in :class:`~rollplan.problem.State` order (u_a, v_a, psi, u_o, v_o);
+    ``segment`` numbers the half-step of each sample; ``timing`` is the law's name and
+    ``minimum_duration`` its shortest duration within the robot's limits (null without limits).
     """
     return {
+        "timing": motion.timing,
         "duration": motion.duration,
+        "minimum_duration": motion.minimum_duration,
         "time": _f(motion.time),
         "omega": _rows(motion.omega),
         "rotor_rates": _rows(motion.rotor_rates),
         "rotor_angles": _rows(motion.rotor_angles),
         "rotor_torques": _rows(motion.rotor_torques),
         "state": _rows(motion.state),
+        "segment": [int(v) for v in motion.segment],
         "robot": motion.robot.as_dict(),
     }
 
@@ -164,6 +244,8 @@ class RotorPlan:
         Planned arrival [m, rad].
     data : dict
         The whole JSON object.
+    start : State
+        Start state [m, rad] (zero when the file has none).
     """
 
     robot: Robot
@@ -171,6 +253,7 @@ class RotorPlan:
     rotor_rates: np.ndarray
     goal: State
     data: dict
+    start: State = State()
 
 
 def load_rotor_plan(path) -> RotorPlan:
@@ -189,16 +272,21 @@ def load_rotor_plan(path) -> RotorPlan:
             hint = " (make it with: rollplan plan ... --duration T --json FILE)" if key != "target" else ""
             raise InputError(f"plan file {str(path)!r} has no key {key!r}{hint}")
     rob = data["robot"]
-    names = [f.name for f in fields(Robot)]
+    names = [f.name for f in fields(Robot) if f.name not in OPTIONAL_KEYS]
     if not isinstance(rob, dict) or any(n not in rob for n in names):
         raise InputError(f"plan file {str(path)!r}: 'robot' must hold {', '.join(names)}")
-    robot = Robot(**{n: rob[n] for n in names})
+    # plan files written before the motors' limits existed have no such keys: unlimited
+    robot = Robot(**{n: rob[n] for n in [*names, *OPTIONAL_KEYS] if n in rob})
     tg = data["target"]
     try:
         goal = State(float(tg["u_a"]), float(tg["v_a"]), float(tg["psi"]))
+        if "goal" in data:
+            goal = State.of(data["goal"], "goal")
+        start = State.of(data["start"], "start") if "start" in data else State()
         t = np.asarray(data["time"], float)
         rates = np.asarray(data["rotor_rates"], float)
-    except (TypeError, KeyError, ValueError):
-        raise InputError(f"plan file {str(path)!r}: 'target', 'time' or 'rotor_rates' is malformed") from None
+    except (TypeError, KeyError, ValueError, InputError):
+        raise InputError(f"plan file {str(path)!r}: 'target', 'start', 'goal', 'time' or 'rotor_rates' is "
+                         "malformed") from None
     t, rates = check_samples(t, rates)
-    return RotorPlan(robot, t, rates, goal, data)
+    return RotorPlan(robot, t, rates, goal, data, start)

@@ -15,6 +15,7 @@ studies take a Problem and never check the same numbers again.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -24,8 +25,8 @@ from .core.plane import wrap
 from .errors import InputError, check_finite, check_range, check_whole
 from .robot import Robot
 
-__all__ = ["STATE_NAMES", "State", "Problem", "K_MAX", "MAX_STEPS", "DEFAULT_K", "check_k", "check_steps",
-           "arrival_error", "arrival_residual"]
+__all__ = ["STATE_NAMES", "State", "Problem", "K_MAX", "MAX_STEPS", "DEFAULT_K", "N3Z_MIN", "check_k", "check_steps",
+           "check_contact", "arrival_error", "arrival_residual"]
 
 #: Names of the state's entries, in the one order used everywhere (arrays, JSON, CSV).
 STATE_NAMES = ("u_a", "v_a", "psi", "u_o", "v_o")
@@ -35,6 +36,10 @@ K_MAX = 100.0
 MAX_STEPS = 1000
 #: k when none is given on the command line or in a batch row: the paper's case study (Section III.C).
 DEFAULT_K = 2.5
+
+#: Smallest ``n3z = cos(u_o) cos(v_o)`` of a start or goal contact point (87.13 deg from the south pole);
+#: see :func:`check_contact`.
+N3Z_MIN = 0.05
 
 
 class State(NamedTuple):
@@ -103,18 +108,46 @@ def arrival_error(final, goal, radius: float = 1.0) -> np.ndarray:
     wrapped to (-pi, pi] (psi is an angle), u_o and v_o are differences [rad].
     """
     f, g = np.asarray(final, float), np.asarray(goal, float)
-    d = f - g
+    with np.errstate(over="ignore"):   # states 1e308 apart are infinitely far apart
+        d = f - g
     return np.array([d[0] / radius, d[1] / radius, float(wrap(d[2])), d[3], d[4]])
 
 
 def arrival_residual(final, goal, radius: float = 1.0) -> float:
     """Euclidean norm of :func:`arrival_error`: the residual every certificate reports."""
-    return float(np.linalg.norm(arrival_error(final, goal, radius)))
+    return float(math.hypot(*arrival_error(final, goal, radius)))   # no overflow for distances of any size
 
 
 def check_k(k) -> float:
     """The inertia ratio k (14) as a float in [0, K_MAX]; InputError otherwise."""
     return check_range("k", k, 0.0, K_MAX)
+
+
+def check_contact(u_o, v_o, name: str = "contact") -> tuple[float, float]:
+    """``(u_o, v_o)`` as floats if the contact point lies in the region where plans start and end.
+
+    The region: the principal chart ``|u_o|, |v_o| < pi/2`` of (1) with
+    ``n3z = cos(u_o) cos(v_o) >= N3Z_MIN`` (:data:`N3Z_MIN` = 0.05, at most 87.13 deg from the
+    south pole). ``n3z`` is the vertical component of the body axis n3 (5); (13) is solved for
+    the spin by dividing by it, so off a pure roll any rolling rate becomes a spin with the gain
+    ``k / n3z``, 20 k at the margin. The figure eights themselves reach down to
+    ``n3z = 1 - 2 A_MAX^2 = 0.048``; start and goal are held to the same band, rounded up.
+
+    Raises
+    ------
+    InputError
+        Not finite, outside the chart, or ``n3z < N3Z_MIN`` (the message names the limit).
+    """
+    u, v = check_finite(f"{name} u_o", u_o), check_finite(f"{name} v_o", v_o)
+    if abs(u) >= math.pi / 2 or abs(v) >= math.pi / 2:
+        raise InputError(f"{name} (u_o, v_o) = ({u:g}, {v:g}) is not allowed: |u_o| and |v_o| must be below "
+                         "pi/2 (the lower hemisphere)")
+    n3z = math.cos(u) * math.cos(v)
+    if n3z < N3Z_MIN:
+        raise InputError(f"{name} (u_o, v_o) = ({u:g}, {v:g}) is not allowed: cos(u_o) cos(v_o) = {n3z:.4g} is "
+                         f"below {N3Z_MIN:g}; the contact point must lie within "
+                         f"{math.degrees(math.acos(N3Z_MIN)):.2f} deg of the south pole")
+    return u, v
 
 
 def check_steps(steps) -> int:
@@ -134,7 +167,8 @@ class Problem:
         Goal state [length unit, rad]; three numbers ``(u_a, v_a, psi)`` mean
         the contact point at the south pole.
     start : State or sequence, optional
-        Start state (default: zero, at rest at the origin).
+        Start state (default: zero, at rest at the origin). The contact points of
+        start and goal must lie in the region of :func:`check_contact`.
     k : float, optional
         Inertia ratio (14), ``0 <= k <= K_MAX`` (k = 0 is pure rolling). Or give ``robot``.
     robot : Robot, optional
@@ -173,6 +207,8 @@ class Problem:
         set_("radius", check_range("radius", radius, 0.0, None, low_open=True))
         set_("goal", State.of(self.goal, "goal"))
         set_("start", State.of(self.start, "start"))
+        for name in ("start", "goal"):
+            check_contact(getattr(self, name).u_o, getattr(self, name).v_o, name)
         set_("steps", check_steps(self.steps))
 
     @property

@@ -93,7 +93,9 @@ class Trajectory:
     ----------
     s : ndarray, shape (N,)
         Path parameter of each sample: the curve parameter theta [rad] of a
-        geometric-phase plan (one step is 2 pi) or the time t [s]; see ``parameter``.
+        geometric-phase plan (one step is 2 pi; in a composed plan or a route every
+        piece of the contact path, a leaf or a roll, spans pi) or the time t [s];
+        see ``parameter``.
     state : ndarray, shape (N, 5)
         States in :class:`~rollplan.problem.State` order (u_a, v_a, psi, u_o, v_o)
         [length unit, rad].

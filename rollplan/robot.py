@@ -7,10 +7,12 @@ from dataclasses import dataclass, fields
 from .core import model
 from .errors import InputError, check_range
 
-__all__ = ["Robot", "load_robot", "default_robot", "DEFAULT_ROBOT_FILE"]
+__all__ = ["Robot", "load_robot", "default_robot", "DEFAULT_ROBOT_FILE", "OPTIONAL_KEYS"]
 
 #: The shipped default robot (package data, same values as ``Robot()``), documented in the file.
 DEFAULT_ROBOT_FILE = "data/default_robot.toml"
+#: Keys of a robot file that may be absent (absent means unlimited): the motors' limits.
+OPTIONAL_KEYS = ("max_rotor_rate", "max_rotor_torque")
 
 
 @dataclass(frozen=True)
@@ -29,6 +31,13 @@ class Robot:
         Moment of inertia J_r of one rotor about its spin axis [kg m^2].
     rotor_inertia_transverse : float
         Moment of inertia J_p of one rotor about a transverse axis [kg m^2].
+    max_rotor_rate : float or None
+        Largest rotor rate |phi_i_dot| either motor can run [rad/s]; None (the key
+        absent from the file) means unlimited. Optional.
+    max_rotor_torque : float or None
+        Largest motor torque |tau_i| either motor can give [N m]; None means
+        unlimited. Optional. The timing laws of :mod:`rollplan.execution.timing` keep
+        the rotor rates and torques within both.
     """
 
     radius: float = 0.1
@@ -36,10 +45,13 @@ class Robot:
     mass_shell: float = 0.4
     rotor_inertia_axial: float = 2.0e-4
     rotor_inertia_transverse: float = 1.2e-4
+    max_rotor_rate: float | None = None
+    max_rotor_torque: float | None = None
 
     def __post_init__(self) -> None:
         for f in fields(self):
-            check_range(f.name, getattr(self, f.name), 0.0, None, low_open=True)
+            if f.name not in OPTIONAL_KEYS or getattr(self, f.name) is not None:
+                check_range(f.name, getattr(self, f.name), 0.0, None, low_open=True)
         if self.mass_shell > self.mass_total:
             raise InputError(f"mass_shell = {self.mass_shell:g} is not allowed: it must not exceed "
                              f"mass_total = {self.mass_total:g}")
@@ -64,13 +76,15 @@ class Robot:
         return float(self._ratio()[2])
 
     def as_dict(self) -> dict:
-        d = {f.name: getattr(self, f.name) for f in fields(self)}
+        """The fields (limits only when set) and k."""
+        d = {f.name: getattr(self, f.name) for f in fields(self)
+             if f.name not in OPTIONAL_KEYS or getattr(self, f.name) is not None}
         d["k"] = self.k
         return d
 
 
 def load_robot(path) -> Robot:
-    """Read a robot from a TOML file with exactly the fields of :class:`Robot`."""
+    """Read a robot from a TOML file with the fields of :class:`Robot` (the :data:`OPTIONAL_KEYS` may be absent)."""
     try:
         import tomllib
     except ModuleNotFoundError:  # Python 3.10
@@ -88,14 +102,14 @@ def load_robot(path) -> Robot:
     unknown = sorted(set(data) - set(names))
     if unknown:
         raise InputError(f"robot file {str(path)!r}: unknown key {unknown[0]!r}; allowed: {', '.join(names)}")
-    missing = [n for n in names if n not in data]
+    missing = [n for n in names if n not in data and n not in OPTIONAL_KEYS]
     if missing:
         raise InputError(f"robot file {str(path)!r}: missing key {missing[0]!r}")
-    for n in names:
+    for n in data:
         if isinstance(data[n], bool) or not isinstance(data[n], (int, float)):
             raise InputError(f"robot file {str(path)!r}: {n} = {data[n]!r} is not allowed: it must be a number")
     try:
-        return Robot(**{n: data[n] for n in names})
+        return Robot(**data)
     except InputError as exc:
         raise InputError(f"robot file {str(path)!r}: {exc}") from None
 

@@ -14,6 +14,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import rollplan  # noqa: E402
 from rollplan.planners.geometric import GeometricPhasePlanner  # noqa: E402
 
 import references  # noqa: E402
@@ -30,3 +31,9 @@ def scipy_trace():
     """Independent reference: (u_a, v_a, psi) after ``steps`` figure eights (a, b) rotated by gamma,
     from zero, by DOP853 on the printed (28)-(30), (35) (units of R, rad)."""
     return references.trace
+
+
+@pytest.fixture(scope="session")
+def asym_plan():
+    """A plan for the default robot with a != b (psi = 0.5), two steps: four leaves, three poles between them."""
+    return rollplan.plan((0.05, 0.08, 0.5), 2, robot=rollplan.Robot())

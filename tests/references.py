@@ -6,13 +6,28 @@ corrected and said so), and is what the tests compare rollplan's symbolic model 
 * :func:`orientation` -- (2), composed from elementary rotations; :func:`axes` -- its columns
   n_1, n_2, n_3 as printed in (3)-(5);
 * :func:`montana` -- Montana's contact kinematics (6)-(10); :func:`omega_from_rates` -- (6), (7),
-  (10) inverted for the angular velocity;
+  (10) inverted for the angular velocity; :func:`rotor_driven_rhs` -- (6)-(10) driven by rotor rates
+  through (11);
 * :func:`realizability` -- the left side of the realizability condition (13);
 * :func:`inertia_ratio` -- (14); :func:`psi_dot` -- (20);
 * :func:`curve_rhs` -- the curve ODE (28)-(30) with c_u, c_v of (26); :func:`circle` -- the circle
   (35) rotated by gamma (31); :func:`rhs` and :func:`trace` -- (28)-(30) along the figure eight,
   integrated by scipy's DOP853 (an integrator that shares no code with rollplan);
 * :func:`n_step_gain` -- (33)-(34); :func:`shift_36` -- the closed form (36);
+* :func:`rotor_terms` -- omega (18), (19), (13), the rotor rates (11) and the rotors' axial spins
+  along a figure eight, per unit contact arc length, with psi by DOP853 on the printed (28)-(30);
+* :func:`phase_plane_topp` -- the classic time-optimal timing of a path under torque and rate
+  limits by forward/backward integration of the extremals in the phase plane (Bobrow, Dubowsky and
+  Gibson 1985; Shin and McKay 1985; Pfeiffer and Johanni 1987), with the maximum velocity curve by
+  bisection (:func:`torque_mvc`);
+* :func:`contact_point` -- (1); :func:`rolling_18_19` -- (18), (19);
+  :func:`rates_15_16_20` -- (15), (16), (20) for any contact path;
+  :func:`chart_rates` -- (24)-(27);
+  :func:`integrate_contact_path` -- (15), (16), (20) along a contact path given in time, by DOP853;
+  :func:`great_circle_path`, :func:`circle_path`, :func:`chart_path` -- contact paths typed here;
+  :func:`polar_contact` -- (u_o, v_o) of a point given by polar angle and direction;
+  :func:`composed_final` -- a composed motion integrated along its pieces (read from their curve names and
+  parameters only); :func:`replay` -- (15), (16), (20) along a sampled contact path alone;
 * :func:`wrap` -- an angle reduced to (-pi, pi]; :func:`rotate` -- a plane vector turned;
   :func:`two_pi_fraction` -- 2 pi as an exact fraction to many digits (Chudnovsky's series in
   integer arithmetic).
@@ -118,6 +133,24 @@ def omega_from_rates(x, xdot, radius=1.0):
     return np.column_stack([wx, wy, -xdot[:, 2] - roll * np.tan(v_o)])
 
 
+def rotor_driven_rhs(j_xx, j_zz, j_r, radius, rates):
+    """Right side ``f(t, x)`` of (6)-(10) with omega from the momentum integral (11), for scipy's solve_ivp.
+
+    ``rates(t) -> (phi_1_dot, phi_2_dot)``; the state x in rollplan's order (u_a, v_a, psi, u_o, v_o);
+    (11) solved for omega with the orientation (2) composed from elementary rotations.
+    """
+    jc = np.array([j_xx, j_xx, j_zz])
+
+    def f(t, x):
+        psi, u, v = x[2], x[3], x[4]
+        rot = orientation(u, v, psi)
+        r1, r2 = rates(t)
+        w = -j_r * (rot[:, 0] * r1 + rot[:, 1] * r2) / jc
+        return montana(w, u, v, psi, radius)
+
+    return f
+
+
 def realizability(n3, omega, k):
     """Left side of (13) divided by Jzz: ``k (n3x wx + n3y wy) + n3z wz`` (arrays (..., 3))."""
     n3, w = np.asarray(n3, float), np.asarray(omega, float)
@@ -199,3 +232,281 @@ def shift_36(a):
     a = np.asarray(a, float)
     c = np.sqrt(1 - a * a)
     return 4 * a / c * np.sin(np.pi * c)
+
+
+# ----------------------------------------------------------------------------- rotors along a figure eight
+
+
+def rotor_terms_per_phi(r, side, gamma, k, jxx, jzz, jr, phi, psi):
+    """omega, rotor rates and axial spins ``n_i . omega + phi_i_dot`` per unit phi_dot at one point of a leaf.
+
+    The leaf is the circle (35) of radius r on ``side`` turned by gamma (31); contact coordinates
+    (24)-(25), their rates (26)-(27), omega_x, omega_y (18)-(19), omega_z from (13), the rotor rates
+    from (11) premultiplied by n_1, n_2 (units of R).
+    """
+    (x, y, z), ct = circle(r, phi, side, gamma)
+    cv = np.sqrt(1 - y * y)
+    u, v = np.arctan2(-x / cv, -z / cv), np.arcsin(y)
+    c_u = np.array([z, 0.0, -x])
+    c_v = np.array([-x * y / cv, cv, -y * z / cv])
+    du, dv = c_u @ ct / cv**2, c_v @ ct
+    wx = -du * np.cos(v) * np.sin(psi) - dv * np.cos(psi)
+    wy = -du * np.cos(v) * np.cos(psi) + dv * np.sin(psi)
+    n1, n2, n3 = axes(u, v, psi)
+    w = np.array([wx, wy, -k * (n3[0] * wx + n3[1] * wy) / n3[2]])
+    jw = np.array([jxx, jxx, jzz]) * w
+    g = -np.array([n1 @ jw, n2 @ jw]) / jr
+    return w, g, np.array([n1 @ w, n2 @ w]) + g
+
+
+def rotor_terms(a, b, gamma, k, jxx, jzz, jr, steps, s_values, side="left"):
+    """omega, rotor rates and axial spins per unit s' at contact arc lengths s of n figure eights (a, b).
+
+    Leaf j (circle a on +y for even j, b on -y for odd j) runs over ``s = S_j + r_j phi``; psi comes
+    from DOP853 on the printed (28)-(30). At a pole ``side`` takes the leaf that ends (left) or
+    starts (right) there. Returns arrays (N, 3), (N, 2), (N, 2).
+    """
+    radii = [a if j % 2 == 0 else b for j in range(2 * steps)]
+    starts = np.concatenate([[0.0], np.cumsum(2 * np.pi * np.array(radii))])
+    ends = [np.zeros(3)]
+    for j, r in enumerate(radii):
+        ends.append(leaf_end(r, 1.0 if j % 2 == 0 else -1.0, k, gamma, ends[-1]))
+    out = ([], [], [])
+    for s in np.atleast_1d(s_values):
+        j = int(np.searchsorted(starts[1:-1], s, side=side))
+        phi, sign = (s - starts[j]) / radii[j], (1.0 if j % 2 == 0 else -1.0)
+        x = ends[j]
+        if phi > 0:
+            x = solve_ivp(rhs, (0.0, phi), x, method="DOP853", rtol=1e-13, atol=1e-14,
+                          args=(radii[j], sign, k, gamma)).y[:, -1]
+        for acc, val in zip(out, rotor_terms_per_phi(radii[j], sign, gamma, k, jxx, jzz, jr, phi, x[2])):
+            acc.append(val / radii[j])
+    return tuple(np.array(v) for v in out)
+
+
+# ----------------------------------------------------------------------------- time-optimal timing (phase plane)
+
+
+def accel_bounds(A, B, x, tau):
+    """``[alpha, beta]``: the s'' allowed by ``|A_i s'' + B_i x| <= tau`` for every row i at one point.
+
+    ``A``, ``B`` (m,); rows with ``A_i = 0`` do not bound s''. Empty (alpha > beta) above the torque
+    part of the maximum velocity curve.
+    """
+    lo, hi = -np.inf, np.inf
+    for ai, bi in zip(A, B):
+        if ai != 0.0:
+            low, high = sorted(((-tau - bi * x) / ai, (tau - bi * x) / ai))
+            lo, hi = max(lo, low), min(hi, high)
+    return lo, hi
+
+
+def torque_mvc(A, B, tau, top=1e12, iterations=120):
+    """Largest x = s'^2 at which some s'' meets every torque row, by bisection (A, B: (N, m)); inf if > top.
+
+    The feasible x form an interval [0, x_max] (the set {(u, x)} is convex and holds (0, 0)).
+    """
+    A, B = np.asarray(A, float), np.asarray(B, float)
+
+    def feasible(x):
+        xc = x[:, None]
+        nz = A != 0
+        safe = np.where(nz, A, 1.0)
+        l1, l2 = (-tau - B * xc) / safe, (tau - B * xc) / safe
+        lo = np.where(nz, np.minimum(l1, l2), -np.inf).max(axis=1)
+        hi = np.where(nz, np.maximum(l1, l2), np.inf).min(axis=1)
+        alone = np.where(~nz, np.abs(B) * xc <= tau, True).all(axis=1)
+        return (lo <= hi) & alone
+
+    n = A.shape[0]
+    lo, hi = np.zeros(n), np.full(n, top)
+    unbounded = feasible(hi)
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        ok = feasible(mid)
+        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+    return np.where(unbounded, np.inf, lo)
+
+
+def phase_plane_topp(grid, max_rate, max_torque):
+    """Time-optimal rest-to-rest timing of a path by extremal integration in the phase plane (s, x = s'^2).
+
+    The classic numerical-integration method in its limit-curve form: the backward
+    maximum-deceleration extremal ``dx/ds = 2 alpha`` from (L, 0), clipped to the maximum velocity
+    curve (MVC), gives the limit curve K (the largest x from which the end, and every rest point on
+    the way, can be reached); it leaves the MVC by itself at the tangent, singular and jump points, so
+    no switch-point search is needed. Then the forward maximum-acceleration extremal
+    ``dx/ds = 2 beta`` from (0, 0), clipped to K. Heun steps on the nodes, with the one-sided
+    coefficients at the joints; no LP, no NLP.
+
+    Parameters
+    ----------
+    grid
+        Any object with ``s`` (N,), ``G_left``, ``G_right``, ``A_left``, ``A_right``, ``B_left``,
+        ``B_right`` (N, m) and ``corners`` (node indices where the motion must be at rest).
+    max_rate, max_torque : float or None
+
+    Returns
+    -------
+    dict
+        ``s``, ``x`` (the profile), ``K``, ``mvc``, ``duration`` (``sum 2 ds / (sqrt(x_k) + sqrt(x_k+1))``).
+    """
+    s = np.asarray(grid.s, float)
+    n = s.size
+    h = np.diff(s)
+    tau = max_torque
+    mvc = np.full(n, np.inf)
+    if max_rate is not None:
+        g = np.maximum(np.abs(grid.G_left).max(axis=1), np.abs(grid.G_right).max(axis=1))
+        mvc = np.minimum(mvc, np.where(g > 0, (max_rate / np.where(g > 0, g, 1.0)) ** 2, np.inf))
+    tq_l, tq_r = torque_mvc(grid.A_left, grid.B_left, tau), torque_mvc(grid.A_right, grid.B_right, tau)
+    mvc = np.minimum.reduce([mvc, tq_l, tq_r])
+    mvc[list(grid.corners)] = 0.0
+    mvc[0] = mvc[-1] = 0.0
+
+    def bound(A, B, x, cap, upper):
+        lo, hi = accel_bounds(A, B, min(x, cap), tau)
+        if lo > hi:  # rounding just above the torque MVC: both ends are the touching point
+            lo = hi = 0.5 * (lo + hi)
+        return hi if upper else lo
+
+    AL, AR, BL, BR = grid.A_left, grid.A_right, grid.B_left, grid.B_right
+    K = np.zeros(n)
+    for k in range(n - 2, -1, -1):
+        a0 = bound(AL[k + 1], BL[k + 1], K[k + 1], tq_l[k + 1], upper=False)
+        xp = min(max(K[k + 1] - 2 * h[k] * a0, 0.0), mvc[k])
+        a1 = bound(AR[k], BR[k], xp, tq_r[k], upper=False)
+        K[k] = min(max(K[k + 1] - h[k] * (a0 + a1), 0.0), mvc[k])
+    x = np.zeros(n)
+    for k in range(n - 1):
+        b0 = bound(AR[k], BR[k], x[k], tq_r[k], upper=True)
+        xp = min(max(x[k] + 2 * h[k] * b0, 0.0), K[k + 1])
+        b1 = bound(AL[k + 1], BL[k + 1], xp, tq_l[k + 1], upper=True)
+        x[k + 1] = min(max(x[k] + h[k] * (b0 + b1), 0.0), K[k + 1])
+    r = np.sqrt(x)
+    den = r[:-1] + r[1:]
+    duration = float(np.sum(2 * h / den)) if np.all(den > 0) else np.inf
+    return {"s": s, "x": x, "K": K, "mvc": mvc, "duration": duration}
+
+
+# ----------------------------------------------------------------------------- any contact path: (15), (16), (20)
+
+
+def rates_15_16_20(psi, u_o, v_o, du_o, dv_o, k, radius=1.0):
+    """(15), (16), (20) as printed: rates of (u_a, v_a, psi) for the contact rates (du_o, dv_o)."""
+    return np.array([-radius * np.cos(psi) * np.cos(v_o) * du_o + radius * np.sin(psi) * dv_o,
+                     radius * np.sin(psi) * np.cos(v_o) * du_o + radius * np.cos(psi) * dv_o,
+                     psi_dot(u_o, v_o, du_o, dv_o, k)])
+
+
+def rolling_18_19(u_o, v_o, psi, du_o, dv_o):
+    """(18), (19) as printed: the rolling components (omega_x, omega_y) from the contact rates."""
+    return (-du_o * np.cos(v_o) * np.sin(psi) - dv_o * np.cos(psi),
+            -du_o * np.cos(v_o) * np.cos(psi) + dv_o * np.sin(psi))
+
+
+def contact_point(u_o, v_o):
+    """(1) on the unit sphere: ``(-sin u cos v, sin v, -cos u cos v)``, shape (..., 3)."""
+    return np.stack([-np.sin(u_o) * np.cos(v_o), np.sin(v_o), -np.cos(u_o) * np.cos(v_o)], axis=-1)
+
+
+def chart_rates(point, dpoint):
+    """``(u_o, v_o, u_o', v_o')`` of a point moving on the unit sphere at ``dpoint``: (24)-(27) as printed."""
+    x, y, z = point
+    s = np.sqrt(1 - y * y)
+    v, u = np.arcsin(y), np.arctan2(-x / s, -z / s)                            # (24), (25)
+    c_u, c_v = np.array([z, 0.0, -x]), np.array([-x * y / s, s, -y * z / s])   # (26)
+    return u, v, c_u @ dpoint / (s * s), c_v @ dpoint                          # (27)
+
+
+def integrate_contact_path(path, x0, t_span, k, t_eval=None, rtol=1e-13, atol=1e-14):
+    """(15), (16), (20) integrated by DOP853 from ``x0 = (u_a, v_a, psi)`` along ``path(t) -> (u, v, u', v')``.
+
+    Returns scipy's solution object (``.y`` of shape (3, len(t_eval)))."""
+    sol = solve_ivp(lambda t, x: rates_15_16_20(x[2], *path(t), k), t_span, np.asarray(x0, float),
+                    method="DOP853", rtol=rtol, atol=atol, t_eval=t_eval)
+    assert sol.success, sol.message
+    return sol
+
+
+def great_circle_path(beta, sigma_0, sigma_1):
+    """The great circle through the south pole in the direction beta, polar angle from sigma_0 to sigma_1
+    as t runs over [0, 1]: a contact path for :func:`integrate_contact_path`."""
+    def path(t):
+        ang = sigma_0 + (sigma_1 - sigma_0) * t
+        c = np.array([np.sin(ang) * np.cos(beta), np.sin(ang) * np.sin(beta), -np.cos(ang)])
+        dc = (sigma_1 - sigma_0) * np.array([np.cos(ang) * np.cos(beta), np.cos(ang) * np.sin(beta), np.sin(ang)])
+        return chart_rates(c, dc)
+
+    return path
+
+
+def circle_path(a, side, gamma):
+    """The circle (35) of radius a (side +1: +y, -1: -y) rotated by gamma (31), t in [0, 2 pi]."""
+    return lambda t: chart_rates(*circle(a, t, side, gamma))
+
+
+def chart_path(u0, v0, cu, cv):
+    """A smooth path in the chart, t in [0, 1]: ``u = u0 + sum cu_j sin(2 pi j t)``,
+    ``v = v0 + sum cv_j (1 - cos(2 pi j t))``."""
+    cu, cv = np.asarray(cu, float), np.asarray(cv, float)
+    j = np.arange(1, cu.size + 1)
+
+    def path(t):
+        w = 2 * np.pi * j * t
+        return (u0 + cu @ np.sin(w), v0 + cv @ (1 - np.cos(w)),
+                cu @ (2 * np.pi * j * np.cos(w)), cv @ (2 * np.pi * j * np.sin(w)))
+
+    return path
+
+
+def polar_contact(sigma, beta):
+    """(u_o, v_o) of the point at polar angle sigma from the south pole in the direction beta, by inverting (1)."""
+    c = np.array([np.sin(sigma) * np.cos(beta), np.sin(sigma) * np.sin(beta), -np.cos(sigma)])
+    return float(np.arctan2(-c[0], -c[2])), float(np.arcsin(c[1]))
+
+
+def piece_path(piece):
+    """The contact path of a piece of a composed plan and its parameter span, typed here from the piece's
+    ``curve`` name, ``index``, ``params`` and ``gamma`` alone: the great circle (``"great_circle"``,
+    polar angle from params[0] to params[1], direction gamma) or a circle (35) of the figure eight
+    (``"figure_eight"``: radius params[index], side +y for index 0, -y for 1) rotated by gamma (31)."""
+    if piece.curve == "great_circle":
+        return great_circle_path(piece.gamma, *piece.params), 1.0
+    assert piece.curve == "figure_eight", piece.curve
+    return circle_path(piece.params[piece.index], 1.0 if piece.index == 0 else -1.0, piece.gamma), 2 * np.pi
+
+
+def composed_final(pieces, start, k):
+    """The end state (5,) of a composed motion from ``start`` (5,), units of R: (15), (16), (20) by DOP853
+    along every piece (:func:`piece_path`), the contact point of the last piece's end."""
+    x, contact = np.asarray(start, float)[:3], np.asarray(start, float)[3:]
+    for piece in pieces:
+        path, span = piece_path(piece)
+        x = integrate_contact_path(path, x, (0.0, span), k).y[:, -1]
+        contact = np.array(path(span)[:2])
+    return np.concatenate([x, contact])
+
+
+def replay(u_o, v_o, segment, x0, k):
+    """(u_a, v_a, psi) at every sample of a sampled contact path, from (15), (16), (20) by DOP853 along
+    cubic splines of the sampled (u_o, v_o) alone, one spline per segment (from the last sample of the
+    one before), parametrized by the chord length of the contact points (1): shape (N, 3)."""
+    from scipy.interpolate import CubicSpline
+
+    u, v, seg = (np.asarray(a) for a in (u_o, v_o, segment))
+    out = np.zeros((u.size, 3))
+    out[0] = x = np.asarray(x0, float)
+    for j in range(int(seg.max()) + 1):
+        idx = np.flatnonzero(seg == j)
+        idx = np.r_[idx[0] - 1, idx[idx > 0]] if idx[0] > 0 else idx
+        if idx.size < 2:
+            continue
+        c = contact_point(u[idx], v[idx])
+        tau = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))]
+        su, sv = CubicSpline(tau, u[idx]), CubicSpline(tau, v[idx])
+        sol = integrate_contact_path(lambda t, su=su, sv=sv: (su(t), sv(t), su(t, 1), sv(t, 1)), x, (0.0, tau[-1]),
+                                     k, tau, rtol=1e-10, atol=1e-12)
+        out[idx[1:]] = sol.y[:, 1:].T
+        x = sol.y[:, -1]
+    return out

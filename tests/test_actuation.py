@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 import rollplan
 from rollplan import InputError
 from rollplan.execution.actuation import MIN_SAMPLES_PER_LEAF, actuate
-from rollplan.execution.timing import rest_to_rest
+from rollplan.execution.timing import MIN_JERK
 from rollplan.plots.motion import plot_motion
 
 import references
@@ -56,13 +56,19 @@ def test_paper_n1_typo():
     assert abs(n1[2] - references.printed_n1z(u, v)) > 0.5
 
 
-def test_rest_to_rest_profile_is_minimum_jerk():
+def test_rest_to_rest_profile_is_minimum_jerk(motion, asym_plan):
+    """Each half-step's arc length follows 10 tau^3 - 15 tau^4 + 6 tau^5 (the minimum-jerk rest-to-rest law)."""
     tau = np.linspace(0, 1, 11)
-    s, ds, dds = (np.array(x).ravel() for x in rest_to_rest().map(11)(tau[None, :]))
-    np.testing.assert_allclose(s, 10 * tau**3 - 15 * tau**4 + 6 * tau**5, atol=1e-15)
-    np.testing.assert_allclose(ds, 30 * tau**2 * (1 - tau) ** 2, atol=1e-13)
-    np.testing.assert_allclose(dds, 60 * tau * (1 - tau) * (1 - 2 * tau), atol=1e-13)
-    assert s[0] == 0 and s[-1] == 1 and ds[0] == ds[-1] == 0 and dds[0] == dds[-1] == 0
+    poly = np.polynomial.Polynomial(MIN_JERK)
+    np.testing.assert_allclose(poly(tau), 10 * tau**3 - 15 * tau**4 + 6 * tau**5, atol=1e-15)
+    np.testing.assert_allclose(poly.deriv()(tau), 30 * tau**2 * (1 - tau) ** 2, atol=1e-13)
+    np.testing.assert_allclose(poly.deriv(2)(tau), 60 * tau * (1 - tau) * (1 - 2 * tau), atol=1e-13)
+    # the motion's first half-step (2 s of 8): s = 2 pi a_R s(tau), closed form in time
+    first = motion.time <= 2.0
+    tau = motion.time[first] / 2.0
+    leaf = 2 * np.pi * asym_plan.a / asym_plan.radius
+    np.testing.assert_allclose(motion.s[first], leaf * (10 * tau**3 - 15 * tau**4 + 6 * tau**5), atol=1e-13)
+    np.testing.assert_allclose(motion.s_dot[first], leaf * 30 * tau**2 * (1 - tau) ** 2 / 2.0, atol=1e-12)
 
 
 def test_sampling(motion, asym_plan):

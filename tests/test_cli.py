@@ -157,9 +157,10 @@ def test_cli_rejects_steps_and_k_outside_the_rules(capsys, argv, needle):
     assert code == 2 and needle in err and one_line(err)
 
 
-def test_cli_target_at_the_start_point_exits_3(capsys):
-    code, _, err = run(capsys, "plan", "--to", "0", "0", "--psi", "1", "--k", "2.5")
-    assert code == 3 and one_line(err)
+def test_cli_turn_in_place_is_planned(capsys):
+    """``--to 0 0 --psi 1`` (once refused): a turn in place by a pair of circles, certified."""
+    code, out, _ = run(capsys, "plan", "--to", "0", "0", "--psi", "1", "--k", "2.5")
+    assert code == 0 and "mode          turn" in out and "residual" in out
 
 
 @pytest.mark.parametrize("name,ext", [("x.unknownext", "unknownext"), ("x.json", "json")])
@@ -476,3 +477,46 @@ def test_summaries_have_six_significant_digits(capsys):
     _, out, _ = run(capsys, "plan")
     for number in re.findall(r"= (-?[0-9.]+(?:e[-+][0-9]+)?) (?:R|rad)\b", out):
         assert len(number.split("e")[0].replace("-", "").replace(".", "").lstrip("0")) <= 6, number
+
+
+def test_route_and_composed_plan_follow_the_conventions(tmp_path, capsys):
+    """The commands of composed plans (plan --from/--contact, route) keep the conventions: --json - on stdout
+    with version and units, the summary on stderr with every length in the unit in use (named), 6 digits and
+    the norm of the residual named."""
+    path = tmp_path / "w.csv"
+    path.write_text("u_a,v_a,psi,u_o,v_o\n0,0,0,0.1,0\n0.6,0.2,0.5,,\n")
+    code, out, err = run(capsys, "route", str(path), "--k", "2.5", "--json", "-")
+    assert code == 0
+    d = json.loads(out)
+    import rollplan
+
+    assert d["version"] == rollplan.__version__ and d["units"]["length"] == "R" and len(d["legs"]) == 1
+    assert "path length" in err and "Euclidean norm" in err and "wrote" not in err
+    assert re.search(r"path length   \S+ R in \d+ pieces", err)
+    code, out, err = run(capsys, "plan", "--from", "0.01", "-0.02", "0.4", "-0.5", "0.6", "--to", "0.05", "0.07",
+                         "--radius", "0.1", "--json", "-")
+    assert code == 0 and json.loads(out)["units"]["length"] == "m"
+    start = re.search(r"from \(u_a, v_a, psi, u_o, v_o\) = \((.*?)\) to", err).group(1).split(", ")
+    assert start == ["0.01 m", "-0.02 m", "0.4 rad", "-0.5 rad", "0.6 rad"]
+    numbers = re.findall(r"= (-?\d[\d.e+-]*) m", err)
+    assert numbers and all(len(n.lstrip("-").replace(".", "").split("e")[0].lstrip("0")) <= 6 for n in numbers)
+
+
+def test_composed_figure_colours_follow_the_convention():
+    """In a composed plan's figure the first leaf after an approach roll is the 1st half-step (red), the rolls
+    have their own colours and every colour is named in a legend."""
+    from rollplan.planners.geometric import plan
+    from rollplan.plots.colors import LEAF, LEAF_LABELS, PIECE
+    from rollplan.plots.common import segments
+    from rollplan.plots.composed import piece_runs, plot_composed
+
+    p = plan((0.05, 0.07, 0.8, 0.0, 0.0), 1, k=2.5, start=(0.0, 0.0, 0.0, 0.3, -0.2))
+    traj = p.sample(800)
+    runs = piece_runs(p, traj)
+    kinds = [p.pieces[j].kind for _, _, j in segments(traj)]
+    assert kinds[0] == "approach" and runs[0][2] == PIECE["approach"]
+    first_leaf = kinds.index("leaf")
+    assert runs[first_leaf][2:] == (LEAF[0], LEAF_LABELS[0]) and runs[first_leaf + 1][2:] == (LEAF[1], LEAF_LABELS[1])
+    fig = plot_composed(p, traj)
+    legend = {t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()}
+    assert {LEAF_LABELS[0], LEAF_LABELS[1], "approach roll (to the pole)", "start", "target"} <= legend

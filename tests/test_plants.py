@@ -41,16 +41,7 @@ def test_constant_rotor_rate_closed_form():
 def _numpy_rhs(robot, spline):
     """(6)-(10) with omega from (11): the printed equations and rotation matrices composed in numpy
     (``references``; independent of rollplan.core.model). State order (u_a, v_a, psi, u_o, v_o)."""
-    jc = np.array([robot.j_xx, robot.j_xx, robot.j_zz])
-
-    def f(t, x):
-        psi, u, v = x[2], x[3], x[4]
-        rot = references.orientation(u, v, psi)
-        r1, r2 = spline(t)
-        w = -robot.rotor_inertia_axial * (rot[:, 0] * r1 + rot[:, 1] * r2) / jc
-        return references.montana(w, u, v, psi, robot.radius)
-
-    return f
+    return references.rotor_driven_rhs(robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, robot.radius, spline)
 
 
 def test_against_scipy_dop853():

@@ -195,7 +195,9 @@ def test_arrival_error_wraps_psi_and_scales_lengths(goal, delta, turns, radius):
     want = [delta[0] / radius, delta[1] / radius, references.wrap(final[2] - goal[2]), delta[3], delta[4]]
     assert np.allclose(err, want, atol=1e-12 * (1 + abs(turns) + max(map(abs, goal))))
     assert arrival_residual(final, goal, radius) == pytest.approx(np.linalg.norm(err), rel=1e-15)
-    assert Problem(goal, k=1, radius=radius).residual(final) == pytest.approx(np.linalg.norm(err), rel=1e-15)
+    inside = np.r_[goal[:3], 0.0, 0.0]   # a Problem's contact points lie in its region (problem.check_contact)
+    moved = final - np.r_[0.0, 0.0, 0.0, goal[3:]]
+    assert Problem(inside, k=1, radius=radius).residual(moved) == pytest.approx(np.linalg.norm(err), rel=1e-15)
 
 
 def test_arrival_error_psi_is_an_angle():

@@ -45,6 +45,18 @@ def test_good_file(tmp_path):
     assert load_robot(write(tmp_path, GOOD)) == Robot(**GOOD)
 
 
+def test_motor_limits_are_optional(tmp_path):
+    """max_rotor_rate and max_rotor_torque: absent means unlimited (None); given, they are kept."""
+    rob = load_robot(write(tmp_path, GOOD))
+    assert rob.max_rotor_rate is None and rob.max_rotor_torque is None
+    assert "max_rotor_rate" not in rob.as_dict()
+    limited = load_robot(write(tmp_path, {**GOOD, "max_rotor_rate": 250, "max_rotor_torque": 0.04}))
+    assert limited == Robot(**GOOD, max_rotor_rate=250, max_rotor_torque=0.04)
+    assert limited.k == rob.k and limited.as_dict()["max_rotor_torque"] == 0.04
+    only_rate = load_robot(write(tmp_path, {**GOOD, "max_rotor_rate": 250.0}))
+    assert only_rate.max_rotor_torque is None
+
+
 @pytest.mark.parametrize("change, key", [
     ({"radius": None}, "radius"),                       # missing
     ({"colour": "'red'"}, "colour"),                    # unknown
@@ -55,6 +67,13 @@ def test_good_file(tmp_path):
     ({"radius": "true"}, "radius"),                     # not a number
     ({"radius": "'0.1'"}, "radius"),
     ({"mass_shell": 3.0}, "mass_shell"),                # heavier than the whole robot
+    ({"max_rotor_rate": 0}, "max_rotor_rate"),          # the optional limits: finite numbers > 0
+    ({"max_rotor_torque": -0.05}, "max_rotor_torque"),
+    ({"max_rotor_torque": "nan"}, "max_rotor_torque"),
+    ({"max_rotor_rate": "inf"}, "max_rotor_rate"),
+    ({"max_rotor_rate": "'fast'"}, "max_rotor_rate"),
+    ({"max_rotor_torque": "false"}, "max_rotor_torque"),
+    ({"max_torque": 0.05}, "max_torque"),               # unknown (the key is max_rotor_torque)
 ])
 def test_bad_file_names_the_key(tmp_path, capsys, change, key):
     entries = {**GOOD, **change}

@@ -1,10 +1,13 @@
-"""Closed spherical curves through the south pole, the inputs of the planner.
+"""Spherical curves, the inputs of the planners: closed curves through the south pole, and arcs.
 
-A :class:`Curve` is a closed, piecewise-smooth curve on the unit sphere, given
-as CasADi expressions. It is traced piece by piece; each piece is smooth on
-``phi in [0, 2*pi]`` and starts and ends at the south pole ``(0, 0, -1)``.
-The planner's curve is the spherical figure eight of two circles (35),
-rotated about OZ by gamma (31); any other curve can be plugged in the same way.
+A :class:`Curve` is a piecewise-smooth curve on the unit sphere, given as
+CasADi expressions. It is traced piece by piece; each piece is smooth on
+``phi in [0, 2*pi]``. The planner's curve is the spherical figure eight of two
+circles (35), rotated about OZ by gamma (31), each of whose pieces starts and
+ends at the south pole ``(0, 0, -1)``; any other curve can be plugged in the
+same way. :func:`great_circle` is the arc of a great circle through the pole,
+the approach and departure of the full-reconfiguration planner (a piece that
+starts or ends off the pole).
 
 The circle (35) of radius ``a`` through the south pole reaches the equator
 ``z = 0`` of the body frame, where (30) is singular (``tan u_o`` blows up), at
@@ -23,7 +26,7 @@ import numpy as np
 
 from . import model
 
-__all__ = ["A_MAX", "Piece", "Curve", "circle_point", "figure_eight"]
+__all__ = ["A_MAX", "Piece", "Curve", "circle_point", "figure_eight", "great_circle_point", "great_circle"]
 
 #: Largest admissible circle radius, in units of R (R/sqrt(2) ~ 0.7071 is singular).
 A_MAX = 0.69
@@ -41,15 +44,19 @@ class Piece:
     breaks : tuple of float
         Panel boundaries in ``[0, 2 pi]`` for the spectral integrator; grade them
         towards places where the right side of (30) is steep.
+    length : callable ``params -> float``, optional
+        Length of the piece on the unit sphere (= of the contact path on the
+        plane, (15)-(16)) for numeric parameters.
     """
 
     point: Callable
     breaks: tuple = tuple(np.linspace(0.0, 2.0 * np.pi, 5))
+    length: Callable | None = None
 
 
 @dataclass(frozen=True)
 class Curve:
-    """A closed curve through the south pole, traced as a sequence of pieces."""
+    """A curve on the unit sphere (closed through the south pole, or an arc), traced as a sequence of pieces."""
 
     pieces: tuple
     param_names: tuple
@@ -83,10 +90,32 @@ def figure_eight() -> Curve:
     """Spherical figure eight: circle ``a`` on the +y side, then circle ``b`` on the -y side."""
     return Curve(
         pieces=(
-            Piece(lambda phi, p: circle_point(p[0], phi, 1.0), _CIRCLE_BREAKS),
-            Piece(lambda phi, p: circle_point(p[1], phi, -1.0), _CIRCLE_BREAKS),
+            Piece(lambda phi, p: circle_point(p[0], phi, 1.0), _CIRCLE_BREAKS, lambda p: 2.0 * np.pi * p[0]),
+            Piece(lambda phi, p: circle_point(p[1], phi, -1.0), _CIRCLE_BREAKS, lambda p: 2.0 * np.pi * p[1]),
         ),
         param_names=("a", "b"),
+    )
+
+
+def great_circle_point(angle):
+    """Point of the great circle through the south pole in the x-z plane, ``angle`` [rad] from the pole
+    towards +x: ``(sin(angle), 0, -cos(angle))`` on the unit sphere (rotate it by gamma about OZ, (31),
+    for another direction)."""
+    return ca.vertcat(ca.sin(angle), 0, -ca.cos(angle))
+
+
+def great_circle() -> Curve:
+    """Arc of a great circle through the south pole: one piece, parameters ``(sigma_0, sigma_1)``.
+
+    The polar angle of the point runs linearly from ``sigma_0`` at ``phi = 0``
+    to ``sigma_1`` at ``phi = 2 pi`` (the arc is traced at constant speed);
+    rotated by gamma about OZ (31), the arc leaves the pole in the direction
+    gamma of the body x-y plane. Its length is ``|sigma_1 - sigma_0|``.
+    """
+    return Curve(
+        pieces=(Piece(lambda phi, p: great_circle_point(p[0] + (p[1] - p[0]) * phi / (2.0 * np.pi)),
+                      length=lambda p: abs(p[1] - p[0])),),
+        param_names=("sigma_0", "sigma_1"),
     )
 
 

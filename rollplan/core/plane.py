@@ -19,6 +19,32 @@ started at heading ``psi0`` makes the shift ``D`` of a step from zero turned by
 
 which is the paper's (33) read the right way up (the printed first fraction is
 upside down), with the limit ``H_n = n h`` where ``sin(eta / 2) = 0`` (34).
+
+The composition law (:func:`compose`, :func:`inverse`, :func:`relative`). The
+n-step law is a case of a rule that holds along *any* contact path, on or off
+the south pole. Write ``p = (u_a, v_a)`` (units of R) and
+``w(t) = (-cos(v_o) u_o', v_o')``; then (15)-(16) read ``p' = Rot(-psi) w(t)``,
+and the right side of (20) has neither ``p`` nor ``psi``. Let ``(p_c, Psi)`` be
+the motion along a contact path ``c`` from the zero plane state ``p = 0,
+psi = 0`` (the contact point at the path's own start). From ``(p0, psi0)`` the
+motion along the same path is
+
+    p(t) = p0 + Rot(-psi0) p_c(t),     psi(t) = psi0 + Psi(t):             (C)
+
+both sides agree at t = 0, and the right side solves (15), (16), (20), since
+``Rot(-psi0) Rot(-Psi) w = Rot(-psi) w``; the solution is unique. So a plane
+state ``g = (p, psi)`` acts on zero-start motions by
+
+    g * h = (p_g + Rot(-psi_g) p_h,  psi_g + psi_h),
+
+the product of the group SE(2) for the pose ``(p, -psi)`` (at the pole the
+orientation (2) is ``Rz(-psi)``, so ``(p, -psi)`` is the planar pose of the
+ball). Consequences: the end state of a path made of consecutive pieces is the
+product of the pieces' zero-start end states; a path traced backwards from its
+end state returns to zero, so its element is the inverse (the right side of
+(15), (16), (20) is linear in the contact rates); the contact coordinates
+``(u_o, v_o)`` are not acted on, they are the path. ``tests/test_plane.py``
+checks (C) against a direct integration of the printed equations.
 """
 
 from __future__ import annotations
@@ -28,7 +54,7 @@ from decimal import Decimal, localcontext
 
 import numpy as np
 
-__all__ = ["TWO_PI", "wrap", "wrap_exact", "rotate", "n_step_sum", "n_step_gain"]
+__all__ = ["TWO_PI", "wrap", "wrap_exact", "rotate", "n_step_sum", "n_step_gain", "compose", "inverse", "relative"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -96,3 +122,38 @@ def n_step_gain(eta, steps: int, eps: float = 1e-12):
     num, den = np.sin(steps * eta / 2), np.sin(eta / 2)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(np.abs(den) < eps, float(steps), np.abs(num / den))
+
+
+def compose(g, h) -> np.ndarray:
+    """``g * h`` of the composition law (C) (module docstring): the plane state reached by the motion
+    ``h`` (its end state from zero) started from the plane state ``g``.
+
+    Parameters
+    ----------
+    g : array_like, shape (3,)
+        Plane state ``(u_a, v_a, psi)`` [units of R, rad].
+    h : array_like, shape (3,) or (3, N)
+        End state(s) of motions from zero.
+
+    Returns
+    -------
+    ndarray, shape of ``h``
+        ``(p_g + Rot(-psi_g) p_h, psi_g + psi_h)``; psi is not wrapped.
+    """
+    g, h = np.asarray(g, float), np.asarray(h, float)
+    p = rotate(-g[2], h[:2])
+    if h.ndim == 1:
+        return np.array([g[0] + p[0], g[1] + p[1], g[2] + h[2]])
+    return np.vstack([g[:2, None] + p, g[2] + h[2]])
+
+
+def inverse(g) -> np.ndarray:
+    """``g^-1 = (-Rot(psi_g) p_g, -psi_g)``: the end state, from zero, of the motion ``g`` traced backwards."""
+    g = np.asarray(g, float)
+    p = rotate(g[2], g[:2])
+    return np.array([-p[0], -p[1], -g[2]])
+
+
+def relative(g, h) -> np.ndarray:
+    """``g^-1 * h``: what a motion must do, from zero, to take the plane state ``g`` to ``h``."""
+    return compose(inverse(g), h)

@@ -1,29 +1,30 @@
-"""From path to motors: a time law for a plan, the body's angular velocity, and the rotors' rates, angles and torques.
+"""From path to motors: a plan timed by a law, the body's angular velocity, and the rotors' rates, angles and torques.
 
 Time law
 --------
-A plan traces a closed curve ``n`` times; each trace is two leaves (half-steps),
-each leaf a smooth piece ``c(phi)``, ``phi in [0, 2 pi]`` (see :mod:`rollplan.curves`).
-Every leaf gets the same duration ``T_l = T / (2 n)`` and is traced with the
-rest-to-rest (minimum-jerk) profile
-
-    phi(t) = 2 pi s(tau),   s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5,   tau = (t - t_j) / T_l,
-
-so ``phi_dot`` and ``phi_ddot`` vanish at both ends of every leaf: the robot
-starts from rest, stops at the south pole between leaves, and does not start
-impulsively, as the momentum integral (11) assumes.
+A plan's contact path is run along its path parameter s (the contact arc length,
+:mod:`rollplan.execution.path`) by a timing law of :mod:`rollplan.execution.timing`
+(``min-jerk`` by default: every piece rest-to-rest in ``T / P`` with the
+minimum-jerk profile, as the momentum integral (11) assumes no impulsive start;
+``time-optimal`` and the non-stop laws within the robot's ``max_rotor_rate`` and
+``max_rotor_torque``). The path is that of any plan from its start state: the ``2 n``
+leaves of a pole-to-pole plan, or the pieces of a composed plan or a route
+(approach and departure rolls, figure eights, circles of a turn in place, legs;
+:func:`rollplan.planners.geometric.as_composed`). Every law rests at the start, at
+the goal and at every corner of the contact path (where a roll meets a figure eight,
+or the direction of the figure eights changes between legs or circles): there the
+angular velocity per unit speed jumps, so passing at a speed would need an infinite
+angular acceleration. The empty motion (start = goal) stays at rest for ``T``.
 
 Angular velocity and rotor rates
 --------------------------------
-Along a leaf the contact rates are ``(u_o_dot, v_o_dot) = (du_o/dphi, dv_o/dphi) phi_dot``
-with (u_o, v_o) from (24)-(25); the rolling components of omega are (18)-(19),
-the spin is fixed by the realizability condition (13) (:func:`rollplan.model.realizable_omega`),
-and the rotor rates follow from the momentum integral (11)
-(:func:`rollplan.model.rotor_rates`). Both are ``phi_dot`` times a function
-``w(phi, psi)`` resp. ``g(phi, psi)`` of the geometry only. The state
-``(u_a, v_a, psi)`` and the rotor angles ``phi_i = int phi_i_dot dt`` are
-integrated in time by CVODES with the right side ``phi_dot (x'(phi), g)``,
-where ``x'(phi)`` is the curve ODE (28)-(30) (:func:`rollplan.integrate.piece_rhs`).
+Along the path, omega and the rotor rates are ``s'`` times functions of s alone
+(:class:`~rollplan.execution.path.ContactPath`): the rolling components of omega are
+(18)-(19) with the contact rates of the curve (24)-(27), the spin is fixed by the
+realizability condition (13) (:func:`rollplan.core.model.curve_omega`), and the rotor
+rates follow from the momentum integral (11) (:func:`rollplan.core.model.rotor_rates`).
+The state (u_a, v_a, psi) and the rotor angles ``phi_i = int G_i ds`` are integrated
+along the path by CVODES with the curve ODE (28)-(30): they do not depend on the timing.
 
 Rotor torques (derivation)
 --------------------------
@@ -44,19 +45,36 @@ in the shell, ``dn_i/dt = omega x n_i``, and
     tau_i = d/dt (n_i . H_i) = J_r d/dt (n_i . omega + phi_i_dot),          (T)
 
 the motor torque is the rate of change of the rotor's absolute axial spin
-momentum. The reaction ``-tau_i n_i`` acts on the shell. With
-``omega = phi_dot w`` and ``phi_i_dot = phi_dot g_i``,
-``n_i . omega + phi_i_dot = phi_dot a_i(phi, psi)`` with ``a_i = n_i . w + g_i``, and
+momentum. The reaction ``-tau_i n_i`` acts on the shell. Along the path,
+``n_i . omega + phi_i_dot = s' a_i(s)`` with ``a_i = n_i . W + G_i`` (per unit s'), so
 
-    tau_i = J_r (phi_ddot a_i + phi_dot^2 da_i/dphi),
-    da_i/dphi = d a_i/d phi + (d a_i/d psi) psi'(phi),
+    tau_i = A_i(s) s'' + B_i(s) s'^2,     A_i = J_r a_i,   B_i = J_r da_i/ds,
 
-with ``psi'(phi)`` from (30). The derivatives are taken by CasADi's automatic
-differentiation of the model; no equation is typed twice. ``J_r`` is the
-axial inertia that multiplies ``phi_i_dot`` in (11) (if an axis carries two
-rotors in tandem, tau_i is the sum of their motor torques).
+with ``da_i/ds`` the total derivative along the path (psi' from (30)). The derivatives
+are taken by CasADi's automatic differentiation of the model; no equation is typed
+twice. ``J_r`` is the axial inertia that multiplies ``phi_i_dot`` in (11) (if an axis
+carries two rotors in tandem, tau_i is the sum of their motor torques).
 ``tests/test_actuation.py`` checks (T) against finite differences of the full
 vector ``H_i`` projected on ``n_i``, which does not use the simplification above.
+
+Samples and how to replay them
+------------------------------
+A :class:`Motion` is sampled uniformly in time, at least the law's
+``samples_per_piece`` per piece on average (so that a cubic spline through the rotor rates
+drives the rotor-only simulation onto the target; see
+:mod:`rollplan.execution.timing`). The rotor rates and angles are continuous in
+time. The torques are piecewise continuous: for the non-stop laws they step at
+every smooth joint passed at a speed (the poles of a figure eight) by
+``(B(S_j^+) - B(S_j^-)) s'^2`` (the curvature of the contact path jumps there),
+and the time-optimal torques are bang-bang with steps at the switches and
+piecewise-constant s''. A sample at a joint holds the value of the piece that
+ends there. A plant driven by the torques should interpolate them
+linearly between samples (not by a spline, which rings at the steps); integrated so
+(trapezoid rule), they reproduce the change of the axial momenta
+``J_r (n_i . omega + phi_i_dot)`` between samples to O(h^2) where the torque is
+smooth and O(h x step) across a step, so a torque-driven replay should re-anchor on
+the sampled rates (the momentum integral (11)) rather than integrate torques over a
+whole run.
 
 Units: time [s], angles [rad], rates [rad/s], torques [N m], lengths in the
 robot's unit [m].
@@ -67,95 +85,48 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 
-from ..core import model
-from ..core.curves import figure_eight, rotated_point
-from ..core.integrate import piece_rhs
-from ..errors import InputError, check_range, check_whole
+from ..errors import InputError, check_whole
 from ..problem import State
+from ..result import Trajectory
 from ..robot import Robot
-from .timing import rest_to_rest
+from .limits import Limits
+from .path import ContactPath, plan_pieces
+from .timing import TimeLaw, TimeProfile, get_law
 
-__all__ = ["Motion", "leaf_function", "actuate", "motion_to_dict", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF"]
+__all__ = ["Motion", "actuate", "sample_motion", "samples_per_piece", "DEFAULT_SAMPLES", "MIN_SAMPLES_PER_LEAF",
+           "MAX_SAMPLES"]
 
 log = logging.getLogger(__name__)
 
 #: Default total number of time samples of a motion (at least).
 DEFAULT_SAMPLES = 2000
-#: Least number of samples per leaf: a cubic spline through the rotor rates then drives the
-#: rotor-only simulation to the target within ~1e-8 R (the error falls as h^4; see the tests).
-MIN_SAMPLES_PER_LEAF = 400
-
-
-@lru_cache(maxsize=4)
-def leaf_function(index: int) -> ca.Function:
-    """Geometry of one leaf of the figure eight, per unit ``phi_dot`` (all from :mod:`rollplan.model`).
-
-    ``F(phi, psi, p[2], gamma, k, jxx, jzz, jr) -> (xdot[5], uv[2], w[3], g[2], a[2], da[2], n[3x2])``:
-
-    * ``xdot`` -- d/dphi of (u_a, v_a, psi, rotor angle 1, rotor angle 2); the first three are (28)-(30)
-      (units of R), the last two ``g``;
-    * ``uv`` -- contact coordinates (u_o, v_o), (24)-(25);
-    * ``w`` -- omega / phi_dot, (18), (19), (13);
-    * ``g`` -- rotor rates / phi_dot, (11);
-    * ``a`` -- ``n_i . w + g_i`` (axial spin per phi_dot);
-    * ``da`` -- total derivative of ``a`` along the leaf, d/dphi with psi' from (30);
-    * ``n`` -- rotor axes n_1, n_2 in the plane frame, (3)-(4).
-    """
-    curve = figure_eight()
-    phi, psi, gamma, k = (ca.SX.sym(n) for n in ("phi", "psi", "gamma", "k"))
-    p = ca.SX.sym("p", 2)
-    jxx, jzz, jr = ca.SX.sym("jxx"), ca.SX.sym("jzz"), ca.SX.sym("jr")
-    w, u_o, v_o = model.curve_omega(rotated_point(curve.pieces[index], phi, p, gamma), phi, psi, k)
-    g = model.rotor_rates(w, u_o, v_o, psi, jxx, jzz, jr)
-    rot = model.orientation(u_o, v_o, psi)
-    a = ca.vertcat(ca.dot(rot[:, 0], w), ca.dot(rot[:, 1], w)) + g
-    xdot3 = piece_rhs(curve, index)(phi, ca.vertcat(0, 0, psi), p, k, gamma)
-    da = ca.jacobian(a, phi) + ca.jacobian(a, psi) * xdot3[2]
-    return ca.Function(f"leaf{index}", [phi, psi, p, gamma, k, jxx, jzz, jr],
-                       [ca.vertcat(xdot3, g), ca.vertcat(u_o, v_o), w, g, a, da, rot[:, :2]],
-                       ["phi", "psi", "p", "gamma", "k", "jxx", "jzz", "jr"],
-                       ["xdot", "uv", "w", "g", "a", "da", "n"])
-
-
-@lru_cache(maxsize=4)
-def _leaf_integrator(index: int, samples: int):
-    """CVODES over one leaf in the normalized time tau in [0, 1], outputs at ``samples`` uniform points."""
-    tau = ca.SX.sym("tau")
-    x = ca.SX.sym("x", 5)
-    par = ca.SX.sym("par", 7)  # a, b, gamma, k, jxx, jzz, jr
-    s, ds, _ = rest_to_rest()(tau)
-    # d/dtau x = phi'(tau) xdot(phi) with phi = 2 pi s(tau)
-    xdot = leaf_function(index)(2 * np.pi * s, x[2], par[0:2], par[2], par[3], par[4], par[5], par[6])[0]
-    ode = 2 * np.pi * ds * xdot
-    grid = np.linspace(0.0, 1.0, samples + 1)[1:]
-    opts = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 200000}
-    return ca.integrator(f"leaf_time{index}_{samples}", "cvodes", {"t": tau, "x": x, "p": par, "ode": ode},
-                         0.0, list(grid), opts)
+#: Least number of samples per leaf of the min-jerk law: a cubic spline through the rotor rates then drives
+#: the rotor-only simulation to the target within ~1e-8 R (the error falls as h^4; see the tests).
+MIN_SAMPLES_PER_LEAF = get_law("min-jerk").samples_per_piece
+#: Largest number of samples of a motion.
+MAX_SAMPLES = 1_000_000
 
 
 @dataclass(frozen=True)
 class Motion:
-    """A plan turned into a motion in time, with what the two rotors must do.
+    """A plan's path timed by a law: what the two rotors must do.
 
-    All arrays have ``N`` rows, one per time sample (uniform in time, leaf
-    boundaries included). Lengths in the robot's unit [m].
+    All arrays have ``N`` rows, one per time sample (uniform in time). Lengths in the
+    robot's unit [m].
 
     Attributes
     ----------
     time : ndarray, shape (N,)
         Time [s], from 0 to ``duration``.
-    phi : ndarray, shape (N,)
-        Parameter of the current leaf, ``2 pi s(tau)`` [rad].
-    phi_dot : ndarray, shape (N,)
-        Its rate [rad/s].
-    leaf : ndarray, shape (N,), int
-        Index of the leaf (half-step) the sample belongs to, from 0 (a boundary
-        sample belongs to the leaf that ends there; sample 0 to leaf 0).
+    s, s_dot, s_ddot : ndarray, shape (N,)
+        Path parameter (contact arc length) [R] and its time derivatives [R/s, R/s^2].
+    segment : ndarray, shape (N,), int
+        Piece of the contact path (a leaf, a half-step, of a figure eight; a roll; a circle of a turn)
+        each sample lies on, numbered as in :class:`rollplan.result.Trajectory` and the plan's
+        ``pieces`` (a sample at a joint belongs to the piece that ends there).
     state : ndarray, shape (N, 5)
         Contact coordinates in :class:`~rollplan.problem.State` order (u_a [m], v_a [m], psi, u_o, v_o [rad]).
     omega : ndarray, shape (N, 3)
@@ -165,18 +136,29 @@ class Motion:
     rotor_angles : ndarray, shape (N, 2)
         phi_1, phi_2, zero at t = 0 [rad].
     rotor_torques : ndarray, shape (N, 2)
-        Motor torques about n_1, n_2 (see the module docstring) [N m].
+        Motor torques about n_1, n_2, (T) of the module docstring [N m].
     robot : Robot
+        With its limits (``Limits.of(robot)``).
     duration : float
         Total time T [s].
     goal : State
         The plan's goal [m, rad].
+    timing : str
+        Name of the timing law.
+    minimum_duration : float or None
+        The law's shortest duration within the robot's limits [s]; None without limits (and for the
+        empty motion).
+    profile : TimeProfile
+        ``s(t)`` of the law.
+    path : ContactPath or None
+        The plan's path with the robot's rotor coefficients (None for the empty motion).
     """
 
     time: np.ndarray
-    phi: np.ndarray
-    phi_dot: np.ndarray
-    leaf: np.ndarray
+    s: np.ndarray
+    s_dot: np.ndarray
+    s_ddot: np.ndarray
+    segment: np.ndarray
     state: np.ndarray
     omega: np.ndarray
     rotor_rates: np.ndarray
@@ -185,101 +167,145 @@ class Motion:
     robot: Robot
     duration: float
     goal: State
+    timing: str
+    minimum_duration: float | None
+    profile: TimeProfile
+    path: ContactPath | None
+
+    @property
+    def limits(self) -> Limits:
+        return Limits.of(self.robot)
 
     @property
     def rest_indices(self) -> np.ndarray:
-        """Indices of the rest points: t = 0 and the end of every leaf."""
-        return np.concatenate([[0], np.nonzero(np.diff(self.leaf) != 0)[0], [self.time.size - 1]])
+        """Indices of the samples at rest (``s' = 0``): t = 0, t = T, and every stop on the way."""
+        return np.nonzero(self.s_dot <= 1e-12 * max(float(self.s_dot.max()), 1e-300))[0]
+
+    def trajectory(self) -> Trajectory:
+        """The motion as a :class:`~rollplan.result.Trajectory` with the time as its parameter."""
+        return Trajectory(self.time, self.state, self.segment, self.robot.radius, "t")
 
 
-def _samples_per_leaf(samples: int, leaves: int) -> int:
-    return max(MIN_SAMPLES_PER_LEAF, math.ceil((samples - 1) / leaves))
+def samples_per_piece(pieces: int, samples: int, per_piece: int, law: str = "") -> int:
+    """Samples per piece of a motion of ``pieces`` pieces: at least ``per_piece``, in all at least ``samples``.
+
+    InputError when ``samples`` is not a whole number >= 4 or the motion would need more than
+    :data:`MAX_SAMPLES` samples.
+    """
+    samples = check_whole("samples", samples, 4)
+    m = max(per_piece, math.ceil((samples - 1) / pieces))
+    if pieces * m + 1 > MAX_SAMPLES:
+        raise InputError(f"timing '{law}' of {pieces} pieces (half-steps, rolls) needs {pieces * m + 1} samples (at "
+                         f"least {m} per piece); at most {MAX_SAMPLES} are allowed: plan fewer steps or ask fewer "
+                         "samples")
+    return m
 
 
-def actuate(plan, robot: Robot, duration: float, samples: int = DEFAULT_SAMPLES) -> Motion:
-    """Time a plan rest-to-rest per leaf and compute omega, rotor rates, angles and torques.
-
-    Solves, for each leaf of the plan's figure eight, ``phi(t) = 2 pi s(tau)``
-    with the minimum-jerk ``s``; then omega from (18), (19), (13), the rotor
-    rates from (11), the rotor angles by integration, and the torques from (T)
-    of the module docstring.
+def sample_motion(path: ContactPath, profile: TimeProfile, samples: int, goal=None,
+                  per_piece: int = MIN_SAMPLES_PER_LEAF) -> Motion:
+    """Sample a timed path uniformly in time: state, omega, rotor rates, angles and torques.
 
     Parameters
     ----------
-    plan : rollplan.planners.geometric.Plan
-        A geometric-phase plan, made for this robot (same k and radius).
-    robot : Robot
-        The robot's parameters.
-    duration : float
-        Total time T > 0 [s]; each of the ``2 n`` leaves takes ``T / (2 n)``.
+    path : ContactPath
+    profile : TimeProfile
+        A law's ``s(t)`` on this path.
     samples : int
-        Least number of time samples (>= 3); rounded up to fill the leaves evenly,
-        with at least :data:`MIN_SAMPLES_PER_LEAF` per leaf.
+        Least total number of samples (>= 4), rounded up to ``P m + 1`` with
+        ``m >= per_piece`` samples per piece, at most :data:`MAX_SAMPLES`.
+    goal : State, optional
+        The plan's goal [m, rad] (default: the path's end state).
+    per_piece : int
+        Least number of samples per piece (the law's ``samples_per_piece``).
 
     Returns
     -------
     Motion
     """
-    duration = check_range("duration", duration, 0.0, None, low_open=True)
-    samples = check_whole("samples", samples, 3)
-    if not math.isclose(plan.k, robot.k, rel_tol=1e-12, abs_tol=0.0):
-        raise InputError(f"the plan was made for k = {plan.k:.12g}, the robot has k = {robot.k:.12g}: "
-                         "plan with this robot")
-    if not math.isclose(plan.radius, robot.radius, rel_tol=1e-12, abs_tol=0.0):
-        raise InputError(f"the plan's radius = {plan.radius:g} differs from the robot's radius = {robot.radius:g}")
-    R = robot.radius
-    leaves = 2 * plan.steps
-    m = _samples_per_leaf(samples, leaves)
-    t_leaf = duration / leaves
-    jxx, jzz, jr = robot.j_xx, robot.j_zz, robot.rotor_inertia_axial
-    ab = [plan.a / R, plan.b / R]
-    par = np.array([ab[0], ab[1], plan.gamma, plan.k, jxx, jzz, jr])
-    tau = np.linspace(0.0, 1.0, m + 1)
-    s, ds, dds = (np.array(v).ravel() for v in rest_to_rest().map(m + 1)(tau[None, :]))
-    phi, phi_dot, phi_ddot = 2 * np.pi * s, 2 * np.pi * ds / t_leaf, 2 * np.pi * dds / t_leaf**2
-
-    x = np.zeros(5)
-    rows = {k: [] for k in ("time", "phi", "phi_dot", "phi_ddot", "leaf", "x", "uv", "w", "g", "a", "da")}
-    for j in range(leaves):
-        piece = j % 2
-        xs = np.array(_leaf_integrator(piece, m)(x0=x, p=par)["xf"])
-        xs = np.hstack([x[:, None], xs])  # (5, m + 1)
-        out = leaf_function(piece).map(m + 1)(phi[None, :], xs[2][None, :], ab, plan.gamma, plan.k, jxx, jzz, jr)
-        keep = slice(0, None) if j == 0 else slice(1, None)
-        rows["time"].append((j + tau[keep]) * t_leaf)
-        rows["phi"].append(phi[keep])
-        rows["phi_dot"].append(phi_dot[keep])
-        rows["leaf"].append(np.full(tau[keep].size, j))
-        rows["x"].append(xs[:, keep].T)
-        for name, val in zip(("uv", "w", "g", "a", "da"), out[1:6]):
-            rows[name].append(np.array(val)[:, keep].T)
-        rows["phi_ddot"].append(phi_ddot[keep])
-        x = xs[:, -1]
-    cat = {k: np.concatenate(v) for k, v in rows.items()}
-    pd, pdd = cat["phi_dot"], cat["phi_ddot"]
-    xs = cat["x"]
-    state = np.column_stack([xs[:, 0] * R, xs[:, 1] * R, xs[:, 2], cat["uv"]])
-    omega = pd[:, None] * cat["w"]
-    rates = pd[:, None] * cat["g"]
-    torques = jr * (pdd[:, None] * cat["a"] + pd[:, None] ** 2 * cat["da"])
-    time = cat["time"]
-    time[-1] = duration
-    log.info("motion: %d leaves x %d samples, T = %g s, max |rotor rate| = %.3g rad/s, max |torque| = %.3g N m",
-             leaves, m, duration, np.abs(rates).max(), np.abs(torques).max())
-    return Motion(time, cat["phi"], pd, cat["leaf"], state, omega, rates, xs[:, 3:5], torques, robot,
-                  duration, plan.goal)
+    pieces = len(path.pieces)
+    m = samples_per_piece(pieces, samples, per_piece, profile.law)
+    total = pieces * m + 1
+    T = profile.duration
+    t = np.linspace(0.0, T, total)
+    b = profile.breaks
+    near = np.clip(np.searchsorted(b, t), 1, b.size - 1)
+    for cand in (near - 1, near):   # samples on a break (the stops of min-jerk) exactly there
+        t = np.where(np.abs(t - b[cand]) <= 1e-12 * T, b[cand], t)
+    s, sd, sdd = profile.evaluate(t)
+    s[0], s[-1] = 0.0, path.length
+    sd[0] = sd[-1] = 0.0
+    ps = path.evaluate(np.clip(s, 0.0, path.length), "left")
+    R = path.robot.radius
+    state = ps.state * np.array([R, R, 1.0, 1.0, 1.0])
+    rates = ps.G * sd[:, None]
+    torques = ps.A * sdd[:, None] + ps.B * sd[:, None] ** 2
+    if not (np.all(np.isfinite(rates)) and np.all(np.isfinite(torques))):
+        raise InputError(f"duration = {T:g} s is not allowed: the rotor rates or torques overflow")
+    if goal is None:
+        fin = path.final_state
+        goal = State(fin[0] * R, fin[1] * R, fin[2])
+    log.info("motion (%s): %d pieces x %d samples, T = %g s, max |rotor rate| = %.3g rad/s, "
+             "max |torque| = %.3g N m", profile.law, pieces, m, T, np.abs(rates).max(), np.abs(torques).max())
+    return Motion(t, s, sd, sdd, ps.segment, state, ps.W * sd[:, None], rates, ps.rotor_angles, torques,
+                  path.robot, T, goal, profile.law, profile.minimum_duration, profile, path)
 
 
-def motion_to_dict(motion: Motion) -> dict:
-    """The motion's keys of ``rollplan plan --duration T --json``: time series as lists of rows."""
-    rows = lambda a: [[float(v) for v in r] for r in np.asarray(a)]
-    return {
-        "duration": motion.duration,
-        "time": [float(v) for v in motion.time],
-        "omega": rows(motion.omega),
-        "rotor_rates": rows(motion.rotor_rates),
-        "rotor_angles": rows(motion.rotor_angles),
-        "rotor_torques": rows(motion.rotor_torques),
-        "state": rows(motion.state),
-        "robot": motion.robot.as_dict(),
-    }
+def actuate(plan, robot: Robot, duration: float | None = None, samples: int = DEFAULT_SAMPLES,
+            timing: str | TimeLaw = "min-jerk") -> Motion:
+    """Time a plan by a law within the robot's limits and compute omega, rotor rates, angles and torques.
+
+    The plan's path from its start state along its contact arc length
+    (:meth:`ContactPath.of_plan`) is run by the law ``timing`` (:mod:`rollplan.execution.timing`);
+    then omega from (18), (19), (13), the rotor rates from (11), the rotor angles by integration
+    along the path, and the torques from (T) of the module docstring.
+
+    Parameters
+    ----------
+    plan : Plan, ComposedPlan or Route
+        A geometric-phase plan (:mod:`rollplan.planners.geometric`), made for this robot (same k and
+        radius): pole to pole, between any two states, or a route.
+    robot : Robot
+        The robot's parameters and its optional ``max_rotor_rate``, ``max_rotor_torque``.
+    duration : float, optional
+        Total time T [s] in :data:`rollplan.execution.timing.DURATION_RANGE`; None: the law's
+        shortest duration within the robot's limits (which must be set).
+    samples : int
+        Least number of time samples (>= 4); see :func:`sample_motion`.
+    timing : str or TimeLaw
+        A name in :data:`rollplan.execution.timing.LAWS` (default ``"min-jerk"``: every piece in
+        ``T / P``, rest-to-rest).
+
+    Returns
+    -------
+    Motion
+        Starting at the plan's start state. The empty motion (start = goal) is ``samples`` samples
+        at rest over the given duration.
+
+    Raises
+    ------
+    InputError
+        Bad input, or a duration that would exceed a limit (the message names the limit and the
+        shortest feasible duration); no duration for the empty motion.
+    """
+    law = get_law(timing)
+    pieces, start = plan_pieces(plan, robot)
+    if not pieces:
+        return _at_rest(plan, robot, law, duration, samples)
+    samples_per_piece(len(pieces), samples, law.samples_per_piece, law.name)  # the sample count before the work
+    path = ContactPath(pieces, robot, start)
+    profile = law.profile(path, Limits.of(robot), duration)
+    return sample_motion(path, profile, samples, plan.goal, law.samples_per_piece)
+
+
+def _at_rest(plan, robot: Robot, law: TimeLaw, duration, samples: int) -> Motion:
+    """The empty motion: ``samples`` samples at the start state over ``duration``, every rate zero."""
+    duration = law.check(Limits.of(robot), duration)
+    if duration is None:
+        raise InputError("the plan is the empty motion (its start is its goal): it has no shortest duration; "
+                         "give a duration to stay at rest that long")
+    samples = check_whole("samples", samples, 4, MAX_SAMPLES)
+    zero = lambda m: np.zeros((samples, m)) if m else np.zeros(samples)  # noqa: E731
+    state = np.repeat(plan.problem.start.array()[None, :], samples, axis=0)
+    profile = TimeProfile(np.array([0.0, duration]), np.zeros((1, 1)), law.name, 0.0)
+    return Motion(np.linspace(0.0, duration, samples), zero(0), zero(0), zero(0), np.zeros(samples, int), state,
+                  zero(3), zero(2), zero(2), zero(2), robot, duration, plan.goal, law.name, None, profile, None)

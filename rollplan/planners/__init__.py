@@ -10,7 +10,9 @@ method: the class is built with keyword options only (all defaulted), and its
 
 ``"geometric"``
     Figure eights traced n times, Section III.B (:mod:`.geometric`): exact
-    plans from rest at the origin to a goal at the pole.
+    plans from rest at the origin to a goal at the pole, and, composed with
+    approach and departure rolls, turns in place and two legs, between any two
+    states (:class:`.geometric.ComposedPlanner`).
 ``"collocation"``
     Direct collocation of the optimal-control problem on the same model (:mod:`.collocation`).
 """
@@ -20,12 +22,12 @@ from __future__ import annotations
 from ..errors import InputError
 from ..problem import Problem
 from .collocation import CollocationPlanner
-from .geometric import GeometricPhasePlanner
+from .geometric import ComposedPlanner
 
 __all__ = ["METHODS", "solve"]
 
 #: Planner classes by method name (see the module docstring for the contract).
-METHODS = {"geometric": GeometricPhasePlanner, "collocation": CollocationPlanner}
+METHODS = {"geometric": ComposedPlanner, "collocation": CollocationPlanner}
 
 
 def solve(problem: Problem, method: str = "geometric", **options):

@@ -61,7 +61,7 @@ def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps:
     ax.set_xlabel("u_a [m]")
     ax.set_ylabel("v_a [m]")
     ax.set_zlabel("z [m]")
-    ax.plot([0], [0], [0], "o", color=MARK, markersize=4)
+    ax.plot([state[0, 0]], [state[0, 1]], [0], "o", color=MARK, markersize=4)
     ax.plot([goal[0]], [goal[1]], [0], "*", color=MARK, markersize=10)
 
     # shell: 6 meridians and 5 parallels on the unit sphere, body frame

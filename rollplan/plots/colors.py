@@ -12,6 +12,10 @@
 ``MARK``                      start and target marks, the fold of the atlas: black
 ``COMPUTED``, ``PRINTED``     a value computed by rollplan (black) and the value printed in
                               the paper (magenta)
+``PIECE``, ``TURN``           composed plans: approach roll dark goldenrod, departure roll dark
+                              slate grey, the circles of a turn in place navy and orchid
+``LAW``, ``LIMIT``            timing laws: min-jerk indigo, nonstop-min-jerk teal,
+                              smooth-cruise chocolate, time-optimal slate blue; limits black dashed
 ============================  ===========================================================
 
 Every figure that uses a colour names it in a legend (or a colour bar for maps).
@@ -21,7 +25,7 @@ from __future__ import annotations
 
 __all__ = ["LEAF", "LEAF_LABELS", "PLANNER", "PLANNER_LABELS", "ROTOR", "ROTOR_LABELS", "AXIS_N3", "OMEGA",
            "OMEGA_LABELS", "PLANNED", "SIMULATED", "MARK", "REST",
-           "COMPUTED", "PRINTED"]
+           "COMPUTED", "PRINTED", "PIECE", "PIECE_LABELS", "TURN", "TURN_LABELS", "LAW", "LIMIT"]
 
 LEAF = ("tab:red", "tab:blue")
 LEAF_LABELS = ("1st half-step (leaf a)", "2nd half-step (leaf b)")
@@ -39,3 +43,13 @@ COMPUTED = "black"
 PRINTED = "magenta"
 #: Thin vertical lines at the rest instants between leaves of a timed motion.
 REST = "0.85"
+#: Pieces of a composed plan other than figure eights: the rolls along great circles to and from the pole.
+PIECE = {"approach": "darkgoldenrod", "departure": "darkslategray"}
+PIECE_LABELS = {"approach": "approach roll (to the pole)", "departure": "departure roll (from the pole)"}
+#: The two circles of each pair of a turn in place.
+TURN = ("navy", "orchid")
+TURN_LABELS = ("turn in place, 1st circle", "turn in place, 2nd circle")
+#: Timing laws (rollplan.execution.timing.LAWS), in the phase plane and wherever laws are compared.
+LAW = {"min-jerk": "indigo", "nonstop-min-jerk": "teal", "smooth-cruise": "chocolate", "time-optimal": "slateblue"}
+#: Motor limits (dashed) in the timing figures.
+LIMIT = "black"

@@ -74,9 +74,9 @@ def sphere_axes(ax, radius=1.0, unit="R", title="contact path on the sphere (bod
     ax.set_title(title)
 
 
-def plane_axes(ax, target=None, unit="R", title="contact path on the plane", handles=()):
+def plane_axes(ax, target=None, unit="R", title="contact path on the plane", handles=(), start=(0.0, 0.0)):
     """Start and target marks, labels, equal aspect, grid and a legend (``handles`` first) of a plane view."""
-    ax.plot([0], [0], "o", color=MARK, markersize=4)
+    ax.plot([start[0]], [start[1]], "o", color=MARK, markersize=4)
     if target is not None:
         ax.plot([target[0]], [target[1]], "*", color=MARK, markersize=10)
     ax.set_xlabel(f"u_a [{unit}]")
@@ -157,7 +157,7 @@ def draw_plane_path(ax, traj, target=None, unit="R"):
     """Contact path on the plane, in the leaf colours, with a legend."""
     for color, (u, v) in by_leaf(traj, traj.u_a, traj.v_a):
         ax.plot(u, v, color=color, linewidth=1.4)
-    plane_axes(ax, target, unit, handles=leaf_handles())
+    plane_axes(ax, target, unit, handles=leaf_handles(), start=(traj.u_a[0], traj.v_a[0]))
 
 
 def draw_psi(ax, traj, target_psi=None, target_label="target psi"):

@@ -9,6 +9,7 @@ from matplotlib.lines import Line2D
 
 from .colors import OMEGA, OMEGA_LABELS, PLANNED, REST, ROTOR, ROTOR_LABELS, SIMULATED
 from .common import draw_plane_path, plane_axes
+from .composed import draw_composed_plane
 
 __all__ = ["plot_motion", "draw_time_series", "plot_simulation"]
 
@@ -19,8 +20,10 @@ def _rests(ax, times):
 
 
 def draw_time_series(ax, motion, values, labels, ylabel, title, scale=1.0, colors=None):
-    """Columns of ``values`` against time, in ``colors``; thin grey lines mark the rest points between leaves."""
-    _rests(ax, motion.time[motion.rest_indices])
+    """Columns of ``values`` against time, in ``colors``; thin grey lines mark the stops (at rest) on the way."""
+    stops = motion.time[motion.rest_indices]
+    stops = stops[(stops > motion.time[0]) & (stops < motion.time[-1])]
+    _rests(ax, stops)
     colors = colors or [None] * len(labels)
     for col, label, color in zip(np.asarray(values).T, labels, colors):
         ax.plot(motion.time, col * scale, linewidth=1.2, label=label, color=color)
@@ -30,7 +33,8 @@ def draw_time_series(ax, motion, values, labels, ylabel, title, scale=1.0, color
     ax.set_xlim(motion.time[0], motion.time[-1])
     ax.grid(True, alpha=0.3)
     handles, _ = ax.get_legend_handles_labels()
-    handles.append(Line2D([], [], color=REST, linewidth=0.7, label="rest between leaves"))
+    if stops.size:
+        handles.append(Line2D([], [], color=REST, linewidth=0.7, label="at rest (between pieces)"))
     ax.legend(handles=handles, loc="upper right", fontsize=8)
 
 
@@ -51,13 +55,16 @@ def plot_motion(motion, plan=None, traj=None, unit="m") -> Figure:
                                                                  enumerate(ROTOR_LABELS)],
                      "motor torque [N m]", "rotor torques", colors=ROTOR)
     if plan is not None and traj is not None:
-        draw_plane_path(axes[1, 1], traj, plan.goal[:2], unit)
+        if hasattr(plan, "pieces"):   # a composed plan or a route: rolls, leaves and turns in their colours
+            draw_composed_plane(axes[1, 1], plan, traj, unit, "contact path on the plane")
+        else:
+            draw_plane_path(axes[1, 1], traj, plan.goal[:2], unit)
     else:
         draw_time_series(axes[1, 1], motion, motion.rotor_angles / (2 * np.pi),
                          [f"$\\varphi_{i + 1}$, {lab}" for i, lab in enumerate(ROTOR_LABELS)],
                          "rotor angle [turns]", "rotor angles", colors=ROTOR)
     r = motion.robot
-    fig.suptitle(f"T = {motion.duration:.6g} s, {int(motion.leaf.max()) + 1} half-steps (rest-to-rest, minimum jerk); "
+    fig.suptitle(f"T = {motion.duration:.6g} s, {int(motion.segment.max()) + 1} pieces (timing {motion.timing}); "
                  f"R = {r.radius:.6g} m, k = {r.k:.6g}, $J_r$ = {r.rotor_inertia_axial:.6g} kg m$^2$")
     return fig
 

@@ -180,7 +180,8 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     ------
     InputError, NoPlanError, SolverError
     """
-    p = gp_plan(tuple(target), steps, k=None if robot is not None else k, robot=robot, radius=radius)
+    p = gp_plan(tuple(target), steps, k=None if robot is not None else k, robot=robot, radius=radius,
+                legs="one")   # one leg of figure eights: the paper's plan
     r = collocate(target, k=None if robot is not None else k, robot=robot, radius=radius, cost=cost,
                   intervals=intervals, degree=degree, scheme=scheme, horizon=horizon, guess=guess, steps=steps,
                   turns=p.branch, contact_bound=contact_bound, warm_start=p if guess == "warm" else None)

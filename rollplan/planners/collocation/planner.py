@@ -14,8 +14,11 @@ problem's start and goal states,
 
     x(0) = start,   x(T) = goal + (0, 0, 2 pi m, 0, 0),
 
-with ``m`` (``turns``) the number of whole turns of psi, 0 by default and the
-branch of the geometric-phase plan for the warm start (same final orientation).
+with ``m`` (``turns``) the number of whole turns of psi, 0 by default and those
+of the geometric-phase plan for the warm start (same final orientation). Start
+and goal are any states of the :class:`~rollplan.problem.Problem` within the
+contact bound; the warm start is then a composed geometric plan (approach and
+departure rolls around the figure eights, :mod:`rollplan.planners.geometric.composed`).
 The contact point stays within a polar angle ``contact_bound`` of the south
 pole (75 deg by default): (8) and the spin (13) are singular on the equator.
 
@@ -55,7 +58,7 @@ from ...errors import InputError, SolverError, check_range, check_whole
 from ...problem import Problem, State
 from ...result import Certificate, CertifiedMotion, Measures, SolverStats, Trajectory
 from ...robot import Robot
-from ..geometric.planner import default_planner
+from ..geometric.composed import as_composed, default_composed_planner
 from .costs import COSTS, N_PAR, Cost
 from .transcription import SCHEMES, Guess, Transcription
 
@@ -202,9 +205,10 @@ def _naive_guess(planner: CollocationPlanner, problem: Problem, start, final, ho
 
 
 def _check_warm_start(plan, problem: Problem) -> None:
-    """InputError unless ``plan`` is a geometric-phase plan for the same k, radius, start and goal."""
-    if getattr(plan, "method", None) != "geometric":
-        raise InputError(f"warm_start = {plan!r:.60} is not allowed: give a geometric-phase Plan")
+    """InputError unless ``plan`` is a geometric-phase plan (of one leg or composed) for the same k,
+    radius, start and goal."""
+    if getattr(plan, "method", None) != "geometric" or not hasattr(plan, "problem"):
+        raise InputError(f"warm_start = {plan!r:.60} is not allowed: give a geometric-phase Plan or ComposedPlan")
     same = (plan.problem.k == problem.k and plan.problem.radius == problem.radius
             and tuple(plan.problem.start) == tuple(problem.start)
             and np.allclose(plan.problem.goal, problem.goal, rtol=0.0, atol=1e-12 * problem.radius))
@@ -214,19 +218,29 @@ def _check_warm_start(plan, problem: Problem) -> None:
 
 
 def _geometric_plan(problem: Problem):
-    """The geometric-phase plan of the problem (the warm start)."""
-    return default_planner().solve(problem)
+    """The geometric-phase plan of the problem (the warm start): one leg of figure eights from rest at the
+    origin to a goal at the pole, else a composed plan (rolls, turns in place, two legs)."""
+    return default_composed_planner().solve(problem)
+
+
+def _whole_turns(plan) -> int:
+    """Whole turns m of psi of a certified plan: its motion ends at ``goal.psi + 2 pi m``."""
+    return round((plan.final.psi - plan.goal.psi) / (2 * math.pi))
 
 
 def _warm_guess(planner: CollocationPlanner, problem: Problem, start, final, horizon: float, warm_start):
-    """The geometric-phase plan ``warm_start`` with theta mapped to time.
+    """The geometric-phase plan ``warm_start`` with its path parameter mapped to time.
 
-    States are interpolated from the plan's samples at normalized time ``theta / (2 pi n)``;
-    the rates on each interval are the mean rates of the plan over that interval.
+    States are interpolated from the plan's samples at normalized time ``s / s_end`` (every piece of
+    the contact path, e.g. a leaf of a figure eight, takes the same time); the rates on each interval
+    are the mean rates of the plan over that interval.
     """
-    p = warm_start
+    p = as_composed(warm_start)
     tr = planner.transcription
-    traj = p.sample(max(200, math.ceil(2 * tr.intervals * tr.degree / (2 * p.steps))))
+    per_piece = max(200, math.ceil(2 * tr.intervals * tr.degree / max(len(p.pieces), 1)))
+    traj = p.sample(len(p.pieces) * per_piece + 1)
+    if traj.s[-1] == 0.0:   # the empty motion: stay at the start
+        return _naive_guess(planner, problem, start, final, horizon, None)
     tau = traj.s / traj.s[-1]
     cols = traj.state / np.array([p.radius, p.radius, 1.0, 1.0, 1.0])
     interp = lambda s: np.stack([np.interp(s, tau, c) for c in cols.T], axis=-1)  # noqa: E731
@@ -314,7 +328,7 @@ class CollocationPlanner:
         if guess == "warm" and warm_start is None:
             warm_start = _geometric_plan(problem)
         if turns is None:
-            turns = warm_start.branch if warm_start is not None else 0
+            turns = _whole_turns(warm_start) if warm_start is not None else 0
         start, final = self._boundary(problem, turns)
         g = GUESSES[guess](self, problem, start, final, horizon, warm_start)
         return self._solve(problem, g, horizon, turns, smoothing, time.perf_counter() - t0)
@@ -330,6 +344,12 @@ class CollocationPlanner:
         if self.cost.needs_robot and problem.robot is None:
             raise InputError(f"cost = {self.cost.name!r} needs robot parameters: give a robot")
         turns = check_whole("turns", turns)
+        for name in ("start", "goal"):
+            state = getattr(problem, name)
+            polar = math.acos(min(1.0, math.cos(state.u_o) * math.cos(state.v_o)))   # from (1)
+            if polar > self.contact_bound:
+                raise InputError(f"the {name} contact point lies {polar:.4g} rad from the south pole, beyond the "
+                                 f"collocation's contact_bound = {self.contact_bound:.4g} rad: raise contact_bound")
         start = problem.scaled(problem.start).array()
         final = problem.scaled(problem.goal).array()
         final[2] += 2 * math.pi * turns
@@ -517,14 +537,14 @@ def collocate(target, k: float | None = None, robot: Robot | None = None, radius
     steps : int
         Traces of the warm-start plan.
     turns : int, optional
-        Whole turns m added to psi (default: the warm plan's branch, else 0).
+        Whole turns m added to psi (default: the warm plan's, else 0).
     smoothing : float
         eps of the path-length integrand.
     contact_bound : float
         Bound on the contact point's polar angle from the south pole [rad].
     start : State or sequence, optional
         Start state (default zero).
-    warm_start : Plan, optional
+    warm_start : Plan or ComposedPlan, optional
         The geometric-phase plan the warm guess follows.
 
     Returns

@@ -1,12 +1,19 @@
-"""The geometric-phase planner: figure eights traced n times (Section III.B of the paper).
+"""The geometric-phase planner: figure eights traced n times (Section III.B of the paper), and its
+extension to any start and goal state.
 
 Pieces: :mod:`.leaves` (tables of the two leaves per k), :mod:`.brackets`
 (cells bracketing roots of (32)-(33)), :mod:`.refine` (root solvers by name),
 :mod:`.certify` (independent integration of the whole motion), :mod:`.planner`
-(the problem class and the functions :func:`plan` and :func:`step`).
+(the pole-to-pole problem class :class:`GeometricPhasePlanner`); full
+reconfiguration: :mod:`.maneuvers` (approach and departure rolls), :mod:`.turn`
+(turning in place), :mod:`.legs` (two legs), :mod:`.composed`
+(:class:`ComposedPlanner` and :func:`plan`, for any start and goal), :mod:`.route`.
 """
 
-from .planner import TOLERANCE, GeometricPhasePlanner, Plan, StepResult, default_planner, plan, step
+from .composed import LEGS, ComposedPlan, ComposedPlanner, as_composed, plan
+from .planner import TOLERANCE, GeometricPhasePlanner, Plan, StepResult, default_planner, step
 from .refine import SOLVERS
+from .route import Route, plan_route
 
-__all__ = ["TOLERANCE", "SOLVERS", "GeometricPhasePlanner", "Plan", "StepResult", "default_planner", "plan", "step"]
+__all__ = ["TOLERANCE", "SOLVERS", "LEGS", "GeometricPhasePlanner", "Plan", "StepResult", "default_planner", "plan",
+           "step", "ComposedPlanner", "ComposedPlan", "as_composed", "Route", "plan_route"]

@@ -1,0 +1,485 @@
+"""Full reconfiguration: plans between any two states ``(u_a, v_a, psi, u_o, v_o)``.
+
+The paper plans from rest at the origin to a goal at the south pole. A start
+or goal with its contact point off the pole is served by a composed motion:
+
+1. an approach roll from the start contact point to the pole (:mod:`.maneuvers`);
+2. figure eights, pole to pole: one leg of ``n`` identical figure eights
+   (:class:`.planner.GeometricPhasePlanner`), or, where none exists, a turn in
+   place by pairs of circles (:mod:`.turn`) or two legs through an
+   intermediate pole state (:mod:`.legs`);
+3. a departure roll from the pole to the goal contact point.
+
+The rolls move ``(u_a, v_a, psi)`` too. Along any contact path the plane part
+composes as a rigid motion of the plane (the law (C) of
+:mod:`rollplan.core.plane`), so with the rolls' elements ``g_A``, ``g_B`` (closed
+form) the figure eights must realize, from zero,
+
+    g_F = g_A^-1 * start^-1 * goal * g_B^-1,                              (F)
+
+and they are solved for that target. Every plan is then certified by one
+CVODES integration of the whole composed motion from the start state
+(:class:`rollplan.core.paths.PathIntegrator`), which uses neither (F) nor the
+closed forms; none is returned above the tolerance.
+
+Keeping the path short and clear of the singular set: the rolls are geodesics
+(the shortest contact paths between their ends), along which ``n3z``, the
+divisor of (13), is monotone, so they never come closer to the singular set
+``n3z = 0`` than the start or goal contact point (held at ``n3z >= 0.05`` by
+:func:`rollplan.problem.check_contact`); the figure eights are the shortest
+one-leg plan for (F) (leaf radii ``<= A_MAX``, ``n3z >= 0.048``).
+
+Choice of the legs (``legs=``):
+
+``"fallback"`` (default)
+    One leg of figure eights; a turn in place (``p_F = 0``) by the circle
+    pairs; two legs only when one leg has no plan. A problem the paper's planner
+    can serve (start at rest at the origin, goal at the pole) gets exactly its
+    plan, at its speed.
+``"shortest"``
+    Also search two legs when one leg exists, and keep the shorter.
+``"one"``, ``"two"``
+    Force one leg (no fallback) or two legs.
+
+Why ``"fallback"`` is the default rather than always searching both: the
+two-leg search is a grid envelope with a local polish (no global guarantee),
+costs seconds, and its shortest plans are degenerate (one leaf per leg shrinks
+to a tiny loop); one leg is the planner's complete, shortest-by-default answer
+and is fast. ``"shortest"`` is there when path length matters more than time.
+
+Special cases: start equal to goal (psi as an angle): the empty motion;
+``g_F`` = identity: the two rolls alone.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, replace
+from functools import lru_cache
+
+import numpy as np
+
+from ...core.integrate import DEFAULT_NODES
+from ...core.interrupt import interruptible, raise_if_interrupted
+from ...core.paths import PathIntegrator, allocate_samples, figure_eight_pieces
+from ...core.plane import compose, inverse, relative, wrap, wrap_exact
+from ...errors import InputError, NoPlanError, check_whole
+from ...problem import Problem, State, arrival_residual
+from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
+from ...robot import Robot
+from .legs import intermediate_state, second_leg, two_leg_candidates
+from .maneuvers import StraightRoll
+from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
+from .refine import SOLVERS
+from .turn import CircleTurn, turn_in_place
+
+__all__ = ["LEGS", "IDENTITY_TOL", "ComposedPlan", "ComposedPlanner", "default_composed_planner", "as_composed",
+           "certify_path", "sample_path", "plan"]
+
+#: Policies for the legs of figure eights (module docstring).
+LEGS = ("fallback", "shortest", "one", "two")
+#: A figure-eight target this close to zero (units of R and rad) is no motion at all.
+IDENTITY_TOL = 1e-12
+#: Default number of samples of :meth:`ComposedPlan.sample`.
+DEFAULT_SAMPLES = 2000
+
+
+@lru_cache(maxsize=1)
+def _integrator() -> PathIntegrator:
+    return PathIntegrator()
+
+
+def _reduced(problem: Problem, name: str) -> tuple[State, int]:
+    """The start or goal in units of R with psi reduced exactly to [-pi, pi], and the whole turns taken off.
+
+    psi is an angle: the motion is planned and integrated in the reduced frame, so that a psi of any
+    size costs no accuracy (``wrap_exact``), and reported in the frame of the given start.
+    """
+    state = problem.scaled(getattr(problem, name))
+    psi, turns = wrap_exact(state.psi)
+    return state._replace(psi=psi), turns
+
+
+def certify_path(problem: Problem, pieces, tol: float = TOLERANCE) -> tuple:
+    """The certificate of a composed motion: ``pieces`` integrated from ``problem.start`` against its goal.
+
+    Returns ``(certificate, ends)``: ``ends`` (P + 1, 5) are the states at the start and after every
+    piece, in units of R and in the reduced frame of :func:`_reduced` (psi of the start in [-pi, pi]).
+    """
+    start, turns = _reduced(problem, "start")
+    ends = _integrator().ends(pieces, start.array(), problem.k)
+    final = State(*(float(v) for v in ends[-1]))
+    residual = arrival_residual(final, _reduced(problem, "goal")[0])
+    final = final._replace(psi=final.psi + 2.0 * math.pi * turns).scaled(problem.radius)
+    return Certificate(PathIntegrator.name, final, residual, 0.0, tol), ends
+
+
+def sample_path(problem: Problem, pieces, samples: int) -> Trajectory:
+    """A composed motion sampled by CVODES from ``problem.start``: ``samples`` samples in all.
+
+    The samples are spread over the pieces in proportion to their lengths (at least 4 per piece
+    when there are enough); ``segment`` numbers the pieces; ``s`` is the path parameter of
+    :meth:`rollplan.core.paths.PathIntegrator.sample` (each piece spans pi; ``parameter`` "theta").
+    """
+    samples = check_whole("samples", samples, len(pieces) + 1, 10**7)
+    start, turns = _reduced(problem, "start")
+    R = problem.radius
+    if not pieces:
+        state = np.repeat(problem.start.array()[None, :], samples, axis=0)
+        return Trajectory(np.zeros(samples), state, np.zeros(samples, int), R, "theta")
+    counts = allocate_samples([p.length for p in pieces], samples)
+    s, states, segment = _integrator().sample(pieces, start.array(), problem.k, counts)
+    return Trajectory(s, states * [R, R, 1.0, 1.0, 1.0] + [0.0, 0.0, 2.0 * math.pi * turns, 0.0, 0.0], segment, R,
+                      "theta")
+
+
+@dataclass(frozen=True)
+class ComposedPlan(CertifiedMotion):
+    """A certified full-reconfiguration plan (satisfies :class:`rollplan.result.PlanResult`).
+
+    Attributes
+    ----------
+    problem : Problem
+        What was solved.
+    mode : str
+        ``"empty"`` (start = goal), ``"rolls"`` (the rolls alone), ``"one"`` (one leg of figure
+        eights), ``"turn"`` (pairs of circles turning in place), ``"two"`` (two legs).
+    approach, departure : StraightRoll or None
+        The rolls (None when the contact point is at the pole).
+    target : ndarray, shape (3,)
+        ``g_F`` of (F): what the figure eights do from zero [units of R, rad].
+    legs : tuple of Plan
+        The geometric-phase plans of the legs (each in its own problem's units).
+    turn : CircleTurn or None
+        The circle pairs of a turn in place [units of R].
+    intermediate : ndarray or None
+        The pole state between two legs, relative to the start of the figure eights [units of R, rad].
+    pieces : tuple of PathPiece
+        The contact path, piece by piece [units of R].
+    certificate : Certificate
+        CVODES integration of the whole motion from the start state, and its residual.
+    stats : SolverStats
+        ``details`` names the mode and, for two legs, the candidates tried.
+    path_length : float
+        Contact path length [length unit].
+    alternatives : tuple of ComposedPlan
+        With ``all_solutions`` and one leg: the plans through the other certified branches.
+    """
+
+    method = "geometric"
+
+    problem: Problem
+    mode: str
+    approach: StraightRoll | None
+    departure: StraightRoll | None
+    target: np.ndarray
+    legs: tuple
+    turn: CircleTurn | None
+    intermediate: np.ndarray | None
+    pieces: tuple
+    certificate: Certificate
+    stats: SolverStats
+    path_length: float
+    alternatives: tuple = ()
+
+    @property
+    def steps(self) -> int:
+        return self.problem.steps
+
+    @property
+    def turns(self) -> int:
+        """Whole turns m of psi: the motion ends at ``goal.psi + 2 pi m``."""
+        return round((self.final.psi - self.goal.psi) / (2.0 * math.pi))
+
+    def sample(self, samples: int = DEFAULT_SAMPLES) -> Trajectory:
+        """The motion sampled by CVODES from the start state, ``samples`` in all (:func:`sample_path`)."""
+        return sample_path(self.problem, self.pieces, samples)
+
+    def lengths(self) -> dict:
+        """Contact path length by kind of piece [length unit]."""
+        out: dict = {}
+        for p in self.pieces:
+            out[p.kind] = out.get(p.kind, 0.0) + p.length * self.radius
+        return out
+
+
+def _pole_to_pole(problem: Problem) -> bool:
+    """The paper's problem: from rest at the origin to a goal at the pole."""
+    return tuple(problem.start) == tuple(State()) and problem.goal.at_pole
+
+
+def as_composed(result) -> ComposedPlan:
+    """A geometric-phase :class:`Plan` as a one-leg :class:`ComposedPlan` (its pieces and certificate);
+    a result that has ``pieces`` already (a composed plan, a route) is returned as it is."""
+    if hasattr(result, "pieces"):
+        return result
+    if not isinstance(result, Plan):
+        raise InputError(f"{result!r:.60} is not allowed: give a geometric-phase plan")
+    R = result.radius
+    pieces = tuple(figure_eight_pieces(result.a / R, result.b / R, result.gamma, result.steps))
+    goal = result.problem.scaled(result.goal)
+    return ComposedPlan(result.problem, "one", None, None, np.array(goal[:3]), (result,), None, None, pieces,
+                        result.certificate, result.stats, result.path_length)
+
+
+class ComposedPlanner:
+    """Planner for any start and goal state (module docstring); the method ``"geometric"`` of
+    :data:`rollplan.planners.METHODS`.
+
+    Parameters
+    ----------
+    method : str
+        Root solver of the figure eights, from :data:`.refine.SOLVERS`.
+    nodes : int
+        Chebyshev degree per panel of the spectral step map, in [4, 200].
+    tol : float
+        Largest certified residual of a returned plan, in (0, 1e-3].
+    legs : str
+        Policy in :data:`LEGS` (default ``"fallback"``).
+    """
+
+    def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
+                 legs: str = "fallback") -> None:
+        if not isinstance(legs, str) or legs not in LEGS:
+            raise InputError(f"legs = {legs!r} is not allowed: choose one of {', '.join(LEGS)}")
+        if not isinstance(method, str) or method not in SOLVERS:
+            raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
+        default = nodes == DEFAULT_NODES and tol == TOLERANCE
+        self.planner = default_planner(method) if default else GeometricPhasePlanner(method, nodes, tol)
+        self.legs = legs
+        self.tol = self.planner.tol
+
+    def solve(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
+        """Plan for ``problem``: a :class:`Plan` for a pole-to-pole problem from rest that one leg
+        serves (unless ``legs`` asks otherwise), else a :class:`ComposedPlan`; see :func:`plan`.
+        Ctrl-C stops it (KeyboardInterrupt), also inside a root solve."""
+        with interruptible():
+            return self._solve(problem, all_solutions, branch)
+
+    def _leg(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
+        """One leg of figure eights by the pole-to-pole planner (a Ctrl-C its root solver dropped is raised)."""
+        try:
+            return self.planner.solve(problem, all_solutions, branch)
+        finally:
+            raise_if_interrupted()
+
+    def _solve(self, problem: Problem, all_solutions: bool, branch: int | None):
+        t0 = time.perf_counter()
+        if not isinstance(problem, Problem):
+            raise InputError(f"problem = {problem!r} is not allowed: give a rollplan.Problem")
+        if branch is not None:
+            branch = check_whole("branch", branch)
+            if self.legs == "two":
+                raise InputError("branch selects a branch of one leg of figure eights; it does not apply to legs='two'")
+        start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
+        one_only = self.legs == "one" or branch is not None
+        if _pole_to_pole(problem) and self.legs != "two" and math.hypot(goal.u_a, goal.v_a) > IDENTITY_TOL:
+            try:
+                found = self._leg(problem, all_solutions, branch)
+            except NoPlanError:
+                if one_only:
+                    raise
+                return self._composed(problem, t0, False, None, "two")   # one leg has just failed
+            if self.legs == "shortest":
+                try:
+                    other = self._composed(problem, t0, False, None, "two")
+                except NoPlanError:
+                    other = None
+                if other is not None and other.path_length < found.path_length:
+                    return other
+            return found
+        if arrival_residual(start, goal) <= IDENTITY_TOL:
+            return self._result(problem, "empty", None, None, np.zeros(3), (), None, None, t0, {})
+        return self._composed(problem, t0, all_solutions, branch, "one" if one_only else self.legs)
+
+    # -- the composed motion ------------------------------------------------------------
+    def _composed(self, problem, t0, all_solutions, branch, legs):
+        """Rolls, figure eights for (F) by the policy ``legs``, certificate."""
+        start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
+        approach = StraightRoll.make(start.u_o, start.v_o, "approach")
+        departure = StraightRoll.make(goal.u_o, goal.v_o, "departure")
+        with np.errstate(over="ignore", invalid="ignore"):
+            target = compose(compose(inverse(approach.element()), relative(start[:3], goal[:3])),
+                             inverse(departure.element()))   # (F)
+        if not np.all(np.isfinite(target)):
+            raise NoPlanError(f"no plan for {problem.describe()}: the displacement from start to goal overflows "
+                              "double precision")
+        details: dict = {}
+        if math.hypot(target[0], target[1]) <= IDENTITY_TOL and abs(float(wrap(target[2]))) <= IDENTITY_TOL:
+            mode = "empty" if approach.empty and departure.empty else "rolls"
+            return self._result(problem, mode, approach, departure, target, (), None, None, t0, details)
+        try:
+            mode, legs_found, turn, w = self._eights(problem, target, legs, all_solutions, branch, details)
+        except NoPlanError as exc:
+            raise NoPlanError(f"no plan for {problem.describe()}: the figure eights must do (u_a, v_a, psi) = "
+                              f"({target[0]:.6g}, {target[1]:.6g}, {target[2]:.6g}) from rest at the pole; {exc}") \
+                from None
+        result = self._result(problem, mode, approach, departure, target, legs_found, turn, w, t0, details)
+        if all_solutions and mode == "one":
+            alts = []
+            for alt in legs_found[0].alternatives:
+                cand = self._result(problem, mode, approach, departure, target, (alt,), None, None, t0, {},
+                                    check=False)
+                if cand.certificate.passed:
+                    alts.append(cand)
+            result = replace(result, alternatives=tuple(alts))
+        return result
+
+    def _eights(self, problem, target, legs, all_solutions, branch, details):
+        """``(mode, leg plans, turn, intermediate)`` of the figure eights for ``target`` (units of R)."""
+        k, steps = problem.k, problem.steps
+        pure_turn = math.hypot(target[0], target[1]) <= IDENTITY_TOL
+        if pure_turn and legs in ("fallback", "shortest"):
+            try:
+                return "turn", (), turn_in_place(float(target[2]), k, steps), None
+            except NoPlanError as exc:
+                details["turn"] = str(exc)
+        one = None
+        if legs != "two":
+            try:
+                if pure_turn:
+                    raise NoPlanError("one leg of identical figure eights turns in place for isolated angles "
+                                      "only (three equations for two unknowns); try legs='fallback'")
+                one = self._leg(Problem(tuple(target), k=k, steps=steps), all_solutions, branch)
+            except NoPlanError as exc:
+                if legs == "one":
+                    raise
+                details["one_leg"] = str(exc)
+        if one is not None and legs in ("one", "fallback"):
+            return "one", (one,), None, None
+        two = self._two_legs(target, k, steps, details)
+        if two is not None and (one is None or two[0].path_length + two[1].path_length < one.path_length):
+            return "two", two[:2], None, two[2]
+        if one is not None:
+            return "one", (one,), None, None
+        raise NoPlanError(f"neither one leg nor two legs of {steps} figure eight(s) with leaf radii in the admissible "
+                          "range reach it; try more steps")
+
+    def _two_legs(self, target, k, steps, details, count: int = 4):
+        """The shortest exact pair of legs of the best candidates of :func:`.legs.two_leg_candidates`.
+
+        Each leg is solved on the branch its candidate lies on (``branch=``, fast near a known
+        root); only when no candidate gives a plan are all branches of the best one tried.
+        """
+        t0 = time.perf_counter()
+        candidates = two_leg_candidates(target, k, steps, count)
+        tried, best = [], None
+
+        def attempt(c, restrict):
+            w = intermediate_state(target, c.r1, c.r2, c.chi1)
+            t2 = second_leg(target, w)
+            b1 = round((c.chi1 - w[2]) / (2 * math.pi)) if restrict else None
+            b2 = round((c.chi2 - t2[2]) / (2 * math.pi)) if restrict else None
+            try:
+                p1 = self._leg(Problem(tuple(w), k=k, steps=steps), branch=b1)
+                p2 = self._leg(Problem(tuple(t2), k=k, steps=steps), branch=b2)
+            except NoPlanError:
+                tried.append({"estimate": c.length, "polished": c.polished, "found": False})
+                return None
+            tried.append({"estimate": c.length, "polished": c.polished, "found": True,
+                          "length": p1.path_length + p2.path_length})
+            return p1, p2, w
+
+        for c in candidates:
+            got = attempt(c, True)
+            if got is not None and (best is None or got[0].path_length + got[1].path_length <
+                                    best[0].path_length + best[1].path_length):
+                best = got
+        if best is None and candidates:
+            best = attempt(candidates[0], False)
+        details["two_legs"] = {"candidates": tried, "search_s": time.perf_counter() - t0}
+        return best
+
+    def _result(self, problem, mode, approach, departure, target, legs, turn, w, t0, details,
+                check: bool = True) -> ComposedPlan:
+        """Pieces, certificate and statistics of a composed plan; NoPlanError if the certificate fails."""
+        approach = approach if approach is not None and not approach.empty else None
+        departure = departure if departure is not None and not departure.empty else None
+        pieces = [approach.piece()] if approach else []
+        if turn is not None:
+            pieces += turn.pieces()
+        for leg in legs:
+            R = leg.radius
+            pieces += figure_eight_pieces(leg.a / R, leg.b / R, leg.gamma, leg.steps)
+        pieces += [departure.piece()] if departure else []
+        cert, _ = certify_path(problem, pieces, self.tol)
+        if check and not cert.passed:
+            raise NoPlanError(f"no certified plan for {problem.describe()}: the composed motion misses the goal by "
+                              f"{cert.residual:.2e} > {self.tol:.0e}; try more steps")
+        if legs:
+            status = ", ".join(sorted({leg.stats.status for leg in legs}))
+            iterations = sum(leg.stats.iterations for leg in legs)
+        else:
+            status, iterations = ("turn" if turn is not None else "closed form"), 0
+        stats = SolverStats(self.planner.method if legs else "brentq" if turn is not None else "none", status,
+                            iterations, time.perf_counter() - t0, {"mode": mode, **details})
+        length = sum(p.length for p in pieces) * problem.radius
+        return ComposedPlan(problem, mode, approach, departure, np.asarray(target, float), tuple(legs), turn, w,
+                            tuple(pieces), cert, stats, length)
+
+
+@lru_cache(maxsize=8)
+def default_composed_planner(method: str = "ipopt", legs: str = "fallback") -> ComposedPlanner:
+    """The shared composed planner of :func:`plan` for a root solver and a legs policy."""
+    return ComposedPlanner(method, legs=legs)
+
+
+def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
+         all_solutions: bool = False, method: str = "ipopt", branch: int | None = None, start=None,
+         legs: str = "fallback"):
+    """Plan an exact, dynamically realizable motion from ``start`` to ``target``, any two states.
+
+    From rest at the origin to a goal at the south pole this is the paper's
+    planner (:meth:`GeometricPhasePlanner.solve`): ``steps`` traces of a figure
+    eight. Otherwise (a start or goal off the pole, a turn in place, a target
+    one leg cannot reach) a composed motion: approach roll, figure eights for
+    the target (F), departure roll (module docstring).
+
+    Parameters
+    ----------
+    target : State or sequence
+        Goal ``(u_a, v_a, psi)`` (contact point at the pole) or ``(u_a, v_a, psi, u_o, v_o)``
+        [length unit of ``radius``, rad].
+    steps : int
+        Figure eights per leg n >= 1 (pairs of circles for a turn in place).
+    k : float, optional
+        Inertia ratio (14), k >= 0. Or give ``robot``.
+    robot : Robot, optional
+        Robot parameters; sets k and, unless given, the radius.
+    radius : float, optional
+        Sphere radius R (default 1, or the robot's).
+    all_solutions : bool
+        Also return the other certified branches of one leg in ``alternatives``.
+    method : str
+        Root solver name from :data:`.refine.SOLVERS`.
+    branch : int, optional
+        Only the branch m of ``n eta = psi + 2 pi m`` of one leg (no fallback to two legs).
+    start : State or sequence, optional
+        Start state (default zero: at rest at the origin, contact at the pole).
+    legs : str
+        ``"fallback"`` (default), ``"shortest"``, ``"one"`` or ``"two"`` (module docstring).
+
+    Returns
+    -------
+    Plan or ComposedPlan
+        A :class:`Plan` for the paper's problem when one leg serves it, else a
+        :class:`ComposedPlan`; both satisfy :class:`rollplan.result.PlanResult`
+        (:func:`as_composed` views a Plan as a one-leg ComposedPlan).
+
+    Raises
+    ------
+    InputError
+        Bad input, e.g. a contact point outside the region of :func:`rollplan.problem.check_contact`.
+    NoPlanError
+        No certified plan (more steps may help).
+    SolverError
+        The root solver broke down.
+    """
+    if not isinstance(method, str) or method not in SOLVERS:
+        raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
+    if not isinstance(legs, str) or legs not in LEGS:
+        raise InputError(f"legs = {legs!r} is not allowed: choose one of {', '.join(LEGS)}")
+    problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
+                      steps=steps)
+    return default_composed_planner(method, legs).solve(problem, all_solutions, branch)

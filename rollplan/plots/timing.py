@@ -1,0 +1,110 @@
+"""Figures of timed motions: rotor rates and torques in time with the motors' limits, and the phase plane (s, s').
+
+The functions take :class:`rollplan.execution.actuation.Motion` objects (and the maximum
+velocity curve, :func:`rollplan.execution.timing.velocity_limit`) and compute nothing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from .colors import LAW, LIMIT, ROTOR, ROTOR_LABELS
+
+__all__ = ["draw_rates_torques", "draw_phase_plane", "plot_timing"]
+
+
+def _limit_lines(ax, value, scale, label):
+    if value is not None:
+        for sign in (1, -1):
+            ax.axhline(sign * value * scale, color=LIMIT, linestyle="--", linewidth=0.8,
+                       label=label if sign == 1 else None)
+
+
+def draw_rates_torques(ax_rates, ax_torques, motion, legend=True):
+    """Rotor rates [rad/s] and motor torques [N m] of a motion against time, with the robot's limits dashed."""
+    lim = motion.limits
+    for i, color in enumerate(ROTOR):
+        ax_rates.plot(motion.time, motion.rotor_rates[:, i], color=color, linewidth=1.0,
+                      label=f"$\\dot\\varphi_{i + 1}$, {ROTOR_LABELS[i]}")
+        ax_torques.plot(motion.time, motion.rotor_torques[:, i], color=color, linewidth=1.0,
+                        label=f"$\\tau_{i + 1}$, {ROTOR_LABELS[i]}")
+    _limit_lines(ax_rates, lim.max_rotor_rate, 1.0, "max_rotor_rate")
+    _limit_lines(ax_torques, lim.max_rotor_torque, 1.0, "max_rotor_torque")
+    shortest = "" if motion.minimum_duration is None else f" (shortest {motion.minimum_duration:.6g} s)"
+    ax_rates.set_title(f"{motion.timing}: T = {motion.duration:.6g} s{shortest}", fontsize=10)
+    ax_rates.set_ylabel("rotor rate [rad/s]")
+    ax_torques.set_ylabel("motor torque [N m]")
+    for ax in (ax_rates, ax_torques):
+        ax.set_xlabel("time t [s]")
+        ax.set_xlim(motion.time[0], motion.time[-1])
+        ax.grid(True, alpha=0.3)
+        if legend:
+            ax.legend(loc="upper right", fontsize=7)
+
+
+def draw_phase_plane(ax, motions, velocity_limit=None, joints=(), reference=None):
+    """The phase plane (s, s'): each motion's profile, the maximum velocity curve and the joints.
+
+    Parameters
+    ----------
+    motions : sequence of Motion
+    velocity_limit : (s, s'_max), optional
+        The maximum velocity curve [R, R/s] (inf where no limit binds).
+    joints : sequence of float
+        s at the joints between pieces (half-steps, rolls) (dotted verticals) [R].
+    reference : (label, s, s'), optional
+        Another profile to draw dashed (e.g. an independent computation).
+    """
+    tops = []
+    if velocity_limit is not None:
+        s, top = velocity_limit
+        top = np.where(np.isfinite(top), top, np.nan)
+        ax.plot(s, top, color=LIMIT, linewidth=1.2, label="maximum velocity curve (limits)")
+        if np.any(np.isfinite(top)):
+            tops.append(np.nanpercentile(top, 50))
+    for m in motions:
+        ax.plot(m.s, m.s_dot, linewidth=1.1, label=m.timing, color=LAW.get(m.timing))
+        tops.append(float(m.s_dot.max()))
+    if reference is not None:
+        label, s, sd = reference
+        ax.plot(s, sd, color=LIMIT, linestyle=(0, (3, 3)), linewidth=0.9, label=label, zorder=5)  # on top
+    for sj in joints:
+        ax.axvline(sj, color="0.7", linestyle=":", linewidth=0.8)
+    ax.set_ylim(0, 1.15 * max(tops) if max(tops) > 0 else 1.0)
+    ax.set_xlabel("contact arc length s [R]   (dotted: joints between pieces)")
+    ax.set_ylabel("s' [R/s]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="lower center", fontsize=7, ncol=3, framealpha=0.95)
+
+
+def plot_timing(motions, velocity_limit=None, title: str = "", reference=None) -> Figure:
+    """Rates and torques in time (one column per motion, limits dashed) above the phase plane (s, s').
+
+    Parameters
+    ----------
+    motions : Motion or sequence of Motion
+        Timed motions of one path (e.g. the same plan under several laws).
+    velocity_limit : (s, s'_max), optional
+        The maximum velocity curve, :func:`rollplan.execution.timing.velocity_limit`.
+    title : str
+    reference : (label, s, s'), optional
+        A profile drawn dashed in the phase plane.
+    """
+    if not isinstance(motions, (list, tuple)):
+        motions = [motions]
+    n = len(motions)
+    fig = Figure(figsize=(max(7.0, 4.2 * n), 9.0), layout="constrained")
+    grid = fig.add_gridspec(3, n)
+    for col, m in enumerate(motions):
+        ax_r = fig.add_subplot(grid[0, col])
+        ax_t = fig.add_subplot(grid[1, col], sharex=ax_r)
+        draw_rates_torques(ax_r, ax_t, m, legend=col == 0)
+    path = motions[0].path   # None for the empty motion
+    draw_phase_plane(fig.add_subplot(grid[2, :]), motions, velocity_limit, () if path is None else path.joints,
+                     reference)
+    m = motions[0]
+    r = m.robot
+    fig.suptitle(title or (f"R = {r.radius:.6g} m, k = {r.k:.6g}, {m.limits.describe()}; "
+                           f"{int(m.segment.max()) + 1} pieces"), fontsize=10)
+    return fig

@@ -1,0 +1,257 @@
+"""Full reconfiguration in numbers: writes results/reconfiguration.md, reconfiguration.json and composed.png.
+
+Every number is a measurement of this run:
+
+* the approach/departure roll: its closed form against CVODES on the model's curve ODE and against
+  scipy's DOP853 on the printed (15), (16), (20) (``tests/references.py``), down to and past the margin;
+* random start/goal pairs (contact points anywhere in the region): modes, lengths, the certificate's
+  residual, the residual of the independent DOP853 integration of the whole composed motion, time,
+  the corners of the contact path at the joints, and how much ``legs="shortest"`` saves over the
+  default ``"fallback"``;
+* turning in place for several psi and k;
+* a route of five waypoints;
+* the JSON trajectory replayed by DOP853 along its sampled contact path, for several sample counts;
+* the figure of a composed plan, results/composed.png.
+
+Run: ``python scripts/reconfiguration.py [--out-dir results] [--quick]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import rollplan
+from rollplan.core.paths import PathIntegrator
+from rollplan.io import save_figure, write_atomic, write_json
+from rollplan.planners.geometric import ComposedPlanner, as_composed
+from rollplan.planners.geometric.maneuvers import StraightRoll
+from rollplan.plots.composed import plot_composed
+from rollplan.problem import N3Z_MIN, Problem
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+import references as ref  # noqa: E402  (the independent references of the tests)
+
+SIGMA_MAX = math.acos(N3Z_MIN)
+
+
+contact_at = ref.polar_contact
+reference_final = ref.composed_final
+
+
+def residual(final, goal):
+    d = np.asarray(final, float) - np.asarray(goal, float)
+    d[2] = ref.wrap(d[2])
+    return float(np.linalg.norm(d))
+
+
+def dop853_residual(p):
+    c = as_composed(p)
+    pr = c.problem
+    return residual(reference_final(c.pieces, pr.scaled(pr.start), c.k), pr.scaled(pr.goal))
+
+
+def corners(pieces):
+    """Angles [deg] between the contact path's tangents at the end of each piece and the start of the next:
+    ``{"leaf-leaf": [...], "other": [...]}`` (joints between the leaves of one leg of figure eights, and
+    the rest: rolls to leaves, leg to leg, circle to circle).
+
+    The map from the sphere's tangent plane at the contact point to the plane's ((15)-(16)) preserves
+    angles, so these are the corners of the path on the plane too. Tangents are chords of length 1e-7 rad
+    in the piece parameter.
+    """
+    out = {"leaf-leaf": [], "other": []}
+    h = 1e-7
+    for a, b in zip(pieces[:-1], pieces[1:]):
+        end = ref.contact_point(*a.contact([2 * np.pi - h, 2 * np.pi]).T)
+        begin = ref.contact_point(*b.contact([0.0, h]).T)
+        t1, t2 = end[1] - end[0], begin[1] - begin[0]
+        c = np.dot(t1, t2) / (np.linalg.norm(t1) * np.linalg.norm(t2))
+        same_leg = a.kind == b.kind == "leaf" and (a.params, a.gamma) == (b.params, b.gamma)
+        key = "leaf-leaf" if same_leg else "other"
+        out[key].append(math.degrees(math.acos(max(-1.0, min(1.0, c)))))
+    return out
+
+
+def rolls(quick):
+    rows = []
+    integ = PathIntegrator()
+    for n3z in (0.5, N3Z_MIN, 0.01) if not quick else (N3Z_MIN,):
+        sigma = math.acos(n3z)
+        worst_cv = worst_dop = 0.0
+        for beta in np.linspace(-3.0, 3.0, 7 if not quick else 3):
+            u, v = contact_at(sigma, beta)
+            for k in (0.0, 2.5, 10.0, 100.0):
+                for kind in ("approach", "departure"):
+                    roll = StraightRoll.make(u, v, kind)
+                    start = np.array([0, 0, 0, u, v]) if kind == "approach" else np.zeros(5)
+                    cv = integ.ends([roll.piece()], start, k)[-1, :3]
+                    ends = (sigma, 0.0) if kind == "approach" else (0.0, sigma)
+                    dop = ref.integrate_contact_path(ref.great_circle_path(roll.beta, *ends), np.zeros(3), (0, 1),
+                                                     k).y[:, -1]
+                    worst_cv = max(worst_cv, residual(cv, roll.element()))
+                    worst_dop = max(worst_dop, residual(dop, roll.element()))
+        rows.append({"n3z": n3z, "cvodes": worst_cv, "dop853": worst_dop})
+    return rows
+
+
+def random_pairs(quick):
+    rng = np.random.default_rng(2024)
+    fallback, shortest = ComposedPlanner(), ComposedPlanner(legs="shortest")
+    fallback.solve(Problem((0.0, 1.0, 0.0), k=2.5))   # build once
+    rows = []
+    for i in range(6 if quick else 30):
+        start = (*rng.uniform(-1.5, 1.5, 2), rng.uniform(-4, 4),
+                 *contact_at(rng.uniform(0, SIGMA_MAX), rng.uniform(-np.pi, np.pi)))
+        goal = (*rng.uniform(-1.5, 1.5, 2), rng.uniform(-4, 4),
+                *contact_at(rng.uniform(0, SIGMA_MAX), rng.uniform(-np.pi, np.pi)))
+        k, steps = float(rng.uniform(0.5, 12.0)), int(rng.integers(1, 4))
+        problem = Problem(goal, start=start, k=k, steps=steps)
+        row = {"case": i, "k": k, "steps": steps}
+        try:
+            t0 = time.perf_counter()
+            p = fallback.solve(problem)
+            row.update(time_s=time.perf_counter() - t0, mode=p.mode, length=p.path_length,
+                       rolls=sum(q.length for q in p.pieces if q.kind in ("approach", "departure")),
+                       certificate=p.residual, dop853=dop853_residual(p), corners=corners(p.pieces))
+            t0 = time.perf_counter()
+            q = shortest.solve(problem)
+            row.update(shortest_time_s=time.perf_counter() - t0, shortest_mode=q.mode, shortest_length=q.path_length,
+                       shortest_dop853=dop853_residual(q))
+        except rollplan.NoPlanError as exc:
+            row["no_plan"] = str(exc)
+        rows.append(row)
+        print(f"pair {i}: {row.get('mode')} {row.get('length', float('nan')):.4f} -> "
+              f"{row.get('shortest_length', float('nan')):.4f}", file=sys.stderr)
+    return rows
+
+
+def turns(quick):
+    rows = []
+    planner = ComposedPlanner()
+    for k in (0.0, 2.5, 10.0, 30.0) if not quick else (2.5,):
+        for psi in (0.3, 1.0, 3.0) if not quick else (1.0,):
+            t0 = time.perf_counter()
+            p = planner.solve(Problem((0.0, 0.0, psi), k=k))
+            dt = time.perf_counter() - t0
+            rows.append({"k": k, "psi": psi, "b": p.turn.b, "length": p.path_length, "time_s": dt,
+                         "certificate": p.residual, "dop853": dop853_residual(p)})
+    return rows
+
+
+ROUTE = [(0, 0, 0), (1.0, 0.5, 0.3), (1.0, 0.5, 1.3), (1.2, 0.4, 1.5, 0.3, -0.2), (0, 0, 0, 0, 0)]
+
+
+def route():
+    t0 = time.perf_counter()
+    r = rollplan.plan_route(ROUTE, k=2.5)
+    dt = time.perf_counter() - t0
+    x, worst = np.asarray(rollplan.State.of(ROUTE[0]), float), 0.0
+    for p, w in zip(r.plans, ROUTE[1:]):
+        x = reference_final(as_composed(p).pieces, x, 2.5)
+        worst = max(worst, residual(x, rollplan.State.of(w)))
+    return {"modes": r.stats.details["modes"], "length": r.path_length, "time_s": dt, "certificate": r.residual,
+            "waypoint_residuals": [float(v) for v in r.waypoint_residuals], "dop853_worst_waypoint": worst}
+
+
+def replay(p, samples):
+    """Max |replayed - sampled| of (u_a, v_a, psi) and |replayed end - goal| (DOP853 along splines of the samples)."""
+    tr = p.sample(samples)
+    out = ref.replay(tr.u_o, tr.v_o, tr.segment, tr.state[0, :3], p.k)
+    err = tr.state[:, :3] - out
+    err[:, 2] = ref.wrap(err[:, 2])
+    return float(np.abs(err).max()), residual(np.r_[out[-1], tr.state[-1, 3:]], p.goal)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out-dir", default="results")
+    ap.add_argument("--quick", action="store_true", help="a few cases only (for the tests of this script)")
+    args = ap.parse_args(argv)
+    out = Path(args.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    data = {"load_average_at_start": os.getloadavg()[0], "rolls": rolls(args.quick), "pairs": random_pairs(args.quick),
+            "turns": turns(args.quick), "route": route()}
+    fig_plan = rollplan.plan((0.0, 0.0, 1.5, -0.4, 0.4), k=2.5, start=(0.0, 0.0, 0.0, 0.5, -0.3))
+    data["figure"] = {"mode": fig_plan.mode, "length": fig_plan.path_length, "residual": fig_plan.residual,
+                      "lengths": fig_plan.lengths()}
+    data["replay"] = [{"samples": n, **dict(zip(("max_error", "end_error"), replay(fig_plan, n)))}
+                      for n in ((501, 2001) if args.quick else (501, 2001, 8001))]
+    save_figure(plot_composed(fig_plan, fig_plan.sample(4000)), out / "composed.png")
+    data["total_time_s"] = time.perf_counter() - t0
+    write_json(out / "reconfiguration.json", data)
+    write_atomic(out / "reconfiguration.md", report(data).encode())
+    print(f"wrote {out / 'reconfiguration.md'}, reconfiguration.json, composed.png "
+          f"({data['total_time_s']:.0f} s)", file=sys.stderr)
+    return 0
+
+
+def report(d) -> str:
+    L = ["# Full reconfiguration: measurements", "",
+         "Written by `scripts/reconfiguration.py` (rerun it to regenerate). Residuals are Euclidean norms over "
+         "(u_a, v_a in R, psi wrapped, u_o, v_o); *certificate* is the planner's CVODES integration of the whole "
+         "composed motion from the start state, *DOP853* an independent integration of the printed (15), (16), (20) "
+         "along the same contact path (`tests/references.py`). Times are wall times on a shared 2-core machine "
+         f"(load average {d['load_average_at_start']:.1f} at the start): upper bounds.", "",
+         "## Approach and departure rolls: closed form against integration", "",
+         "Worst difference over directions beta, k in {0, 2.5, 10, 100}, approach and departure:", "",
+         "| n3z of the off-pole end | CVODES (model's curve ODE) | DOP853 (printed equations) |", "|---|---|---|"]
+    L += [f"| {r['n3z']:g} | {r['cvodes']:.1e} | {r['dop853']:.1e} |" for r in d["rolls"]]
+    pairs = [r for r in d["pairs"] if "mode" in r]
+    modes = {}
+    for r in pairs:
+        modes[r["mode"]] = modes.get(r["mode"], 0) + 1
+    times = np.array([r["time_s"] for r in pairs])
+    stimes = np.array([r["shortest_time_s"] for r in pairs])
+    saving = np.array([1 - r["shortest_length"] / r["length"] for r in pairs])
+    corner = np.concatenate([r["corners"]["other"] for r in pairs])
+    smooth = np.concatenate([r["corners"]["leaf-leaf"] for r in pairs])
+    L += ["", "## Random start and goal states", "",
+          f"{len(d['pairs'])} pairs (seed 2024): positions in [-1.5, 1.5]^2 R, psi in [-4, 4], both contact points "
+          "uniform in direction and polar angle up to the margin (n3z >= 0.05), k in [0.5, 12], n in {1, 2, 3}.", "",
+          f"* planned and certified: {len(pairs)} of {len(d['pairs'])}; modes (default `legs=\"fallback\"`): "
+          + ", ".join(f"{m} {c}" for m, c in sorted(modes.items())),
+          f"* worst certificate residual {max(r['certificate'] for r in pairs):.1e}; worst DOP853 residual "
+          f"{max(r['dop853'] for r in pairs):.1e}; worst DOP853 residual of the `shortest` plans "
+          f"{max(r['shortest_dop853'] for r in pairs):.1e} (tolerance 1e-9)",
+          f"* path length {min(r['length'] for r in pairs):.3g} to {max(r['length'] for r in pairs):.3g} R, "
+          f"of which rolls {min(r['rolls'] for r in pairs):.3g} to {max(r['rolls'] for r in pairs):.3g} R",
+          f"* time per plan (default): median {np.median(times):.3g} s, max {times.max():.3g} s; with "
+          f"`legs=\"shortest\"`: median {np.median(stimes):.3g} s, max {stimes.max():.3g} s",
+          f"* `shortest` found a shorter (two-leg) plan in {int((saving > 1e-9).sum())} of {len(pairs)} pairs; "
+          f"saving median {np.median(saving) * 100:.1f} %, max {saving.max() * 100:.1f} %",
+          f"* corners of the contact path at the joints (angle between the tangents before and after): where a "
+          f"roll meets a leaf or one leg the next, median {np.median(corner):.0f} deg, max {corner.max():.0f} deg "
+          f"over {corner.size} joints; between the leaves of one leg at most {smooth.max():.1e} deg over "
+          f"{smooth.size} joints (the figure eights of a leg join smoothly). The time law rests at every joint."]
+    L += ["", "## Turning in place", "", "| k | psi | circle b [R] | path [R] | certificate | DOP853 | time [s] |",
+          "|---|---|---|---|---|---|---|"]
+    L += [f"| {r['k']:g} | {r['psi']:g} | {r['b']:.6f} | {r['length']:.4f} | {r['certificate']:.1e} | "
+          f"{r['dop853']:.1e} | {r['time_s']:.3f} |" for r in d["turns"]]
+    r = d["route"]
+    L += ["", "## A route of five waypoints", "",
+          f"`{ROUTE}` at k = 2.5: leg modes {', '.join(r['modes'])}; {r['length']:.4f} R; one-pass certificate "
+          f"{r['certificate']:.1e}, worst waypoint residual {max(r['waypoint_residuals']):.1e}; DOP853 through the "
+          f"whole route, worst waypoint {r['dop853_worst_waypoint']:.1e}; {r['time_s']:.2f} s."]
+    f = d["figure"]
+    L += ["", "## The figure and the trajectory replay", "",
+          "`composed.png`: contact (0.5, -0.3) to (-0.4, 0.4), psi 0 to 1.5 at the same plane point, k = 2.5: "
+          f"mode {f['mode']}, {f['length']:.4f} R ("
+          + ", ".join(f"{k} {v:.3f}" for k, v in f["lengths"].items()) + f"), residual {f['residual']:.1e}.", "",
+          "(15), (16), (20) integrated by DOP853 along cubic splines of the sampled (u_o, v_o) alone "
+          "(one spline per segment) against the sampled (u_a, v_a, psi):", "",
+          "| samples | max difference | end to goal |", "|---|---|---|"]
+    L += [f"| {r['samples']} | {r['max_error']:.1e} | {r['end_error']:.1e} |" for r in d["replay"]]
+    L += ["", f"Total run time {d['total_time_s']:.0f} s.", ""]
+    return "\n".join(L)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
