@@ -470,6 +470,11 @@ def _add_target_options(parser, to_default, steps_help) -> None:
                             help="target contact point (u_a, v_a) on the plane (default %g %g)" % tuple(to_default))
     parser.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
     parser.add_argument("--steps", type=_whole, default=1, help=steps_help)
+    _add_robot_options(parser)
+
+
+def _add_robot_options(parser) -> None:
+    """--k | --robot, --radius: the robot, as in ``plan``."""
     g = parser.add_mutually_exclusive_group()
     g.add_argument("--k", type=_number, default=None, help=_K_HELP)
     g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
@@ -605,8 +610,8 @@ def _add_timing_options(parser) -> None:
                              + ". Every law rests at the corners of the contact path (where a roll meets the figure "
                                "eights). Without --duration: the law's shortest duration within the robot's limits")
     parser.add_argument("--samples", type=_whole, default=2000,
-                        help="samples of the trajectory in --json and --plot, in all (default 2000); with "
-                             "--duration or --timing also the least number of time samples (at least 400 per "
+                        help="samples of the trajectory in --json and --plot, in all, in [2, 10^7] (default 2000); "
+                             "with --duration or --timing also the least number of time samples (at least 400 per "
                              "piece for min-jerk, 3000 for the other laws)")
     parser.add_argument("--timing-plot", metavar="FILE.png",
                         help="with --duration or --timing: rotor rates and torques in time with the robot's limits, "
@@ -645,12 +650,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="header u_a,v_a,psi[,u_o,v_o][,steps][,label]; one waypoint a row, the first is the start")
     w.add_argument("--steps", type=_whole, default=1,
                    help=f"figure eights n {_STEPS} per leg where a row does not say (default 1)")
-    g = w.add_mutually_exclusive_group()
-    g.add_argument("--k", type=_number, default=None, help=_K_HELP)
-    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
-    w.add_argument("--radius", type=_number, default=None,
-                   help="sphere radius R > 0 [m]; lengths are then in metres (default: lengths in units of R, "
-                        "or the robot's radius)")
+    _add_robot_options(w)
     w.add_argument("--legs", choices=geometric.LEGS, default="fallback", help="as for plan (default fallback)")
     w.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     w.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the route"))

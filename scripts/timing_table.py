@@ -38,7 +38,7 @@ from rollplan.execution.path import ContactPath
 from rollplan.execution.plants import simulate_rotors
 from rollplan.execution.timing import LAWS, velocity_limit
 from rollplan.execution.topp import solve_topp, toppra_available
-from rollplan.io import save_figure, write_atomic, write_json
+from rollplan.io import save_figure, tagged, write_atomic, write_json
 from rollplan.plots.timing import plot_timing
 
 from benchmark import git_commit, machine
@@ -242,7 +242,7 @@ def main(argv=None):
     out = Path(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / "timing.md", to_markdown(report).encode())
-    write_json(out / "timing.json", report)
+    write_json(out / "timing.json", tagged(report, "R"))
     for name, file in (("default", "timing_laws.png"), ("default, slow motor", "timing_rate_limited.png")):
         if settings["figures"] is not None and name in settings["figures"]:
             save_figure(settings["figures"][name], out / file)

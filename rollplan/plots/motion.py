@@ -64,7 +64,8 @@ def plot_motion(motion, plan=None, traj=None, unit="m") -> Figure:
                          [f"$\\varphi_{i + 1}$, {lab}" for i, lab in enumerate(ROTOR_LABELS)],
                          "rotor angle [turns]", "rotor angles", colors=ROTOR)
     r = motion.robot
-    fig.suptitle(f"T = {motion.duration:.6g} s, {int(motion.segment.max()) + 1} pieces (timing {motion.timing}); "
+    pieces = "pieces (leaves, rolls, circles)" if plan is None or hasattr(plan, "pieces") else "half-steps"
+    fig.suptitle(f"T = {motion.duration:.6g} s, {int(motion.segment.max()) + 1} {pieces} (timing {motion.timing}); "
                  f"R = {r.radius:.6g} m, k = {r.k:.6g}, $J_r$ = {r.rotor_inertia_axial:.6g} kg m$^2$")
     return fig
 
