@@ -13,9 +13,9 @@
 ``COMPUTED``, ``PRINTED``     a value computed by rollplan (black) and the value printed in
                               the paper (magenta)
 ``PIECE``, ``TURN``           composed plans: approach roll dark goldenrod, departure roll dark
-                              slate grey, the circles of a turn in place navy and orchid
-``LAW``, ``LIMIT``            timing laws: min-jerk indigo, nonstop-min-jerk teal,
-                              smooth-cruise chocolate, time-optimal slate blue; limits black dashed
+                              slate grey, the circles of a turn in place dark khaki and violet red
+``LAW``, ``LIMIT``            timing laws: min-jerk navy, nonstop-min-jerk teal, smooth-cruise
+                              goldenrod, time-optimal black; the motors' limits dim grey
 ============================  ===========================================================
 
 Every figure that uses a colour names it in a legend (or a colour bar for maps).
@@ -47,9 +47,9 @@ REST = "0.85"
 PIECE = {"approach": "darkgoldenrod", "departure": "darkslategray"}
 PIECE_LABELS = {"approach": "approach roll (to the pole)", "departure": "departure roll (from the pole)"}
 #: The two circles of each pair of a turn in place.
-TURN = ("navy", "orchid")
+TURN = ("darkkhaki", "mediumvioletred")
 TURN_LABELS = ("turn in place, 1st circle", "turn in place, 2nd circle")
 #: Timing laws (rollplan.execution.timing.LAWS), in the phase plane and wherever laws are compared.
-LAW = {"min-jerk": "indigo", "nonstop-min-jerk": "teal", "smooth-cruise": "chocolate", "time-optimal": "slateblue"}
-#: Motor limits (dashed) in the timing figures.
-LIMIT = "black"
+LAW = {"min-jerk": "navy", "nonstop-min-jerk": "teal", "smooth-cruise": "goldenrod", "time-optimal": "black"}
+#: Motor limits (dashed) and the maximum velocity curve in the timing figures.
+LIMIT = "dimgray"

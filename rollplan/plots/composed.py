@@ -79,10 +79,10 @@ def plot_composed(plan, traj, unit="R") -> Figure:
     ax3.legend(handles=ax3.get_legend_handles_labels()[0] + [Line2D([], [], color=REST, linewidth=0.6,
                                                                     label="joints between pieces (at rest)")],
                loc="best", fontsize=8)
-    ax3.set_title("contact angle psi and contact point (u_o, v_o) along the path")
+    ax3.set_title("contact angle and contact point along the path")
     mode = getattr(plan, "mode", "route")
     units = (unit, unit, "rad", "rad", "rad")
     start, goal = (", ".join(f"{float(v):.6g} {u}" for v, u in zip(x, units)) for x in (plan.problem.start, plan.goal))
-    fig.suptitle(f"k = {plan.k:.6g}, {mode}, {len(plan.pieces)} pieces: from (u_a, v_a, psi, u_o, v_o) = ({start}) "
-                 f"to ({goal}); residual {plan.residual:.1e} (Euclidean norm; lengths in R, angles in rad)")
+    fig.suptitle(f"k = {plan.k:.6g}, mode {mode}, {len(plan.pieces)} pieces: from (u_a, v_a, psi, u_o, v_o) = "
+                 f"({start})\nto ({goal}); residual {plan.residual:.1e} (Euclidean norm; lengths in R, angles in rad)")
     return fig

@@ -31,7 +31,9 @@ def draw_rates_torques(ax_rates, ax_torques, motion, legend=True):
                         label=f"$\\tau_{i + 1}$, {ROTOR_LABELS[i]}")
     _limit_lines(ax_rates, lim.max_rotor_rate, 1.0, "max_rotor_rate")
     _limit_lines(ax_torques, lim.max_rotor_torque, 1.0, "max_rotor_torque")
-    shortest = "" if motion.minimum_duration is None else f" (shortest {motion.minimum_duration:.6g} s)"
+    shortest = ("" if motion.minimum_duration is None else " (the shortest)"
+                if abs(motion.duration - motion.minimum_duration) <= 1e-9 * motion.duration
+                else f" (shortest {motion.minimum_duration:.6g} s)")
     ax_rates.set_title(f"{motion.timing}: T = {motion.duration:.6g} s{shortest}", fontsize=10)
     ax_rates.set_ylabel("rotor rate [rad/s]")
     ax_torques.set_ylabel("motor torque [N m]")
