@@ -39,7 +39,7 @@ COSTS = ("path_length", "angular_velocity")
 def gp(target):
     for n in (1, 2, 3):
         try:
-            return plan(target, n, k=K)
+            return plan(target, n, k=K, legs="one")   # one leg of figure eights: the paper's plan
         except NoPlanError:
             continue
     return None
@@ -126,7 +126,7 @@ def convergence_table(rows):
 
 
 def scaling(Ns, repeats, target=(0.5, 0.3, 0.4)):
-    p = plan(target, 1, k=K)
+    p = plan(target, 1, k=K, legs="one")
     res = {}
     for cost in COSTS:
         times, builds, iters, objs, resid = [], [], [], [], []

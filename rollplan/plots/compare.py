@@ -63,9 +63,8 @@ def draw_comparison_series(fig, series: dict, horizon_label: str = "time t [s]",
         ax.set_ylabel(ylabel)
         ax.set_xlabel(horizon_label)
         ax.grid(True, alpha=0.3)
-    axes[0, 0].legend(loc="best", fontsize=8)
-    if rates:
-        axes[1, 0].legend(loc="best", fontsize=8)
+    handles, _ = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=9)   # one legend, off the data
 
 
 def plot_comparison(c, unit: str = "R", series: dict | None = None) -> Figure:
