@@ -57,3 +57,24 @@ def test_scheduler_without_dask_names_the_extra(monkeypatch):
     with pytest.raises(InputError) as err, Executor(scheduler="tcp://127.0.0.1:8786"):
         pass
     assert DASK_EXTRA in str(err.value) and "\n" not in str(err.value)
+
+
+def test_no_fork_while_other_threads_run():
+    """Forking a process that runs other threads (e.g. a Dask client's) can deadlock the workers: spawn then."""
+    import multiprocessing
+    import threading
+
+    from rollplan.studies.executor import start_method
+
+    stop = threading.Event()
+    t = threading.Thread(target=stop.wait, daemon=True)
+    t.start()
+    try:
+        assert start_method() == "spawn"
+        with Executor(2) as ex:
+            assert list(ex.map(abs, [-1, -2, 3])) == [1, 2, 3]
+    finally:
+        stop.set()
+        t.join()
+    if "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1:
+        assert start_method() == "fork"

@@ -20,8 +20,9 @@ Backends:
 ``jobs > 1``
     A pool of worker processes on this machine. Where the ``fork`` start method exists (Linux), the
     workers are forked from this process after ``warm()`` has run here, so they start with whatever
-    ``warm`` built (the planner and its compiled functions) and pay no start-up; elsewhere they are
-    spawned and run ``warm()`` once each. Ctrl-C in this process stops the workers at once.
+    ``warm`` built (the planner and its compiled functions) and pay no start-up; elsewhere, or when this
+    process runs other threads (forking them is unsafe), they are spawned and run ``warm()`` once each.
+    Ctrl-C in this process stops the workers at once.
 ``scheduler = "tcp://host:port"``
     The items are tasks on a Dask distributed cluster (optional extra:
     ``pip install 'rollplan[distributed]'``). The workers must have the same version of rollplan
@@ -46,7 +47,8 @@ from ..errors import InputError, check_whole
 from ..progress import silence
 from ..version import __version__
 
-__all__ = ["Executor", "ExecutorError", "map_in_order", "DASK_EXTRA", "CONNECT_TIMEOUT", "WORKERS_TIMEOUT"]
+__all__ = ["Executor", "ExecutorError", "map_in_order", "start_method", "DASK_EXTRA", "CONNECT_TIMEOUT",
+           "WORKERS_TIMEOUT"]
 
 log = logging.getLogger(__name__)
 
@@ -87,8 +89,12 @@ def _worker_version() -> str:
     return __version__
 
 
-def _start_method() -> str:
-    return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+def start_method() -> str:
+    """``fork`` where it exists and this process runs no other thread (a fork copies locks held by other
+    threads, e.g. those of a Dask client, and can deadlock the workers); ``spawn`` otherwise."""
+    if "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1:
+        return "fork"
+    return "spawn"
 
 
 class Executor:
@@ -173,7 +179,7 @@ class Executor:
         return self._map_pool(fn, items)
 
     def _map_pool(self, fn, items):
-        method = _start_method()
+        method = start_method()
         ctx = multiprocessing.get_context(method)
         workers = min(self.jobs, len(items))
         if method == "fork":
