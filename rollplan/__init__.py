@@ -40,14 +40,14 @@ from .planners.geometric import (  # noqa: E402
 from .problem import N3Z_MIN, STATE_NAMES, Problem, State  # noqa: E402
 from .result import Certificate, Measures, PlanResult, SolverStats, Trajectory  # noqa: E402
 from .robot import Robot, default_robot, load_robot  # noqa: E402
+from .version import __version__  # noqa: E402
 from .waypoints import read_waypoints  # noqa: E402
 
 if _GUARDED and not _interrupts.cli_follows():   # python -m rollplan.<another module>: guard no longer
     _interrupts.end_start_up()
 
-__version__ = "0.1.0"
-
 __all__ = [
+    "__version__",
     "A_MAX", "Curve", "Piece", "circle_point", "figure_eight",
     "InputError", "NoPlanError", "SolverError",
     "STATE_NAMES", "N3Z_MIN", "State", "Problem",

@@ -1,9 +1,17 @@
-"""The ``rollplan`` command. Exit codes: 0 success, 2 bad input, 3 no plan, 4 solver failure, 130 interrupted
-(Ctrl-C)."""
+"""The rollplan command: exact motion planning for a spherical robot driven by two internal rotors.
+
+Exit codes: 0 success, 2 bad input, 3 no plan, 4 solver failure, 130 interrupted (Ctrl-C); batch: 1 when
+some rows failed, 3 when every row failed. `--json -` writes the JSON document to stdout and the summary to
+stderr.
+Lengths are printed in the unit in use (R, or m with --robot or --radius), summaries with 6
+significant digits (JSON files in full precision); long work shows its progress on stderr.
+"""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import json
 import logging
 import os
 import re
@@ -14,30 +22,33 @@ from . import interrupts
 from .core.curves import A_MAX
 from .errors import InputError, NoPlanError, SolverError, check_finite, check_whole
 from .inputs import parse_number, parse_whole, show_path
-from .io import check_figure_path, check_writable, composed_to_dict, route_to_dict, save_figure, write_json
+from .io import check_figure_path, check_writable, composed_to_dict, route_to_dict, save_figure, tagged, write_json
 from .outputs import claim
 from .planners import geometric
 from .planners.geometric import as_composed
-from .problem import STATE_NAMES
+from .problem import DEFAULT_K, K_MAX, MAX_STEPS, STATE_NAMES
+from .progress import Progress, report, reporting
 from .robot import default_robot, load_robot
+from .version import __version__
 from .waypoints import read_waypoints
 
-EXIT_OK, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER, EXIT_INTERRUPTED = 0, 2, 3, 4, 130
-#: k of ``plan`` and ``compare`` when neither --k nor --robot is given (the paper's case study).
-DEFAULT_K = 2.5
+EXIT_OK, EXIT_SOME_FAILED, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
+#: What a residual is (printed next to every residual and arrival error).
+NORM = "Euclidean norm; lengths in R, angles in rad"
+#: Numbers as argparse should see them: also in exponent form (-1e-3) and -inf/-nan (refused later by the
+#: number check, with a clear message, instead of being taken for an option).
+_NEGATIVE_NUMBER = re.compile(r"^-([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports bad input in one line with exit code 2, and takes ``-1e-3`` for a number."""
+    """argparse that takes negative numbers in any form and reports bad input in one line with exit code 2."""
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        # argparse's own pattern misses exponents (-1e-3) and would read them as options
-        self._negative_number_matcher = re.compile(r"^-(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?$"
-                                                   r"|^-(?i:inf|infinity|nan)$")
+        self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message):
-        self.exit(EXIT_INPUT, f"{self.prog}: error: {message}\n")
+        self.exit(EXIT_INPUT, f"{self.prog}: error: {message} (see: {self.prog} --help)\n")
 
 
 def _number(text: str) -> float:
@@ -64,7 +75,7 @@ class _Claims:
 def _check_outputs(json=None, figure=None, inputs=()) -> None:
     """Refuse unwritable output paths, unknown figure formats, outputs that are inputs and two outputs that are
     one file before any computation, and hold the outputs (a second process writing one of them is refused)."""
-    if json is not None:
+    if json is not None and json != "-":
         check_writable(json, inputs=inputs)
     if figure is not None:
         check_figure_path(figure)
@@ -81,6 +92,22 @@ def _check_outputs(json=None, figure=None, inputs=()) -> None:
         _Claims.stack.enter_context(claim(json, figure))
 
 
+def _emit_json(args, obj, unit: str) -> None:
+    """Write ``obj`` (with ``version`` and ``units``) to ``--json FILE``, or to stdout for ``--json -``."""
+    doc = tagged(obj, unit)
+    if args.json == "-":
+        args.stdout.write(json.dumps(doc, indent=1, allow_nan=False) + "\n")
+        args.stdout.flush()
+    else:
+        write_json(args.json, doc)
+        print(f"wrote {args.json}")
+
+
+def _g(x) -> str:
+    """A number in a summary: 6 significant digits."""
+    return f"{x:.6g}"
+
+
 def _k_or_robot(args):
     """(k, robot) from --k / --robot."""
     if args.robot is not None:
@@ -89,14 +116,15 @@ def _k_or_robot(args):
 
 
 def _fmt_plan(p, unit) -> str:
+    f = p.final
     lines = [
-        f"  figure eight  a = {p.a:.9g} {unit}   b = {p.b:.9g} {unit}   gamma = {p.gamma:.9g} rad"
+        f"  figure eight  a = {_g(p.a)} {unit}   b = {_g(p.b)} {unit}   gamma = {_g(p.gamma)} rad"
         f"   (branch m = {p.branch})",
-        f"  one step      h = {p.h:.9g} {unit}   eta = {p.eta:.9g} rad",
-        f"  path length   {p.path_length:.9g} {unit}",
-        f"  final         u_a = {p.final.u_a:.12g}  v_a = {p.final.v_a:.12g}  psi = {p.final.psi:.12g}"
-        f"  u_o = {p.final.u_o:.3g}  v_o = {p.final.v_o:.3g}",
-        f"  residual      {p.residual:.2e} ({p.certificate.method}, independent of the planner)",
+        f"  one step      h = {_g(p.h)} {unit}   eta = {_g(p.eta)} rad",
+        f"  path length   {_g(p.path_length)} {unit}",
+        f"  final         u_a = {_g(f.u_a)} {unit}  v_a = {_g(f.v_a)} {unit}  psi = {_g(f.psi)} rad"
+        f"  u_o = {f.u_o:.3g} rad  v_o = {f.v_o:.3g} rad",
+        f"  residual      {p.residual:.2e} ({NORM}; {p.certificate.method}, independent of the planner)",
     ]
     return "\n".join(lines)
 
@@ -116,8 +144,10 @@ def _fmt_all(p, unit) -> str:
     return "\n".join(lines)
 
 
-def _fmt_state(x) -> str:
-    return "(" + ", ".join(f"{float(v):.9g}" for v in x) + ")"
+def _fmt_state(x, unit) -> str:
+    """A state (u_a, v_a, psi, u_o, v_o) with its units: lengths in ``unit``, angles in rad."""
+    units = (unit, unit, "rad", "rad", "rad")
+    return "(" + ", ".join(f"{_g(float(v))} {u}" for v, u in zip(x, units)) + ")"
 
 
 def _fmt_composed(p, unit) -> str:
@@ -128,26 +158,27 @@ def _fmt_composed(p, unit) -> str:
             "two": "two legs of figure eights through an intermediate pole state"}[p.mode]
     lines = [f"  mode          {p.mode}: {what}"]
     if p.approach is not None:
-        lines.append(f"  approach      roll of {p.approach.sigma * R:.9g} {unit} to the pole along the great circle "
-                     f"(direction beta = {p.approach.beta:.6g} rad)")
+        lines.append(f"  approach      roll of {_g(p.approach.sigma * R)} {unit} to the pole along the great circle "
+                     f"(direction beta = {_g(p.approach.beta)} rad)")
     if p.legs or p.turn is not None:
         t = p.target
-        lines.append(f"  eights do     (u_a, v_a, psi) = ({t[0] * R:.9g}, {t[1] * R:.9g}, {t[2]:.9g}) "
-                     "from rest at the pole")
+        lines.append(f"  eights do     (u_a, v_a, psi) = ({_g(t[0] * R)} {unit}, {_g(t[1] * R)} {unit}, "
+                     f"{_g(t[2])} rad) from rest at the pole")
     for i, leg in enumerate(p.legs, 1):
         s = R / leg.radius
-        lines.append(f"  leg {i}         {leg.steps} x figure eight a = {leg.a * s:.9g} {unit}   b = {leg.b * s:.9g} "
-                     f"{unit}   gamma = {leg.gamma:.9g} rad   (branch m = {leg.branch})")
+        lines.append(f"  leg {i}         {leg.steps} x figure eight a = {_g(leg.a * s)} {unit}   b = {_g(leg.b * s)} "
+                     f"{unit}   gamma = {_g(leg.gamma)} rad   (branch m = {leg.branch})")
     if p.turn is not None:
         tr = p.turn
-        lines.append(f"  turn          {tr.steps} pair(s) of circles b = {tr.b * R:.9g} {unit} "
-                     f"({'+y' if tr.side == 0 else '-y'} side), eta = {tr.eta:.9g} rad each")
+        lines.append(f"  turn          {tr.steps} pair(s) of circles b = {_g(tr.b * R)} {unit} "
+                     f"({'+y' if tr.side == 0 else '-y'} side), eta = {_g(tr.eta)} rad each")
     if p.departure is not None:
-        lines.append(f"  departure     roll of {p.departure.sigma * R:.9g} {unit} from the pole along the great "
-                     f"circle (direction beta = {p.departure.beta:.6g} rad)")
-    lines += [f"  path length   {p.path_length:.9g} {unit} in {len(p.pieces)} pieces",
-              f"  final         {_fmt_state(p.final)}",
-              f"  residual      {p.residual:.2e} ({p.certificate.method}, the whole motion from the start state)"]
+        lines.append(f"  departure     roll of {_g(p.departure.sigma * R)} {unit} from the pole along the great "
+                     f"circle (direction beta = {_g(p.departure.beta)} rad)")
+    lines += [f"  path length   {_g(p.path_length)} {unit} in {len(p.pieces)} pieces",
+              f"  final         {_fmt_state(p.final, unit)}",
+              f"  residual      {p.residual:.2e} ({NORM}; {p.certificate.method}, the whole motion from the start "
+              "state)"]
     return "\n".join(lines)
 
 
@@ -198,20 +229,29 @@ def _plan_inputs(args, inputs=()):
     return k, _robot_for_duration(args, k, robot)
 
 
+def _stage(args, command: str, name: str) -> None:
+    """Report the stage ``name`` of ``plan`` or ``route`` as progress (so long work is never silent)."""
+    stages = ["planning"] + ["timing"] * _is_timed(args) + ["sampling"] * bool(args.json or args.plot) + \
+        ["writing JSON"] * bool(args.json) + ["drawing"] * bool(args.plot or args.timing_plot) + ["done"]
+    report(command, stages.index(name), len(stages) - 1, stage=name)
+
+
 def cmd_plan(args) -> int:
     k, robot = _plan_inputs(args)
     goal = (args.to[0], args.to[1], args.psi, args.contact[0], args.contact[1])
+    _stage(args, "plan", "planning")
     p = geometric.plan(goal, args.steps, k, robot, args.radius, args.all, args.method, branch=args.branch,
                        start=args.start, legs=args.legs)
-    unit = "m" if robot is not None else ("R" if args.radius is None else "units")
+    unit = p.problem.unit
     g = p.goal
     composed = hasattr(p, "pieces")
+    radius = f"R = {_g(p.radius)} {'m' if unit == 'm' else '(lengths in units of R)'}"
     if composed or tuple(p.problem.start) != (0.0,) * 5:
-        print(f"rollplan: k = {p.k:.9g}, R = {p.radius:g}, steps = {p.steps}, from (u_a, v_a, psi, u_o, v_o) = "
-              f"{_fmt_state(p.problem.start)} to {_fmt_state(g)}")
+        print(f"rollplan: k = {_g(p.k)}, {radius}, steps = {p.steps}, from (u_a, v_a, psi, u_o, v_o) = "
+              f"{_fmt_state(p.problem.start, unit)} to {_fmt_state(g, unit)}")
     else:
-        print(f"rollplan: k = {p.k:.9g}, R = {p.radius:g}, steps = {p.steps}, target (u_a, v_a, psi) = "
-              f"({g.u_a:g}, {g.v_a:g}, {g.psi:g})")
+        print(f"rollplan: k = {_g(p.k)}, {radius}, steps = {p.steps}, target (u_a, v_a, psi) = "
+              f"({_g(g.u_a)} {unit}, {_g(g.v_a)} {unit}, {_g(g.psi)} rad)")
     print(_fmt_composed(p, unit) if composed else _fmt_plan(p, unit))
     details = p.stats.details
     if "branches" in details:
@@ -222,18 +262,24 @@ def cmd_plan(args) -> int:
           f"{p.stats.time_s * 1e3:.1f} ms")
     if args.all:
         print(_fmt_all(p, unit))
-    _write_results(args, p, robot, unit, composed_to_dict)
+    _write_results(args, p, robot, unit, composed_to_dict, "plan")
     return EXIT_OK
 
 
-def _write_results(args, p, robot, unit, to_dict) -> None:
+def _write_results(args, p, robot, unit, to_dict, command) -> None:
     """--duration/--timing, --json, --plot and --timing-plot of ``plan`` and ``route``: ``args.samples``
-    trajectory samples in all."""
+    trajectory samples in all; each stage reported as progress."""
+    if _is_timed(args):
+        _stage(args, command, "timing")
     motion, extra = _timed(args, p, robot) if _is_timed(args) else (None, {})
+    if args.json or args.plot:
+        _stage(args, command, "sampling")
     traj = as_composed(p).sample(args.samples) if (args.json or args.plot) else None
     if args.json:
-        write_json(args.json, {**to_dict(p, traj), **extra})
-        print(f"wrote {args.json}")
+        _stage(args, command, "writing JSON")
+        _emit_json(args, {**to_dict(p, traj), **extra}, unit)
+    if args.plot or args.timing_plot:
+        _stage(args, command, "drawing")
     if args.plot and motion is not None:
         from .plots.motion import plot_motion
 
@@ -242,12 +288,12 @@ def _write_results(args, p, robot, unit, to_dict) -> None:
     elif args.plot and not hasattr(p, "pieces"):
         from .plots.plan import plot_plan
 
-        save_figure(plot_plan(p, traj, unit or "R"), args.plot)
+        save_figure(plot_plan(p, traj, unit), args.plot)
         print(f"wrote {args.plot}")
     elif args.plot:
         from .plots.composed import plot_composed
 
-        save_figure(plot_composed(p, traj, unit or "R"), args.plot)
+        save_figure(plot_composed(p, traj, unit), args.plot)
         print(f"wrote {args.plot}")
     if args.timing_plot:
         from .execution.timing import velocity_limit
@@ -263,26 +309,21 @@ def cmd_route(args) -> int:
     k, robot = _plan_inputs(args, inputs=[args.waypoints])
     waypoints = read_waypoints(args.waypoints)
     print(f"rollplan route: {len(waypoints)} waypoints from {args.waypoints}")
-    # a bar on a terminal only: piped or captured, stderr holds nothing but the one line of a refusal
-    progress = _Progress() if sys.stderr.isatty() else None
-    try:
-        r = geometric.plan_route(waypoints, args.steps, k, robot, args.radius, args.legs, args.method,
-                                 progress=None if progress is None else
-                                 (lambda done, total: progress("legs", done, total)))
-    finally:  # Ctrl-C: exit 130 in main()
-        if progress is not None:
-            progress.close()
-    unit = "m" if robot is not None else ("R" if args.radius is None else "units")
-    print(f"rollplan route: k = {r.k:.9g}, R = {r.radius:g}, {len(r.plans)} legs, default steps = {r.steps}")
+    r = geometric.plan_route(waypoints, args.steps, k, robot, args.radius, args.legs, args.method,
+                             progress=lambda done, total: report("route", done, total, stage="legs"))
+    unit = r.problem.unit
+    print(f"rollplan route: k = {_g(r.k)}, R = {_g(r.radius)} {'m' if unit == 'm' else '(lengths in units of R)'}, "
+          f"{len(r.plans)} legs, default steps = {r.steps}")
     for i, (p, w, res) in enumerate(zip(r.plans, r.waypoints[1:], r.waypoint_residuals), 1):
         label = f" {w.label!r}" if w.label else ""
-        print(f"  leg {i} to waypoint {i + 1}{label} {_fmt_state(w.state)}: {getattr(p, 'mode', 'one')}, "
-              f"{p.path_length:.6g} {unit}, waypoint residual {res:.2e}")
-    print(f"  path length   {r.path_length:.9g} {unit} in {len(r.pieces)} pieces")
-    print(f"  final         {_fmt_state(r.final)}")
-    print(f"  residual      {r.residual:.2e} ({r.certificate.method}, the whole route from the first waypoint)")
+        print(f"  leg {i} to waypoint {i + 1}{label} {_fmt_state(w.state, unit)}: {getattr(p, 'mode', 'one')}, "
+              f"{_g(p.path_length)} {unit}, waypoint residual {res:.2e}")
+    print(f"  path length   {_g(r.path_length)} {unit} in {len(r.pieces)} pieces")
+    print(f"  final         {_fmt_state(r.final, unit)}")
+    print(f"  residual      {r.residual:.2e} ({NORM}; {r.certificate.method}, the whole route from the first "
+          "waypoint)")
     print(f"  time          {r.stats.time_s:.2f} s")
-    _write_results(args, r, robot, unit, route_to_dict)
+    _write_results(args, r, robot, unit, route_to_dict, "route")
     return EXIT_OK
 
 
@@ -297,22 +338,22 @@ def _timed(args, p, robot):
     motion = actuate(p, robot, args.duration, args.samples, timing)
     sim = certify_motion(motion)
     lim = motion.limits
-    print(f"  motion        T = {motion.duration:g} s, {motion.time.size} samples, timing {timing}"
+    print(f"  motion        T = {_g(motion.duration)} s, {motion.time.size} samples, timing {timing}"
           f"{' (rest-to-rest per piece: leaf, roll)' if timing == 'min-jerk' else ''}")
     if motion.path is None:
         print("  limits        none needed: the plan is the empty motion (at rest)")
     elif lim.any:
         print(f"  limits        {lim.describe()}: the shortest feasible duration with timing {timing} is "
-              f"{round_up(motion.minimum_duration):.6g} s")
+              f"{_g(round_up(motion.minimum_duration))} s")
     else:
         print("  limits        none in the robot file (add max_rotor_rate [rad/s] and max_rotor_torque [N m] "
               "to keep the motors within them)")
     rate, torque = abs(motion.rotor_rates).max(), abs(motion.rotor_torques).max()
     use_rate = f" ({rate / lim.max_rotor_rate:.1%} of the limit)" if lim.max_rotor_rate is not None else ""
     use_torque = f" ({torque / lim.max_rotor_torque:.1%} of the limit)" if lim.max_rotor_torque is not None else ""
-    print(f"  rotors        max |rate| = {rate:.4g} rad/s{use_rate}   max |torque| = {torque:.4g} N m{use_torque}")
-    print(f"  rotor-only    arrival error {sim.arrival_error:.2e} (position {sim.position_error:.2e} R; "
-          "spline through the rotor rates, (11) and (6)-(10) by CVODES)")
+    print(f"  rotors        max |rate| = {_g(rate)} rad/s{use_rate}   max |torque| = {_g(torque)} N m{use_torque}")
+    print(f"  rotor-only    arrival error {sim.arrival_error:.2e} ({NORM}), position error "
+          f"{sim.position_error * robot.radius:.2e} m (spline through the rotor rates, (11) and (6)-(10) by CVODES)")
     extra = motion_to_dict(motion)
     extra["rotor_simulation"] = {"arrival_error": sim.arrival_error, "position_error": sim.position_error,
                                  "final": [float(v) for v in sim.final]}
@@ -324,36 +365,13 @@ def cmd_step(args) -> int:
     r = geometric.step(args.a, args.b, k=args.k, gamma=args.gamma)
     u, v = r.shift
     # final psi of one step equals eta
-    print(f"rollplan step: a = {r.a:g} R, b = {r.b:g} R, k = {r.k:g}, gamma = {r.gamma:g} rad")
-    print(f"  h = {r.h:.12g} R   eta = {r.eta:.12g} rad   direction = {r.direction:.12g} rad")
-    print(f"  final u_a = {u:.12g} R   v_a = {v:.12g} R   psi = {r.eta:.12g} rad")
+    print(f"rollplan step: a = {_g(r.a)} R, b = {_g(r.b)} R, k = {_g(r.k)}, gamma = {_g(r.gamma)} rad")
+    print(f"  h = {_g(r.h)} R   eta = {_g(r.eta)} rad   direction = {_g(r.direction)} rad")
+    print(f"  final u_a = {_g(u)} R   v_a = {_g(v)} R   psi = {_g(r.eta)} rad")
     if args.json:
-        write_json(args.json, {"a": r.a, "b": r.b, "k": r.k, "gamma": r.gamma, "h": r.h, "eta": r.eta,
-                               "direction": r.direction, "final": {"u_a": float(u), "v_a": float(v), "psi": r.eta}})
-        print(f"wrote {args.json}")
+        _emit_json(args, {"a": r.a, "b": r.b, "k": r.k, "gamma": r.gamma, "h": r.h, "eta": r.eta,
+                          "direction": r.direction, "final": {"u_a": float(u), "v_a": float(v), "psi": r.eta}}, "R")
     return EXIT_OK
-
-
-class _Progress:
-    """``progress(label, done, total)`` drawn as one tqdm bar per label on stderr."""
-
-    def __init__(self) -> None:
-        from tqdm import tqdm
-
-        self._tqdm = tqdm
-        self._bars: dict = {}
-
-    def __call__(self, label: str, done: int, total: int) -> None:
-        bar = self._bars.get(label)
-        if bar is None:
-            bar = self._bars[label] = self._tqdm(total=total, desc=label, file=sys.stderr)
-        bar.total = total
-        bar.update(done - bar.n)
-
-    def close(self) -> None:
-        for bar in self._bars.values():
-            bar.close()
-        self._bars.clear()
 
 
 def cmd_reproduce(args) -> int:
@@ -362,15 +380,12 @@ def cmd_reproduce(args) -> int:
     from .studies.paper import reproduce
 
     t0 = time.perf_counter()
-    progress = _Progress()
     print(f"rollplan reproduce: Section III.C of the paper into {args.out}", file=sys.stderr)
-    try:
+    with Progress() as progress:
         result = reproduce(args.out, progress=progress)
-    finally:
-        progress.close()
     width = max(len(r.quantity) for r in result.rows)
     for r in result.rows:
-        print(f"  {r.quantity:<{width}}  paper {r.paper:<11.9g} computed {r.computed:<16.12g} {r.status}")
+        print(f"  {r.quantity:<{width}}  paper {r.paper:<11.9g} computed {r.computed:<12.6g} {r.status}")
     n_ok = sum(r.status == "reproduced" for r in result.rows)
     print(f"{n_ok} of {len(result.rows)} reproduced, {len(result.rows) - n_ok} discrepancies "
           f"(evidence in {args.out}/REPRODUCTION.md); {time.perf_counter() - t0:.1f} s")
@@ -408,40 +423,45 @@ def _simulate_executed(args, rp, robot) -> int:
 
     dist = _noise(args)
     plan, piece = _file_plan(rp, args.plan_file)
-    runs = []
-    for closed in (False, True)[:1 + bool(args.closed_loop)]:
-        progress = _Progress()
-        try:
-            runs.append(execute(plan, rp.robot, robot, piece, plant=args.plant, closed_loop=closed, disturbances=dist,
-                                progress=progress))
-        finally:
-            progress.close()
+    runs = [execute(plan, rp.robot, robot, piece, plant=args.plant, closed_loop=closed, disturbances=dist,
+                    progress=report) for closed in (False, True)[:1 + bool(args.closed_loop)]]
     opened, run = runs[0], runs[-1]
     f, g, e = run.final, rp.goal, run.error
     print(f"rollplan simulate: {args.plant} plant, {'closed' if args.closed_loop else 'open'} loop, "
-          f"{plan.steps} figure eights of {2 * piece:g} s (min-jerk per piece), robot k = {robot.k:.9g} "
-          f"(planned k = {rp.robot.k:.9g}){', measurement noise %g' % args.noise if dist else ''}")
-    print(f"  final         u_a = {f[0]:.12g} m  v_a = {f[1]:.12g} m  psi = {f[2]:.12g} rad"
-          f"  u_o = {f[3]:.3g}  v_o = {f[4]:.3g}")
-    print(f"  target        u_a = {g.u_a:.12g} m  v_a = {g.v_a:.12g} m  psi = {g.psi:.12g} rad")
-    print(f"  arrival error {run.arrival_error:.3e} (position {run.position_error:.3e} R, psi {e[2]:.3e} rad)"
+          f"{plan.steps} figure eights of {_g(2 * piece)} s (min-jerk per piece), robot k = {_g(robot.k)} "
+          f"(planned k = {_g(rp.robot.k)}){', measurement noise ' + _g(args.noise) if dist else ''}")
+    print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
+          f"  u_o = {_g(f[3])} rad  v_o = {_g(f[4])} rad")
+    print(f"  target        u_a = {_g(g.u_a)} m  v_a = {_g(g.v_a)} m  psi = {_g(g.psi)} rad")
+    print(f"  arrival error {run.arrival_error:.3e} ({NORM}; position {run.position_error:.3e} R, psi {e[2]:.3e} rad)"
           + (f"; open loop {opened.arrival_error:.3e}" if args.closed_loop else ""))
     if args.closed_loop:
-        print("  estimated k   " + ", ".join(f"{d['k']:.9g}" for d in run.estimates if "k" in d))
+        print("  estimated k   " + ", ".join(_g(d["k"]) for d in run.estimates if "k" in d))
     if args.json:
         d = run.to_dict()
         d.update({"open_loop_arrival_error": opened.arrival_error, "robot": robot.as_dict(),
                   "model_robot": rp.robot.as_dict(), "noise": args.noise, "seed": args.seed})
-        write_json(args.json, d)
-        print(f"wrote {args.json}")
+        _emit_json(args, d, "m")
     return EXIT_OK
+
+
+def _planned_states(rp):
+    """The plan file's planned states at its sample times, (N, 5), or None if it has none usable."""
+    import numpy as np
+
+    try:
+        state = np.asarray(rp.data.get("state"), float)
+    except (TypeError, ValueError):
+        return None
+    ok = state.shape == (rp.time.size, 5) and np.all(np.isfinite(state))
+    return state if ok else None
 
 
 def cmd_simulate(args) -> int:
     from .execution.plants import simulate_rotors
     from .io import load_rotor_plan
 
-    _check_outputs(json=args.json, inputs=[args.plan_file, args.robot])
+    _check_outputs(json=args.json, figure=args.plot, inputs=[args.plan_file, args.robot])
     rp = load_rotor_plan(args.plan_file)
     robot = load_robot(args.robot) if args.robot else rp.robot
     if args.closed_loop or args.plant != "rates" or args.noise:
@@ -449,19 +469,28 @@ def cmd_simulate(args) -> int:
     sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
     e = sim.error
     f, g = sim.final, rp.goal
-    print(f"rollplan simulate: {rp.time.size} samples over {rp.time[-1] - rp.time[0]:g} s, robot k = {robot.k:.9g}"
-          f"{' (planned k = %.9g)' % rp.robot.k if args.robot else ''}")
-    print(f"  final         u_a = {f[0]:.12g} m  v_a = {f[1]:.12g} m  psi = {f[2]:.12g} rad"
-          f"  u_o = {f[3]:.3g}  v_o = {f[4]:.3g}")
-    print(f"  target        u_a = {g.u_a:.12g} m  v_a = {g.v_a:.12g} m  psi = {g.psi:.12g} rad")
-    print(f"  arrival error {sim.arrival_error:.3e} (position {sim.position_error:.3e} R = "
-          f"{sim.position_error * robot.radius:.3e} m, psi {e[2]:.3e} rad, u_o {e[3]:.1e}, v_o {e[4]:.1e})")
+    print(f"rollplan simulate: {rp.time.size} samples over {_g(rp.time[-1] - rp.time[0])} s, robot k = {_g(robot.k)}"
+          f"{' (planned k = %s)' % _g(rp.robot.k) if args.robot else ''}, R = {_g(robot.radius)} m")
+    print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
+          f"  u_o = {f[3]:.3g} rad  v_o = {f[4]:.3g} rad")
+    print(f"  target        u_a = {_g(g.u_a)} m  v_a = {_g(g.v_a)} m  psi = {_g(g.psi)} rad")
+    print(f"  arrival error {sim.arrival_error:.3e} ({NORM}): position {sim.position_error * robot.radius:.3e} m, "
+          f"psi {e[2]:.3e} rad, u_o {e[3]:.1e} rad, v_o {e[4]:.1e} rad")
     if args.json:
-        write_json(args.json, {"final": dict(zip(STATE_NAMES, map(float, sim.final))),
-                               "arrival_error": sim.arrival_error, "position_error": sim.position_error,
-                               "error": dict(zip(STATE_NAMES, map(float, e))),
-                               "robot": robot.as_dict()})
-        print(f"wrote {args.json}")
+        _emit_json(args, {"final": dict(zip(STATE_NAMES, map(float, sim.final))),
+                          "arrival_error": sim.arrival_error, "position_error": sim.position_error,
+                          "position_error_m": sim.position_error * robot.radius,
+                          "error": dict(zip(STATE_NAMES, map(float, e))),
+                          "error_units": "u_a, v_a and position_error in R; psi (wrapped), u_o, v_o in rad",
+                          "robot": robot.as_dict()}, "m")
+    if args.plot:
+        from .plots.motion import plot_simulation
+
+        title = (f"rotor-driven simulation of {args.plan_file}: arrival error {sim.arrival_error:.2e} ({NORM}),\n"
+                 f"position error {sim.position_error * robot.radius:.2e} m")
+        save_figure(plot_simulation(sim.time, sim.state, rp.rotor_rates, g, _planned_states(rp), robot, title),
+                    args.plot)
+        print(f"wrote {args.plot}")
     return EXIT_OK
 
 
@@ -479,13 +508,15 @@ def cmd_animate(args) -> int:
         raise InputError(f"--fps {args.fps} is not allowed: it must lie in [1, 100]")
     rp = load_rotor_plan(args.plan_file)
     sim = simulate_rotors(rp.robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
-    make_animation(rp.time, sim.state, rp.rotor_rates, rp.robot, rp.goal, args.out, args.frames, args.fps)
+    with Progress(unit="frames") as progress:
+        make_animation(rp.time, sim.state, rp.rotor_rates, rp.robot, rp.goal, args.out, args.frames, args.fps,
+                       progress=progress)
     print(f"wrote {args.out}")
     return EXIT_OK
 
 
 def _fmt_row(name, a, b, fmt):
-    return f"  {name:<30s} {format(a, fmt):>20s} {format(b, fmt):>20s}"
+    return f"  {name:<34s} {format(a, fmt):>20s} {format(b, fmt):>20s}"
 
 
 def cmd_compare(args) -> int:
@@ -497,35 +528,40 @@ def cmd_compare(args) -> int:
                            args.cost, args.intervals, args.degree, args.scheme, args.guess, args.contact_bound)
     p, r, prob = c.plan, c.result, c.problem
     gm, om = c.plan_measures, r.measures
-    unit = "m" if robot is not None else ("R" if args.radius is None else "units")
+    unit = prob.unit
     effort = "rotor effort int|phi'|^2 dt" if robot is not None else "effort int|omega|^2 dt"
     g, tr = prob.goal, r.transcription
-    print(f"rollplan compare: k = {prob.k:.9g}, R = {prob.radius:g}, T = {c.horizon:g} s, target (u_a, v_a, psi) = "
-          f"({g.u_a:g}, {g.v_a:g}, {g.psi:g})")
-    print(f"  geometric phase: {prob.steps} figure eight(s), a = {p.a:.6g}, b = {p.b:.6g}, "
-          f"gamma = {p.gamma:.6g}, timed t ~ theta")
+    print(f"rollplan compare: k = {_g(prob.k)}, R = {_g(prob.radius)} {'m' if unit == 'm' else '(lengths in R)'}, "
+          f"T = {_g(c.horizon)} s, target (u_a, v_a, psi) = ({_g(g.u_a)} {unit}, {_g(g.v_a)} {unit}, {_g(g.psi)} rad)")
+    print(f"  geometric phase: {prob.steps} figure eight(s), a = {_g(p.a)} {unit}, b = {_g(p.b)} {unit}, "
+          f"gamma = {_g(p.gamma)} rad, timed t ~ theta")
     print(f"  collocation: cost {r.cost}, {tr.scheme} d = {tr.degree}, N = {tr.intervals}, {r.guess} guess, "
           f"psi turns m = {r.turns}")
-    print(f"  {'':<30s} {'geometric phase':>20s} {'collocation':>20s}")
-    print(_fmt_row(f"contact path length [{unit or '-'}]", gm.path_length, om.path_length, ".6g"))
+    print(f"  {'':<34s} {'geometric phase':>20s} {'collocation':>20s}")
+    print(_fmt_row(f"contact path length [{unit}]", gm.path_length, om.path_length, ".6g"))
     print(_fmt_row(f"{effort} [rad^2/s]", c.effort(gm), c.effort(om), ".6g"))
     print(_fmt_row("peak |omega| [rad/s]", gm.peak_omega, om.peak_omega, ".6g"))
-    print(_fmt_row("final residual (CVODES)", p.residual, r.residual, ".2e"))
+    print(_fmt_row("residual (CVODES, Euclidean norm)", p.residual, r.residual, ".2e"))
     print(_fmt_row("solve time [ms]", p.stats.time_s * 1e3, r.stats.time_s * 1e3, ".1f"))
     print(_fmt_row("iterations", p.stats.iterations, r.stats.iterations, "d"))
     print(_fmt_row("status", p.stats.status, r.stats.status, "s"))
+    print(f"  (residuals: {NORM})")
     if r.guess == "warm":
         print(f"  (collocation time is IPOPT's; its warm start took another "
               f"{r.stats.details['guess_time_s'] * 1e3:.1f} ms)")
     if args.json:
-        write_json(args.json, comparison.comparison_to_dict(c))
-        print(f"wrote {args.json}")
+        _emit_json(args, comparison.comparison_to_dict(c), unit)
     if args.plot:
         from .plots.compare import plot_comparison
 
-        save_figure(plot_comparison(c, unit or "R"), args.plot)
+        save_figure(plot_comparison(c, unit, comparison.comparison_series(c)), args.plot)
         print(f"wrote {args.plot}")
     return EXIT_OK
+
+
+_K_HELP = "inertia ratio k in [0, %g] (default %g, the paper's case)" % (K_MAX, DEFAULT_K)
+_STEPS = "in [1, %d]" % MAX_STEPS
+_JSON_HELP = "write {} as JSON to FILE (- for stdout; the summary then goes to stderr)"
 
 
 def _add_target_options(parser, to_default, steps_help) -> None:
@@ -538,30 +574,38 @@ def _add_target_options(parser, to_default, steps_help) -> None:
                             help="target contact point (u_a, v_a) on the plane (default %g %g)" % tuple(to_default))
     parser.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
     parser.add_argument("--steps", type=_whole, default=1, help=steps_help)
+    _add_robot_options(parser)
+
+
+def _add_robot_options(parser) -> None:
+    """--k | --robot, --radius: the robot, as in ``plan``."""
     g = parser.add_mutually_exclusive_group()
-    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default %g)" % DEFAULT_K)
+    g.add_argument("--k", type=_number, default=None, help=_K_HELP)
     g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
-    parser.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+    parser.add_argument("--radius", type=_number, default=None,
+                        help="sphere radius R > 0 [m]; lengths are then in metres (default: lengths in units of R, "
+                             "or the robot's radius)")
 
 
 def _add_compare_parser(sub) -> None:
     from .planners import collocation
 
     c = sub.add_parser("compare", help="geometric-phase plan versus direct-collocation optimum, side by side")
-    _add_target_options(c, to_default=None, steps_help="figure eights n >= 1 of the geometric plan (default 1)")
+    _add_target_options(c, to_default=None, steps_help=f"figure eights n {_STEPS} of the geometric plan (default 1)")
     c.add_argument("--cost", choices=sorted(collocation.COSTS), default="path_length",
                    help="collocation cost (default path_length; rotor_effort needs --robot)")
-    c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T [s] of both motions (default 1)")
-    c.add_argument("--intervals", type=_whole, default=100, help="collocation intervals N (default 100)")
-    c.add_argument("--degree", type=_whole, default=3, help="collocation degree d (default 3)")
+    c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T > 0 [s] of both motions (default 1)")
+    c.add_argument("--intervals", type=_whole, default=100, help="collocation intervals N in [1, 100000] (default 100)")
+    c.add_argument("--degree", type=_whole, default=3, help="collocation degree d in [1, 9] (default 3)")
     c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
     c.add_argument("--guess", choices=sorted(collocation.GUESSES), default="warm",
                    help="collocation initial guess: warm (the geometric plan) or naive (straight line)")
     c.add_argument("--contact-bound", type=_number, default=collocation.CONTACT_BOUND, metavar="RAD",
-                   help="collocation: largest polar angle of the contact point from the south pole "
+                   help="collocation: largest polar angle of the contact point from the south pole, in (0, pi/2) "
                         "(default %.4g rad = 75 deg)" % collocation.CONTACT_BOUND)
-    c.add_argument("--json", metavar="FILE", help="write both results as JSON")
-    c.add_argument("--plot", metavar="FILE.png", help="overlay both contact paths on the plane and the sphere")
+    c.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("both results"))
+    c.add_argument("--plot", metavar="FILE.png", help="both contact paths on the sphere and the plane, and omega "
+                   "(and with --robot the rotor rates) of both motions in time")
     c.set_defaults(func=cmd_compare)
 
 
@@ -578,38 +622,82 @@ def cmd_codegen(args) -> int:
 
 
 def cmd_batch(args) -> int:
-    import os
-
     from .studies.batch import run_batch
+    from .studies.executor import ExecutorError, cpu_count
 
     try:
-        jobs = args.jobs if args.jobs is not None else (os.cpu_count() or 1)
+        jobs = args.jobs if args.jobs is not None else cpu_count()
         r = run_batch(args.targets, args.out, jobs, args.resume, args.overwrite, args.method,
-                      progress=not args.quiet)
+                      progress=not args.quiet, scheduler=args.scheduler)
     except KeyboardInterrupt:
         print(f"\nrollplan: interrupted; finished lines are kept in {args.out}: rerun with --resume",
               file=sys.stderr)
         return EXIT_INTERRUPTED
+    except ExecutorError as exc:
+        print(f"rollplan: the cluster failed: {exc}; finished lines are kept in {args.out}: rerun with --resume",
+              file=sys.stderr)
+        return EXIT_SOLVER
     print(f"rollplan batch: {r.total} targets, {r.skipped} already done, {r.planned} planned "
           f"({r.failed} failed) in {r.time_s:.1f} s; wrote {args.out}")
+    if r.total and r.failed_total == r.total:
+        print(f"rollplan: every row failed ({r.failed_total} of {r.total}); see 'reason' in {args.out}",
+              file=sys.stderr)
+        return EXIT_NOPLAN
+    if r.failed_total:
+        print(f"rollplan: {r.failed_total} of {r.total} rows failed; see 'reason' in {args.out}", file=sys.stderr)
+        return EXIT_SOME_FAILED
     return EXIT_OK
+
+
+def _per_k(path, k, several: bool):
+    return path.replace("{k}", f"{k:g}") if several else path
 
 
 def cmd_atlas(args) -> int:
     from .plots.atlas import plot_atlas
-    from .studies.atlas import atlas_to_dict, compute_atlas
+    from .studies.atlas import atlas_to_dict, compute_atlases
 
-    _check_outputs(json=args.json, figure=args.out)
-    at = compute_atlas(args.k, args.steps, args.resolution)
-    save_figure(plot_atlas(at), args.out)
-    print(f"rollplan atlas: k = {at.k:g}, steps = {at.steps}, {at.a.size} x {at.b.size} grid on (0, {at.a[-1]:g}]^2")
-    print(f"  shift per step h in [{at.h.min():.6g}, {at.h.max():.6g}] R, holonomy eta in "
-          f"[{at.eta.min():.6g}, {at.eta.max():.6g}] rad, {at.fold_cells} grid cells on the fold det = 0")
-    print(f"wrote {args.out}")
-    if args.json:
-        write_json(args.json, atlas_to_dict(at))
-        print(f"wrote {args.json}")
+    several = len(args.k) > 1
+    for path in (args.out, args.json):
+        if several and path not in (None, "-") and "{k}" not in path:
+            raise InputError(f"output path {path!r} is not allowed with several --k values: put {{k}} in it "
+                             "(e.g. atlas_k{k}.png)")
+    if several and args.json == "-":
+        raise InputError("--json - is not allowed with several --k values: give a file name with {k}")
+    for k in args.k:
+        _check_outputs(json=None if args.json is None else _per_k(args.json, k, several),
+                       figure=_per_k(args.out, k, several))
+    with Progress(unit="blocks", delay=1.0) as progress:
+        atlases = compute_atlases(args.k, args.steps, args.resolution, scheduler=args.scheduler, progress=progress)
+    for at in atlases:
+        out = _per_k(args.out, at.k, several)
+        save_figure(plot_atlas(at), out)
+        print(f"rollplan atlas: k = {_g(at.k)}, steps = {at.steps}, {at.a.size} x {at.b.size} grid on "
+              f"(0, {_g(at.a[-1])} R]^2")
+        print(f"  shift per step h in [{_g(at.h.min())}, {_g(at.h.max())}] R, holonomy eta in "
+              f"[{_g(at.eta.min())}, {_g(at.eta.max())}] rad, {at.fold_cells} grid cells on the fold det = 0")
+        print(f"wrote {out}")
+        if args.json:
+            _emit_json(argparse.Namespace(json=_per_k(args.json, at.k, several), stdout=args.stdout),
+                       atlas_to_dict(at), "R")
     return EXIT_OK
+
+
+_BATCH_EPILOG = """\
+TARGETS.csv: a header, then one target per line; columns u_a, v_a (required), psi (default 0),
+steps (default 1), k (default 2.5); an empty cell takes the default; more columns are carried into
+the output; blank lines and lines starting with # are skipped. Example:
+
+  # u_a, v_a in units of R, psi in rad
+  u_a,v_a,psi,steps,k
+  0,1,0,1,2.5
+  0.5,0.3,0.4,2,
+  -0.2,0.6
+
+exit status: 0 every row planned, 1 some rows failed, 3 every row failed (each failed row has
+"status": "failed" and a "reason" in the output), 2 bad input, 4 the cluster failed, 130 interrupted
+(finished lines are kept: rerun with --resume).
+"""
 
 
 def _add_timing_options(parser) -> None:
@@ -626,8 +714,8 @@ def _add_timing_options(parser) -> None:
                              + ". Every law rests at the corners of the contact path (where a roll meets the figure "
                                "eights). Without --duration: the law's shortest duration within the robot's limits")
     parser.add_argument("--samples", type=_whole, default=2000,
-                        help="samples of the trajectory in --json and --plot, in all (default 2000); with "
-                             "--duration or --timing also the least number of time samples (at least 400 per "
+                        help="samples of the trajectory in --json and --plot, in all, in [2, 10^7] (default 2000); "
+                             "with --duration or --timing also the least number of time samples (at least 400 per "
                              "piece for min-jerk, 3000 for the other laws)")
     parser.add_argument("--timing-plot", metavar="FILE.png",
                         help="with --duration or --timing: rotor rates and torques in time with the robot's limits, "
@@ -635,16 +723,18 @@ def _add_timing_options(parser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="rollplan", description=__doc__)
+    parser = _Parser(prog="rollplan", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"rollplan {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log the planner's progress")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
 
     p = sub.add_parser("plan", help="plan a motion between two states by figure eights (and rolls, turns, legs)")
-    _add_target_options(p, to_default=(0.0, 1.0), steps_help="number of figure eights n >= 1 per leg (default 1)")
+    _add_target_options(p, to_default=(0.0, 1.0), steps_help=f"number of figure eights n {_STEPS} per leg (default 1)")
     p.add_argument("--from", dest="start", nargs=5, type=_number, default=(0.0,) * 5,
                    metavar=("U_A", "V_A", "PSI", "U_O", "V_O"),
                    help="start state (default 0 0 0 0 0: at rest at the origin, contact at the south pole); "
-                        "off the pole psi is the contact angle of (2), not a yaw")
+                        "lengths in the unit in use, angles in rad; off the pole psi is the contact angle of (2), "
+                        "not a yaw")
     p.add_argument("--contact", nargs=2, type=_number, default=(0.0, 0.0), metavar=("U_O", "V_O"),
                    help="goal contact point on the sphere [rad] (default 0 0, the south pole); "
                         "cos(u_o) cos(v_o) >= 0.05")
@@ -655,33 +745,31 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--branch", type=int, default=None, metavar="M",
                    help="only branch M of n eta = psi + 2 pi M (one leg of figure eights)")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
-    p.add_argument("--json", metavar="FILE", help="write the plan as JSON")
-    p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere and the plane "
-                   "(with --duration: omega, rotor rates and torques in time)")
+    p.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the plan"))
+    p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere (from below) and the "
+                   "plane, and psi along it (with --duration or --timing: omega, rotor rates and torques in time)")
     _add_timing_options(p)
     p.set_defaults(func=cmd_plan)
 
     w = sub.add_parser("route", help="plan a route through waypoints (a CSV file), leg by leg, certified as one")
     w.add_argument("waypoints", metavar="WAYPOINTS.csv",
                    help="header u_a,v_a,psi[,u_o,v_o][,steps][,label]; one waypoint a row, the first is the start")
-    w.add_argument("--steps", type=_whole, default=1, help="figure eights per leg where a row does not say (default 1)")
-    g = w.add_mutually_exclusive_group()
-    g.add_argument("--k", type=_number, default=None, help="inertia ratio k >= 0 (default %g)" % DEFAULT_K)
-    g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
-    w.add_argument("--radius", type=_number, default=None, help="sphere radius R (default 1, or the robot's)")
+    w.add_argument("--steps", type=_whole, default=1,
+                   help=f"figure eights n {_STEPS} per leg where a row does not say (default 1)")
+    _add_robot_options(w)
     w.add_argument("--legs", choices=geometric.LEGS, default="fallback", help="as for plan (default fallback)")
     w.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
-    w.add_argument("--json", metavar="FILE", help="write the route as JSON")
+    w.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the route"))
     w.add_argument("--plot", metavar="FILE.png", help="draw the route's contact path")
     _add_timing_options(w)
     w.set_defaults(func=cmd_route)
 
     s = sub.add_parser("step", help="what one figure eight does: shift h and holonomy eta")
     s.add_argument("--a", type=_number, required=True, help="first leaf radius [R], 0 < a <= %g" % A_MAX)
-    s.add_argument("--b", type=_number, default=None, help="second leaf radius [R] (default a)")
-    s.add_argument("--k", type=_number, required=True, help="inertia ratio k >= 0")
+    s.add_argument("--b", type=_number, default=None, help="second leaf radius [R], 0 < b <= %g (default a)" % A_MAX)
+    s.add_argument("--k", type=_number, default=DEFAULT_K, help=_K_HELP)
     s.add_argument("--gamma", type=_number, default=0.0, help="rotation about OZ [rad] (default 0)")
-    s.add_argument("--json", metavar="FILE", help="write the result as JSON")
+    s.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the result"))
     s.set_defaults(func=cmd_step)
 
     r = sub.add_parser("reproduce", help="regenerate the paper's case study (Figs 6-12, table, report)")
@@ -692,7 +780,9 @@ def build_parser() -> argparse.ArgumentParser:
     m = sub.add_parser("simulate", help="drive the robot by the plan's rotor rates alone and report the arrival error")
     m.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
     m.add_argument("--robot", metavar="FILE.toml", help="simulate this (real) robot instead of the planned one")
-    m.add_argument("--json", metavar="FILE", help="write the simulated final state and errors as JSON")
+    m.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the simulated final state and errors"))
+    m.add_argument("--plot", metavar="FILE.png", help="the simulated motion against the plan: paths, psi, deviation "
+                   "in time, and the rotor rates that drove it")
     m.add_argument("--closed-loop", action="store_true",
                    help="measure after each figure eight, estimate the robot, re-plan the rest (re-timed min-jerk)")
     m.add_argument("--plant", choices=("rates", "torques"), default="rates",
@@ -706,8 +796,8 @@ def build_parser() -> argparse.ArgumentParser:
     a = sub.add_parser("animate", help="animate the sphere rolling under the plan's rotor rates (GIF)")
     a.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
     a.add_argument("--out", metavar="FILE.gif", required=True, help="output animation (GIF)")
-    a.add_argument("--frames", type=_whole, default=100, help="number of frames (default 100)")
-    a.add_argument("--fps", type=_whole, default=20, help="frames per second (default 20)")
+    a.add_argument("--frames", type=_whole, default=100, help="number of frames in [2, 2000] (default 100)")
+    a.add_argument("--fps", type=_whole, default=20, help="frames per second in [1, 100] (default 20)")
     a.set_defaults(func=cmd_animate)
 
     _add_compare_parser(sub)
@@ -716,7 +806,8 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
     c.add_argument("--steps-per-leaf", type=_whole, default=240,
                    help="node intervals per leaf of the step map, a multiple of 10 (default 240)")
-    c.add_argument("--prefix", default="rollplan", help="prefix of the C symbols and files (default rollplan)")
+    c.add_argument("--prefix", default="rollplan", help="prefix of the C symbols and files, a C identifier "
+                   "(default rollplan)")
     c.add_argument("--k-max", type=_number, default=5.0,
                    help="largest k the C planner accepts; refused unless its step map is accurate to 1e-10 up to "
                         "it (default 5; e.g. 10 with --steps-per-leaf 320)")
@@ -724,30 +815,62 @@ def build_parser() -> argparse.ArgumentParser:
                    help="C number type: float for single-precision FPUs (plans certified to 1e-4 only)")
     c.set_defaults(func=cmd_codegen)
 
-    b = sub.add_parser("batch", help="plan every target of a CSV file (u_a, v_a, psi, steps, k) in parallel")
-    b.add_argument("targets", metavar="TARGETS.csv", help="CSV with header u_a, v_a, psi, steps, k")
-    b.add_argument("--out", required=True, metavar="PLANS.jsonl", help="output: one JSON line per target")
-    b.add_argument("--jobs", type=_whole, default=None, help="worker processes (default: number of cores)")
+    b = sub.add_parser("batch", help="plan every target of a CSV file (u_a, v_a, psi, steps, k) in parallel",
+                       epilog=_BATCH_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    b.add_argument("targets", metavar="TARGETS.csv", help="CSV with header u_a, v_a[, psi, steps, k] (see below)")
+    b.add_argument("--out", required=True, metavar="PLANS.jsonl", help="output: one JSON line per target, in order")
+    b.add_argument("--jobs", type=_whole, default=None, help="worker processes >= 1 (default: number of cores)")
+    b.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="plan on a Dask distributed cluster instead, e.g. tcp://host:8786 (needs: pip install "
+                        "'rollplan[distributed]'; workers: dask worker ADDRESS --nthreads 1)")
     b.add_argument("--resume", action="store_true", help="keep the lines in --out and plan only the missing rows")
     b.add_argument("--overwrite", action="store_true", help="replace an existing --out")
     b.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
-    b.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+    b.add_argument("--quiet", action="store_true", help="no progress on stderr")
     b.set_defaults(func=cmd_batch)
 
+    from .studies.atlas import DEFAULT_RESOLUTION, MAX_RESOLUTION
+
     t = sub.add_parser("atlas", help="maps of h(a, b) and eta(a, b) with contours and the fold of the step map")
-    t.add_argument("--k", type=_number, required=True, help="inertia ratio k >= 0")
-    t.add_argument("--steps", type=_whole, default=1, help="also map what n figure eights reach (default 1)")
-    t.add_argument("--resolution", type=_whole, default=81, help="grid points per axis (default 81)")
+    t.add_argument("--k", type=_number, nargs="+", default=[DEFAULT_K], metavar="K",
+                   help=_K_HELP + "; several values sweep over k (then put {k} in --out and --json)")
+    t.add_argument("--steps", type=_whole, default=1, help=f"also map what n figure eights reach, n {_STEPS} "
+                   "(default 1)")
+    t.add_argument("--resolution", type=_whole, default=DEFAULT_RESOLUTION,
+                   help=f"grid points per axis in [2, {MAX_RESOLUTION}] (default {DEFAULT_RESOLUTION})")
     t.add_argument("--out", required=True, metavar="FILE.png", help="figure")
-    t.add_argument("--json", metavar="FILE", help="write the maps as JSON")
+    t.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the maps"))
+    t.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="evaluate the grid on a Dask distributed cluster (pip install 'rollplan[distributed]')")
     t.set_defaults(func=cmd_atlas)
     return parser
+
+
+#: ``name='value'`` or ``name=True`` in a message of the Python API: an option to name in command-line syntax.
+_API_OPTION = re.compile(r"\b([a-z][a-z_]*)=(?:'([^']*)'|True\b)")
+
+
+def _cli_syntax(message: str, args) -> str:
+    """A message of the API with its option hints in command-line syntax (``guess='warm'`` -> ``--guess warm``),
+    for the options the command has."""
+    def sub(m):
+        if m.group(1) not in vars(args):
+            return m.group(0)
+        flag = "--" + m.group(1).replace("_", "-")
+        return flag if m.group(2) is None else f"{flag} {m.group(2)}"
+
+    return _API_OPTION.sub(sub, message)
 
 
 def main(argv=None) -> int:
     try:
         interrupts.end_start_up()   # from here Ctrl-C is KeyboardInterrupt: exit 130 below
-        args = build_parser().parse_args(argv)
+        parser = build_parser()
+        argv = sys.argv[1:] if argv is None else list(argv)
+        if not argv:   # a bare `rollplan`: say what it can do
+            parser.print_help(sys.stderr)
+            return EXIT_INPUT
+        args = parser.parse_args(argv)
     except KeyboardInterrupt:
         print("rollplan: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -755,24 +878,28 @@ def main(argv=None) -> int:
     if (getattr(args, "command", None) in ("plan", "compare", "route") and args.k is None and args.robot is None
             and getattr(args, "duration", None) is None and getattr(args, "timing", None) is None):
         args.k = DEFAULT_K
+    args.stdout = sys.stdout
+    to_stdout = getattr(args, "json", None) == "-"
     try:
         with ExitStack() as stack:
             _Claims.stack, _Claims.files = stack, {}
-            return args.func(args)
+            with contextlib.redirect_stdout(sys.stderr) if to_stdout else contextlib.nullcontext(), \
+                    Progress(delay=5.0) as progress, reporting(progress):
+                return args.func(args)
     except KeyboardInterrupt:  # Ctrl-C, also inside the solvers (rollplan.interrupts)
-        print("rollplan: interrupted", file=sys.stderr)
+        print("\nrollplan: interrupted" if sys.stderr.isatty() else "rollplan: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except MemoryError:
         print("rollplan: error: not enough memory for this input", file=sys.stderr)
         return EXIT_INPUT
     except InputError as exc:
-        print(f"rollplan: error: {exc}", file=sys.stderr)
+        print(f"rollplan: error: {_cli_syntax(str(exc), args)}", file=sys.stderr)
         return EXIT_INPUT
     except NoPlanError as exc:
-        print(f"rollplan: no plan: {exc}", file=sys.stderr)
+        print(f"rollplan: no plan: {_cli_syntax(str(exc), args)}", file=sys.stderr)
         return EXIT_NOPLAN
     except SolverError as exc:
-        print(f"rollplan: solver failed ({exc.status}): {exc}", file=sys.stderr)
+        print(f"rollplan: solver failed ({exc.status}): {_cli_syntax(str(exc), args)}", file=sys.stderr)
         return EXIT_SOLVER
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()

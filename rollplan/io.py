@@ -18,12 +18,27 @@ from .outputs import check_figure_path, check_writable, save_figure, write_atomi
 from .planners.geometric.composed import as_composed
 from .problem import State, check_contact
 from .robot import Robot, robot_from_mapping
+from .version import __version__
 
 __all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict",
-           "composed_to_dict", "route_to_dict", "motion_to_dict", "RotorPlan", "load_rotor_plan", "MAX_PLAN_BYTES"]
+           "UNITS", "tagged", "composed_to_dict", "route_to_dict", "motion_to_dict", "RotorPlan", "load_rotor_plan",
+           "MAX_PLAN_BYTES"]
 
 #: Largest plan file read back (a plan of 1000 steps timed with 10^6 samples fits).
 MAX_PLAN_BYTES = 1 << 30
+
+
+#: Units of every JSON output except the length (``tagged`` adds it): SI, angles in radians.
+UNITS = {"angle": "rad", "time": "s", "angular_rate": "rad/s", "torque": "N m", "mass": "kg",
+         "inertia": "kg m^2",
+         "residual": "Euclidean norm of the arrival error (u_a/R, v_a/R, psi wrapped, u_o, v_o): lengths in R, "
+                     "angles in rad"}
+
+
+def tagged(obj: dict, length_unit: str) -> dict:
+    """``obj`` with the fields ``version`` (of rollplan) and ``units`` (``length``: ``"R"`` or ``"m"``,
+    and :data:`UNITS`) in front: the form of every JSON document rollplan writes."""
+    return {"version": __version__, "units": {"length": length_unit, **UNITS}, **obj}
 
 
 def _f(x):

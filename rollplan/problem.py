@@ -25,7 +25,7 @@ from .core.plane import wrap, wrap_exact
 from .errors import InputError, check_finite, check_range, check_whole
 from .robot import Robot
 
-__all__ = ["STATE_NAMES", "State", "Problem", "K_MAX", "MAX_STEPS", "N3Z_MIN", "check_k", "check_steps",
+__all__ = ["STATE_NAMES", "State", "Problem", "K_MAX", "MAX_STEPS", "DEFAULT_K", "N3Z_MIN", "check_k", "check_steps",
            "check_contact", "arrival_error", "arrival_residual"]
 
 #: Names of the state's entries, in the one order used everywhere (arrays, JSON, CSV).
@@ -34,6 +34,9 @@ STATE_NAMES = ("u_a", "v_a", "psi", "u_o", "v_o")
 K_MAX = 100.0
 #: Largest number of figure-eight steps a plan may have.
 MAX_STEPS = 1000
+#: k when none is given on the command line or in a batch row: the paper's case study (Section III.C).
+DEFAULT_K = 2.5
+
 #: Smallest ``n3z = cos(u_o) cos(v_o)`` of a start or goal contact point (87.13 deg from the south pole);
 #: see :func:`check_contact`.
 N3Z_MIN = 0.05
@@ -213,10 +216,9 @@ class Problem:
 
     @property
     def unit(self) -> str:
-        """Name of the length unit: ``"m"`` with a robot, ``"R"`` for the unit sphere, else ``"units"``."""
-        if self.robot is not None and self.radius == self.robot.radius:
-            return "m"
-        return "R" if self.radius == 1.0 else "units"
+        """Name of the length unit: ``"R"`` for the unit sphere without a robot, else ``"m"`` (a robot's
+        radius is in metres, and so is a radius given without one)."""
+        return "R" if self.robot is None and self.radius == 1.0 else "m"
 
     def scaled(self, state: State) -> State:
         """A state of this problem in units of R (lengths divided by the radius)."""
@@ -228,10 +230,10 @@ class Problem:
 
     def describe(self) -> str:
         """One line naming the problem, for messages."""
-        g = self.goal
-        where = f"(u_a, v_a, psi) = ({g.u_a:g}, {g.v_a:g}, {g.psi:g})"
+        g, u = self.goal, self.unit
+        where = f"(u_a, v_a, psi) = ({g.u_a:g} {u}, {g.v_a:g} {u}, {g.psi:g} rad)"
         if not g.at_pole:
-            where += f", contact (u_o, v_o) = ({g.u_o:g}, {g.v_o:g})"
+            where += f", contact (u_o, v_o) = ({g.u_o:g} rad, {g.v_o:g} rad)"
         if tuple(self.start) != tuple(State()):
             where = f"from {tuple(float(v) for v in self.start)} to " + where
         return f"{where} in {self.steps} step(s) with k = {self.k:g}"

@@ -1,6 +1,6 @@
 """Geometric phase versus direct collocation on a set of targets; writes results/comparison.md.
 
-Usage: python scripts/compare_planners.py [--out results] [--quick]
+Usage: python scripts/compare_planners.py [--out results] [--quick] [--figures-only]
 
 For every target: the geometric-phase plan (fewest steps in 1..3 that give a
 plan), and collocation (N = 100, Legendre d = 3, T = 1) with two costs
@@ -25,7 +25,7 @@ from rollplan import NoPlanError, Problem, SolverError, plan
 from rollplan.io import save_figure, write_atomic
 from rollplan.planners.collocation import CollocationPlanner
 from rollplan.plots.compare import plot_comparison, plot_scaling
-from rollplan.studies.comparison import compare, measure_plan
+from rollplan.studies.comparison import compare, comparison_series, measure_plan
 
 import bench_collocation
 
@@ -39,7 +39,7 @@ COSTS = ("path_length", "angular_velocity")
 def gp(target):
     for n in (1, 2, 3):
         try:
-            return plan(target, n, k=K)
+            return plan(target, n, k=K, legs="one")   # one leg of figure eights: the paper's plan
         except NoPlanError:
             continue
     return None
@@ -126,7 +126,7 @@ def convergence_table(rows):
 
 
 def scaling(Ns, repeats, target=(0.5, 0.3, 0.4)):
-    p = plan(target, 1, k=K)
+    p = plan(target, 1, k=K, legs="one")
     res = {}
     for cost in COSTS:
         times, builds, iters, objs, resid = [], [], [], [], []
@@ -150,6 +150,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--out", default="results")
     ap.add_argument("--quick", action="store_true", help="fewer targets and repeats")
+    ap.add_argument("--figures-only", action="store_true", help="only the two comparison figures (no timings)")
     args = ap.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     logging.getLogger("rollplan").setLevel(logging.ERROR)
@@ -157,13 +158,15 @@ def main():
     out.mkdir(exist_ok=True)
     targets = TARGETS[:4] if args.quick else TARGETS
     t_start = time.perf_counter()
+    ex = compare((0.5, 0.3, 0.4), 1, k=K)
+    save_figure(plot_comparison(ex, "R", comparison_series(ex)), out / "comparison_paths.png")
+    ex2 = compare((-0.4, 0.4, 1.0), 1, k=K, cost="angular_velocity")
+    save_figure(plot_comparison(ex2, "R", comparison_series(ex2)), out / "comparison_paths_energy.png")
+    if args.figures_only:
+        print(f"wrote {out / 'comparison_paths.png'} and {out / 'comparison_paths_energy.png'}")
+        return
     planners = {c: CollocationPlanner(100, 3, "legendre", c) for c in COSTS}
     rows = run_targets(planners, targets)
-
-    ex = compare((0.5, 0.3, 0.4), 1, k=K)
-    save_figure(plot_comparison(ex, "R"), out / "comparison_paths.png")
-    ex2 = compare((-0.4, 0.4, 1.0), 1, k=K, cost="angular_velocity")
-    save_figure(plot_comparison(ex2, "R"), out / "comparison_paths_energy.png")
 
     Ns = [25, 50, 100, 200] if args.quick else [25, 50, 100, 200, 400]
     sc = scaling(Ns, 3 if args.quick else 5)

@@ -29,7 +29,7 @@ import numpy as np
 
 import rollplan
 from rollplan.core.paths import PathIntegrator
-from rollplan.io import save_figure, write_atomic, write_json
+from rollplan.io import save_figure, tagged, write_atomic, write_json
 from rollplan.planners.geometric import ComposedPlanner, as_composed
 from rollplan.planners.geometric.maneuvers import StraightRoll
 from rollplan.plots.composed import plot_composed
@@ -186,7 +186,7 @@ def main(argv=None) -> int:
                       for n in ((501, 2001) if args.quick else (501, 2001, 8001))]
     save_figure(plot_composed(fig_plan, fig_plan.sample(4000)), out / "composed.png")
     data["total_time_s"] = time.perf_counter() - t0
-    write_json(out / "reconfiguration.json", data)
+    write_json(out / "reconfiguration.json", tagged(data, "R"))
     write_atomic(out / "reconfiguration.md", report(data).encode())
     print(f"wrote {out / 'reconfiguration.md'}, reconfiguration.json, composed.png "
           f"({data['total_time_s']:.0f} s)", file=sys.stderr)

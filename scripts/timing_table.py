@@ -28,7 +28,6 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-from tqdm import tqdm
 
 import rollplan
 from rollplan.errors import NoPlanError
@@ -38,8 +37,9 @@ from rollplan.execution.path import ContactPath
 from rollplan.execution.plants import simulate_rotors
 from rollplan.execution.timing import LAWS, velocity_limit
 from rollplan.execution.topp import solve_topp, toppra_available
-from rollplan.io import save_figure, write_atomic, write_json
+from rollplan.io import save_figure, tagged, write_atomic, write_json
 from rollplan.plots.timing import plot_timing
+from rollplan.progress import Progress
 
 from benchmark import git_commit, machine
 
@@ -231,10 +231,13 @@ def main(argv=None):
               "toppra": "toppra" in backends, "settings": {k: v for k, v in settings.items() if k != "figures"},
               "rows": []}
     try:
-        for case in tqdm(cases, desc="rows", file=sys.stderr):
-            r = row(*case, settings)
-            if r is not None:
-                report["rows"].append(r)
+        with Progress(unit="rows") as progress:   # a bar on a terminal, plain lines in a log
+            for i, case in enumerate(cases):
+                progress("rows", i, len(cases))
+                r = row(*case, settings)
+                if r is not None:
+                    report["rows"].append(r)
+            progress("rows", len(cases), len(cases))
         report["convergence"] = convergence(settings)
     except KeyboardInterrupt:
         print("interrupted: nothing written", file=sys.stderr)
@@ -242,7 +245,7 @@ def main(argv=None):
     out = Path(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / "timing.md", to_markdown(report).encode())
-    write_json(out / "timing.json", report)
+    write_json(out / "timing.json", tagged(report, "R"))
     for name, file in (("default", "timing_laws.png"), ("default, slow motor", "timing_rate_limited.png")):
         if settings["figures"] is not None and name in settings["figures"]:
             save_figure(settings["figures"][name], out / file)

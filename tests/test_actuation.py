@@ -181,5 +181,5 @@ def test_plot_motion(motion, asym_plan):
     assert isinstance(fig, Figure)
     labels = [ax.get_ylabel() for ax in fig.axes]
     assert "angular velocity [rad/s]" in labels and "rotor rate [rad/s]" in labels
-    assert "motor torque [mN m]" in labels
+    assert "motor torque [N m]" in labels   # N m as in the console and the JSON
     assert all(ax.get_xlabel() == "time t [s]" for ax in fig.axes[:3])

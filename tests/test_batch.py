@@ -5,6 +5,7 @@ import contextlib
 import json
 import os
 import random
+import re
 import signal
 import subprocess
 import sys
@@ -14,6 +15,7 @@ import pytest
 
 from rollplan import cli
 from rollplan.errors import InputError
+from rollplan.planners.geometric import default_planner
 from rollplan.studies.batch import read_output, run_batch
 
 import references
@@ -102,16 +104,16 @@ def test_resume_with_a_gap_restores_input_order(tmp_path):
 @pytest.mark.slow
 def test_cli_batch(tmp_path, capsys):
     csv_path, out = write_csv(tmp_path / "t.csv", ROWS[:3]), tmp_path / "p.jsonl"
-    assert cli.main(["batch", str(csv_path), "--out", str(out)]) == 0
+    assert cli.main(["batch", str(csv_path), "--out", str(out)]) == 1   # row 2 fails
     err = capsys.readouterr().err
-    assert "3/3" in err   # progress bar
+    assert "3/3" in err   # progress
     assert len(out.read_text().splitlines()) == 3
     assert cli.main(["batch", str(csv_path), "--out", str(out)]) == 2   # exists, no --resume
-    assert cli.main(["batch", str(csv_path), "--out", str(out), "--overwrite", "--quiet"]) == 0
+    assert cli.main(["batch", str(csv_path), "--out", str(out), "--overwrite", "--quiet"]) == 1
     bad = tmp_path / "bad.csv"
-    bad.write_text("u_a,v_a,psi,k\n0,1,0,0\n")
+    bad.write_text("u_a,psi,k\n0,1,0,0\n")
     assert cli.main(["batch", str(bad), "--out", str(tmp_path / "q.jsonl")]) == 2
-    assert "steps" in capsys.readouterr().err
+    assert "v_a" in capsys.readouterr().err
     assert cli.main(["batch", str(tmp_path / "none.csv"), "--out", str(tmp_path / "q.jsonl")]) == 2
     assert cli.main(["batch", str(csv_path), "--out", str(tmp_path / "q.jsonl"), "--jobs", "0"]) == 2
 
@@ -126,6 +128,18 @@ def without_times(lines):
         d = json.loads(json.dumps(d))
         if "solver" in d:
             d["solver"].pop("time_s")
+        out.append(d)
+    return out
+
+
+# ----------------------------------------------------------------------------- conventions of issue 18
+
+def _strip_times(lines):
+    """Output lines without the solver's wall time (the only field that differs between two runs)."""
+    out = []
+    for d in lines:
+        d = json.loads(json.dumps(d))
+        d.get("solver", {}).pop("time_s", None)
         out.append(d)
     return out
 
@@ -303,3 +317,143 @@ def test_second_batch_on_the_same_output_is_refused(tmp_path, capsys):
         _, err = first.communicate(timeout=600)
     assert first.returncode == 0, err
     assert [d["index"] for d in read_lines(out)] == list(range(len(SLOW_ROWS)))
+
+def test_comments_blank_lines_and_defaults(tmp_path, scipy_trace):
+    """# lines and blank lines are not rows; missing psi/steps/k columns and empty cells take 0, 1 and 2.5.
+    The defaulted plan equals the explicit one and is checked by DOP853 on the printed (28)-(30)."""
+    short = tmp_path / "short.csv"
+    short.write_text("# targets\n\nu_a,v_a\n# a comment between rows\n0.5,0.3\n\n   \n0.2,-0.4\n")
+    empty = tmp_path / "empty.csv"
+    empty.write_text("u_a,v_a,psi,steps,k\n0.5,0.3,,,\n0.2,-0.4,0,1,2.5\n")
+    r1 = run_batch(short, tmp_path / "a.jsonl")
+    r2 = run_batch(empty, tmp_path / "b.jsonl")
+    assert (r1.total, r1.failed, r2.total, r2.failed) == (2, 0, 2, 0)
+    a, b = read_output(tmp_path / "a.jsonl"), read_output(tmp_path / "b.jsonl")
+    assert [d["index"] for d in a] == [0, 1]
+    for d in a + b:
+        assert (d["k"], d["steps"], d["target"]["psi"]) == (2.5, 1, 0.0)
+    assert [d["figure_eight"] for d in a] == [d["figure_eight"] for d in b]
+    fe = a[0]["figure_eight"]
+    assert scipy_trace(fe["a"], fe["b"], 2.5, fe["gamma"]) == pytest.approx([0.5, 0.3, 0.0], abs=1e-9)
+
+
+def test_lines_carry_version_and_units(tmp_path):
+    import rollplan
+
+    run_batch(write_csv(tmp_path / "t.csv", ROWS[:3]), tmp_path / "p.jsonl")
+    for d in read_output(tmp_path / "p.jsonl"):
+        assert d["version"] == rollplan.__version__
+        assert d["units"]["length"] == "R" and d["units"]["angle"] == "rad"
+
+
+def test_missing_required_column_names_the_required_ones(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("u_a,psi\n0,1\n")
+    with pytest.raises(InputError, match="v_a"):
+        run_batch(bad, tmp_path / "q.jsonl")
+
+
+def test_fsync_is_batched(tmp_path, monkeypatch):
+    """Every line is flushed at once, but fsync (milliseconds each) runs at most every FSYNC_INTERVAL and at the end."""
+    import os
+
+    from rollplan.studies import batch
+
+    calls = []
+    real = os.fsync
+    monkeypatch.setattr(batch.os, "fsync", lambda fd: (calls.append(fd), real(fd)))
+    sizes = []
+
+    def watch(done, total, failed):
+        sizes.append((tmp_path / "p.jsonl").stat().st_size)
+
+    r = run_batch(write_csv(tmp_path / "t.csv"), tmp_path / "p.jsonl", progress=watch)
+    assert len(calls) <= 1 + r.time_s / batch.FSYNC_INTERVAL
+    assert all(b > a for a, b in zip(sizes[1:], sizes[2:]))   # each line on disk (flushed) as it is done
+
+
+def test_progress_is_plain_lines_in_a_log(tmp_path, capsys):
+    run_batch(write_csv(tmp_path / "t.csv", ROWS[:3]), tmp_path / "p.jsonl", progress=True)
+    err = capsys.readouterr().err
+    assert "\r" not in err
+    assert re.search(r"^batch: 3/3 targets \(100%\), 1 failed, .* elapsed$", err, re.MULTILINE)
+
+
+def test_forked_workers_start_with_the_planner_built():
+    """With --jobs 2 the workers are forked after the parent built the planner: they construct nothing."""
+    from rollplan.studies.executor import Executor, start_method
+
+    if start_method() != "fork":
+        pytest.skip("no fork here (or this process runs other threads): the workers are spawned")
+    ex = Executor(2, warm=_warm)
+    with ex:
+        seen = list(ex.map(_planner_misses, range(6)))
+    parent = default_planner.cache_info().misses
+    assert {m for _, m in seen} == {parent}   # no worker missed the cache, i.e. built a planner
+    assert len({pid for pid, _ in seen}) >= 1
+
+
+def _warm():
+    default_planner("ipopt")
+
+
+def _planner_misses(_):
+    import os
+
+    default_planner("ipopt")
+    return os.getpid(), default_planner.cache_info().misses
+
+
+@pytest.mark.parametrize("rows, code", [(ROWS[:2], 0), (ROWS[:3], 1), (ROWS[2:5], 3)])
+def test_cli_exit_codes(tmp_path, capsys, rows, code):
+    """0 when every row is planned, 1 when some failed, 3 when all failed (documented in --help)."""
+    out = tmp_path / "p.jsonl"
+    assert cli.main(["batch", str(write_csv(tmp_path / "t.csv", rows)), "--out", str(out), "--jobs", "1",
+                     "--quiet"]) == code
+    err = capsys.readouterr().err
+    assert len(out.read_text().splitlines()) == len(rows)
+    if code:
+        assert "failed" in err and "Traceback" not in err
+
+
+def test_cli_exit_code_counts_rows_kept_by_resume(tmp_path, capsys):
+    csv_path, out = write_csv(tmp_path / "t.csv", ROWS[2:5]), tmp_path / "p.jsonl"
+
+    def stop_after_two(done, total, failed):
+        if done == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_batch(csv_path, out, progress=stop_after_two)
+    assert cli.main(["batch", str(csv_path), "--out", str(out), "--resume", "--quiet"]) == 3   # as uninterrupted
+
+
+def test_cli_exists_message_names_the_flags(tmp_path, capsys):
+    csv_path, out = write_csv(tmp_path / "t.csv", ROWS[:1]), tmp_path / "p.jsonl"
+    out.write_text("")
+    assert cli.main(["batch", str(csv_path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--resume" in err and "--overwrite" in err and "resume=True" not in err
+
+
+def test_cli_help_documents_exit_codes_and_columns(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["batch", "--help"])
+    text = capsys.readouterr().out
+    assert "1 some rows failed" in text and "3 every row failed" in text and "#" in text and "default 2.5" in text
+
+
+@pytest.mark.slow
+def test_the_shipped_example_runs(tmp_path, capsys):
+    """examples/targets.csv (shown in the README): four plans and two recorded failures, exit 1."""
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parent.parent / "examples" / "targets.csv"
+    out = tmp_path / "plans.jsonl"
+    assert cli.main(["batch", str(example), "--out", str(out), "--quiet"]) == 1
+    lines = read_output(out)
+    assert [d["status"] for d in lines] == ["ok"] * 4 + ["failed"] * 2
+    assert lines[0]["figure_eight"]["a"] == pytest.approx(0.300429, abs=5e-7)   # the paper's a1
+    for d in lines[:4]:
+        u, v, psi = d["target"]["u_a"], d["target"]["v_a"], d["target"]["psi"]
+        assert [d["final"]["u_a"], d["final"]["v_a"], d["final"]["psi"]] == pytest.approx([u, v, psi], abs=1e-9)

@@ -9,14 +9,13 @@ import re
 import stat
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
 from conftest import one_line, run
 
 from rollplan import InputError, Robot, State
-from rollplan.cli import _Progress, main
+from rollplan.cli import main
 from rollplan.io import load_rotor_plan
 
 import references
@@ -27,7 +26,7 @@ def test_plan_paper_case_json_and_plot(tmp_path, capsys):
     js, png = tmp_path / "p.json", tmp_path / "p.png"
     code, out, _ = run(capsys, "plan", "--to", "0", "1", "--k", "2.5", "--all", "--json", str(js), "--plot", str(png))
     assert code == 0
-    assert "0.300428" in out
+    assert "a = 0.300429 R" in out   # 6 significant digits, unit named
     d = json.loads(js.read_text())
     for key in ("k", "radius", "steps", "target", "figure_eight", "step", "final", "residual", "path_length",
                 "trajectory", "alternatives"):
@@ -64,10 +63,10 @@ def test_step_command_matches_printed_reference(tmp_path, capsys, argv, ab, k, g
     assert d["h"] == pytest.approx(np.hypot(ref[0], ref[1]), abs=1e-10)
     assert d["eta"] == pytest.approx(ref[2], abs=1e-10)
     assert d["direction"] == pytest.approx(np.arctan2(ref[1], ref[0]), abs=1e-9)
-    # stdout reports the same h and eta
+    # stdout reports the same h and eta, to the 6 significant digits of a summary
     shown = dict(re.findall(r"\b(h|eta) = (\S+)", out))
-    assert float(shown["h"]) == pytest.approx(np.hypot(ref[0], ref[1]), abs=1e-10)
-    assert float(shown["eta"]) == pytest.approx(ref[2], abs=1e-10)
+    assert float(shown["h"]) == pytest.approx(np.hypot(ref[0], ref[1]), rel=5e-6, abs=1e-12)
+    assert float(shown["eta"]) == pytest.approx(ref[2], rel=5e-6, abs=1e-12)
 
 
 @pytest.mark.parametrize("argv,needle", [
@@ -82,7 +81,7 @@ def test_step_command_matches_printed_reference(tmp_path, capsys, argv, ab, k, g
     (["plan", "--k", "2", "--robot", "r.toml"], "not allowed with"),
     (["step", "--a", "0.8", "--k", "2.5"], "a = 0.8"),
     (["step", "--a", "0.3", "--b", "0", "--k", "2.5"], "b = 0"),
-    (["step", "--a", "0.3"], "--k"),
+    (["step", "--k", "2.5"], "--a"),
     (["frobnicate"], "invalid choice"),
 ])
 def test_bad_input_exits_2_with_one_line(capsys, argv, needle):
@@ -205,17 +204,6 @@ def test_relative_symlink_output_is_written_through(tmp_path, capsys, monkeypatc
     assert json.loads(real.read_text())["a"] == 0.3
 
 
-def test_progress_bar_shows_the_count(capsys):
-    """Long commands (reproduce) draw one progress bar per label on stderr with the count done."""
-    progress = _Progress()
-    progress("h(k) sweep", 1, 3)
-    time.sleep(0.15)   # tqdm redraws at most every 0.1 s
-    progress("h(k) sweep", 3, 3)
-    progress.close()
-    err = capsys.readouterr().err
-    assert "h(k) sweep: " in err and "3/3" in err
-
-
 def test_unreadable_and_invalid_files(tmp_path, capsys):
     assert main(["plan", "--robot", str(tmp_path / "none.toml")]) == 2
     assert "cannot be read" in capsys.readouterr().err
@@ -310,6 +298,30 @@ def test_simulate_other_robot(planned, tmp_path, capsys):
     assert err > 1e-3
 
 
+def test_simulate_plot_and_json_metadata(planned, tmp_path, capsys):
+    import rollplan
+
+    _, _, out, data = planned
+    assert data["version"] == rollplan.__version__ and data["units"]["length"] == "m"
+    assert data["units"]["torque"] == "N m"
+    png, js = tmp_path / "sim.png", tmp_path / "sim.json"
+    capsys.readouterr()
+    assert main(["simulate", str(out), "--plot", str(png), "--json", str(js)]) == 0
+    text = capsys.readouterr().out
+    assert png.read_bytes()[:4] == b"\x89PNG" and png.stat().st_size > 20000
+    d = json.loads(js.read_text())
+    assert d["version"] == rollplan.__version__ and d["units"]["length"] == "m"
+    assert d["position_error_m"] == pytest.approx(d["position_error"] * 0.15)
+    assert "Euclidean norm" in text and re.search(r"position \S+ m", text)
+
+
+def test_plan_duration_prints_torques_in_n_m_and_position_error_in_m(tmp_path, capsys):
+    code, out, _ = run(capsys, "plan", "--to", "0", "0.1", "--duration", "5")
+    assert code == 0
+    assert re.search(r"max \|torque\| = \S+ N m", out)
+    assert re.search(r"position error \S+ m ", out) and " R;" not in out
+
+
 def test_default_robot_when_no_file(tmp_path, capsys):
     out = tmp_path / "p.json"
     assert main(["plan", "--to", "0", "0.1", "--duration", "5", "--json", str(out)]) == 0
@@ -340,3 +352,158 @@ def test_animate_writes_a_gif(planned, tmp_path):
 
     assert gif.read_bytes()[:6] in (b"GIF89a", b"GIF87a")
     assert Image.open(gif).n_frames == 3
+
+
+# ----------------------------------------------------------------------------- Unix conventions (issue 18)
+
+def test_json_dash_pipes_into_a_json_parser():
+    """`--json -` writes only the JSON document to stdout (the summary goes to stderr): piped into a parser."""
+    reader = "import json, sys; d = json.load(sys.stdin); print(d['h'], d['eta'], d['version'], d['units']['length'])"
+    cmd = f"{sys.executable} -m rollplan.cli step --a 0.3 --b 0.4 --json - | {sys.executable} -c \"{reader}\""
+    r = subprocess.run(cmd, shell=True, check=True, capture_output=True, text=True, timeout=300)
+    h, eta, version, unit = r.stdout.split()
+    ref = references.trace(0.3, 0.4, 2.5)   # k defaults to 2.5
+    assert float(h) == pytest.approx(np.hypot(ref[0], ref[1]), abs=1e-10)
+    assert float(eta) == pytest.approx(ref[2], abs=1e-10)
+    assert unit == "R"
+    import rollplan
+
+    assert version == rollplan.__version__
+
+
+def test_json_dash_in_process_keeps_stdout_pure(capsys):
+    code, out, err = run(capsys, "plan", "--to", "0.5", "0.3", "--psi", "0.4", "--json", "-")
+    assert code == 0
+    d = json.loads(out)   # nothing but the document on stdout
+    assert d["final"]["u_a"] == pytest.approx(0.5, abs=1e-9) and len(d["trajectory"]["theta"]) > 100
+    assert "figure eight" in err and "residual" in err and "wrote" not in err
+    assert not os.path.exists("-")
+
+
+def test_version():
+    from importlib.metadata import version
+
+    import rollplan
+
+    r = subprocess.run([sys.executable, "-m", "rollplan.cli", "--version"], check=True, capture_output=True,
+                       text=True, timeout=120)
+    assert r.stdout.strip() == f"rollplan {rollplan.__version__}" == f"rollplan {version('rollplan')}"
+
+
+def test_bare_command_prints_usage(capsys):
+    code, out, err = run(capsys)
+    assert code == 2 and out == ""
+    assert err.startswith("usage: rollplan")
+    for command in ("plan", "step", "reproduce", "simulate", "animate", "compare", "codegen", "batch", "atlas"):
+        assert f"\n    {command} " in err
+
+
+@pytest.mark.parametrize("argv, target", [
+    (["--to", "-1e-3", "1", "--psi", "-2e-1"], (-1e-3, 1.0, -0.2)),
+    (["--to", "-.5", "-3E-1", "--psi", "-1E+0"], (-0.5, -0.3, -1.0)),
+])
+def test_negative_numbers_in_exponent_form(tmp_path, capsys, argv, target):
+    js = tmp_path / "p.json"
+    code, _, err = run(capsys, "plan", *argv, "--json", str(js))
+    assert code == 0, err
+    d = json.loads(js.read_text())
+    assert (d["target"]["u_a"], d["target"]["v_a"], d["target"]["psi"]) == target
+    fe = d["figure_eight"]
+    x = references.trace(fe["a"], fe["b"], 2.5, fe["gamma"], steps=d["steps"])
+    assert x[:2] == pytest.approx(target[:2], abs=1e-9)
+    assert np.cos(x[2] - target[2]) == pytest.approx(1.0, abs=1e-12)
+
+
+@pytest.mark.parametrize("value", ["-inf", "-nan", "-Infinity"])
+def test_negative_non_numbers_are_refused_as_numbers(capsys, value):
+    code, _, err = run(capsys, "plan", "--to", value, "1")
+    assert code == 2 and value in err and "not a finite number" in err and one_line(err)
+
+
+def test_errors_point_to_help(capsys):
+    code, _, err = run(capsys, "step", "--a")
+    assert code == 2 and "(see: rollplan step --help)" in err and one_line(err)
+
+
+def test_k_defaults_to_the_papers_case(tmp_path, capsys):
+    js = tmp_path / "s.json"
+    assert run(capsys, "step", "--a", "0.3", "--json", str(js))[0] == 0
+    d = json.loads(js.read_text())
+    assert d["k"] == 2.5
+    assert d["eta"] == pytest.approx(references.trace(0.3, 0.3, 2.5)[2], abs=1e-10)
+    assert run(capsys, "atlas", "--resolution", "3", "--out", str(tmp_path / "a.png"), "--json",
+               str(tmp_path / "a.json"))[0] == 0
+    assert json.loads((tmp_path / "a.json").read_text())["k"] == 2.5
+
+
+@pytest.mark.parametrize("command, needles", [
+    ("plan", ["[0, 100]", "[1, 1000]", "default 2.5", "- for stdout"]),
+    ("step", ["0 < a <= 0.69", "0 < b <= 0.69", "[0, 100]"]),
+    ("atlas", ["[0, 100]", "[2, 1000]", "[1, 1000]", "--scheduler"]),
+    ("animate", ["[2, 2000]", "[1, 100]"]),
+    ("compare", ["[1, 100000]", "[1, 9]", "(0, pi/2)"]),
+    ("batch", ["--scheduler", ">= 1", "exit status"]),
+])
+def test_limits_are_in_the_help(capsys, command, needles):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for needle in needles:
+        assert needle in text, needle
+
+
+def test_lengths_are_printed_in_the_unit_in_use(capsys):
+    code, out, _ = run(capsys, "plan", "--to", "0", "0.1", "--radius", "0.1")
+    assert code == 0
+    assert "R = 0.1 m" in out and "a = 0.0300429 m" in out and "units" not in out
+    assert re.search(r"final +u_a = \S+ m +v_a = 0.1 m +psi = \S+ rad", out)
+    assert "Euclidean norm; lengths in R, angles in rad" in out
+
+
+def test_summaries_have_six_significant_digits(capsys):
+    _, out, _ = run(capsys, "plan")
+    for number in re.findall(r"= (-?[0-9.]+(?:e[-+][0-9]+)?) (?:R|rad)\b", out):
+        assert len(number.split("e")[0].replace("-", "").replace(".", "").lstrip("0")) <= 6, number
+
+
+def test_route_and_composed_plan_follow_the_conventions(tmp_path, capsys):
+    """The commands of composed plans (plan --from/--contact, route) keep the conventions: --json - on stdout
+    with version and units, the summary on stderr with every length in the unit in use (named), 6 digits and
+    the norm of the residual named."""
+    path = tmp_path / "w.csv"
+    path.write_text("u_a,v_a,psi,u_o,v_o\n0,0,0,0.1,0\n0.6,0.2,0.5,,\n")
+    code, out, err = run(capsys, "route", str(path), "--k", "2.5", "--json", "-")
+    assert code == 0
+    d = json.loads(out)
+    import rollplan
+
+    assert d["version"] == rollplan.__version__ and d["units"]["length"] == "R" and len(d["legs"]) == 1
+    assert "path length" in err and "Euclidean norm" in err and "wrote" not in err
+    assert re.search(r"path length   \S+ R in \d+ pieces", err)
+    code, out, err = run(capsys, "plan", "--from", "0.01", "-0.02", "0.4", "-0.5", "0.6", "--to", "0.05", "0.07",
+                         "--radius", "0.1", "--json", "-")
+    assert code == 0 and json.loads(out)["units"]["length"] == "m"
+    start = re.search(r"from \(u_a, v_a, psi, u_o, v_o\) = \((.*?)\) to", err).group(1).split(", ")
+    assert start == ["0.01 m", "-0.02 m", "0.4 rad", "-0.5 rad", "0.6 rad"]
+    numbers = re.findall(r"= (-?\d[\d.e+-]*) m", err)
+    assert numbers and all(len(n.lstrip("-").replace(".", "").split("e")[0].lstrip("0")) <= 6 for n in numbers)
+
+
+def test_composed_figure_colours_follow_the_convention():
+    """In a composed plan's figure the first leaf after an approach roll is the 1st half-step (red), the rolls
+    have their own colours and every colour is named in a legend."""
+    from rollplan.planners.geometric import plan
+    from rollplan.plots.colors import LEAF, LEAF_LABELS, PIECE
+    from rollplan.plots.common import segments
+    from rollplan.plots.composed import piece_runs, plot_composed
+
+    p = plan((0.05, 0.07, 0.8, 0.0, 0.0), 1, k=2.5, start=(0.0, 0.0, 0.0, 0.3, -0.2))
+    traj = p.sample(800)
+    runs = piece_runs(p, traj)
+    kinds = [p.pieces[j].kind for _, _, j in segments(traj)]
+    assert kinds[0] == "approach" and runs[0][2] == PIECE["approach"]
+    first_leaf = kinds.index("leaf")
+    assert runs[first_leaf][2:] == (LEAF[0], LEAF_LABELS[0]) and runs[first_leaf + 1][2:] == (LEAF[1], LEAF_LABELS[1])
+    fig = plot_composed(p, traj)
+    legend = {t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()}
+    assert {LEAF_LABELS[0], LEAF_LABELS[1], "approach roll (to the pole)", "start", "target"} <= legend

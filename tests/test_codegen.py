@@ -262,6 +262,7 @@ def test_cli_codegen(tmp_path, capsys):
     with pytest.raises(SystemExit, match="2"):
         main(["codegen", "--out", str(tmp_path / "d"), "--k-max", "nan"])
     assert main(["codegen", "--out", str(tmp_path / "d"), "--prefix", "9x"]) == 2
+    assert not (tmp_path / "d").exists()   # a refused run leaves no empty folder behind
     assert main(["codegen", "--out", str(tmp_path / "no" / "such")]) == 2
     assert "not allowed" in capsys.readouterr().err
 

@@ -75,7 +75,8 @@ def test_cli_compare_json_and_plot(tmp_path, capsys):
                "--json", str(js), "--plot", str(png)])
     out = capsys.readouterr().out
     assert rc == 0
-    for row in ("contact path length", "effort", "peak |omega|", "final residual", "solve time", "iterations"):
+    for row in ("contact path length [R]", "effort", "peak |omega|", "residual (CVODES, Euclidean norm)", "solve time",
+                "iterations"):
         assert row in out
     d = json.loads(js.read_text())
     for side in ("geometric_phase", "collocation"):
@@ -128,3 +129,4 @@ def test_cli_compare_solver_failure_exit_4(monkeypatch, capsys):
     assert main(["compare", "--to", "0.5", "0.3"]) == 4
     err = capsys.readouterr().err
     assert "Maximum_Iterations_Exceeded" in err and "hint" in err and "Traceback" not in err
+    assert "try --guess warm" in err and "guess='warm'" not in err   # the hint in command-line syntax

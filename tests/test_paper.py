@@ -113,7 +113,8 @@ def test_roots_count_is_stable_on_doubled_grid(reduced):
 def test_json_schema(reduced, tmp_path):
     write_reproduction(reduced, tmp_path, figures=False)
     doc = json.loads((tmp_path / "reproduction.json").read_text())
-    assert list(doc) == ["rows"] and len(doc["rows"]) == len(reduced.rows)
+    assert list(doc) == ["version", "units", "rows"] and len(doc["rows"]) == len(reduced.rows)
+    assert doc["units"]["length"] == "R"
     for r in doc["rows"]:
         assert list(r) == ["quantity", "paper", "computed", "status", "note"]
         assert isinstance(r["quantity"], str) and isinstance(r["note"], str) and r["note"]

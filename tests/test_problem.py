@@ -101,7 +101,7 @@ def test_problem_defaults_and_robot():
     q = Problem((0.0, 0.1, 0.0), robot=robot, steps=3)
     assert q.k == robot.k and q.radius == robot.radius and q.unit == "m" and q.steps == 3
     assert Problem((0.0, 0.1, 0.0), robot=robot, radius=2.0).radius == 2.0   # radius given wins
-    assert Problem((0.0, 1.0, 0.0), k=1, radius=2.0).unit == "units"
+    assert Problem((0.0, 1.0, 0.0), k=1, radius=2.0).unit == "m"   # a radius without a robot is in metres
     assert isinstance(Problem((0.0, 1.0, 0.0), k=1).k, float)
 
 

@@ -400,4 +400,27 @@ def test_cli_plan_file_with_limits_round_trip(robot_file, tmp_path, capsys):
                 "--json", out)[0] == 0
     assert load_rotor_plan(out).robot == ROBOT
     code, text, _ = _run(capsys, "simulate", out)
-    assert code == 0 and float(re.search(r"position (\S+) R", text).group(1)) < 1e-5
+    # simulate prints the position error in the unit in use (m with a robot): 1e-5 R is 1e-5 * radius metres
+    assert code == 0 and float(re.search(r"position (\S+) m", text).group(1)) < 1e-5 * ROBOT.radius
+
+
+def test_timing_figure_follows_the_colour_and_unit_conventions():
+    """The timing figure draws the rotors in the rotor colours with torques in N m (as the console and the JSON),
+    the limits at their values in N m, and each law in its colour."""
+    from matplotlib.colors import to_rgba
+
+    from rollplan.plots.colors import LAW, ROTOR
+    from rollplan.plots.timing import plot_timing
+
+    p = rollplan.plan((0.0, 0.1, 0.0), robot=ROBOT)
+    m = actuate(p, ROBOT, 2.0 * actuate(p, ROBOT, timing="min-jerk").minimum_duration, timing="min-jerk")
+    fig = plot_timing(m)
+    torques = next(ax for ax in fig.axes if ax.get_ylabel() == "motor torque [N m]")
+    lines = [ln for ln in torques.get_lines() if len(ln.get_xdata()) > 2]
+    assert [to_rgba(ln.get_color()) for ln in lines] == [to_rgba(c) for c in ROTOR]
+    assert np.allclose(lines[0].get_ydata(), m.rotor_torques[:, 0])
+    limits = sorted(ln.get_ydata()[0] for ln in torques.get_lines() if len(ln.get_xdata()) == 2)
+    assert limits == pytest.approx([-ROBOT.max_rotor_torque, ROBOT.max_rotor_torque])
+    phase = fig.axes[-1]
+    assert to_rgba(next(ln for ln in phase.get_lines() if ln.get_label() == "min-jerk").get_color()) == \
+        to_rgba(LAW["min-jerk"])

@@ -33,6 +33,7 @@ from numpy.polynomial import chebyshev as cheb
 
 from .. import interrupts
 from ..errors import InputError, check_choice, check_range
+from ..progress import report
 from . import model
 from .curves import Curve, rotated_point
 
@@ -232,11 +233,12 @@ class CvodesIntegrator:
         p = np.concatenate([np.asarray(params, float), [k, gamma]])
         x = np.asarray(x0, float)
         out = []
-        for _ in range(steps):
+        for step in range(steps):
             for integ in ints:
                 xs = np.array(interrupts.call(integ, x0=x, p=p)["xf"])
                 out.append(xs.T)
                 x = xs[:, -1]
+            report("CVODES trace, steps", step + 1, steps)
         grid = np.linspace(0.0, 2.0 * np.pi, samples + 1)[1:]
         return np.tile(grid, steps * len(ints)), np.vstack(out)
 

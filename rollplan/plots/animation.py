@@ -5,9 +5,11 @@ The motion shown is given (e.g. the rotor-driven simulation of a plan file,
 the two motors produce). The sphere's centre is at ``(u_a, v_a, R)`` above the contact point and its
 orientation is (2), ``R = Rz(psi)^T Rx(v_o)^T Ry(u_o)^T`` (:func:`rollplan.core.model.orientation`),
 which maps the contact point (1) of the body frame to the bottom of the sphere.
-Drawn: the shell (meridians and parallels), the body axes n_1 (red, rotor 1),
-n_2 (green, rotor 2), n_3 (blue), the contact path on the plane and on the
-shell so far, and the rotor rates with a moving cursor.
+Drawn (colours of :mod:`.colors`, all named in legends): the shell (meridians
+and parallels), the body axes n_1 (rotor 1), n_2 (rotor 2) and n_3, the contact
+path on the plane and on the shell so far, the start and the target, the time
+of the frame, and the rotor rates with a moving cursor. Saving reports its
+progress (``progress(label, done, total)``).
 """
 
 from __future__ import annotations
@@ -22,18 +24,23 @@ from matplotlib.figure import Figure
 from ..errors import OutputError
 from ..execution.poses import animation_frames
 from ..outputs import write_atomic
+from .colors import AXIS_N3, MARK, ROTOR, ROTOR_LABELS, SIMULATED
 
 __all__ = ["make_animation"]
 
 log = logging.getLogger(__name__)
 
 
-def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps: int = 20) -> None:
+def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps: int = 20, progress=None,
+                   dpi: float | None = None) -> None:
     """Write a GIF of the sphere rolling (see module docstring) to ``out`` atomically.
 
-    ``state`` (N, 5) in :class:`~rollplan.problem.State` order at ``time``; ``goal`` (u_a, v_a, ...) [m].
+    ``state`` (N, 5) in :class:`~rollplan.problem.State` order at ``time``; ``goal`` (u_a, v_a, ...) [m];
+    ``progress(label, done, total)`` is called after each frame written; ``dpi`` scales the frames
+    (default: matplotlib's).
     """
     from matplotlib.animation import FuncAnimation, PillowWriter
+    from matplotlib.lines import Line2D
 
     R = robot.radius
     t, x, rot, contact = animation_frames(time, state, frames)
@@ -55,8 +62,8 @@ def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps:
     ax.set_xlabel("u_a [m]")
     ax.set_ylabel("v_a [m]")
     ax.set_zlabel("z [m]")
-    ax.plot([state[0, 0]], [state[0, 1]], [0], "ko", markersize=4)
-    ax.plot([goal[0]], [goal[1]], [0], "k*", markersize=10)
+    ax.plot([state[0, 0]], [state[0, 1]], [0], "o", color=MARK, markersize=4)
+    ax.plot([goal[0]], [goal[1]], [0], "*", color=MARK, markersize=10)
 
     # shell: 6 meridians and 5 parallels on the unit sphere, body frame
     s = np.linspace(0, 2 * np.pi, 49)
@@ -66,20 +73,32 @@ def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps:
     for lat in np.linspace(-60, 60, 5) * np.pi / 180:
         circles.append(np.stack([np.cos(lat) * np.cos(s), np.cos(lat) * np.sin(s), np.full_like(s, np.sin(lat))]))
     shell = [ax.plot([], [], [], color="0.6", linewidth=0.6)[0] for _ in circles]
-    axes = [ax.plot([], [], [], color=c, linewidth=2.2)[0] for c in ("tab:red", "tab:green", "tab:blue")]
-    path = ax.plot([], [], [], color="tab:purple", linewidth=1.4)[0]
-    on_shell = ax.plot([], [], [], color="tab:orange", linewidth=1.4)[0]
-    ax.set_title("sphere rolling: body axes n1 (red), n2 (green), n3 (blue)", fontsize=9)
+    axis_colors = (ROTOR[0], ROTOR[1], AXIS_N3)
+    axes = [ax.plot([], [], [], color=c, linewidth=2.2)[0] for c in axis_colors]
+    path = ax.plot([], [], [], color=SIMULATED, linewidth=1.4)[0]
+    on_shell = ax.plot([], [], [], color=SIMULATED, linewidth=1.0, linestyle="--")[0]
+    handles = [Line2D([], [], color=c, linewidth=2.2, label=lab) for c, lab in
+               zip(axis_colors, ("body axis n1 (rotor 1)", "body axis n2 (rotor 2)", "body axis n3"))]
+    handles += [Line2D([], [], color=SIMULATED, linewidth=1.4, label="simulated contact path, plane"),
+                Line2D([], [], color=SIMULATED, linewidth=1.0, linestyle="--", label="simulated contact path, shell"),
+                Line2D([], [], color=MARK, marker="o", markersize=4, linestyle="", label="start"),
+                Line2D([], [], color=MARK, marker="*", markersize=10, linestyle="", label="target")]
+    ax.legend(handles=handles, loc="upper left", fontsize=7, bbox_to_anchor=(-0.12, 0.93))
+    stamp = fig.text(0.27, 0.985, "", ha="center", va="top", fontsize=11, family="monospace",
+                     bbox={"boxstyle": "round,pad=0.3", "fc": "white", "ec": "0.6"})
 
-    ax2.plot(time, rates[:, 0], label="$\\dot\\varphi_1$ (about n1)", color="tab:red")
-    ax2.plot(time, rates[:, 1], label="$\\dot\\varphi_2$ (about n2)", color="tab:green")
-    cursor = ax2.axvline(time[0], color="k", linewidth=1)
+    for i in range(2):
+        ax2.plot(time, rates[:, i], label=f"$\\dot\\varphi_{i + 1}$, {ROTOR_LABELS[i]}", color=ROTOR[i])
+    cursor = ax2.axvline(time[0], color=MARK, linewidth=1)
     ax2.set_xlabel("time t [s]")
     ax2.set_ylabel("rotor rate [rad/s]")
-    ax2.set_title("rotor rates")
+    ax2.set_title("rotor rates (cursor: the frame's time)")
     ax2.grid(True, alpha=0.3)
-    ax2.legend(loc="upper right", fontsize=8)
+    ax2.legend(handles=ax2.get_legend_handles_labels()[0] + [Line2D([], [], color=MARK, linewidth=1,
+                                                                    label="time of the frame")],
+               loc="upper right", fontsize=8)
     fig.tight_layout()
+    width = len(f"{time[-1]:.2f}")
 
     def update(i):
         centre = np.array([x[i, 0], x[i, 1], R])
@@ -94,13 +113,15 @@ def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps:
         c = centre[:, None] + R * 1.01 * rot[i] @ contact[upto].T
         on_shell.set_data_3d(c[0], c[1], c[2])
         cursor.set_xdata([t[i], t[i]])
-        return shell + axes + [path, on_shell, cursor]
+        stamp.set_text(f"sphere rolling under its rotors, t = {t[i]:{width}.2f} s of {time[-1]:.2f} s")
+        return shell + axes + [path, on_shell, cursor, stamp]
 
     anim = FuncAnimation(fig, update, frames=frames, blit=False)
+    report = None if progress is None else (lambda i, n: progress("animation frames", i + 1, n))
     try:
         with tempfile.TemporaryDirectory() as tmp:   # Pillow writes to a file name: rendered there, then copied
             name = os.path.join(tmp, "anim.gif")
-            anim.save(name, writer=PillowWriter(fps=fps))
+            anim.save(name, writer=PillowWriter(fps=fps), progress_callback=report, dpi=dpi)
             with open(name, "rb") as fh:
                 data = fh.read()
     except OSError as exc:

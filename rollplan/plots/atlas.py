@@ -5,38 +5,80 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.plane import wrap
+from .colors import MARK
 
 __all__ = ["plot_atlas"]
+
+
+#: Contour labels are kept only where a and b are below this fraction of the largest radius: near
+#: a, b = A_MAX the contours crowd and their labels would cover one another.
+_LABEL_REGION = 0.82
+
+
+def _sparse_labels(ax, cs, a_max):
+    """Label each contour line of ``cs`` once, in the middle of its longest run outside the crowded corner."""
+    limit = _LABEL_REGION * a_max
+    positions = []
+    for segs in cs.allsegs:
+        best = None
+        for seg in segs:
+            inside = np.max(seg, axis=1) < limit
+            # longest run of consecutive points inside the region
+            edges = np.flatnonzero(np.diff(np.concatenate([[0], inside.astype(int), [0]])))
+            for start, stop in zip(edges[::2], edges[1::2]):
+                if best is None or stop - start > best[1] - best[0]:
+                    best = (start, stop, seg)
+        if best is not None and best[1] - best[0] >= 5:
+            positions.append(tuple(best[2][(best[0] + best[1]) // 2]))
+    if positions:
+        ax.clabel(cs, fontsize=7, fmt="%.3g", inline=True, inline_spacing=2, manual=positions)
 
 
 def plot_atlas(at):
     """Figure of an :class:`~rollplan.studies.atlas.Atlas` (computes nothing).
 
-    h and eta over (a, b) with contours and the fold ``det = 0`` (black), and
-    the (turn, shift) pairs n steps reach (turn wrapped to (-pi, pi]).
+    h and eta over (a, b) with labelled contours, the fold ``det = 0`` (black) and
+    the diagonal ``a = b`` (where eta = 0), and the (turn, shift) pairs n steps
+    reach (turn wrapped to (-pi, pi]).
     """
     from matplotlib.colors import LogNorm, SymLogNorm
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
-    fig = Figure(figsize=(16, 5.2), layout="constrained")
+    fig = Figure(figsize=(17, 5.6), layout="constrained")
     axes = fig.subplots(1, 3)
+    a_max = float(at.a[-1])
     big = float(np.abs(at.eta).max()) or 1.0
     eta_levels = np.unique(np.concatenate([-np.geomspace(0.05, big, 12)[::-1], [0.0], np.geomspace(0.05, big, 12)]))
-    for ax, z, title, cmap, levels, norm in (
-            (axes[0], at.h, "shift of one step h(a, b) [R]", "viridis", 24, None),
+    h_top = float(at.h.max())
+    h_lines = np.arange(0.25, h_top, 0.25 if h_top < 4 else 0.5)
+    eta_lines = np.array([v for v in (-20, -10, -5, -2, -1, -0.5, -0.2, 0.2, 0.5, 1, 2, 5, 10, 20) if abs(v) < big])
+    fold = np.nanmin(at.det) < 0 < np.nanmax(at.det)
+    for ax, z, title, cmap, levels, norm, lines, label in (
+            (axes[0], at.h, "shift of one step h(a, b) [R]", "viridis", 24, None, h_lines, "h [R]"),
             (axes[1], at.eta, "holonomy of one step eta(a, b) [rad]", "coolwarm", eta_levels,
-             SymLogNorm(0.05, vmin=-big, vmax=big))):
+             SymLogNorm(0.05, vmin=-big, vmax=big), eta_lines, "eta [rad] (symmetric log scale)")):
         cf = ax.contourf(at.b, at.a, z, cmap=cmap, levels=levels, norm=norm)
-        cs = ax.contour(at.b, at.a, z, colors="w", linewidths=0.5, levels=levels)
-        ax.clabel(cs, cs.levels[::3], fontsize=7, fmt="%.2g")
-        if np.nanmin(at.det) < 0 < np.nanmax(at.det):
-            ax.contour(at.b, at.a, at.det, levels=[0.0], colors="k", linewidths=1.8)
-        ax.plot([at.a[0], at.a[-1]], [at.a[0], at.a[-1]], ls=":", color="0.3", lw=0.8)
+        if lines.size:
+            cs = ax.contour(at.b, at.a, z, colors="w", linewidths=0.6, levels=lines)
+            _sparse_labels(ax, cs, a_max)
+        if fold:
+            ax.contour(at.b, at.a, at.det, levels=[0.0], colors=MARK, linewidths=1.8)
+        ax.plot([at.a[0], a_max], [at.a[0], a_max], ls=":", color="0.3", lw=1.0)
+        handles = [Line2D([], [], color="w", lw=0.6, label="contours (labelled below "
+                          f"{_LABEL_REGION * a_max:.2g} R)"),
+                   Line2D([], [], color="0.3", ls=":", lw=1.0, label="a = b (eta = 0)")]
+        if fold:
+            handles.insert(0, Line2D([], [], color=MARK, lw=1.8, label="fold: det d(h, eta)/d(a, b) = 0"))
+        leg = ax.legend(handles=handles, loc="lower left", fontsize=7.5, framealpha=0.85)
+        leg.get_frame().set_facecolor("0.75")
         ax.set_xlabel("b [R]")
         ax.set_ylabel("a [R]")
         ax.set_title(title)
         ax.set_aspect("equal")
-        fig.colorbar(cf, ax=ax, shrink=0.85)
+        bar = fig.colorbar(cf, ax=ax, shrink=0.85, label=label)
+        if norm is not None:
+            bar.set_ticks([v for v in (-20, -5, -1, -0.2, 0, 0.2, 1, 5, 20) if abs(v) <= big])
     ax = axes[2]
     turn = wrap(at.turn_total.ravel())
     shift = at.shift_total.ravel()
@@ -47,5 +89,6 @@ def plot_atlas(at):
     ax.set_xlabel(f"turn psi reached by {at.steps} step(s), n eta wrapped to (-pi, pi] [rad]")
     ax.set_ylabel(f"shift reached by {at.steps} step(s) [R]")
     ax.set_title("reachable (turn, shift) pairs (white: none on the grid)")
-    fig.suptitle(f"Reachability atlas of the figure eight, k = {at.k:g}, n = {at.steps}")
+    fig.suptitle(f"Reachability atlas of the figure eight, k = {at.k:.6g}, n = {at.steps}, "
+                 f"{at.a.size} x {at.b.size} grid")
     return fig

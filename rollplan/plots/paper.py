@@ -3,7 +3,7 @@
 Functions take results of :mod:`rollplan.studies.paper` and return matplotlib
 figures; they compute nothing. Conventions as in the paper: the first
 half-step (first leaf of the figure eight) in red, the second in blue; the
-contact path on the sphere (body frame, 3-D) and on the plane.
+contact path on the sphere (body frame, 3-D, and a close-up seen from below) and on the plane.
 """
 
 from __future__ import annotations
@@ -11,13 +11,15 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from .common import draw_plane_path, draw_sphere_path
+from .colors import COMPUTED, PRINTED
+from .common import draw_bottom_view, draw_plane_path, draw_sphere_path, leaf_handles
 
 __all__ = ["contact_figure", "shift_vs_k_figure", "shift_vs_a_figure", "case_study_figures"]
 
 
 def contact_figure(plan, traj, title: str) -> Figure:
-    """Contact path of a one-step plan on the sphere (left) and on the plane (right).
+    """Contact path of a one-step plan: on the sphere in 3-D (left, as in the paper), a close-up of it seen
+    from below (middle, equal aspect) and on the plane (right).
 
     Parameters
     ----------
@@ -28,18 +30,17 @@ def contact_figure(plan, traj, title: str) -> Figure:
     title : str
         Figure title.
     """
-    fig = Figure(figsize=(11, 5))
-    ax1 = fig.add_subplot(1, 2, 1, projection="3d")
+    fig = Figure(figsize=(16, 5.4), layout="constrained")
+    fig.get_layout_engine().set(wspace=0.12)
+    grid = fig.add_gridspec(1, 3, width_ratios=[0.8, 1, 1])
+    ax1 = fig.add_subplot(grid[0], projection="3d")
     draw_sphere_path(ax1, traj, plan.radius)
-    ax1.view_init(elev=-30, azim=-50)  # from below: the paths lie around the south pole
-    ax1.set_title("contact path on the sphere (body frame, seen from below)", pad=18)
-    ax2 = fig.add_subplot(1, 2, 2)
-    draw_plane_path(ax2, traj, plan.goal[:2], "R")
-    ax2.plot([], [], color="tab:red", label="1st half-step")
-    ax2.plot([], [], color="tab:blue", label="2nd half-step")
-    ax2.legend(loc="best", fontsize=8)
+    ax1.view_init(elev=-25, azim=-50)  # from below: the paths lie around the south pole
+    ax1.set_title("on the sphere in 3-D, from below", pad=28)
+    ax1.legend(handles=leaf_handles(), loc="lower left", fontsize=8)
+    draw_bottom_view(fig.add_subplot(grid[1]), traj, plan.radius, "R")
+    draw_plane_path(fig.add_subplot(grid[2]), traj, plan.goal[:2], "R")
     fig.suptitle(title)
-    fig.tight_layout()
     return fig
 
 
@@ -61,12 +62,12 @@ def shift_vs_k_figure(sweep, sweep_printed=None, paper_zeros=()) -> Figure:
     if sweep_printed is not None:
         ax.plot(sweep_printed.x, sweep_printed.h, color="0.6", linestyle="--", linewidth=1.0,
                 label=f"a = {sweep_printed.fixed:.6f} R (as printed)")
-    ax.plot(sweep.roots, np.zeros(len(sweep.roots)), "o", color="tab:green", markersize=6,
+    ax.plot(sweep.roots, np.zeros(len(sweep.roots)), "o", color=COMPUTED, markersize=6,
             label="zeros (root finding)")
     for i, r in enumerate(sweep.roots, 1):
         ax.annotate(f"$k_{i}$={r:.5g}", (r, 0), textcoords="offset points", xytext=(0, -16), ha="center", fontsize=8)
     if len(paper_zeros):
-        ax.plot(paper_zeros, np.zeros(len(paper_zeros)), "x", color="tab:red", markersize=9, mew=1.5,
+        ax.plot(paper_zeros, np.zeros(len(paper_zeros)), "x", color=PRINTED, markersize=9, mew=1.5,
                 label="zeros printed in the paper")
     ax.set_xlabel("inertia ratio k [-]")
     ax.set_ylabel("normalized shift h/R [-]")
@@ -98,13 +99,13 @@ def shift_vs_a_figure(sweep, level: float = 1.0, paper_roots=(), labelled: int =
     ax = fig.add_subplot(1, 1, 1)
     ax.plot(sweep.x, sweep.h, color="k", linewidth=1.2, label=f"k = {sweep.fixed:g}")
     ax.axhline(level, color="0.5", linestyle=":", linewidth=1.0, label=f"h/R = {level:g}")
-    ax.plot(sweep.roots, np.full(len(sweep.roots), level), "o", color="tab:green", markersize=5,
+    ax.plot(sweep.roots, np.full(len(sweep.roots), level), "o", color=COMPUTED, markersize=5,
             label="roots (root finding)")
     for i, r in enumerate(sweep.roots[:labelled], 1):
         ax.annotate(f"$a_{i}$={r:.6f}", (r, level), textcoords="offset points", xytext=(-4, 12 + 10 * (i % 2)),
                     ha="right", fontsize=8)
     if len(paper_roots):
-        ax.plot(paper_roots, np.full(len(paper_roots), level), "x", color="tab:red", markersize=9, mew=1.5,
+        ax.plot(paper_roots, np.full(len(paper_roots), level), "x", color=PRINTED, markersize=9, mew=1.5,
                 label="roots printed in the paper")
     ax.set_xlabel("circle radius a/R [-]")
     ax.set_ylabel("normalized shift h/R [-]")

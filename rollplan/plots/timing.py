@@ -9,31 +9,34 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-__all__ = ["draw_rates_torques", "draw_phase_plane", "plot_timing"]
+from .colors import LAW, LIMIT, ROTOR, ROTOR_LABELS
 
-_ROTOR_COLORS = ("tab:green", "tab:purple")
+__all__ = ["draw_rates_torques", "draw_phase_plane", "plot_timing"]
 
 
 def _limit_lines(ax, value, scale, label):
     if value is not None:
         for sign in (1, -1):
-            ax.axhline(sign * value * scale, color="k", linestyle="--", linewidth=0.8,
+            ax.axhline(sign * value * scale, color=LIMIT, linestyle="--", linewidth=0.8,
                        label=label if sign == 1 else None)
 
 
 def draw_rates_torques(ax_rates, ax_torques, motion, legend=True):
-    """Rotor rates and motor torques of a motion against time, with the robot's limits dashed."""
+    """Rotor rates [rad/s] and motor torques [N m] of a motion against time, with the robot's limits dashed."""
     lim = motion.limits
-    for i, color in enumerate(_ROTOR_COLORS):
-        ax_rates.plot(motion.time, motion.rotor_rates[:, i], color=color, linewidth=1.0, label=f"rotor {i + 1}")
-        ax_torques.plot(motion.time, 1e3 * motion.rotor_torques[:, i], color=color, linewidth=1.0,
-                        label=f"rotor {i + 1}")
+    for i, color in enumerate(ROTOR):
+        ax_rates.plot(motion.time, motion.rotor_rates[:, i], color=color, linewidth=1.0,
+                      label=f"$\\dot\\varphi_{i + 1}$, {ROTOR_LABELS[i]}")
+        ax_torques.plot(motion.time, motion.rotor_torques[:, i], color=color, linewidth=1.0,
+                        label=f"$\\tau_{i + 1}$, {ROTOR_LABELS[i]}")
     _limit_lines(ax_rates, lim.max_rotor_rate, 1.0, "max_rotor_rate")
-    _limit_lines(ax_torques, lim.max_rotor_torque, 1e3, "max_rotor_torque")
-    shortest = "" if motion.minimum_duration is None else f" (shortest {motion.minimum_duration:.4g} s)"
-    ax_rates.set_title(f"{motion.timing}: T = {motion.duration:.4g} s{shortest}", fontsize=10)
+    _limit_lines(ax_torques, lim.max_rotor_torque, 1.0, "max_rotor_torque")
+    shortest = ("" if motion.minimum_duration is None else " (the shortest)"
+                if abs(motion.duration - motion.minimum_duration) <= 1e-9 * motion.duration
+                else f" (shortest {motion.minimum_duration:.6g} s)")
+    ax_rates.set_title(f"{motion.timing}: T = {motion.duration:.6g} s{shortest}", fontsize=10)
     ax_rates.set_ylabel("rotor rate [rad/s]")
-    ax_torques.set_ylabel("motor torque [mN m]")
+    ax_torques.set_ylabel("motor torque [N m]")
     for ax in (ax_rates, ax_torques):
         ax.set_xlabel("time t [s]")
         ax.set_xlim(motion.time[0], motion.time[-1])
@@ -59,15 +62,15 @@ def draw_phase_plane(ax, motions, velocity_limit=None, joints=(), reference=None
     if velocity_limit is not None:
         s, top = velocity_limit
         top = np.where(np.isfinite(top), top, np.nan)
-        ax.plot(s, top, color="k", linewidth=1.2, label="maximum velocity curve (limits)")
+        ax.plot(s, top, color=LIMIT, linewidth=1.2, label="maximum velocity curve (limits)")
         if np.any(np.isfinite(top)):
             tops.append(np.nanpercentile(top, 50))
     for m in motions:
-        ax.plot(m.s, m.s_dot, linewidth=1.1, label=m.timing)
+        ax.plot(m.s, m.s_dot, linewidth=1.1, label=m.timing, color=LAW.get(m.timing))
         tops.append(float(m.s_dot.max()))
     if reference is not None:
         label, s, sd = reference
-        ax.plot(s, sd, color="k", linestyle=(0, (3, 3)), linewidth=0.9, label=label, zorder=5)  # on top
+        ax.plot(s, sd, color=LIMIT, linestyle=(0, (3, 3)), linewidth=0.9, label=label, zorder=5)  # on top
     for sj in joints:
         ax.axvline(sj, color="0.7", linestyle=":", linewidth=0.8)
     ax.set_ylim(0, 1.15 * max(tops) if max(tops) > 0 else 1.0)
@@ -104,6 +107,6 @@ def plot_timing(motions, velocity_limit=None, title: str = "", reference=None) -
                      reference)
     m = motions[0]
     r = m.robot
-    fig.suptitle(title or (f"R = {r.radius:g} m, k = {r.k:.4g}, {m.limits.describe()}; "
+    fig.suptitle(title or (f"R = {r.radius:.6g} m, k = {r.k:.6g}, {m.limits.describe()}; "
                            f"{int(m.segment.max()) + 1} pieces"), fontsize=10)
     return fig

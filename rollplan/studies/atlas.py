@@ -12,12 +12,15 @@ is the set of (shift, turn) pairs ``n`` figure eights can reach. Where the
 Jacobian determinant ``det d(h, eta)/d(a, b)`` vanishes the map folds: there
 two solution branches of (32)-(33) meet and disappear, and the root solver's
 Newton matrix is singular. The maps are evaluated by the spectral step map,
-batched with CasADi ``map`` over threads; the determinant is exact (AD).
+batched with CasADi ``map`` over threads; the determinant is exact (AD). The
+grid is evaluated in blocks of rows, so the work reports its progress and can
+run on a Dask cluster (:mod:`.executor`), one block per task, for one k or a
+sweep over several (:func:`compute_atlases`).
 """
 
 from __future__ import annotations
 
-import os
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -26,14 +29,20 @@ import numpy as np
 
 from ..core.curves import A_MAX
 from ..core.plane import n_step_gain
-from ..errors import check_whole
+from ..errors import InputError, check_whole
 from ..planners.geometric import default_planner
 from ..problem import check_k, check_steps
+from .executor import Executor, cpu_count
 
-__all__ = ["Atlas", "atlas_function", "compute_atlas", "atlas_to_dict", "n_step_totals"]
+__all__ = ["Atlas", "DEFAULT_RESOLUTION", "MAX_RESOLUTION", "atlas_function", "compute_atlas", "compute_atlases",
+           "atlas_to_dict", "n_step_totals"]
 
-#: Grid points evaluated per block (each block takes well under a second).
-_BLOCK = 2048
+#: Grid points per axis of an atlas by default (the command line's and results/atlas_k2.5.png's).
+DEFAULT_RESOLUTION = 101
+#: Largest grid points per axis.
+MAX_RESOLUTION = 1000
+#: An atlas is evaluated in about this many blocks of rows (the unit of progress and of cluster tasks).
+_BLOCKS = 25
 
 
 @dataclass(frozen=True)
@@ -94,7 +103,72 @@ def n_step_totals(h, eta, steps: int):
     return h * n_step_gain(eta, steps), steps * eta
 
 
-def compute_atlas(k: float, steps: int = 1, resolution: int = 81, planner=None, threads: int | None = None) -> Atlas:
+def _evaluate(fun: ca.Function, k: float, a_rows, b, threads: int):
+    """(h, eta, det) on the grid ``a_rows`` x ``b``, each of shape (len(a_rows), len(b))."""
+    aa, bb = np.meshgrid(np.asarray(a_rows, float), np.asarray(b, float), indexing="ij")
+    pts = np.vstack([aa.ravel(), bb.ravel()])
+    batch = fun.map(pts.shape[1], "thread", threads) if threads > 1 else fun.map(pts.shape[1])
+    return tuple(np.array(v).reshape(aa.shape) for v in batch(pts, k))
+
+
+def _block(task):
+    """A block of rows of an atlas on a cluster worker (the workers' default planner, one thread)."""
+    k, a_rows, b = task
+    return _evaluate(_cached_atlas_function(default_planner()), k, a_rows, b, 1)
+
+
+def compute_atlases(ks, steps: int = 1, resolution: int = DEFAULT_RESOLUTION, planner=None, threads: int | None = None,
+                    scheduler: str | None = None, progress=None) -> list:
+    """:func:`compute_atlas` for each k of ``ks``, in order: a sweep over k, in blocks of rows.
+
+    Parameters
+    ----------
+    ks : sequence of float
+        Inertia ratios, each in [0, K_MAX].
+    steps, resolution, planner, threads
+        As in :func:`compute_atlas` (``planner`` and ``threads`` apply to a run in this process).
+    scheduler : str, optional
+        Address of a Dask distributed scheduler: evaluate the blocks on its workers instead.
+    progress : callable, optional
+        ``progress("atlas", blocks done, blocks)`` after each block.
+    """
+    try:
+        ks = [check_k(k) for k in ks]
+    except TypeError:
+        raise InputError(f"ks = {ks!r} is not allowed: give a sequence of inertia ratios") from None
+    if not ks:
+        raise InputError("ks is empty: give at least one inertia ratio")
+    steps = check_steps(steps)  # the planner's own limits
+    resolution = check_whole("resolution", resolution, 2, MAX_RESOLUTION)
+    r = A_MAX * np.arange(1, resolution + 1) / resolution
+    per = math.ceil(resolution / _BLOCKS)
+    blocks = [(k, r[i:i + per], r) for k in ks for i in range(0, resolution, per)]
+    if scheduler is not None:
+        runner, fn = Executor(1, scheduler), _block
+    else:
+        fun = _cached_atlas_function(planner or default_planner())
+        cores = threads or cpu_count()
+        runner, fn = Executor(1), (lambda task: _evaluate(fun, task[0], task[1], task[2], cores))
+    parts = []
+    with runner:
+        for part in runner.map(fn, blocks):
+            parts.append(part)
+            if progress is not None:
+                progress("atlas", len(parts), len(blocks))
+    out = []
+    for j, k in enumerate(ks):
+        mine = parts[j * len(blocks) // len(ks):(j + 1) * len(blocks) // len(ks)]
+        h, eta, det = (np.vstack([p[i] for p in mine]) for i in range(3))
+        total_h, total_psi = n_step_totals(h, eta, int(steps))
+        s = np.sign(det)
+        corners = np.stack([s[:-1, :-1], s[1:, :-1], s[:-1, 1:], s[1:, 1:]])
+        fold = int(np.count_nonzero(corners.min(0) != corners.max(0)))
+        out.append(Atlas(k, int(steps), r, r.copy(), h, eta, det, total_h, total_psi, fold))
+    return out
+
+
+def compute_atlas(k: float, steps: int = 1, resolution: int = DEFAULT_RESOLUTION, planner=None,
+                  threads: int | None = None, scheduler: str | None = None, progress=None) -> Atlas:
     """Evaluate h, eta and the fold determinant on a ``resolution`` x ``resolution`` grid of (0, A_MAX]^2.
 
     Parameters
@@ -104,35 +178,17 @@ def compute_atlas(k: float, steps: int = 1, resolution: int = 81, planner=None, 
     steps : int
         n >= 1 for the totals ``H_n``, ``Psi_n``.
     resolution : int
-        Grid points per axis, >= 2; ``a_i = A_MAX i / N``, i = 1..N.
+        Grid points per axis, in [2, MAX_RESOLUTION]; ``a_i = A_MAX i / N``, i = 1..N.
     planner : GeometricPhasePlanner, optional
         Planner whose step map to use (default: the module's cached one).
     threads : int, optional
         Threads of the CasADi ``map`` (default: all cores).
+    scheduler : str, optional
+        Address of a Dask distributed scheduler to evaluate the grid on (see :func:`compute_atlases`).
+    progress : callable, optional
+        ``progress("atlas", done, total)`` per block of rows.
     """
-    k, steps = check_k(k), check_steps(steps)  # the planner's own limits
-    resolution = check_whole("resolution", resolution, 2, 1000)
-    planner = planner or default_planner()
-    fun = _cached_atlas_function(planner)
-    r = A_MAX * np.arange(1, resolution + 1) / resolution
-    aa, bb = np.meshgrid(r, r, indexing="ij")
-    pts = np.vstack([aa.ravel(), bb.ravel()])
-    threads = threads or os.cpu_count() or 1
-    # in blocks of grid rows: a map does not poll for Ctrl-C, so Python sees it between blocks
-    rows = max(1, _BLOCK // resolution)
-    size = rows * resolution
-    batch = fun.map(size, "thread", threads) if threads > 1 else fun.map(size)
-    out = np.zeros((3, pts.shape[1]))
-    for lo in range(0, pts.shape[1], size):
-        block = pts[:, lo:lo + size]
-        padded = np.pad(block, ((0, 0), (0, size - block.shape[1])), mode="edge")
-        out[:, lo:lo + block.shape[1]] = np.vstack([np.array(v) for v in batch(padded, k)])[:, :block.shape[1]]
-    h, eta, det = (row.reshape(resolution, resolution) for row in out)
-    total_h, total_psi = n_step_totals(h, eta, int(steps))
-    s = np.sign(det)
-    corners = np.stack([s[:-1, :-1], s[1:, :-1], s[:-1, 1:], s[1:, 1:]])
-    fold = int(np.count_nonzero(corners.min(0) != corners.max(0)))
-    return Atlas(k, int(steps), r, r.copy(), h, eta, det, total_h, total_psi, fold)
+    return compute_atlases([k], steps, resolution, planner, threads, scheduler, progress)[0]
 
 
 @lru_cache(maxsize=4)

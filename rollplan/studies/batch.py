@@ -1,22 +1,27 @@
 """Batch planning: many targets from a CSV file, in parallel, one JSON line each.
 
-Every row of the targets file (columns ``u_a, v_a, psi, steps, k``; more
-columns are carried along) is planned with :func:`rollplan.planners.geometric.plan`,
+Every row of the targets file is planned with :func:`rollplan.planners.geometric.plan`,
 which solves (32)-(33) for the figure eight (31) and verifies the plan by an
 independent CVODES integration of (28)-(30). The targets file is read by
 :func:`rollplan.inputs.read_csv` and its numbers by
-:func:`rollplan.inputs.parse_number` (the rules of the command line). The
-output is JSON Lines, one object per row, in input order:
+:func:`rollplan.inputs.parse_number` (the rules of the command line). It is CSV
+with a header; columns ``u_a, v_a`` are required, ``psi`` (default 0), ``steps``
+(default 1) and ``k`` (default :data:`~rollplan.problem.DEFAULT_K`, the paper's
+case) are optional, and an empty cell takes the default too; more columns are
+carried along. Blank lines and lines starting with ``#`` are skipped (they are
+not data rows). The output is JSON Lines, one object per row, in input order:
 
 * a plan: :func:`rollplan.io.plan_to_dict` (no trajectory, no alternatives)
   plus ``"index"`` (0-based data row), ``"key"``, ``"input"`` (the row as
-  read) and ``"status": "ok"``;
+  read), ``"status": "ok"``, and ``"version"`` and ``"units"`` (:func:`rollplan.io.tagged`);
 * a failure: ``"index"``, ``"key"``, ``"input"``, ``"status": "failed"``,
   ``"error"`` (the exception's class name) and ``"reason"`` (its one-line message).
 
 Rows are never dropped, and a row is never recorded as failed because the run
 was interrupted: Ctrl-C stops the run (also inside the solvers, see
 :mod:`rollplan.interrupts`) and the row in flight is planned again next time.
+The rows run where an :class:`.executor.Executor` puts them: in this process,
+in local worker processes, or on a Dask cluster, with the same output.
 
 Resume. ``key`` is a SHA-256 of the row's content (its columns and fields as
 read, in a canonical order) and of the root solver: ``resume=True`` keeps a
@@ -24,9 +29,10 @@ finished line whose key is some row's key (renumbered to that row's index)
 and plans every other row. A row edited, inserted or moved is planned again or
 kept by what it holds, never by its position; lines of rows no longer in the
 file are dropped. Lines are appended as soon as they are in order, each
-reaching the file at once (:class:`rollplan.outputs.LineWriter`), so a run
-stopped at any moment (Ctrl-C, SIGKILL) and resumed writes the same lines as a
-run never stopped (up to the solvers' wall-clock times, ``solver.time_s``).
+reaching the file at once (:class:`rollplan.outputs.LineWriter`, fsync in
+batches), so a run stopped at any moment (Ctrl-C, SIGKILL) and resumed writes
+the same lines as a run never stopped (up to the solvers' wall-clock times,
+``solver.time_s``).
 
 Safety (:mod:`rollplan.outputs`): the output is locked for the whole run (a
 second batch on the same output is refused), it may not be the targets file,
@@ -39,30 +45,31 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import multiprocessing
-import signal
-import sys
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from tqdm import tqdm
-
 from ..errors import InputError, NoPlanError, SolverError, check_choice, check_flag, check_whole
 from ..inputs import parse_number, parse_whole, read_csv, show_path
-from ..io import plan_to_dict
+from ..io import plan_to_dict, tagged
 from ..outputs import LineWriter, check_writable, claim, write_atomic
-from ..planners.geometric import SOLVERS, plan
+from ..planners.geometric import SOLVERS, default_planner, plan
+from ..problem import DEFAULT_K
+from ..progress import Progress
+from .executor import Executor
 
-__all__ = ["COLUMNS", "MAX_TARGETS_BYTES", "BatchResult", "read_targets", "row_key", "plan_row", "run_batch",
-           "read_output"]
+__all__ = ["COLUMNS", "REQUIRED", "DEFAULTS", "MAX_TARGETS_BYTES", "BatchResult", "read_targets", "row_key",
+           "plan_row", "run_batch", "read_output"]
 
 log = logging.getLogger(__name__)
 
-#: Columns a targets file must have.
+#: Columns of a targets file, in order.
 COLUMNS = ("u_a", "v_a", "psi", "steps", "k")
+#: Columns a targets file must have.
+REQUIRED = ("u_a", "v_a")
+#: Values of the optional columns when a column is missing or a cell is empty.
+DEFAULTS = {"psi": "0", "steps": "1", "k": repr(DEFAULT_K)}
 #: Largest targets file read.
 MAX_TARGETS_BYTES = 1 << 28
 #: Version of what ``key`` hashes; a line of another version is planned again on resume.
@@ -85,6 +92,8 @@ class BatchResult:
         Rows of this run recorded as failures.
     time_s : float
         Wall time of this run [s].
+    failed_total : int
+        Rows recorded as failures in the whole output (kept ones included).
     """
 
     total: int
@@ -92,17 +101,18 @@ class BatchResult:
     planned: int
     failed: int
     time_s: float
+    failed_total: int = 0
 
 
 def _targets(path):
-    return read_csv(path, "targets file", COLUMNS, MAX_TARGETS_BYTES)
+    return read_csv(path, "targets file", REQUIRED, MAX_TARGETS_BYTES, comments=True)
 
 
 def read_targets(path) -> list:
-    """Rows of a targets CSV as dicts of stripped strings (header required, blank lines skipped).
+    """Rows of a targets CSV as dicts of stripped strings (header required; blank and ``#`` lines skipped).
 
     Raises InputError if the file cannot be read (see :func:`rollplan.inputs.read_csv`)
-    or lacks a column of :data:`COLUMNS`.
+    or lacks a column of :data:`REQUIRED`.
     """
     return _targets(path).rows
 
@@ -116,15 +126,15 @@ def row_key(row: dict, method: str = "ipopt", problem: str | None = None) -> str
 
 
 def _parse(row: dict):
-    """(target, steps, k) from a row; InputError naming the bad value."""
+    """(target, steps, k) from a row (missing or empty optional cells take :data:`DEFAULTS`);
+    InputError naming the bad value."""
+    value = lambda name: row.get(name) or DEFAULTS.get(name)  # noqa: E731
     vals = {}
     for name in ("u_a", "v_a", "psi", "k"):
-        if name not in row:
+        if value(name) is None:
             raise InputError(f"{name} is missing")
-        vals[name] = parse_number(row[name], name)
-    if "steps" not in row:
-        raise InputError("steps is missing")
-    steps = parse_whole(row["steps"], "steps")
+        vals[name] = parse_number(value(name), name)
+    steps = parse_whole(value("steps"), "steps")
     return (vals["u_a"], vals["v_a"], vals["psi"]), steps, vals["k"]
 
 
@@ -141,32 +151,34 @@ def plan_row(index: int, row: dict, method: str = "ipopt", problem: str | None =
         target, steps, k = _parse(row)
         p = plan(target, steps, k=k, method=method)
         out = plan_to_dict(p, None, include_alternatives=False)
-        return {**head, **out, "input": row, "status": "ok"}
+        return tagged({**head, **out, "input": row, "status": "ok"}, p.problem.unit)
     except (InputError, NoPlanError, SolverError) as exc:
-        return {**head, "input": row, "status": "failed", "error": type(exc).__name__,
-                "reason": str(exc).splitlines()[0] if str(exc) else type(exc).__name__}
+        return _failed(head, row, exc)
     except Exception as exc:  # a bug or an unexpected solver crash: record it, never drop the row
         log.exception("row %d failed unexpectedly", index)
-        return {**head, "input": row, "status": "failed", "error": type(exc).__name__,
-                "reason": (str(exc).splitlines() or [type(exc).__name__])[0]}
+        return _failed(head, row, exc)
 
 
-def _ignore_sigint():
-    """Worker initializer: Ctrl-C is handled by the parent, which stops the pool."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+def _failed(head: dict, row: dict, exc: BaseException) -> dict:
+    """The output line of a row that failed: the exception's class and its first line."""
+    return tagged({**head, "input": row, "status": "failed", "error": type(exc).__name__,
+                   "reason": (str(exc).splitlines() or [type(exc).__name__])[0]}, "R")
 
 
-def _start_pool(processes: int):
-    """Worker processes that ignore Ctrl-C from the start (the parent stops them): SIGINT is ignored while
-    they are spawned, and an ignored signal stays ignored through exec, also while they import rollplan."""
-    ctx = multiprocessing.get_context("spawn")
-    if threading.current_thread() is not threading.main_thread():
-        return ctx.Pool(processes, initializer=_ignore_sigint)
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        return ctx.Pool(processes, initializer=_ignore_sigint)
-    finally:
-        signal.signal(signal.SIGINT, previous)
+def _lost_row(job, exc) -> dict:
+    """The output line of a row whose task was lost on a cluster (e.g. its worker died)."""
+    index, row, method, problem = job
+    return _failed({"index": index, "key": row_key(row, method, problem)}, row, exc)
+
+
+class _Warm:
+    """Build the planner of ``method`` once per process (picklable, for spawned workers)."""
+
+    def __init__(self, method: str) -> None:
+        self.method = method
+
+    def __call__(self) -> None:
+        default_planner(self.method)
 
 
 def _plan_job(job):
@@ -214,24 +226,19 @@ def _dump(d: dict) -> str:
     return json.dumps(d, allow_nan=False, separators=(",", ":")) + "\n"
 
 
-def _tick(bar, done: int, failed: int) -> None:
-    bar.n = done
-    bar.set_postfix(failed=failed, refresh=False)
-    bar.refresh()
-
-
 def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool = False,
-              method: str = "ipopt", progress: Callable | bool | None = None) -> BatchResult:
+              method: str = "ipopt", progress: Callable | bool | None = None,
+              scheduler: str | None = None) -> BatchResult:
     """Plan every row of ``targets`` into the JSON Lines file ``out``, in input order.
 
     Parameters
     ----------
     targets : path
-        CSV file with columns :data:`COLUMNS`.
+        CSV file (module docstring: columns, defaults, comments).
     out : path
         Output JSON Lines file (not the targets file); locked while the run lasts.
     jobs : int
-        Worker processes (each builds its own planner); 1 plans in this process.
+        Worker processes on this machine (each starts with a built planner); 1 plans in this process.
     resume : bool
         Keep the finished lines of ``out`` whose rows are still in ``targets`` (by content, see the
         module docstring) and plan the other rows.
@@ -240,7 +247,11 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
     method : str
         Root solver of :func:`rollplan.planners.geometric.plan`.
     progress : callable ``(done, total, failed)``, True or None
-        Progress report after each row; True draws a tqdm bar on stderr.
+        Progress report after each row; True shows it on stderr (:class:`rollplan.progress.Progress`:
+        a bar on a terminal, a line every few seconds otherwise).
+    scheduler : str, optional
+        Address of a Dask distributed scheduler: plan the rows on its workers instead (``jobs`` is
+        then ignored); the output is the same.
 
     Returns
     -------
@@ -261,13 +272,14 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
     if resume and overwrite:
         raise InputError("resume and overwrite exclude each other: resume keeps the finished lines of the output, "
                          "overwrite replaces it")
+    executor = Executor(jobs, scheduler, _Warm(method))   # checks jobs and scheduler before any file is touched
     table = _targets(targets)
     out = check_writable(out, "output file", inputs=[targets])
     with claim(out, what="output file"):
-        return _run(table, out, jobs, resume, overwrite, method, progress)
+        return _run(table, out, executor, resume, overwrite, method, progress)
 
 
-def _run(table, out: Path, jobs, resume, overwrite, method, progress) -> BatchResult:
+def _run(table, out: Path, executor, resume, overwrite, method, progress) -> BatchResult:
     if out.exists() and not (resume or overwrite):
         raise InputError(f"output file {show_path(out)} exists: pass --resume to continue it or --overwrite to "
                          "replace it")
@@ -281,38 +293,28 @@ def _run(table, out: Path, jobs, resume, overwrite, method, progress) -> BatchRe
         else:
             todo.append((i, row, method, problem))
     kept = sorted(lines)
-    write_atomic(out, "".join(_dump(lines[i]) for i in kept).encode(), "output file")
-    bar = tqdm(total=len(rows), initial=len(kept), unit="target", file=sys.stderr) if progress is True else None
-    report = (lambda d, total, f: _tick(bar, d, f)) if bar is not None else (progress or None)
+    kept_failed = sum(lines[i].get("status") != "ok" for i in kept)
+    shown = Progress(unit="targets") if progress is True else None
+    report = ((lambda d, total, f: shown("batch", d, total, failed=f)) if shown is not None else (progress or None))
     start = time.perf_counter()
     failed, count = 0, len(kept)
-    pool = None
     try:
-        with LineWriter(out, "output file") as writer:
-            if jobs == 1 or len(todo) <= 1:
-                results = map(_plan_job, todo)
-            else:
-                pool = _start_pool(min(jobs, len(todo)))
-                results = pool.imap(_plan_job, todo, chunksize=1)   # yields in input order
-            if report:
-                report(count, len(rows), failed)
-            for d in results:
-                writer.write(_dump(d))
-                lines[d["index"]] = d
-                count += 1
-                failed += d["status"] != "ok"
+        with executor:   # connects to a scheduler (and checks its workers) before the output is touched
+            write_atomic(out, "".join(_dump(lines[i]) for i in kept).encode(), "output file")
+            with LineWriter(out, "output file") as writer:
+                results = executor.map(_plan_job, todo, on_error=_lost_row)   # yields in input order
                 if report:
                     report(count, len(rows), failed)
-        if pool is not None:
-            pool.close()
-            pool.join()
-            pool = None
+                for d in results:
+                    writer.write(_dump(d))
+                    lines[d["index"]] = d
+                    count += 1
+                    failed += d["status"] != "ok"
+                    if report:
+                        report(count, len(rows), failed)
     finally:
-        if bar is not None:
-            bar.close()
-        if pool is not None:
-            pool.terminate()
-            pool.join()
+        if shown is not None:
+            shown.close()
     if kept and todo and kept[-1] > todo[0][0]:   # kept lines came first, out of input order: sort
         write_atomic(out, "".join(_dump(lines[i]) for i in sorted(lines)).encode(), "output file")
-    return BatchResult(len(rows), len(kept), len(todo), failed, time.perf_counter() - start)
+    return BatchResult(len(rows), len(kept), len(todo), failed, time.perf_counter() - start, kept_failed + failed)

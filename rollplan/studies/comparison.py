@@ -39,7 +39,7 @@ from ..problem import Problem
 from ..result import Measures, Trajectory
 from ..robot import Robot
 
-__all__ = ["Comparison", "compare", "measure_plan", "comparison_to_dict"]
+__all__ = ["Comparison", "compare", "measure_plan", "comparison_series", "comparison_to_dict"]
 
 TRAJECTORY_KEYS = ("t", "u_o", "v_o", "u_a", "v_a", "psi")
 
@@ -97,35 +97,74 @@ def _leaf_omega_functions():
     return out
 
 
-def measure_plan(p: Plan, horizon: float = 1.0, robot: Robot | None = None,
-                 samples_per_leaf: int = 500) -> tuple:
-    """Measures of a geometric-phase plan timed by ``t = T theta / (2 pi n)``, and its timed trajectory."""
+@lru_cache(maxsize=4)
+def _rotor_rate_function(jxx: float, jzz: float, jr: float) -> ca.Function:
+    """``(omega[3], u_o, v_o, psi) -> rotor rates[2]`` of (11) for one robot's inertias."""
+    w = ca.SX.sym("w", 3)
+    uo, vo, ps = ca.SX.sym("uo"), ca.SX.sym("vo"), ca.SX.sym("ps")
+    return ca.Function("rot", [w, uo, vo, ps], [model.rotor_rates(w, uo, vo, ps, jxx, jzz, jr)])
+
+
+def _rotor_rates_along(robot: Robot, omega, traj, rows) -> np.ndarray:
+    """Rotor rates (11), shape (M, 2), for angular velocities ``omega`` (M, 3) at the samples ``rows`` of ``traj``."""
+    fn = _rotor_rate_function(robot.j_xx, robot.j_zz, robot.rotor_inertia_axial)
+    omega = np.asarray(omega, float)
+    return np.array(fn.map(omega.shape[0])(omega.T, traj.u_o[rows][None, :], traj.v_o[rows][None, :],
+                                           traj.psi[rows][None, :])).T
+
+
+def _timed_circles(p: Plan, horizon: float, robot: Robot | None, samples_per_leaf: int):
+    """The plan timed by ``t = T theta / (2 pi n)``: its samples and, per circle of the figure eight, the
+    sample rows (the circle's start included), omega and (with a robot) the rotor rates there."""
     m = samples_per_leaf + (samples_per_leaf % 2)  # even: Simpson on m + 1 points
     tr = p.sample(m)
     ab = np.array([p.a, p.b]) / p.radius
     rate = 4.0 * math.pi * p.steps / horizon
     funcs = _leaf_omega_functions()
-    dt = horizon / (2 * p.steps) / m  # each circle takes T / (2 n)
-    energy = rotor = peak = 0.0
     phi = np.linspace(0.0, 2.0 * math.pi, m + 1)
-    rot_fn = None
-    if robot is not None:
-        w = ca.SX.sym("w", 3)
-        uo, vo, ps = ca.SX.sym("uo"), ca.SX.sym("vo"), ca.SX.sym("ps")
-        rot_fn = ca.Function("rot", [w, uo, vo, ps], [model.rotor_rates(w, uo, vo, ps, robot.j_xx, robot.j_zz,
-                                                                           robot.rotor_inertia_axial)])
+    circles = []
     for j in range(2 * p.steps):
         sl = slice(j * m, (j + 1) * m + 1)  # samples of this circle, including its start
-        psi = tr.psi[sl]
-        om = np.array(funcs[j % 2].map(m + 1)(phi[None, :], ab, p.gamma, psi[None, :], p.k, rate)).T
+        om = np.array(funcs[j % 2].map(m + 1)(phi[None, :], ab, p.gamma, tr.psi[sl][None, :], p.k, rate)).T
+        circles.append((sl, om, _rotor_rates_along(robot, om, tr, sl) if robot is not None else None))
+    timed = replace(tr, s=horizon * tr.s / tr.s[-1], parameter="t")
+    return timed, m, circles
+
+
+def measure_plan(p: Plan, horizon: float = 1.0, robot: Robot | None = None,
+                 samples_per_leaf: int = 500) -> tuple:
+    """Measures of a geometric-phase plan timed by ``t = T theta / (2 pi n)``, and its timed trajectory."""
+    timed, m, circles = _timed_circles(p, horizon, robot, samples_per_leaf)
+    dt = horizon / (2 * p.steps) / m  # each circle takes T / (2 n)
+    energy = rotor = peak = 0.0
+    for _, om, ph in circles:
         sq = (om ** 2).sum(axis=1)
         energy += _simpson(sq, dt)
         peak = max(peak, float(np.sqrt(sq.max())))
-        if rot_fn is not None:
-            ph = np.array(rot_fn.map(m + 1)(om.T, tr.u_o[sl][None, :], tr.v_o[sl][None, :], psi[None, :])).T
+        if ph is not None:
             rotor += _simpson((ph ** 2).sum(axis=1), dt)
-    timed = replace(tr, s=horizon * tr.s / tr.s[-1], parameter="t")
     return Measures(p.path_length, float(energy), float(rotor) if robot is not None else float("nan"), peak), timed
+
+
+def comparison_series(c: Comparison, samples_per_leaf: int = 200) -> dict:
+    """Time series of both motions of a comparison, for :func:`rollplan.plots.compare.plot_comparison`.
+
+    ``{"geometric_phase": {...}, "collocation": {...}}``, each with ``t`` (N,) [s],
+    ``omega`` (N, 3) [rad/s, plane frame] and ``rotor_rates`` (N, 2) [rad/s] (None
+    without a robot). The plan's series repeats the time of each joint between
+    circles, where omega jumps under this timing; the collocation's is at the
+    samples of its certified trajectory.
+    """
+    robot = c.problem.robot
+    timed, _, circles = _timed_circles(c.plan, c.horizon, robot, samples_per_leaf)
+    t = np.concatenate([timed.s[sl] for sl, _, _ in circles])
+    gp = {"t": t, "omega": np.vstack([om for _, om, _ in circles]),
+          "rotor_rates": np.vstack([ph for _, _, ph in circles]) if robot is not None else None}
+    r = c.result
+    rows = slice(0, r.trajectory.s.size)
+    coll = {"t": r.trajectory.s, "omega": np.asarray(r.omega, float),
+            "rotor_rates": _rotor_rates_along(robot, r.omega, r.trajectory, rows) if robot is not None else None}
+    return {"geometric_phase": gp, "collocation": coll}
 
 
 def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None = None,

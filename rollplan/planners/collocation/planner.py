@@ -79,13 +79,13 @@ SMOOTHING = 1e-4
 TOLERANCE = 1e-6
 
 _HINTS = {
-    "Maximum_Iterations_Exceeded": "raise max_iter, or warm-start from the geometric-phase plan (guess 'warm')",
+    "Maximum_Iterations_Exceeded": "raise max_iter, or warm-start from the geometric-phase plan (guess='warm')",
     "Infeasible_Problem_Detected": "the boundary conditions look unreachable within the contact bound; "
-                                   "try guess 'warm', more intervals or a larger contact bound",
-    "Restoration_Failed": "IPOPT lost feasibility; try guess 'warm' or more intervals",
-    "Error_In_Step_Computation": "the KKT system is singular; try guess 'warm' or another cost",
+                                   "try guess='warm', more intervals or a larger contact_bound",
+    "Restoration_Failed": "IPOPT lost feasibility; try guess='warm' or more intervals",
+    "Error_In_Step_Computation": "the KKT system is singular; try guess='warm' or another cost",
     "Invalid_Number_Detected": "NaN/Inf in the model: the contact point reached the equator (u_o or v_o = pi/2); "
-                               "lower the contact bound or try guess 'warm'",
+                               "lower contact_bound or try guess='warm'",
 }
 
 
@@ -378,10 +378,10 @@ class CollocationPlanner:
         where = (f"N = {tr.intervals}, d = {tr.degree}, {tr.scheme}, cost {self.cost.name}, {g.name} guess")
         log.info("collocation %s: %s in %d iterations, %.3f s", where, status, iters, solve_time)
         if not st["success"]:
-            hint = _HINTS.get(status, "try guess 'warm', more intervals or a longer horizon")
+            hint = _HINTS.get(status, "try guess='warm', more intervals or a longer horizon")
             if g.name == "naive" and status in ("Infeasible_Problem_Detected", "Restoration_Failed"):
                 hint = ("the naive guess rests at the south pole, where the linearized kinematics are not "
-                        "controllable (displacement and psi need Lie brackets); use guess 'warm'")
+                        "controllable (displacement and psi need Lie brackets); use guess='warm'")
             raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {status} after {iters} "
                               f"iterations; hint: {hint}", status)
         states, colloc, controls = tr.unpack(np.array(sol["x"]).ravel())

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ...errors import InputError, check_whole
+from ...io import tagged
 from ...outputs import check_writable, make_folder, save_figure, write_atomic, write_json
 from ...plots.paper import case_study_figures
 from .report import case_study_rows, markdown
@@ -157,7 +158,7 @@ def write_reproduction(result: CaseStudyResult, out, figures: bool = True) -> li
         for name, fig in zip(FIGURES, case_study_figures(result, PAPER)):
             save_figure(fig, out / name)
             written.append(out / name)
-    write_json(out / "reproduction.json", {"rows": [r.as_dict() for r in result.rows]})
+    write_json(out / "reproduction.json", tagged({"rows": [r.as_dict() for r in result.rows]}, "R"))
     written.append(out / "reproduction.json")
     write_atomic(out / "REPRODUCTION.md", markdown(result, FIGURES if figures else ()).encode())
     written.append(out / "REPRODUCTION.md")

@@ -1,0 +1,113 @@
+"""Batch planning and atlases on a Dask distributed cluster (``--scheduler ADDRESS``): a real local cluster
+with worker processes gives the same output, line by line, as a run in this process, with the same
+resume and failure semantics. Skipped only if Dask distributed is not installed (it is in the test extra)."""
+
+import json
+
+import numpy as np
+import pytest
+
+distributed = pytest.importorskip("distributed")
+
+from test_batch import _strip_times, check_lines, write_csv  # noqa: E402
+
+from rollplan import cli  # noqa: E402
+from rollplan.errors import InputError  # noqa: E402
+from rollplan.studies import executor  # noqa: E402
+from rollplan.studies.atlas import compute_atlas, compute_atlases  # noqa: E402
+from rollplan.studies.batch import read_output, run_batch  # noqa: E402
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """Two worker processes with one thread each, on this machine."""
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                                  silence_logs=50) as c:
+        yield c.scheduler_address
+
+
+def test_batch_on_the_cluster_equals_a_local_run(tmp_path, cluster):
+    csv_path = write_csv(tmp_path / "t.csv")
+    local, remote = tmp_path / "local.jsonl", tmp_path / "dask.jsonl"
+    r_local = run_batch(csv_path, local, jobs=1)
+    r_dask = run_batch(csv_path, remote, scheduler=cluster)
+    assert (r_dask.total, r_dask.planned, r_dask.failed, r_dask.failed_total) == \
+        (r_local.total, r_local.planned, r_local.failed, r_local.failed_total) == (6, 6, 3, 3)
+    lines = read_output(remote)
+    check_lines(lines)   # same order, same failures with their reasons, plans on target
+    assert _strip_times(lines) == _strip_times(read_output(local))
+
+
+def test_interrupted_local_run_resumed_on_the_cluster(tmp_path, cluster):
+    csv_path, out = write_csv(tmp_path / "t.csv"), tmp_path / "p.jsonl"
+
+    def stop_after_two(done, total, failed):
+        if done == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_batch(csv_path, out, progress=stop_after_two)
+    kept = out.read_bytes()
+    r = run_batch(csv_path, out, resume=True, scheduler=cluster)
+    assert (r.skipped, r.planned, r.failed_total) == (2, 4, 3)
+    assert out.read_bytes().startswith(kept)
+    check_lines(read_output(out))
+    run_batch(csv_path, tmp_path / "whole.jsonl")
+    assert _strip_times(read_output(out)) == _strip_times(read_output(tmp_path / "whole.jsonl"))
+
+
+def test_cli_batch_on_the_cluster(tmp_path, cluster, capsys):
+    csv_path, out = write_csv(tmp_path / "t.csv"), tmp_path / "p.jsonl"
+    assert cli.main(["batch", str(csv_path), "--out", str(out), "--scheduler", cluster, "--quiet"]) == 1
+    check_lines(read_output(out))
+    assert "3 of 6 rows failed" in capsys.readouterr().err
+
+
+def test_a_lost_task_is_a_failed_row(tmp_path, cluster):
+    """A task whose worker dies is recorded as a failed row (never dropped); the others are planned."""
+    with executor.Executor(scheduler=cluster) as ex:
+        results = list(ex.map(_die_on_two, [1, 2, 3], on_error=lambda item, exc: ("failed", item,
+                                                                                  type(exc).__name__)))
+    assert results[0] == 1 and results[2] == 3
+    assert results[1][:2] == ("failed", 2) and results[1][2] == "KilledWorker"
+
+
+def _die_on_two(x):
+    if x == 2:
+        import os
+
+        os._exit(1)   # the worker process dies (as on a segfault)
+    return x
+
+
+def test_atlas_sweep_on_the_cluster_equals_local(cluster):
+    here = compute_atlases([1.0, 2.5], steps=2, resolution=7)
+    there = compute_atlases([1.0, 2.5], steps=2, resolution=7, scheduler=cluster)
+    for a, b in zip(here, there):
+        assert a.k == b.k and a.fold_cells == b.fold_cells
+        for name in ("h", "eta", "det", "shift_total", "turn_total"):
+            assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    one = compute_atlas(2.5, steps=2, resolution=7, scheduler=cluster)
+    assert np.array_equal(one.h, here[1].h)
+
+
+def test_cli_atlas_sweep_on_the_cluster(tmp_path, cluster):
+    out, js = str(tmp_path / "atlas_k{k}.png"), str(tmp_path / "atlas_k{k}.json")
+    assert cli.main(["atlas", "--k", "1", "2.5", "--resolution", "5", "--out", out, "--json", js,
+                     "--scheduler", cluster]) == 0
+    for k in ("1", "2.5"):
+        assert (tmp_path / f"atlas_k{k}.png").stat().st_size > 10000
+        assert json.loads((tmp_path / f"atlas_k{k}.json").read_text())["k"] == float(k)
+
+
+def test_unreachable_scheduler_is_bad_input(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(executor, "CONNECT_TIMEOUT", 2.0)
+    with pytest.raises(InputError, match="cannot be reached"):
+        run_batch(write_csv(tmp_path / "t.csv"), tmp_path / "p.jsonl", scheduler="tcp://127.0.0.1:9")
+    assert not (tmp_path / "p.jsonl").exists()   # refused before the output was touched
+    assert cli.main(["batch", str(tmp_path / "t.csv"), "--out", str(tmp_path / "p.jsonl"),
+                     "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    err = capsys.readouterr().err
+    assert "cannot be reached" in err and len(err.strip().splitlines()) == 1
