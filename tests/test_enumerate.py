@@ -12,6 +12,7 @@ brentq and every local minimum of ``|h^2 - h_m^2|`` checked for a close pair by 
 minimiser. Plans are certified by DOP853 over all n steps.
 """
 
+import json
 import math
 
 import numpy as np
@@ -280,11 +281,10 @@ def _cli(capsys, *args):
 
 def test_cli_step_at_the_corner_of_the_domain_and_beyond(capsys):
     """`rollplan step --a 0.69 --k 100` prints the DOP853 shift; k above K_MAX is refused (exit 2)."""
-    code, out, _ = _cli(capsys, "step", "--a", "0.69", "--k", "100")
+    code, out, _ = _cli(capsys, "step", "--a", "0.69", "--k", "100", "--json", "-")   # full precision: JSON
     ref = references.trace(A_MAX, A_MAX, K_MAX)
-    u = float(out.split("u_a =")[1].split()[0])
-    v = float(out.split("v_a =")[1].split()[0])
-    assert code == 0 and abs(u - ref[0]) < 1e-10 and abs(v - ref[1]) < 1e-10
+    final = json.loads(out)["final"]
+    assert code == 0 and abs(final["u_a"] - ref[0]) < 1e-10 and abs(final["v_a"] - ref[1]) < 1e-10
     code, _, err = _cli(capsys, "step", "--a", "0.3", "--k", "100.5")
     assert code == 2 and "k = 100.5" in err and "100" in err and len(err.strip().splitlines()) == 1
 
@@ -292,7 +292,7 @@ def test_cli_step_at_the_corner_of_the_domain_and_beyond(capsys):
 def test_cli_branch_and_compact_all(capsys):
     code, out, _ = _cli(capsys, "plan", "--to", "-0.2724", "0.1488", "--psi", "-2.9291", "--steps", "3",
                         "--branch", "0")
-    assert code == 0 and "(branch m = 0)" in out and "path length   19.484014" in out
+    assert code == 0 and "(branch m = 0)" in out and "path length   19.484 R" in out   # 6 digits in summaries
     code, out, _ = _cli(capsys, "plan", "--to", "0", "1", "--k", "2.5", "--all")
     count = int(out.split("all plans:")[1].split()[0])
     rows = out.split("residual\n")[-1].strip().splitlines()

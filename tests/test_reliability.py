@@ -299,7 +299,7 @@ def test_negative_exponents_in_from_and_contact(capsys):
     code, out, err = run(capsys, "plan", "--from", "-1e-3", "0", "-2e-1", "-1e-2", "0", "--to", "0", "1",
                          "--contact", "-1e-1", "0", "--k", "2.5")
     assert code == 0, err
-    assert "from (u_a, v_a, psi, u_o, v_o) = (-0.001, 0, -0.2, -0.01, 0)" in out
+    assert "from (u_a, v_a, psi, u_o, v_o) = (-0.001 R, 0 R, -0.2 rad, -0.01 rad, 0 rad)" in out
 
 
 def test_route_outputs_never_replace_the_waypoints_or_a_read_only_file(tmp_path, capsys):

@@ -59,7 +59,8 @@ from ..problem import DEFAULT_K
 from ..progress import Progress
 from .executor import Executor
 
-__all__ = ["COLUMNS", "REQUIRED", "DEFAULTS", "MAX_TARGETS_BYTES", "BatchResult", "read_targets", "row_key",
+__all__ = ["COLUMNS", "REQUIRED", "DEFAULTS", "FSYNC_INTERVAL", "MAX_TARGETS_BYTES", "BatchResult", "read_targets",
+           "row_key",
            "plan_row", "run_batch", "read_output"]
 
 log = logging.getLogger(__name__)
@@ -72,6 +73,9 @@ REQUIRED = ("u_a", "v_a")
 DEFAULTS = {"psi": "0", "steps": "1", "k": repr(DEFAULT_K)}
 #: Largest targets file read.
 MAX_TARGETS_BYTES = 1 << 28
+#: Seconds between two fsyncs of the output (each line reaches the file at once; fsync guards against a crash
+#: of the machine, not of the process, and costs milliseconds per call).
+FSYNC_INTERVAL = 2.0
 #: Version of what ``key`` hashes; a line of another version is planned again on resume.
 _KEY_FORMAT = 1
 
@@ -301,7 +305,7 @@ def _run(table, out: Path, executor, resume, overwrite, method, progress) -> Bat
     try:
         with executor:   # connects to a scheduler (and checks its workers) before the output is touched
             write_atomic(out, "".join(_dump(lines[i]) for i in kept).encode(), "output file")
-            with LineWriter(out, "output file") as writer:
+            with LineWriter(out, "output file", sync_every=1 << 30, sync_seconds=FSYNC_INTERVAL) as writer:
                 results = executor.map(_plan_job, todo, on_error=_lost_row)   # yields in input order
                 if report:
                     report(count, len(rows), failed)
