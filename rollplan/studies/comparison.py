@@ -172,20 +172,29 @@ def _planner(intervals, degree, scheme, cost, contact_bound) -> RestToRestPlanne
     return RestToRestPlanner(intervals, degree, scheme, cost, contact_bound)
 
 
-def _branches(problem: Problem, robot: Robot, contact_bound: float) -> list:
-    """The certified GP branches of one leg whose leaves stay within the bound, shortest first."""
+def _branches(problem: Problem, robot: Robot, contact_bound: float, wanted: int) -> list:
+    """Up to ``wanted`` certified GP branches of one leg whose leaves stay within the bound: the planner's
+    (the shortest), then its neighbours ``m +- 1, m +- 2, ...`` (at most ``2 wanted + 2`` branches tried)."""
+    amax = leaf_radius_bound(contact_bound) * problem.radius
+    kw = {"robot": robot, "radius": problem.radius, "legs": "one"}
+    goal = tuple(problem.goal)
     try:
-        p = gp_plan(tuple(problem.goal), problem.steps, robot=robot, radius=problem.radius, all_solutions=True,
-                    legs="one")
+        first = gp_plan(goal, problem.steps, **kw)
     except NoPlanError as exc:
         raise NoPlanError(f"{exc} (the comparison needs a plan of one leg of figure eights)") from None
-    amax = leaf_radius_bound(contact_bound) * problem.radius
-    ok = [q for q in (p, *p.alternatives) if max(q.a, q.b) <= amax]
+    found = [first]
+    for d in range(1, wanted + 2):
+        for m in (first.branch - d, first.branch + d):
+            try:
+                found.append(gp_plan(goal, problem.steps, branch=m, **kw))
+            except NoPlanError:
+                continue
+    ok = sorted((q for q in found if max(q.a, q.b) <= amax), key=lambda q: q.path_length)
     if not ok:
-        raise NoPlanError(f"no geometric-phase plan for {problem.describe()} keeps its leaves within "
-                          f"a, b <= {amax / problem.radius:.6g} R (contact bound {contact_bound:.6g} rad); "
-                          "raise --contact-bound or --steps")
-    return ok
+        raise NoPlanError(f"no geometric-phase plan for {problem.describe()} near branch {first.branch} keeps its "
+                          f"leaves within a, b <= {amax / problem.radius:.6g} R (contact bound {contact_bound:.6g} "
+                          "rad); raise --contact-bound or --steps")
+    return ok[:wanted]
 
 
 def _warm_samples(motion: TimedMotion, radius: float) -> tuple[np.ndarray, np.ndarray]:
@@ -247,7 +256,7 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
 
     t0 = time.perf_counter()
     timed = []
-    for p in _branches(problem, rob, contact_bound)[:branches]:
+    for p in _branches(problem, rob, contact_bound, branches):
         path = ContactPath.of_plan(p, rob)
         motion = timed_samples(path, optimal_timing(path, horizon, cost, N), planner.samples_per_interval)
         timed.append((p, Side(motion, measure(motion), p.residual, 0.0), path))
@@ -270,11 +279,11 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     t1 = time.perf_counter()
     for name, m, t, x7, start_cost in candidates:
         guess = guess_from_samples(tr, t, x7, name)
-        starts.append(_run(planner, problem, guess, horizon, m, start_cost, results))
+        starts.append(_run(planner, problem, rob, guess, horizon, m, start_cost, results))
     if naive:
         for m in sorted({m0, 0}, key=abs):
             start, final = planner.boundary(problem, m)
-            starts.append(_run(planner, problem, naive_guess(tr, start, final), horizon, m, None, results,
+            starts.append(_run(planner, problem, rob, naive_guess(tr, start, final), horizon, m, None, results,
                                f"naive:{m}"))
     coll_time = time.perf_counter() - t1
     if not results:
@@ -286,10 +295,10 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
                       tuple((p, s) for p, s, _ in timed), timing_bound(gp_path, horizon, cost))
 
 
-def _run(planner, problem, guess, horizon, turns, start_cost, results, name=None) -> Start:
+def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:
     t0 = time.perf_counter()
     try:
-        r = planner.solve(problem, guess, horizon, turns)
+        r = planner.solve(problem, guess, horizon, turns, robot)
     except SolverError as exc:
         return Start(name or guess.name, turns, exc.status, None, start_cost, time.perf_counter() - t0)
     results.append(r)

@@ -45,6 +45,7 @@ from ...errors import InputError, SolverError, check_range, check_whole
 from ...measures import TimedMotion, measure
 from ...problem import Problem, State
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
+from ...robot import Robot
 from .costs import N_PAR
 from .transcription import Guess, Transcription
 
@@ -186,8 +187,6 @@ class RestToRestPlanner:
         """Start and final 7-states (units of R) at rest; InputError for a start or goal beyond the bound."""
         if not isinstance(problem, Problem):
             raise InputError(f"problem = {problem!r:.60} is not allowed: give a rollplan.Problem")
-        if self.cost == "rotor_energy" and problem.robot is None:
-            raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot")
         turns = check_whole("turns", turns)
         for name in ("start", "goal"):
             s = getattr(problem, name)
@@ -200,8 +199,12 @@ class RestToRestPlanner:
         final[2] += 2 * math.pi * turns
         return start, final
 
-    def solve(self, problem: Problem, guess: Guess, horizon: float = 1.0, turns: int = 0) -> RestResult:
+    def solve(self, problem: Problem, guess: Guess, horizon: float = 1.0, turns: int = 0,
+              robot: Robot | None = None) -> RestResult:
         """Solve from ``guess`` (see :func:`guess_from_samples`, :func:`naive_guess`).
+
+        ``robot`` gives the inertias of the rotor rates and torques when the problem has none
+        (default: the problem's robot; without either they are computed with unit inertias).
 
         Raises
         ------
@@ -212,10 +215,15 @@ class RestToRestPlanner:
             (status ``"Verification_Failed"``).
         """
         start, final = self.boundary(problem, turns)
+        if self.cost == "rotor_energy" and robot is None and problem.robot is None:
+            raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot")
         horizon = check_range("horizon", horizon, 0.0, 1e6, low_open=True)
         tr = self.transcription
         guess = tr.check_guess(guess)
-        par = rest_parameters(problem.k, horizon, problem.robot)
+        robot = robot if robot is not None else problem.robot
+        if robot is not None and not math.isclose(robot.k, problem.k, rel_tol=1e-12):
+            raise InputError(f"robot has k = {robot.k:.12g}, the problem k = {problem.k:.12g}")
+        par = rest_parameters(problem.k, horizon, robot)
         c = self.contact_bound
         lbx, ubx = tr.bounds(start, final, [np.inf, np.inf, np.inf, c, c, np.inf, np.inf])
         x0 = np.clip(tr.pack(guess), lbx, ubx)
@@ -231,7 +239,7 @@ class RestToRestPlanner:
             raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {status} after {iters} "
                               "iterations; hint: warm-start from a geometric-phase plan", status)
         _, _, controls = tr.unpack(np.array(sol["x"]).ravel())
-        motion = certify(controls, start, problem, horizon, self.samples_per_interval)
+        motion = certify(controls, start, problem, horizon, self.samples_per_interval, robot)
         fin = State(*motion.state[-1])
         residual = problem.residual(fin)   # psi compared as an angle
         cert = Certificate("cvodes", fin, residual, 0.0, TOLERANCE)
@@ -254,13 +262,13 @@ def _interval_integrator(per: int) -> ca.Function:
                          0.0, grid, opts)
 
 
-def certify(controls, start, problem: Problem, horizon: float, per: int = 8) -> TimedMotion:
+def certify(controls, start, problem: Problem, horizon: float, per: int = 8, robot: Robot | None = None) -> TimedMotion:
     """CVODES integration of the 7-state ODE with piecewise-constant accelerations ``controls`` (N, 2)
     from ``start`` (7,) (units of R): the samples of every interval, both ends included, as a
     :class:`~rollplan.measures.TimedMotion` in the problem's length unit."""
     controls = np.asarray(controls, float)
     N = controls.shape[0]
-    par = rest_parameters(problem.k, horizon, problem.robot)
+    par = rest_parameters(problem.k, horizon, robot if robot is not None else problem.robot)
     h = horizon / N
     integ, f = _interval_integrator(per), motion_function()
     x = np.asarray(start, float)
