@@ -35,16 +35,23 @@ from functools import lru_cache
 import numpy as np
 
 from ..errors import InputError, NoPlanError, SolverError, check_range, check_whole
+from ..execution.actuation import actuate
 from ..execution.optimal_timing import TIMING_COSTS, contact_rates, optimal_timing, timed_samples, timing_bound
 from ..execution.path import ContactPath
 from ..measures import TimedMotion, measure
-from ..planners.collocation.rest import RestResult, RestToRestPlanner, guess_from_samples, naive_guess
+from ..planners.collocation.rest import (
+    MinimumTimePlanner,
+    RestResult,
+    RestToRestPlanner,
+    guess_from_samples,
+    naive_guess,
+)
 from ..planners.geometric import plan as gp_plan
 from ..problem import Problem
 from ..robot import Robot
 
 __all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side", "Comparison",
-           "leaf_radius_bound", "robot_for_k", "compare", "comparison_to_dict"]
+           "leaf_radius_bound", "robot_for_k", "compare", "comparison_to_dict", "MinimumTime", "minimum_time"]
 
 #: Default contact bound of both planners: largest polar angle of the contact point [rad] (80 deg).
 CONTACT_BOUND = math.radians(80.0)
@@ -330,3 +337,62 @@ def comparison_to_dict(c: Comparison) -> dict:
                         "start_cost": s.start_cost, "solve_time_s": s.solve_time_s} for s in c.starts],
         },
     }
+
+
+@dataclass(frozen=True)
+class MinimumTime:
+    """Minimum time of both methods under the robot's rotor limits, rest to rest.
+
+    Attributes
+    ----------
+    problem : Problem
+    plan : Plan
+        The GP plan (shortest branch within the contact bound).
+    gp_duration : float
+        Its time-optimal timing's duration (:mod:`rollplan.execution.timing`, ``"time-optimal"``) [s].
+    duration : float
+        The collocation's minimum time (free final time), warm-started from that timing [s].
+    gp, collocation : Side
+        Both motions (``costs["duration"]`` their durations).
+    """
+
+    problem: Problem
+    plan: object
+    gp_duration: float
+    duration: float
+    gp: Side
+    collocation: Side
+
+
+@lru_cache(maxsize=4)
+def _min_time_planner(intervals, degree, contact_bound) -> MinimumTimePlanner:
+    return MinimumTimePlanner(intervals, degree, contact_bound=contact_bound)
+
+
+def minimum_time(target, robot: Robot, steps: int = 1, intervals: int = 60, degree: int = 3,
+                 contact_bound: float = CONTACT_BOUND) -> MinimumTime:
+    """Minimum time rest to rest under ``robot``'s ``max_rotor_rate`` and ``max_rotor_torque`` (both needed):
+    the GP path's time-optimal timing against the collocation with free final time and the same limits
+    at its collocation points, warm-started from the former, with the same contact bound.
+
+    Raises
+    ------
+    InputError, NoPlanError, SolverError
+    """
+    problem = Problem(tuple(target), robot=robot, steps=steps)
+    planner = _min_time_planner(intervals, degree, check_range("contact_bound", contact_bound, 0.0, math.pi / 2,
+                                                               True, True))
+    t0 = time.perf_counter()
+    p = _branches(problem, robot, contact_bound, 1)[0]
+    m = actuate(p, robot, timing="time-optimal")
+    gp_time = time.perf_counter() - t0
+    R = robot.radius
+    rates = contact_rates(m.omega, m.state)[:, 2:4]
+    x7 = np.column_stack([m.state / np.array([R, R, 1.0, 1.0, 1.0]), rates])
+    velocity = contact_rates(m.omega, m.state)[:, :2] * R
+    gp_motion = TimedMotion(m.time, m.state, velocity, m.omega, m.rotor_rates, m.rotor_torques, R)
+    turns = round((p.final.psi - problem.goal.psi) / (2 * math.pi))
+    guess = guess_from_samples(planner.base.transcription, m.time, x7, "gp-time-optimal")
+    T, r = planner.solve(problem, guess, m.duration, robot, turns)
+    return MinimumTime(problem, p, m.duration, T, Side(gp_motion, measure(gp_motion), p.residual, gp_time),
+                       Side(r.motion, measure(r.motion), r.residual, r.stats.time_s))

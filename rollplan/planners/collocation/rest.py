@@ -49,8 +49,8 @@ from ...robot import Robot
 from .costs import N_PAR
 from .transcription import Guess, Transcription
 
-__all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "rest_parameters", "motion_function", "naive_guess",
-           "guess_from_samples"]
+__all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "MinimumTimePlanner", "certify", "rest_parameters",
+           "motion_function", "naive_guess", "guess_from_samples"]
 
 #: Running costs of the rest-to-rest problem, by name: ``L(xdot, omega, torque, par)``.
 REST_COSTS = {
@@ -161,7 +161,7 @@ class RestToRestPlanner:
 
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre",
                  cost: str = "angular_velocity", contact_bound: float = math.radians(80.0), tol: float = 1e-9,
-                 max_iter: int = 300, samples_per_interval: int = 8) -> None:
+                 max_iter: int = 150, samples_per_interval: int = 8) -> None:
         self.transcription = Transcription(intervals, degree, scheme, nx=7, nu=2)
         if not isinstance(cost, str) or cost not in REST_COSTS:
             raise InputError(f"cost = {cost!r} is not allowed: choose one of {', '.join(REST_COSTS)}")
@@ -308,3 +308,90 @@ def guess_from_samples(tr: Transcription, t, x7, name: str) -> Guess:
     states = interp(np.append(starts, 1.0))
     controls = np.diff(states[:, 5:7], axis=0) / (t[-1] / tr.intervals)
     return Guess(states, interp(tc), controls, name)
+
+
+class MinimumTimePlanner:
+    """The rest-to-rest problem of :class:`RestToRestPlanner` with free final time: minimise T subject to
+    ``|phi_i_dot| <= max_rotor_rate`` and ``|tau_i| <= max_rotor_torque`` (the robot's limits, at every
+    collocation point and at both ends of every interval, with the interval's acceleration).
+
+    Parameters
+    ----------
+    intervals, degree, scheme, contact_bound, tol, max_iter, samples_per_interval
+        As in :class:`RestToRestPlanner`.
+    """
+
+    def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre",
+                 contact_bound: float = math.radians(80.0), tol: float = 1e-9, max_iter: int = 300,
+                 samples_per_interval: int = 8) -> None:
+        base = RestToRestPlanner(intervals, degree, scheme, "path_length", contact_bound, tol, max_iter,
+                                 samples_per_interval)
+        self.base = base
+        tr = base.transcription
+        N, d, nx, nu = tr.intervals, tr.degree, tr.nx, tr.nu
+        x = ca.SX.sym("x", 7)
+        depth = ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])
+        nlp, rows = tr.nlp(base.point, depth, N_PAR)
+        V, par = nlp["x"], nlp["p"]
+        T = ca.SX.sym("T")
+        limits = ca.SX.sym("limits", 2)   # max rate, max torque
+        fixed = ca.SX.sym("fixed", N_PAR)
+        sub = ca.vertcat(fixed[0], T, fixed[2:])
+        g_dyn = ca.substitute(nlp["g"], par, sub)
+        f = motion_function()
+        lim = []
+        block = nx * d + nu + nx
+        for i in range(N):
+            o = nx + i * block
+            x0, xc = V[o - nx: o], [V[o + nx * j: o + nx * (j + 1)] for j in range(d)]
+            w, x1 = V[o + nx * d: o + nx * d + nu], V[o + nx * d + nu: o + block]
+            for xp in (x0, *xc, x1):
+                _, _, rates, torque = f(xp, w, sub)
+                lim += [rates / limits[0], torque / limits[1]]
+        g_lim = ca.vertcat(*lim)
+        self.n_dyn, self.n_lim, self.path_rows = g_dyn.numel(), g_lim.numel(), rows
+        opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
+                "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter, "ipopt.mu_strategy": "adaptive"}
+        self.solver = ca.nlpsol("min_time", "ipopt", {"x": ca.vertcat(V, T), "p": ca.vertcat(fixed, limits),
+                                                      "f": T, "g": ca.vertcat(g_dyn, g_lim)}, opts)
+
+    def solve(self, problem: Problem, guess: Guess, duration_guess: float, robot: Robot, turns: int = 0):
+        """Minimum-time rest-to-rest motion within ``robot``'s limits (both must be set), from ``guess``
+        (normalized time) and ``duration_guess`` [s]. Returns ``(duration, RestResult)``.
+
+        Raises
+        ------
+        InputError, SolverError
+        """
+        if not isinstance(robot, Robot) or robot.max_rotor_rate is None or robot.max_rotor_torque is None:
+            raise InputError("minimum time needs a robot with max_rotor_rate and max_rotor_torque")
+        base = self.base
+        start, final = base.boundary(problem, turns)
+        tr = base.transcription
+        c = base.contact_bound
+        lbx, ubx = tr.bounds(start, final, [np.inf, np.inf, np.inf, c, c, np.inf, np.inf])
+        x0 = np.append(np.clip(tr.pack(tr.check_guess(guess)), lbx, ubx),
+                       check_range("duration_guess", duration_guess, 0.0, 1e6, low_open=True))
+        lbg = np.concatenate([np.where(self.path_rows, math.cos(c), 0.0), -np.ones(self.n_lim)])
+        ubg = np.concatenate([np.where(self.path_rows, np.inf, 0.0), np.ones(self.n_lim)])
+        par = np.concatenate([rest_parameters(problem.k, 1.0, robot), [robot.max_rotor_rate, robot.max_rotor_torque]])
+        t0 = time.perf_counter()
+        sol = self.solver(x0=x0, lbx=np.append(lbx, 1e-6), ubx=np.append(ubx, 1e6), lbg=lbg, ubg=ubg, p=par)
+        solve_time = time.perf_counter() - t0
+        st = self.solver.stats()
+        status, iters = str(st["return_status"]), int(st["iter_count"])
+        if not st["success"]:
+            raise SolverError(f"IPOPT did not solve the minimum-time problem: {status} after {iters} iterations",
+                              status)
+        v = np.array(sol["x"]).ravel()
+        T = float(v[-1])
+        _, _, controls = tr.unpack(v[:-1])
+        motion = certify(controls, start, problem, T, base.samples_per_interval, robot)
+        fin = State(*motion.state[-1])
+        cert = Certificate("cvodes", fin, problem.residual(fin), 0.0, TOLERANCE)
+        if not cert.passed:
+            raise SolverError(f"the minimum-time solution misses the goal by {cert.residual:.2e} when integrated by "
+                              "CVODES; hint: raise N", "Verification_Failed")
+        stats = SolverStats("ipopt", status, iters, solve_time, {})
+        return T, RestResult(problem, "minimum_time", tr, T, int(turns), guess.name, c, controls, T, motion, cert,
+                             stats)
