@@ -177,3 +177,23 @@ def test_timed_motion_refuses_bad_shapes():
     with pytest.raises(InputError, match="non-decreasing"):
         TimedMotion(np.array([0.0, 2.0, 1.0]), np.zeros((3, 5)), np.zeros((3, 2)), np.zeros((3, 3)),
                     np.zeros((3, 2)), np.zeros((3, 2)))
+
+
+@pytest.mark.slow
+def test_minimum_time_within_the_limits():
+    """Free final time under the rotor limits: the certified motion is at rest at both ends, on the goal, and
+    within the limits at its samples up to the discretisation between collocation points."""
+    from dataclasses import replace
+
+    from rollplan.studies.comparison import minimum_time
+
+    robot = replace(default_robot(), max_rotor_rate=300.0, max_rotor_torque=0.05)
+    mt = minimum_time((0.05, 0.03, 0.4), robot, intervals=16)
+    o, g = mt.collocation.costs, mt.gp.costs
+    assert mt.collocation.residual < 1e-6 and mt.gp.residual < 1e-9
+    assert o["duration"] == pytest.approx(mt.duration) and g["duration"] == pytest.approx(mt.gp_duration)
+    assert o["peak_rotor_torque"] <= 0.05 * 1.05 and o["peak_rotor_rate"] <= 300.0 * 1.05
+    assert g["peak_rotor_torque"] <= 0.05 * 1.01 and g["peak_rotor_rate"] <= 300.0 * 1.01
+    assert np.abs(mt.collocation.motion.omega[[0, -1]]).max() < 1e-9
+    # one limit is active: the motion could not be run faster
+    assert max(o["peak_rotor_torque"] / 0.05, o["peak_rotor_rate"] / 300.0) > 0.95
