@@ -47,7 +47,7 @@ from ...problem import Problem, State
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from .costs import N_PAR
-from .transcription import Guess, Transcription
+from .transcription import Guess, Transcription, check_contact_bound, ipopt_options
 
 __all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "MinimumTimePlanner", "certify", "rest_parameters",
            "motion_function", "naive_guess", "guess_from_samples"]
@@ -175,12 +175,9 @@ class RestToRestPlanner:
         x, w, par = ca.SX.sym("x", 7), ca.SX.sym("w", 2), ca.SX.sym("par", N_PAR)
         xdot, omega, _, torque = f(x, w, par)
         self.point = ca.Function("point", [x, w, par], [xdot, REST_COSTS[cost](xdot, omega, torque, par), omega])
-        depth = ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])  # cos(polar angle), (1)
         t0 = time.perf_counter()
-        nlp, self.path_rows = self.transcription.nlp(self.point, depth, N_PAR)
-        opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": self.tol,
-                "ipopt.constr_viol_tol": self.tol, "ipopt.max_iter": self.max_iter, "ipopt.mu_strategy": "adaptive"}
-        self.solver = ca.nlpsol("rest", "ipopt", nlp, opts)
+        nlp, self.path_rows = self.transcription.contact_nlp(self.point, N_PAR)
+        self.solver = ca.nlpsol("rest", "ipopt", nlp, ipopt_options(self.tol, self.max_iter))
         self.build_time_s = time.perf_counter() - t0
 
     def boundary(self, problem: Problem, turns: int) -> tuple[np.ndarray, np.ndarray]:
@@ -188,12 +185,7 @@ class RestToRestPlanner:
         if not isinstance(problem, Problem):
             raise InputError(f"problem = {problem!r:.60} is not allowed: give a rollplan.Problem")
         turns = check_whole("turns", turns)
-        for name in ("start", "goal"):
-            s = getattr(problem, name)
-            polar = math.acos(min(1.0, math.cos(s.u_o) * math.cos(s.v_o)))   # from (1)
-            if polar > self.contact_bound:
-                raise InputError(f"the {name} contact point lies {polar:.4g} rad from the south pole, beyond "
-                                 f"contact_bound = {self.contact_bound:.4g} rad")
+        check_contact_bound(problem, self.contact_bound)
         start = np.concatenate([problem.scaled(problem.start).array(), [0.0, 0.0]])
         final = np.concatenate([problem.scaled(problem.goal).array(), [0.0, 0.0]])
         final[2] += 2 * math.pi * turns
@@ -225,10 +217,7 @@ class RestToRestPlanner:
             raise InputError(f"robot has k = {robot.k:.12g}, the problem k = {problem.k:.12g}")
         par = rest_parameters(problem.k, horizon, robot)
         c = self.contact_bound
-        lbx, ubx = tr.bounds(start, final, [np.inf, np.inf, np.inf, c, c, np.inf, np.inf])
-        x0 = np.clip(tr.pack(guess), lbx, ubx)
-        lbg = np.where(self.path_rows, math.cos(c), 0.0)
-        ubg = np.where(self.path_rows, np.inf, 0.0)
+        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, c, self.path_rows)
         t0 = time.perf_counter()
         sol = self.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
         solve_time = time.perf_counter() - t0
@@ -329,9 +318,7 @@ class MinimumTimePlanner:
         self.base = base
         tr = base.transcription
         N, d, nx, nu = tr.intervals, tr.degree, tr.nx, tr.nu
-        x = ca.SX.sym("x", 7)
-        depth = ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])
-        nlp, rows = tr.nlp(base.point, depth, N_PAR)
+        nlp, rows = tr.contact_nlp(base.point, N_PAR)
         V, par = nlp["x"], nlp["p"]
         T = ca.SX.sym("T")
         limits = ca.SX.sym("limits", 2)   # max rate, max torque
@@ -350,10 +337,9 @@ class MinimumTimePlanner:
                 lim += [rates / limits[0], torque / limits[1]]
         g_lim = ca.vertcat(*lim)
         self.n_dyn, self.n_lim, self.path_rows = g_dyn.numel(), g_lim.numel(), rows
-        opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
-                "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter, "ipopt.mu_strategy": "adaptive"}
         self.solver = ca.nlpsol("min_time", "ipopt", {"x": ca.vertcat(V, T), "p": ca.vertcat(fixed, limits),
-                                                      "f": T, "g": ca.vertcat(g_dyn, g_lim)}, opts)
+                                                      "f": T, "g": ca.vertcat(g_dyn, g_lim)},
+                                ipopt_options(tol, max_iter))
 
     def solve(self, problem: Problem, guess: Guess, duration_guess: float, robot: Robot, turns: int = 0):
         """Minimum-time rest-to-rest motion within ``robot``'s limits (both must be set), from ``guess``
@@ -369,11 +355,9 @@ class MinimumTimePlanner:
         start, final = base.boundary(problem, turns)
         tr = base.transcription
         c = base.contact_bound
-        lbx, ubx = tr.bounds(start, final, [np.inf, np.inf, np.inf, c, c, np.inf, np.inf])
-        x0 = np.append(np.clip(tr.pack(tr.check_guess(guess)), lbx, ubx),
-                       check_range("duration_guess", duration_guess, 0.0, 1e6, low_open=True))
-        lbg = np.concatenate([np.where(self.path_rows, math.cos(c), 0.0), -np.ones(self.n_lim)])
-        ubg = np.concatenate([np.where(self.path_rows, np.inf, 0.0), np.ones(self.n_lim)])
+        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(tr.check_guess(guess), start, final, c, self.path_rows)
+        x0 = np.append(x0, check_range("duration_guess", duration_guess, 0.0, 1e6, low_open=True))
+        lbg, ubg = np.concatenate([lbg, -np.ones(self.n_lim)]), np.concatenate([ubg, np.ones(self.n_lim)])
         par = np.concatenate([rest_parameters(problem.k, 1.0, robot), [robot.max_rotor_rate, robot.max_rotor_torque]])
         t0 = time.perf_counter()
         sol = self.solver(x0=x0, lbx=np.append(lbx, 1e-6), ubx=np.append(ubx, 1e6), lbg=lbg, ubg=ubg, p=par)

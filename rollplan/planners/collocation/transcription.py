@@ -20,17 +20,36 @@ the state and controls the contact accelerations (``nx = 7``).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
+from ...core import model
 from ...errors import InputError, check_whole
 
-__all__ = ["SCHEMES", "Guess", "Transcription"]
+__all__ = ["SCHEMES", "Guess", "Transcription", "ipopt_options", "check_contact_bound"]
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
 SCHEMES = ("legendre", "radau")
+
+
+def ipopt_options(tol: float, max_iter: int) -> dict:
+    """The options of every collocation NLP: IPOPT silent, tolerance ``tol`` (also on the constraints)."""
+    return {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
+            "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter, "ipopt.mu_strategy": "adaptive"}
+
+
+def check_contact_bound(problem, contact_bound: float) -> None:
+    """InputError when the start or goal contact point of ``problem`` lies beyond ``contact_bound`` [rad]
+    of the south pole (polar angle from (1): ``acos(cos u_o cos v_o)``)."""
+    for name in ("start", "goal"):
+        state = getattr(problem, name)
+        polar = math.acos(min(1.0, math.cos(state.u_o) * math.cos(state.v_o)))
+        if polar > contact_bound:
+            raise InputError(f"the {name} contact point lies {polar:.4g} rad from the south pole, beyond the "
+                             f"collocation's contact_bound = {contact_bound:.4g} rad: raise contact_bound")
 
 
 @dataclass(frozen=True)
@@ -144,6 +163,25 @@ class Transcription:
             J = J + Ji
         rows = np.concatenate([np.zeros(nx * d + nx, bool), np.ones(d + 1, bool)] * N)
         return {"x": ca.vertcat(*V), "p": par, "f": J, "g": ca.vertcat(*g)}, rows
+
+    def contact_nlp(self, point: ca.Function, n_par: int):
+        """:meth:`nlp` with the contact bound as the path constraint: ``-z >= cos(bound)`` for the contact
+        point (1) (the depth below the centre, the cosine of the polar angle) at every collocation point and
+        interval end; the state's entries 3 and 4 are u_o and v_o."""
+        x = ca.SX.sym("x", self.nx)
+        depth = ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])
+        return self.nlp(point, depth, n_par)
+
+    def contact_bounds(self, guess: Guess, start, final, contact_bound: float, path_rows):
+        """``(x0, lbx, ubx, lbg, ubg)`` of the NLP of :meth:`contact_nlp`: ``start``, ``final`` fixed,
+        ``|u_o|, |v_o| <= contact_bound``, the guess clipped into the bounds."""
+        box = np.full(self.nx, np.inf)
+        box[3:5] = contact_bound
+        lbx, ubx = self.bounds(start, final, box)
+        x0 = np.clip(self.pack(guess), lbx, ubx)
+        lbg = np.where(path_rows, math.cos(contact_bound), 0.0)
+        ubg = np.where(path_rows, np.inf, 0.0)
+        return x0, lbx, ubx, lbg, ubg
 
     @property
     def _block(self) -> int:
