@@ -36,7 +36,7 @@ TARGETS = [(0.3, 0.0, 0.0), (0.5, 0.3, 0.4), (-0.4, 0.4, 1.0), (0.8, -0.2, -0.5)
 LENGTH_TARGETS = TARGETS[:4]
 ROBOT_TARGETS = [(0.05, 0.03, 0.4), (0.02, 0.01, 2.0)]
 N = 100
-CONVERGENCE_N = (12, 25, 50, 100)
+CONVERGENCE_N = (20, 40, 80, 160)
 
 
 def polar_max(motion):

@@ -12,7 +12,7 @@ s and s' are then exact polynomials of t (no discretisation of the dynamics); th
 * ``"rotor_energy"``: ``int |A(s) s'' + B(s) s'^2|^2 dt`` (scaled by 1/J_r^2),
 
 is integrated by 3-point Gauss-Legendre quadrature per interval with ``|W|^2``, A and B
-interpolated linearly on a table of the path, and IPOPT minimises it. What is reported of
+interpolated by cubic B-splines on a table of the path, and IPOPT minimises it. What is reported of
 the timed motion is measured again on the exact path (:func:`timed_samples`,
 :func:`rollplan.measures.measure`), not taken from this NLP.
 

@@ -6,7 +6,7 @@ from matplotlib.figure import Figure
 
 from .common import plane_axes, sphere_axes
 
-__all__ = ["plot_comparison", "plot_scaling"]
+__all__ = ["plot_comparison"]
 
 COLORS = {"geometric_phase": "tab:red", "collocation": "tab:blue"}
 LABELS = {"geometric_phase": "geometric phase", "collocation": "collocation"}
@@ -44,22 +44,5 @@ def plot_comparison(c, unit: str = "R") -> Figure:
     fig.suptitle(f"k = {p.k:.4g}, target (u_a, v_a, psi) = ({g.u_a:g}, {g.v_a:g}, {g.psi:g}), n = {p.steps}, "
                  f"rest to rest over T = {c.horizon:g} s, cost {c.cost}, N = {tr.intervals}, "
                  f"contact bound {c.contact_bound:.4g} rad")
-    fig.tight_layout()
-    return fig
-
-
-def plot_scaling(intervals, times, labels) -> Figure:
-    """Solve time against N (log-log), one line per series; ``times`` is a list of arrays [s]."""
-    fig = Figure(figsize=(6, 4.5))
-    ax = fig.add_subplot(1, 1, 1)
-    for t, lab in zip(times, labels):
-        ax.loglog(intervals, t, "o-", label=lab)
-    ax.set_xticks(list(intervals))
-    ax.set_xticklabels([str(n) for n in intervals])
-    ax.minorticks_off()
-    ax.set_xlabel("intervals N")
-    ax.set_ylabel("IPOPT solve time [s]")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
     fig.tight_layout()
     return fig

@@ -307,6 +307,8 @@ def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, na
     try:
         r = planner.solve(problem, guess, horizon, turns, robot)
     except SolverError as exc:
+        if exc.status == "User_Requested_Stop":   # Ctrl-C inside IPOPT: stop the whole multistart
+            raise KeyboardInterrupt from None
         return Start(name or guess.name, turns, exc.status, None, start_cost, time.perf_counter() - t0)
     results.append(r)
     return Start(name or guess.name, turns, "ok", measure(r.motion)[planner.cost], start_cost, r.stats.time_s)
