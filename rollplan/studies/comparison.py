@@ -152,7 +152,9 @@ class Comparison:
     branches : tuple of (Plan, Side)
         Every timed GP branch within the bound, shortest first.
     bound : float or None
-        The timing bound of ``plan``'s path (:func:`rollplan.execution.optimal_timing.timing_bound`).
+        For ``cost == "angular_velocity"``: the least ``int |omega|^2 dt`` of any timing of ``plan``'s path
+        over T (:func:`rollplan.execution.optimal_timing.timing_bound`); None for the other costs (the
+        path length does not depend on the timing; no bound is computed for the torque energy).
     """
 
     problem: Problem
@@ -299,7 +301,8 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     best = min(results, key=lambda r: measure(r.motion)[cost])
     coll = Side(best.motion, measure(best.motion), best.residual, coll_time)
     return Comparison(problem, rob, float(horizon), cost, contact_bound, plan, gp_side, coll, best, tuple(starts),
-                      tuple((p, s) for p, s, _ in timed), timing_bound(gp_path, horizon, cost))
+                      tuple((p, s) for p, s, _ in timed),
+                      timing_bound(gp_path, horizon, cost) if cost == "angular_velocity" else None)
 
 
 def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:
