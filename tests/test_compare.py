@@ -168,6 +168,14 @@ def test_cli_compare_bad_input(argv, msg, capsys):
     assert msg in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("psi", ["0", "1"])
+def test_cli_compare_needs_one_leg_of_figure_eights(psi, capsys):
+    """The start itself and a turn in place have no one-leg figure-eight plan: exit 3, one line."""
+    assert main(["compare", "--to", "0", "0", "--psi", psi]) == 3
+    err = capsys.readouterr().err
+    assert "one leg of figure eights" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
 def test_timed_motion_refuses_bad_shapes():
     from rollplan.errors import InputError
 
