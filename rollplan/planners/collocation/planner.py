@@ -444,8 +444,9 @@ class Certifier:
         self._omega = ca.Function("omega", [x, w, par], [omega])
 
     def verify(self, controls, k: float, horizon: float = 1.0, robot: Robot | None = None, x0=None) -> dict:
-        """Integrate :func:`~rollplan.core.model.contact_rhs` from ``x0`` (default rest at the origin)
-        with piecewise-constant ``controls`` (N, 2) by CVODES.
+        """Integrate :func:`~rollplan.core.model.contact_rhs` from ``x0`` (default the zero state)
+        with piecewise-constant ``controls`` (N, 2) by CVODES. The contact rates jump to the first
+        control at t = 0: the motion does not start at rest (for rest to rest see :mod:`.rest`).
 
         Returns a dict: ``t`` (M + 1,) [s], ``x`` (M + 1, 5) states in units of R,
         ``segment`` (M + 1,) interval of each sample, ``xf`` (5,), ``omega`` (M + 1, 3),
