@@ -525,36 +525,37 @@ def cmd_compare(args) -> int:
     _check_outputs(json=args.json, figure=args.plot, inputs=[args.robot])
     k, robot = _k_or_robot(args)
     c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
-                           args.cost, args.intervals, args.degree, args.scheme, args.guess, args.contact_bound)
+                           args.cost, args.intervals, args.degree, args.scheme, args.contact_bound, args.branches)
     p, r, prob = c.plan, c.result, c.problem
-    gm, om = c.plan_measures, r.measures
     unit = prob.unit
-    effort = "rotor effort int|phi'|^2 dt" if robot is not None else "effort int|omega|^2 dt"
     g, tr = prob.goal, r.transcription
     print(f"rollplan compare: k = {_g(prob.k)}, R = {_g(prob.radius)} {'m' if unit == 'm' else '(lengths in R)'}, "
-          f"T = {_g(c.horizon)} s, target (u_a, v_a, psi) = ({_g(g.u_a)} {unit}, {_g(g.v_a)} {unit}, {_g(g.psi)} rad)")
+          f"T = {_g(c.horizon)} s, target (u_a, v_a, psi) = ({_g(g.u_a)} {unit}, {_g(g.v_a)} {unit}, {_g(g.psi)} rad), "
+          f"cost {c.cost}, contact bound {_g(c.contact_bound)} rad, rest to rest")
     print(f"  geometric phase: {prob.steps} figure eight(s), a = {_g(p.a)} {unit}, b = {_g(p.b)} {unit}, "
-          f"gamma = {_g(p.gamma)} rad, timed t ~ theta")
-    print(f"  collocation: cost {r.cost}, {tr.scheme} d = {tr.degree}, N = {tr.intervals}, {r.guess} guess, "
-          f"psi turns m = {r.turns}")
-    print(f"  {'':<34s} {'geometric phase':>20s} {'collocation':>20s}")
-    print(_fmt_row(f"contact path length [{unit}]", gm.path_length, om.path_length, ".6g"))
-    print(_fmt_row(f"{effort} [rad^2/s]", c.effort(gm), c.effort(om), ".6g"))
-    print(_fmt_row("peak |omega| [rad/s]", gm.peak_omega, om.peak_omega, ".6g"))
-    print(_fmt_row("residual (CVODES, Euclidean norm)", p.residual, r.residual, ".2e"))
-    print(_fmt_row("solve time [ms]", p.stats.time_s * 1e3, r.stats.time_s * 1e3, ".1f"))
-    print(_fmt_row("iterations", p.stats.iterations, r.stats.iterations, "d"))
-    print(_fmt_row("status", p.stats.status, r.stats.status, "s"))
+          f"gamma = {_g(p.gamma)} rad, "
+          f"branch {p.branch}, optimal timing ({len(c.branches)} branch(es) timed)")
+    wins = sum(s.status == "ok" for s in c.starts)
+    print(f"  collocation: contact accelerations, {tr.scheme} d = {tr.degree}, N = {tr.intervals}, best of "
+          f"{len(c.starts)} starts ({wins} converged): {r.guess}, psi turns m = {r.turns}")
+    print(f"  {'':<32s} {'geometric phase':>20s} {'collocation':>20s}")
+    gc, oc = c.gp.costs, c.collocation.costs
+    print(_fmt_row(f"contact path length [{unit}]", gc["path_length"], oc["path_length"], ".6g"))
+    print(_fmt_row("effort int|omega|^2 dt [rad^2/s]", gc["angular_velocity"], oc["angular_velocity"], ".6g"))
+    print(_fmt_row("torque energy int|tau|^2 dt", gc["rotor_energy"], oc["rotor_energy"], ".6g"))
+    print(_fmt_row("peak rotor rate [rad/s]", gc["peak_rotor_rate"], oc["peak_rotor_rate"], ".6g"))
+    print(_fmt_row("peak rotor torque [N m]", gc["peak_rotor_torque"], oc["peak_rotor_torque"], ".6g"))
+    print(_fmt_row("final residual (CVODES)", c.gp.residual, c.collocation.residual, ".2e"))
     print(f"  (residuals: {NORM})")
-    if r.guess == "warm":
-        print(f"  (collocation time is IPOPT's; its warm start took another "
-              f"{r.stats.details['guess_time_s'] * 1e3:.1f} ms)")
+    print(_fmt_row("solve time [s]", c.gp.solve_time_s, c.collocation.solve_time_s, ".3f"))
+    if robot is None:
+        print("  (without --robot, torques are those of a robot with this k and J_zz = 1)")
     if args.json:
         _emit_json(args, comparison.comparison_to_dict(c), unit)
     if args.plot:
         from .plots.compare import plot_comparison
 
-        save_figure(plot_comparison(c, unit, comparison.comparison_series(c)), args.plot)
+        save_figure(plot_comparison(c, unit), args.plot)
         print(f"wrote {args.plot}")
     return EXIT_OK
 
@@ -589,23 +590,23 @@ def _add_robot_options(parser) -> None:
 
 def _add_compare_parser(sub) -> None:
     from .planners import collocation
+    from .studies.comparison import COMPARED_COSTS, CONTACT_BOUND
 
-    c = sub.add_parser("compare", help="geometric-phase plan versus direct-collocation optimum, side by side")
-    _add_target_options(c, to_default=None, steps_help=f"figure eights n {_STEPS} of the geometric plan (default 1)")
-    c.add_argument("--cost", choices=sorted(collocation.COSTS), default="path_length",
-                   help="collocation cost (default path_length; rotor_effort needs --robot)")
-    c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T > 0 [s] of both motions (default 1)")
-    c.add_argument("--intervals", type=_whole, default=100, help="collocation intervals N in [1, 100000] (default 100)")
-    c.add_argument("--degree", type=_whole, default=3, help="collocation degree d in [1, 9] (default 3)")
+    c = sub.add_parser("compare", help="geometric-phase plan versus collocation optimum on one problem, rest to rest")
+    _add_target_options(c, to_default=None, steps_help="figure eights n >= 1 of the geometric plan (default 1)")
+    c.add_argument("--cost", choices=COMPARED_COSTS, default="angular_velocity",
+                   help="the cost compared, minimised by both (default angular_velocity; rotor_energy needs --robot)")
+    c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T [s] of both motions (default 1)")
+    c.add_argument("--intervals", type=_whole, default=100, help="intervals N of both motions (default 100)")
+    c.add_argument("--degree", type=_whole, default=3, help="collocation degree d (default 3)")
     c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
-    c.add_argument("--guess", choices=sorted(collocation.GUESSES), default="warm",
-                   help="collocation initial guess: warm (the geometric plan) or naive (straight line)")
-    c.add_argument("--contact-bound", type=_number, default=collocation.CONTACT_BOUND, metavar="RAD",
-                   help="collocation: largest polar angle of the contact point from the south pole, in (0, pi/2) "
-                        "(default %.4g rad = 75 deg)" % collocation.CONTACT_BOUND)
+    c.add_argument("--branches", type=_whole, default=2,
+                   help="geometric-phase branches timed and used as warm starts (default 2)")
+    c.add_argument("--contact-bound", type=_number, default=CONTACT_BOUND, metavar="RAD",
+                   help="both planners: largest polar angle of the contact point from the south pole "
+                        "(default %.4g rad = 80 deg)" % CONTACT_BOUND)
     c.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("both results"))
-    c.add_argument("--plot", metavar="FILE.png", help="both contact paths on the sphere and the plane, and omega "
-                   "(and with --robot the rotor rates) of both motions in time")
+    c.add_argument("--plot", metavar="FILE.png", help="both contact paths and their omega, rotor rates, torques")
     c.set_defaults(func=cmd_compare)
 
 

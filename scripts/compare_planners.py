@@ -1,259 +1,266 @@
-"""Geometric phase versus direct collocation on a set of targets; writes results/comparison.md.
+"""The fair comparison of geometric phase and collocation on a set of targets; writes results/comparison.md.
 
-Usage: python scripts/compare_planners.py [--out results] [--quick] [--figures-only]
+Usage: python scripts/compare_planners.py [--out results] [--quick]
 
-For every target: the geometric-phase plan (fewest steps in 1..3 that give a
-plan), and collocation (N = 100, Legendre d = 3, T = 1) with two costs
-(path_length, angular_velocity), each from the warm start and from the naive
-straight-line guess. Both collocation solves steer psi to the same final value
-(the plan's branch), so they solve the same problem. Then the IPOPT time
-against N, and the budget measurement (N = 100, d = 3, warm start).
+Every number and every conclusion of comparison.md is computed here from the runs
+(rollplan.studies.comparison.compare: one problem, rest to rest, acceleration-level
+controls for both, the same contact bound, the GP path with its optimal timing, the
+collocation from several starts over m). Also: the collocation's optimum against N, and
+the rotor-energy comparison with the default robot. Writes comparison.md, comparison.json
+and comparison_paths.png.
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import math
 import platform
 import statistics
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from rollplan import NoPlanError, Problem, SolverError, plan
-from rollplan.io import save_figure, write_atomic
-from rollplan.planners.collocation import CollocationPlanner
-from rollplan.plots.compare import plot_comparison, plot_scaling
-from rollplan.studies.comparison import compare, comparison_series, measure_plan
-
-import bench_collocation
+from rollplan import default_robot
+from rollplan.errors import NoPlanError, SolverError
+from rollplan.io import save_figure, write_atomic, write_json
+from rollplan.plots.compare import plot_comparison
+from rollplan.studies.comparison import CONTACT_BOUND, compare, minimum_time
 
 K = 2.5
-TARGETS = [(0.3, 0.0, 0.0), (0.0, 0.5, 0.0), (0.5, 0.3, 0.4), (-0.4, 0.4, 1.0), (0.8, -0.2, -0.5),
-           (1.0, 1.0, 0.0), (0.2, 0.1, 2.0), (-0.6, -0.6, -1.5), (1.5, 0.0, 0.3), (0.1, -0.3, 3.0),
-           (0.7, 0.7, -2.5), (-1.2, 0.5, 0.8)]
-COSTS = ("path_length", "angular_velocity")
+TARGETS = [(0.3, 0.0, 0.0), (0.5, 0.3, 0.4), (-0.4, 0.4, 1.0), (0.8, -0.2, -0.5), (0.2, 0.1, 2.0),
+           (-0.6, -0.6, -1.5)]
+#: Targets of the path_length cost (a subset: every run is a multistart of IPOPT solves).
+LENGTH_TARGETS = TARGETS[:4]
+ROBOT_TARGETS = [(0.05, 0.03, 0.4), (0.02, 0.01, 2.0)]
+N = 100
+CONVERGENCE_N = (20, 40, 80, 160)
 
 
-def gp(target):
-    for n in (1, 2, 3):
-        try:
-            return plan(target, n, k=K, legs="one")   # one leg of figure eights: the paper's plan
-        except NoPlanError:
-            continue
-    return None
+def polar_max(motion):
+    s = motion.state
+    return float(np.degrees(np.arccos(np.clip(np.cos(s[:, 3]) * np.cos(s[:, 4]), -1, 1)).max()))
 
 
-def run_targets(planners, targets):
-    rows = []
-    for tgt in targets:
-        p = gp(tgt)
-        if p is None:
-            rows.append({"target": tgt, "plan": None})
-            continue
-        g, _ = measure_plan(p)
-        row = {"target": tgt, "plan": p, "gp": g, "coll": {}}
-        for cost in COSTS:
-            for guess in ("warm", "naive"):
-                try:
-                    r = planners[cost].solve(Problem(tgt, k=K), guess=guess, turns=p.branch, warm_start=p)
-                    row["coll"][cost, guess] = r
-                except SolverError as exc:
-                    row["coll"][cost, guess] = exc
-        rows.append(row)
-        logging.info("target %s done", tgt)
-    return rows
+def run(target, cost, robot=None, intervals=N):
+    t0 = time.perf_counter()
+    try:
+        c = compare(target, 1, k=None if robot else K, robot=robot, cost=cost, intervals=intervals)
+    except (NoPlanError, SolverError) as exc:
+        logging.info("%s %s: %s", target, cost, exc)
+        return {"target": target, "cost": cost, "error": str(exc)}
+    g, o = c.gp, c.collocation
+    rest = max(float(np.abs(m.omega[[0, -1]]).max()) for m in (g.motion, o.motion))
+    not_worse = [s.cost <= s.start_cost * (1 + 1e-9) for s in c.starts if s.start_cost is not None and s.cost]
+    row = {"target": target, "cost": cost, "gp_branch": c.plan.branch, "gp_a": c.plan.a, "gp_b": c.plan.b,
+           "gp_turns": round((c.plan.final.psi - c.problem.goal.psi) / (2 * math.pi)), "ocp_turns": c.result.turns,
+           "gp": g.costs, "ocp": o.costs, "bound": c.bound, "gp_residual": g.residual, "ocp_residual": o.residual,
+           "gp_time": g.solve_time_s, "ocp_time": o.solve_time_s, "winner": c.result.guess,
+           "starts": [(s.name, s.status, s.cost) for s in c.starts], "rest": rest,
+           "polar_gp": polar_max(g.motion), "polar_ocp": polar_max(o.motion),
+           "bound_deg": math.degrees(c.contact_bound), "ocp_not_worse": all(not_worse), "n_checked": len(not_worse),
+           "wall": time.perf_counter() - t0}
+    logging.info("%s %s: GP %.4g, OCP %.4g (%.0f s)", target, cost, g.costs[cost], o.costs[cost], row["wall"])
+    return row, c
 
 
 def fmt(x, f=".4g"):
-    return format(x, f) if isinstance(x, (int, float)) else str(x)
+    return "n/a" if x is None else format(x, f)
 
 
-def _status(r):
-    return r.status if isinstance(r, Exception) else "ok"
+def kind(name):
+    return "naive" if name.startswith("naive") else ("GP, psi bent to another m" if "->" in name else "GP branch")
 
 
-def target_table(rows):
-    out = ["| target (u_a, v_a, psi) | n | GP length | GP effort | GP peak w | coll. length (path cost) "
-           "| coll. effort (energy cost) | coll. peak w (path cost) | residual GP / coll. "
-           "| naive guess (path / energy) |",
+def section(rows, cost, unit):
+    ok = [r for r in rows if "error" not in r]
+    out = [f"| target (u_a, v_a, psi) | GP branch (a, b) | m GP / OCP | length GP / OCP | {cost} GP / bound / OCP "
+           f"| ratio OCP/GP | peak rotor rate GP / OCP | residual GP / OCP | time GP / OCP [s] | best start |",
            "|---|---|---|---|---|---|---|---|---|---|"]
-    for row in rows:
-        t = row["target"]
-        if row["plan"] is None:
-            out.append(f"| {t} | - | no plan in 1..3 steps | | | | | | | |")
+    for r in rows:
+        if "error" in r:
+            out.append(f"| {r['target']} | {r['error']} |||||||||")
             continue
-        g = row["gp"]
-        rl = row["coll"]["path_length", "warm"]
-        re = row["coll"]["angular_velocity", "warm"]
-        cl = fmt(rl.measures.path_length) if not isinstance(rl, Exception) else f"failed ({rl.status})"
-        pk = fmt(rl.measures.peak_omega) if not isinstance(rl, Exception) else "-"
-        ce = fmt(re.measures.effort) if not isinstance(re, Exception) else f"failed ({re.status})"
-        res = max((r.residual for r in (rl, re) if not isinstance(r, Exception)), default=float("nan"))
-        out.append(f"| ({t[0]:g}, {t[1]:g}, {t[2]:g}) | {row['plan'].steps} | {g.path_length:.4g} | "
-                   f"{g.effort:.4g} | {g.peak_omega:.4g} | {cl} | {ce} | {pk} | {row['plan'].residual:.1e} / "
-                   f"{res:.1e} | "
-                   f"{_status(row['coll']['path_length', 'naive'])} / "
-                   f"{_status(row['coll']['angular_velocity', 'naive'])} |")
-    return out
+        g, o = r["gp"], r["ocp"]
+        out.append(f"| {r['target']} | {r['gp_branch']} ({r['gp_a']:.3f}, {r['gp_b']:.3f}) | {r['gp_turns']} / "
+                   f"{r['ocp_turns']} | {g['path_length']:.4g} / {o['path_length']:.4g} | {g[cost]:.4g} / "
+                   f"{fmt(r['bound'])} / {o[cost]:.4g} | {o[cost] / g[cost]:.3f} | {g['peak_rotor_rate']:.4g} / "
+                   f"{o['peak_rotor_rate']:.4g} | {r['gp_residual']:.1e} / {r['ocp_residual']:.1e} | "
+                   f"{r['gp_time']:.2f} / {r['ocp_time']:.2f} | {r['winner']} |")
+    ratios = [r["ocp"][cost] / r["gp"][cost] for r in ok]
+    lratios = [r["ocp"]["path_length"] / r["gp"]["path_length"] for r in ok]
+    lines = []
+    if ok:
+        better = sum(x < 1 for x in ratios)
+        lines.append(f"- The collocation's {cost} is below the GP plan's on {better}/{len(ok)} targets; ratio "
+                     f"OCP/GP median {statistics.median(ratios):.3f} (range {min(ratios):.3f}-{max(ratios):.3f}); "
+                     f"path-length ratio median {statistics.median(lratios):.3f} "
+                     f"(range {min(lratios):.3f}-{max(lratios):.3f}).")
+        if cost == "angular_velocity":
+            over = [r["gp"][cost] / r["bound"] - 1 for r in ok]
+            lines.append(f"- The GP path's optimal rest-to-rest timing is within {100 * max(over):.2f} % of the timing "
+                         f"bound of its path on every target (median {100 * statistics.median(over):.2f} %; "
+                         f"{sum(x <= 0.02 for x in over)}/{len(ok)} within 2 %).")
+        diff_m = sum(r["ocp_turns"] != r["gp_turns"] for r in ok)
+        lines.append(f"- The best collocation optimum has another number of whole turns m of psi than the GP plan on "
+                     f"{diff_m}/{len(ok)} targets.")
+        wins = {}
+        for r in ok:
+            wins[kind(r["winner"])] = wins.get(kind(r["winner"]), 0) + 1
+        conv = {}
+        for r in ok:
+            for name, status, _ in r["starts"]:
+                n_ok, n = conv.get(kind(name), (0, 0))
+                conv[kind(name)] = (n_ok + (status == "ok"), n + 1)
+        lines.append("- Best start: " + ", ".join(f"{k} {v}/{len(ok)}" for k, v in sorted(wins.items())) +
+                     "; converged: " + ", ".join(f"{k} {a}/{b}" for k, (a, b) in sorted(conv.items())) + ".")
+        checked = sum(r["n_checked"] for r in ok)
+        lines.append(f"- Every collocation started from a GP branch ends no worse than that branch: "
+                     f"{'yes' if all(r['ocp_not_worse'] for r in ok) else 'NO'} ({checked} warm starts).")
+        lines.append(f"- Both motions start and end at rest (largest |omega| at t = 0, T: "
+                     f"{max(r['rest'] for r in ok):.1e} rad/s) and stay within the contact bound "
+                     f"{ok[0]['bound_deg']:.4g} deg (largest polar angle GP {max(r['polar_gp'] for r in ok):.3f} deg, "
+                     f"collocation {max(r['polar_ocp'] for r in ok):.3f} deg). Residuals: GP at most "
+                     f"{max(r['gp_residual'] for r in ok):.1e}, collocation at most "
+                     f"{max(r['ocp_residual'] for r in ok):.1e}.")
+        gt, ot = [r["gp_time"] for r in ok], [r["ocp_time"] for r in ok]
+        lines.append(f"- Solve time (whole side, shared machine): GP median {statistics.median(gt):.2f} s, "
+                     f"collocation (every start) median {statistics.median(ot):.2f} s.")
+    return out, lines
 
 
-def convergence_table(rows):
-    out = ["| cost | guess | converged | median iterations | median IPOPT time [s] | same optimum as warm |",
-           "|---|---|---|---|---|---|"]
-    summary = {}
-    for cost in COSTS:
-        for guess in ("warm", "naive"):
-            rs = [row["coll"][cost, guess] for row in rows if row["plan"] is not None]
-            ok = [r for r in rs if not isinstance(r, Exception) and r.residual < 1e-6]
-            same = ""
-            if guess == "naive":
-                pairs = [(row["coll"][cost, "warm"], row["coll"][cost, "naive"]) for row in rows
-                         if row["plan"] is not None]
-                pairs = [(a, b) for a, b in pairs if not isinstance(a, Exception) and not isinstance(b, Exception)]
-                obj = lambda r: r.solution.objective  # noqa: E731
-                n_same = sum(abs(obj(a) - obj(b)) <= 1e-6 * max(1.0, abs(obj(a))) for a, b in pairs)
-                n_lower = sum(obj(b) < obj(a) - 1e-6 * max(1.0, abs(obj(a))) for a, b in pairs)
-                same = f"{n_same}/{len(pairs)} (naive lower in {n_lower})"
-            fails = [f"{r.status}" for r in rs if isinstance(r, Exception)]
-            summary[cost, guess] = (len(ok), len(rs))
-            it = statistics.median([r.stats.iterations for r in ok]) if ok else float("nan")
-            tm = statistics.median([r.stats.time_s for r in ok]) if ok else float("nan")
-            fail_txt = f" (failed: {', '.join(sorted(set(fails)))})" if fails else ""
-            out.append(f"| {cost} | {guess} | {len(ok)}/{len(rs)}{fail_txt} | {it:g} | {tm:.3f} | {same} |")
-    return out, summary
+def convergence(target=(0.5, 0.3, 0.4)):
+    rows = []
+    for n in CONVERGENCE_N:
+        c = compare(target, 1, k=K, intervals=n, branches=1, naive=False)
+        rows.append((n, c.collocation.costs["angular_velocity"], c.gp.costs["angular_velocity"], c.bound,
+                     c.collocation.residual))
+        logging.info("convergence N = %d done", n)
+    ref = rows[-1][1]
+    diffs = [abs(r[1] - ref) for r in rows[:-1]]
+    orders = [math.log2(diffs[i] / diffs[i + 1]) if diffs[i + 1] > 0 else float("nan")
+              for i in range(len(diffs) - 1)]
+    gp_over = [(r[2] / r[3] - 1) for r in rows]
+    per_doubling = statistics.median([gp_over[i] / gp_over[i + 1] for i in range(len(gp_over) - 1)])
+    table = ["| N | collocation int|omega|^2 dt | GP (optimal timing) | GP over its bound | collocation residual |",
+             "|---|---|---|---|---|"]
+    table += [f"| {n} | {o:.8f} | {g:.6f} | {100 * (g / b - 1):.3f} % | {res:.1e} |" for n, o, g, b, res in rows]
+    text = (f"Observed order of the collocation optimum (differences to N = {CONVERGENCE_N[-1]}, successive N): "
+            + ", ".join(f"{x:.2f}" for x in orders) + f". The GP timing's excess over its bound falls from "
+            f"{100 * gp_over[0]:.2f} % at N = {rows[0][0]} to {100 * gp_over[-1]:.3f} % at N = {rows[-1][0]} "
+            f"(median ratio per doubling of N {per_doubling:.2f}).")
+    return table, text, rows
 
 
-def scaling(Ns, repeats, target=(0.5, 0.3, 0.4)):
-    p = plan(target, 1, k=K, legs="one")
-    res = {}
-    for cost in COSTS:
-        times, builds, iters, objs, resid = [], [], [], [], []
-        for N in Ns:
-            t0 = time.perf_counter()
-            P = CollocationPlanner(N, 3, "legendre", cost)
-            builds.append(time.perf_counter() - t0)
-            ts = []
-            for _ in range(repeats):
-                r = P.solve(Problem(target, k=K), warm_start=p)
-                ts.append(r.stats.time_s)
-            times.append(statistics.median(ts))
-            iters.append(r.stats.iterations)
-            objs.append(r.measures.path_length if cost == "path_length" else r.measures.effort)
-            resid.append(r.residual)
-        res[cost] = (np.array(times), np.array(builds), iters, np.array(objs), np.array(resid))
-    return res
+def min_time_section(quick, data):
+    robot = replace(default_robot(), max_rotor_rate=300.0, max_rotor_torque=0.05)
+    rows, table = [], ["| target [m, rad] | GP time-optimal [s] | collocation minimum time [s] | ratio | peak rate "
+                       "GP / coll. [rad/s] | peak torque GP / coll. [N m] | residual GP / coll. |",
+                       "|---|---|---|---|---|---|---|"]
+    for tgt in (ROBOT_TARGETS[:1] if quick else ROBOT_TARGETS):
+        try:
+            mt = minimum_time(tgt, robot)
+        except (NoPlanError, SolverError) as exc:
+            table.append(f"| {tgt} | {exc} ||||||")
+            continue
+        g, o = mt.gp.costs, mt.collocation.costs
+        rows.append({"target": tgt, "gp": mt.gp_duration, "ocp": mt.duration, "gp_costs": g, "ocp_costs": o})
+        table.append(f"| {tgt} | {mt.gp_duration:.4f} | {mt.duration:.4f} | {mt.duration / mt.gp_duration:.3f} | "
+                     f"{g['peak_rotor_rate']:.4g} / {o['peak_rotor_rate']:.4g} | {g['peak_rotor_torque']:.5f} / "
+                     f"{o['peak_rotor_torque']:.5f} | {mt.gp.residual:.1e} / {mt.collocation.residual:.1e} |")
+        logging.info("minimum time %s done", tgt)
+    data["minimum_time"] = rows
+    lines = []
+    if rows:
+        ratios = [r["ocp"] / r["gp"] for r in rows]
+        over = max(max(r["ocp_costs"]["peak_rotor_torque"] / robot.max_rotor_torque,
+                       r["ocp_costs"]["peak_rotor_rate"] / robot.max_rotor_rate) for r in rows)
+        lines = [f"- Minimum-time ratio collocation/GP median {statistics.median(ratios):.3f} "
+                 f"(range {min(ratios):.3f}-{max(ratios):.3f}) on {len(rows)} targets.",
+                 f"- The collocation holds the limits at its collocation points; on the certified samples its largest "
+                 f"use of a limit is {over:.5f} of it (between the points, discretisation)."]
+    return [f"## Minimum time under the rotor limits (default robot, max_rotor_rate = {robot.max_rotor_rate:g} rad/s, "
+            f"max_rotor_torque = {robot.max_rotor_torque:g} N m; collocation N = 60)", "", *lines, "", *table, ""]
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--out", default="results")
-    ap.add_argument("--quick", action="store_true", help="fewer targets and repeats")
-    ap.add_argument("--figures-only", action="store_true", help="only the two comparison figures (no timings)")
+    ap.add_argument("--quick", action="store_true", help="three targets, no convergence table")
     args = ap.parse_args()
-    logging.basicConfig(level=logging.INFO, format="%(message)s")
-    logging.getLogger("rollplan").setLevel(logging.ERROR)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     out = Path(args.out)
-    out.mkdir(exist_ok=True)
-    targets = TARGETS[:4] if args.quick else TARGETS
-    t_start = time.perf_counter()
-    ex = compare((0.5, 0.3, 0.4), 1, k=K)
-    save_figure(plot_comparison(ex, "R", comparison_series(ex)), out / "comparison_paths.png")
-    ex2 = compare((-0.4, 0.4, 1.0), 1, k=K, cost="angular_velocity")
-    save_figure(plot_comparison(ex2, "R", comparison_series(ex2)), out / "comparison_paths_energy.png")
-    if args.figures_only:
-        print(f"wrote {out / 'comparison_paths.png'} and {out / 'comparison_paths_energy.png'}")
-        return
-    planners = {c: CollocationPlanner(100, 3, "legendre", c) for c in COSTS}
-    rows = run_targets(planners, targets)
-
-    Ns = [25, 50, 100, 200] if args.quick else [25, 50, 100, 200, 400]
-    sc = scaling(Ns, 3 if args.quick else 5)
-    save_figure(plot_scaling(Ns, [sc[c][0] for c in COSTS], [f"{c}, Legendre d = 3, warm" for c in COSTS]),
-                out / "comparison_scaling.png")
-    bt = bench_collocation.measure(repeats=3 if args.quick else 5, targets=targets[:6], k=K, naive=False)["times_s"]
-    med = statistics.median(bt)
-
-    # which is shorter / cheaper
-    valid = [r for r in rows if r["plan"] is not None]
-    shorter = sum(1 for r in valid if not isinstance(r["coll"]["path_length", "warm"], Exception)
-                  and r["coll"]["path_length", "warm"].measures.path_length < r["gp"].path_length)
-    cheaper = sum(1 for r in valid if not isinstance(r["coll"]["angular_velocity", "warm"], Exception)
-                  and r["coll"]["angular_velocity", "warm"].measures.effort < r["gp"].effort)
-    ratio_l = [r["coll"]["path_length", "warm"].measures.path_length / r["gp"].path_length for r in valid
-               if not isinstance(r["coll"]["path_length", "warm"], Exception)]
-    coll_res = [r["coll"]["path_length", "warm"].residual for r in valid
-                if not isinstance(r["coll"]["path_length", "warm"], Exception)] or [float("nan")]
-    ratio_e = [r["coll"]["angular_velocity", "warm"].measures.effort / r["gp"].effort for r in valid
-               if not isinstance(r["coll"]["angular_velocity", "warm"], Exception)]
-    gp_times = [r["plan"].stats.time_s for r in valid]
-    conv, _ = convergence_table(rows)
-    slope = {c: np.polyfit(np.log(Ns), np.log(sc[c][0]), 1)[0] for c in COSTS}
-
-    md = [
-        "# Geometric phase versus direct collocation",
-        "",
-        f"Generated by `scripts/compare_planners.py` on {platform.node()} ({platform.processor() or 'cpu'}), "
-        f"k = {K}, T = 1 s, collocation N = 100, Legendre d = 3, piecewise-constant contact rates. "
-        f"Total run time {time.perf_counter() - t_start:.0f} s. Times are wall times on a shared machine.",
-        "",
-        "Geometric-phase plans are timed with t proportional to theta (each circle at constant speed). "
-        "Effort is int |omega|^2 dt [rad^2/s]. The collocation's `path_length` cost is the energy form "
-        "int |v|^2 dt, whose minimizers are the shortest paths traversed at constant speed "
-        "(Cauchy-Schwarz); the `angular_velocity` cost is int |omega|^2 dt. All residuals are from an "
-        "independent CVODES integration of the model with the planned inputs.",
-        "",
-        "## Which is shorter, which is cheaper",
-        "",
-        f"- Collocation (path-length cost, warm start) is shorter than the figure-eight plan on {shorter}/{len(valid)} "
-        f"targets; length ratio collocation/GP median {statistics.median(ratio_l):.3f} "
-        f"(range {min(ratio_l):.3f}-{max(ratio_l):.3f})." if ratio_l else "- no collocation solution",
-        f"- Collocation (angular-velocity cost, warm start) needs less int |omega|^2 dt than the plan on "
-        f"{cheaper}/{len(valid)} targets; effort ratio median {statistics.median(ratio_e):.3f} "
-        f"(range {min(ratio_e):.3f}-{max(ratio_e):.3f})." if ratio_e else "- no collocation solution",
-        f"- The geometric-phase planner takes {statistics.median(gp_times):.3f} s median (bracketing, root solve and "
-        f"CVODES verification); its residual is at most {max(r['plan'].residual for r in valid):.1e}, the "
-        f"collocation's at most {max(coll_res):.1e} (path-length cost, warm start), bounded by the transcription "
-        "error and IPOPT's tolerance. The plan is exact in structure (any timing of the same "
-        "curve is realizable); the collocation result is optimal only for its cost, horizon and discretization.",
-    ]
-    md += ["", "## Per target", ""] + target_table(rows)
-    md += ["", "## Convergence from the naive guess versus the warm start", "",
-           "Naive: every state linear in time from 0 to the target with u_o = v_o = 0 and zero rates. "
-           "Warm: the geometric-phase plan, theta mapped to t / T. Both steer psi to the plan's branch.", ""] + conv
-    md += ["", "Why the naive guess fails: it sits at rest on the south pole (u_o = v_o = 0, zero rates), where "
-           "the system is driftless and its linearization is not controllable. There the collocation "
-           "equations' Jacobian is rank deficient (N = 10, d = 3: rank 197 of 200 rows for the target "
-           "(0.3, 0, 0), 199 of 200 for (0.5, 0.3, 0.4), whose psi guess is not zero): to first order "
-           "the rates only move (u_o, v_o) and, through (6)-(7), (u_a, v_a) by amounts that must cancel "
-           "since u_o and v_o return to 0; the displacement and the turn of psi come only from Lie "
-           "brackets (second order). IPOPT then reports a locally infeasible problem, as it does here for "
-           "the targets with psi = 0; for others the first steps leave the singular point by chance. This "
-           "is the sensitivity to the initial guess the paper attributes to optimal control; the "
-           "geometric-phase plan is a feasible, non-singular guess. The problem is non-convex: warm and "
-           "naive runs that both converge may end in different local optima (last column)."]
-    md += ["", "## Time against N (Legendre d = 3, warm start, target (0.5, 0.3, 0.4))", "",
-           "Per cost: IPOPT time, iterations, NLP build time, the verified optimum (path length for "
-           "`path_length`, int |omega|^2 dt for `angular_velocity`) and the verified residual.", "",
-           "| N | " + " | ".join(f"{c}: IPOPT [s] | iter. | build [s] | optimum | residual" for c in COSTS) + " |",
-           "|---|" + "---|---|---|---|---|" * len(COSTS)]
-    for i, N in enumerate(Ns):
-        md.append(f"| {N} | " + " | ".join(f"{sc[c][0][i]:.3f} | {sc[c][2][i]} | {sc[c][1][i]:.2f} | "
-                                           f"{sc[c][3][i]:.8f} | {sc[c][4][i]:.1e}" for c in COSTS) + " |")
-    md += ["", "The optimum changes by O(N^-2) as N doubles: the contact rates are constant on each interval, "
-           "and a piecewise-constant approximation of a smooth optimal control costs O(h^2) in the cost "
-           "(first-order optimality makes the O(h) control error enter quadratically). The residual sits at "
-           "the level of IPOPT's tolerance (1e-10) for d = 3, where the Gauss method's O(h^6) error is smaller."]
-    md += ["", "Fitted exponent of IPOPT time ~ N^p: " + ", ".join(f"{c}: p = {slope[c]:.2f}" for c in COSTS) + ".",
-           "", "![time vs N](comparison_scaling.png)", "",
-           "## Budget: N = 100, d = 3, warm start", "",
-           f"IPOPT time over {len(bt)} solves (path_length, {len(targets[:6])} targets): median {med:.3f} s, "
-           f"max {max(bt):.3f} s. Budget < 1 s: {'met' if med < 1.0 else 'NOT met'}.", "",
-           "## Figures", "", "![paths](comparison_paths.png)", "", "![paths, energy cost](comparison_paths_energy.png)",
-           ""]
+    out.mkdir(parents=True, exist_ok=True)
+    t_all = time.perf_counter()
+    targets = TARGETS[:3] if args.quick else TARGETS
+    md = ["# Geometric phase versus collocation: one problem, rest to rest", "",
+          f"Generated by `scripts/compare_planners.py` on {platform.node()} ({platform.machine()}); k = {K}, "
+          f"T = 1 s, N = {N} intervals for both, collocation Legendre d = 3, contact bound "
+          f"{math.degrees(CONTACT_BOUND):.4g} deg for both, start at rest at the origin, goal at rest at the pole.", "",
+          "Both motions solve the same problem (`rollplan.studies.comparison`): the same start and goal, the same "
+          "contact bound (the GP planner keeps the branches with leaves a, b <= sin(bound / 2) R), rest to rest with "
+          "accelerations constant on N intervals (the collocation controls the contact accelerations; the GP path is "
+          "timed by the rest-to-rest timing of its path that minimises the compared cost), psi an angle (the "
+          "collocation is solved from the GP branches, the best branch's motion with psi bent to m +- 1 and 0, and a "
+          "naive straight line; the best certified optimum is kept). Every cost is measured by "
+          "`rollplan.measures.measure` on the sampled motion of each side. 'bound' is the least int |omega|^2 dt of "
+          "any timing of the GP path, (int |W| ds)^2 / T. For the path_length cost both minimise the energy form "
+          "int |v|^2 dt (the GP path's length does not depend on its timing) and the length is reported.", ""]
+    data = {"k": K, "intervals": N, "contact_bound": CONTACT_BOUND, "sections": {}}
+    figure = None
+    for cost in ("angular_velocity", "path_length"):
+        rows = []
+        for tgt in (targets if cost == "angular_velocity" else [t for t in targets if t in LENGTH_TARGETS]):
+            res = run(tgt, cost)
+            if isinstance(res, tuple):
+                rows.append(res[0])
+                if figure is None and tgt == (0.2, 0.1, 2.0) and cost == "angular_velocity":
+                    figure = res[1]
+            else:
+                rows.append(res)
+        table, lines = section(rows, cost, "")
+        md += [f"## Cost {cost}", "", *lines, "", *table, ""]
+        data["sections"][cost] = rows
+    robot = default_robot()
+    rows = []
+    for tgt in (ROBOT_TARGETS[:1] if args.quick else ROBOT_TARGETS):
+        res = run(tgt, "rotor_energy", robot=robot)
+        rows.append(res[0] if isinstance(res, tuple) else res)
+    table, lines = section(rows, "rotor_energy", "N^2 m^2 s")
+    md += ["## Cost rotor_energy (int |tau|^2 dt), the default robot (R = 0.1 m, targets in m)", "", *lines, "",
+           *table, ""]
+    data["sections"]["rotor_energy"] = rows
+    if not args.quick:
+        table, text, conv = convergence()
+        md += ["## Convergence in N (target (0.5, 0.3, 0.4), cost angular_velocity)", "", text, "", *table, ""]
+        data["convergence"] = conv
+    md += min_time_section(args.quick, data)
+    md += ["## Not compared here", "",
+           "- A peer implementation of the same OCP: rockit (`rockit-meco`) is not on the package index this "
+           "project's machines reach; opty is, but it takes the equations of motion as SymPy expressions while the "
+           "project's one model is CasADi's (a translation of the model's expression graph would be needed, and is "
+           "not written).", ""]
+    if figure is not None:
+        save_figure(plot_comparison(figure), out / "comparison_paths.png")
+        md += ["![paths and time series, (0.2, 0.1, 2)](comparison_paths.png)", ""]
+    md.insert(3, f"Total run time {time.perf_counter() - t_all:.0f} s; times are wall times on a shared machine.")
     write_atomic(out / "comparison.md", "\n".join(md).encode())
-    print(f"wrote {out / 'comparison.md'}; budget median {med:.3f} s")
+    write_json(out / "comparison.json", _jsonable(data))
+    print(f"wrote {out / 'comparison.md'}")
+
+
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, (np.floating, np.integer)):
+        return x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x
 
 
 if __name__ == "__main__":

@@ -1,9 +1,9 @@
-"""Geometric phase versus collocation (rollplan.studies.comparison), `rollplan compare`, and the
-measurements behind it.
+"""The fair comparison (rollplan.studies.comparison), its pieces and `rollplan compare`.
 
-References: the figure eight's length ``2 pi n (a + b)`` (closed form), finite differences of the
-sampled motions inverted through Montana's (6), (7), (10) as printed in the paper
-(``references.omega_from_rates``), and the JSON schema of the issue.
+References: closed forms of a rest-to-rest roll along a great circle (bang-bang acceleration: its
+angular-velocity energy, length and torques), the paper's printed (15), (16), (20) integrated by
+scipy's DOP853 (``references.integrate_contact_path``, ``references.replay``), the Cauchy-Schwarz
+bound of a timing, and the JSON schema of the issue.
 """
 
 from __future__ import annotations
@@ -14,86 +14,152 @@ import math
 import numpy as np
 import pytest
 
-from rollplan import Problem
+from rollplan import Problem, default_robot, plan
 from rollplan.cli import main
-from rollplan.studies.comparison import compare
+from rollplan.execution.optimal_timing import optimal_timing, timed_samples, timing_bound
+from rollplan.execution.path import ContactPath
+from rollplan.measures import TimedMotion, integrate_samples, measure
+from rollplan.planners.collocation.costs import N_PAR
+from rollplan.planners.collocation.rest import RestToRestPlanner, certify, rest_parameters
+from rollplan.studies.comparison import SIDE_KEYS, TRAJECTORY_KEYS, compare, leaf_radius_bound, robot_for_k
 
 import references
 
 K = 2.5
-TARGET = (0.5, 0.3, 0.4)
+
+
+def _polar(state):
+    return np.arccos(np.clip(np.cos(state[:, 3]) * np.cos(state[:, 4]), -1, 1))
+
+
+def test_integrate_samples_handles_jumps_and_matches_closed_forms():
+    t = np.r_[np.linspace(0, 1, 11), np.linspace(1, 2, 11)]       # t = 1 twice: a jump
+    y = np.r_[np.linspace(0, 1, 11) ** 2, np.full(11, 5.0)]
+    assert integrate_samples(t, y) == pytest.approx(1 / 3 + 5.0, rel=1e-14)
+    assert integrate_samples([0.0, 0.5, 2.0], [1.0, 1.0, 1.0]) == pytest.approx(2.0)
+
+
+def test_rest_to_rest_roll_costs_in_closed_form():
+    """u_o = 0, psi = 0, v_o'' = +a then -a: omega = (-v_o', 0, 0) by (18), (19), (13); then
+    int |omega|^2 dt = a^2 T^3 / 12, the length is R a T^2 / 4, v_a ends at that length, psi stays 0,
+    and the torques are tau_1 = +-(J_xx - J_r) a, tau_2 = 0 (n_1 = e_x, phi_1_dot = J_xx v_o' / J_r by (11))."""
+    robot = default_robot()
+    a, T = 1.6, 1.0
+    V = a * T ** 2 / 4
+    problem = Problem((0.0, robot.radius * V, 0.0, 0.0, V), robot=robot)
+    m = certify([[0.0, a], [0.0, -a]], np.zeros(7), problem, T, per=40)
+    c = measure(m)
+    assert c["angular_velocity"] == pytest.approx(a ** 2 * T ** 3 / 12, rel=1e-10)
+    assert c["path_length"] == pytest.approx(robot.radius * V, rel=1e-10)
+    assert c["rotor_energy"] == pytest.approx((robot.j_xx - robot.rotor_inertia_axial) ** 2 * a ** 2 * T, rel=1e-9)
+    assert c["peak_rotor_torque"] == pytest.approx((robot.j_xx - robot.rotor_inertia_axial) * a, rel=1e-9)
+    assert c["peak_rotor_rate"] == pytest.approx(robot.j_xx / robot.rotor_inertia_axial * a * T / 2, rel=1e-9)
+    assert problem.residual(m.state[-1]) < 1e-10
+    assert np.abs(m.omega[[0, -1]]).max() < 1e-14
+
+
+@pytest.mark.parametrize("degree, order", [(1, 2), (2, 4)])
+def test_transcription_converges_at_its_order_to_the_printed_equations(degree, order):
+    """The collocation of the rest-to-rest state (rates as states, accelerations constant) used as an implicit
+    Runge-Kutta method: its end state converges to DOP853 on (15), (16), (20) at order 2d."""
+    acc = np.array([1.3, -0.8])
+    T = 1.0
+    planner = RestToRestPlanner(intervals=2, degree=degree)
+
+    def path(t):   # u_o, v_o, rates: +acc up to T/2, -acc after
+        if t <= T / 2:
+            return (*(acc * t ** 2 / 2), *(acc * t))
+        s = T - t
+        return (*(acc * (T ** 2 / 4 - s ** 2 / 2)), *(acc * s))
+
+    ref = np.concatenate([references.integrate_contact_path(path, np.zeros(3), (0, T / 2), K).y[:, -1]])
+    ref = references.integrate_contact_path(path, ref, (T / 2, T), K).y[:, -1]
+    errors = []
+    for n in (4, 8, 16, 32):
+        controls = np.repeat([acc, -acc], n // 2, axis=0)
+        x = planner.transcription.simulate(planner.point, N_PAR, controls, rest_parameters(K, T))[-1]
+        errors.append(np.abs(x[:3] - ref).max())
+    rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(rates > order - 0.3), (errors, rates)
+
+
+@pytest.fixture(scope="module")
+def hard_path():
+    """The path of the GP plan for (0.2, 0.1, 2) (branch m = -2, leaves 0.61 and 0.20 R)."""
+    robot = robot_for_k(K)
+    p = plan((0.2, 0.1, 2.0), 1, robot=robot)
+    return p, ContactPath.of_plan(p, robot)
+
+
+def test_optimal_timing_is_within_two_percent_of_the_bound(hard_path):
+    p, path = hard_path
+    bound = timing_bound(path, 1.0, "angular_velocity")
+    m = timed_samples(path, optimal_timing(path, 1.0, "angular_velocity", 100))
+    c = measure(m)
+    assert bound * (1 - 1e-9) <= c["angular_velocity"] <= 1.02 * bound
+    assert c["path_length"] == pytest.approx(2 * math.pi * (p.a + p.b), rel=1e-6)
+    assert np.abs(m.omega[[0, -1]]).max() == 0.0 and np.abs(m.rotor_rates[[0, -1]]).max() == 0.0
+    # the constant-theta-speed timing (each circle in T/2) is far above it: (int |omega| dt)^2 / T is the least
+    assert bound == pytest.approx(238.1, rel=1e-3)
+
+
+def test_contact_bound_and_leaf_radius():
+    assert leaf_radius_bound(2 * math.asin(0.69)) == pytest.approx(0.69)
+    far, _ = references.circle(0.5, np.pi, 1.0)   # the point of the circle opposite the pole
+    assert math.acos(-far[2]) == pytest.approx(2 * math.asin(0.5), rel=1e-12)
+    assert robot_for_k(K).k == pytest.approx(K, rel=1e-14) and robot_for_k(K).j_zz == pytest.approx(1.0)
 
 
 @pytest.fixture(scope="module")
 def comp():
-    return compare(TARGET, 1, k=K, intervals=40)
+    return compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=1, naive=False)
 
 
-def _fd_energy(traj):
-    """int |omega|^2 dt from finite differences of the samples (a Trajectory timed in t), omega by
-    inverting (6), (7), (10)."""
-    assert traj.parameter == "t"
-    t, x = traj.s, traj.state
-    xdot = np.gradient(x, t, axis=0, edge_order=2)
-    sq = (references.omega_from_rates(x, xdot, traj.radius) ** 2).sum(axis=1)
-    speed = np.hypot(xdot[:, 0], xdot[:, 1])
-    trap = lambda y: float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))  # noqa: E731
-    return trap(sq), trap(speed)
+def test_comparison_is_fair(comp):
+    bound = comp.contact_bound
+    for side in (comp.gp, comp.collocation):
+        m = side.motion
+        assert np.abs(m.omega[[0, -1]]).max() < 1e-9 and np.abs(m.velocity[[0, -1]]).max() < 1e-9   # at rest
+        assert _polar(m.state).max() <= bound + 1e-6                                                # same bound
+        assert side.costs == measure(m) and side.residual < 1e-6
+    assert comp.bound <= comp.gp.costs["angular_velocity"] <= 1.05 * comp.bound   # N = 16: ramps cost ~ 1/N
+    for s in comp.starts:    # never worse than the GP plan it started from
+        if s.start_cost is not None and s.cost is not None:
+            assert s.cost <= s.start_cost * (1 + 1e-9)
+    assert comp.collocation.costs["angular_velocity"] < comp.gp.costs["angular_velocity"]
 
 
-def test_comparison_holds_both_results_of_one_problem(comp):
-    assert comp.problem == Problem(TARGET, k=K) == comp.plan.problem == comp.result.problem
-    assert comp.horizon == 1.0 and comp.effort_kind == "angular_velocity"
-    assert comp.effort(comp.plan_measures) == comp.plan_measures.effort
-    assert comp.result.turns == comp.plan.branch and comp.result.guess == "warm"
+def test_collocation_path_obeys_the_printed_equations(comp):
+    tr = comp.collocation.motion.trajectory()
+    x = references.replay(tr.u_o, tr.v_o, np.zeros(tr.s.size, int), np.zeros(3), K)
+    assert np.abs(x - tr.state[:, :3]).max() < 1e-5
 
 
-def test_geometric_side_measurements(comp):
-    g, p = comp.plan_measures, comp.plan
-    tr = comp.plan_trajectory
-    assert g.path_length == pytest.approx(2 * math.pi * (p.a + p.b), rel=1e-12)
-    energy, length = _fd_energy(tr)
-    assert length == pytest.approx(g.path_length, rel=1e-3)
-    assert energy == pytest.approx(comp.effort(g), rel=2e-2)  # FD across the leaf junctions is crude
-    assert tr.s[0] == 0 and tr.s[-1] == pytest.approx(comp.horizon) and np.all(np.diff(tr.s) > 0)
-
-
-def test_collocation_side_measurements(comp):
-    r = comp.result
-    o = r.measures
-    energy, length = _fd_energy(r.trajectory)
-    assert length == pytest.approx(o.path_length, rel=1e-3)
-    assert energy == pytest.approx(comp.effort(o), rel=2e-2)
-    assert r.residual < 1e-7 and comp.plan.residual < 1e-9
-    # the optimum of the path-length cost is shorter than the figure eight
-    assert o.path_length < comp.plan_measures.path_length
-
-
-def test_cli_compare_json_and_plot(tmp_path, capsys):
+def test_cli_compare_json_has_the_issues_keys(tmp_path, capsys):
     js, png = tmp_path / "c.json", tmp_path / "c.png"
-    rc = main(["compare", "--to", "0.5", "0.3", "--psi", "0.4", "--k", "2.5", "--intervals", "40",
-               "--json", str(js), "--plot", str(png)])
-    out = capsys.readouterr().out
-    assert rc == 0
-    for row in ("contact path length [R]", "effort", "peak |omega|", "residual (CVODES, Euclidean norm)", "solve time",
-                "iterations"):
-        assert row in out
+    rc = main(["compare", "--to", "0.5", "0.3", "--psi", "0.4", "--k", "2.5", "--intervals", "20",
+               "--branches", "1", "--json", str(js), "--plot", str(png)])
+    assert rc == 0, capsys.readouterr().err
     d = json.loads(js.read_text())
     for side in ("geometric_phase", "collocation"):
         s = d[side]
-        for key in ("path_length", "effort", "residual", "solve_time_s", "trajectory"):
-            assert key in s
+        assert tuple(s) == SIDE_KEYS and tuple(s["trajectory"]) == TRAJECTORY_KEYS
+        assert s["contact_bound"] == d["geometric_phase"]["contact_bound"]
         tr = s["trajectory"]
-        assert set(tr) == {"t", "u_o", "v_o", "u_a", "v_a", "psi"}
-        assert len({len(v) for v in tr.values()}) == 1 and len(tr["t"]) >= 1000
-        assert tr["u_a"][-1] == pytest.approx(0.5, abs=1e-6) and tr["psi"][-1] == pytest.approx(0.4, abs=1e-6)
+        assert len({len(v) for v in tr.values()}) == 1
+        assert tr["u_a"][-1] == pytest.approx(0.5, abs=1e-6) and tr["psi"][-1] % (2 * math.pi) == \
+            pytest.approx(0.4, abs=1e-6)
+        assert s["effort"] == d["details"][side]["costs"]["angular_velocity"]
     assert png.stat().st_size > 1000
 
 
 @pytest.mark.parametrize("argv, msg", [
     (["compare", "--to", "0.5", "0.3", "--k", "-1"], "k = -1"),
-    (["compare", "--to", "0.5", "0.3", "--cost", "rotor_effort"], "needs robot"),
+    (["compare", "--to", "0.5", "0.3", "--k", "0.5"], "k = 0.5"),
+    (["compare", "--to", "0.5", "0.3", "--cost", "rotor_energy"], "needs robot"),
     (["compare", "--to", "0.5", "0.3", "--intervals", "0"], "intervals"),
+    (["compare", "--to", "0.5", "0.3", "--contact-bound", "2"], "contact_bound"),
+    (["compare", "--to", "0.5", "0.3", "--horizon", "-1"], "horizon"),
     (["compare", "--to", "0.5", "0.3", "--json", "/nonexistent/dir/x.json"], "not writable"),
 ])
 def test_cli_compare_bad_input(argv, msg, capsys):
@@ -102,31 +168,40 @@ def test_cli_compare_bad_input(argv, msg, capsys):
     assert msg in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
-def test_cli_compare_robot(tmp_path, capsys):
-    toml = tmp_path / "r.toml"
-    toml.write_text("radius = 0.1\nmass_total = 1.2\nmass_shell = 0.4\nrotor_inertia_axial = 2.0e-4\n"
-                    "rotor_inertia_transverse = 1.2e-4\n")
-    js = tmp_path / "c.json"
-    rc = main(["compare", "--to", "0.05", "0.03", "--psi", "0.4", "--robot", str(toml), "--cost", "rotor_effort",
-               "--intervals", "30", "--json", str(js)])
-    assert rc == 0
-    d = json.loads(js.read_text())
-    assert d["geometric_phase"]["effort_kind"] == "rotor" == d["collocation"]["effort_kind"]
-    # the rotor-effort optimum costs less rotor effort than the figure eight
-    assert d["collocation"]["effort"] < d["geometric_phase"]["effort"]
-
-
-def test_cli_compare_solver_failure_exit_4(monkeypatch, capsys):
-    """A failing IPOPT solve maps to exit 4 with its status, no traceback."""
-    import rollplan.studies.comparison as cmp
-    from rollplan.errors import SolverError
-
-    def failing(*args, **kwargs):
-        raise SolverError("IPOPT did not solve the collocation problem; hint: try guess='warm'",
-                          "Maximum_Iterations_Exceeded")
-
-    monkeypatch.setattr(cmp, "collocate", failing)
-    assert main(["compare", "--to", "0.5", "0.3"]) == 4
+@pytest.mark.parametrize("psi", ["0", "1"])
+def test_cli_compare_needs_one_leg_of_figure_eights(psi, capsys):
+    """The start itself and a turn in place have no one-leg figure-eight plan: exit 3, one line."""
+    assert main(["compare", "--to", "0", "0", "--psi", psi]) == 3
     err = capsys.readouterr().err
-    assert "Maximum_Iterations_Exceeded" in err and "hint" in err and "Traceback" not in err
-    assert "try --guess warm" in err and "guess='warm'" not in err   # the hint in command-line syntax
+    assert "one leg of figure eights" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_timed_motion_refuses_bad_shapes():
+    from rollplan.errors import InputError
+
+    with pytest.raises(InputError, match="velocity"):
+        TimedMotion(np.arange(3.0), np.zeros((3, 5)), np.zeros((2, 2)), np.zeros((3, 3)), np.zeros((3, 2)),
+                    np.zeros((3, 2)))
+    with pytest.raises(InputError, match="non-decreasing"):
+        TimedMotion(np.array([0.0, 2.0, 1.0]), np.zeros((3, 5)), np.zeros((3, 2)), np.zeros((3, 3)),
+                    np.zeros((3, 2)), np.zeros((3, 2)))
+
+
+@pytest.mark.slow
+def test_minimum_time_within_the_limits():
+    """Free final time under the rotor limits: the certified motion is at rest at both ends, on the goal, and
+    within the limits at its samples up to the discretisation between collocation points."""
+    from dataclasses import replace
+
+    from rollplan.studies.comparison import minimum_time
+
+    robot = replace(default_robot(), max_rotor_rate=300.0, max_rotor_torque=0.05)
+    mt = minimum_time((0.05, 0.03, 0.4), robot, intervals=16)
+    o, g = mt.collocation.costs, mt.gp.costs
+    assert mt.collocation.residual < 1e-6 and mt.gp.residual < 1e-9
+    assert o["duration"] == pytest.approx(mt.duration) and g["duration"] == pytest.approx(mt.gp_duration)
+    assert o["peak_rotor_torque"] <= 0.05 * 1.05 and o["peak_rotor_rate"] <= 300.0 * 1.05
+    assert g["peak_rotor_torque"] <= 0.05 * 1.01 and g["peak_rotor_rate"] <= 300.0 * 1.01
+    assert np.abs(mt.collocation.motion.omega[[0, -1]]).max() < 1e-9
+    # one limit is active: the motion could not be run faster
+    assert max(o["peak_rotor_torque"] / 0.05, o["peak_rotor_rate"] / 300.0) > 0.95

@@ -41,6 +41,7 @@ __all__ = [
     "psi_dot_realizable",
     "inertia_ratio",
     "rotor_rates",
+    "rotor_axial_spins",
     "contact_coordinates",
     "curve_contact",
     "curve_omega",
@@ -162,6 +163,17 @@ def rotor_rates(omega, u_o, v_o, psi, j_xx, j_zz, j_r):
     rot = orientation(u_o, v_o, psi)
     jw = ca.vertcat(j_xx * omega[0], j_xx * omega[1], j_zz * omega[2])
     return ca.vertcat(-ca.dot(rot[:, 0], jw) / j_r, -ca.dot(rot[:, 1], jw) / j_r)
+
+
+def rotor_axial_spins(omega, u_o, v_o, psi, j_xx, j_zz, j_r):
+    """The rotors' absolute spins about their axes, ``n_i . omega + phi_i_dot`` (i = 1, 2), with (11).
+
+    ``J_r`` times their time derivative is the motor torque about ``n_i``
+    (:mod:`rollplan.execution.actuation`).
+    """
+    rot = orientation(u_o, v_o, psi)
+    return (ca.vertcat(ca.dot(rot[:, 0], omega), ca.dot(rot[:, 1], omega))
+            + rotor_rates(omega, u_o, v_o, psi, j_xx, j_zz, j_r))
 
 
 def contact_coordinates(point, R=1.0):

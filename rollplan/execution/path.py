@@ -111,8 +111,7 @@ def curve_piece_function(curve: Curve, index: int) -> ca.Function:
     jxx, jzz, jr = ca.SX.sym("jxx"), ca.SX.sym("jzz"), ca.SX.sym("jr")
     w, u_o, v_o = model.curve_omega(rotated_point(curve.pieces[index], phi, p, gamma), phi, psi, k)
     g = model.rotor_rates(w, u_o, v_o, psi, jxx, jzz, jr)
-    rot = model.orientation(u_o, v_o, psi)
-    a = ca.vertcat(ca.dot(rot[:, 0], w), ca.dot(rot[:, 1], w)) + g
+    a = model.rotor_axial_spins(w, u_o, v_o, psi, jxx, jzz, jr)
     xdot3 = piece_rhs(curve, index)(phi, ca.vertcat(0, 0, psi), p, k, gamma)
     da = ca.jacobian(a, phi) + ca.jacobian(a, psi) * xdot3[2]
     return ca.Function(f"piece{index}", [phi, psi, p, gamma, k, jxx, jzz, jr],

@@ -1,216 +1,424 @@
-"""Geometric-phase plan versus direct-collocation optimum on the same target.
+"""A fair comparison of the geometric-phase plan and the optimal-control (collocation) optimum.
 
-Both motions are measured the same way on the same horizon ``T``:
+One problem for both (:class:`~rollplan.problem.Problem`): rest at the origin to a goal at the
+pole, the same horizon T, the same contact bound, psi an angle for both, the same control class,
+the same cost, measured by the same function on the same trajectory type.
 
-* contact path length ``int |v| dt`` [length unit] (the plan's ``2 pi n (a + b)``;
-  the collocation's from its CVODES verification);
-* effort: the angular-velocity energy ``int |omega|^2 dt`` [rad^2/s], omega from
-  (18), (19) and (13), or, with a robot, the rotor effort
-  ``int (phi1_dot^2 + phi2_dot^2) dt`` with the rotor rates of (11);
-* peak ``|omega|`` [rad/s], the verified residual, solve time, iterations.
+* Contact bound. One value (:data:`CONTACT_BOUND` by default) for both. A circle of the figure
+  eight of radius a through the south pole reaches the polar angle ``2 asin(a / R)``, so the
+  geometric-phase (GP) planner keeps only branches with ``a, b <= R sin(bound / 2)``
+  (:func:`leaf_radius_bound`); the collocation bounds the contact point at every collocation point.
+* Rest to rest, acceleration-level controls for both. The GP path is timed by the rest-to-rest
+  timing that minimises the compared cost (:func:`rollplan.execution.optimal_timing.optimal_timing`,
+  ``s''`` constant on the same N intervals); the collocation
+  (:mod:`rollplan.planners.collocation.rest`) controls the contact accelerations, constant on N
+  intervals, with zero contact rates at both ends.
+* psi is an angle. The collocation is solved from several starts with their own whole turns m of
+  psi (multistart, :func:`compare`), and the best certified one is kept.
+* Costs by name (:data:`COMPARED_COSTS`), every one measured by :func:`rollplan.measures.measure` on
+  the :class:`~rollplan.measures.TimedMotion` of each side (the GP's from the exact path, the
+  collocation's from the CVODES certification).
 
-The geometric-phase plan has no time of its own: it is timed with ``t``
-proportional to the curve parameter theta, ``t = T theta / (2 pi n)``, which
-traces each circle of the figure eight at constant speed. Its angular velocity
-is computed exactly along the CVODES samples of the plan
-(:func:`rollplan.core.model.curve_omega` along the rotated circles (31), times
-``d phi / dt = 4 pi n / T``); the integrals use Simpson's rule on each circle,
-where the integrand is smooth. Both sides are results of one
-:class:`~rollplan.problem.Problem` (:class:`~rollplan.result.PlanResult`),
-measured as :class:`~rollplan.result.Measures` with a timed
-:class:`~rollplan.result.Trajectory`.
+Starts of the multistart (each a :class:`Start`): ``gpI:m`` the collocation warm-started from the
+timed GP branch I (the first ``branches`` admissible branches, shortest first) with its m whole turns;
+``gpI:m->m2`` the best GP branch's motion with psi bent linearly in time to end at ``m2`` turns
+(the nearest other m and m = 0); ``naive:m`` the straight line at rest.
 """
 
 from __future__ import annotations
 
+import functools
 import math
-from dataclasses import dataclass, replace
+import time
+from dataclasses import dataclass
 from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 
-from ..core import model
-from ..core.curves import figure_eight, rotated_point
-from ..planners.collocation import CONTACT_BOUND, CollocationResult, collocate
+from ..core.interrupt import interruptible, raise_if_interrupted
+from ..errors import InputError, NoPlanError, SolverError, check_range, check_whole
+from ..execution.actuation import actuate
+from ..execution.optimal_timing import TIMING_COSTS, contact_rates, optimal_timing, timed_samples, timing_bound
+from ..execution.path import ContactPath
+from ..measures import TimedMotion, measure
+from ..planners.collocation.rest import (
+    MinimumTimePlanner,
+    RestResult,
+    RestToRestPlanner,
+    guess_from_samples,
+    naive_guess,
+)
 from ..planners.geometric import Plan
 from ..planners.geometric import plan as gp_plan
 from ..problem import Problem
-from ..result import Measures, Trajectory
 from ..robot import Robot
 
-__all__ = ["Comparison", "compare", "measure_plan", "comparison_series", "comparison_to_dict"]
+__all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side", "Comparison",
+           "leaf_radius_bound", "robot_for_k", "compare", "comparison_to_dict", "MinimumTime", "minimum_time"]
 
+#: Default contact bound of both planners: largest polar angle of the contact point [rad] (80 deg).
+CONTACT_BOUND = math.radians(80.0)
+#: Costs a comparison can be made for (the collocation and the GP timing minimise it).
+COMPARED_COSTS = TIMING_COSTS
+#: Keys of each side in the JSON of ``rollplan compare --json``.
+SIDE_KEYS = ("path_length", "effort", "residual", "solve_time_s", "contact_bound", "trajectory")
+#: Columns of each side's trajectory in that JSON.
 TRAJECTORY_KEYS = ("t", "u_o", "v_o", "u_a", "v_a", "psi")
+
+
+def leaf_radius_bound(contact_bound: float) -> float:
+    """Largest leaf radius [R] of a figure eight whose contact point stays within ``contact_bound`` [rad]
+    of the south pole: a circle of radius a through the pole reaches the polar angle ``2 asin(a)``."""
+    return math.sin(contact_bound / 2.0)
+
+
+def robot_for_k(k: float) -> Robot:
+    """A robot of radius 1 with inertia ratio ``k`` (14) and ``J_zz = 1``: what the GP timing needs when only k
+    is given (its omega does not depend on the inertias; its rotor rates and torques are in units of J_zz)."""
+    k = check_range("k", k, 1.0, None, low_open=True)
+    shell = min(0.5 * (k - 1.0), 0.75)          # m_o <= M = k - 1
+    rotor = (1.0 - 2.0 / 3.0 * shell) / 3.0     # J_r = J_p: 2/3 m_o + 2 J_p + J_r = 1
+    return Robot(radius=1.0, mass_total=k - 1.0, mass_shell=shell, rotor_inertia_axial=rotor,
+                 rotor_inertia_transverse=rotor)
+
+
+@dataclass(frozen=True)
+class Start:
+    """One start of the collocation's multistart and how it ended.
+
+    Attributes
+    ----------
+    name : str
+        ``gpI:m``, ``gpI:m->m2`` or ``naive:m`` (module docstring).
+    turns : int
+        Whole turns m of psi the collocation steers to.
+    status : str
+        IPOPT's status, ``"Verification_Failed"``, or ``"ok"``.
+    cost : float or None
+        The compared cost of the certified optimum, measured (None when it failed).
+    start_cost : float or None
+        The same cost of the timed GP branch it started from (``gpI:m`` starts only).
+    solve_time_s : float
+        IPOPT's time [s].
+    """
+
+    name: str
+    turns: int
+    status: str
+    cost: float | None
+    start_cost: float | None
+    solve_time_s: float
+
+
+@dataclass(frozen=True)
+class Side:
+    """One side of a comparison: its motion and what it costs.
+
+    Attributes
+    ----------
+    motion : TimedMotion
+    costs : dict
+        :func:`rollplan.measures.measure` of ``motion``.
+    residual : float
+        Certified residual to the goal (units of R, rad).
+    solve_time_s : float
+        Wall time of the whole side [s]: GP planning and timing of its branches; every start of the collocation.
+    """
+
+    motion: TimedMotion
+    costs: dict
+    residual: float
+    solve_time_s: float
 
 
 @dataclass(frozen=True)
 class Comparison:
-    """Both planners on one problem.
+    """Both methods on one problem (module docstring).
 
     Attributes
     ----------
     problem : Problem
+    robot : Robot
+        The problem's robot, or :func:`robot_for_k` without one.
     horizon : float
-        T [s] of both motions.
+        T [s].
+    cost : str
+        The compared cost, in :data:`COMPARED_COSTS`.
+    contact_bound : float
+        Of both planners [rad].
     plan : Plan
-        The geometric-phase plan.
-    result : CollocationResult
-        The collocation optimum.
-    plan_measures : Measures
-        The plan timed by ``t = T theta / (2 pi n)`` (module docstring).
-    plan_trajectory : Trajectory
-        The plan's samples on that time law (``parameter == "t"``).
-    effort_kind : str
-        ``"angular_velocity"`` (``int |omega|^2 dt``) or, with a robot, ``"rotor"``
-        (``int |phi_dot|^2 dt``): the effort compared.
+        The GP branch with the least compared cost among those timed.
+    gp, collocation : Side
+    result : RestResult
+        The best collocation solution.
+    starts : tuple of Start
+    branches : tuple of (Plan, Side)
+        Every timed GP branch within the bound, shortest first.
+    bound : float or None
+        For ``cost == "angular_velocity"``: the least ``int |omega|^2 dt`` of any timing of ``plan``'s path
+        over T (:func:`rollplan.execution.optimal_timing.timing_bound`); None for the other costs (the
+        path length does not depend on the timing; no bound is computed for the torque energy).
     """
 
     problem: Problem
+    robot: Robot
     horizon: float
-    plan: Plan
-    result: CollocationResult
-    plan_measures: Measures
-    plan_trajectory: Trajectory
-    effort_kind: str
+    cost: str
+    contact_bound: float
+    plan: object
+    gp: Side
+    collocation: Side
+    result: RestResult
+    starts: tuple
+    branches: tuple
+    bound: float | None
 
-    def effort(self, measures: Measures) -> float:
-        """The compared effort of one side's measures."""
-        return measures.rotor_effort if self.effort_kind == "rotor" else measures.effort
+    @property
+    def effort(self) -> tuple[float, float]:
+        """The compared cost of the GP side and of the collocation side."""
+        return self.gp.costs[self.cost], self.collocation.costs[self.cost]
 
 
-def _simpson(y, dx):
-    """Composite Simpson rule on an odd number of uniform samples."""
-    return dx / 3.0 * (y[0] + y[-1] + 4.0 * y[1:-1:2].sum() + 2.0 * y[2:-1:2].sum())
+@lru_cache(maxsize=8)
+def _planner(intervals, degree, scheme, cost, contact_bound) -> RestToRestPlanner:
+    return RestToRestPlanner(intervals, degree, scheme, cost, contact_bound)
 
 
-@lru_cache(maxsize=1)
-def _leaf_omega_functions():
-    """Per circle of the figure eight: (phi, ab, gamma, psi, k, phi_rate) -> omega (3,)."""
-    out = []
-    for piece in figure_eight().pieces:
-        phi = ca.SX.sym("phi")
-        ab = ca.SX.sym("ab", 2)
-        gamma, psi, k, rate = (ca.SX.sym(n) for n in ("gamma", "psi", "k", "rate"))
-        w, _, _ = model.curve_omega(rotated_point(piece, phi, ab, gamma), phi, psi, k)
-        out.append(ca.Function("leaf_omega", [phi, ab, gamma, psi, k, rate], [w * rate]))
-    return out
+def _branches(problem: Problem, robot: Robot, contact_bound: float, wanted: int) -> list:
+    """Up to ``wanted`` certified GP branches of one leg whose leaves stay within the bound: the planner's
+    (the shortest), then its neighbours ``m +- 1, m +- 2, ...`` (at most ``2 wanted + 2`` branches tried)."""
+    amax = leaf_radius_bound(contact_bound) * problem.radius
+    kw = {"robot": robot, "radius": problem.radius, "legs": "one"}
+    goal = tuple(problem.goal)
+    try:
+        first = gp_plan(goal, problem.steps, **kw)
+    except NoPlanError as exc:
+        raise NoPlanError(f"{exc} (the comparison needs a plan of one leg of figure eights)") from None
+    if not isinstance(first, Plan):   # a turn in place or the empty motion: not one leg of figure eights
+        raise NoPlanError(f"{problem.describe()} has no plan of one leg of figure eights (it is "
+                          f"{'the start itself' if not first.pieces else 'a ' + first.mode + ' motion'}); "
+                          "the comparison needs one")
+    found = [first]
+    for d in range(1, wanted + 2):
+        for m in (first.branch - d, first.branch + d):
+            try:
+                found.append(gp_plan(goal, problem.steps, branch=m, **kw))
+            except NoPlanError:
+                continue
+    ok = sorted((q for q in found if max(q.a, q.b) <= amax), key=lambda q: q.path_length)
+    if not ok:
+        raise NoPlanError(f"no geometric-phase plan for {problem.describe()} near branch {first.branch} keeps its "
+                          f"leaves within a, b <= {amax / problem.radius:.6g} R (contact bound {contact_bound:.6g} "
+                          "rad); raise --contact-bound or --steps")
+    return ok[:wanted]
+
+
+def _warm_samples(motion: TimedMotion, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(t, x7)`` of a timed GP motion: the state in units of R and the contact rates, (8)-(9)."""
+    rates = contact_rates(motion.omega, motion.state)[:, 2:4]
+    x7 = np.column_stack([motion.state / np.array([radius, radius, 1.0, 1.0, 1.0]), rates])
+    return motion.t, x7
+
+
+def _honours_ctrl_c(func):
+    """Run ``func`` with Ctrl-C honoured inside every IPOPT solve (:mod:`rollplan.core.interrupt`)."""
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        with interruptible():
+            return func(*args, **kwargs)
+    return wrapper
+
+
+@_honours_ctrl_c
+def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None = None,
+            radius: float | None = None, horizon: float = 1.0, cost: str = "angular_velocity",
+            intervals: int = 100, degree: int = 3, scheme: str = "legendre",
+            contact_bound: float = CONTACT_BOUND, branches: int = 2, naive: bool = True) -> Comparison:
+    """Solve one problem by both methods, fairly (module docstring), and measure both.
+
+    Parameters
+    ----------
+    target : sequence
+        Goal ``(u_a, v_a, psi)`` at the pole [length unit, rad]; the start is rest at the origin.
+    steps : int
+        Figure eights n of the GP plan.
+    k, robot, radius
+        As in :class:`~rollplan.problem.Problem`; without a robot k > 1 is needed (:func:`robot_for_k`).
+    horizon : float
+        T [s] of both motions.
+    cost : str
+        In :data:`COMPARED_COSTS`; ``"rotor_energy"`` needs a robot.
+    intervals, degree, scheme
+        N (of both the collocation and the GP timing), d and points of the collocation.
+    contact_bound : float
+        Of both planners [rad], in (0, pi/2).
+    branches : int
+        GP branches timed and used as warm starts (>= 1).
+    naive : bool
+        Also start the collocation from the straight line at rest.
+
+    Raises
+    ------
+    InputError, NoPlanError, SolverError
+        Bad input; no GP plan within the bound; no start of the collocation converged.
+    """
+    if not isinstance(cost, str) or cost not in COMPARED_COSTS:
+        raise InputError(f"cost = {cost!r:.40} is not allowed: choose one of {', '.join(COMPARED_COSTS)}")
+    if cost == "rotor_energy" and robot is None:
+        raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot")
+    problem = Problem(tuple(target), k=None if robot is not None else k, robot=robot, radius=radius, steps=steps)
+    if not problem.start.at_pole or not problem.goal.at_pole or tuple(problem.start) != (0.0,) * 5:
+        raise InputError("the comparison starts at rest at the origin and ends at the pole")
+    contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
+    horizon = check_range("horizon", horizon, 0.0, 1e6, low_open=True)
+    branches = check_whole("branches", branches, 1, 100)
+    rob = robot if robot is not None else robot_for_k(problem.k)
+    if robot is None and radius is not None and radius != 1.0:
+        rob = Robot(radius=radius, mass_total=rob.mass_total, mass_shell=rob.mass_shell,
+                    rotor_inertia_axial=rob.rotor_inertia_axial * radius ** 2,
+                    rotor_inertia_transverse=rob.rotor_inertia_transverse * radius ** 2)
+    planner = _planner(intervals, degree, scheme, cost, contact_bound)   # checks N, d, scheme, bound
+    N = planner.transcription.intervals
+
+    t0 = time.perf_counter()
+    timed = []
+    for p in _branches(problem, rob, contact_bound, branches):
+        path = ContactPath.of_plan(p, rob)
+        motion = timed_samples(path, optimal_timing(path, horizon, cost, N), planner.samples_per_interval)
+        timed.append((p, Side(motion, measure(motion), p.residual, 0.0), path))
+    gp_time = time.perf_counter() - t0
+    best_gp = min(range(len(timed)), key=lambda i: timed[i][1].costs[cost])
+    plan, gp_side, gp_path = timed[best_gp]
+    gp_side = Side(gp_side.motion, gp_side.costs, gp_side.residual, gp_time)
+
+    starts, results = [], []
+    turns_of = lambda q: round((q.final.psi - problem.goal.psi) / (2 * math.pi))  # noqa: E731
+    tr = planner.transcription
+    candidates = [(f"gp{i}:{turns_of(p)}", turns_of(p), *_warm_samples(side.motion, problem.radius),
+                   side.costs[cost]) for i, (p, side, _) in enumerate(timed)]
+    m0 = turns_of(plan)
+    t_best, x_best = _warm_samples(gp_side.motion, problem.radius)
+    for m2 in sorted({m0 - 1, m0 + 1, 0} - {m0}, key=abs):
+        x2 = x_best.copy()
+        x2[:, 2] += 2 * math.pi * (m2 - m0) * t_best / t_best[-1]
+        candidates.append((f"gp{best_gp}:{m0}->{m2}", m2, t_best, x2, None))
+    t1 = time.perf_counter()
+    for name, m, t, x7, start_cost in candidates:
+        guess = guess_from_samples(tr, t, x7, name)
+        starts.append(_run(planner, problem, rob, guess, horizon, m, start_cost, results))
+    if naive:
+        for m in sorted({m0, 0}, key=abs):
+            start, final = planner.boundary(problem, m)
+            starts.append(_run(planner, problem, rob, naive_guess(tr, start, final), horizon, m, None, results,
+                               f"naive:{m}"))
+    coll_time = time.perf_counter() - t1
+    if not results:
+        worst = starts[0].status
+        raise SolverError(f"no start of the collocation converged for {problem.describe()} (first: {worst})", worst)
+    best = min(results, key=lambda r: measure(r.motion)[cost])
+    coll = Side(best.motion, measure(best.motion), best.residual, coll_time)
+    return Comparison(problem, rob, float(horizon), cost, contact_bound, plan, gp_side, coll, best, tuple(starts),
+                      tuple((p, s) for p, s, _ in timed),
+                      timing_bound(gp_path, horizon, cost) if cost == "angular_velocity" else None)
+
+
+def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:
+    t0 = time.perf_counter()
+    try:
+        r = planner.solve(problem, guess, horizon, turns, robot)
+        raise_if_interrupted()
+    except SolverError as exc:
+        raise_if_interrupted()    # Ctrl-C inside IPOPT ends that solve only: stop the whole multistart
+        return Start(name or guess.name, turns, exc.status, None, start_cost, time.perf_counter() - t0)
+    results.append(r)
+    return Start(name or guess.name, turns, "ok", measure(r.motion)[planner.cost], start_cost, r.stats.time_s)
+
+
+def _side(c: Comparison, side: Side) -> dict:
+    cols = side.motion.columns()
+    return {"path_length": side.costs["path_length"], "effort": side.costs[c.cost], "residual": side.residual,
+            "solve_time_s": side.solve_time_s, "contact_bound": c.contact_bound,
+            "trajectory": {key: cols[key] for key in TRAJECTORY_KEYS}}
+
+
+def comparison_to_dict(c: Comparison) -> dict:
+    """The JSON object of ``rollplan compare --json``: per side exactly :data:`SIDE_KEYS`; the rest under
+    ``details``."""
+    g, p, r = c.problem.goal, c.plan, c.result
+    return {
+        "target": {"u_a": g.u_a, "v_a": g.v_a, "psi": g.psi}, "k": c.problem.k, "radius": c.problem.radius,
+        "horizon": c.horizon, "steps": c.problem.steps, "cost": c.cost,
+        "geometric_phase": _side(c, c.gp), "collocation": _side(c, c.collocation),
+        "details": {
+            "geometric_phase": {"costs": c.gp.costs, "figure_eight": {"a": p.a, "b": p.b, "gamma": p.gamma},
+                                "branch": p.branch, "timing_bound": c.bound},
+            "collocation": {"costs": c.collocation.costs, "turns": r.turns, "guess": r.guess,
+                            "intervals": r.transcription.intervals, "degree": r.transcription.degree,
+                            "scheme": r.transcription.scheme, "iterations": r.stats.iterations},
+            "starts": [{"name": s.name, "turns": s.turns, "status": s.status, "cost": s.cost,
+                        "start_cost": s.start_cost, "solve_time_s": s.solve_time_s} for s in c.starts],
+        },
+    }
+
+
+@dataclass(frozen=True)
+class MinimumTime:
+    """Minimum time of both methods under the robot's rotor limits, rest to rest.
+
+    Attributes
+    ----------
+    problem : Problem
+    plan : Plan
+        The GP plan (shortest branch within the contact bound).
+    gp_duration : float
+        Its time-optimal timing's duration (:mod:`rollplan.execution.timing`, ``"time-optimal"``) [s].
+    duration : float
+        The collocation's minimum time (free final time), warm-started from that timing [s].
+    gp, collocation : Side
+        Both motions (``costs["duration"]`` their durations).
+    """
+
+    problem: Problem
+    plan: object
+    gp_duration: float
+    duration: float
+    gp: Side
+    collocation: Side
 
 
 @lru_cache(maxsize=4)
-def _rotor_rate_function(jxx: float, jzz: float, jr: float) -> ca.Function:
-    """``(omega[3], u_o, v_o, psi) -> rotor rates[2]`` of (11) for one robot's inertias."""
-    w = ca.SX.sym("w", 3)
-    uo, vo, ps = ca.SX.sym("uo"), ca.SX.sym("vo"), ca.SX.sym("ps")
-    return ca.Function("rot", [w, uo, vo, ps], [model.rotor_rates(w, uo, vo, ps, jxx, jzz, jr)])
+def _min_time_planner(intervals, degree, contact_bound) -> MinimumTimePlanner:
+    return MinimumTimePlanner(intervals, degree, contact_bound=contact_bound)
 
 
-def _rotor_rates_along(robot: Robot, omega, traj, rows) -> np.ndarray:
-    """Rotor rates (11), shape (M, 2), for angular velocities ``omega`` (M, 3) at the samples ``rows`` of ``traj``."""
-    fn = _rotor_rate_function(robot.j_xx, robot.j_zz, robot.rotor_inertia_axial)
-    omega = np.asarray(omega, float)
-    return np.array(fn.map(omega.shape[0])(omega.T, traj.u_o[rows][None, :], traj.v_o[rows][None, :],
-                                           traj.psi[rows][None, :])).T
-
-
-def _timed_circles(p: Plan, horizon: float, robot: Robot | None, samples_per_leaf: int):
-    """The plan timed by ``t = T theta / (2 pi n)``: its samples and, per circle of the figure eight, the
-    sample rows (the circle's start included), omega and (with a robot) the rotor rates there."""
-    m = samples_per_leaf + (samples_per_leaf % 2)  # even: Simpson on m + 1 points
-    tr = p.sample(m)
-    ab = np.array([p.a, p.b]) / p.radius
-    rate = 4.0 * math.pi * p.steps / horizon
-    funcs = _leaf_omega_functions()
-    phi = np.linspace(0.0, 2.0 * math.pi, m + 1)
-    circles = []
-    for j in range(2 * p.steps):
-        sl = slice(j * m, (j + 1) * m + 1)  # samples of this circle, including its start
-        om = np.array(funcs[j % 2].map(m + 1)(phi[None, :], ab, p.gamma, tr.psi[sl][None, :], p.k, rate)).T
-        circles.append((sl, om, _rotor_rates_along(robot, om, tr, sl) if robot is not None else None))
-    timed = replace(tr, s=horizon * tr.s / tr.s[-1], parameter="t")
-    return timed, m, circles
-
-
-def measure_plan(p: Plan, horizon: float = 1.0, robot: Robot | None = None,
-                 samples_per_leaf: int = 500) -> tuple:
-    """Measures of a geometric-phase plan timed by ``t = T theta / (2 pi n)``, and its timed trajectory."""
-    timed, m, circles = _timed_circles(p, horizon, robot, samples_per_leaf)
-    dt = horizon / (2 * p.steps) / m  # each circle takes T / (2 n)
-    energy = rotor = peak = 0.0
-    for _, om, ph in circles:
-        sq = (om ** 2).sum(axis=1)
-        energy += _simpson(sq, dt)
-        peak = max(peak, float(np.sqrt(sq.max())))
-        if ph is not None:
-            rotor += _simpson((ph ** 2).sum(axis=1), dt)
-    return Measures(p.path_length, float(energy), float(rotor) if robot is not None else float("nan"), peak), timed
-
-
-def comparison_series(c: Comparison, samples_per_leaf: int = 200) -> dict:
-    """Time series of both motions of a comparison, for :func:`rollplan.plots.compare.plot_comparison`.
-
-    ``{"geometric_phase": {...}, "collocation": {...}}``, each with ``t`` (N,) [s],
-    ``omega`` (N, 3) [rad/s, plane frame] and ``rotor_rates`` (N, 2) [rad/s] (None
-    without a robot). The plan's series repeats the time of each joint between
-    circles, where omega jumps under this timing; the collocation's is at the
-    samples of its certified trajectory.
-    """
-    robot = c.problem.robot
-    timed, _, circles = _timed_circles(c.plan, c.horizon, robot, samples_per_leaf)
-    t = np.concatenate([timed.s[sl] for sl, _, _ in circles])
-    gp = {"t": t, "omega": np.vstack([om for _, om, _ in circles]),
-          "rotor_rates": np.vstack([ph for _, _, ph in circles]) if robot is not None else None}
-    r = c.result
-    rows = slice(0, r.trajectory.s.size)
-    coll = {"t": r.trajectory.s, "omega": np.asarray(r.omega, float),
-            "rotor_rates": _rotor_rates_along(robot, r.omega, r.trajectory, rows) if robot is not None else None}
-    return {"geometric_phase": gp, "collocation": coll}
-
-
-def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None = None,
-            radius: float | None = None, horizon: float = 1.0, cost: str = "path_length", intervals: int = 100,
-            degree: int = 3, scheme: str = "legendre", guess: str = "warm",
-            contact_bound: float = CONTACT_BOUND) -> Comparison:
-    """Plan by geometric phase (:func:`rollplan.plan`) and by collocation, and measure both.
-
-    The collocation is warm-started from the same plan when ``guess="warm"``,
-    and steers psi to the plan's final psi (same orientation, ``turns`` = its branch).
+def minimum_time(target, robot: Robot, steps: int = 1, intervals: int = 60, degree: int = 3,
+                 contact_bound: float = CONTACT_BOUND) -> MinimumTime:
+    """Minimum time rest to rest under ``robot``'s ``max_rotor_rate`` and ``max_rotor_torque`` (both needed):
+    the GP path's time-optimal timing against the collocation with free final time and the same limits
+    at its collocation points, warm-started from the former, with the same contact bound.
 
     Raises
     ------
     InputError, NoPlanError, SolverError
     """
-    p = gp_plan(tuple(target), steps, k=None if robot is not None else k, robot=robot, radius=radius,
-                legs="one")   # one leg of figure eights: the paper's plan
-    r = collocate(target, k=None if robot is not None else k, robot=robot, radius=radius, cost=cost,
-                  intervals=intervals, degree=degree, scheme=scheme, horizon=horizon, guess=guess, steps=steps,
-                  turns=p.branch, contact_bound=contact_bound, warm_start=p if guess == "warm" else None)
-    measures, timed = measure_plan(p, horizon, robot)
-    return Comparison(p.problem, float(horizon), p, r, measures, timed, "rotor" if robot is not None else
-                      "angular_velocity")
-
-
-def _side(c: Comparison, res, measures: Measures, traj: Trajectory) -> dict:
-    f = lambda a: [float(x) for x in np.asarray(a).ravel()]  # noqa: E731
-    cols = {"t": traj.s, "u_o": traj.u_o, "v_o": traj.v_o, "u_a": traj.u_a, "v_a": traj.v_a, "psi": traj.psi}
-    return {"path_length": measures.path_length, "effort": c.effort(measures), "effort_kind": c.effort_kind,
-            "angular_velocity_energy": measures.effort, "peak_omega": measures.peak_omega,
-            "residual": res.residual, "solve_time_s": res.stats.time_s, "iterations": res.stats.iterations,
-            "status": res.stats.status, "trajectory": {key: f(cols[key]) for key in TRAJECTORY_KEYS}}
-
-
-def comparison_to_dict(c: Comparison) -> dict:
-    """The JSON object of ``rollplan compare --json``."""
-    r, p, g = c.result, c.plan, c.problem.goal
-    d = {"target": {"u_a": g.u_a, "v_a": g.v_a, "psi": g.psi}, "k": c.problem.k, "radius": c.problem.radius,
-         "horizon": c.horizon, "steps": c.problem.steps,
-         "geometric_phase": _side(c, p, c.plan_measures, c.plan_trajectory),
-         "collocation": _side(c, r, r.measures, r.trajectory)}
-    d["geometric_phase"].update({"figure_eight": {"a": p.a, "b": p.b, "gamma": p.gamma}, "branch": p.branch})
-    tr = r.transcription
-    d["collocation"].update({"cost": r.cost, "objective": r.solution.objective, "scheme": tr.scheme,
-                             "degree": tr.degree, "intervals": tr.intervals, "guess": r.guess, "turns": r.turns,
-                             "guess_time_s": r.stats.details["guess_time_s"],
-                             "verify_time_s": r.stats.details["verify_time_s"],
-                             "max_defect": r.solution.max_defect, "contact_bound": r.contact_bound})
-    return d
+    problem = Problem(tuple(target), robot=robot, steps=steps)
+    planner = _min_time_planner(intervals, degree, check_range("contact_bound", contact_bound, 0.0, math.pi / 2,
+                                                               True, True))
+    t0 = time.perf_counter()
+    p = _branches(problem, robot, contact_bound, 1)[0]
+    m = actuate(p, robot, timing="time-optimal")
+    gp_time = time.perf_counter() - t0
+    R = robot.radius
+    rates = contact_rates(m.omega, m.state)[:, 2:4]
+    x7 = np.column_stack([m.state / np.array([R, R, 1.0, 1.0, 1.0]), rates])
+    velocity = contact_rates(m.omega, m.state)[:, :2] * R
+    gp_motion = TimedMotion(m.time, m.state, velocity, m.omega, m.rotor_rates, m.rotor_torques, R)
+    turns = round((p.final.psi - problem.goal.psi) / (2 * math.pi))
+    guess = guess_from_samples(planner.base.transcription, m.time, x7, "gp-time-optimal")
+    with interruptible():
+        try:
+            T, r = planner.solve(problem, guess, m.duration, robot, turns)
+        finally:
+            raise_if_interrupted()
+    return MinimumTime(problem, p, m.duration, T, Side(gp_motion, measure(gp_motion), p.residual, gp_time),
+                       Side(r.motion, measure(r.motion), r.residual, r.stats.time_s))

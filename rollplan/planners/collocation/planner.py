@@ -62,7 +62,7 @@ from ...result import Certificate, CertifiedMotion, Measures, SolverStats, Traje
 from ...robot import Robot
 from ..geometric.composed import as_composed, default_composed_planner
 from .costs import COSTS, N_PAR, Cost
-from .transcription import SCHEMES, Guess, Transcription
+from .transcription import SCHEMES, Guess, Transcription, check_contact_bound, ipopt_options
 
 __all__ = ["SCHEMES", "COSTS", "GUESSES", "CONTACT_BOUND", "SMOOTHING", "TOLERANCE", "Guess", "Certifier",
            "CollocationSolution", "CollocationResult", "CollocationPlanner", "collocate"]
@@ -301,13 +301,9 @@ class CollocationPlanner:
         verify_samples = check_whole("verify_samples", verify_samples, 1, 10**6)
         self.samples_per_interval = max(1, math.ceil(verify_samples / self.transcription.intervals))
         self.point = _point_function(self.cost)
-        x = ca.SX.sym("x", 5)
-        depth = ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])  # cos(polar angle), eq. (1)
         t0 = time.perf_counter()
-        nlp, self.path_rows = self.transcription.nlp(self.point, depth, N_PAR)
-        opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": self.tol,
-                "ipopt.constr_viol_tol": self.tol, "ipopt.max_iter": self.max_iter, "ipopt.mu_strategy": "adaptive"}
-        self.solver = ca.nlpsol("collocation", "ipopt", nlp, opts)
+        nlp, self.path_rows = self.transcription.contact_nlp(self.point, N_PAR)
+        self.solver = ca.nlpsol("collocation", "ipopt", nlp, ipopt_options(self.tol, self.max_iter))
         self.build_time_s = time.perf_counter() - t0
 
     # -- solve --------------------------------------------------------------------------
@@ -344,12 +340,7 @@ class CollocationPlanner:
         if self.cost.needs_robot and problem.robot is None:
             raise InputError(f"cost = {self.cost.name!r} needs robot parameters: give a robot")
         turns = check_whole("turns", turns)
-        for name in ("start", "goal"):
-            state = getattr(problem, name)
-            polar = math.acos(min(1.0, math.cos(state.u_o) * math.cos(state.v_o)))   # from (1)
-            if polar > self.contact_bound:
-                raise InputError(f"the {name} contact point lies {polar:.4g} rad from the south pole, beyond the "
-                                 f"collocation's contact_bound = {self.contact_bound:.4g} rad: raise contact_bound")
+        check_contact_bound(problem, self.contact_bound)
         start = problem.scaled(problem.start).array()
         final = problem.scaled(problem.goal).array()
         # psi is an angle: start and goal reduced exactly by whole turns (a psi of 1e8 keeps full accuracy);
@@ -365,11 +356,7 @@ class CollocationPlanner:
         smoothing = check_range("smoothing", smoothing, 0.0, None)
         tr = self.transcription
         par = _parameters(problem.k, horizon, smoothing, problem.robot)
-        c = self.contact_bound
-        lbx, ubx = tr.bounds(start, final, [np.inf, np.inf, np.inf, c, c])
-        x0 = np.clip(tr.pack(g), lbx, ubx)
-        lbg = np.where(self.path_rows, math.cos(c), 0.0)
-        ubg = np.where(self.path_rows, np.inf, 0.0)
+        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(g, start, final, self.contact_bound, self.path_rows)
         t0 = time.perf_counter()
         sol = interrupts.call(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
         solve_time = time.perf_counter() - t0
@@ -463,8 +450,9 @@ class Certifier:
         self._omega = ca.Function("omega", [x, w, par], [omega])
 
     def verify(self, controls, k: float, horizon: float = 1.0, robot: Robot | None = None, x0=None) -> dict:
-        """Integrate :func:`~rollplan.core.model.contact_rhs` from ``x0`` (default rest at the origin)
-        with piecewise-constant ``controls`` (N, 2) by CVODES.
+        """Integrate :func:`~rollplan.core.model.contact_rhs` from ``x0`` (default the zero state)
+        with piecewise-constant ``controls`` (N, 2) by CVODES. The contact rates jump to the first
+        control at t = 0: the motion does not start at rest (for rest to rest see :mod:`.rest`).
 
         Returns a dict: ``t`` (M + 1,) [s], ``x`` (M + 1, 5) states in units of R,
         ``segment`` (M + 1,) interval of each sample, ``xf`` (5,), ``omega`` (M + 1, 3),

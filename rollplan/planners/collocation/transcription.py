@@ -12,23 +12,45 @@ end-of-interval states converge at that order as ``N`` grows
 by the same quadrature.
 
 Decision variables, in order: ``X_0``, then per interval its collocation
-states (5 x d, column by column), its control (2) and ``X_{i+1}``.
+states (nx x d, column by column), its control (nu) and ``X_{i+1}``. The state
+has ``nx = 5`` entries (u_a, v_a, psi, u_o, v_o) and the control ``nu = 2`` (the
+contact rates) by default; the rest-to-rest planner appends the contact rates to
+the state and controls the contact accelerations (``nx = 7``).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from ... import interrupts
+from ...core import model
 from ...errors import InputError, check_choice, check_whole
 
-__all__ = ["SCHEMES", "Guess", "Transcription"]
+__all__ = ["SCHEMES", "Guess", "Transcription", "ipopt_options", "check_contact_bound"]
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
 SCHEMES = ("legendre", "radau")
+
+
+def ipopt_options(tol: float, max_iter: int) -> dict:
+    """The options of every collocation NLP: IPOPT silent, tolerance ``tol`` (also on the constraints)."""
+    return {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
+            "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter, "ipopt.mu_strategy": "adaptive"}
+
+
+def check_contact_bound(problem, contact_bound: float) -> None:
+    """InputError when the start or goal contact point of ``problem`` lies beyond ``contact_bound`` [rad]
+    of the south pole (polar angle from (1): ``acos(cos u_o cos v_o)``)."""
+    for name in ("start", "goal"):
+        state = getattr(problem, name)
+        polar = math.acos(min(1.0, math.cos(state.u_o) * math.cos(state.v_o)))
+        if polar > contact_bound:
+            raise InputError(f"the {name} contact point lies {polar:.4g} rad from the south pole, beyond the "
+                             f"collocation's contact_bound = {contact_bound:.4g} rad: raise contact_bound")
 
 
 @dataclass(frozen=True)
@@ -37,12 +59,12 @@ class Guess:
 
     Attributes
     ----------
-    states : ndarray, shape (N + 1, 5)
-        (u_a, v_a, psi, u_o, v_o) at the interval boundaries.
-    colloc : ndarray, shape (N, d, 5)
+    states : ndarray, shape (N + 1, nx)
+        (u_a, v_a, psi, u_o, v_o) at the interval boundaries (and the contact rates when nx = 7).
+    colloc : ndarray, shape (N, d, nx)
         The state at the collocation points.
-    controls : ndarray, shape (N, 2)
-        (u_o_dot, v_o_dot) on each interval [rad/s].
+    controls : ndarray, shape (N, nu)
+        (u_o_dot, v_o_dot) on each interval [rad/s] (the contact accelerations when nx = 7).
     name : str
     """
 
@@ -64,15 +86,21 @@ class Transcription:
         Collocation degree d in 1..9.
     scheme : str
         ``"legendre"`` (Gauss points, order 2d) or ``"radau"`` (order 2d - 1).
+    nx, nu : int
+        Sizes of the state and of the control (module docstring).
     """
 
     intervals: int = 100
     degree: int = 3
     scheme: str = "legendre"
+    nx: int = 5
+    nu: int = 2
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "intervals", check_whole("intervals", self.intervals, 1, 100000))
         object.__setattr__(self, "degree", check_whole("degree", self.degree, 1, 9))
+        object.__setattr__(self, "nx", check_whole("nx", self.nx, 1, 100))
+        object.__setattr__(self, "nu", check_whole("nu", self.nu, 1, 100))
         check_choice("scheme", self.scheme, SCHEMES)
 
     def coefficients(self):
@@ -92,9 +120,9 @@ class Transcription:
         """
         d = self.degree
         _, C, D, B = self.coefficients()
-        x0 = ca.SX.sym("x0", 5)
-        xc = ca.SX.sym("xc", 5, d)
-        w = ca.SX.sym("w", 2)
+        x0 = ca.SX.sym("x0", self.nx)
+        xc = ca.SX.sym("xc", self.nx, d)
+        w = ca.SX.sym("w", self.nu)
         h = ca.SX.sym("h")
         par = ca.SX.sym("par", n_par)
         T = par[1]
@@ -122,22 +150,42 @@ class Transcription:
         G = self.interval_function(point, n_par)
         par = ca.SX.sym("par", n_par)
         V, g, J = [], [], 0
-        xk = ca.SX.sym("X0", 5)
+        nx = self.nx
+        xk = ca.SX.sym("X0", nx)
         V.append(xk)
         for i in range(N):
-            xc = ca.SX.sym(f"XC{i}", 5, d)
-            w = ca.SX.sym(f"W{i}", 2)
+            xc = ca.SX.sym(f"XC{i}", nx, d)
+            w = ca.SX.sym(f"W{i}", self.nu)
             defect, x_end, Ji = G(xk, xc, w, 1.0 / N, par)
-            xk = ca.SX.sym(f"X{i + 1}", 5)
+            xk = ca.SX.sym(f"X{i + 1}", nx)
             V += [ca.vec(xc), w, xk]
             g += [ca.vec(defect), x_end - xk, path.map(d)(xc).T, path(xk)]
             J = J + Ji
-        rows = np.concatenate([np.zeros(5 * d + 5, bool), np.ones(d + 1, bool)] * N)
+        rows = np.concatenate([np.zeros(nx * d + nx, bool), np.ones(d + 1, bool)] * N)
         return {"x": ca.vertcat(*V), "p": par, "f": J, "g": ca.vertcat(*g)}, rows
+
+    def contact_nlp(self, point: ca.Function, n_par: int):
+        """:meth:`nlp` with the contact bound as the path constraint: ``-z >= cos(bound)`` for the contact
+        point (1) (the depth below the centre, the cosine of the polar angle) at every collocation point and
+        interval end; the state's entries 3 and 4 are u_o and v_o."""
+        x = ca.SX.sym("x", self.nx)
+        depth = ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])
+        return self.nlp(point, depth, n_par)
+
+    def contact_bounds(self, guess: Guess, start, final, contact_bound: float, path_rows):
+        """``(x0, lbx, ubx, lbg, ubg)`` of the NLP of :meth:`contact_nlp`: ``start``, ``final`` fixed,
+        ``|u_o|, |v_o| <= contact_bound``, the guess clipped into the bounds."""
+        box = np.full(self.nx, np.inf)
+        box[3:5] = contact_bound
+        lbx, ubx = self.bounds(start, final, box)
+        x0 = np.clip(self.pack(guess), lbx, ubx)
+        lbg = np.where(path_rows, math.cos(contact_bound), 0.0)
+        ubg = np.where(path_rows, np.inf, 0.0)
+        return x0, lbx, ubx, lbg, ubg
 
     @property
     def _block(self) -> int:
-        return 5 * self.degree + 2 + 5  # variables per interval after X0
+        return self.nx * self.degree + self.nu + self.nx  # variables per interval after X0
 
     def pack(self, guess: Guess) -> np.ndarray:
         """The decision vector of a guess."""
@@ -148,21 +196,21 @@ class Transcription:
 
     def unpack(self, v: np.ndarray):
         """``(states (N + 1, 5), colloc (N, d, 5), controls (N, 2))`` of a decision vector."""
-        N, d = self.intervals, self.degree
-        states, colloc, controls = np.zeros((N + 1, 5)), np.zeros((N, d, 5)), np.zeros((N, 2))
-        states[0] = v[:5]
+        N, d, nx, nu = self.intervals, self.degree, self.nx, self.nu
+        states, colloc, controls = np.zeros((N + 1, nx)), np.zeros((N, d, nx)), np.zeros((N, nu))
+        states[0] = v[:nx]
         for i in range(N):
-            blk = v[5 + i * self._block: 5 + (i + 1) * self._block]
-            colloc[i] = blk[: 5 * d].reshape(d, 5)
-            controls[i] = blk[5 * d: 5 * d + 2]
-            states[i + 1] = blk[5 * d + 2:]
+            blk = v[nx + i * self._block: nx + (i + 1) * self._block]
+            colloc[i] = blk[: nx * d].reshape(d, nx)
+            controls[i] = blk[nx * d: nx * d + nu]
+            states[i + 1] = blk[nx * d + nu:]
         return states, colloc, controls
 
     def bounds(self, start, final, box):
-        """Variable bounds: ``start`` and ``final`` fixed, every other state within ``+-box`` (5,)."""
+        """Variable bounds: ``start`` and ``final`` fixed, every other state within ``+-box`` (nx,)."""
         N, d = self.intervals, self.degree
         box = np.asarray(box, float)
-        wb = np.full(2, np.inf)
+        wb = np.full(self.nu, np.inf)
         lb, ub = [np.asarray(start, float)], [np.asarray(start, float)]
         for i in range(N):
             lb += [np.tile(-box, d), -wb]
@@ -180,8 +228,8 @@ class Transcription:
 
     def check_guess(self, g: Guess) -> Guess:
         """``g`` if its arrays have this transcription's shapes and are finite; InputError otherwise."""
-        want = {"states": (self.intervals + 1, 5), "colloc": (self.intervals, self.degree, 5),
-                "controls": (self.intervals, 2)}
+        want = {"states": (self.intervals + 1, self.nx), "colloc": (self.intervals, self.degree, self.nx),
+                "controls": (self.intervals, self.nu)}
         for name, shape in want.items():
             arr = np.asarray(getattr(g, name), float)
             if arr.shape != shape or not np.all(np.isfinite(arr)):
@@ -193,14 +241,14 @@ class Transcription:
 
         This is the transcription used as a ``d``-stage implicit Runge-Kutta
         method (Gauss-Legendre or Radau IIA): no optimization. Returns the
-        states at the interval boundaries, shape (N + 1, 5), units of R.
+        states at the interval boundaries, shape (N + 1, nx), units of R.
         """
         controls = np.asarray(controls, float)
         N, d = controls.shape[0], self.degree
         G = self.interval_function(point, n_par)
-        xc = ca.SX.sym("xc", 5, d)
-        x0s = ca.SX.sym("x0", 5)
-        w = ca.SX.sym("w", 2)
+        xc = ca.SX.sym("xc", self.nx, d)
+        x0s = ca.SX.sym("x0", self.nx)
+        w = ca.SX.sym("w", self.nu)
         h = ca.SX.sym("h")
         p = ca.SX.sym("par", n_par)
         defect, x_end, _ = G(x0s, xc, w, h, p)
@@ -208,7 +256,7 @@ class Transcription:
         rf = ca.rootfinder("sim", "newton", res, {"abstol": 1e-15, "abstolStep": 1e-16, "max_iter": 50,
                                                    "error_on_fail": False})
         end = ca.Function("end", [ca.vec(xc), x0s], [x_end])
-        x = np.zeros(5) if x0 is None else np.asarray(x0, float)
+        x = np.zeros(self.nx) if x0 is None else np.asarray(x0, float)
         out = [x]
         for i in range(N):
             z = interrupts.call(rf, np.tile(x, d), np.concatenate([x, controls[i], [1.0 / N], par]))
