@@ -34,8 +34,8 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from .. import interrupts
 from ..core import model
-from ..core.interrupt import raise_if_interrupted
 from ..errors import InputError, SolverError, check_range, check_whole
 from ..measures import TimedMotion
 from .path import ContactPath
@@ -145,9 +145,8 @@ def optimal_timing(path: ContactPath, horizon: float, cost: str, intervals: int 
     ubs[0] = 0.0
     lbv, ubv = np.zeros(N + 1), np.full(N + 1, np.inf)
     ubv[0] = ubv[-1] = 0.0
-    sol = solver(x0=np.concatenate([s0, v0, a0]), lbx=np.concatenate([lbs, lbv, np.full(N, -np.inf)]),
-                 ubx=np.concatenate([ubs, ubv, np.full(N, np.inf)]), lbg=0.0, ubg=0.0)
-    raise_if_interrupted()   # Ctrl-C inside IPOPT ends the solve only: raise it (rollplan.core.interrupt)
+    sol = interrupts.call(solver, x0=np.concatenate([s0, v0, a0]), lbx=np.concatenate([lbs, lbv, np.full(N, -np.inf)]),
+                          ubx=np.concatenate([ubs, ubv, np.full(N, np.inf)]), lbg=0.0, ubg=0.0)
     st = solver.stats()
     if not st["success"]:
         raise SolverError(f"IPOPT did not find the optimal timing ({cost}, N = {N}): {st['return_status']}",

@@ -27,7 +27,6 @@ timed GP branch I (the first ``branches`` admissible branches, shortest first) w
 
 from __future__ import annotations
 
-import functools
 import math
 import time
 from dataclasses import dataclass
@@ -35,7 +34,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..core.interrupt import interruptible, raise_if_interrupted
+from .. import interrupts
 from ..errors import InputError, NoPlanError, SolverError, check_range, check_whole
 from ..execution.actuation import actuate
 from ..execution.optimal_timing import TIMING_COSTS, contact_rates, optimal_timing, timed_samples, timing_bound
@@ -220,16 +219,6 @@ def _warm_samples(motion: TimedMotion, radius: float) -> tuple[np.ndarray, np.nd
     return motion.t, x7
 
 
-def _honours_ctrl_c(func):
-    """Run ``func`` with Ctrl-C honoured inside every IPOPT solve (:mod:`rollplan.core.interrupt`)."""
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        with interruptible():
-            return func(*args, **kwargs)
-    return wrapper
-
-
-@_honours_ctrl_c
 def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None = None,
             radius: float | None = None, horizon: float = 1.0, cost: str = "angular_velocity",
             intervals: int = 100, degree: int = 3, scheme: str = "legendre",
@@ -325,10 +314,9 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
 def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:
     t0 = time.perf_counter()
     try:
-        r = planner.solve(problem, guess, horizon, turns, robot)
-        raise_if_interrupted()
+        # Ctrl-C inside IPOPT ends that solve only: interrupts.call raises it, which stops the whole multistart
+        r = interrupts.call(planner.solve, problem, guess, horizon, turns, robot)
     except SolverError as exc:
-        raise_if_interrupted()    # Ctrl-C inside IPOPT ends that solve only: stop the whole multistart
         return Start(name or guess.name, turns, exc.status, None, start_cost, time.perf_counter() - t0)
     results.append(r)
     return Start(name or guess.name, turns, "ok", measure(r.motion)[planner.cost], start_cost, r.stats.time_s)
@@ -415,10 +403,6 @@ def minimum_time(target, robot: Robot, steps: int = 1, intervals: int = 60, degr
     gp_motion = TimedMotion(m.time, m.state, velocity, m.omega, m.rotor_rates, m.rotor_torques, R)
     turns = round((p.final.psi - problem.goal.psi) / (2 * math.pi))
     guess = guess_from_samples(planner.base.transcription, m.time, x7, "gp-time-optimal")
-    with interruptible():
-        try:
-            T, r = planner.solve(problem, guess, m.duration, robot, turns)
-        finally:
-            raise_if_interrupted()
+    T, r = interrupts.call(planner.solve, problem, guess, m.duration, robot, turns)
     return MinimumTime(problem, p, m.duration, T, Side(gp_motion, measure(gp_motion), p.residual, gp_time),
                        Side(r.motion, measure(r.motion), r.residual, r.stats.time_s))

@@ -40,6 +40,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from ... import interrupts
 from ...core import model
 from ...errors import InputError, SolverError, check_range, check_whole
 from ...measures import TimedMotion, measure
@@ -219,7 +220,7 @@ class RestToRestPlanner:
         c = self.contact_bound
         x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, c, self.path_rows)
         t0 = time.perf_counter()
-        sol = self.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
+        sol = interrupts.call(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
         solve_time = time.perf_counter() - t0
         st = self.solver.stats()
         status, iters = str(st["return_status"]), int(st["iter_count"])
@@ -360,7 +361,8 @@ class MinimumTimePlanner:
         lbg, ubg = np.concatenate([lbg, -np.ones(self.n_lim)]), np.concatenate([ubg, np.ones(self.n_lim)])
         par = np.concatenate([rest_parameters(problem.k, 1.0, robot), [robot.max_rotor_rate, robot.max_rotor_torque]])
         t0 = time.perf_counter()
-        sol = self.solver(x0=x0, lbx=np.append(lbx, 1e-6), ubx=np.append(ubx, 1e6), lbg=lbg, ubg=ubg, p=par)
+        sol = interrupts.call(self.solver, x0=x0, lbx=np.append(lbx, 1e-6), ubx=np.append(ubx, 1e6), lbg=lbg, ubg=ubg,
+                              p=par)
         solve_time = time.perf_counter() - t0
         st = self.solver.stats()
         status, iters = str(st["return_status"]), int(st["iter_count"])
