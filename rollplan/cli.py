@@ -593,17 +593,18 @@ def _add_compare_parser(sub) -> None:
     from .studies.comparison import COMPARED_COSTS, CONTACT_BOUND
 
     c = sub.add_parser("compare", help="geometric-phase plan versus collocation optimum on one problem, rest to rest")
-    _add_target_options(c, to_default=None, steps_help="figure eights n >= 1 of the geometric plan (default 1)")
+    _add_target_options(c, to_default=None, steps_help=f"figure eights n {_STEPS} of the geometric plan (default 1)")
     c.add_argument("--cost", choices=COMPARED_COSTS, default="angular_velocity",
                    help="the cost compared, minimised by both (default angular_velocity; rotor_energy needs --robot)")
-    c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T [s] of both motions (default 1)")
-    c.add_argument("--intervals", type=_whole, default=100, help="intervals N of both motions (default 100)")
-    c.add_argument("--degree", type=_whole, default=3, help="collocation degree d (default 3)")
+    c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T > 0 [s] of both motions (default 1)")
+    c.add_argument("--intervals", type=_whole, default=100,
+                   help="intervals N of both motions in [1, 100000] (default 100)")
+    c.add_argument("--degree", type=_whole, default=3, help="collocation degree d in [1, 9] (default 3)")
     c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
     c.add_argument("--branches", type=_whole, default=2,
                    help="geometric-phase branches timed and used as warm starts (default 2)")
     c.add_argument("--contact-bound", type=_number, default=CONTACT_BOUND, metavar="RAD",
-                   help="both planners: largest polar angle of the contact point from the south pole "
+                   help="both planners: largest polar angle of the contact point from the south pole, in (0, pi/2) "
                         "(default %.4g rad = 80 deg)" % CONTACT_BOUND)
     c.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("both results"))
     c.add_argument("--plot", metavar="FILE.png", help="both contact paths and their omega, rotor rates, torques")
