@@ -8,7 +8,8 @@
    open against closed loop, with and without measurement noise (median and 95th percentile).
 3. The torque-driven plant against the rate-driven one on the same plans.
 
-Run: ``python scripts/closed_loop.py [--out-dir results] [--seeds 10] [--workers 2] [--quick] [--report-only]``.
+Run: ``python scripts/closed_loop.py [--out-dir results] [--seeds 10] [--workers 2] [--scheduler ADDRESS] [--quick]
+[--report-only]``.
 """
 
 from __future__ import annotations
@@ -93,13 +94,13 @@ def issue_case(seeds, workers):
     return {"model_k": model.k, "real_k": real.k, "goal": GOAL, "steps": STEPS, "rows": rows, "noise": noise}
 
 
-def monte_carlo(seeds, workers, plant="rates", errors=ERRORS, noises=(0.0, NOISE)):
+def monte_carlo(seeds, workers, plant="rates", errors=ERRORS, noises=(0.0, NOISE), scheduler=None):
     cases = [{"kind": kind, "error": err, "seed": s, "noise": nz, "plant": plant, "steps": STEPS,
               "piece_duration": PIECE}
              for kind in ("k", "J_r") for err in errors for nz in noises for s in range(seeds)]
     b, prog = bar(f"Monte Carlo, {plant} plant")
     try:
-        results = run_cases(cases, workers, prog)
+        results = run_cases(cases, workers, prog, scheduler=scheduler)
     finally:
         b.close()
     rows = []
@@ -183,6 +184,8 @@ def main():
     ap.add_argument("--seeds", type=int, default=10, help="Monte Carlo runs per row (default 10)")
     ap.add_argument("--torque-seeds", type=int, default=5, help="runs per row of the torque plant (default 5)")
     ap.add_argument("--workers", type=int, default=2, help="processes (default 2)")
+    ap.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                    help="run the Monte Carlo on this Dask distributed scheduler (pip install 'rollplan[distributed]')")
     ap.add_argument("--quick", action="store_true", help="2 seeds, errors 1 and 10 %% only (a smoke test)")
     ap.add_argument("--report-only", action="store_true",
                     help="only write closed_loop.md and .png again from closed_loop.json")
@@ -198,8 +201,9 @@ def main():
     t0 = time.perf_counter()
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     issue = issue_case(seeds, args.workers)
-    mc_rows, mc_runs = monte_carlo(seeds, args.workers, errors=errors)
-    tq_rows, tq_runs = monte_carlo(tseeds, args.workers, "torques", errors=(errors[0], errors[-1]), noises=(0.0,))
+    mc_rows, mc_runs = monte_carlo(seeds, args.workers, errors=errors, scheduler=args.scheduler)
+    tq_rows, tq_runs = monte_carlo(tseeds, args.workers, "torques", errors=(errors[0], errors[-1]), noises=(0.0,),
+                                   scheduler=args.scheduler)
     tvr, mismatch = torque_vs_rate()
     data = {"issue_case": issue, "monte_carlo_rates": mc_rows, "monte_carlo_torques": tq_rows, "runs_rates": mc_runs,
             "runs_torques": tq_runs, "torque_vs_rate": tvr, "open_loop_by_plant": mismatch, "seeds": seeds,

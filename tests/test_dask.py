@@ -111,3 +111,19 @@ def test_unreachable_scheduler_is_bad_input(tmp_path, monkeypatch, capsys):
                      "--scheduler", "tcp://127.0.0.1:9"]) == 2
     err = capsys.readouterr().err
     assert "cannot be reached" in err and len(err.strip().splitlines()) == 1
+
+
+def test_closed_loop_monte_carlo_on_the_cluster_equals_local(cluster):
+    """The closed-loop study's Monte Carlo (issue 13) is a map of one function over cases: on the cluster it
+    gives the same runs, in the same order, as in this process (deterministic seeds, same arithmetic)."""
+    from rollplan.studies.closed_loop import run_cases
+
+    cases = [{"kind": kind, "error": 0.05, "seed": seed, "noise": 0.0, "plant": "rates", "steps": 2,
+              "piece_duration": 2.0} for kind, seed in (("k", 0), ("J_r", 1))]
+    here = run_cases(cases, workers=1)
+    there = run_cases(cases, scheduler=cluster)
+    for a, b in zip(here, there, strict=True):
+        assert a["failed"] is None and b["failed"] is None
+        assert (a["kind"], a["seed"], a["open"], a["closed"], a["estimated_k"]) == \
+            (b["kind"], b["seed"], b["open"], b["closed"], b["estimated_k"])
+        assert a["closed"] < 0.05 * a["open"]   # the feedback works on the cluster as here

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 
 import numpy as np
@@ -23,6 +22,7 @@ from ..execution.feedback import execute
 from ..execution.plants import disturbance
 from ..planners.geometric import plan as make_plan
 from ..robot import Robot
+from .executor import map_in_order
 
 __all__ = ["ISSUE_MODEL", "issue_real_robot", "robot_with_error", "random_goal", "run_case", "run_cases",
            "summarize"]
@@ -85,32 +85,15 @@ def run_case(case: dict) -> dict:
     return out
 
 
-def run_cases(cases, workers: int = 2, progress=None) -> list:
-    """:func:`run_case` over ``cases`` in ``workers`` local processes (1: in this process), in order.
+def run_cases(cases, workers: int = 2, progress=None, scheduler: str | None = None) -> list:
+    """:func:`run_case` over ``cases``, in order: in this process (``workers`` 1), in ``workers`` local
+    processes, or on the Dask cluster at ``scheduler`` (:func:`rollplan.studies.executor.map_in_order`).
 
-    ``progress(done, total)`` after each run. Ctrl-C cancels the runs not started and stops the pool.
+    ``progress(done, total)`` after each run. Ctrl-C cancels the runs not started and stops the workers.
     """
-    cases = list(cases)
-    if workers <= 1:
-        out = []
-        for i, c in enumerate(cases):
-            out.append(run_case(c))
-            if progress:
-                progress(i + 1, len(cases))
-        return out
-    pool = ProcessPoolExecutor(workers)
-    try:
-        futures = [pool.submit(run_case, c) for c in cases]
-        for i, f in enumerate(futures):
-            f.result()
-            if progress:
-                progress(i + 1, len(cases))
-        return [f.result() for f in futures]
-    except KeyboardInterrupt:
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+    report = None if progress is None else (lambda label, done, total: progress(done, total))
+    return map_in_order(run_case, list(cases), jobs=workers, scheduler=scheduler, progress=report,
+                        label="closed-loop runs")
 
 
 def summarize(results, key: str) -> dict:
