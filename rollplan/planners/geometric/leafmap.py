@@ -57,13 +57,13 @@ follow it line by line.
 from __future__ import annotations
 
 import math
-import sys
 from functools import lru_cache
 
 import numpy as np
 
 from ...core.curves import A_MAX
 from ...problem import K_MAX
+from ...progress import report
 
 __all__ = ["ORDER", "BUCKETS", "progress", "panels_for", "gauss_nodes", "turn", "turn_dr", "turn_inverse",
            "displacement", "signed_length", "leaf_values", "step_values"]
@@ -78,13 +78,25 @@ assert BUCKETS[-1][0] >= K_MAX
 _TWO_PI = 2.0 * math.pi
 
 
-def progress(total: int, label: str):
-    """A tqdm bar on stderr that appears only if the work lasts over a second (None without tqdm)."""
-    try:
-        from tqdm import tqdm
-    except ImportError:  # pragma: no cover
-        return None
-    return tqdm(total=total, desc=label, file=sys.stderr, delay=1.0, leave=False)
+class _Reported:
+    """Units of work done, passed on to :func:`rollplan.progress.report`."""
+
+    def __init__(self, total: int, label: str) -> None:
+        self.total, self.label, self.done = int(total), label, 0
+
+    def update(self, n: int) -> None:
+        self.done += int(n)
+        report(self.label, self.done, self.total)
+
+    def close(self) -> None:
+        """Nothing to release (the display belongs to the caller's :class:`rollplan.progress.Progress`)."""
+
+
+def progress(total: int, label: str) -> _Reported:
+    """Progress of ``total`` units of work, shown by :func:`rollplan.progress.report`: by the command's
+    display (a bar on a terminal, periodic lines in a log, after a few seconds), by nothing in the API
+    unless the caller installs one (:func:`rollplan.progress.reporting`)."""
+    return _Reported(total, label)
 
 
 def panels_for(k: float) -> int:
