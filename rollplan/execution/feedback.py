@@ -62,9 +62,9 @@ def robot_from_inertias(radius: float, j_xx: float, j_zz: float, j_r: float, lik
 
     ``M = (Jxx - Jzz) / R^2``; the split of ``Jzz - J_r = 2/3 m_o R^2 + 2 J_p`` (14) between shell
     and transverse rotor inertia enters no equation: J_p is taken from ``like`` when that gives a
-    possible robot (:class:`~rollplan.robot.Robot`: ``0 <= m_o <= M``, ``J_r <= 2 J_p``, ``J_r + 2 J_p
-    <= 2 (M - m_o) R^2``), otherwise the rotors are thin disks (``2 J_p = J_r``, the least J_p allowed)
-    and the shell takes the rest. Inertias that no possible robot has (``Jzz < 2 J_r``, or too little
+    possible robot (one that :class:`~rollplan.robot.Robot`'s own checks accept: ``m_o <= M``, ``J_r <=
+    2 J_p``, ``J_r + 2 J_p <= 2 (M - m_o) R^2``), otherwise the rotors are thin disks (``2 J_p = J_r``,
+    the least J_p allowed) and the shell takes the rest. Inertias that no possible robot has (``Jzz < 2 J_r``, or too little
     mass left for the rotors) are refused. The limits of ``like`` are kept.
     """
     if not (j_xx > j_zz > j_r > 0):
@@ -75,22 +75,16 @@ def robot_from_inertias(radius: float, j_xx: float, j_zz: float, j_r: float, lik
                          "(a rotor, a body of revolution, has J_r <= 2 J_p)")
     r2 = radius * radius
     mass = (j_xx - j_zz) / r2
-
-    def possible(jp):
-        m_o = 1.5 * (j_zz - 2 * jp - j_r) / r2
-        return (0 <= m_o <= mass and j_r <= 2 * jp and j_r + 2 * jp <= 2 * (mass - m_o) * r2), m_o
-
-    jp = like.rotor_inertia_transverse if like is not None else 0.5 * j_r
-    ok, m_o = possible(jp)
-    if not ok:
-        jp = 0.5 * j_r
-        ok, m_o = possible(jp)
-    if not ok:
-        raise InputError(f"inertias Jxx = {j_xx!r}, Jzz = {j_zz!r}, J_r = {j_r!r} are not those of a possible robot: "
-                         "the rotors need mass inside the sphere (J_r + 2 J_p <= 2 (M - m_o) R^2)")
     limits = {} if like is None else {"max_rotor_rate": like.max_rotor_rate, "max_rotor_torque": like.max_rotor_torque}
-    return Robot(radius=radius, mass_total=mass, mass_shell=m_o, rotor_inertia_axial=j_r,
-                 rotor_inertia_transverse=jp, **limits)
+    refusal = None
+    for jp in ([like.rotor_inertia_transverse] if like is not None else []) + [0.5 * j_r]:
+        try:   # the robot's own checks decide what is possible
+            return Robot(radius=radius, mass_total=mass, mass_shell=1.5 * (j_zz - 2 * jp - j_r) / r2,
+                         rotor_inertia_axial=j_r, rotor_inertia_transverse=jp, **limits)
+        except InputError as exc:
+            refusal = exc
+    raise InputError(f"inertias Jxx = {j_xx!r}, Jzz = {j_zz!r}, J_r = {j_r!r} are not those of a possible robot: "
+                     f"{refusal}")
 
 
 @dataclass

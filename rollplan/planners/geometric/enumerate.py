@@ -62,9 +62,10 @@ from typing import NamedTuple
 import numpy as np
 
 from ...core.curves import A_MAX
+from ...progress import report
 from . import leafmap
 from .brackets import target_shift
-from .leafmap import progress, signed_length, turn, turn_dr, turn_inverse
+from .leafmap import signed_length, turn, turn_dr, turn_inverse
 
 __all__ = ["K_MONOTONE", "PHASE_STEP", "HERMITE_REL", "SAFETY", "MIN_WIDTH", "Branch", "Root", "branches",
            "branch_values", "x_of_length", "roots", "cache_dir", "rho_table"]
@@ -214,13 +215,9 @@ def _build_rho_table(k: float) -> RhoTable:
     mid = 0.5 * (r[:-1] + r[1:])
     both = np.concatenate([r, mid])
     rho, drho = np.empty(both.size), np.empty(both.size)
-    bar = progress(both.size, f"leaf table (k = {k:g})")
     for i in range(0, both.size, _TABLE_CHUNK):
         rho[i:i + _TABLE_CHUNK], drho[i:i + _TABLE_CHUNK] = signed_length(both[i:i + _TABLE_CHUNK], k, derivative=True)
-        if bar is not None:
-            bar.update(min(_TABLE_CHUNK, both.size - i))
-    if bar is not None:
-        bar.close()
+        report(f"leaf table (k = {k:g})", min(i + _TABLE_CHUNK, both.size), both.size)
     n = r.size
     t = RhoTable(float(k), r, rho[:n], drho[:n], 0.0)
     err = np.abs(rho_lookup(mid, t)[0] - rho[n:]).max()

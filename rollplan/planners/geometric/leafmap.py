@@ -63,9 +63,8 @@ import numpy as np
 
 from ...core.curves import A_MAX
 from ...problem import K_MAX
-from ...progress import report
 
-__all__ = ["ORDER", "BUCKETS", "progress", "panels_for", "gauss_nodes", "turn", "turn_dr", "turn_inverse",
+__all__ = ["ORDER", "BUCKETS", "panels_for", "gauss_nodes", "turn", "turn_dr", "turn_inverse",
            "displacement", "signed_length", "leaf_values", "step_values"]
 
 #: Gauss-Legendre nodes per panel.
@@ -76,27 +75,6 @@ BUCKETS = ((5.0, 2), (10.0, 3), (20.0, 4), (30.0, 6), (40.0, 7), (50.0, 9), (75.
 assert BUCKETS[-1][0] >= K_MAX
 
 _TWO_PI = 2.0 * math.pi
-
-
-class _Reported:
-    """Units of work done, passed on to :func:`rollplan.progress.report`."""
-
-    def __init__(self, total: int, label: str) -> None:
-        self.total, self.label, self.done = int(total), label, 0
-
-    def update(self, n: int) -> None:
-        self.done += int(n)
-        report(self.label, self.done, self.total)
-
-    def close(self) -> None:
-        """Nothing to release (the display belongs to the caller's :class:`rollplan.progress.Progress`)."""
-
-
-def progress(total: int, label: str) -> _Reported:
-    """Progress of ``total`` units of work, shown by :func:`rollplan.progress.report`: by the command's
-    display (a bar on a terminal, periodic lines in a log, after a few seconds), by nothing in the API
-    unless the caller installs one (:func:`rollplan.progress.reporting`)."""
-    return _Reported(total, label)
 
 
 def panels_for(k: float) -> int:

@@ -70,12 +70,13 @@ from ...errors import (
     check_whole,
 )
 from ...problem import Problem, State, arrival_residual, check_k
+from ...progress import report
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from .brackets import find_brackets
 from .certify import CvodesCertifier
 from .enumerate import K_MONOTONE, branches, roots
-from .leafmap import progress, step_values
+from .leafmap import step_values
 from .leaves import LeafTables
 from .refine import SOLVER_ERROR_STATUSES, SOLVERS, step_residual
 
@@ -349,43 +350,38 @@ class GeometricPhasePlanner:
         # is certified, only lengths below it are searched, and no branch whose smallest a + b is not
         # below it is visited (the first root of a branch in x is its shortest)
         best = math.inf
-        bar = progress(len(brs), f"search (k = {k:g}, {len(brs)} branches)")
+        label = f"search (k = {k:g}, {len(brs)} branches)"
         visited = 0
-        try:
-            start, size = 0, 4
-            while start < len(brs):
-                chunk = [br for br in brs[start:start + size] if br.y0 < best]
-                start, size = start + size, min(2 * size, _CHUNK)
-                if not chunk:
-                    if not all_solutions:
-                        break       # y0 grows along brs: nothing left can be shorter
-                    continue
-                visited += len(chunk)
-                cands = roots(chunk, k, first_only=not all_solutions,
-                              lengths=(0.0, math.inf if all_solutions else best))
-                for r in cands:
-                    if not all_solutions and r.a + r.b >= best:
+        start, size = 0, 4
+        while start < len(brs):
+            chunk = [br for br in brs[start:start + size] if br.y0 < best]
+            start, size = start + size, min(2 * size, _CHUNK)
+            if not chunk:
+                if not all_solutions:
+                    break       # y0 grows along brs: nothing left can be shorter
+                continue
+            visited += len(chunk)
+            cands = roots(chunk, k, first_only=not all_solutions,
+                          lengths=(0.0, math.inf if all_solutions else best))
+            for r in cands:
+                if not all_solutions and r.a + r.b >= best:
+                    break
+                queue = [r]
+                while queue:   # a branch's next roots only if its first is rejected
+                    q = queue.pop(0)
+                    tried += 1
+                    cand = self._certified(problem, (q.a, q.b), q.m - turns, target, q.kind, 0, "enumeration")
+                    if cand[1].passed:
+                        found.append(cand)
+                        if not all_solutions:
+                            best = min(best, q.a + q.b)
                         break
-                    queue = [r]
-                    while queue:   # a branch's next roots only if its first is rejected
-                        q = queue.pop(0)
-                        tried += 1
-                        cand = self._certified(problem, (q.a, q.b), q.m - turns, target, q.kind, 0, "enumeration")
-                        if cand[1].passed:
-                            found.append(cand)
-                            if not all_solutions:
-                                best = min(best, q.a + q.b)
-                            break
-                        log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual %.2e > %.0e",
-                                    q.m - turns, q.a, q.b, cand[1].residual, self.tol)
-                        rejected.append(cand[1].residual)
-                        if not all_solutions and q is r:
-                            queue = roots([next(b_ for b_ in chunk if b_.m == r.m)], k)[1:]
-                if bar is not None:
-                    bar.update(len(chunk))
-        finally:
-            if bar is not None:
-                bar.close()
+                    log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual %.2e > %.0e",
+                                q.m - turns, q.a, q.b, cand[1].residual, self.tol)
+                    rejected.append(cand[1].residual)
+                    if not all_solutions and q is r:
+                        queue = roots([next(b_ for b_ in chunk if b_.m == r.m)], k)[1:]
+            report(label, visited, len(brs))
         elapsed = time.perf_counter() - t_start
         if not found:
             self._raise_if_rejected(where, rejected)
