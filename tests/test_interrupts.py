@@ -104,11 +104,11 @@ def test_planner_is_interrupted_not_sent_to_another_branch(tmp_path, monkeypatch
     assert time.perf_counter() - timer.sent[0] < 5.0
 
 
-def fresh_cache_env():
-    """The environment with an empty leaf-table cache: a k = 99 plan then builds its table (seconds of work)."""
-    import tempfile
-
-    return {**os.environ, "ROLLPLAN_CACHE_DIR": tempfile.mkdtemp(prefix="rollplan-cache-")}
+def fresh_cache_env(folder):
+    """The environment with an empty leaf-table cache in ``folder`` (made here): a k = 99 plan then builds its
+    table (seconds of work)."""
+    folder.mkdir()
+    return {**os.environ, "ROLLPLAN_CACHE_DIR": str(folder)}
 
 
 def run_and_interrupt(argv, delay, wait_for=None, env=None):
@@ -142,11 +142,12 @@ def run_and_interrupt(argv, delay, wait_for=None, env=None):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("delay", [1.4, 1.8, 2.2])
-def test_ctrl_c_stops_the_solver_loop_with_exit_130(delay):
+def test_ctrl_c_stops_the_solver_loop_with_exit_130(delay, tmp_path):
     """`plan --to 0 1 --k 99` with no leaf table on disk builds its table and searches 511 branches for
     seconds; SIGINT at moments of that work exits 130 within a second or two (the machine may be loaded),
     with "rollplan: interrupted" as the last line on stderr and no traceback."""
-    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99"], delay, env=fresh_cache_env())
+    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99"], delay,
+                                              env=fresh_cache_env(tmp_path / "cache"))
     assert code == 130, err
     assert elapsed < 2.0
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
@@ -154,7 +155,7 @@ def test_ctrl_c_stops_the_solver_loop_with_exit_130(delay):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("launcher", ["module", "script"])
-def test_ctrl_c_during_start_up_is_one_line_and_exit_130(launcher):
+def test_ctrl_c_during_start_up_is_one_line_and_exit_130(launcher, tmp_path):
     """SIGINT while `python -m rollplan.cli` compiled and ran cli.py (after the package had loaded) gave a
     KeyboardInterrupt traceback and exit -2: the start-up guard now holds until cli.main takes over. Moments from
     0.3 s (the interpreter's own start-up, before rollplan's first line, is Python's) to well into planning."""
@@ -166,7 +167,8 @@ def test_ctrl_c_during_start_up_is_one_line_and_exit_130(launcher):
             pytest.skip("the rollplan console script is not installed next to this Python")
     for delay in (0.3, 0.6, 0.9, 1.2, 1.6, 2.0):
         proc = subprocess.Popen([*command, "plan", "--to", "0", "1", "--k", "99"], stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, text=True, env=fresh_cache_env())
+                                stderr=subprocess.PIPE, text=True,
+                                env=fresh_cache_env(tmp_path / f"cache{delay}"))
         time.sleep(delay)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=60)
