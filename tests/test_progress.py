@@ -88,5 +88,5 @@ def test_report_reaches_the_installed_progress_only():
 def test_the_cvodes_trace_of_many_steps_reports(planner):
     buf = io.StringIO()
     with reporting(Progress(stream=buf, interval=0.0)):
-        planner.certifier.final(0.3, 0.3, 2.5, 0.0, 3)
+        planner.cvodes.final(0.3, 0.3, 2.5, 0.0, 3)
     assert re.findall(r"CVODES trace, steps: (\d)/3", buf.getvalue()) == ["1", "2", "3"]

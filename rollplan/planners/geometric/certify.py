@@ -1,24 +1,199 @@
 """Certification of a geometric-phase plan: an independent integration of all n steps.
 
-:class:`CvodesCertifier` traces the rotated figure eight (31) ``n`` times with
-CasADi's CVODES (Adams, relative tolerance 3e-15) on the full right side of
-(28)-(30): it does not use the spectral quadrature, the leaf tables or the
-n-step law (33) the planner relies on, and composes the steps by integration.
-At this tolerance it agrees with scipy's DOP853 on the printed equations to
-about 1e-11 over ten steps of large leaves, far below the 1e-9 it certifies.
+Two certifiers, chosen by name (:data:`CERTIFIERS`); both integrate the model's curve ODE
+(28)-(30) along the rotated figure eight ``Rz(gamma) c(a, b, theta)`` (31), leaf after leaf, for
+all ``n`` steps, from zero, and give the final state and a bound of its integration error:
+
+``"rk8"`` (the default, :class:`RK8Certifier`)
+    Fixed-step explicit Runge-Kutta of order 8 (the 12-stage order-8 formula of DOP853,
+    :func:`rollplan.core.integrate.rk8_step`), compiled to C (:mod:`rollplan.core.compiled`). The
+    whole motion is integrated twice, with ``N`` and with ``2N`` steps per leaf, and
+
+        estimate = |x_2N - x_N| + ROUNDING_FACTOR eps (1 + max |psi|) sqrt(2 n 2N)
+
+    bounds the error of ``x_2N`` (u_a, v_a, psi; Euclidean norm). For an order-8 method in its
+    asymptotic range the error of ``x_2N`` is about ``|x_2N - x_N| / 255``: counting the whole
+    difference also covers the pre-asymptotic range; the second term bounds the rounding errors,
+    which the difference of two runs does not show (they add like a random walk over the steps
+    and reach (u_a, v_a) through psi). While the estimate exceeds ``tol / 4`` the step count is
+    doubled (up to :data:`MAX_STEPS_PER_LEAF`), so acceptance never rests on the starting count
+    (:func:`initial_steps`, a speed heuristic). The steps are equal in a graded variable ``tau``,
+    ``phi = tau + 2 atan(beta sin tau / (1 - beta cos tau))`` with ``beta(r) = r^2 / (1 - r^2 +
+    sqrt(1 - 2 r^2))`` (:func:`grading`): short steps near ``phi = pi``, where the leaf comes
+    closest to the body equator (the singularity of (30)) and psi turns fastest.
+``"cvodes"`` (:class:`CvodesCertifier`)
+    CasADi's CVODES (Adams, relative tolerance 3e-15) on the same equations in ``phi``; it gives
+    no error estimate (0), its tolerance lies far below the certificate's.
+
+Why the certificate is independent of the planner's step map. The planner solves (32)-(33) on
+the closed-form leaf map (:mod:`.leafmap`): the turn ``E(r, k)`` in closed form and the
+displacement as a Gauss-Legendre quadrature in the variable ``chi`` of a reduced integral,
+composed into n steps by the rotation and mirror rules of (28)-(30). The certificate shares
+only the model (:mod:`rollplan.core.model`, the single source of truth) and the plan's
+parameters: it integrates the model's full right side (28)-(30) (through the (u_o, v_o) chart,
+(18)-(19), (13) and Montana's (6), (7), (10)) in time-like ``tau``, by Runge-Kutta time stepping
+whose errors propagate through psi into (u_a, v_a); the -y leaf is integrated on its own curve,
+not mirrored; gamma enters through the curve, not by rotating a result; the n steps are
+composed by integrating on from the previous end state, never by the n-step law.
 """
 
 from __future__ import annotations
 
+import math
+from functools import lru_cache
+from pathlib import Path
+
 import casadi as ca
 import numpy as np
 
-from ...core import model
-from ...core.curves import figure_eight, rotated_point
-from ...core.integrate import CvodesIntegrator
+from ...core import compiled as _compiled_mod
+from ...core import curves, integrate, model
+from ...core.compiled import compiled_lazy
+from ...core.curves import circle_point, figure_eight, rotated_point
+from ...core.integrate import CvodesIntegrator, rk8_step
+from ...errors import check_choice
 from ...problem import State
 
-__all__ = ["CvodesCertifier"]
+__all__ = ["CERTIFIERS", "DEFAULT_CERTIFIER", "MAX_STEPS_PER_LEAF", "REFINE_BELOW", "ROUNDING_FACTOR", "grading",
+           "initial_steps", "rounding_allowance", "RK8Certifier", "CvodesCertifier", "certifier"]
+
+#: Largest number of RK steps per leaf of the finer of the two integrations.
+MAX_STEPS_PER_LEAF = 1 << 14
+#: The step count is doubled while the estimate exceeds this fraction of the tolerance.
+REFINE_BELOW = 0.25
+#: Safety factor of :func:`rounding_allowance`.
+ROUNDING_FACTOR = 4.0
+_TWO_PI = 2.0 * math.pi
+
+
+def grading(r):
+    """``beta(r) = r^2 / (1 - r^2 + sqrt(1 - 2 r^2))``: the step near ``phi = pi`` is ``(1 - beta) /
+    (1 + beta) = sqrt(1 - 2 r^2)`` times the mean step, the distance scale of the equator singularity of
+    (30) there. Floats or CasADi expressions."""
+    lib = ca if isinstance(r, (ca.SX, ca.MX)) else np
+    return r * r / (1.0 - r * r + lib.sqrt(1.0 - 2.0 * r * r))
+
+
+def _leaf_rhs() -> ca.Function:
+    """``f(tau, x[3], p[4]) -> dx/dtau``: (28)-(30) along one leaf in the graded variable, ``p = (r, side,
+    k, gamma)``: the circle (35) of radius r on the side ``side`` (+1: +y, -1: -y) rotated by gamma (31)."""
+    tau = ca.SX.sym("tau")
+    x = ca.SX.sym("x", 3)
+    p = ca.SX.sym("p", 4)
+    r, side, k, gamma = p[0], p[1], p[2], p[3]
+    beta = grading(r)
+    phi = tau + 2.0 * ca.atan(beta * ca.sin(tau) / (1.0 - beta * ca.cos(tau)))
+    point = model.rot_z(gamma) @ circle_point(r, phi, side)
+    rhs, psi = model.curve_rhs(point, tau, k)        # d/dtau by AD through phi(tau)
+    rhs = ca.cse(ca.substitute(rhs, psi, x[2]))      # the composed model repeats its sin/cos
+    return ca.Function("cert_rhs", [tau, x, p], [rhs], ["tau", "x", "p"], ["xdot"])
+
+
+def _eight_pair(steps: int) -> ca.Function:
+    """``(xc, xf, pa, pb) -> (yc, yf, mid)``: one figure eight integrated from ``xc`` with ``steps`` and
+    from ``xf`` with ``2 steps`` RK8 steps per leaf; ``mid`` is the finer state between the leaves;
+    ``pa = (a, 1, k, gamma)``, ``pb = (b, -1, k, gamma)``."""
+    rk = rk8_step(_leaf_rhs())
+    x, t, h, p = ca.SX.sym("x", 3), ca.SX.sym("t"), ca.SX.sym("h"), ca.SX.sym("p", 4)
+    one = ca.Function("cert_step", [x, t, h, p], [ca.cse(rk(x, t, h, p))])
+    coarse, fine = one.mapaccum("cert_coarse", steps), one.mapaccum("cert_fine", 2 * steps)
+    xc, xf = ca.MX.sym("xc", 3), ca.MX.sym("xf", 3)
+    pa, pb = ca.MX.sym("pa", 4), ca.MX.sym("pb", 4)
+    hc, hf = _TWO_PI / steps, _TWO_PI / (2 * steps)
+    tc, tf = ca.DM(np.arange(steps) * hc).T, ca.DM(np.arange(2 * steps) * hf).T
+    yc, yf, mids = xc, xf, []
+    for p_ in (pa, pb):
+        yc = coarse(yc, tc, hc, p_)[:, -1]
+        yf = fine(yf, tf, hf, p_)[:, -1]
+        mids.append(yf)
+    return ca.Function(f"cert_eight_{steps}", [xc, xf, pa, pb], [yc, yf, mids[0]], ["xc", "xf", "pa", "pb"],
+                       ["yc", "yf", "mid"])
+
+
+#: The files whose code defines the certificate's functions (the key of their compiled libraries).
+_SOURCES = tuple(Path(m.__file__) for m in (model, curves, integrate, _compiled_mod)) + (Path(__file__),)
+
+
+@lru_cache(maxsize=16)
+def _eight_pair_function(steps: int, compile: bool) -> ca.Function:
+    if not compile:
+        return _eight_pair(steps)
+    return compiled_lazy(f"cert_eight_{steps}", lambda: _eight_pair(steps), f"steps={steps}", _SOURCES)
+
+
+def initial_steps(a: float, b: float, k: float, steps: int = 1, tol: float = 1e-9) -> int:
+    """RK steps per leaf to start with: a power of two, at least 16 (doubled on demand).
+
+    A speed heuristic only (the estimate decides acceptance): ``max(10 + 14.5 r / s^1.5, 1.45 k r c /
+    s)`` for the larger radius ``r`` (``c = sqrt(1 - r^2)``, ``s = sqrt(1 - 2 r^2)``); the first term
+    resolves the approach to the equator near ``phi = pi``, the second the fastest turn of psi, about
+    ``k c / s`` per unit of ``tau``; scaled by ``(n 1e-9 / tol)^(1/8)`` (the global error of n steps
+    grows about linearly in n).
+    """
+    r = max(a, b)
+    s = math.sqrt(max(1.0 - 2.0 * r * r, 1e-12))
+    c = math.sqrt(1.0 - r * r)
+    need = max(10.0 + 14.5 * r / s ** 1.5, 1.45 * k * r * c / s) * (steps * 1e-9 / tol) ** 0.125
+    return 1 << max(4, math.ceil(math.log2(need)))
+
+
+def rounding_allowance(psi_scale: float, steps: int, steps_per_leaf: int) -> float:
+    """Bound of the rounding error of the finer run (module docstring):
+    ``ROUNDING_FACTOR eps (1 + psi_scale) sqrt(2 n N_fine)``."""
+    return ROUNDING_FACTOR * float(np.finfo(float).eps) * (1.0 + psi_scale) * math.sqrt(2.0 * steps * steps_per_leaf)
+
+
+@lru_cache(maxsize=1)
+def _end_contact() -> ca.Function:
+    """``(b, gamma) -> (u_o, v_o)`` of the figure eight's end point (24)-(25) (the pole, up to rounding)."""
+    b, gamma = ca.SX.sym("b"), ca.SX.sym("gamma")
+    u, v = model.contact_coordinates(model.rot_z(gamma) @ circle_point(b, _TWO_PI, -1.0))
+    return ca.Function("cert_end_contact", [b, gamma], [u, v])
+
+
+class RK8Certifier:
+    """Final state of n traces of the figure eight (a, b) rotated by gamma, with an error bound, by the
+    compiled fixed-step RK8 integration with step doubling (module docstring); units of R.
+
+    Parameters
+    ----------
+    compile : bool
+        Compile the integration to C (cached on disk; :mod:`rollplan.core.compiled`); False runs
+        CasADi's virtual machine.
+    """
+
+    name = "rk8"
+
+    def __init__(self, compile: bool = True) -> None:
+        self.compile = bool(compile)
+
+    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = 1e-9):
+        """``(final State, estimate, steps per leaf)``: the finer run's final state (u_o, v_o of the end
+        point), the bound of its error [R, rad] and its RK steps per leaf."""
+        n = initial_steps(a, b, k, steps, tol)
+        pa = np.array([a, 1.0, k, gamma])
+        pb = np.array([b, -1.0, k, gamma])
+        while True:
+            f = _eight_pair_function(n, self.compile)
+            xc = xf = np.zeros(3)
+            scale = 0.0
+            for _ in range(int(steps)):
+                yc, yf, mid = f.call([xc, xf, pa, pb])
+                xc, xf = np.array(yc).ravel(), np.array(yf).ravel()
+                scale = max(scale, abs(float(mid[2])), abs(xf[2]))
+            est = float(np.linalg.norm(xf - xc)) + rounding_allowance(scale, steps, 2 * n)
+            if not math.isfinite(est):
+                est = math.inf
+                break
+            if est <= REFINE_BELOW * tol or 4 * n > MAX_STEPS_PER_LEAF:
+                break
+            n *= 2
+        u_o, v_o = (float(v) for v in _end_contact()(b, gamma))
+        return State(float(xf[0]), float(xf[1]), float(xf[2]), u_o, v_o), est, 2 * n
+
+    def final(self, a: float, b: float, k: float, gamma: float, steps: int) -> State:
+        """(u_a, v_a, psi, u_o, v_o) after ``steps`` traces from zero [R, rad]."""
+        return self.certify(a, b, k, gamma, steps)[0]
 
 
 class CvodesCertifier:
@@ -29,11 +204,28 @@ class CvodesCertifier:
     def __init__(self, reltol: float = 3e-15, abstol: float = 1e-16) -> None:
         self.curve = figure_eight()
         self.integrator = CvodesIntegrator(self.curve, reltol=reltol, abstol=abstol)
-        self._ints = self.integrator.integrators(1)
+        self._ints = None
 
     def final(self, a: float, b: float, k: float, gamma: float, steps: int) -> State:
         """(u_a, v_a, psi, u_o, v_o) after ``steps`` traces from zero [R, rad]."""
+        if self._ints is None:
+            self._ints = self.integrator.integrators(1)
         _, xs = self.integrator.trace([a, b], k, gamma, steps, integrators=self._ints)
         end = rotated_point(self.curve.pieces[-1], 2 * np.pi, ca.DM([a, b]), gamma)
         u_o, v_o = (float(c) for c in model.contact_coordinates(end))
         return State(*(float(v) for v in xs[-1]), u_o, v_o)
+
+    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = 1e-9):
+        """``(final State, 0.0, 0)``: CVODES gives no error estimate (module docstring)."""
+        return self.final(a, b, k, gamma, steps), 0.0, 0
+
+
+#: Certifiers by name: ``CERTIFIERS[name]()`` has ``name``, ``final(a, b, k, gamma, steps) -> State`` and
+#: ``certify(a, b, k, gamma, steps, tol) -> (State, error bound, steps per leaf)`` (units of R, rad).
+CERTIFIERS = {"rk8": RK8Certifier, "cvodes": CvodesCertifier}
+DEFAULT_CERTIFIER = "rk8"
+
+
+def certifier(name: str = DEFAULT_CERTIFIER):
+    """A new certifier by name from :data:`CERTIFIERS` (InputError naming the choices otherwise)."""
+    return CERTIFIERS[check_choice("certifier", name, CERTIFIERS)]()

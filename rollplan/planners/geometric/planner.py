@@ -74,11 +74,11 @@ from ...progress import report
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from .brackets import find_brackets
-from .certify import CvodesCertifier
+from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
 from .enumerate import K_MONOTONE, branches, roots
-from .leafmap import step_values
+from .leafmap import panels_for, step_values
 from .leaves import LeafTables
-from .refine import SOLVER_ERROR_STATUSES, SOLVERS, step_residual
+from .refine import SOLVER_ERROR_STATUSES, SOLVERS, polisher, step_residual
 
 __all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
 
@@ -88,6 +88,9 @@ log = logging.getLogger(__name__)
 TOLERANCE = 1e-9
 #: Largest number of branches enumerated together.
 _CHUNK = 64
+#: A polished root farther than this from the enumerated one (in a or b [R]) is not taken (the solver
+#: left the root it was started at); the enumerated root is certified instead.
+_POLISH_MOVE = 1e-6
 #: Brackets whose tables' model root lies within this many cell widths of the cell centre are
 #: solved first (see :func:`.brackets.cell_start`).
 _PLAUSIBLE_OFFSET = 1.5
@@ -193,25 +196,38 @@ class GeometricPhasePlanner:
     """Geometric-phase planner for repeated solves (problem class).
 
     Builds nothing a plan does not use: the leaf map is plain numpy with per-k tables
-    (:func:`.enumerate.rho_table`); the spectral step map, the root solver and the leaf tables of
-    the bracketing path (``k < 1/2``) are built on first use.
+    (:func:`.enumerate.rho_table`); the compiled shooting residual and its solver
+    (:func:`.refine.polisher`, per panel count of the leaf map), the certifier's compiled
+    integration, and the spectral step map, root solver and leaf tables of the bracketing path
+    (``k < 1/2``) are built or loaded from the disk cache on first use.
 
     Parameters
     ----------
     method : str
-        Root solver from :data:`.refine.SOLVERS`.
+        Solver of the shooting problem (32)-(33) from :data:`.refine.SOLVERS`: ``"ipopt"`` (the
+        default) or ``"newton"``. For ``k >= 1/2`` it polishes each enumerated root (started there, it
+        needs one or two iterations); for ``k < 1/2`` it refines the brackets.
     nodes : int
         Chebyshev degree per panel of the spectral step map, in [4, 200].
     tol : float
-        Largest certified residual a returned plan may have, in (0, 1e-3].
+        Largest certified residual plus error bound a returned plan may have, in (0, 1e-3].
+    certifier : str
+        Certifier from :data:`.certify.CERTIFIERS`: ``"rk8"`` (the default: compiled RK8 with a
+        step-doubling error bound) or ``"cvodes"``.
     """
 
-    def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE) -> None:
+    def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
+                 certifier: str = DEFAULT_CERTIFIER) -> None:
         self.method = check_choice("method", method, SOLVERS)
         self.tol = check_range("tol", tol, 0.0, 1e-3, low_open=True)
         self.nodes = check_whole("nodes", nodes, 4, 200)
         self.curve = figure_eight()
-        self.certifier = CvodesCertifier()
+        self.certifier = CERTIFIERS[check_choice("certifier", certifier, CERTIFIERS)]()
+
+    @cached_property
+    def cvodes(self) -> CvodesCertifier:
+        """The CVODES integration that samples plans (:meth:`sample`)."""
+        return self.certifier if isinstance(self.certifier, CvodesCertifier) else CvodesCertifier()
 
     # -- the bracketing path (k < 1/2), built on first use ------------------------------
     @cached_property
@@ -309,9 +325,9 @@ class GeometricPhasePlanner:
                 seen.append((float(x[0]), float(x[1]), m))
                 cand = self._certified(problem, x, m - turns, target, str(status), iters)
                 if not cand[1].passed:
-                    log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual %.2e > %.0e",
-                                m - turns, x[0], x[1], cand[1].residual, self.tol)
-                    rejected.append(cand[1].residual)
+                    log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual + bound %.2e > %.0e",
+                                m - turns, x[0], x[1], cand[1].residual + cand[1].error_bound, self.tol)
+                    rejected.append(cand[1].residual + cand[1].error_bound)
                     continue
                 found.append(cand)
                 found.sort(key=lambda c: c[0].a + c[0].b)
@@ -335,7 +351,8 @@ class GeometricPhasePlanner:
         """NoPlanError naming the best certified residual when roots were found but none certified."""
         if rejected:
             raise NoPlanError(f"no certified plan for {where}: {len(rejected)} root(s) of (32)-(33) found, but "
-                              f"their certified residual (best {min(rejected):.1e}) exceeds {self.tol:.0e}; "
+                              f"their certified residual plus error bound (best {min(rejected):.1e}) exceeds "
+                              f"{self.tol:.0e}; "
                               "try more steps")
 
     def _solve_enumerated(self, problem, all_solutions, branch, target, turns, t_start) -> Plan:
@@ -370,15 +387,16 @@ class GeometricPhasePlanner:
                 while queue:   # a branch's next roots only if its first is rejected
                     q = queue.pop(0)
                     tried += 1
-                    cand = self._certified(problem, (q.a, q.b), q.m - turns, target, q.kind, 0, "enumeration")
+                    x, status, iters = self._polish(q, k)
+                    cand = self._certified(problem, x, q.m - turns, target, status, iters)
                     if cand[1].passed:
                         found.append(cand)
                         if not all_solutions:
                             best = min(best, q.a + q.b)
                         break
-                    log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual %.2e > %.0e",
-                                q.m - turns, q.a, q.b, cand[1].residual, self.tol)
-                    rejected.append(cand[1].residual)
+                    log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual + bound %.2e > %.0e",
+                                q.m - turns, q.a, q.b, cand[1].residual + cand[1].error_bound, self.tol)
+                    rejected.append(cand[1].residual + cand[1].error_bound)
                     if not all_solutions and q is r:
                         queue = roots([next(b_ for b_ in chunk if b_.m == r.m)], k)[1:]
             report(label, visited, len(brs))
@@ -392,6 +410,16 @@ class GeometricPhasePlanner:
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
         return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
 
+    def _polish(self, q, k: float):
+        """``((a, b), status, iterations)``: the enumerated root ``q`` polished by the shooting solver
+        (:func:`.refine.polisher`) on the leaf map's residual of (32)-(33); the enumerated root itself
+        (status prefixed ``enumerated:``) when the solver fails or leaves it."""
+        x, status, iters, ok = polisher(self.method, panels_for(k))([q.a, q.b], [k, q.eta, q.h], 1e-6, A_MAX)
+        if ok and abs(x[0] - q.a) <= _POLISH_MOVE and abs(x[1] - q.b) <= _POLISH_MOVE:
+            return (float(x[0]), float(x[1])), str(status), iters
+        log.info("polish of branch m=%d (a=%.6f, b=%.6f) not taken (%s)", q.m, q.a, q.b, status)
+        return (q.a, q.b), f"enumerated:{status}", iters
+
     def _certified(self, problem, x, m, target_r, status, iters, method=None):
         """Gamma from the geometry (module docstring), then the certificate: a tuple for :meth:`_plan`."""
         a, b = float(x[0]), float(x[1])
@@ -399,10 +427,10 @@ class GeometricPhasePlanner:
         shift, eta = complex(shift[0]), float(eta[0])
         total = shift * n_step_sum(eta, problem.steps)
         gamma = float(wrap(math.atan2(target_r[1], target_r[0]) - math.atan2(total.imag, total.real)))
-        final_r = self.certifier.final(a, b, problem.k, gamma, problem.steps)
+        final_r, bound, _ = self.certifier.certify(a, b, problem.k, gamma, problem.steps, self.tol)
         goal_r = problem.scaled(problem.goal)
         residual = arrival_residual(final_r, State(goal_r.u_a, goal_r.v_a, target_r[2]))
-        cert = Certificate(self.certifier.name, final_r.scaled(problem.radius), residual, 0.0, self.tol)
+        cert = Certificate(self.certifier.name, final_r.scaled(problem.radius), residual, bound, self.tol)
         stats = SolverStats(method or self.method, status, iters, 0.0)
         return _Root(a, b, gamma, m, abs(shift), eta), cert, stats
 
@@ -417,7 +445,7 @@ class GeometricPhasePlanner:
         """Sampled trajectory of a plan (CVODES), in the plan's units; ``segment`` = 2 step + leaf."""
         samples_per_leaf = check_whole("samples_per_leaf", samples_per_leaf, 1, 100000)
         ab = [p.a / p.radius, p.b / p.radius]
-        phi, xs = self.certifier.integrator.trace(ab, p.k, p.gamma, p.steps, samples_per_leaf)
+        phi, xs = self.cvodes.integrator.trace(ab, p.k, p.gamma, p.steps, samples_per_leaf)
         pieces = len(self.curve.pieces)
         segment = np.arange(phi.size) // samples_per_leaf
         leaf = segment % pieces
@@ -444,9 +472,10 @@ def _contact_coordinates() -> ca.Function:
 
 
 @lru_cache(maxsize=4)
-def default_planner(method: str = "ipopt") -> GeometricPhasePlanner:
-    """The shared planner of :func:`plan` and :func:`step` for a root solver (built once per process)."""
-    return GeometricPhasePlanner(method)
+def default_planner(method: str = "ipopt", certifier: str = DEFAULT_CERTIFIER) -> GeometricPhasePlanner:
+    """The shared planner of :func:`plan` and :func:`step` for a solver and a certifier (built once per
+    process)."""
+    return GeometricPhasePlanner(method, certifier=certifier)
 
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,

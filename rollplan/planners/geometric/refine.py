@@ -1,50 +1,146 @@
-"""Refinement of bracketed roots of (32)-(33) by a root solver chosen by name.
+"""Root solvers of (32)-(33) chosen by name, and the shooting residual they solve.
 
-Every solver in :data:`SOLVERS` follows one contract: ``SOLVERS[name](residual)``
-takes the residual ``F(ab[2], par[3]) -> (eta(a, b) - eta_m, h(a, b) - h_m)``
-(``par = (k, eta_m, h_m)``) and returns ``solve(x0, par, lbx, ubx) -> (x, status,
-iterations, ok)``: the end point, the solver's status string, its iterations,
-and whether the end point is a candidate root kept inside the box ``[lbx, ubx]``.
-A solve that does not converge says only that its bracket holds no root; the
-statuses in :data:`SOLVER_ERROR_STATUSES` mean the solver itself broke down.
+The residual. One figure eight (+y leaf a, then -y leaf b) from zero turns psi by ``eta(a, b) =
+E(a) - E(b)`` and shifts by ``h(a, b) = |d(a) + exp(-i E(a)) conj(d(b))|`` (:mod:`.leafmap`,
+item 4), so on branch m (32)-(33) read ``F(ab, par) = (eta(a, b) - eta_m, h(a, b) - h_m) = 0`` with
+``par = (k, eta_m, h_m)``. :func:`leaf_residual` builds F in CasADi from the leaf map's formulas: the
+closed-form turn E and the Gauss-Legendre displacement d on the nodes of
+:func:`.leafmap.gauss_nodes` with the panel count of :func:`.leafmap.panels_for` (one function per
+panel count, valid for the k of its bucket), as a kernel mapped over the nodes so that it compiles
+in well under a second; ``tests/test_refine.py`` checks it against the numpy leaf map. Its value
+and Jacobian are compiled to C and cached on disk (:mod:`rollplan.core.compiled`).
+
+The solvers. Every entry of :data:`SOLVERS` follows one contract: ``SOLVERS[name](residual)``
+takes a residual ``F(ab[2], par[3]) -> (2,)`` as above and returns ``solve(x0, par, lbx, ubx) -> (x,
+status, iterations, ok)``: the end point, the solver's status string, its iterations, and whether
+the end point is a candidate root inside the box ``[lbx, ubx]`` (the certificate decides). A solve
+that does not converge says only that its start holds no root; the statuses in
+:data:`SOLVER_ERROR_STATUSES` mean the solver itself broke down.
+
+``"ipopt"`` (the default)
+    IPOPT through CasADi's ``nlpsol`` on the feasibility problem ``min 0 s.t. F = 0, lbx <= ab <=
+    ubx`` (the shooting problem of the design), quiet, with a limited-memory Hessian (the objective
+    is zero; the constraints' curvature is not needed to converge from a start near the root).
+    Started at the enumerated root (:mod:`.enumerate`) it needs one or two iterations.
+``"newton"``
+    CasADi's ``rootfinder`` (plain Newton on F, exact Jacobian).
+
+:func:`polisher` gives the solver of a name on the compiled leaf-map residual of the panel count
+of k: the planner's last step before the certificate.
 """
 
 from __future__ import annotations
+
+import math
+from functools import lru_cache
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
 from ... import interrupts
+from ...core import compiled as _compiled_mod
+from ...core.compiled import compiled_lazy
 from ...core.curves import A_MAX
+from . import leafmap
+from .leafmap import gauss_nodes
 
-__all__ = ["SOLVERS", "SOLVER_ERROR_STATUSES", "ROOT_TOL", "step_residual"]
+__all__ = ["SOLVERS", "SOLVER_ERROR_STATUSES", "ROOT_TOL", "step_residual", "leaf_turn", "leaf_displacement",
+           "leaf_residual", "polisher"]
 
-#: Statuses that mean the solver broke (not that a bracket held no root).
+#: Statuses that mean the solver broke (not that a start held no root).
 SOLVER_ERROR_STATUSES = frozenset({"Invalid_Number_Detected", "Error_In_Step_Computation", "Internal_Error",
                                    "Insufficient_Memory", "Not_Enough_Memory", "Unrecoverable_Exception",
                                    "NonIpopt_Exception_Thrown", "Invalid_Problem_Definition", "Invalid_Option"})
 #: Largest |residual of (32)-(33)| of a solver's end point that is still a candidate root.
 ROOT_TOL = 1e-10
 _NEWTON_NO_ROOT = "no_root_in_bracket"
+_TWO_PI = 2.0 * math.pi
 
 
 def step_residual(step_map: ca.Function) -> ca.Function:
-    """``F(ab[2], par[3]) -> (eta - eta_m, h - h_m)`` of one step from zero, ``par = (k, eta_m, h_m)``."""
+    """``F(ab[2], par[3]) -> (eta - eta_m, h - h_m)`` of one step from zero by a step map
+    ``(x0, ab, k, gamma) -> x_end`` (the spectral map of the bracketing path), ``par = (k, eta_m, h_m)``."""
     ab = ca.SX.sym("ab", 2)
     par = ca.SX.sym("par", 3)
     xf = step_map(ca.DM.zeros(3), ab, par[0], 0)
     return ca.Function("residual", [ab, par], [ca.vertcat(xf[2] - par[1], ca.norm_2(xf[:2]) - par[2])])
 
 
+def _consts(r):
+    c = ca.sqrt(1.0 - r * r)
+    s = ca.sqrt(1.0 - 2.0 * r * r)
+    return c, s, r * r / (c * c + s)
+
+
+def leaf_turn(r, k):
+    """Turn E(r, k) of the +y leaf (CasADi expression; the closed form of :func:`.leafmap.turn`)."""
+    c, s, _ = _consts(r)
+    return _TWO_PI * r * r / (1.0 + c) - 2.0 * _TWO_PI * k * c * r * r / (s * (1.0 + s))
+
+
+def _node_kernel() -> ca.Function:
+    """``(chi, w, r, k) -> w phi'(chi) (cos, sin)(theta)``: one node of the displacement integral of
+    :func:`.leafmap.displacement` (its module docstring)."""
+    chi, w, r, k = (ca.SX.sym(n) for n in ("chi", "w", "r", "k"))
+    c, s, rho = _consts(r)
+    den = 1.0 - rho * ca.cos(chi)
+    q = den * den + (rho * ca.sin(chi)) ** 2
+    phi = chi + 2.0 * ca.atan2(rho * ca.sin(chi), den)
+    jac = (1.0 - rho * rho) / q
+    theta = (1.0 - k) * c * phi + (k * c / s) * chi
+    return ca.Function("gp_node", [chi, w, r, k], [w * jac * ca.cos(theta), w * jac * ca.sin(theta)])
+
+
+
+def leaf_displacement(r, k, panels: int):
+    """Displacement ``(re, im)`` of the +y leaf of radius r (MX expressions) by the Gauss rule of
+    :func:`.leafmap.gauss_nodes` with ``panels`` panels (the rule of :func:`.leafmap.displacement`)."""
+    chi, w = gauss_nodes(panels)
+    kernel = _node_kernel().map(chi.size, "serial")
+    re, im = kernel(ca.DM(chi).T, ca.DM(w).T, r, k)
+    return r * ca.sum2(re), r * ca.sum2(im)
+
+
+def _leaf_residual(panels: int) -> ca.Function:
+    ab = ca.MX.sym("ab", 2)
+    par = ca.MX.sym("par", 3)
+    k = par[0]
+    a, b = ab[0], ab[1]
+    ea, eb = leaf_turn(a, k), leaf_turn(b, k)
+    ua, va = leaf_displacement(a, k, panels)
+    ub, vb = leaf_displacement(b, k, panels)
+    # S = d(a) + exp(-i E(a)) conj(d(b))
+    cs, sn = ca.cos(ea), ca.sin(ea)
+    su = ua + cs * ub - sn * vb
+    sv = va - sn * ub - cs * vb
+    return ca.Function(f"gp_residual_{panels}", [ab, par],
+                       [ca.vertcat(ea - eb - par[1], ca.sqrt(su * su + sv * sv) - par[2])], ["ab", "par"], ["F"])
+
+
+_SOURCES = (Path(__file__), Path(leafmap.__file__), Path(_compiled_mod.__file__))
+
+
+@lru_cache(maxsize=16)
+def leaf_residual(panels: int, compile: bool = True) -> ca.Function:
+    """``F(ab[2], par[3]) -> (eta(a, b) - eta_m, h(a, b) - h_m)`` on the leaf map with ``panels`` Gauss
+    panels (module docstring), compiled with its Jacobian (unless ``compile`` is false)."""
+    if not compile:
+        return _leaf_residual(panels)
+    return compiled_lazy(f"gp_residual_{panels}", lambda: _leaf_residual(panels), f"panels={panels}", _SOURCES,
+                         jacobian=True)
+
+
 def _ipopt_solver(residual: ca.Function):
-    ab = ca.SX.sym("ab", 2)
-    par = ca.SX.sym("par", 3)
+    ab = ca.MX.sym("ab", 2)
+    par = ca.MX.sym("par", 3)
     nlp = {"x": ab, "p": par, "f": 0, "g": residual(ab, par)}
     # show_eval_warnings: the Jacobian of |shift| is 0/0 where the shift of a step vanishes (targets near
     # the start point); IPOPT treats that NaN as a failed evaluation and steps back. Expected, not news.
     opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "show_eval_warnings": False,
             "ipopt.tol": 1e-13, "ipopt.constr_viol_tol": 1e-13, "ipopt.max_iter": 60,
-            "ipopt.hessian_approximation": "limited-memory"}
+            "ipopt.hessian_approximation": "limited-memory", "ipopt.print_timing_statistics": "no",
+            "ipopt.print_user_options": "no", "ipopt.print_options_documentation": "no"}
     solver = ca.nlpsol("gp_ipopt", "ipopt", nlp, opts)
 
     def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
@@ -68,7 +164,7 @@ def _newton_solver(residual: ca.Function):
         x = np.array(interrupts.call(rf, x0, par_value)).ravel()
         st = rf.stats()
         ok = bool(st["success"]) and bool(np.all((x >= lbx) & (x <= ubx)))
-        # Newton cannot tell a bracket without a root from a failure: both are "no root" here.
+        # Newton cannot tell a start without a root from a failure: both are "no root" here.
         status = st["return_status"] if ok else _NEWTON_NO_ROOT
         return x, status, int(st.get("iter_count", -1)), ok
 
@@ -77,3 +173,11 @@ def _newton_solver(residual: ca.Function):
 
 #: Root solvers for (32)-(33), by name (see the module docstring for the contract).
 SOLVERS = {"ipopt": _ipopt_solver, "newton": _newton_solver}
+
+
+@lru_cache(maxsize=32)
+def polisher(method: str, panels: int):
+    """The solver ``method`` of :data:`SOLVERS` on the compiled leaf-map residual with ``panels`` panels
+    (:func:`.leafmap.panels_for` of k); built once per process."""
+    return SOLVERS[method](leaf_residual(panels))
+

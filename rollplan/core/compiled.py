@@ -1,0 +1,272 @@
+"""CasADi functions compiled to C, cached on disk, with the virtual machine as fallback.
+
+:func:`compiled` takes a :class:`casadi.Function`, generates C with CasADi's ``CodeGenerator``
+(with the function's Jacobian, named ``jac_<name>``, in the same library when asked, so that
+:func:`casadi.external` gives solvers compiled derivatives), compiles it with the system C compiler
+into a shared library in the user's cache directory and loads it with :func:`casadi.external`. The
+next call, in this or any later process, only loads the library. :func:`compiled_lazy` does the
+same but builds the function only when the library is not cached yet (building a large graph
+costs more at start-up than loading its library).
+
+Cache directory
+    ``$ROLLPLAN_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/rollplan`` (``~/.cache/rollplan`` when
+    ``XDG_CACHE_HOME`` is unset): the directory of the planner's leaf tables too.
+Key
+    SHA-256 of rollplan's version, CasADi's version, the compiler command, the flags, the platform,
+    and either the function's serialized form (its whole expression graph and options:
+    :func:`compiled`) or a name, a descriptor of its construction parameters and the bytes of the
+    source files that define it (:func:`compiled_lazy`). A change of any of them gives another
+    file name, so a stale library is never loaded; a library that does not load, or whose
+    signature differs from the function's, is rebuilt.
+Concurrency
+    Every build writes into its own temporary directory inside the cache directory and moves the
+    finished library into place with ``os.replace`` (atomic on one file system): a reader sees no
+    file or a complete one, never a half-written one; concurrent builders of the same function
+    each write a complete library and the last rename wins. No lock is needed.
+Interrupts
+    The compiler runs in its own process group; on Ctrl-C (KeyboardInterrupt) or on timeout the
+    whole group (driver, cc1, as, ld) is killed at once, the temporary directory removed, and the
+    KeyboardInterrupt propagates (after a timeout the virtual machine is used).
+Fallback
+    Without a C compiler, with ``ROLLPLAN_NO_COMPILE=1``, or when a build or a load fails, the
+    function itself (CasADi's SX/MX virtual machine) is returned and one warning per reason logged.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import os
+import platform
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import casadi as ca
+
+from ..version import __version__
+
+__all__ = ["DEFAULT_FLAGS", "BUILD_TIMEOUT", "cache_dir", "compiler_command", "compiled", "compiled_lazy",
+           "clear_cache", "last_build"]
+
+log = logging.getLogger(__name__)
+
+#: Compiler flags (part of the key). -O2 without -ffast-math: IEEE arithmetic, as in the virtual machine.
+DEFAULT_FLAGS = ("-O2", "-fPIC", "-shared", "-fno-math-errno")
+#: Seconds one build may take before the virtual machine is used instead.
+BUILD_TIMEOUT = 300.0
+
+_warned: set = set()
+_last: dict = {}
+
+
+def cache_dir() -> Path:
+    """The cache directory (module docstring); created on first write, not here."""
+    if os.environ.get("ROLLPLAN_CACHE_DIR"):
+        return Path(os.environ["ROLLPLAN_CACHE_DIR"])
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rollplan"
+
+
+def compiler_command() -> str | None:
+    """The C compiler: ``$CC`` if set and found, else cc, gcc or clang; None when none is found or
+    ``ROLLPLAN_NO_COMPILE`` is set (not empty, not 0)."""
+    if os.environ.get("ROLLPLAN_NO_COMPILE", "") not in ("", "0"):
+        return None
+    for cand in (os.environ.get("CC"), "cc", "gcc", "clang"):
+        if cand and cand.split() and shutil.which(cand.split()[0]):
+            return cand
+    return None
+
+
+def last_build() -> dict:
+    """What the most recent :func:`compiled` or :func:`compiled_lazy` call did: ``source`` is
+    ``"cache"``, ``"built"`` or ``"vm"`` (with ``reason``); times in s (for measurements and tests)."""
+    return dict(_last)
+
+
+def _key(parts, blobs=()) -> str:
+    h = hashlib.sha256()
+    for part in (__version__, ca.__version__, platform.machine(), sys.platform, *parts):
+        h.update(str(part).encode())
+        h.update(b"\0")
+    for blob in blobs:
+        h.update(blob)
+        h.update(b"\0")
+    return h.hexdigest()[:32]
+
+
+def compiled(fn: ca.Function, jacobian: bool = False, flags=DEFAULT_FLAGS,
+             timeout: float = BUILD_TIMEOUT) -> ca.Function:
+    """``fn`` compiled to C and loaded from the disk cache (built on first use).
+
+    Parameters
+    ----------
+    fn : casadi.Function
+        Any function CasADi generates C for (SX, or MX without external solvers). Large straight-line
+        SX functions compile slowly (the compiler's time grows steeply with the size of one C
+        function): build them as a small kernel mapped over data (``Function.map``) instead.
+    jacobian : bool
+        Put ``fn.jacobian()`` in the library too, so that derivatives of the loaded function are
+        compiled as well.
+    flags : sequence of str
+        Compiler flags (part of the key).
+    timeout : float
+        Seconds a build may take.
+
+    Returns
+    -------
+    casadi.Function
+        The loaded function (same inputs and outputs), or ``fn`` itself without a compiler or when
+        the build fails (one warning logged per reason).
+    """
+    _last.clear()
+    cc = compiler_command()
+    if cc is None:
+        return _fallback(fn, _no_compiler_reason())
+    key = _key((fn.name(), cc, " ".join(flags), jacobian), (fn.serialize().encode(),))
+    return _get(fn.name(), key, lambda: fn, cc, flags, timeout, jacobian)
+
+
+def compiled_lazy(name: str, build, descriptor: str, sources=(), jacobian: bool = False, flags=DEFAULT_FLAGS,
+                  timeout: float = BUILD_TIMEOUT) -> ca.Function:
+    """Like :func:`compiled`, but ``build()`` (which returns a function named ``name``) runs only when
+    no library is cached or it must be used in the virtual machine.
+
+    The key holds ``name``, ``descriptor`` (the construction parameters, e.g. ``"steps=32"``) and the
+    bytes of ``sources`` (the files whose code defines the function, e.g. the model and the module
+    that builds it: editing them changes the key) instead of the serialized graph.
+    """
+    _last.clear()
+    cc = compiler_command()
+    if cc is None:
+        return _fallback(build(), _no_compiler_reason())
+    key = _key((name, descriptor, cc, " ".join(flags), jacobian), [Path(s).read_bytes() for s in sources])
+    return _get(name, key, build, cc, flags, timeout, jacobian)
+
+
+def _no_compiler_reason() -> str:
+    if os.environ.get("ROLLPLAN_NO_COMPILE", "") not in ("", "0"):
+        return "ROLLPLAN_NO_COMPILE is set"
+    return "no C compiler found (set CC)"
+
+
+def _fallback(fn: ca.Function, why: str) -> ca.Function:
+    if why not in _warned:
+        _warned.add(why)
+        log.warning("rollplan: %s; using CasADi's virtual machine (slower)", why)
+    _last.update(source="vm", reason=why)
+    return fn
+
+
+def _same_signature(a: ca.Function, b: ca.Function) -> bool:
+    return (a.n_in() == b.n_in() and a.n_out() == b.n_out()
+            and all(a.sparsity_in(i) == b.sparsity_in(i) for i in range(a.n_in()))
+            and all(a.sparsity_out(i) == b.sparsity_out(i) for i in range(a.n_out())))
+
+
+def _load(name: str, path: Path, fn: ca.Function | None):
+    """The library's function, or None when it does not load or (given ``fn``) its signature differs."""
+    try:
+        ext = ca.external(name, str(path))
+    except Exception as exc:   # a truncated, foreign or corrupt file: rebuilt
+        log.debug("cannot load %s: %s", path, exc)
+        return None
+    return ext if fn is None or _same_signature(ext, fn) else None
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    """Kill the compiler driver and its children (cc1, as, ld): its whole process group."""
+    try:
+        if os.name == "nt":
+            proc.kill()
+        else:
+            os.killpg(proc.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+    proc.wait()
+
+
+def _run_compiler(cmd, cwd: Path, timeout: float):
+    """``(exit code, output)`` of the compiler, run in its own process group; the group is killed on
+    timeout or interrupt, after which the exception propagates."""
+    log_path = cwd / "build.log"
+    with open(log_path, "w") as logf:
+        proc = subprocess.Popen(cmd, cwd=cwd, stdout=logf, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
+                                start_new_session=(os.name != "nt"))
+        try:
+            code = proc.wait(timeout=timeout)
+        except BaseException:
+            _kill_group(proc)
+            raise
+    return code, log_path.read_text(errors="replace")
+
+
+def _get(name: str, key: str, build, cc: str, flags, timeout: float, jacobian: bool) -> ca.Function:
+    """Load ``name-key`` from the cache, or build, compile and cache it."""
+    root = cache_dir()
+    lib = root / f"{name}-{key}{'.dll' if os.name == 'nt' else '.so'}"
+    t0 = time.perf_counter()
+    if lib.exists():
+        ext = _load(name, lib, None)
+        if ext is not None:
+            _last.update(source="cache", load_s=time.perf_counter() - t0, path=str(lib))
+            return ext
+        log.info("rollplan: rebuilding the unusable %s", lib)
+    fn = build()
+    if fn.name() != name:
+        raise ValueError(f"the built function is named {fn.name()!r}, expected {name!r}")
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".build-{name}-", dir=root))
+    except OSError as exc:
+        return _fallback(fn, f"cannot write the cache directory {root} ({exc.strerror})")
+    try:
+        log.info("rollplan: compiling %s (first use; cached in %s)", name, root)
+        t1 = time.perf_counter()
+        src = f"{name}.c"
+        cg = ca.CodeGenerator(src, {"with_header": False})
+        cg.add(fn)
+        if jacobian:
+            cg.add(fn.jacobian())
+        cg.generate(str(tmp) + os.sep)
+        t2 = time.perf_counter()
+        out = tmp / lib.name
+        cmd = cc.split() + list(flags) + ["-o", str(out), str(tmp / src), "-lm"]
+        try:
+            code, output = _run_compiler(cmd, tmp, timeout)
+        except subprocess.TimeoutExpired:
+            return _fallback(fn, f"compiling {name} took more than {timeout:g} s")
+        except OSError as exc:
+            return _fallback(fn, f"cannot run the C compiler {cc!r} ({exc.strerror})")
+        if code != 0:
+            log.debug("compiler output:\n%s", output)
+            return _fallback(fn, f"the C compiler failed on {name} (exit {code})")
+        t3 = time.perf_counter()
+        os.replace(out, lib)   # atomic: readers see no file or a complete one
+        ext = _load(name, lib, fn)
+        if ext is None:
+            return _fallback(fn, f"the compiled {name} does not load")
+        _last.update(source="built", codegen_s=t2 - t1, compile_s=t3 - t2, load_s=time.perf_counter() - t3,
+                     path=str(lib))
+        return ext
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def clear_cache() -> int:
+    """Delete every compiled library (and leftover build directory) in :func:`cache_dir`; returns the
+    number of libraries removed."""
+    root = cache_dir()
+    n = 0
+    if root.is_dir():
+        for p in root.iterdir():
+            if p.suffix in (".so", ".dll"):
+                p.unlink(missing_ok=True)
+                n += 1
+            elif p.name.startswith(".build-") and p.is_dir():
+                shutil.rmtree(p, ignore_errors=True)
+    return n
