@@ -353,7 +353,7 @@ def test_plan_is_a_certified_result(planner):
     assert p.problem == problem and p.goal == problem.goal and (p.k, p.steps, p.radius) == (2.5, 2, 1.0)
     c = p.certificate
     assert c.passed and c.method == "rk8" and c.residual == p.residual and c.tolerance == 1e-9
-    assert 0.0 < c.error_bound and c.residual + c.error_bound <= 1e-9
+    assert c.error_bound > 0.0 and c.residual + c.error_bound <= 1e-9
     assert c.final == p.final
     x = references.trace(p.a, p.b, p.k, p.gamma, p.steps)
     assert np.abs(np.asarray(c.final[:3]) - x).max() < 1e-10

@@ -167,10 +167,12 @@ class RK8Certifier:
     def __init__(self, compile: bool = True) -> None:
         self.compile = bool(compile)
 
-    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = 1e-9):
+    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = 1e-9,
+                start: int | None = None):
         """``(final State, estimate, steps per leaf)``: the finer run's final state (u_o, v_o of the end
-        point), the bound of its error [R, rad] and its RK steps per leaf."""
-        n = initial_steps(a, b, k, steps, tol)
+        point), the bound of its error [R, rad] and its RK steps per leaf; ``start`` overrides the
+        coarse run's first step count (:func:`initial_steps`, a power of two; for studies)."""
+        n = int(start) if start else initial_steps(a, b, k, steps, tol)
         pa = np.array([a, 1.0, k, gamma])
         pb = np.array([b, -1.0, k, gamma])
         while True:

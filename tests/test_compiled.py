@@ -1,0 +1,153 @@
+"""Compiled CasADi functions cached on disk: reuse, staleness, atomic concurrent builds, fallback, Ctrl-C."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from rollplan.core import compiled as cmod
+
+
+def _fn(scale: float = 2.0, name: str = "ctest") -> ca.Function:
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p")
+    return ca.Function(name, [x, p], [ca.vertcat(ca.sin(x[0]) * p * scale, x[0] * x[1])])
+
+
+@pytest.fixture
+def cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROLLPLAN_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv("ROLLPLAN_NO_COMPILE", raising=False)
+    if cmod.compiler_command() is None:
+        pytest.skip("no C compiler")
+    return tmp_path
+
+
+def test_built_once_then_loaded_from_the_cache(cache):
+    f = _fn()
+    g = cmod.compiled(f, jacobian=True)
+    assert cmod.last_build()["source"] == "built"
+    assert np.allclose(np.array(g([0.3, 2.0], 1.5)), np.array(f([0.3, 2.0], 1.5)), rtol=0, atol=1e-15)
+    cmod.compiled(f, jacobian=True)
+    assert cmod.last_build()["source"] == "cache"
+    libs = list(cache.glob("ctest-*.so"))
+    assert len(libs) == 1 and not list(cache.glob(".build-*"))
+    # the Jacobian comes from the library (compiled), equal to the VM's
+    x = ca.MX.sym("x", 2)
+    jc = ca.Function("j", [x], [ca.jacobian(g(x, 1.5), x)])([0.3, 2.0])
+    jv = ca.Function("j", [x], [ca.jacobian(f(x, 1.5), x)])([0.3, 2.0])
+    assert np.allclose(np.array(jc), np.array(jv), rtol=0, atol=1e-15)
+
+
+def test_a_changed_function_gets_its_own_library(cache):
+    cmod.compiled(_fn(2.0))
+    cmod.compiled(_fn(3.0))
+    assert cmod.last_build()["source"] == "built" and len(list(cache.glob("ctest-*.so"))) == 2
+
+
+def test_lazy_build_runs_only_on_a_miss(cache, tmp_path):
+    src = tmp_path / "src.py"
+    src.write_text("a")
+    calls = []
+
+    def build():
+        calls.append(1)
+        return _fn(name="clazy")
+
+    cmod.compiled_lazy("clazy", build, "d=1", [src])
+    cmod.compiled_lazy("clazy", build, "d=1", [src])
+    assert len(calls) == 1 and cmod.last_build()["source"] == "cache"
+    src.write_text("b")                     # the source changed: a new key, built again
+    cmod.compiled_lazy("clazy", build, "d=1", [src])
+    assert len(calls) == 2 and cmod.last_build()["source"] == "built"
+
+
+_CHILD = """
+import sys, numpy as np, casadi as ca
+from rollplan.core import compiled as c
+x = ca.SX.sym("x", 2); p = ca.SX.sym("p")
+e = ca.vertcat(ca.sin(x[0]) * p, x[0] * x[1])
+for i in range({terms}):
+    e = e + ca.sin(x[0] + i) * ca.cos(x[1] * i) / (1 + i)
+f = ca.Function("cchild", [x, p], [e])
+g = c.compiled(f)
+print(c.last_build()["source"], float(np.abs(np.array(g([0.3, 2.0], 1.5) - f([0.3, 2.0], 1.5))).max()))
+"""
+
+
+def _child(cache, terms=0, env=None, **kw):
+    e = {**os.environ, "ROLLPLAN_CACHE_DIR": str(cache), **(env or {})}
+    return subprocess.Popen([sys.executable, "-c", _CHILD.format(terms=terms)], env=e, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, **kw)
+
+
+@pytest.mark.slow
+def test_concurrent_builds_leave_one_complete_library(cache):
+    procs = [_child(cache, 200) for _ in range(3)]
+    outs = [p.communicate(timeout=120) for p in procs]
+    assert all(p.returncode == 0 for p in procs), outs
+    for out, _ in outs:
+        source, err = out.split()
+        assert source in ("built", "cache") and float(err) < 1e-14
+    assert len(list(cache.glob("cchild-*.so"))) == 1 and not list(cache.glob(".build-*"))
+
+
+@pytest.mark.slow
+def test_a_corrupt_library_is_rebuilt(cache):
+    p = _child(cache)
+    assert p.communicate(timeout=120)[0].startswith("built")
+    lib = next(cache.glob("cchild-*.so"))
+    lib.write_bytes(b"\x7fELF truncated")
+    out, err = _child(cache).communicate(timeout=120)
+    assert out.startswith("built"), err
+
+
+def test_without_a_compiler_the_virtual_machine_serves(cache, monkeypatch):
+    f = _fn()
+    monkeypatch.setenv("ROLLPLAN_NO_COMPILE", "1")
+    g = cmod.compiled(f)
+    assert g is f and cmod.last_build()["source"] == "vm"
+    monkeypatch.delenv("ROLLPLAN_NO_COMPILE")
+    monkeypatch.delenv("CC", raising=False)
+    monkeypatch.setenv("PATH", str(cache))   # no cc, gcc or clang on the path
+    assert cmod.compiler_command() is None
+    g = cmod.compiled(f)
+    assert g is f and "no C compiler" in cmod.last_build()["reason"]
+    assert not list(cache.glob("*.so"))
+
+
+def test_a_plan_runs_without_a_compiler(tmp_path):
+    env = {**os.environ, "ROLLPLAN_CACHE_DIR": str(tmp_path), "ROLLPLAN_NO_COMPILE": "1"}
+    code = ("import rollplan; p = rollplan.plan((1, -0.5, 1), steps=3, k=2.5); "
+            "print(p.certificate.passed, p.certificate.method, p.stats.method)")
+    run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300,
+                         check=False)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split() == ["True", "rk8", "ipopt"]
+    assert not list(Path(tmp_path).glob("*.so"))
+
+
+def _compilers_in(path: Path) -> list:
+    ps = subprocess.run(["ps", "-ww", "-eo", "pid,args"], capture_output=True, text=True, check=False).stdout
+    return [line for line in ps.splitlines() if str(path) in line and "python" not in line]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
+def test_ctrl_c_kills_the_compiler_promptly(cache):
+    p = _child(cache, 6000)       # a large function: the compiler runs for seconds
+    deadline = time.monotonic() + 60
+    while not _compilers_in(cache) and time.monotonic() < deadline and p.poll() is None:
+        time.sleep(0.05)
+    assert _compilers_in(cache), "the compiler did not start"
+    t0 = time.monotonic()
+    p.send_signal(signal.SIGINT)
+    p.communicate(timeout=10)
+    assert time.monotonic() - t0 < 1.5 and p.returncode != 0
+    time.sleep(0.2)
+    assert not _compilers_in(cache) and not list(cache.glob("*.so")) and not list(cache.glob(".build-*"))
