@@ -17,31 +17,42 @@ from . import interrupts as _interrupts
 # takes over (rollplan.interrupts.guard_start_up); imported by a program, nothing changes.
 _GUARDED = _interrupts.guard_start_up()
 
-from .core.curves import A_MAX, Curve, Piece, circle_point, figure_eight  # noqa: E402
-from .errors import InputError, NoPlanError, SolverError  # noqa: E402
-from .execution.actuation import Motion, actuate  # noqa: E402
-from .execution.plants import Simulation, simulate_rotors  # noqa: E402
-from .planners import METHODS, solve  # noqa: E402
-from .planners.collocation import CollocationPlanner, CollocationResult, collocate  # noqa: E402
-from .planners.geometric import (  # noqa: E402
-    LEGS,
-    SOLVERS,
-    ComposedPlan,
-    ComposedPlanner,
-    GeometricPhasePlanner,
-    Plan,
-    Route,
-    StepResult,
-    as_composed,
-    plan,
-    plan_route,
-    step,
-)
-from .problem import N3Z_MIN, STATE_NAMES, Problem, State  # noqa: E402
-from .result import Certificate, Measures, PlanResult, SolverStats, Trajectory  # noqa: E402
-from .robot import Robot, default_robot, load_robot  # noqa: E402
+# Names are imported on first use (PEP 562), so that `import rollplan` and the `rollplan` command load only
+# what they use (the collocation planner, the execution layer and the plots are not needed for a plan).
+_LAZY = {
+    "A_MAX": "core.curves", "Curve": "core.curves", "Piece": "core.curves", "circle_point": "core.curves",
+    "figure_eight": "core.curves",
+    "InputError": "errors", "NoPlanError": "errors", "SolverError": "errors",
+    "Motion": "execution.actuation", "actuate": "execution.actuation",
+    "Simulation": "execution.plants", "simulate_rotors": "execution.plants",
+    "METHODS": "planners", "solve": "planners",
+    "CollocationPlanner": "planners.collocation", "CollocationResult": "planners.collocation",
+    "collocate": "planners.collocation",
+    **dict.fromkeys(("LEGS", "SOLVERS", "ComposedPlan", "ComposedPlanner", "GeometricPhasePlanner", "Plan", "Route",
+                     "StepResult", "as_composed", "plan", "plan_route", "step"), "planners.geometric"),
+    "N3Z_MIN": "problem", "STATE_NAMES": "problem", "Problem": "problem", "State": "problem",
+    "Certificate": "result", "Measures": "result", "PlanResult": "result", "SolverStats": "result",
+    "Trajectory": "result",
+    "Robot": "robot", "default_robot": "robot", "load_robot": "robot",
+    "read_waypoints": "waypoints",
+}
+
 from .version import __version__  # noqa: E402
-from .waypoints import read_waypoints  # noqa: E402
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'rollplan' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
+
 
 if _GUARDED and not _interrupts.cli_follows():   # python -m rollplan.<another module>: guard no longer
     _interrupts.end_start_up()

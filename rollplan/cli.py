@@ -41,11 +41,33 @@ _NEGATIVE_NUMBER = re.compile(r"^-([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?$|
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that takes negative numbers in any form and reports bad input in one line with exit code 2."""
+    """argparse that takes negative numbers in any form and reports bad input in one line with exit code 2.
 
-    def __init__(self, *args, **kwargs) -> None:
+    ``builder(parser)``, if given, adds the arguments when the parser is first used (a command whose options
+    need heavy modules loads them only when it runs or shows its help).
+    """
+
+    def __init__(self, *args, builder=None, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = _NEGATIVE_NUMBER
+        self._builder = builder
+
+    def _build(self) -> None:
+        if self._builder is not None:
+            build, self._builder = self._builder, None
+            build(self)
+
+    def parse_known_args(self, args=None, namespace=None):
+        self._build()
+        return super().parse_known_args(args, namespace)
+
+    def format_help(self):
+        self._build()
+        return super().format_help()
+
+    def format_usage(self):
+        self._build()
+        return super().format_usage()
 
     def error(self, message):
         self.exit(EXIT_INPUT, f"{self.prog}: error: {message} (see: {self.prog} --help)\n")
@@ -589,10 +611,14 @@ def _add_robot_options(parser) -> None:
 
 
 def _add_compare_parser(sub) -> None:
+    sub.add_parser("compare", help="geometric-phase plan versus collocation optimum on one problem, rest to rest",
+                   builder=_compare_arguments)
+
+
+def _compare_arguments(c) -> None:
     from .planners import collocation
     from .studies.comparison import COMPARED_COSTS, CONTACT_BOUND
 
-    c = sub.add_parser("compare", help="geometric-phase plan versus collocation optimum on one problem, rest to rest")
     _add_target_options(c, to_default=None, steps_help=f"figure eights n {_STEPS} of the geometric plan (default 1)")
     c.add_argument("--cost", choices=COMPARED_COSTS, default="angular_velocity",
                    help="the cost compared, minimised by both (default angular_velocity; rotor_energy needs --robot)")
@@ -831,9 +857,14 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--quiet", action="store_true", help="no progress on stderr")
     b.set_defaults(func=cmd_batch)
 
+    sub.add_parser("atlas", help="maps of h(a, b) and eta(a, b) with contours and the fold of the step map",
+                   builder=_atlas_arguments)
+    return parser
+
+
+def _atlas_arguments(t) -> None:
     from .studies.atlas import DEFAULT_RESOLUTION, MAX_RESOLUTION
 
-    t = sub.add_parser("atlas", help="maps of h(a, b) and eta(a, b) with contours and the fold of the step map")
     t.add_argument("--k", type=_number, nargs="+", default=[DEFAULT_K], metavar="K",
                    help=_K_HELP + "; several values sweep over k (then put {k} in --out and --json)")
     t.add_argument("--steps", type=_whole, default=1, help=f"also map what n figure eights reach, n {_STEPS} "
@@ -845,7 +876,6 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="evaluate the grid on a Dask distributed cluster (pip install 'rollplan[distributed]')")
     t.set_defaults(func=cmd_atlas)
-    return parser
 
 
 #: ``name='value'`` or ``name=True`` in a message of the Python API: an option to name in command-line syntax.

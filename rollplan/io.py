@@ -12,7 +12,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
-from .execution.plants import check_samples
 from .inputs import load_json, show_path
 from .outputs import check_figure_path, check_writable, save_figure, write_atomic, write_json
 from .planners.geometric.composed import as_composed
@@ -227,6 +226,8 @@ def load_rotor_plan(path) -> RotorPlan:
         raise InputError(f"{where}: {exc}") from None
     except (TypeError, KeyError, ValueError):
         raise InputError(f"{where}: 'target', 'start', 'goal', 'time' or 'rotor_rates' is malformed") from None
+    from .execution.plants import check_samples  # the execution layer only when a rotor plan is read
+
     try:
         t, rates = check_samples(t, rates)
     except InputError as exc:

@@ -49,9 +49,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from ..core import model
+from ..core.spline import CubicSpline
 from ..errors import InputError
 
 __all__ = ["RatioEstimate", "RatioEstimator", "InertiaEstimate", "InertiaEstimator", "window_integrals"]

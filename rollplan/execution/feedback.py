@@ -40,8 +40,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
+from ..core.spline import CubicSpline
 from ..errors import InputError, NoPlanError, check_finite, check_whole
 from ..problem import STATE_NAMES, State, arrival_error
 from ..robot import Robot
@@ -64,8 +64,8 @@ def robot_from_inertias(radius: float, j_xx: float, j_zz: float, j_r: float, lik
     and transverse rotor inertia enters no equation: J_p is taken from ``like`` when that gives a
     possible robot (one that :class:`~rollplan.robot.Robot`'s own checks accept: ``m_o <= M``, ``J_r <=
     2 J_p``, ``J_r + 2 J_p <= 2 (M - m_o) R^2``), otherwise the rotors are thin disks (``2 J_p = J_r``,
-    the least J_p allowed) and the shell takes the rest. Inertias that no possible robot has (``Jzz < 2 J_r``, or too little
-    mass left for the rotors) are refused. The limits of ``like`` are kept.
+    the least J_p allowed) and the shell takes the rest. Inertias that no possible robot has (``Jzz < 2 J_r``, or
+    too little mass left for the rotors) are refused. The limits of ``like`` are kept.
     """
     if not (j_xx > j_zz > j_r > 0):
         raise InputError(f"inertias Jxx = {j_xx!r}, Jzz = {j_zz!r}, J_r = {j_r!r} are not allowed: "

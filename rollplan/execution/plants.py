@@ -52,11 +52,11 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from .. import interrupts
 from ..core import model
 from ..core.plane import wrap_exact
+from ..core.spline import CubicSpline
 from ..errors import InputError, SolverError, check_finite
 from ..problem import State, arrival_error
 from ..robot import Robot

@@ -19,15 +19,34 @@ method: the class is built with keyword options only (all defaulted), and its
 
 from __future__ import annotations
 
+import importlib
+from collections.abc import Mapping
+
 from ..errors import check_choice
 from ..problem import Problem
-from .collocation import CollocationPlanner
-from .geometric import ComposedPlanner
 
 __all__ = ["METHODS", "solve"]
 
+
+class _Methods(Mapping):
+    """Planner classes by method name, each imported on first access (a plan by one method does not load
+    the other)."""
+
+    _where = {"geometric": (".geometric", "ComposedPlanner"), "collocation": (".collocation", "CollocationPlanner")}
+
+    def __getitem__(self, name: str):
+        module, cls = self._where[name]
+        return getattr(importlib.import_module(module, __name__), cls)
+
+    def __iter__(self):
+        return iter(self._where)
+
+    def __len__(self) -> int:
+        return len(self._where)
+
+
 #: Planner classes by method name (see the module docstring for the contract).
-METHODS = {"geometric": ComposedPlanner, "collocation": CollocationPlanner}
+METHODS = _Methods()
 
 
 def solve(problem: Problem, method: str = "geometric", **options):

@@ -44,11 +44,11 @@ from functools import lru_cache
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import brentq
 
 from ...core.curves import A_MAX, figure_eight
 from ...core.integrate import DEFAULT_NODES, spectral_step
 from ...core.paths import PathPiece
+from ...core.roots import brent
 from ...errors import NoPlanError
 
 __all__ = ["ETA_STEP", "CircleTurn", "leaf_maps", "circle_steps", "turn_in_place"]
@@ -176,7 +176,7 @@ def turn_in_place(psi: float, k: float, steps: int = 1) -> CircleTurn:
     for i, level, sign in cross:
         if i == first:
             f = lambda x, level=level: float(circle_steps(1, x, k)[2, 0]) - level  # noqa: E731
-            roots.append((brentq(f, b[i], b[i + 1], xtol=1e-15, rtol=1e-15, maxiter=200) if f(b[i]) != 0 else
+            roots.append((brent(f, b[i], b[i + 1], xtol=1e-15, rtol=1e-15) if f(b[i]) != 0 else
                           float(b[i]), sign))
     r, sign = min(roots)
     side = 1 if sign > 0 else 0

@@ -213,7 +213,7 @@ def markdown(result, figures=(), paper=PAPER) -> str:
         "shift lies on the axis at angle -eta_1/2 (eta_1: turn of psi over the first leaf), so the signed shift "
         "s = u_a cos(eta_1/2) - v_a sin(eta_1/2), |s| = h, changes sign at the zeros of h(k) "
         f"(checked on the sweep: max ||s| - h| = {result.k_sweep.symmetry_error:.1e}).")
-    add("* Roots are bracketed by sign changes on the sweep and refined by scipy's brentq on the spectral "
+    add("* Roots are bracketed by sign changes on the sweep and refined by Brent's method on the spectral "
         "step map (not read off the grid), then refined again on CVODES. The number of brackets is recounted on a "
         f"grid of twice the resolution: k sweep {len(result.k_sweep.roots)} / {result.k_sweep.roots_double_grid}, "
         f"a sweep {len(result.a_sweep.roots)} / {result.a_sweep.roots_double_grid}.")

@@ -24,7 +24,7 @@ so the *signed* shift
 is smooth and changes sign at the zeros of h(k). (This identity is checked on
 every sweep: ``max | |s| - h |`` is recorded.) Zeros of ``s(k)`` and roots of
 ``h(a) - 1`` are bracketed on sweeps that evaluate the spectral step map in
-batches (CasADi ``map``) and refined by scipy's brentq. Every root is refined a
+batches (CasADi ``map``) and refined by Brent's method. Every root is refined a
 second, independent way with the adaptive CVODES integrator, and for k = 0 a
 third way with the closed form (36). The gamma that points the shift along
 +v_a is ``gamma = wrap(pi/2 - atan2(v_a, u_a))`` (the displacement turns by +gamma).
@@ -43,11 +43,11 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import brentq
 
 from ...core.curves import A_MAX
 from ...core.integrate import DEFAULT_NODES, CvodesIntegrator, spectral_step
 from ...core.plane import wrap
+from ...core.roots import brent
 from ...errors import InputError
 from ...planners.geometric import GeometricPhasePlanner, Plan, default_planner
 from ...problem import Problem
@@ -65,7 +65,8 @@ Progress = Callable[[str, int, int], None]
 
 
 def refine_root(fun: Callable[[float], float], lo: float, hi: float, xtol: float = 1e-14) -> float:
-    """Root of a scalar function in a sign-changing bracket ``[lo, hi]`` (scipy's brentq).
+    """Root of a scalar function in a sign-changing bracket ``[lo, hi]`` (Brent's method,
+    :func:`rollplan.core.roots.brent`).
 
     Raises InputError when ``fun(lo)`` and ``fun(hi)`` have the same sign.
     """
@@ -76,7 +77,7 @@ def refine_root(fun: Callable[[float], float], lo: float, hi: float, xtol: float
         return hi
     if np.sign(f_lo) == np.sign(f_hi):
         raise InputError(f"[{lo:g}, {hi:g}] does not bracket a root: f = {f_lo:g}, {f_hi:g}")
-    return float(brentq(fun, lo, hi, xtol=xtol * (1.0 + abs(lo)), rtol=4 * np.finfo(float).eps, maxiter=200))
+    return brent(fun, lo, hi, xtol=xtol * (1.0 + abs(lo)), rtol=4 * np.finfo(float).eps)
 
 
 def bracket_roots(x: np.ndarray, f: np.ndarray) -> list:
