@@ -146,7 +146,8 @@ def _fmt_plan(p, unit) -> str:
         f"  path length   {_g(p.path_length)} {unit}",
         f"  final         u_a = {_g(f.u_a)} {unit}  v_a = {_g(f.v_a)} {unit}  psi = {_g(f.psi)} rad"
         f"  u_o = {f.u_o:.3g} rad  v_o = {f.v_o:.3g} rad",
-        f"  residual      {p.residual:.2e} ({NORM}; {p.certificate.method}, independent of the planner)",
+        f"  residual      {p.residual:.2e} ({NORM}; {p.certificate.method}, independent of the planner"
+        f"{f', integration error bound {p.certificate.error_bound:.1e}' if p.certificate.error_bound else ''})",
     ]
     return "\n".join(lines)
 

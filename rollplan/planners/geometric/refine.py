@@ -20,7 +20,8 @@ that does not converge says only that its start holds no root; the statuses in
 ``"ipopt"`` (the default)
     IPOPT through CasADi's ``nlpsol`` on the feasibility problem ``min 0 s.t. F = 0, lbx <= ab <=
     ubx`` (the shooting problem of the design), quiet, with a limited-memory Hessian (the objective
-    is zero; the constraints' curvature is not needed to converge from a start near the root).
+    is zero; the constraints' curvature is not needed to converge from a start near the root), no
+    problem scaling and a small monotone barrier parameter (the start is next to the root).
     Started at the enumerated root (:mod:`.enumerate`) it needs one or two iterations.
 ``"newton"``
     CasADi's ``rootfinder`` (plain Newton on F, exact Jacobian).
@@ -140,7 +141,10 @@ def _ipopt_solver(residual: ca.Function):
     opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "show_eval_warnings": False,
             "ipopt.tol": 1e-13, "ipopt.constr_viol_tol": 1e-13, "ipopt.max_iter": 60,
             "ipopt.hessian_approximation": "limited-memory", "ipopt.print_timing_statistics": "no",
-            "ipopt.print_user_options": "no", "ipopt.print_options_documentation": "no"}
+            "ipopt.print_user_options": "no", "ipopt.print_options_documentation": "no",
+            # a 2 x 2 problem in units of R and rad, started next to its root: no scaling (which costs a
+            # Jacobian evaluation per solve) and a small, monotone barrier parameter
+            "ipopt.nlp_scaling_method": "none", "ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-6}
     solver = ca.nlpsol("gp_ipopt", "ipopt", nlp, opts)
 
     def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
