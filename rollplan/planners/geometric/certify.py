@@ -183,7 +183,7 @@ class RK8Certifier:
                 yc, yf, mid = f.call([xc, xf, pa, pb])
                 xc, xf = np.array(yc).ravel(), np.array(yf).ravel()
                 scale = max(scale, abs(float(mid[2])), abs(xf[2]))
-            est = float(np.linalg.norm(xf - xc)) + rounding_allowance(scale, steps, 2 * n)
+            est = float(np.linalg.norm(xf - xc) + rounding_allowance(scale, steps, 2 * n))
             if not math.isfinite(est):
                 est = math.inf
                 break

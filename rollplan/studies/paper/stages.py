@@ -221,7 +221,7 @@ class CaseStudy:
     Parameters
     ----------
     planner : GeometricPhasePlanner, optional
-        Supplies the CVODES certifier and the trajectory sampler.
+        Supplies the certifier and the trajectory sampler (CVODES).
     nodes : int
         Chebyshev degree per panel of the first-leaf spectral map.
     chunk : int
@@ -342,15 +342,15 @@ class CaseStudy:
     def symmetric_plan(self, a: float, k: float) -> Plan:
         """The one-step plan of the paper's figures: a = b, gamma pointing the shift along +v_a.
 
-        Certified by the planner's CVODES integration against the goal ``(0, h, 0)``
-        (contact point at the pole).
+        Certified by the planner's certifier (:mod:`rollplan.planners.geometric.certify`) against the goal
+        ``(0, h, 0)`` (contact point at the pole).
         """
         out = self.spectral(a, k)
         gamma = self.gamma_to_va(out)
         h = float(np.hypot(out[0], out[1]))
         problem = Problem((0.0, h, 0.0), k=k)
-        final = self.planner.certifier.final(a, a, k, gamma, 1)
-        cert = Certificate(self.planner.certifier.name, final, problem.residual(final), 0.0, self.planner.tol)
+        final, bound, _ = self.planner.certifier.certify(a, a, k, gamma, 1, self.planner.tol)
+        cert = Certificate(self.planner.certifier.name, final, problem.residual(final), bound, self.planner.tol)
         stats = SolverStats("none", "given (paper's case study)", 0, 0.0)
         return Plan(problem, a, a, gamma, 0, h, float(out[2]), 4 * math.pi * a, cert, stats, (), self.planner)
 
