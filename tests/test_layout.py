@@ -107,3 +107,14 @@ def test_a_plan_loads_neither_collocation_nor_plots():
            "heavy = [m for m in sys.modules if m.startswith(('matplotlib', 'rollplan.planners.collocation',\n"
            "         'rollplan.plots', 'rollplan.studies', 'scipy'))]\n"
            "assert not heavy, heavy\n")
+
+
+def test_lazy_names_resolve():
+    """Every name rollplan exports resolves (imported on first use), and an unknown name is an AttributeError."""
+    for name in rollplan.__all__:
+        assert getattr(rollplan, name) is not None and name in dir(rollplan)
+    with pytest.raises(AttributeError):
+        rollplan.no_such_name  # noqa: B018
+    from rollplan.planners import METHODS
+
+    assert set(METHODS) == {"geometric", "collocation"} and METHODS["geometric"].__name__ == "ComposedPlanner"
