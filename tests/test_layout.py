@@ -98,6 +98,10 @@ def test_no_runtime_path_imports_scipy():
            "assert 'scipy' not in sys.modules, 'import'\n"
            "p = rollplan.plan((1, -0.5, 1), steps=3, k=2.5)\n"
            "assert p.certificate.passed and 'scipy' not in sys.modules, 'plan'\n")
+    _fresh("import sys\n"
+           "sys.modules['scipy'] = None   # as if scipy were not installed: importing it fails\n"
+           "import rollplan.cli\n"
+           "assert rollplan.cli.main(['plan', '--to', '0.5', '0.3', '--psi', '0.4', '--steps', '2']) == 0\n")
 
 
 def test_a_plan_loads_neither_collocation_nor_plots():
