@@ -10,8 +10,9 @@ panel count, valid for the k of its bucket), as a kernel mapped over the nodes s
 in well under a second; ``tests/test_refine.py`` checks it against the numpy leaf map. Its value
 and Jacobian are compiled to C and cached on disk (:mod:`rollplan.core.compiled`).
 
-The solvers. Every entry of :data:`SOLVERS` follows one contract: ``SOLVERS[name](residual)``
-takes a residual ``F(ab[2], par[3]) -> (2,)`` as above and returns ``solve(x0, par, lbx, ubx) -> (x,
+The solvers. Every entry of :data:`SOLVERS` follows one contract: ``SOLVERS[name](residual,
+near_root=False)`` takes a residual ``F(ab[2], par[3]) -> (2,)`` as above (``near_root``: every start
+will lie next to a root, so the solver may use options for that case) and returns ``solve(x0, par, lbx, ubx) -> (x,
 status, iterations, ok)``: the end point, the solver's status string, its iterations, and whether
 the end point is a candidate root inside the box ``[lbx, ubx]`` (the certificate decides). A solve
 that does not converge says only that its start holds no root; the statuses in
@@ -20,8 +21,8 @@ that does not converge says only that its start holds no root; the statuses in
 ``"ipopt"`` (the default)
     IPOPT through CasADi's ``nlpsol`` on the feasibility problem ``min 0 s.t. F = 0, lbx <= ab <=
     ubx`` (the shooting problem of the design), quiet, with a limited-memory Hessian (the objective
-    is zero; the constraints' curvature is not needed to converge from a start near the root), no
-    problem scaling and a small monotone barrier parameter (the start is next to the root).
+    is zero; the constraints' curvature is not needed to converge from a start near the root); near a
+    root without problem scaling and with a small monotone barrier parameter.
     Started at the enumerated root (:mod:`.enumerate`) it needs one or two iterations.
 ``"newton"``
     CasADi's ``rootfinder`` (plain Newton on F, exact Jacobian).
@@ -132,7 +133,7 @@ def leaf_residual(panels: int, compile: bool = True) -> ca.Function:
                          jacobian=True)
 
 
-def _ipopt_solver(residual: ca.Function):
+def _ipopt_solver(residual: ca.Function, near_root: bool = False):
     ab = ca.MX.sym("ab", 2)
     par = ca.MX.sym("par", 3)
     nlp = {"x": ab, "p": par, "f": 0, "g": residual(ab, par)}
@@ -141,10 +142,10 @@ def _ipopt_solver(residual: ca.Function):
     opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "show_eval_warnings": False,
             "ipopt.tol": 1e-13, "ipopt.constr_viol_tol": 1e-13, "ipopt.max_iter": 60,
             "ipopt.hessian_approximation": "limited-memory", "ipopt.print_timing_statistics": "no",
-            "ipopt.print_user_options": "no", "ipopt.print_options_documentation": "no",
-            # a 2 x 2 problem in units of R and rad, started next to its root: no scaling (which costs a
-            # Jacobian evaluation per solve) and a small, monotone barrier parameter
-            "ipopt.nlp_scaling_method": "none", "ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-6}
+            "ipopt.print_user_options": "no", "ipopt.print_options_documentation": "no"}
+    if near_root:   # a 2 x 2 problem in units of R and rad started next to its root: no scaling (which costs
+        # a Jacobian evaluation per solve) and a small, monotone barrier parameter
+        opts.update({"ipopt.nlp_scaling_method": "none", "ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-6})
     solver = ca.nlpsol("gp_ipopt", "ipopt", nlp, opts)
 
     def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
@@ -159,7 +160,7 @@ def _ipopt_solver(residual: ca.Function):
     return solve
 
 
-def _newton_solver(residual: ca.Function):
+def _newton_solver(residual: ca.Function, near_root: bool = False):
     rf = ca.rootfinder("gp_newton", "newton", residual,
                        {"abstol": 1e-14, "abstolStep": 1e-16, "max_iter": 40, "error_on_fail": False,
                         "show_eval_warnings": False})  # NaN outside the admissible range is a failed solve
@@ -183,5 +184,5 @@ SOLVERS = {"ipopt": _ipopt_solver, "newton": _newton_solver}
 def polisher(method: str, panels: int):
     """The solver ``method`` of :data:`SOLVERS` on the compiled leaf-map residual with ``panels`` panels
     (:func:`.leafmap.panels_for` of k); built once per process."""
-    return SOLVERS[method](leaf_residual(panels))
+    return SOLVERS[method](leaf_residual(panels), near_root=True)
 
