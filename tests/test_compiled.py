@@ -151,3 +151,20 @@ def test_ctrl_c_kills_the_compiler_promptly(cache):
     assert time.monotonic() - t0 < 1.5 and p.returncode != 0
     time.sleep(0.2)
     assert not _compilers_in(cache) and not list(cache.glob("*.so")) and not list(cache.glob(".build-*"))
+
+
+@pytest.mark.slow
+def test_a_long_compile_shows_progress(cache):
+    import io
+
+    from rollplan.progress import Progress, reporting
+
+    x = ca.SX.sym("x", 2)
+    e = x[0]
+    for i in range(3000):
+        e = e + ca.sin(x[0] + i) * ca.cos(x[1] * i) / (1 + i)
+    buf = io.StringIO()
+    with reporting(Progress(stream=buf, interval=0.0)):
+        cmod.compiled(ca.Function("cprogress", [x], [e]))
+    assert cmod.last_build()["source"] == "built"
+    assert "compiling cprogress (first use; cached after): 0/1" in buf.getvalue()

@@ -48,6 +48,7 @@ from pathlib import Path
 
 import casadi as ca
 
+from ..progress import report
 from ..version import __version__
 
 __all__ = ["DEFAULT_FLAGS", "BUILD_TIMEOUT", "cache_dir", "compiler_command", "compiled", "compiled_lazy",
@@ -190,18 +191,28 @@ def _kill_group(proc: subprocess.Popen) -> None:
     proc.wait()
 
 
-def _run_compiler(cmd, cwd: Path, timeout: float):
-    """``(exit code, output)`` of the compiler, run in its own process group; the group is killed on
-    timeout or interrupt, after which the exception propagates."""
+def _run_compiler(cmd, cwd: Path, timeout: float, label: str):
+    """``(exit code, output)`` of the compiler, run in its own process group (progress reported under
+    ``label`` while it runs); the group is killed on timeout or interrupt, after which the exception
+    propagates."""
     log_path = cwd / "build.log"
+    deadline = time.monotonic() + timeout
     with open(log_path, "w") as logf:
         proc = subprocess.Popen(cmd, cwd=cwd, stdout=logf, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                 start_new_session=(os.name != "nt"))
         try:
-            code = proc.wait(timeout=timeout)
+            while True:
+                try:
+                    code = proc.wait(timeout=min(0.5, max(deadline - time.monotonic(), 0.0)))
+                    break
+                except subprocess.TimeoutExpired:
+                    if time.monotonic() >= deadline:
+                        raise
+                    report(label, 0, 1)
         except BaseException:
             _kill_group(proc)
             raise
+    report(label, 1, 1)
     return code, log_path.read_text(errors="replace")
 
 
@@ -237,7 +248,7 @@ def _get(name: str, key: str, build, cc: str, flags, timeout: float, jacobian: b
         out = tmp / lib.name
         cmd = cc.split() + list(flags) + ["-o", str(out), str(tmp / src), "-lm"]
         try:
-            code, output = _run_compiler(cmd, tmp, timeout)
+            code, output = _run_compiler(cmd, tmp, timeout, f"compiling {name} (first use; cached after)")
         except subprocess.TimeoutExpired:
             return _fallback(fn, f"compiling {name} took more than {timeout:g} s")
         except OSError as exc:
