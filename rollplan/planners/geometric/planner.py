@@ -34,12 +34,15 @@ the displacement by a Gauss rule accurate to K_MAX). The shortest plan is
 found by a bounded search: branches are visited in increasing order of the
 smallest ``a + b`` they can hold, the first root of each branch is its
 shortest, and the search stops when no branch left can beat the best
-certified plan. For ``k < 1/2`` the turn is not monotone and the branches are
+certified plan. Each root is then polished by the solver of the shooting problem (32)-(33) chosen by
+name, IPOPT through CasADi by default (:func:`.refine.polisher`: compiled residual and Jacobian of the
+leaf map, started at the enumerated root, one or two iterations). For ``k < 1/2`` the turn is not monotone and the branches are
 bracketed on tables of the two leaves instead (:mod:`.leaves`,
 :mod:`.brackets`) and refined by a root solver chosen by name (:mod:`.refine`),
 without the completeness guarantee. Every plan is certified by an independent
-integration of all ``n`` steps (:mod:`.certify`); a plan whose certified
-residual exceeds the tolerance is never returned.
+integration of all ``n`` steps (:mod:`.certify`: compiled RK8 with a step-doubling error bound by
+default, CVODES by name); a plan whose certified residual plus error bound exceeds the tolerance is
+never returned.
 """
 
 from __future__ import annotations
