@@ -36,8 +36,8 @@ smallest ``a + b`` they can hold, the first root of each branch is its
 shortest, and the search stops when no branch left can beat the best
 certified plan. Each root is then polished by the solver of the shooting problem (32)-(33) chosen by
 name, IPOPT through CasADi by default (:func:`.refine.polisher`: compiled residual and Jacobian of the
-leaf map, started at the enumerated root, one or two iterations). For ``k < 1/2`` the turn is not monotone and the branches are
-bracketed on tables of the two leaves instead (:mod:`.leaves`,
+leaf map, started at the enumerated root, one or two iterations). For ``k < 1/2`` the turn is not
+monotone and the branches are bracketed on tables of the two leaves instead (:mod:`.leaves`,
 :mod:`.brackets`) and refined by a root solver chosen by name (:mod:`.refine`),
 without the completeness guarantee. Every plan is certified by an independent
 integration of all ``n`` steps (:mod:`.certify`: compiled RK8 with a step-doubling error bound by
