@@ -214,6 +214,26 @@ def test_timed_motion_refuses_bad_shapes():
 
 
 @pytest.mark.slow
+def test_empirical_order_of_the_collocation_optimum_is_one():
+    """The optimum J(N) of the rest-to-rest collocation measured at N = 20, 40, 80, 160: the empirical order
+    log2((J(N) - J(2N)) / (J(2N) - J(4N))) tends to 1, not to the transcription's 2d. The cost does not involve
+    the accelerations, so the continuous problem's infimum has rates jumping at both ends and is not attained; the
+    discrete optimum ramps the rates within about one interval at each end, which costs O(1/N)."""
+    from rollplan.studies.comparison import branch_guess
+
+    problem = Problem((0.5, 0.3, 0.4), k=K)
+    J = []
+    for n in (20, 40, 80, 160):
+        planner = RestToRestPlanner(n, 3)
+        guess, m = branch_guess(problem, planner)
+        J.append(planner.solve(problem, guess, 1.0, m).objective)
+    d = np.diff(J)
+    orders = np.log2(d[:-1] / d[1:])
+    assert np.all(d < 0)                        # monotone from above
+    assert abs(orders[-1] - 1.0) < 0.2 and orders[-1] < orders[0]
+
+
+@pytest.mark.slow
 def test_minimum_time_within_the_limits():
     """Free final time under the rotor limits: the certified motion is at rest at both ends, on the goal, and
     within the limits at its samples up to the discretisation between collocation points."""
