@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from rollplan import Problem
-from rollplan.errors import InputError
+from rollplan.errors import InputError, SolverError
 from rollplan.planners.collocation.rest import RestToRestPlanner, naive_guess
 from rollplan.studies.comparison_peer import peer_rest_to_rest, rockit_solve
 
@@ -55,6 +55,10 @@ def test_peer_bad_input_and_missing_rockit(monkeypatch):
         peer_rest_to_rest(problem, "warm")
     planner = RestToRestPlanner(4, 1)
     guess = naive_guess(planner.transcription, *planner.boundary(problem, 0))
+    with pytest.raises(InputError, match="horizon"):
+        rockit_solve(planner, problem, guess, horizon=float("nan"))
+    with pytest.raises(SolverError, match="rockit/IPOPT did not solve"):    # IPOPT stopped after one iteration
+        rockit_solve(RestToRestPlanner(4, 1, max_iter=1), problem, guess)
     monkeypatch.setitem(sys.modules, "rockit", None)
     with pytest.raises(InputError, match="rockit-meco"):
         rockit_solve(planner, problem, guess)
