@@ -221,6 +221,18 @@ def _warm_samples(motion: TimedMotion, radius: float) -> tuple[np.ndarray, np.nd
     return motion.t, x7
 
 
+def _robot(problem: Problem, robot: Robot | None) -> Robot:
+    """``robot``, else the problem's, else :func:`robot_for_k` scaled to the problem's radius."""
+    if robot is not None or problem.robot is not None:
+        return robot if robot is not None else problem.robot
+    rob, radius = robot_for_k(problem.k), problem.radius
+    if radius == 1.0:
+        return rob
+    return Robot(radius=radius, mass_total=rob.mass_total, mass_shell=rob.mass_shell,
+                 rotor_inertia_axial=rob.rotor_inertia_axial * radius ** 2,
+                 rotor_inertia_transverse=rob.rotor_inertia_transverse * radius ** 2)
+
+
 def _timed(p, robot: Robot, horizon: float, planner: RestToRestPlanner):
     """``(path, motion)``: the GP plan ``p``'s path timed by the rest-to-rest timing minimising the planner's cost on
     its N intervals, sampled like the planner's certified motions."""
@@ -243,7 +255,7 @@ def branch_guess(problem: Problem, planner: RestToRestPlanner, horizon: float = 
     ------
     InputError, NoPlanError
     """
-    rob = robot if robot is not None else problem.robot if problem.robot is not None else robot_for_k(problem.k)
+    rob = _robot(problem, robot)
     p = _branches(problem, rob, planner.contact_bound, 1)[0]
     _, motion = _timed(p, rob, horizon, planner)
     m = _turns(p, problem)
@@ -292,11 +304,7 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
     horizon = check_range("horizon", horizon, 0.0, 1e6, low_open=True)
     branches = check_whole("branches", branches, 1, 100)
-    rob = robot if robot is not None else robot_for_k(problem.k)
-    if robot is None and radius is not None and radius != 1.0:
-        rob = Robot(radius=radius, mass_total=rob.mass_total, mass_shell=rob.mass_shell,
-                    rotor_inertia_axial=rob.rotor_inertia_axial * radius ** 2,
-                    rotor_inertia_transverse=rob.rotor_inertia_transverse * radius ** 2)
+    rob = _robot(problem, robot)
     planner = _planner(intervals, degree, scheme, cost, contact_bound)   # checks N, d, scheme, bound
 
     t0 = time.perf_counter()
