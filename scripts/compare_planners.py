@@ -156,7 +156,7 @@ def convergence(target=(0.5, 0.3, 0.4)):
             f"; J(N) decreases {'monotonically' if monotone else 'NOT monotonically'} with N. ")
     if abs(orders[-1] - 1) < 0.2:
         text += ("The optimum converges at first order, not at the transcription's order 2d (which its states have "
-                 "with the controls held fixed, tests/test_collocation.py): the cost does not involve the "
+                 "with the controls held fixed, tests/test_compare.py): the cost does not involve the "
                  "accelerations, so the continuous problem's infimum has the rates jumping at both ends and is not "
                  "attained, and the discrete optimum ramps the rates from and to rest within about one interval at "
                  "each end. ")
