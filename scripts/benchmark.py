@@ -649,11 +649,54 @@ def section_batch(ctx):
     return {"title": "Batch planning: --jobs 2 against --jobs 1", "rows": rows, "notes": notes, "summary": m}
 
 
+#: (target, N, guess) of the peer section: a small case from the naive guess, and the comparison's setting
+#: (results/comparison.md: N = 100, d = 3) from the warm start of its shortest GP branch.
+PEER_CASES = [((-0.4, 0.4, 1.0), 20, "naive"), ((0.5, 0.3, 0.4), 100, "gp")]
+
+
+def section_peer(ctx):
+    """The rest-to-rest collocation against the same OCP transcribed by rockit (rollplan.studies.comparison_peer):
+    the optima side by side and the solve times."""
+    from rollplan.errors import InputError
+    from rollplan.studies.comparison_peer import peer_rest_to_rest
+
+    title = "Peer: the rest-to-rest OCP in rollplan and in rockit (same OCP, same transcription class)"
+    repeats = 1 if ctx["quick"] else 5
+    rows = []
+    for target, n, guess in PEER_CASES[:1] if ctx["quick"] else PEER_CASES:
+        try:
+            r = peer_rest_to_rest(Problem(target, k=K), guess, intervals=n, repeats=repeats).row()
+        except InputError as exc:    # rockit not installed
+            return {"title": title, "rows": [], "notes": [str(exc)]}
+        rows.append({"target (u_a, v_a, psi)": str(target), "N": n, "guess": r["guess"],
+                     "optimum rollplan": f"{r['objective']:.12g}", "optimum rockit": f"{r['peer_objective']:.12g}",
+                     "relative difference": r["relative_difference"], "largest control difference":
+                     r["control_difference"], "iterations rollplan / rockit": f"{r['iterations']} / "
+                     f"{r['peer_iterations']}", "build rollplan [s]": r["build_s"],
+                     "first solve rockit (build + solve) [s]": r["peer_first_s"],
+                     "solve rollplan, median [s]": r["solve_median_s"],
+                     "solve rockit, median [s]": r["peer_solve_median_s"]})
+    notes = [f"k = {K}, T = 1 s, cost angular_velocity, contact bound 80 deg, Legendre d = 3; both IPOPT with the same "
+             "options (tol 1e-9), from the same guess (naive: the straight line at rest; gp: the shortest geometric-"
+             "phase branch timed by its optimal rest-to-rest timing). rockit's NLP: its DirectCollocation (M = 1) "
+             "of the same dynamics (the model's CasADi function), cost, bounds and boundary conditions, expanded to "
+             "SX like rollplan's. Solve times: wall time of the solver call from the same guess, "
+             f"median of {repeats + 1} (rollplan) and {repeats} (rockit, after the first) solves; rockit's include "
+             "its Opti bookkeeping per solve. Build: rollplan's NLP and solver construction; rockit's first solve "
+             "includes its transcription and the solver's construction."]
+    if rows:
+        worst = max(r["relative difference"] for r in rows)
+        notes.append(f"Largest relative difference of the optima: {worst:.1e} "
+                     f"({'within' if worst <= 1e-6 else 'NOT within'} 1e-6).")
+    return {"title": title, "rows": rows, "notes": notes}
+
+
 #: The benchmark, in order. Append new sections here; :func:`section_budgets` reads the others' summaries and
 #: is shown first in the report.
 SECTIONS = [section_plan, section_cold, section_high_k, section_step_map, section_collocation, section_c_planner,
             section_memory, section_profile,
             section_batch, section_budgets]
+SECTIONS.insert(SECTIONS.index(section_collocation) + 1, section_peer)
 
 
 # ----------------------------------------------------------------------------- report

@@ -129,6 +129,32 @@ def test_comparison_is_fair(comp):
     assert comp.collocation.costs["angular_velocity"] < comp.gp.costs["angular_velocity"]
 
 
+def test_comparison_figure_follows_the_colour_convention(comp):
+    """Both planners in their colours (rollplan.plots.colors.PLANNER) on the paths and |omega|; each planner's
+    rotor rates and torques in the rotor colours and omega's components in theirs; every colour in a legend."""
+    from matplotlib.colors import to_rgba
+
+    from rollplan.plots.colors import OMEGA, OMEGA_LABELS, PLANNER, PLANNER_LABELS, ROTOR, ROTOR_LABELS
+    from rollplan.plots.compare import plot_comparison
+
+    fig = plot_comparison(comp)
+    by_title = {ax.get_title(): ax for ax in fig.axes}
+    rgba = lambda ax: [to_rgba(ln.get_color()) for ln in ax.get_lines() if len(ln.get_xdata()) > 2]  # noqa: E731
+    planners = [to_rgba(PLANNER[n]) for n in ("geometric_phase", "collocation")]
+    assert rgba(by_title["contact paths on the plane"]) == planners
+    assert rgba(by_title["|omega| of both motions"]) == planners
+    legends = {t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()}
+    for name, side in (("geometric_phase", comp.gp), ("collocation", comp.collocation)):
+        who = PLANNER_LABELS[name]
+        assert any(text.startswith(who) for text in legends)
+        rates = by_title[f"{who}: rotor rates, eq. (11)"]
+        assert rgba(rates) == [to_rgba(c) for c in ROTOR]
+        assert np.array_equal(rates.get_lines()[1].get_ydata(), side.motion.rotor_rates[:, 1])
+        assert rgba(by_title[f"{who}: motor torques"]) == [to_rgba(c) for c in ROTOR]
+        assert rgba(by_title[f"{who}: omega (plane frame)"]) == [to_rgba(c) for c in OMEGA]
+    assert all(any(lab in text for text in legends) for lab in (*ROTOR_LABELS, *OMEGA_LABELS, "start", "target"))
+
+
 def test_collocation_path_obeys_the_printed_equations(comp):
     tr = comp.collocation.motion.trajectory()
     x = references.replay(tr.u_o, tr.v_o, np.zeros(tr.s.size, int), np.zeros(3), K)
@@ -185,6 +211,26 @@ def test_timed_motion_refuses_bad_shapes():
     with pytest.raises(InputError, match="non-decreasing"):
         TimedMotion(np.array([0.0, 2.0, 1.0]), np.zeros((3, 5)), np.zeros((3, 2)), np.zeros((3, 3)),
                     np.zeros((3, 2)), np.zeros((3, 2)))
+
+
+@pytest.mark.slow
+def test_empirical_order_of_the_collocation_optimum_is_one():
+    """The optimum J(N) of the rest-to-rest collocation measured at N = 20, 40, 80, 160: the empirical order
+    log2((J(N) - J(2N)) / (J(2N) - J(4N))) tends to 1, not to the transcription's 2d. The cost does not involve
+    the accelerations, so the continuous problem's infimum has rates jumping at both ends and is not attained; the
+    discrete optimum ramps the rates within about one interval at each end, which costs O(1/N)."""
+    from rollplan.studies.comparison import branch_guess
+
+    problem = Problem((0.5, 0.3, 0.4), k=K)
+    J = []
+    for n in (20, 40, 80, 160):
+        planner = RestToRestPlanner(n, 3)
+        guess, m = branch_guess(problem, planner)
+        J.append(planner.solve(problem, guess, 1.0, m).objective)
+    d = np.diff(J)
+    orders = np.log2(d[:-1] / d[1:])
+    assert np.all(d < 0)                        # monotone from above
+    assert abs(orders[-1] - 1.0) < 0.2 and orders[-1] < orders[0]
 
 
 @pytest.mark.slow

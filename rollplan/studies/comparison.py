@@ -47,13 +47,15 @@ from ..planners.collocation.rest import (
     guess_from_samples,
     naive_guess,
 )
+from ..planners.collocation.transcription import Guess
 from ..planners.geometric import Plan
 from ..planners.geometric import plan as gp_plan
 from ..problem import Problem
 from ..robot import Robot
 
 __all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side", "Comparison",
-           "leaf_radius_bound", "robot_for_k", "compare", "comparison_to_dict", "MinimumTime", "minimum_time"]
+           "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict", "MinimumTime",
+           "minimum_time"]
 
 #: Default contact bound of both planners: largest polar angle of the contact point [rad] (80 deg).
 CONTACT_BOUND = math.radians(80.0)
@@ -219,6 +221,47 @@ def _warm_samples(motion: TimedMotion, radius: float) -> tuple[np.ndarray, np.nd
     return motion.t, x7
 
 
+def _robot(problem: Problem, robot: Robot | None) -> Robot:
+    """``robot``, else the problem's, else :func:`robot_for_k` scaled to the problem's radius."""
+    if robot is not None or problem.robot is not None:
+        return robot if robot is not None else problem.robot
+    rob, radius = robot_for_k(problem.k), problem.radius
+    if radius == 1.0:
+        return rob
+    return Robot(radius=radius, mass_total=rob.mass_total, mass_shell=rob.mass_shell,
+                 rotor_inertia_axial=rob.rotor_inertia_axial * radius ** 2,
+                 rotor_inertia_transverse=rob.rotor_inertia_transverse * radius ** 2)
+
+
+def _timed(p, robot: Robot, horizon: float, planner: RestToRestPlanner):
+    """``(path, motion)``: the GP plan ``p``'s path timed by the rest-to-rest timing minimising the planner's cost on
+    its N intervals, sampled like the planner's certified motions."""
+    path = ContactPath.of_plan(p, robot)
+    timing = optimal_timing(path, horizon, planner.cost, planner.transcription.intervals)
+    return path, timed_samples(path, timing, planner.samples_per_interval)
+
+
+def _turns(p, problem: Problem) -> int:
+    """Whole turns m of psi of the GP plan ``p``: its final psi is the goal's + 2 pi m."""
+    return round((p.final.psi - problem.goal.psi) / (2 * math.pi))
+
+
+def branch_guess(problem: Problem, planner: RestToRestPlanner, horizon: float = 1.0,
+                 robot: Robot | None = None) -> tuple[Guess, int]:
+    """The warm start ``gp0:m`` of :func:`compare` for ``planner``: the shortest GP branch within its contact
+    bound, timed by the rest-to-rest timing of its cost, as a guess of its transcription; and m.
+
+    Raises
+    ------
+    InputError, NoPlanError
+    """
+    rob = _robot(problem, robot)
+    p = _branches(problem, rob, planner.contact_bound, 1)[0]
+    _, motion = _timed(p, rob, horizon, planner)
+    m = _turns(p, problem)
+    return guess_from_samples(planner.transcription, *_warm_samples(motion, problem.radius), f"gp0:{m}"), m
+
+
 def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None = None,
             radius: float | None = None, horizon: float = 1.0, cost: str = "angular_velocity",
             intervals: int = 100, degree: int = 3, scheme: str = "legendre",
@@ -261,19 +304,13 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
     horizon = check_range("horizon", horizon, 0.0, 1e6, low_open=True)
     branches = check_whole("branches", branches, 1, 100)
-    rob = robot if robot is not None else robot_for_k(problem.k)
-    if robot is None and radius is not None and radius != 1.0:
-        rob = Robot(radius=radius, mass_total=rob.mass_total, mass_shell=rob.mass_shell,
-                    rotor_inertia_axial=rob.rotor_inertia_axial * radius ** 2,
-                    rotor_inertia_transverse=rob.rotor_inertia_transverse * radius ** 2)
+    rob = _robot(problem, robot)
     planner = _planner(intervals, degree, scheme, cost, contact_bound)   # checks N, d, scheme, bound
-    N = planner.transcription.intervals
 
     t0 = time.perf_counter()
     timed = []
     for p in _branches(problem, rob, contact_bound, branches):
-        path = ContactPath.of_plan(p, rob)
-        motion = timed_samples(path, optimal_timing(path, horizon, cost, N), planner.samples_per_interval)
+        path, motion = _timed(p, rob, horizon, planner)
         timed.append((p, Side(motion, measure(motion), p.residual, 0.0), path))
     gp_time = time.perf_counter() - t0
     best_gp = min(range(len(timed)), key=lambda i: timed[i][1].costs[cost])
@@ -281,7 +318,7 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     gp_side = Side(gp_side.motion, gp_side.costs, gp_side.residual, gp_time)
 
     starts, results = [], []
-    turns_of = lambda q: round((q.final.psi - problem.goal.psi) / (2 * math.pi))  # noqa: E731
+    turns_of = lambda q: _turns(q, problem)  # noqa: E731
     tr = planner.transcription
     candidates = [(f"gp{i}:{turns_of(p)}", turns_of(p), *_warm_samples(side.motion, problem.radius),
                    side.costs[cost]) for i, (p, side, _) in enumerate(timed)]
