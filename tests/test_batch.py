@@ -384,6 +384,17 @@ def test_progress_is_plain_lines_in_a_log(tmp_path, capsys):
     assert re.search(r"^batch: 3/3 targets \(100%\), 1 failed, .* elapsed$", err, re.MULTILINE)
 
 
+def test_rows_do_not_show_the_planners_own_progress(tmp_path):
+    """A batch shows its own progress (or none with --quiet): the search progress of each row's planner would
+    be one stale label over the whole run."""
+    from rollplan.progress import reporting
+
+    labels = []
+    with reporting(lambda label, *a, **kw: labels.append(label)):
+        run_batch(write_csv(tmp_path / "t.csv", ROWS[:2]), tmp_path / "p.jsonl", jobs=1)
+    assert labels == []
+
+
 def test_forked_workers_start_with_the_planner_built():
     """With --jobs 2 the workers are forked after the parent built the planner: they construct nothing."""
     from rollplan.studies.executor import Executor, start_method
