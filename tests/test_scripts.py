@@ -63,13 +63,7 @@ def test_closed_loop_script_runs(tmp_path):
 @pytest.mark.skipif(any(shutil.which(t) is None for t in ("arm-none-eabi-gcc", "qemu-system-arm", "make", "cc"))
                     and os.environ.get("ROLLPLAN_REQUIRE_EMBEDDED") != "1", reason="needs the ARM toolchain and QEMU")
 def test_embedded_report_script_runs(tmp_path):
-    """The script end to end, on the first of its targets only (the paper's case): its other targets are more
-    emulated runs of the same firmware, whose plans on the boards tests/test_embedded.py checks."""
-    scripts = Path(__file__).resolve().parent.parent / "scripts"
-    run = ("import sys; sys.path.insert(0, sys.argv[1]); import embedded_report as e; "
-           "e.TARGETS = e.TARGETS[:1]; sys.argv = [e.__file__] + sys.argv[2:]; e.main()")
-    subprocess.run([sys.executable, "-c", run, str(scripts), "--no-host", "--out-dir", str(tmp_path)], check=True,
-                   capture_output=True, timeout=1800)
+    run_script("embedded_report.py", tmp_path, "--no-host", timeout=1800)
     text = (tmp_path / "embedded.md").read_text()
     assert "| double | m7 (mps2-an500) |" in text and "| float | m4f (mps2-an386) |" in text
     assert "Instructions per plan" in text and (tmp_path / "embedded.json").stat().st_size > 0
