@@ -37,6 +37,8 @@ def run(folder: Path, node: str) -> tuple:
     cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *shlex.split(node)]
     c, t = _cpu(), time.perf_counter()
     r = subprocess.run(cmd, cwd=folder, capture_output=True, text=True, check=False, timeout=3600)
+    if r.returncode:
+        print(f"{folder}: pytest {node} failed:\n{r.stdout[-3000:]}", file=sys.stderr)
     return time.perf_counter() - t, _cpu() - c, r.returncode == 0
 
 
