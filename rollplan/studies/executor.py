@@ -23,10 +23,11 @@ Backends:
     ``warm`` built (the planner and its compiled functions) and pay no start-up. With ``first_here``
     (items that share what ``fn`` builds lazily, e.g. the rows of a batch at one k) the first item runs
     here too before the fork, so whatever it built (the tables of its parameters, the solver's
-    internals) is built once, not once per worker. Items go to the workers in chunks sized from the first item's time
-    (one item when an item takes longer than :data:`CHUNK_SECONDS`), so short items do not pay a round
-    trip each. Elsewhere, or when this process runs other threads (forking them is unsafe), the workers
-    are spawned and run ``warm()`` once each. Ctrl-C in this process stops the workers at once.
+    internals) is built once, not once per worker. Items go to the workers in chunks sized from the
+    first item's time (one item when an item takes longer than :data:`CHUNK_SECONDS`), so short items
+    do not pay a round trip each. Elsewhere, or when this process runs other threads (forking them is
+    unsafe), the workers are spawned and run ``warm()`` once each. Ctrl-C in this process stops the
+    workers at once.
 ``scheduler = "tcp://host:port"``
     The items are tasks on a Dask distributed cluster (optional extra:
     ``pip install 'rollplan[distributed]'``). The workers must have the same version of rollplan
@@ -193,22 +194,24 @@ class Executor:
         return self._map_pool(fn, items)
 
     def _map_pool(self, fn, items):
-        method = start_method()
-        ctx = multiprocessing.get_context(method)
-        if method != "fork":
-            workers = min(self.jobs, len(items))
-            self._pool = ctx.Pool(workers, initializer=_spawned_worker_init, initargs=(self.warm,))
-            log.info("%d worker processes (%s)", workers, method)
-            yield from self._pool.imap(fn, items, chunksize=1)   # in input order
-            return
-        if self.warm is not None:
-            self.warm()
         rest, elapsed = items, None
-        if self.first_here:
+        if self.first_here and start_method() == "fork":
+            if self.warm is not None:
+                self.warm()
             start = time.perf_counter()
             yield fn(items[0])   # here: what fn builds lazily is built once, before the fork, for every worker
             elapsed = time.perf_counter() - start
             rest = items[1:]
+        method = start_method()   # again: the first item may have started a thread
+        ctx = multiprocessing.get_context(method)
+        if method != "fork":
+            workers = min(self.jobs, len(rest))
+            self._pool = ctx.Pool(workers, initializer=_spawned_worker_init, initargs=(self.warm,))
+            log.info("%d worker processes (%s)", workers, method)
+            yield from self._pool.imap(fn, rest, chunksize=1)   # in input order
+            return
+        if self.warm is not None:
+            self.warm()   # built once here (nothing new if the first item ran here); the forked workers share it
         workers = min(self.jobs, len(rest))
         chunk = chunk_size(elapsed, len(rest), workers)
         # Objects moved to the permanent generation are not traversed by the workers' garbage collector,
