@@ -10,9 +10,14 @@ shared, so runs of one repeat see the same load), reported as min and median:
 
 * the whole command, cold: ``rollplan batch T.csv --out P.jsonl --jobs J --quiet`` in a new
   process (Python start, imports, the planner's construction, planning, output);
-* the planning phase, warm: :func:`rollplan.studies.batch.run_batch` in this process after the
-  planner and the leaf tables of k have been built (the forked workers of ``--jobs 2`` start with
-  them), i.e. the throughput of a long batch.
+* the rows phase, warm: :func:`rollplan.studies.batch.run_batch` in this process after the
+  planner and the leaf tables of k have been built, i.e. the throughput of a long batch.
+
+With ``--jobs 2`` the first row is planned in the parent and the two workers are forked after it
+(they start with the imports, the planner and the tables of k in memory), so the fixed part is
+paid once in both runs and only the rows are shared. The speed-ups are given per repeat (ratio
+of the two runs of one repeat: median, min..max) and as the ratio of the two minimum times (the
+runs least disturbed by other processes).
 
 Wall times on a shared machine measure the share of the CPU a run gets, not what it needs: with
 Linux's autogroup scheduling (``/proc/sys/kernel/sched_autogroup_enabled``) all processes of one
@@ -103,6 +108,7 @@ def measure(n_targets: int = 200, repeats: int = 3, cold: bool = True) -> dict:
         tmp = Path(tmp)
         csv = tmp / "targets.csv"
         write_targets(csv, n_targets)
+        load_start = list(os.getloadavg()) if hasattr(os, "getloadavg") else None
         kinds = ("cold", "warm") if cold else ("warm",)
         times = {(kind, j): [] for kind in kinds for j in (1, 2)}
         planner = default_planner("ipopt")
@@ -122,7 +128,8 @@ def measure(n_targets: int = 200, repeats: int = 3, cold: bool = True) -> dict:
         failed = sum(d["status"] != "ok" for d in runs[0])
     autogroup = Path("/proc/sys/kernel/sched_autogroup_enabled")
     out = {"targets": n_targets, "failed_rows": failed, "repeats": repeats, "same_lines": same,
-           "cores": os.cpu_count(), "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
+           "cores": os.cpu_count(), "load_average_start": load_start,
+           "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
            "autogroup": autogroup.read_text().strip() == "1" if autogroup.exists() else None}
     for kind in kinds:
         w1, w2 = [w for w, _ in times[kind, 1]], [w for w, _ in times[kind, 2]]
@@ -131,7 +138,7 @@ def measure(n_targets: int = 200, repeats: int = 3, cold: bool = True) -> dict:
         ratios = [a / b for a, b in zip(w1, w2)]
         out[kind] = {"jobs1_s": w1, "jobs2_s": w2, "jobs1_median_s": statistics.median(w1),
                      "jobs2_median_s": statistics.median(w2), "speedup_median": statistics.median(ratios),
-                     "speedup_min": min(ratios), "speedup_max": max(ratios),
+                     "speedup_min": min(ratios), "speedup_max": max(ratios), "speedup_of_min": min(w1) / min(w2),
                      "jobs1_cpu_s": c1, "jobs2_cpu_s": c2, "serial_cpu_s": serial,
                      "idle_speedup_estimate": c1 / (serial + (c2 - serial) / 2)}
     return out
@@ -144,20 +151,23 @@ def to_markdown(m: dict, command: str) -> str:
 
     out = ["# Batch planning: --jobs 2 against --jobs 1", "",
            f"- date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M UTC}; command: `{command}`",
-           f"- machine: {platform.platform()}, {m['cores']} cores; load average at the end "
+           f"- machine: {platform.platform()}, {m['cores']} cores; load average (1, 5, 15 min) at the start "
+           f"{', '.join(f'{x:.2f}' for x in m.get('load_average_start') or [])}, at the end "
            f"{', '.join(f'{x:.2f}' for x in m['load_average'] or [])}; autogroup scheduling "
            f"{'on' if m['autogroup'] else 'off'}",
            f"- {m['targets']} targets ({m['failed_rows']} without a plan), {m['repeats']} repeats alternating the "
            f"order of the runs; both write the same lines (solver times aside): {m['same_lines']}", "",
-           "| measurement | --jobs 1 [s] | --jobs 2 [s] | wall speed-up (median, min..max) "
+           "| measurement | --jobs 1 [s] | --jobs 2 [s] | wall speed-up per repeat (median, min..max) "
+           "| wall speed-up of the minimum times "
            "| CPU --jobs 1 / --jobs 2 [s] | serial CPU [s] | idle speed-up, estimate from CPU |",
-           "|---|---|---|---|---|---|---|"]
-    for kind, what in (("cold", "whole command, cold"), ("warm", "planning phase, planner built")):
+           "|---|---|---|---|---|---|---|---|"]
+    for kind, what in (("cold", "whole command, cold"), ("warm", "rows phase, planner built")):
         if kind in m:
             r = m[kind]
-            out.append(f"| {what} | {', '.join(f'{x:.1f}' for x in r['jobs1_s'])} | "
-                       f"{', '.join(f'{x:.1f}' for x in r['jobs2_s'])} | {r['speedup_median']:.2f} "
-                       f"({r['speedup_min']:.2f}..{r['speedup_max']:.2f}) | {r['jobs1_cpu_s']:.2f} / "
+            out.append(f"| {what} | {', '.join(f'{x:.2f}' for x in r['jobs1_s'])} | "
+                       f"{', '.join(f'{x:.2f}' for x in r['jobs2_s'])} | {r['speedup_median']:.2f} "
+                       f"({r['speedup_min']:.2f}..{r['speedup_max']:.2f}) | {r['speedup_of_min']:.2f} "
+                       f"| {r['jobs1_cpu_s']:.2f} / "
                        f"{r['jobs2_cpu_s']:.2f} | {r['serial_cpu_s']:.2f} | {r['idle_speedup_estimate']:.2f} |")
     out += ["", __doc__[__doc__.index("Two measurements"):].strip(), ""]
     return "\n".join(out)

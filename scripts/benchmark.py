@@ -631,16 +631,18 @@ def section_batch(ctx):
         rows.append({"measurement": what, "--jobs 1 median [s]": r["jobs1_median_s"],
                      "--jobs 2 median [s]": r["jobs2_median_s"], "speed-up median": r["speedup_median"],
                      "speed-up min..max": f"{r['speedup_min']:.2f}..{r['speedup_max']:.2f}",
+                     "speed-up of the min times": r["speedup_of_min"],
                      "CPU --jobs 1 / --jobs 2 [s]": f"{r['jobs1_cpu_s']:.2f} / {r['jobs2_cpu_s']:.2f}",
                      "idle speed-up (estimate from CPU)": r["idle_speedup_estimate"],
                      f"budget >= {bench_batch.BUDGET_SPEEDUP:g}x (wall)": _status(r["speedup_median"]
                                                                                    >= bench_batch.BUDGET_SPEEDUP)})
     notes = [f"{m['targets']} targets ({m['failed_rows']} without a plan), {m['repeats']} repeat(s) alternating the "
-             f"order of the two runs; the same lines from both: {m['same_lines']}. Load average at the end "
+             f"order of the two runs; the same lines from both: {m['same_lines']}. Load average at the start "
+             f"{', '.join(f'{x:.2f}' for x in m['load_average_start'] or [])}, at the end "
              f"{', '.join(f'{x:.2f}' for x in m['load_average'] or [])} on {m['cores']} cores; autogroup "
              f"scheduling {'on' if m['autogroup'] else 'off'}.",
              "Cold: Python start, imports and the planner's construction are paid once in both runs (the --jobs 2 "
-             "workers are forked after the parent built the planner), so they bound the cold speed-up; warm: "
+             "workers are forked after the parent planned the first row), so they bound the cold speed-up; warm: "
              "the throughput of a long batch.",
              "With autogroup scheduling, all processes of a session share one fair share of the CPU: while other "
              "sessions keep the cores busy, two workers get no more CPU than one, and the wall-clock speed-up "

@@ -258,14 +258,19 @@ def _batch_process(csv_path, out, jobs):
                             stderr=subprocess.PIPE, text=True, start_new_session=True)
 
 
+#: (signal, --jobs) of the interrupted attempts, in turn: each signal at random moments of runs in this process
+#: and of runs with forked workers.
+INTERRUPTIONS = [(signal.SIGINT, 1), (signal.SIGINT, 2), (signal.SIGKILL, 1), (signal.SIGKILL, 2)] * 2
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL])
-def test_interrupted_at_random_moments_and_resumed_equals_an_uninterrupted_run(tmp_path, sig):
+def test_interrupted_at_random_moments_and_resumed_equals_an_uninterrupted_run(tmp_path):
     """Run the batch, stop it by SIGINT (Ctrl-C) or SIGKILL at random moments from its start (imports,
     planner construction, planning, writing), resume, again and again: the final output equals an
     uninterrupted run line for line (up to the solvers' wall-clock times). A SIGINT exits 130 with one line
     and no traceback (within a second in the solvers; CasADi's construction of a solver, a few seconds on a
-    loaded machine, is not interruptible) and never records the row in flight as failed."""
+    loaded machine, is not interruptible) and never records the row in flight as failed. (One sequence of
+    attempts alternates the two signals, so both share the reference run and the final resume.)"""
     rows = SLOW_ROWS
     csv_path = write_csv(tmp_path / "t.csv", rows)
     reference = tmp_path / "reference.jsonl"
@@ -274,10 +279,10 @@ def test_interrupted_at_random_moments_and_resumed_equals_an_uninterrupted_run(t
     assert proc.wait(timeout=600) == SLOW_EXIT
     whole = time.perf_counter() - t0          # the moments are drawn over a whole run, start-up included
     out = tmp_path / "out.jsonl"
-    rng = random.Random(16 + sig)
+    rng = random.Random(18)
     history = []
-    for attempt in range(8):
-        proc = _batch_process(csv_path, out, jobs=1 + attempt % 2)
+    for sig, jobs in INTERRUPTIONS:
+        proc = _batch_process(csv_path, out, jobs=jobs)
         delay = rng.uniform(0.3, whole)
         time.sleep(delay)
         if sig == signal.SIGKILL:
@@ -286,7 +291,7 @@ def test_interrupted_at_random_moments_and_resumed_equals_an_uninterrupted_run(t
             proc.send_signal(signal.SIGINT)
         t_sig = time.perf_counter()
         _, err = proc.communicate(timeout=120)
-        history.append((delay, proc.returncode, len(read_output(out))))
+        history.append((sig.name, jobs, delay, proc.returncode, len(read_output(out))))
         if sig == signal.SIGINT:
             assert proc.returncode in (SLOW_EXIT, 130), (history, err)
             assert time.perf_counter() - t_sig < 10.0, history
@@ -298,7 +303,7 @@ def test_interrupted_at_random_moments_and_resumed_equals_an_uninterrupted_run(t
     proc = _batch_process(csv_path, out, jobs=2)
     _, err = proc.communicate(timeout=600)
     assert proc.returncode == SLOW_EXIT, err
-    print("interrupted runs (delay [s], exit code, finished lines):", history)
+    print("interrupted runs (signal, jobs, delay [s], exit code, finished lines):", history)
     assert out.read_text().count("\n") == len(rows)
     assert without_times(read_lines(out)) == without_times(read_lines(reference)), history
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.jsonl", "reference.jsonl", "t.csv"]
@@ -382,6 +387,17 @@ def test_progress_is_plain_lines_in_a_log(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "\r" not in err
     assert re.search(r"^batch: 3/3 targets \(100%\), 1 failed, .* elapsed$", err, re.MULTILINE)
+
+
+def test_rows_do_not_show_the_planners_own_progress(tmp_path):
+    """A batch shows its own progress (or none with --quiet): the search progress of each row's planner would
+    be one stale label over the whole run."""
+    from rollplan.progress import reporting
+
+    labels = []
+    with reporting(lambda label, *a, **kw: labels.append(label)):
+        run_batch(write_csv(tmp_path / "t.csv", ROWS[:2]), tmp_path / "p.jsonl", jobs=1)
+    assert labels == []
 
 
 def test_forked_workers_start_with_the_planner_built():

@@ -78,3 +78,42 @@ def test_no_fork_while_other_threads_run():
         t.join()
     if "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1:
         assert start_method() == "fork"
+
+
+_BUILT: list = []
+
+
+def _build_lazily(x):
+    if not _BUILT:   # what an item builds lazily, once per process (e.g. the tables of its k)
+        _BUILT.append(os.getpid())
+    return x, os.getpid(), _BUILT[0]
+
+
+def test_first_item_here_and_the_forked_workers_share_what_it_built():
+    """first_here: item 0 runs in this process before the fork; the workers get the rest and find built what it
+    built (nothing is built twice)."""
+    from rollplan.studies.executor import start_method
+
+    if start_method() != "fork":
+        pytest.skip("no fork here (or this process runs other threads): the workers are spawned")
+    _BUILT.clear()
+    try:
+        with Executor(2, first_here=True) as ex:
+            out = list(ex.map(_build_lazily, range(7)))
+    finally:
+        _BUILT.clear()
+    assert [x for x, _, _ in out] == list(range(7))
+    assert out[0][1] == os.getpid() and all(pid != os.getpid() for _, pid, _ in out[1:])
+    assert {built for _, _, built in out} == {os.getpid()}
+    with pytest.raises(ValueError, match="three"), Executor(2, first_here=True) as ex:
+        list(ex.map(_fail_on_three, range(6)))
+
+
+def test_chunk_size():
+    from rollplan.studies.executor import CHUNK_SECONDS, chunk_size
+
+    assert chunk_size(None, 1000, 2) == 1                      # unknown item time: one at a time
+    assert chunk_size(2 * CHUNK_SECONDS, 1000, 2) == 1         # long items: one at a time
+    assert chunk_size(CHUNK_SECONDS / 5, 1000, 2) == 5         # short ones: CHUNK_SECONDS of work
+    assert chunk_size(1e-9, 160, 2) == 10                      # at most an eighth of a worker's share
+    assert chunk_size(1e-9, 3, 2) == chunk_size(0.0, 3, 2) == chunk_size(float("nan"), 3, 2) == 1

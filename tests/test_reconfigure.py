@@ -4,7 +4,6 @@ scipy's DOP853 on the printed (15), (16), (20) along the contact path, typed in 
 pieces' parameters alone (references.great_circle_path, references.circle_path)."""
 
 import math
-from functools import lru_cache
 
 import numpy as np
 import pytest
@@ -190,29 +189,37 @@ def test_turning_in_place_off_the_pole(planner):
     assert reference_residual(p) < TOL
 
 
-@lru_cache(maxsize=4)
-def circle_holonomy(k, count=700):
-    """eta_1(b): psi after one -y circle (35) of radius b from zero, by DOP853 on the printed equations."""
-    b = np.linspace(1e-3, 0.69, count)
-    eta = [ref.integrate_contact_path(ref.circle_path(r, -1.0, 0.0), np.zeros(3), (0, 2 * np.pi), k,
-                                      rtol=1e-9, atol=1e-11).y[2, -1] for r in b]
-    return b, np.array(eta)
+#: The brute force's uniform grid of circle radii b.
+HOLONOMY_GRID = np.linspace(1e-3, 0.69, 700)
+_HOLONOMY: dict = {}
+
+
+def circle_holonomy(k, i):
+    """eta_1(b) at HOLONOMY_GRID[i]: psi after one -y circle (35) of radius b from zero, by DOP853 on the
+    printed equations (computed once per k and grid point, in order of b)."""
+    eta = _HOLONOMY.setdefault(k, [])
+    while len(eta) <= i:
+        r = HOLONOMY_GRID[len(eta)]
+        eta.append(ref.integrate_contact_path(ref.circle_path(r, -1.0, 0.0), np.zeros(3), (0, 2 * np.pi), k,
+                                              rtol=1e-9, atol=1e-11).y[2, -1])
+    return eta[i]
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("psi,k,steps", [(0.3, 2.5, 1), (3.0, 2.5, 1), (-2.0, 2.5, 2), (5.0, 2.5, 1),
                                          (-2.0, 0.0, 1), (1.0, 0.0, 2), (1.0, 10.0, 2)])
 def test_the_turn_is_the_smallest_circle_of_a_brute_force(psi, k, steps):
-    """Brute force: every crossing of eta_1(b) (DOP853 on a uniform grid) with any level
-    +-(psi + 2 pi m)/(2n); the smallest b must be the turn's, to the grid spacing."""
-    b, eta = circle_holonomy(k)
+    """Brute force: the first crossing of eta_1(b) (DOP853 on a uniform grid, walked up from the smallest b)
+    with any level +-(psi + 2 pi m)/(2n); its b must be the turn's, to the grid spacing. (The grid beyond the
+    first crossing cannot hold a smaller b, so it is not integrated.)"""
+    b = HOLONOMY_GRID
+    m = np.arange(-200, 201)
+    levels = np.concatenate([sign * (psi + 2 * np.pi * m) / (2 * steps) for sign in (1.0, -1.0)])
     best = np.inf
-    for sign in (1.0, -1.0):
-        for m in range(-200, 201):
-            d = eta - sign * (psi + 2 * np.pi * m) / (2 * steps)
-            i = np.flatnonzero(np.sign(d[:-1]) * np.sign(d[1:]) <= 0)
-            if i.size:
-                best = min(best, b[i[0]])
+    for i in range(b.size - 1):
+        if np.any(np.sign(circle_holonomy(k, i) - levels) * np.sign(circle_holonomy(k, i + 1) - levels) <= 0):
+            best = b[i]
+            break
     t = turn_in_place(psi, k, steps)
     assert best - 1e-12 <= t.b <= best + (b[1] - b[0]) * 1.01
 

@@ -56,7 +56,7 @@ from ..io import plan_to_dict, tagged
 from ..outputs import LineWriter, check_writable, claim, write_atomic
 from ..planners.geometric import SOLVERS, default_planner, plan
 from ..problem import DEFAULT_K
-from ..progress import Progress
+from ..progress import Progress, reporting
 from .executor import Executor
 
 __all__ = ["COLUMNS", "REQUIRED", "DEFAULTS", "FSYNC_INTERVAL", "MAX_TARGETS_BYTES", "BatchResult", "read_targets",
@@ -187,7 +187,8 @@ class _Warm:
 
 def _plan_job(job):
     index, row, method, problem = job
-    return plan_row(index, row, method, problem)
+    with reporting(None):   # the batch shows its own progress, not the planner's of each row
+        return plan_row(index, row, method, problem)
 
 
 def _batch_line(raw: bytes):
@@ -242,7 +243,9 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
     out : path
         Output JSON Lines file (not the targets file); locked while the run lasts.
     jobs : int
-        Worker processes on this machine (each starts with a built planner); 1 plans in this process.
+        Worker processes on this machine; 1 plans in this process. Where processes fork (Linux), the first
+        row is planned here and the workers forked after it, so they start with the planner and the
+        tables of its k built (:class:`.executor.Executor`, ``first_here``).
     resume : bool
         Keep the finished lines of ``out`` whose rows are still in ``targets`` (by content, see the
         module docstring) and plan the other rows.
@@ -276,7 +279,9 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
     if resume and overwrite:
         raise InputError("resume and overwrite exclude each other: resume keeps the finished lines of the output, "
                          "overwrite replaces it")
-    executor = Executor(jobs, scheduler, _Warm(method))   # checks jobs and scheduler before any file is touched
+    # Checks jobs and scheduler before any file is touched. Local workers are forked after the first row was
+    # planned here: they start with what it built (the planner, the tables of its k), built once.
+    executor = Executor(jobs, scheduler, _Warm(method), first_here=True)
     table = _targets(targets)
     out = check_writable(out, "output file", inputs=[targets])
     with claim(out, what="output file"):

@@ -20,9 +20,14 @@ Backends:
 ``jobs > 1``
     A pool of worker processes on this machine. Where the ``fork`` start method exists (Linux), the
     workers are forked from this process after ``warm()`` has run here, so they start with whatever
-    ``warm`` built (the planner and its compiled functions) and pay no start-up; elsewhere, or when this
-    process runs other threads (forking them is unsafe), they are spawned and run ``warm()`` once each.
-    Ctrl-C in this process stops the workers at once.
+    ``warm`` built (the planner and its compiled functions) and pay no start-up. With ``first_here``
+    (items that share what ``fn`` builds lazily, e.g. the rows of a batch at one k) the first item runs
+    here too before the fork, so whatever it built (the tables of its parameters, the solver's
+    internals) is built once, not once per worker. Items go to the workers in chunks sized from the
+    first item's time (one item when an item takes longer than :data:`CHUNK_SECONDS`), so short items
+    do not pay a round trip each. Elsewhere, or when this process runs other threads (forking them is
+    unsafe), the workers are spawned and run ``warm()`` once each. Ctrl-C in this process stops the
+    workers at once.
 ``scheduler = "tcp://host:port"``
     The items are tasks on a Dask distributed cluster (optional extra:
     ``pip install 'rollplan[distributed]'``). The workers must have the same version of rollplan
@@ -41,14 +46,15 @@ import multiprocessing
 import os
 import signal
 import threading
+import time
 from collections.abc import Callable, Iterable, Iterator
 
 from ..errors import InputError, check_whole
 from ..progress import silence
 from ..version import __version__
 
-__all__ = ["Executor", "ExecutorError", "map_in_order", "start_method", "DASK_EXTRA", "CONNECT_TIMEOUT",
-           "WORKERS_TIMEOUT"]
+__all__ = ["Executor", "ExecutorError", "map_in_order", "start_method", "chunk_size", "DASK_EXTRA",
+           "CONNECT_TIMEOUT", "WORKERS_TIMEOUT", "CHUNK_SECONDS"]
 
 log = logging.getLogger(__name__)
 
@@ -58,6 +64,9 @@ DASK_EXTRA = "pip install 'rollplan[distributed]'"
 CONNECT_TIMEOUT = 10.0
 #: Seconds to wait for a scheduler to have at least one worker.
 WORKERS_TIMEOUT = 60.0
+#: Seconds of work a chunk of items sent to a local worker is sized for (items shorter than this go in
+#: chunks, so the cost of sending an item and its result is small against the item's own).
+CHUNK_SECONDS = 0.05
 
 _TASK_LOCK = threading.Lock()
 
@@ -109,18 +118,24 @@ class Executor:
     warm : callable, optional
         ``warm()`` builds what ``fn`` will need (e.g. the planner), once per process: here before
         workers are forked, or in each spawned worker. Optional: ``fn`` must work without it.
+    first_here : bool
+        With forked workers, run the first item in this process before forking them (see the module
+        docstring): for items that share what ``fn`` builds lazily. Without it (few long items with
+        nothing shared, e.g. a sweep over parameters) every item runs in a worker.
 
     Use ``with Executor(...) as ex: for result in ex.map(fn, items): ...``; leaving the block
     stops the workers (at once if it is left by an exception, e.g. Ctrl-C).
     """
 
-    def __init__(self, jobs: int = 1, scheduler: str | None = None, warm: Callable | None = None) -> None:
+    def __init__(self, jobs: int = 1, scheduler: str | None = None, warm: Callable | None = None,
+                 first_here: bool = False) -> None:
         self.jobs = check_whole("jobs", jobs, 1)
         if scheduler is not None and (not isinstance(scheduler, str) or not scheduler.strip()):
             raise InputError(f"scheduler = {scheduler!r} is not allowed: give the address of a Dask scheduler, "
                              "e.g. 'tcp://host:8786'")
         self.scheduler = scheduler
         self.warm = warm
+        self.first_here = bool(first_here)
         self._pool = None
         self._client = None
         self._futures: list = []
@@ -179,23 +194,35 @@ class Executor:
         return self._map_pool(fn, items)
 
     def _map_pool(self, fn, items):
-        method = start_method()
-        ctx = multiprocessing.get_context(method)
-        workers = min(self.jobs, len(items))
-        if method == "fork":
+        rest, elapsed = items, None
+        if self.first_here and start_method() == "fork":
             if self.warm is not None:
-                self.warm()   # built once here; the forked workers share it
-            # Objects moved to the permanent generation are not traversed by the workers' garbage collector,
-            # so their pages stay shared instead of being copied into every worker.
-            gc.freeze()
-            try:
-                self._pool = ctx.Pool(workers, initializer=_ignore_sigint)
-            finally:
-                gc.unfreeze()
-        else:
+                self.warm()
+            start = time.perf_counter()
+            yield fn(items[0])   # here: what fn builds lazily is built once, before the fork, for every worker
+            elapsed = time.perf_counter() - start
+            rest = items[1:]
+        method = start_method()   # again: the first item may have started a thread
+        ctx = multiprocessing.get_context(method)
+        if method != "fork":
+            workers = min(self.jobs, len(rest))
             self._pool = ctx.Pool(workers, initializer=_spawned_worker_init, initargs=(self.warm,))
-        log.info("%d worker processes (%s)", workers, method)
-        return self._pool.imap(fn, items, chunksize=1)   # in input order
+            log.info("%d worker processes (%s)", workers, method)
+            yield from self._pool.imap(fn, rest, chunksize=1)   # in input order
+            return
+        if self.warm is not None:
+            self.warm()   # built once here (nothing new if the first item ran here); the forked workers share it
+        workers = min(self.jobs, len(rest))
+        chunk = chunk_size(elapsed, len(rest), workers)
+        # Objects moved to the permanent generation are not traversed by the workers' garbage collector,
+        # so their pages stay shared instead of being copied into every worker.
+        gc.freeze()
+        try:
+            self._pool = ctx.Pool(workers, initializer=_ignore_sigint)
+        finally:
+            gc.unfreeze()
+        log.info("%d worker processes (fork), %d item(s) per chunk", workers, chunk)
+        yield from self._pool.imap(fn, rest, chunksize=chunk)   # in input order
 
     def _map_dask(self, fn, items, on_error):
         client = self._client
@@ -275,6 +302,16 @@ def map_in_order(fn: Callable, items: Iterable, jobs: int = 1, scheduler: str | 
             if progress is not None:
                 progress(label, len(out), len(items))
     return out
+
+
+def chunk_size(seconds: float | None, items: int, workers: int) -> int:
+    """Items per chunk sent to a local worker: as many items of ``seconds`` each as make
+    :data:`CHUNK_SECONDS` of work, but at most an eighth of each worker's share (so the workers end
+    together and progress stays smooth); 1 when the time of an item is not known (``None``)."""
+    if seconds is None or not seconds >= 0:
+        return 1
+    per_worker = items // (8 * max(workers, 1))
+    return max(1, min(int(CHUNK_SECONDS / max(seconds, 1e-6)), per_worker))
 
 
 def cpu_count() -> int:
