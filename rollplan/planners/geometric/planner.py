@@ -26,19 +26,17 @@ So, for a branch ``m`` (psi is an angle: ``n eta = psi + 2 pi m``), solve
 ``sin(eta/2) = 0`` the limit is ``h_des / n``, (34); see :mod:`rollplan.core.plane`),
 then ``gamma = arg(target) - arg(sum_j Rot(-j eta) D_bar)``.
 
-The pieces. For ``k >= 1/2`` (every physical robot) the roots of (32)-(33) are
-enumerated completely, branch by branch, as the roots of one scalar function
-of one leaf radius (:mod:`.enumerate`, whose docstring holds the completeness
-argument) on the accurate leaf map (:mod:`.leafmap`: the turn in closed form,
-the displacement by a Gauss rule accurate to K_MAX). The shortest plan is
-found by a bounded search: branches are visited in increasing order of the
-smallest ``a + b`` they can hold, the first root of each branch is its
-shortest, and the search stops when no branch left can beat the best
-certified plan. For ``k < 1/2`` the turn is not monotone and the branches are
-bracketed on tables of the two leaves instead (:mod:`.leaves`,
-:mod:`.brackets`) and refined by a root solver chosen by name (:mod:`.refine`),
-without the completeness guarantee. Every plan is certified by an independent
-integration of all ``n`` steps (:mod:`.certify`); a plan whose certified
+The pieces. For every k the roots of (32)-(33) are enumerated completely,
+branch by branch, as the roots of one scalar function along graphs that cover
+the level set of (32) (:mod:`.enumerate`, whose docstring holds the
+completeness argument) on the accurate leaf map (:mod:`.leafmap`: the turn in
+closed form, the displacement by a Gauss rule accurate to K_MAX). The shortest
+plan is found by a bounded search: branches are visited in increasing order of
+a lower bound of ``a + b`` on them, the shortest root of each branch is found
+first, and the search stops when no branch left can beat the best certified
+plan. (The bracketing of the leaf tables, :mod:`.leaves`, :mod:`.brackets`,
+remains for the atlas and the benchmarks.) Every plan is certified by an
+independent integration of all ``n`` steps (:mod:`.certify`); a plan whose certified
 residual exceeds the tolerance is never returned.
 """
 
@@ -75,7 +73,7 @@ from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from .brackets import find_brackets
 from .certify import CvodesCertifier
-from .enumerate import K_MONOTONE, branches, roots
+from .enumerate import K_ENUMERATED, branches, roots
 from .leafmap import step_values
 from .leaves import LeafTables
 from .refine import SOLVER_ERROR_STATUSES, SOLVERS, step_residual
@@ -270,7 +268,7 @@ class GeometricPhasePlanner:
             raise NoPlanError(f"no plan for {where}: the target is the start point, and rollplan plans "
                               "motions with a nonzero displacement")
         target = (goal_r.u_a, goal_r.v_a, psi_des)
-        if k >= K_MONOTONE:
+        if k >= K_ENUMERATED:   # every accepted k (the bracketing below is no longer reached)
             return self._solve_enumerated(problem, all_solutions, None if branch is None else branch + turns,
                                           target, turns, t_start)
         brackets = self.brackets(k, h_des, psi_des, steps, fine=all_solutions)
