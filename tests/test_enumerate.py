@@ -441,3 +441,34 @@ def test_enumeration_for_every_k_against_a_2d_brute_force(k):
         enum = _enumerated(target, steps, k)
         missed, extra = _same_sets(brute, enum)
         assert missed == [] and extra == [], (target, steps, missed, extra)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("k", [0.0, 0.005, 0.1, 0.3, 0.45])
+def test_planner_below_one_half_is_the_shortest_and_complete(k):
+    """The planner at k < 1/2 (formerly bracketed without a guarantee): random targets, n in 1..3; the
+    default plan is the shortest root of the 2-D brute force that DOP853 certifies, and ``all_solutions``
+    lists exactly the brute force's roots (certified ones; each checked by DOP853)."""
+    rng = np.random.default_rng(int(k * 1000) + 11)
+    e = leafmap.turn(np.linspace(0.0, A_MAX, 2001), k)
+    span = float(e.max() - min(e.min(), 0.0))          # |eta| <= span: psi where branches exist
+    for _ in range(4):
+        steps = int(rng.integers(1, 4))
+        dist, direction = rng.uniform(0.02, 0.5), rng.uniform(-np.pi, np.pi)
+        psi = 0.0 if rng.uniform() < 0.3 else rng.uniform(-1.0, 1.0) * min(np.pi, 0.9 * steps * span)
+        target = (dist * np.cos(direction), dist * np.sin(direction), psi)
+        brute = _brute_roots_2d(target, steps, k)
+        try:
+            p = rollplan.plan(target, steps=steps, k=k, all_solutions=True, legs="one")
+        except rollplan.NoPlanError:
+            assert brute == []
+            continue
+        plans = (p,) + p.alternatives
+        assert all(_certified_by_dop853(target, steps, k, q) < 1e-9 for q in plans)
+        missed, extra = _same_sets(brute, [(q.branch, q.a, q.b) for q in plans])
+        assert extra == []
+        # a brute-force root the certificate rejected would be missing; none is expected here
+        assert missed == []
+        assert p.path_length <= min(2 * math.pi * steps * (a + b) for _, a, b in brute) + 1e-8
+        d = rollplan.plan(target, steps=steps, k=k, legs="one")
+        assert d.path_length == pytest.approx(p.path_length, abs=1e-9)

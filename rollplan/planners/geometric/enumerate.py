@@ -106,8 +106,9 @@ HERMITE_REL = 1e-2
 #: Factor between the Hermite error anywhere in a cell and at its midpoint.
 SAFETY = 4.0
 #: Table of rho: steps in the turn E [rad] and in r [R].
-TABLE_PHASE = 0.1
-TABLE_STEP = 0.0025
+TABLE_PHASE = 0.15
+TABLE_STEP = 0.004
+TABLE_INV_S = 0.005
 _TABLE_CHUNK = 512
 #: Newton steps on the accurate map below this are taken without a new evaluation (see :func:`_polish`).
 POLISH_STEP = 1e-8
@@ -187,7 +188,7 @@ def _table_file(k: float) -> Path:
     h = hashlib.sha256()
     for src in (__file__, leafmap.__file__):
         h.update(Path(src).read_bytes())
-    h.update(repr((float(k), TABLE_PHASE, TABLE_STEP, SAFETY, K_FAST, np.__version__)).encode())
+    h.update(repr((float(k), TABLE_PHASE, TABLE_STEP, TABLE_INV_S, SAFETY, K_FAST, np.__version__)).encode())
     return cache_dir() / f"rho_table_{h.hexdigest()[:32]}.npz"
 
 
@@ -217,10 +218,13 @@ def rho_table(k: float) -> RhoTable:
     return t
 
 
-def _table_radii(k: float, step: float, phase: float) -> np.ndarray:
-    """Radii uniform in r with ``step``, each cell split evenly so that E changes by at most ``phase``."""
+def _table_radii(k: float, step: float, phase: float, inv_s: float = math.inf) -> np.ndarray:
+    """Radii uniform in r with ``step``, each cell split evenly so that E changes by at most ``phase`` and
+    ``1 / s = (1 - 2 r^2)^(-1/2)`` (whose powers make the leaf map steep near A_MAX) by at most ``inv_s``."""
     base = np.linspace(0.0, A_MAX, math.ceil(A_MAX / step) + 1)
-    parts = np.maximum(1, np.ceil(np.abs(np.diff(turn(base, k))) / phase)).astype(int)
+    parts = np.maximum(np.ceil(np.abs(np.diff(turn(base, k))) / phase),
+                       np.ceil(np.diff((1.0 - 2.0 * base * base) ** -0.5) / inv_s))
+    parts = np.maximum(1, parts).astype(int)
     idx = np.repeat(np.arange(parts.size), parts)
     frac = (np.arange(idx.size) - np.repeat(np.cumsum(parts) - parts, parts)) / np.repeat(parts, parts)
     r = base[idx] + frac * (base[idx + 1] - base[idx])
@@ -240,7 +244,7 @@ def _build_rho_table(k: float) -> RhoTable:
     """Table of rho for inertia ratio k on :func:`_table_radii` (steps :data:`TABLE_STEP`, :data:`TABLE_PHASE`);
     ``eps`` is SAFETY times the largest error at the midpoints of the interpolation variable (where the
     error factor of cubic Hermite interpolation peaks) against the accurate map, plus rounding."""
-    r = _table_radii(k, TABLE_STEP, TABLE_PHASE)
+    r = _table_radii(k, TABLE_STEP, TABLE_PHASE, TABLE_INV_S)
     n = r.size
     label = f"leaf table (k = {k:g})"
     if k >= K_FAST:
@@ -334,8 +338,9 @@ def branches(k: float, psi: float, steps: int, h_des: float, only: int | None = 
         np.minimum.at(y0, gr.br, gr.low)
         np.maximum.at(x_end, gr.br, gr.xmax)
     order = np.argsort(y0, kind="stable")
-    return [Branch(int(m[i]), float(eta[i]), float(h[i]), float(x_end[i]), float(y0[i]))
-            for i in order if np.isfinite(y0[i])]
+    order = order[np.isfinite(y0[order])]
+    return list(map(Branch._make, zip(m[order].tolist(), eta[order].tolist(), h[order].tolist(),
+                                      x_end[order].tolist(), y0[order].tolist())))
 
 
 def _radius(w, k: float):
@@ -404,7 +409,7 @@ class _WGraphs:
         rho, drho, r = _w_lookup(both, self.wt)
         drdw = None
         if accurate:
-            r = radius_of_root_phase(both, self.k, r)
+            r = radius_of_root_phase(both, self.k, r, steps=1)   # the table's r is close: one step to rounding
             rho, drho = signed_length(r, self.k, derivative=True)
             drdw = 1.0 / root_phase(r, self.k)[1]
             drho = drho * drdw
@@ -570,8 +575,8 @@ def _eps_g(k: float) -> float:
 
 def _hermite(g0, p0, g1, p1, w, s):
     """Cubic Hermite interpolant at the local coordinate s in [0, 1] of cells of width w."""
-    h00, h10, h01, h11 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, -2 * s**3 + 3 * s**2, s**3 - s**2
-    return h00 * g0 + h10 * w * p0 + h01 * g1 + h11 * w * p1
+    m0, m1 = w * p0, w * p1
+    return ((((2.0 * g0 - 2.0 * g1 + m0 + m1) * s + (3.0 * (g1 - g0) - 2.0 * m0 - m1)) * s + m0) * s) + g0
 
 
 def _critical(g0, p0, g1, p1, w):
@@ -609,6 +614,9 @@ def _cells(gr, p, gi):
         err = np.abs(gm - _hermite(g0, p0, g1, p1, x1 - x0, 0.5))
         big = np.maximum(np.maximum(np.abs(g0), np.abs(g1)), np.abs(gm))
         s = (err > HERMITE_REL * big) & (err > 1e-15 * (1.0 + gr.h2[o])) & (x1 - x0 > MIN_WIDTH)
+        if not done and not s.any():    # resolved at once: the cells are in order already
+            c = dict(own=o, x0=x0, x1=x1, g0=g0, p0=p0, g1=g1, p1=p1, gm=gm, err=err, s0=s0, s1=s1)
+            return c if o.size else None
         keep = ~s
         done.append((o[keep], x0[keep], x1[keep], g0[keep], p0[keep], g1[keep], p1[keep], gm[keep], err[keep],
                      s0[keep], s1[keep]))
@@ -669,7 +677,7 @@ def _cubic_root(g0, p0, g1, p1, w, lo, hi):
         s = np.where(h1 != h0, lo + (hi - lo) * h0 / (h0 - h1), 0.5 * (lo + hi))
         A = 2 * g0 + w * p0 - 2 * g1 + w * p1
         B = -3 * g0 - 2 * w * p0 + 3 * g1 - w * p1
-        for _ in range(4):
+        for _ in range(2):
             f = ((A * s + B) * s + w * p0) * s + g0
             df = (3 * A * s + 2 * B) * s + w * p0
             s = s - f / df
@@ -681,43 +689,40 @@ def _examine(gr, act, c, crit, eps_g):
     """Roots in the active cells ``act`` of :func:`_cells` output ``c`` (module docstring): arrays of
     parameter, graph index and kind (1 simple, 2 double)."""
     o, x0, x1, g0, p0, g1, p1 = (c[n][act] for n in ("own", "x0", "x1", "g0", "p0", "g1", "p1"))
+    n = act.size
     w = x1 - x0
     cr = crit[act]
-    loc = np.column_stack([np.zeros(act.size), np.where(np.isnan(cr), 1.0, cr), np.ones(act.size)])  # (n, 4)
+    has = ~np.isnan(cr)
+    # each cell cut at the critical points of its Hermite cubic (a missing one collapses to the end)
+    loc = np.ones((n, 4))
+    loc[:, 0] = 0.0
+    loc[:, 1:3] = np.where(has, cr, 1.0)
     pts = x0[:, None] + w[:, None] * loc
-    inner_needed = ~np.isnan(cr)
-    vals = np.column_stack([g0, np.zeros((act.size, 2)), g1])
-    dvals = np.column_stack([p0, np.zeros((act.size, 2)), p1])
-    if inner_needed.any():
-        rows, cols_ = np.nonzero(inner_needed)
-        gi_, dgi_, _, _ = gr.values(pts[rows, cols_ + 1], o[rows])
-        vals[rows, cols_ + 1] = gi_
-        dvals[rows, cols_ + 1] = dgi_
-    # collapsed critical points take the end's values
-    for j in (1, 2):
-        miss = ~inner_needed[:, j - 1]
-        vals[miss, j], dvals[miss, j] = g1[miss], p1[miss]
+    vals, dvals = np.empty((n, 4)), np.empty((n, 4))
+    vals[:, 0], vals[:, 1:] = g0, g1[:, None]
+    dvals[:, 0], dvals[:, 1:] = p0, p1[:, None]
+    any_inner = bool(has.any())
+    if any_inner:
+        rows, cols = np.nonzero(has)
+        vals[rows, cols + 1], dvals[rows, cols + 1], _, _ = gr.values(pts[rows, cols + 1], o[rows])
     found_x, found_o, found_kind = [], [], []
-    # sign changes: simple roots
-    for j in range(3):
-        lo, hi, vlo, vhi = pts[:, j], pts[:, j + 1], vals[:, j], vals[:, j + 1]
-        sc = (hi > lo) & (vlo * vhi < 0)
-        if sc.any():
-            start = x0[sc] + w[sc] * _cubic_root(g0[sc], p0[sc], g1[sc], p1[sc], w[sc], loc[sc, j], loc[sc, j + 1])
-            start = np.clip(start, lo[sc], hi[sc])
-            found_x.append(_bracketed(gr, lo[sc], hi[sc], vlo[sc], o[sc], x=start, tol=ROOT_TOL))
-            found_o.append(o[sc])
-            found_kind.append(np.ones(int(sc.sum()), int))
-        exact = (vhi == 0.0) & (hi > lo)
-        found_x.append(hi[exact])
-        found_o.append(o[exact])
-        found_kind.append(np.ones(int(exact.sum()), int))
-    exact = vals[:, 0] == 0.0
-    found_x.append(pts[exact, 0])
-    found_o.append(o[exact])
-    found_kind.append(np.ones(int(exact.sum()), int))
+    # sign changes between consecutive points: simple roots, all at once
+    sc = (pts[:, 1:] > pts[:, :3]) & (vals[:, :3] * vals[:, 1:] < 0)
+    rows, j = np.nonzero(sc)
+    if rows.size:
+        lo, hi = pts[rows, j], pts[rows, j + 1]
+        start = x0[rows] + w[rows] * _cubic_root(g0[rows], p0[rows], g1[rows], p1[rows], w[rows], loc[rows, j],
+                                                 loc[rows, j + 1])
+        found_x.append(_bracketed(gr, lo, hi, vals[rows, j], o[rows], x=np.clip(start, lo, hi), tol=ROOT_TOL))
+        found_o.append(o[rows])
+        found_kind.append(np.ones(rows.size, int))
+    rows, j = np.nonzero(vals == 0.0)           # exact zeros at the points
+    if rows.size:
+        found_x.append(pts[rows, j])
+        found_o.append(o[rows])
+        found_kind.append(np.ones(rows.size, int))
     # close pairs and tangencies: g keeps its sign around an interior point where g' changes sign
-    for j in (1, 2):
+    for j in (1, 2) if any_inner else ():
         lo, mid, hi = pts[:, j - 1], pts[:, j], pts[:, j + 1]
         keep_sign = (vals[:, j] * vals[:, j - 1] > 0) & (vals[:, j] * vals[:, j + 1] > 0) & (hi > lo)
         halves = ((lo, mid, dvals[:, j - 1], dvals[:, j]), (mid, hi, dvals[:, j], dvals[:, j + 1]))
@@ -742,30 +747,35 @@ def _examine(gr, act, c, crit, eps_g):
             found_x.append(xc[tang])
             found_o.append(o[cand][tang])
             found_kind.append(np.full(int(tang.sum()), 2))
+    if not found_x:
+        return np.zeros(0), np.zeros(0, int), np.zeros(0, int)
     return np.concatenate(found_x), np.concatenate(found_o), np.concatenate(found_kind)
 
 
 def _polish(gr, x, own, iters: int = 6):
-    """Newton on g of the accurate map from the table's roots: steps that would leave the graph or grow
-    |g| are not taken, and once every step is below :data:`POLISH_STEP` (the quadratic regime, from
-    roots of a table accurate to ``eps``) the last one is taken without a new evaluation. Returns
-    (x, a, b): the roots to rounding on the accurate map."""
-    lo, hi = gr.lo[own], gr.hi[own]
-    g, dg, a, b, da, db = gr.accurate(x, own)
-    for _ in range(iters):
+    """Newton on g of the accurate map from the table's roots, root by root: once a step is below
+    :data:`POLISH_STEP` (the quadratic regime) it is taken without a new evaluation; a step that grows
+    |g| ends the root's polish at its best point. Returns (x, a, b): the roots to rounding on the
+    accurate map (a and b moved with the last step by their derivatives)."""
+    x, a, b = x.copy(), np.empty(x.size), np.empty(x.size)
+    best = np.full(x.size, np.inf)
+    todo, xt = np.arange(x.size), x
+    for i in range(iters + 1):
+        g, dg, a_, b_, da, db = gr.accurate(xt, own[todo])
+        better = np.abs(g) < best[todo]
+        upd = todo[better]
+        x[upd], a[upd], b[upd], best[upd] = xt[better], a_[better], b_[better], np.abs(g[better])
         with np.errstate(divide="ignore", invalid="ignore"):
             step = g / dg
         step = np.where(np.isfinite(step), step, 0.0)
-        nxt = np.clip(x - step, lo, hi)
-        step = x - nxt
-        if np.all(np.abs(step) <= POLISH_STEP):
-            return nxt, a - step * da, b - step * db
-        g2, dg2, a2, b2, da2, db2 = gr.accurate(nxt, own)
-        better = np.abs(g2) < np.abs(g)
-        x = np.where(better, nxt, x)
-        g, dg, a, b, da, db = (np.where(better, u, v) for u, v in ((g2, g), (dg2, dg), (a2, a), (b2, b), (da2, da),
-                                                                    (db2, db)))
-        if not better.any():
+        nxt = np.clip(xt - step, gr.lo[own[todo]], gr.hi[own[todo]])
+        step = xt - nxt
+        small = better & (np.abs(step) <= POLISH_STEP)
+        fin = todo[small]
+        x[fin], a[fin], b[fin] = nxt[small], a_[small] - step[small] * da[small], b_[small] - step[small] * db[small]
+        go = better & ~small & (i < iters)
+        todo, xt = todo[go], nxt[go]
+        if todo.size == 0:
             break
     return x, a, b
 
@@ -790,17 +800,25 @@ def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)
         return []
     o, x0, x1, g0, p0, g1, p1, gm, err = (c[n] for n in ("own", "x0", "x1", "g0", "p0", "g1", "p1", "gm", "err"))
     w = x1 - x0
-    crit = _critical(g0, p0, g1, p1, w)
-    has = ~np.isnan(crit)
-    hcrit = _hermite(g0[:, None], p0[:, None], g1[:, None], p1[:, None], w[:, None], np.where(has, crit, 0.0))
+    floor = SAFETY * err + 1e-13 * (1.0 + gr.h2[o]) + gr.eps_g
+    # quick exclusion: with g0, g1 of one sign, |H| >= min(|g0|, |g1|) - max(|w p0 - dg|, |w p1 - dg|) / 4
+    # (H minus the chord is s (1 - s) ((1 - s) (w p0 - dg) - s (w p1 - dg)), dg = g1 - g0)
+    dg = g1 - g0
+    bound = np.minimum(np.abs(g0), np.abs(g1)) - 0.25 * np.maximum(np.abs(w * p0 - dg), np.abs(w * p1 - dg))
+    cand = np.nonzero((g0 * g1 <= 0.0) | (bound <= floor))[0]
+    if gr.monotone_length and math.isfinite(lengths[1]):   # cells beyond the length bound: no root below it
+        cand = cand[c["s0"][cand] <= lengths[1] + 1e-9]
+    crit = np.full((o.size, 2), np.nan)
+    g0c, p0c, g1c, p1c, wc = g0[cand], p0[cand], g1[cand], p1[cand], w[cand]
+    cc = _critical(g0c, p0c, g1c, p1c, wc)
+    crit[cand] = cc
+    has = ~np.isnan(cc)
+    hcrit = _hermite(g0c[:, None], p0c[:, None], g1c[:, None], p1c[:, None], wc[:, None], np.where(has, cc, 0.0))
     hc = np.where(has, np.abs(hcrit), np.inf)
-    crosses = (has & (hcrit * g0[:, None] <= 0)).any(axis=1)    # H changes sign inside
-    floor = 1e-13 * (1.0 + gr.h2[o]) + gr.eps_g
-    low = np.minimum(np.minimum(np.abs(g0), np.abs(g1)), hc.min(axis=1))
-    sign_change = (np.sign(g0) != np.sign(g1)) | (np.sign(g0) != np.sign(gm))
-    active = sign_change | crosses | (low <= SAFETY * err + floor)
-    active &= (c["s0"] <= lengths[1] + 1e-9) | ~np.array(gr.monotone_length)   # beyond the length bound
-    act = np.nonzero(active)[0]
+    crosses = (has & (hcrit * g0c[:, None] <= 0)).any(axis=1)    # H changes sign inside
+    low = np.minimum(np.minimum(np.abs(g0c), np.abs(g1c)), hc.min(axis=1))
+    sign_change = (np.sign(g0c) != np.sign(g1c)) | (np.sign(g0c) != np.sign(gm[cand]))
+    act = cand[sign_change | crosses | (low <= floor[cand])]
     if act.size == 0:
         return []
     if not (first_only and gr.monotone_length):
@@ -843,6 +861,6 @@ def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)
         first[1:] = bi[1:] != bi[:-1]
         a, b, bi, kinds = a[first], b[first], bi[first], kinds[first]
     names = ("", "simple", "double")
-    out = [Root(brs[j].m, brs[j].eta, brs[j].h, float(a[i]), float(b[i]), float(min(a[i], b[i])), names[kinds[i]])
-           for i, j in enumerate(bi.tolist())]
+    out = [Root(brs[j].m, brs[j].eta, brs[j].h, ai, bi_, min(ai, bi_), names[kd])
+           for j, ai, bi_, kd in zip(bi.tolist(), a.tolist(), b.tolist(), kinds.tolist())]
     return sorted(out, key=lambda r: r.a + r.b)
