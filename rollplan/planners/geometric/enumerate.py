@@ -112,6 +112,7 @@ TABLE_INV_S = 0.005
 _TABLE_CHUNK = 512
 #: Newton steps on the accurate map below this are taken without a new evaluation (see :func:`_polish`).
 POLISH_STEP = 1e-8
+_POLISH_CHUNK = 2048
 #: Table-level roots are located to this (absolute, in the graph's parameter) before the polish.
 ROOT_TOL = 1e-10
 #: Smallest cell width (in the graph's parameter).
@@ -752,6 +753,17 @@ def _examine(gr, act, c, crit, eps_g):
     return np.concatenate(found_x), np.concatenate(found_o), np.concatenate(found_kind)
 
 
+def _accurate(gr, x, own):
+    """``gr.accurate`` in pieces of :data:`_POLISH_CHUNK` roots, with progress (many roots at high k)."""
+    if x.size <= _POLISH_CHUNK:
+        return gr.accurate(x, own)
+    parts = []
+    for i in range(0, x.size, _POLISH_CHUNK):
+        parts.append(gr.accurate(x[i:i + _POLISH_CHUNK], own[i:i + _POLISH_CHUNK]))
+        report(f"polish (k = {gr.k:g})", min(i + _POLISH_CHUNK, x.size), x.size)
+    return tuple(np.concatenate(c) for c in zip(*parts))
+
+
 def _polish(gr, x, own, iters: int = 6):
     """Newton on g of the accurate map from the table's roots, root by root: once a step is below
     :data:`POLISH_STEP` (the quadratic regime) it is taken without a new evaluation; a step that grows
@@ -761,7 +773,7 @@ def _polish(gr, x, own, iters: int = 6):
     best = np.full(x.size, np.inf)
     todo, xt = np.arange(x.size), x
     for i in range(iters + 1):
-        g, dg, a_, b_, da, db = gr.accurate(xt, own[todo])
+        g, dg, a_, b_, da, db = _accurate(gr, xt, own[todo])
         better = np.abs(g) < best[todo]
         upd = todo[better]
         x[upd], a[upd], b[upd], best[upd] = xt[better], a_[better], b_[better], np.abs(g[better])

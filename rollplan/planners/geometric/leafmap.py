@@ -244,8 +244,8 @@ def displacement(r, k: float, derivative: bool = False, chunk: int = 2048):
         phi = chi + 2.0 * np.arctan2(rho * schi, den)
         jac = (1.0 - rho * rho) / q
         theta = (1.0 - k) * c * phi + (k * c / s) * chi
-        e = np.exp(1j * theta)
-        base = (jac * e) @ w
+        ct, st = np.cos(theta), np.sin(theta)                 # exp(i theta), in real arithmetic
+        base = (jac * ct) @ w + 1j * ((jac * st) @ w)
         out[i:i + chunk] = rr[:, 0] * base
         if derivative:
             c_r, s_r = -rr / c, -2.0 * rr / s
@@ -254,7 +254,8 @@ def displacement(r, k: float, derivative: bool = False, chunk: int = 2048):
             phi_rho = 2.0 * schi / q
             jac_rho = (-2.0 * rho * q - (1.0 - rho * rho) * (2.0 * rho - 2.0 * cchi)) / (q * q)
             theta_r = (1.0 - k) * (c_r * phi + c * phi_rho * rho_r) + k * chi * (c_r * s - c * s_r) / (s * s)
-            dterm = ((jac_rho * rho_r + 1j * theta_r * jac) * e) @ w
+            re, im = jac_rho * rho_r, theta_r * jac              # (re + i im) exp(i theta)
+            dterm = (re * ct - im * st) @ w + 1j * ((re * st + im * ct) @ w)
             dout[i:i + chunk] = base + rr[:, 0] * dterm
     return (out, dout) if derivative else out
 
