@@ -9,7 +9,10 @@ each branch m, a dense scan in the first leaf radius a (uniform in the turn E(a)
 finer than the planner's grid), b from ``E(b) = E(a) - eta_m`` by scipy's brentq on the closed form,
 h from the complex step map (not the rho form the planner uses), every sign change refined by
 brentq and every local minimum of ``|h^2 - h_m^2|`` checked for a close pair by scipy's bounded
-minimiser. Plans are certified by DOP853 over all n steps.
+minimiser. For every k (E not monotone below 1/2) a 2-D brute force scans the level set
+``E(a) - E(b) = eta_m`` both over a and over b, on monotone pieces of E found numerically (a dense
+scan and scipy's bounded minimiser), with the same refinement. Plans are certified by DOP853 over
+all n steps.
 """
 
 import json

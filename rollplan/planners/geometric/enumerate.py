@@ -40,13 +40,17 @@ otherwise; its interpolation error is bounded by ``eps``, SAFETY times the large
 midpoints against the accurate map) and cached on disk and in memory.
 
 Completeness argument. Every graph of every branch is sampled at once (flat arrays over all the
-graphs of a chunk of branches) on a grid in p (for w: the table's nodes thinned to steps of
-:data:`PHASE_STEP` rad in E and :data:`X_STEP` in r; for sigma: steps of :data:`SIGMA_STEP`), and g
-is also evaluated at every cell's midpoint. A cell is split at its midpoint while the cubic Hermite
-interpolant H of (g, g') at its ends misses g at the midpoint by more than :data:`HERMITE_REL` of
-the cell's largest |g| and more than rounding (down to :data:`MIN_WIDTH`). A cell is *excluded*
-only if ``min |H| > SAFETY * |g(mid) - H(mid)| + floor`` over the cell, with ``floor`` covering
-rounding and the table's error carried into g. g has no zero there as long as the Hermite error
+graphs of a chunk of branches) on a grid in p (for w: the root phases of radii uniform in r with
+steps of :data:`X_STEP`, refined so that E changes by at most :data:`PHASE_STEP` between them; for
+sigma: steps of :data:`SIGMA_STEP`), and g is also evaluated at every cell's midpoint. A cell is
+split at its midpoint while the cubic Hermite interpolant H of (g, g') at its ends misses g at the
+midpoint by more than :data:`HERMITE_REL` of the cell's largest |g| and more than rounding (down to
+:data:`MIN_WIDTH`). A cell is *excluded* only if ``min |H| > SAFETY * |g(mid) - H(mid)| + floor``
+over the cell, with ``floor`` covering rounding and the table's error carried into g (a cell whose
+ends have one sign is excluded at once when ``min(|g0|, |g1|) - max(|w g0' - dg|, |w g1' - dg|) / 4``,
+``dg = g1 - g0``, a lower bound of min |H| since H minus its chord is ``s (1 - s) ((1 - s) (w g0' -
+dg) - s (w g1' - dg))``, exceeds the same threshold; else H's critical points decide). g has no
+zero there as long as the Hermite error
 anywhere in the cell is at most SAFETY times its value at the midpoint (where the error factor of
 cubic Hermite interpolation peaks), i.e. as long as the cell resolves g's fourth derivative, which
 the splitting enforces; and the true g differs from the tabulated one by less than the floor.
@@ -345,8 +349,9 @@ def branches(k: float, psi: float, steps: int, h_des: float, only: int | None = 
 
 
 def _radius(w, k: float):
-    """Radii of root phases w (``k >= K_FAST``): the table's Hermite cubic, then Newton on the closed form."""
-    return radius_of_root_phase(w, k, _w_lookup(w, _w_table(k))[2])
+    """Radii of root phases w (``k >= K_FAST``): the table's Hermite cubic, then one Newton step on the
+    closed form (quadratic from the cubic's error)."""
+    return radius_of_root_phase(w, k, _w_lookup(w, _w_table(k))[2], steps=1)
 
 
 @lru_cache(maxsize=32)
