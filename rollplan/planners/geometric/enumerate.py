@@ -666,11 +666,13 @@ def _bracketed(gr, lo, hi, glo, own, which: int = 0, iters: int = 100, x=None, t
             else:
                 nxt = xa - f * (xa - prev_x[active]) / (f - prev_f[active])
         prev_x[active], prev_f[active] = xa, f
+        # converged when the Newton (secant) step itself is below the tolerance, even if it would touch
+        # the bracket's end; otherwise a step leaving the bracket is replaced by bisection
+        small = np.abs(nxt - xa) <= tol + 2e-16 * (1.0 + np.abs(xa))
         bad = ~np.isfinite(nxt) | (nxt <= lo[active]) | (nxt >= hi[active])
-        nxt = np.where(bad, 0.5 * (lo[active] + hi[active]), nxt)
+        nxt = np.where(small, np.clip(nxt, lo[active], hi[active]), np.where(bad, 0.5 * (lo[active] + hi[active]), nxt))
         x[active] = nxt
-        go = (f != 0.0) & (np.abs(nxt - xa) > tol + 2e-16 * (1.0 + np.abs(xa))) & \
-             (hi[active] - lo[active] > 4e-16 * (1.0 + np.abs(xa)))
+        go = (f != 0.0) & ~small & (hi[active] - lo[active] > 4e-16 * (1.0 + np.abs(xa)))
         active = active[go]
     return x
 
@@ -736,7 +738,7 @@ def _examine(gr, act, c, crit, eps_g):
             cand = keep_sign & (side_hi > side_lo) & (dl * dh < 0)
             if not cand.any():
                 continue
-            xc = _bracketed(gr, side_lo[cand], side_hi[cand], dl[cand], o[cand], which=1)
+            xc = _bracketed(gr, side_lo[cand], side_hi[cand], dl[cand], o[cand], which=1, tol=ROOT_TOL)
             gc = gr.values(xc, o[cand])[0]
             ref = vals[cand, j]
             pair = gc * ref < 0
