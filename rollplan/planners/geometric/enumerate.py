@@ -296,7 +296,7 @@ def _w_table(k: float) -> _WTable:
 def _w_lookup(w, wt: _WTable):
     """``(rho, d rho / dw, r)`` at root phases w (Hermite cubics of the table)."""
     i = np.searchsorted(wt.w, w, side="right") - 1
-    np.clip(i, 0, wt.width.size - 1, out=i)
+    i = np.minimum(np.maximum(i, 0), wt.width.size - 1)
     h = wt.width[i]
     s = (w - wt.w[i]) / h
     c = wt.coef[i]
@@ -528,7 +528,7 @@ class _SigmaGraphs:
         a = np.clip(self.alo[gi] + frac * (self.ahi[gi] - self.alo[gi]), lo, hi)
         sa, eta = self.sa[gi], self.eta[gi]
         for _ in range(80):
-            b = np.clip(kap * (p - a), b_lo, b_hi)
+            b = _clip(kap * (p - a), b_lo, b_hi)
             f = turn(a, k) - turn(b, k) - eta
             df = turn_dr(a, k) + kap * turn_dr(b, k)
             right = f * sa < 0.0                   # Phi increases along s_a: the root is to the right
@@ -541,7 +541,7 @@ class _SigmaGraphs:
             a = np.where(f == 0.0, a, nxt)
             if done:
                 break
-        return a, np.clip(kap * (p - a), b_lo, b_hi)
+        return a, _clip(kap * (p - a), b_lo, b_hi)
 
     def values(self, p, gi, accurate: bool = False):
         """``(g, g', a, b)`` at parameters p of graphs gi (table, or the accurate map)."""
@@ -577,6 +577,11 @@ def _eps_g(k: float) -> float:
 
 
 # ----------------------------------------------------------------------------- cells and roots
+
+
+def _clip(x, lo, hi):
+    """``np.clip`` without its overhead on small arrays."""
+    return np.minimum(np.maximum(x, lo), hi)
 
 
 def _hermite(g0, p0, g1, p1, w, s):
@@ -670,7 +675,7 @@ def _bracketed(gr, lo, hi, glo, own, which: int = 0, iters: int = 100, x=None, t
         # the bracket's end; otherwise a step leaving the bracket is replaced by bisection
         small = np.abs(nxt - xa) <= tol + 2e-16 * (1.0 + np.abs(xa))
         bad = ~np.isfinite(nxt) | (nxt <= lo[active]) | (nxt >= hi[active])
-        nxt = np.where(small, np.clip(nxt, lo[active], hi[active]), np.where(bad, 0.5 * (lo[active] + hi[active]), nxt))
+        nxt = np.where(small, _clip(nxt, lo[active], hi[active]), np.where(bad, 0.5 * (lo[active] + hi[active]), nxt))
         x[active] = nxt
         go = (f != 0.0) & ~small & (hi[active] - lo[active] > 4e-16 * (1.0 + np.abs(xa)))
         active = active[go]
@@ -721,7 +726,7 @@ def _examine(gr, act, c, crit, eps_g):
         lo, hi = pts[rows, j], pts[rows, j + 1]
         start = x0[rows] + w[rows] * _cubic_root(g0[rows], p0[rows], g1[rows], p1[rows], w[rows], loc[rows, j],
                                                  loc[rows, j + 1])
-        found_x.append(_bracketed(gr, lo, hi, vals[rows, j], o[rows], x=np.clip(start, lo, hi), tol=ROOT_TOL))
+        found_x.append(_bracketed(gr, lo, hi, vals[rows, j], o[rows], x=_clip(start, lo, hi), tol=ROOT_TOL))
         found_o.append(o[rows])
         found_kind.append(np.ones(rows.size, int))
     rows, j = np.nonzero(vals == 0.0)           # exact zeros at the points
@@ -787,7 +792,7 @@ def _polish(gr, x, own, iters: int = 6):
         with np.errstate(divide="ignore", invalid="ignore"):
             step = g / dg
         step = np.where(np.isfinite(step), step, 0.0)
-        nxt = np.clip(xt - step, gr.lo[own[todo]], gr.hi[own[todo]])
+        nxt = _clip(xt - step, gr.lo[own[todo]], gr.hi[own[todo]])
         step = xt - nxt
         small = better & (np.abs(step) <= POLISH_STEP)
         fin = todo[small]

@@ -163,7 +163,7 @@ def radius_of_root_phase(w, k: float, r0, steps: int = 2):
     target = -np.asarray(w, float) ** 2
     for _ in range(steps):
         f, df = _turn_u(u, k)
-        u = np.clip(u - (f - target) / df, 0.0, A_MAX * A_MAX)
+        u = np.minimum(np.maximum(u - (f - target) / df, 0.0), A_MAX * A_MAX)
     return np.sqrt(u)
 
 
