@@ -1,50 +1,74 @@
-"""Complete enumeration of the roots of (32)-(33): one scalar equation per branch.
+"""Complete enumeration of the roots of (32)-(33): one scalar equation per graph of each branch.
 
-Reduction (for ``k >= 1/2``; :mod:`.leafmap` gives the structure used here). One step turns psi
-by ``eta(a, b) = E(a) - E(b)`` and shifts by ``h(a, b) = |F|``, ``F = exp(i E(a)) d(a) +
-conj(d(b))``, with the turn E in closed form and strictly decreasing on ``(0, A_MAX]``. On branch
-m of ``n eta = psi + 2 pi m`` (32) fixes ``eta_m`` and (33) the shift ``h_m``
-(:func:`.brackets.target_shift`). Let ``e = |eta_m|``, ``x`` the smaller leaf radius and ``y``
-the larger: ``E(y) = E(x) - e``, so
+Reduction (:mod:`.leafmap` gives the structure used here). One step turns psi by ``eta(a, b) =
+E(a) - E(b)`` and shifts by ``h(a, b) = |F|``, ``F = exp(i E(a)) d(a) + conj(d(b))``, with the turn
+E in closed form. On branch m of ``n eta = psi + 2 pi m`` (32) fixes ``eta_m`` and (33) the shift
+``h_m`` (:func:`.brackets.target_shift`). With the leaf's symmetry (``d = rho exp(-i E/2)``, real
+rho; :mod:`.leafmap`, items 3-4), ``h^2 = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta_m / 2)``
+with ``eta_m`` fixed on the branch, so on the level set ``E(a) - E(b) = eta_m`` (33) is
 
-    y(x) = E^-1(E(x) - e),   0 <= x <= x_end = E^-1(E(A_MAX) + e),   dy/dx = E'(x) / E'(y) in [0, 1]
+    g = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta_m / 2) - h_m^2 = 0.
 
-(``|E'|`` grows with r), ``(a, b) = (x, y)`` if ``eta_m >= 0`` and ``(y, x)`` otherwise. The
-branch is one smooth curve, parametrised by x. With the leaf's symmetry (``d = rho exp(-i E/2)``,
-real rho; :mod:`.leafmap`, items 3-4), ``h^2 = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta_m / 2)``
-with ``eta_m`` fixed on the branch, so (33) on it is the scalar equation
+The level set is covered by *graphs*: smooth curves parametrised by one variable p on an interval,
+along which a and b move with bounded slopes, so that g(p) is smooth with ``g'`` from the chain
+rule. Two parametrisations are used.
 
-    g(x) = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta_m / 2) - h_m^2 = 0,
+* ``k >= K_FAST`` (every physical robot): E is strictly decreasing (:func:`.leafmap.turn_pieces`)
+  and the root phase ``w(r) = sqrt(-E(r))`` is a smooth increasing coordinate on ``[0, A_MAX]``
+  (:func:`.leafmap.root_phase`). With ``e = |eta_m|``, the smaller radius x and the larger y,
+  ``w(y)^2 = w(x)^2 + e``: the branch is one graph over ``p = w(x) in [0, sqrt(w(A_MAX)^2 - e)]``
+  with ``dw(y)/dp = p / w(y) in [0, 1]``, ``(a, b) = (x, y)`` if ``eta_m >= 0`` else ``(y, x)``.
+  rho is tabulated in w (:func:`rho_table`), so g needs no inversion of E: two table look-ups.
+  ``a + b`` grows with p, and its smallest value ``y0 = r(sqrt(e))`` grows with e.
+* every k (used for ``k < K_FAST``): split ``(0, A_MAX]`` into the monotone pieces of E
+  (:func:`.leafmap.turn_pieces`: one, or two around the maximum at r* for ``1/Q < k < 1/2``). In
+  the rectangle of pieces (i, j) (a on piece i, b on piece j, signs ``s_i``, ``s_j`` of E') the level
+  set is, by monotonicity, one curve that is a graph over a and over b; its tangent is
+  ``(E'(b), E'(a))``, so ``sigma = a + kappa b`` with ``kappa = s_i s_j`` is strictly increasing along
+  it, with ``da/dsigma = E'(b) / (E'(b) + kappa E'(a))`` and ``db/dsigma = E'(a) / (E'(b) + kappa
+  E'(a))``, both of modulus at most 1 (1/2 where both E' vanish, at a corner of the rectangle). The
+  graph over sigma runs between the ends of the curve (where a or b reaches an end of its piece),
+  and ``a(sigma)`` solves the strictly monotone ``E(a) - E(kappa (sigma - a)) = eta_m`` (bracketed
+  Newton on the closed form). ``eta_m = 0`` needs nothing special: in a diagonal rectangle the
+  curve is the diagonal ``a = b`` (E is one-to-one on a piece), off the diagonal it is the family
+  ``a != b`` with ``E(a) = E(b)`` through the corner ``(r*, r*)``; a root on a corner shared by two
+  graphs is reported once.
 
-with ``g'`` from ``E'`` (closed form) and ``rho'``. rho depends on one radius and k only, so it is
-tabulated once per k (:func:`rho_table`: cubic Hermite in r on radii uniform in E and in r, its
-interpolation error bounded by ``eps``, SAFETY times the largest error at the midpoints against the
-accurate map) and cached on disk. Along the branch ``a + b = x + y(x)`` grows with x, and its
-smallest value ``y(0) = E^-1(-e)`` grows with ``e``: the shortest plan on a branch is its first root
-in x, and a branch whose ``y(0)`` is not below the best length found cannot hold a shorter plan.
+rho is tabulated once per k (:func:`rho_table`: cubic Hermite on radii uniform in r and refined
+so that E changes by at most :data:`TABLE_PHASE` between nodes, in w for ``k >= K_FAST`` and in r
+otherwise; its interpolation error is bounded by ``eps``, SAFETY times the largest error at the
+midpoints against the accurate map) and cached on disk and in memory.
 
-Completeness argument. Per branch, g (on the table) is sampled on a grid uniform in the phase
-``E(x)`` (steps of :data:`PHASE_STEP` rad) and in x, then every cell is split at its midpoint while
-the cubic Hermite interpolant H of (g, g') at its ends misses g at the midpoint by more than
-:data:`HERMITE_REL` of the cell's largest |g| and more than rounding (down to :data:`MIN_WIDTH`).
-A cell is *excluded* only if ``min |H| > SAFETY * |g(mid) - H(mid)| + floor`` over the cell, with
-``floor`` covering rounding and the table's error carried into g. g has no zero there as long as
-the Hermite error anywhere in the cell is at most SAFETY times its value at the midpoint (where the
-error factor of cubic Hermite interpolation peaks), i.e. as long as the cell resolves g's fourth
-derivative, which the splitting enforces; and the true g differs from the tabulated one by less
-than the floor. Every other cell is examined: each sign change of g between the ends and the
-critical points of H is a root (bracketed Newton); where g keeps its sign but H has an extremum,
-the critical point of g is located (bracketed secant on g') and gives two roots (a close pair) or
-a double root (a tangency) if ``|g|`` is within the floor there. The roots are then polished by
-Newton on g of the accurate map. So every root of (32)-(33) with ``0 < x <= x_end``, on every
-branch, is found: simple roots, close pairs down to what the floor separates, and tangencies; the
-certificate (:mod:`.certify`) then accepts or rejects each plan. The argument is not interval
-arithmetic: it rests on the midpoint error estimating the Hermite error within SAFETY in resolved
-cells (and likewise for the table); ``tests/test_enumerate.py`` checks the result against an
-independent dense brute force.
+Completeness argument. Every graph of every branch is sampled at once (flat arrays over all the
+graphs of a chunk of branches) on a grid in p (for w: the root phases of radii uniform in r with
+steps of :data:`X_STEP`, refined so that E changes by at most :data:`PHASE_STEP` between them; for
+sigma: steps of :data:`SIGMA_STEP`), and g is also evaluated at every cell's midpoint. A cell is
+split at its midpoint while the cubic Hermite interpolant H of (g, g') at its ends misses g at the
+midpoint by more than :data:`HERMITE_REL` of the cell's largest |g| and more than rounding (down to
+:data:`MIN_WIDTH`). A cell is *excluded* only if ``min |H| > SAFETY * |g(mid) - H(mid)| + floor``
+over the cell, with ``floor`` covering rounding and the table's error carried into g (a cell whose
+ends have one sign is excluded at once when ``min(|g0|, |g1|) - max(|w g0' - dg|, |w g1' - dg|) / 4``,
+``dg = g1 - g0``, a lower bound of min |H| since H minus its chord is ``s (1 - s) ((1 - s) (w g0' -
+dg) - s (w g1' - dg))``, exceeds the same threshold; else H's critical points decide). g has no
+zero there as long as the Hermite error
+anywhere in the cell is at most SAFETY times its value at the midpoint (where the error factor of
+cubic Hermite interpolation peaks), i.e. as long as the cell resolves g's fourth derivative, which
+the splitting enforces; and the true g differs from the tabulated one by less than the floor.
+Every other cell is examined: each sign change of g between the ends and the critical points of H
+is a root (bracketed Newton); where g keeps its sign but H has an extremum, the critical point of g
+is located (bracketed secant on g') and gives two roots (a close pair) or a double root (a
+tangency) if ``|g|`` is within the floor there. The roots are then polished by Newton on g of the
+accurate map. So every root of (32)-(33) with ``0 < a, b <= A_MAX``, on every branch, is found:
+simple roots, close pairs down to what the floor separates, and tangencies; the certificate
+(:mod:`.certify`) then accepts or rejects each plan. The argument is not interval arithmetic: it
+rests on the midpoint error estimating the Hermite error within SAFETY in resolved cells (and
+likewise for the table); ``tests/test_enumerate.py`` checks the result against independent dense
+brute forces, for k from 0 to 20.
 
-For ``k < 1/2`` E is not monotone on ``(0, A_MAX]`` and this parametrisation does not apply:
-the planner falls back to bracketing (:mod:`.brackets`), without this guarantee.
+The shortest plan (``first_only``): on a w graph ``a + b`` grows with p, so a branch's shortest
+plan is its first root, and a root with ``a + b <= L`` has ``w(y) <= w(L)`` and ``x <= L - y0``,
+which bounds p before sampling; the active cells of each branch are examined in order until one
+gives a root. On sigma graphs all roots are found and the shortest of each branch kept.
 
 Everything is a pure function of numpy arrays (the C planner ports it).
 """
@@ -65,32 +89,43 @@ from ...core.curves import A_MAX
 from ...progress import report
 from . import leafmap
 from .brackets import target_shift
-from .leafmap import signed_length, turn, turn_dr, turn_inverse
+from .leafmap import radius_of_root_phase, root_phase, signed_length, turn, turn_dr, turn_inverse, turn_pieces
 
-__all__ = ["K_MONOTONE", "PHASE_STEP", "HERMITE_REL", "SAFETY", "MIN_WIDTH", "Branch", "Root", "branches",
-           "branch_values", "x_of_length", "roots", "cache_dir", "rho_table"]
+__all__ = ["K_MONOTONE", "K_ENUMERATED", "K_FAST", "PHASE_STEP", "X_STEP", "SIGMA_STEP", "HERMITE_REL", "SAFETY",
+           "MIN_WIDTH", "Branch", "Root", "branches", "roots", "cache_dir", "rho_table", "RhoTable", "rho_lookup"]
 
-#: Smallest k for which E is strictly decreasing on (0, A_MAX] (the reduction above).
+#: Smallest k for which E is strictly decreasing on (0, A_MAX].
 K_MONOTONE = 0.5
-#: Initial sampling step in the phase E(x) [rad].
+#: Smallest k the enumeration serves: every accepted k.
+K_ENUMERATED = 0.0
+#: Smallest k of the root-phase parametrisation (above K_MONOTONE: w is smooth in r for k > 1/2).
+K_FAST = 0.6
+#: Initial sampling steps of the w graphs: in the turn E [rad] and in the radius [R].
 PHASE_STEP = 0.5
-#: Initial sampling step in x [R].
 X_STEP = 0.02
+#: Initial sampling step of the sigma graphs [R].
+SIGMA_STEP = 0.005
 #: A cell is split while its Hermite midpoint error exceeds this fraction of its largest |g|.
 HERMITE_REL = 1e-2
 #: Factor between the Hermite error anywhere in a cell and at its midpoint.
 SAFETY = 4.0
 #: Table of rho: steps in the turn E [rad] and in r [R].
-TABLE_PHASE = 0.25
-TABLE_STEP = 0.005
+TABLE_PHASE = 0.15
+TABLE_STEP = 0.004
+TABLE_INV_S = 0.005
 _TABLE_CHUNK = 512
-#: Smallest cell width [R].
+#: Newton steps on the accurate map below this are taken without a new evaluation (see :func:`_polish`).
+POLISH_STEP = 1e-8
+_POLISH_CHUNK = 2048
+#: Table-level roots are located to this (absolute, in the graph's parameter) before the polish.
+ROOT_TOL = 1e-10
+#: Smallest cell width (in the graph's parameter).
 MIN_WIDTH = 1e-10
 
 
 class Branch(NamedTuple):
-    """Branch m of ``n eta = psi + 2 pi m``: turn ``eta`` and shift ``h`` per step, the range of
-    the smaller radius ``[0, x_end]`` and the smallest ``a + b`` on it (``y0``)."""
+    """Branch m of ``n eta = psi + 2 pi m``: turn ``eta`` and shift ``h`` per step, the largest smaller
+    radius on it (``x_end``) and a lower bound of ``a + b`` on it (``y0``; exact for ``k >= 1/2``)."""
 
     m: int
     eta: float
@@ -100,7 +135,7 @@ class Branch(NamedTuple):
 
 
 class Root(NamedTuple):
-    """A root of (32)-(33): branch, leaf radii, parameter x, and ``kind`` ("simple" or "double")."""
+    """A root of (32)-(33): branch, leaf radii, the smaller radius x, and ``kind`` ("simple" or "double")."""
 
     m: int
     eta: float
@@ -111,37 +146,21 @@ class Root(NamedTuple):
     kind: str
 
 
-def branches(k: float, psi: float, steps: int, h_des: float, only: int | None = None) -> list:
-    """Branches m that can hold a root, sorted by their smallest ``a + b`` (``k >= 1/2``).
-
-    ``psi`` in (-pi, pi]; ``only`` restricts to one m. A branch is kept when
-    ``|eta_m| <= |E(A_MAX)|`` and ``h_m`` is finite (:func:`.brackets.target_shift`).
-    """
-    lam = -float(turn(A_MAX, k))
-    two_pi = 2.0 * math.pi
-    lo = math.ceil((-steps * lam - psi) / two_pi)
-    hi = math.floor((steps * lam - psi) / two_pi)
-    m = np.arange(lo, hi + 1) if only is None else np.array([only])
-    eta = (psi + two_pi * m) / steps
-    h = target_shift(h_des, eta, steps)
-    keep = np.isfinite(h) & (np.abs(eta) <= lam)
-    m, eta, h = m[keep], eta[keep], h[keep]
-    e = np.abs(eta)
-    y0 = turn_inverse(-e, k)
-    x_end = turn_inverse(-lam + e, k)
-    order = np.argsort(y0, kind="stable")
-    return [Branch(int(m[i]), float(eta[i]), float(h[i]), float(x_end[i]), float(y0[i])) for i in order]
+# ----------------------------------------------------------------------------- tables
 
 
 class RhoTable(NamedTuple):
-    """Per-k table of the signed length rho(r) of :func:`.leafmap.signed_length` and its r-derivative at
-    radii ``r`` (cubic Hermite between them), with ``eps``, a bound of the interpolation error."""
+    """Per-k table of the signed length rho of :func:`.leafmap.signed_length` at radii ``r`` (cubic Hermite
+    between them), with ``eps``, a bound of the interpolation error. For ``k >= K_FAST`` the
+    interpolation is in the root phase ``w`` (nodes ``w``, ``drdw = dr/dw``), otherwise in r (``w`` empty)."""
 
     k: float
     r: np.ndarray
     rho: np.ndarray
     drho: np.ndarray
     eps: float
+    w: np.ndarray
+    drdw: np.ndarray
 
 
 def _hermite_parts(s):
@@ -152,7 +171,7 @@ def _hermite_parts(s):
 
 
 def rho_lookup(r, t: RhoTable):
-    """``(rho, d rho / dr)`` at radii ``r`` from the table (cubic Hermite)."""
+    """``(rho, d rho / dr)`` at radii ``r`` from the table (cubic Hermite in r)."""
     i = np.clip(np.searchsorted(t.r, r, side="right") - 1, 0, t.r.size - 2)
     w = t.r[i + 1] - t.r[i]
     s = (r - t.r[i]) / w
@@ -174,7 +193,7 @@ def _table_file(k: float) -> Path:
     h = hashlib.sha256()
     for src in (__file__, leafmap.__file__):
         h.update(Path(src).read_bytes())
-    h.update(repr((float(k), TABLE_PHASE, TABLE_STEP, SAFETY, np.__version__)).encode())
+    h.update(repr((float(k), TABLE_PHASE, TABLE_STEP, TABLE_INV_S, SAFETY, K_FAST, np.__version__)).encode())
     return cache_dir() / f"rho_table_{h.hexdigest()[:32]}.npz"
 
 
@@ -185,7 +204,7 @@ def rho_table(k: float) -> RhoTable:
     path = _table_file(k)
     try:
         with np.load(path) as z:
-            return RhoTable(float(k), z["r"], z["rho"], z["drho"], float(z["eps"]))
+            return RhoTable(float(k), z["r"], z["rho"], z["drho"], float(z["eps"]), z["w"], z["drdw"])
     except (OSError, KeyError, ValueError):
         pass
     t = _build_rho_table(k)
@@ -194,7 +213,7 @@ def rho_table(k: float) -> RhoTable:
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".rho_table.", suffix=".tmp")
         try:
             with os.fdopen(fd, "wb") as fh:
-                np.savez(fh, r=t.r, rho=t.rho, drho=t.drho, eps=t.eps)
+                np.savez(fh, r=t.r, rho=t.rho, drho=t.drho, eps=t.eps, w=t.w, drdw=t.drdw)
             os.replace(tmp, path)
         finally:
             if os.path.exists(tmp):
@@ -204,95 +223,371 @@ def rho_table(k: float) -> RhoTable:
     return t
 
 
+def _table_radii(k: float, step: float, phase: float, inv_s: float = math.inf) -> np.ndarray:
+    """Radii uniform in r with ``step``, each cell split evenly so that E changes by at most ``phase`` and
+    ``1 / s = (1 - 2 r^2)^(-1/2)`` (whose powers make the leaf map steep near A_MAX) by at most ``inv_s``."""
+    base = np.linspace(0.0, A_MAX, math.ceil(A_MAX / step) + 1)
+    parts = np.maximum(np.ceil(np.abs(np.diff(turn(base, k))) / phase),
+                       np.ceil(np.diff((1.0 - 2.0 * base * base) ** -0.5) / inv_s))
+    parts = np.maximum(1, parts).astype(int)
+    idx = np.repeat(np.arange(parts.size), parts)
+    frac = (np.arange(idx.size) - np.repeat(np.cumsum(parts) - parts, parts)) / np.repeat(parts, parts)
+    r = base[idx] + frac * (base[idx + 1] - base[idx])
+    return np.append(r, A_MAX)
+
+
+def _accurate_rho(r, k: float, label: str):
+    """rho and d rho / dr at radii r by the accurate map, in chunks, with progress."""
+    rho, drho = np.empty(r.size), np.empty(r.size)
+    for i in range(0, r.size, _TABLE_CHUNK):
+        rho[i:i + _TABLE_CHUNK], drho[i:i + _TABLE_CHUNK] = signed_length(r[i:i + _TABLE_CHUNK], k, derivative=True)
+        report(label, min(i + _TABLE_CHUNK, r.size), r.size)
+    return rho, drho
+
+
 def _build_rho_table(k: float) -> RhoTable:
-    """Table of rho for inertia ratio k: radii uniform in the turn E (steps :data:`TABLE_PHASE`) and in r
-    (:data:`TABLE_STEP`); ``eps`` is SAFETY times the largest error at the midpoints (where the error
-    factor of cubic Hermite interpolation peaks) against the accurate map, plus rounding."""
-    t_end = float(turn(A_MAX, k))
-    r = np.concatenate([turn_inverse(np.linspace(0.0, t_end, math.ceil(abs(t_end) / TABLE_PHASE) + 2), k),
-                        np.linspace(0.0, A_MAX, math.ceil(A_MAX / TABLE_STEP) + 1)])
-    r = np.unique(np.clip(r[np.isfinite(r)], 0.0, A_MAX))
-    mid = 0.5 * (r[:-1] + r[1:])
-    both = np.concatenate([r, mid])
-    rho, drho = np.empty(both.size), np.empty(both.size)
-    for i in range(0, both.size, _TABLE_CHUNK):
-        rho[i:i + _TABLE_CHUNK], drho[i:i + _TABLE_CHUNK] = signed_length(both[i:i + _TABLE_CHUNK], k, derivative=True)
-        report(f"leaf table (k = {k:g})", min(i + _TABLE_CHUNK, both.size), both.size)
+    """Table of rho for inertia ratio k on :func:`_table_radii` (steps :data:`TABLE_STEP`, :data:`TABLE_PHASE`);
+    ``eps`` is SAFETY times the largest error at the midpoints of the interpolation variable (where the
+    error factor of cubic Hermite interpolation peaks) against the accurate map, plus rounding."""
+    r = _table_radii(k, TABLE_STEP, TABLE_PHASE, TABLE_INV_S)
     n = r.size
-    t = RhoTable(float(k), r, rho[:n], drho[:n], 0.0)
-    err = np.abs(rho_lookup(mid, t)[0] - rho[n:]).max()
+    label = f"leaf table (k = {k:g})"
+    if k >= K_FAST:
+        w, dwdr = root_phase(r, k)
+        drdw = 1.0 / dwdr
+        wm = 0.5 * (w[:-1] + w[1:])
+        mid = turn_inverse(-wm * wm, k)
+    else:
+        w, drdw = np.zeros(0), np.zeros(0)
+        mid = 0.5 * (r[:-1] + r[1:])
+    rho, drho = _accurate_rho(np.concatenate([r, mid]), k, label)
+    t = RhoTable(float(k), r, rho[:n], drho[:n], 0.0, w, drdw)
+    approx = _w_lookup(wm, _coefficients(t))[0] if k >= K_FAST else rho_lookup(mid, t)[0]
+    err = np.abs(approx - rho[n:]).max()
     return t._replace(eps=SAFETY * float(err) + 1e-13)
 
 
-def branch_values(x, eta, h, k: float, table: RhoTable | None = None):
-    """``(g, g', a, b)`` at parameters ``x`` of the branches with turn ``eta`` and shift ``h`` per step
-    (arrays broadcast to ``x``; see the module docstring), with
-    ``g = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta / 2) - h^2`` (:mod:`.leafmap`, item 4); rho from
-    ``table`` if given, else from the accurate map."""
-    x = np.atleast_1d(np.asarray(x, float))
-    eta = np.broadcast_to(np.asarray(eta, float), x.shape)
-    h = np.broadcast_to(np.asarray(h, float), x.shape)
-    e = np.abs(eta)
-    y = _other(x, eta, k)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        dy = np.where(e == 0.0, 1.0, np.nan_to_num(turn_dr(x, k) / turn_dr(y, k)))
-    plus = eta >= 0.0
-    a, b = np.where(plus, x, y), np.where(plus, y, x)
-    da_dx, db_dx = np.where(plus, 1.0, dy), np.where(plus, dy, 1.0)
-    both = np.concatenate([a, b])
-    rho, drho = rho_lookup(both, table) if table is not None else signed_length(both, k, derivative=True)
-    n = x.size
-    ra, rb, pa, pb = rho[:n], rho[n:], drho[:n], drho[n:]
-    c = np.cos(0.5 * eta)
-    g = ra * ra + rb * rb + 2.0 * c * ra * rb - h * h
-    dg = 2.0 * (ra + c * rb) * pa * da_dx + 2.0 * (rb + c * ra) * pb * db_dx
-    return g, dg, a, b
+class _WTable(NamedTuple):
+    """Monomial coefficients per cell of the Hermite cubics in w of rho (0..3) and of r (4..7), cell widths."""
+
+    w: np.ndarray
+    width: np.ndarray
+    coef: np.ndarray
 
 
-def _other(x, eta, k: float):
-    """The larger radius y(x) of branches with turn ``eta`` at the smaller radius x (arrays)."""
-    e = np.abs(eta)
-    y = np.where(e == 0.0, x, turn_inverse(turn(x, k) - e, k))
-    return np.where(np.isnan(y), A_MAX, y)
+def _cubic_coefficients(y0, m0, y1, m1):
+    """Monomial coefficients in s in [0, 1] of the Hermite cubic with values y and scaled slopes m."""
+    return np.column_stack([y0, m0, -3 * y0 - 2 * m0 + 3 * y1 - m1, 2 * y0 + m0 - 2 * y1 + m1])
 
 
-def x_of_length(total, brs: list, k: float):
-    """Per branch, the x in ``[0, x_end]`` where ``a + b = x + y(x)`` reaches ``total`` (clipped;
-    ``x + y(x)`` increases with x), by bisection."""
-    eta = np.array([br.eta for br in brs])
-    lo = np.zeros(eta.size)
-    hi = np.array([br.x_end for br in brs])
-    top = hi.copy()
-    for _ in range(48):
-        mid = 0.5 * (lo + hi)
-        below = mid + _other(mid, eta, k) < total
-        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
-    return np.where(top + _other(top, eta, k) <= total, top, hi)
+def _coefficients(t: RhoTable) -> _WTable:
+    width = np.diff(t.w)
+    drhodw = t.drho * t.drdw
+    c_rho = _cubic_coefficients(t.rho[:-1], width * drhodw[:-1], t.rho[1:], width * drhodw[1:])
+    c_r = _cubic_coefficients(t.r[:-1], width * t.drdw[:-1], t.r[1:], width * t.drdw[1:])
+    return _WTable(t.w, width, np.hstack([c_rho, c_r]))
 
 
-def _grid(brs: list, k: float, x_lo, x_hi):
-    """Initial samples of x on ``[x_lo, x_hi]`` of each branch, uniform in the phase E(x) and in x:
-    (x, branch index) arrays, sorted by branch then x."""
-    xs, owner = [], []
-    for i in range(len(brs)):
-        if x_hi[i] <= x_lo[i]:
-            continue
-        t0, t1 = float(turn(x_lo[i], k)), float(turn(x_hi[i], k))
-        nt = max(2, math.ceil(abs(t1 - t0) / PHASE_STEP) + 1)
-        nx = max(2, math.ceil((x_hi[i] - x_lo[i]) / X_STEP) + 1)
-        xi = np.concatenate([turn_inverse(np.linspace(t0, t1, nt), k), np.linspace(x_lo[i], x_hi[i], nx)])
-        xi = np.unique(np.clip(xi[np.isfinite(xi)], x_lo[i], x_hi[i]))
-        xs.append(xi)
-        owner.append(np.full(xi.size, i))
-    if not xs:
-        return np.zeros(0), np.zeros(0, int)
-    return np.concatenate(xs), np.concatenate(owner)
+@lru_cache(maxsize=8)
+def _w_table(k: float) -> _WTable:
+    return _coefficients(rho_table(k))
+
+
+def _w_lookup(w, wt: _WTable):
+    """``(rho, d rho / dw, r)`` at root phases w (Hermite cubics of the table)."""
+    i = np.searchsorted(wt.w, w, side="right") - 1
+    i = np.minimum(np.maximum(i, 0), wt.width.size - 1)
+    h = wt.width[i]
+    s = (w - wt.w[i]) / h
+    c = wt.coef[i]
+    rho = ((c[:, 3] * s + c[:, 2]) * s + c[:, 1]) * s + c[:, 0]
+    drho = ((3.0 * c[:, 3] * s + 2.0 * c[:, 2]) * s + c[:, 1]) / h
+    r = ((c[:, 7] * s + c[:, 6]) * s + c[:, 5]) * s + c[:, 4]
+    return rho, drho, r
+
+
+@lru_cache(maxsize=8)
+def _w_nodes(k: float) -> np.ndarray:
+    """Initial sampling nodes in w of the w graphs (module docstring)."""
+    return np.unique(root_phase(_table_radii(k, X_STEP, PHASE_STEP), k)[0])
+
+
+# ----------------------------------------------------------------------------- branches
+
+
+def branches(k: float, psi: float, steps: int, h_des: float, only: int | None = None) -> list:
+    """Branches m that can hold a root, sorted by their lower bound of ``a + b``.
+
+    ``psi`` in (-pi, pi]; ``only`` restricts to one m. A branch is kept when ``|eta_m|`` is at most
+    the range of E on ``(0, A_MAX]``, ``h_m`` is finite (:func:`.brackets.target_shift`) and its level
+    set is not empty.
+    """
+    k = float(k)
+    e_lo, e_hi = _turn_range(k)
+    lam = e_hi - e_lo
+    two_pi = 2.0 * math.pi
+    lo = math.ceil((-steps * lam - psi) / two_pi)
+    hi = math.floor((steps * lam - psi) / two_pi)
+    m = np.arange(lo, hi + 1) if only is None else np.array([only])
+    eta = (psi + two_pi * m) / steps
+    h = target_shift(h_des, eta, steps)
+    keep = np.isfinite(h) & (np.abs(eta) <= lam)
+    m, eta, h = m[keep], eta[keep], h[keep]
+    if k >= K_FAST:
+        e = np.abs(eta)
+        r = _radius(np.sqrt(np.concatenate([e, lam - e])), k)
+        y0, x_end = r[:e.size], r[e.size:]
+    else:
+        gr = _SigmaGraphs(k, eta, h)
+        y0, x_end = np.full(eta.size, np.inf), np.zeros(eta.size)
+        np.minimum.at(y0, gr.br, gr.low)
+        np.maximum.at(x_end, gr.br, gr.xmax)
+    order = np.argsort(y0, kind="stable")
+    order = order[np.isfinite(y0[order])]
+    return list(map(Branch._make, zip(m[order].tolist(), eta[order].tolist(), h[order].tolist(),
+                                      x_end[order].tolist(), y0[order].tolist())))
+
+
+def _radius(w, k: float):
+    """Radii of root phases w (``k >= K_FAST``): the table's Hermite cubic, then one Newton step on the
+    closed form (quadratic from the cubic's error)."""
+    return radius_of_root_phase(w, k, _w_lookup(w, _w_table(k))[2], steps=1)
+
+
+@lru_cache(maxsize=32)
+def _turn_range(k: float) -> tuple:
+    """Smallest and largest E on [0, A_MAX] (E(0) = 0; extremes at the ends of the monotone pieces)."""
+    ends = [0.0] + [float(turn(p[1], k)) for p in turn_pieces(k)]
+    return min(ends), max(ends)
+
+
+# ----------------------------------------------------------------------------- graphs
+
+
+class _WGraphs:
+    """The w graphs of branches (``k >= K_FAST``, module docstring): one per branch."""
+
+    def __init__(self, k: float, eta, h, lengths, y0):
+        self.k = k
+        self.wt = _w_table(k)
+        self.nodes = _w_nodes(k)
+        lam = -_turn_range(k)[0]
+        self.eta = np.asarray(eta, float)
+        self.e = np.abs(self.eta)
+        self.c = np.cos(0.5 * self.eta)
+        self.h2 = np.asarray(h, float) ** 2
+        self.br = np.arange(self.eta.size)
+        self.lo = np.zeros(self.eta.size)
+        self.hi = np.sqrt(np.maximum(lam - self.e, 0.0))
+        if lengths[0] > 0.0:   # a + b >= L0 needs y >= L0 / 2
+            y_lo = root_phase(min(0.5 * lengths[0], A_MAX), k)[0]
+            self.lo = np.sqrt(np.maximum(y_lo * y_lo - self.e, 0.0))
+        if math.isfinite(lengths[1]):   # a + b <= L needs w(y) <= w(L) and x <= L - y0
+            cap = root_phase(min(lengths[1], A_MAX), k)[0]
+            self.hi = np.minimum(self.hi, np.sqrt(np.maximum(cap * cap - self.e, 0.0)))
+            x_cap = root_phase(np.clip(lengths[1] - np.asarray(y0, float), 0.0, A_MAX), k)[0]
+            self.hi = np.minimum(self.hi, x_cap)
+        self.eps_g = _eps_g(k)
+        self.monotone_length = True
+
+    def grid(self):
+        """Initial samples (p, graph index), sorted by graph then p; the table's nodes inside, and the ends."""
+        ok = np.nonzero(self.hi > self.lo)[0]
+        i0 = np.searchsorted(self.nodes, self.lo[ok], side="right")
+        i1 = np.searchsorted(self.nodes, self.hi[ok], side="left")
+        cnt = np.maximum(i1 - i0, 0) + 2
+        start = np.cumsum(cnt) - cnt
+        gi = np.repeat(ok, cnt)
+        pos = np.arange(cnt.sum()) - np.repeat(start, cnt)
+        p = self.nodes[np.clip(np.repeat(i0, cnt) + pos - 1, 0, self.nodes.size - 1)]
+        p[start] = self.lo[ok]
+        p[start + cnt - 1] = self.hi[ok]
+        return p, gi
+
+    def values(self, p, gi, accurate: bool = False):
+        """``(g, g', a, b)`` at parameters p of graphs gi (table, or the accurate map)."""
+        return self._values(p, gi, accurate)[:4]
+
+    def _values(self, p, gi, accurate: bool):
+        n = p.size
+        wy = np.sqrt(p * p + self.e[gi])
+        both = np.concatenate([p, wy])
+        rho, drho, r = _w_lookup(both, self.wt)
+        drdw = None
+        if accurate:
+            r = radius_of_root_phase(both, self.k, r, steps=1)   # the table's r is close: one step to rounding
+            rho, drho = signed_length(r, self.k, derivative=True)
+            drdw = 1.0 / root_phase(r, self.k)[1]
+            drho = drho * drdw
+        slope = np.where(wy > 0.0, p / np.maximum(wy, 1e-300), 1.0)
+        ra, rb, pa, pb = rho[:n], rho[n:], drho[:n], drho[n:]
+        c = self.c[gi]
+        g = ra * ra + rb * rb + 2.0 * c * ra * rb - self.h2[gi]
+        dg = 2.0 * (ra + c * rb) * pa + 2.0 * (rb + c * ra) * pb * slope
+        plus = self.eta[gi] >= 0.0
+        x, y = r[:n], r[n:]
+        if drdw is None:
+            return g, dg, np.where(plus, x, y), np.where(plus, y, x)
+        dx, dy = drdw[:n], drdw[n:] * slope
+        return g, dg, np.where(plus, x, y), np.where(plus, y, x), np.where(plus, dx, dy), np.where(plus, dy, dx)
+
+    def accurate(self, p, gi):
+        """``(g, g', a, b, da/dp, db/dp)`` on the accurate map."""
+        return self._values(p, gi, True)
+
+
+def _inverse_on(t, k: float, lo, hi, sign):
+    """Radius on the piece ``[lo, hi]`` (sign of E' there) with ``E = t`` (t clipped to the piece's range),
+    by bisection on the closed form (arrays)."""
+    a, b = np.array(lo, float), np.array(hi, float)
+    t = np.asarray(t, float)
+    for _ in range(60):
+        mid = 0.5 * (a + b)
+        right = (turn(mid, k) - t) * sign < 0.0   # E(mid) before t along the piece: the root is to the right
+        a, b = np.where(right, mid, a), np.where(right, b, mid)
+    return 0.5 * (a + b)
+
+
+class _SigmaGraphs:
+    """The sigma graphs of branches (every k, module docstring): one per branch and rectangle of pieces."""
+
+    def __init__(self, k: float, eta, h, lengths=(0.0, math.inf)):
+        self.k = k
+        eta = np.asarray(eta, float)
+        h = np.asarray(h, float)
+        pieces = turn_pieces(k)
+        cols = {n: [] for n in ("br", "eta", "h", "kap", "sa", "alo", "ahi", "blo", "bhi", "sb", "lo", "hi",
+                                "low", "xmax")}
+        idx = np.arange(eta.size)
+        for lo_i, hi_i, s_i in pieces:
+            ti = sorted((float(turn(lo_i, k)), float(turn(hi_i, k))))
+            for lo_j, hi_j, s_j in pieces:
+                tj = sorted((float(turn(lo_j, k)), float(turn(hi_j, k))))
+                t_lo = np.maximum(ti[0], tj[0] + eta)      # E(a) in E(piece i) and E(a) - eta in E(piece j)
+                t_hi = np.minimum(ti[1], tj[1] + eta)
+                ok = t_hi > t_lo
+                if not ok.any():
+                    continue
+                e_, t_lo, t_hi, b_ = eta[ok], t_lo[ok], t_hi[ok], idx[ok]
+                ends = np.concatenate([t_lo, t_hi])
+                a_end = _inverse_on(ends, k, lo_i, hi_i, s_i)
+                b_end = _inverse_on(ends - np.concatenate([e_, e_]), k, lo_j, hi_j, s_j)
+                q = e_.size
+                if s_i < 0:   # a decreasing in E(a): the end of larger E has the smaller a
+                    a_end = np.concatenate([a_end[q:], a_end[:q]])
+                    b_end = np.concatenate([b_end[q:], b_end[:q]])
+                kap = s_i * s_j
+                sig = a_end + kap * b_end
+                keep = sig[q:] > sig[:q]
+                n = int(keep.sum())
+                cols["br"].append(b_[keep])
+                cols["eta"].append(e_[keep])
+                cols["h"].append(h[b_][keep])
+                cols["kap"].append(np.full(n, float(kap)))
+                cols["sa"].append(np.full(n, float(s_i)))
+                cols["sb"].append(np.full(n, float(s_j)))
+                cols["alo"].append(a_end[:q][keep])
+                cols["ahi"].append(a_end[q:][keep])
+                cols["blo"].append(np.full(n, lo_j))
+                cols["bhi"].append(np.full(n, hi_j))
+                cols["lo"].append(sig[:q][keep])
+                cols["hi"].append(sig[q:][keep])
+                b_min = np.minimum(b_end[:q], b_end[q:])[keep]
+                cols["low"].append(a_end[:q][keep] + b_min)
+                cols["xmax"].append(np.minimum(np.maximum(a_end[:q], a_end[q:]),
+                                               np.maximum(b_end[:q], b_end[q:]))[keep])
+        for name, v in cols.items():
+            setattr(self, name, np.concatenate(v) if v else np.zeros(0))
+        self.br = self.br.astype(int)
+        self.c = np.cos(0.5 * self.eta)
+        self.h2 = self.h ** 2
+        if math.isfinite(lengths[1]):   # sigma = a + b on kappa = +1 graphs
+            self.hi = np.where(self.kap > 0, np.minimum(self.hi, lengths[1]), self.hi)
+        self.table = rho_table(k)
+        self.eps_g = _eps_g(k)
+        self.monotone_length = False
+
+    def grid(self):
+        ok = np.nonzero(self.hi > self.lo)[0]
+        cnt = np.ceil((self.hi[ok] - self.lo[ok]) / SIGMA_STEP).astype(int) + 1
+        start = np.cumsum(cnt) - cnt
+        gi = np.repeat(ok, cnt)
+        frac = (np.arange(cnt.sum()) - np.repeat(start, cnt)) / np.repeat(cnt - 1, cnt)
+        return self.lo[gi] + frac * (self.hi[gi] - self.lo[gi]), gi
+
+    def radii(self, p, gi):
+        """``(a, b)`` on graphs gi at parameters p: bracketed Newton on ``E(a) - E(kappa (p - a)) = eta``."""
+        k, kap = self.k, self.kap[gi]
+        b_lo, b_hi = self.blo[gi], self.bhi[gi]
+        lo = np.maximum(self.alo[gi], np.where(kap > 0, p - b_hi, p + b_lo))
+        hi = np.minimum(self.ahi[gi], np.where(kap > 0, p - b_lo, p + b_hi))
+        hi = np.maximum(hi, lo)
+        span = self.hi[gi] - self.lo[gi]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            frac = np.where(span > 0, (p - self.lo[gi]) / span, 0.5)
+        a = np.clip(self.alo[gi] + frac * (self.ahi[gi] - self.alo[gi]), lo, hi)
+        sa, eta = self.sa[gi], self.eta[gi]
+        for _ in range(80):
+            b = _clip(kap * (p - a), b_lo, b_hi)
+            f = turn(a, k) - turn(b, k) - eta
+            df = turn_dr(a, k) + kap * turn_dr(b, k)
+            right = f * sa < 0.0                   # Phi increases along s_a: the root is to the right
+            lo, hi = np.where(right, a, lo), np.where(right, hi, a)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                nxt = a - f / df
+            bad = ~np.isfinite(nxt) | (nxt <= lo) | (nxt >= hi)
+            nxt = np.where(bad, 0.5 * (lo + hi), nxt)
+            done = np.all((np.abs(nxt - a) <= 1e-16 + 2e-16 * a) | (hi - lo <= 4e-16 * (1.0 + hi)) | (f == 0.0))
+            a = np.where(f == 0.0, a, nxt)
+            if done:
+                break
+        return a, _clip(kap * (p - a), b_lo, b_hi)
+
+    def values(self, p, gi, accurate: bool = False):
+        """``(g, g', a, b)`` at parameters p of graphs gi (table, or the accurate map)."""
+        return self._values(p, gi, accurate)[:4]
+
+    def accurate(self, p, gi):
+        """``(g, g', a, b, da/dp, db/dp)`` on the accurate map."""
+        return self._values(p, gi, True)
+
+    def _values(self, p, gi, accurate: bool):
+        a, b = self.radii(p, gi)
+        n = p.size
+        both = np.concatenate([a, b])
+        rho, drho = signed_length(both, self.k, derivative=True) if accurate else rho_lookup(both, self.table)
+        ea, eb = turn_dr(a, self.k), turn_dr(b, self.k)
+        kap = self.kap[gi]
+        den = eb + kap * ea
+        with np.errstate(divide="ignore", invalid="ignore"):
+            da = np.where(den != 0.0, eb / den, 0.5)
+            db = np.where(den != 0.0, ea / den, 0.5 * kap)
+        ra, rb, pa, pb = rho[:n], rho[n:], drho[:n], drho[n:]
+        c = self.c[gi]
+        g = ra * ra + rb * rb + 2.0 * c * ra * rb - self.h2[gi]
+        dg = 2.0 * (ra + c * rb) * pa * da + 2.0 * (rb + c * ra) * pb * db
+        return g, dg, a, b, da, db
+
+
+@lru_cache(maxsize=8)
+def _eps_g(k: float) -> float:
+    """Bound of the table's error carried into g (``|d g| <= 2 (|rho_a| + |rho_b|) (eps_a + eps_b) + ...``)."""
+    t = rho_table(k)
+    return 8.0 * float(np.abs(t.rho).max()) * t.eps + t.eps ** 2
+
+
+# ----------------------------------------------------------------------------- cells and roots
+
+
+def _clip(x, lo, hi):
+    """``np.clip`` without its overhead on small arrays."""
+    return np.minimum(np.maximum(x, lo), hi)
 
 
 def _hermite(g0, p0, g1, p1, w, s):
     """Cubic Hermite interpolant at the local coordinate s in [0, 1] of cells of width w."""
-    h00, h10, h01, h11 = 2 * s**3 - 3 * s**2 + 1, s**3 - 2 * s**2 + s, -2 * s**3 + 3 * s**2, s**3 - s**2
-    return h00 * g0 + h10 * w * p0 + h01 * g1 + h11 * w * p1
+    m0, m1 = w * p0, w * p1
+    return ((((2.0 * g0 - 2.0 * g1 + m0 + m1) * s + (3.0 * (g1 - g0) - 2.0 * m0 - m1)) * s + m0) * s) + g0
 
 
 def _critical(g0, p0, g1, p1, w):
@@ -302,64 +597,70 @@ def _critical(g0, p0, g1, p1, w):
     A = 3.0 * (2 * g0 + w * p0 - 2 * g1 + w * p1) / w
     B = 2.0 * (-3 * g0 - 2 * w * p0 + 3 * g1 - w * p1) / w
     C = p0
-    out = np.full((g0.size, 2), np.nan)
     with np.errstate(divide="ignore", invalid="ignore"):
         disc = B * B - 4 * A * C
         sq = np.sqrt(np.maximum(disc, 0.0))
         quad = np.abs(A) > 1e-300
         r1 = np.where(quad, (-B - sq) / (2 * A), -C / B)
         r2 = np.where(quad, (-B + sq) / (2 * A), np.nan)
-    for j, r in enumerate((r1, r2)):
-        ok = (disc >= 0) & np.isfinite(r) & (r > 0) & (r < 1)
-        out[:, j] = np.where(ok, r, np.nan)
-    return np.sort(out, axis=1)
+    ok1 = (disc >= 0) & (r1 > 0) & (r1 < 1)
+    ok2 = (disc >= 0) & (r2 > 0) & (r2 < 1)
+    return np.sort(np.column_stack([np.where(ok1, r1, np.nan), np.where(ok2, r2, np.nan)]), axis=1)
 
 
-def _cells(brs: list, k: float, x_lo, x_hi, table: RhoTable):
-    """Resolved cells of the branches ``brs``: dict of arrays ``own`` (branch index), x0, x1, g0, p0,
-    g1, p1, gm, err (see the module docstring)."""
-    eta = np.array([br.eta for br in brs])
-    hh = np.array([br.h for br in brs])
-    xs, own = _grid(brs, k, x_lo, x_hi)
-    if xs.size < 2:
-        return None
-    g, p, _, _ = branch_values(xs, eta[own], hh[own], k, table)
-    same = own[:-1] == own[1:]
-    o, x0, x1, g0, p0, g1, p1 = own[:-1][same], xs[:-1][same], xs[1:][same], g[:-1][same], p[:-1][same], \
-        g[1:][same], p[1:][same]
+def _cells(gr, p, gi):
+    """Resolved cells of the graphs from samples (p, gi) sorted by graph then p: dict of arrays ``own``
+    (graph index), x0, x1, g0, p0, g1, p1, gm, err, s0, s1 (a + b at the ends) (module docstring)."""
+    same = (gi[:-1] == gi[1:]) & (p[1:] > p[:-1])
+    o, x0, x1 = gi[:-1][same], p[:-1][same], p[1:][same]
+    xm = 0.5 * (x0 + x1)
+    n_pts = p.size
+    g, dg, a, b = gr.values(np.concatenate([p, xm]), np.concatenate([gi, o]))
+    length = a + b
+    g0, g1, p0, p1 = g[:n_pts - 1][same], g[1:n_pts][same], dg[:n_pts - 1][same], dg[1:n_pts][same]
+    s0, s1 = length[:n_pts - 1][same], length[1:n_pts][same]
+    gm, pm, sm = g[n_pts:], dg[n_pts:], length[n_pts:]
     done = []
-    while x0.size:
-        xm = 0.5 * (x0 + x1)
-        gm, pm, _, _ = branch_values(xm, eta[o], hh[o], k, table)
+    while True:
         err = np.abs(gm - _hermite(g0, p0, g1, p1, x1 - x0, 0.5))
         big = np.maximum(np.maximum(np.abs(g0), np.abs(g1)), np.abs(gm))
-        s = (err > HERMITE_REL * big) & (err > 1e-15 * (1.0 + hh[o] ** 2)) & (x1 - x0 > MIN_WIDTH)
+        s = (err > HERMITE_REL * big) & (err > 1e-15 * (1.0 + gr.h2[o])) & (x1 - x0 > MIN_WIDTH)
+        if not done and not s.any():    # resolved at once: the cells are in order already
+            c = dict(own=o, x0=x0, x1=x1, g0=g0, p0=p0, g1=g1, p1=p1, gm=gm, err=err, s0=s0, s1=s1)
+            return c if o.size else None
         keep = ~s
-        done.append((o[keep], x0[keep], x1[keep], g0[keep], p0[keep], g1[keep], p1[keep], gm[keep], err[keep]))
+        done.append((o[keep], x0[keep], x1[keep], g0[keep], p0[keep], g1[keep], p1[keep], gm[keep], err[keep],
+                     s0[keep], s1[keep]))
+        if not s.any():
+            break
         o = np.concatenate([o[s], o[s]])
         x0, x1 = np.concatenate([x0[s], xm[s]]), np.concatenate([xm[s], x1[s]])
         g0, g1 = np.concatenate([g0[s], gm[s]]), np.concatenate([gm[s], g1[s]])
         p0, p1 = np.concatenate([p0[s], pm[s]]), np.concatenate([pm[s], p1[s]])
-    cols = [np.concatenate(c) for c in zip(*done)]
+        s0, s1 = np.concatenate([s0[s], sm[s]]), np.concatenate([sm[s], s1[s]])
+        xm = 0.5 * (x0 + x1)
+        gm, pm, a, b = gr.values(xm, o)
+        sm = a + b
+    cols = [np.concatenate(c) for c in zip(*done)] if len(done) > 1 else list(done[0])
     if cols[0].size == 0:
         return None
     order = np.lexsort((cols[1], cols[0]))
-    return dict(zip(("own", "x0", "x1", "g0", "p0", "g1", "p1", "gm", "err"), (c[order] for c in cols)))
+    return dict(zip(("own", "x0", "x1", "g0", "p0", "g1", "p1", "gm", "err", "s0", "s1"), (c[order] for c in cols)))
 
 
-def _bracketed(lo, hi, glo, eta, h, k: float, table, which: int = 0, iters: int = 100):
-    """Roots in [lo, hi] of g (``which`` 0) or g' (1) with a sign change there, all at once:
-    Newton on g (or the secant on g') kept inside the shrinking bracket, bisection otherwise."""
+def _bracketed(gr, lo, hi, glo, own, which: int = 0, iters: int = 100, x=None, tol: float = 0.0):
+    """Roots in [lo, hi] of g (``which`` 0) or g' (1) of graphs ``own`` with a sign change there, all at
+    once: Newton on g (or the secant on g') kept inside the shrinking bracket, bisection otherwise."""
     lo, hi = lo.copy(), hi.copy()
     slo = np.sign(glo)
-    x = 0.5 * (lo + hi)
+    x = 0.5 * (lo + hi) if x is None else x.copy()
     active = np.arange(x.size)
     prev_x, prev_f = lo.copy(), glo.copy()
     for _ in range(iters):
         if active.size == 0:
             break
         xa = x[active]
-        out = branch_values(xa, eta[active], h[active], k, table)
+        out = gr.values(xa, own[active])
         f = out[which]
         same = np.sign(f) == slo[active]
         lo[active] = np.where(same, xa, lo[active])
@@ -370,43 +671,71 @@ def _bracketed(lo, hi, glo, eta, h, k: float, table, which: int = 0, iters: int 
             else:
                 nxt = xa - f * (xa - prev_x[active]) / (f - prev_f[active])
         prev_x[active], prev_f[active] = xa, f
+        # converged when the Newton (secant) step itself is below the tolerance, even if it would touch
+        # the bracket's end; otherwise a step leaving the bracket is replaced by bisection
+        small = np.abs(nxt - xa) <= tol + 2e-16 * (1.0 + np.abs(xa))
         bad = ~np.isfinite(nxt) | (nxt <= lo[active]) | (nxt >= hi[active])
-        nxt = np.where(bad, 0.5 * (lo[active] + hi[active]), nxt)
+        nxt = np.where(small, _clip(nxt, lo[active], hi[active]), np.where(bad, 0.5 * (lo[active] + hi[active]), nxt))
         x[active] = nxt
-        go = (f != 0.0) & (np.abs(nxt - xa) > 2e-16 * (1.0 + np.abs(xa))) & \
-             (hi[active] - lo[active] > 4e-16 * (1.0 + np.abs(xa)))
+        go = (f != 0.0) & ~small & (hi[active] - lo[active] > 4e-16 * (1.0 + np.abs(xa)))
         active = active[go]
     return x
 
 
-def _examine(act, c, crit, eta, hh, k, table, eps_g):
-    """Roots in the active cells ``act`` of :func:`_cells` output ``c`` (see the module docstring):
-    arrays of x, branch index and kind."""
-    o, x0, x1, g0, p0, g1, p1 = (c[n] for n in ("own", "x0", "x1", "g0", "p0", "g1", "p1"))
+def _cubic_root(g0, p0, g1, p1, w, lo, hi):
+    """A root of the cell's Hermite cubic in the local sub-interval [lo, hi] of [0, 1] where it changes
+    sign (a few bisection-safeguarded Newton steps on the cubic): the start of :func:`_bracketed`."""
+    h0, h1 = _hermite(g0, p0, g1, p1, w, lo), _hermite(g0, p0, g1, p1, w, hi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(h1 != h0, lo + (hi - lo) * h0 / (h0 - h1), 0.5 * (lo + hi))
+        A = 2 * g0 + w * p0 - 2 * g1 + w * p1
+        B = -3 * g0 - 2 * w * p0 + 3 * g1 - w * p1
+        for _ in range(2):
+            f = ((A * s + B) * s + w * p0) * s + g0
+            df = (3 * A * s + 2 * B) * s + w * p0
+            s = s - f / df
+            s = np.where((s >= lo) & (s <= hi), s, 0.5 * (lo + hi))   # nan fails both
+    return s
+
+
+def _examine(gr, act, c, crit, eps_g):
+    """Roots in the active cells ``act`` of :func:`_cells` output ``c`` (module docstring): arrays of
+    parameter, graph index and kind (1 simple, 2 double)."""
+    o, x0, x1, g0, p0, g1, p1 = (c[n][act] for n in ("own", "x0", "x1", "g0", "p0", "g1", "p1"))
+    n = act.size
     w = x1 - x0
-    # sub-intervals of the active cells: ends and the Hermite critical points
-    pts = np.column_stack([x0[act], x0[act, None] + w[act, None] * crit[act], x1[act]])   # (n, 4), nan = none
-    pts = np.where(np.isnan(pts), x1[act, None], pts)                                   # collapse to the end
-    inner = branch_values(pts[:, 1:3].ravel(), np.repeat(eta[o[act]], 2), np.repeat(hh[o[act]], 2), k, table)
-    vals = np.column_stack([g0[act], inner[0].reshape(-1, 2), g1[act]])
-    dvals = np.column_stack([p0[act], inner[1].reshape(-1, 2), p1[act]])
-    owner = o[act]
+    cr = crit[act]
+    has = ~np.isnan(cr)
+    # each cell cut at the critical points of its Hermite cubic (a missing one collapses to the end)
+    loc = np.ones((n, 4))
+    loc[:, 0] = 0.0
+    loc[:, 1:3] = np.where(has, cr, 1.0)
+    pts = x0[:, None] + w[:, None] * loc
+    vals, dvals = np.empty((n, 4)), np.empty((n, 4))
+    vals[:, 0], vals[:, 1:] = g0, g1[:, None]
+    dvals[:, 0], dvals[:, 1:] = p0, p1[:, None]
+    any_inner = bool(has.any())
+    if any_inner:
+        rows, cols = np.nonzero(has)
+        vals[rows, cols + 1], dvals[rows, cols + 1], _, _ = gr.values(pts[rows, cols + 1], o[rows])
     found_x, found_o, found_kind = [], [], []
-    # sign changes: simple roots
-    for j in range(3):
-        lo, hi, vlo, vhi = pts[:, j], pts[:, j + 1], vals[:, j], vals[:, j + 1]
-        sc = (hi > lo) & (vlo * vhi < 0)
-        if sc.any():
-            xr = _bracketed(lo[sc], hi[sc], vlo[sc], eta[owner[sc]], hh[owner[sc]], k, table)
-            found_x.append(xr)
-            found_o.append(owner[sc])
-            found_kind += ["simple"] * int(sc.sum())
-        exact = (vhi == 0.0) & (hi > 0)
-        found_x.append(hi[exact])
-        found_o.append(owner[exact])
-        found_kind += ["simple"] * int(exact.sum())
+    # sign changes between consecutive points: simple roots, all at once
+    sc = (pts[:, 1:] > pts[:, :3]) & (vals[:, :3] * vals[:, 1:] < 0)
+    rows, j = np.nonzero(sc)
+    if rows.size:
+        lo, hi = pts[rows, j], pts[rows, j + 1]
+        start = x0[rows] + w[rows] * _cubic_root(g0[rows], p0[rows], g1[rows], p1[rows], w[rows], loc[rows, j],
+                                                 loc[rows, j + 1])
+        found_x.append(_bracketed(gr, lo, hi, vals[rows, j], o[rows], x=_clip(start, lo, hi), tol=ROOT_TOL))
+        found_o.append(o[rows])
+        found_kind.append(np.ones(rows.size, int))
+    rows, j = np.nonzero(vals == 0.0)           # exact zeros at the points
+    if rows.size:
+        found_x.append(pts[rows, j])
+        found_o.append(o[rows])
+        found_kind.append(np.ones(rows.size, int))
     # close pairs and tangencies: g keeps its sign around an interior point where g' changes sign
-    for j in (1, 2):
+    for j in (1, 2) if any_inner else ():
         lo, mid, hi = pts[:, j - 1], pts[:, j], pts[:, j + 1]
         keep_sign = (vals[:, j] * vals[:, j - 1] > 0) & (vals[:, j] * vals[:, j + 1] > 0) & (hi > lo)
         halves = ((lo, mid, dvals[:, j - 1], dvals[:, j]), (mid, hi, dvals[:, j], dvals[:, j + 1]))
@@ -414,113 +743,148 @@ def _examine(act, c, crit, eta, hh, k, table, eps_g):
             cand = keep_sign & (side_hi > side_lo) & (dl * dh < 0)
             if not cand.any():
                 continue
-            xc = _bracketed(side_lo[cand], side_hi[cand], dl[cand], eta[owner[cand]], hh[owner[cand]], k, table,
-                            which=1)
-            gc = branch_values(xc, eta[owner[cand]], hh[owner[cand]], k, table)[0]
+            xc = _bracketed(gr, side_lo[cand], side_hi[cand], dl[cand], o[cand], which=1, tol=ROOT_TOL)
+            gc = gr.values(xc, o[cand])[0]
             ref = vals[cand, j]
             pair = gc * ref < 0
             if pair.any():   # two roots, one on each side of the critical point, all pairs at once
                 idx = np.nonzero(cand)[0][pair]
                 lo2 = np.concatenate([side_lo[idx], xc[pair]])
                 hi2 = np.concatenate([xc[pair], side_hi[idx]])
-                own2 = np.concatenate([owner[idx], owner[idx]])
-                g_lo = branch_values(lo2, eta[own2], hh[own2], k, table)[0]
-                found_x.append(_bracketed(lo2, hi2, g_lo, eta[own2], hh[own2], k, table))
+                own2 = np.concatenate([o[idx], o[idx]])
+                g_lo = gr.values(lo2, own2)[0]
+                found_x.append(_bracketed(gr, lo2, hi2, g_lo, own2, tol=ROOT_TOL))
                 found_o.append(own2)
-                found_kind += ["simple"] * int(own2.size)
-            tang = ~pair & (np.abs(gc) <= 1e-13 * (1.0 + hh[owner[cand]] ** 2) + eps_g)
+                found_kind.append(np.ones(own2.size, int))
+            tang = ~pair & (np.abs(gc) <= 1e-13 * (1.0 + gr.h2[o[cand]]) + eps_g)
             found_x.append(xc[tang])
-            found_o.append(owner[cand][tang])
-            found_kind += ["double"] * int(tang.sum())
-    xr, orr = np.concatenate(found_x), np.concatenate(found_o)
-    kinds = np.array(found_kind, dtype=object)
-    return xr, orr, kinds
+            found_o.append(o[cand][tang])
+            found_kind.append(np.full(int(tang.sum()), 2))
+    if not found_x:
+        return np.zeros(0), np.zeros(0, int), np.zeros(0, int)
+    return np.concatenate(found_x), np.concatenate(found_o), np.concatenate(found_kind)
 
-def _polish(x, eta, h, k: float, x_end, iters: int = 6):
-    """Newton on g of the accurate map from the table's roots (a few steps; a step that would leave
-    [0, x_end] or grow is not taken): the roots to rounding on the accurate map."""
-    x = x.copy()
-    if x.size == 0:
-        return x
-    g, dg, _, _ = branch_values(x, eta, h, k)
-    for _ in range(iters):
+
+def _accurate(gr, x, own):
+    """``gr.accurate`` in pieces of :data:`_POLISH_CHUNK` roots, with progress (many roots at high k)."""
+    if x.size <= _POLISH_CHUNK:
+        return gr.accurate(x, own)
+    parts = []
+    for i in range(0, x.size, _POLISH_CHUNK):
+        parts.append(gr.accurate(x[i:i + _POLISH_CHUNK], own[i:i + _POLISH_CHUNK]))
+        report(f"polish (k = {gr.k:g})", min(i + _POLISH_CHUNK, x.size), x.size)
+    return tuple(np.concatenate(c) for c in zip(*parts))
+
+
+def _polish(gr, x, own, iters: int = 6):
+    """Newton on g of the accurate map from the table's roots, root by root: once a step is below
+    :data:`POLISH_STEP` (the quadratic regime) it is taken without a new evaluation; a step that grows
+    |g| ends the root's polish at its best point. Returns (x, a, b): the roots to rounding on the
+    accurate map (a and b moved with the last step by their derivatives)."""
+    x, a, b = x.copy(), np.empty(x.size), np.empty(x.size)
+    best = np.full(x.size, np.inf)
+    todo, xt = np.arange(x.size), x
+    for i in range(iters + 1):
+        g, dg, a_, b_, da, db = _accurate(gr, xt, own[todo])
+        better = np.abs(g) < best[todo]
+        upd = todo[better]
+        x[upd], a[upd], b[upd], best[upd] = xt[better], a_[better], b_[better], np.abs(g[better])
         with np.errstate(divide="ignore", invalid="ignore"):
-            nxt = np.clip(x - g / dg, 0.0, x_end)
-        ok = np.isfinite(nxt)
-        if not ok.any():
+            step = g / dg
+        step = np.where(np.isfinite(step), step, 0.0)
+        nxt = _clip(xt - step, gr.lo[own[todo]], gr.hi[own[todo]])
+        step = xt - nxt
+        small = better & (np.abs(step) <= POLISH_STEP)
+        fin = todo[small]
+        x[fin], a[fin], b[fin] = nxt[small], a_[small] - step[small] * da[small], b_[small] - step[small] * db[small]
+        go = better & ~small & (i < iters)
+        todo, xt = todo[go], nxt[go]
+        if todo.size == 0:
             break
-        g2, dg2, _, _ = branch_values(np.where(ok, nxt, x), eta, h, k)
-        better = ok & (np.abs(g2) < np.abs(g))
-        x = np.where(better, nxt, x)
-        g, dg = np.where(better, g2, g), np.where(better, dg2, dg)
-        if not better.any():
-            break
-    return x
+    return x, a, b
 
 
-def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)) -> list:
-    """Every root of g on the branches ``brs`` with ``0 < x <= x_end`` and ``lengths[0] <= a + b <=
-    lengths[1]`` (:class:`Root`, sorted by ``a + b``); with ``first_only`` only the first root of
-    each branch in x (its shortest plan). See the module docstring for why none is missed."""
+def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf), polish: bool = True) -> list:
+    """Every root of g on the branches ``brs`` with ``lengths[0] <= a + b <= lengths[1]`` (:class:`Root`,
+    sorted by ``a + b``); with ``first_only`` only the shortest root of each branch. ``polish``: Newton
+    on the accurate map (else the table's roots). See the module docstring for why none is missed."""
     brs = [br for br in brs if br.x_end > 0.0]
     if not brs:
         return []
+    k = float(k)
     eta = np.array([br.eta for br in brs])
     hh = np.array([br.h for br in brs])
-    x_lo = x_of_length(lengths[0], brs, k) if lengths[0] > 0.0 else np.zeros(len(brs))
-    x_hi = x_of_length(lengths[1], brs, k) if math.isfinite(lengths[1]) else np.array([br.x_end for br in brs])
-    table = rho_table(float(k))
-    c = _cells(brs, k, x_lo, x_hi, table)
+    gr = (_WGraphs(k, eta, hh, lengths, [br.y0 for br in brs]) if k >= K_FAST
+          else _SigmaGraphs(k, eta, hh, lengths))
+    p, gi = gr.grid()
+    if p.size < 2:
+        return []
+    c = _cells(gr, p, gi)
     if c is None:
         return []
     o, x0, x1, g0, p0, g1, p1, gm, err = (c[n] for n in ("own", "x0", "x1", "g0", "p0", "g1", "p1", "gm", "err"))
     w = x1 - x0
-    crit = _critical(g0, p0, g1, p1, w)
-    hcrit = _hermite(g0[:, None], p0[:, None], g1[:, None], p1[:, None], w[:, None], np.nan_to_num(crit))
-    hc = np.where(np.isnan(crit), np.inf, np.abs(hcrit))
-    crosses = (~np.isnan(crit) & (hcrit * g0[:, None] <= 0)).any(axis=1)    # H changes sign inside
-    eps_g = 8.0 * float(np.abs(table.rho).max()) * table.eps + table.eps ** 2   # table error carried into g
-    floor = 1e-13 * (1.0 + hh[o] ** 2) + eps_g
-    low = np.minimum(np.minimum(np.abs(g0), np.abs(g1)), hc.min(axis=1))
-    sign_change = (np.sign(g0) != np.sign(g1)) | (np.sign(g0) != np.sign(gm))
-    act = np.nonzero(sign_change | crosses | (low <= SAFETY * err + floor))[0]
+    floor = SAFETY * err + 1e-13 * (1.0 + gr.h2[o]) + gr.eps_g
+    # quick exclusion: with g0, g1 of one sign, |H| >= min(|g0|, |g1|) - max(|w p0 - dg|, |w p1 - dg|) / 4
+    # (H minus the chord is s (1 - s) ((1 - s) (w p0 - dg) - s (w p1 - dg)), dg = g1 - g0)
+    dg = g1 - g0
+    bound = np.minimum(np.abs(g0), np.abs(g1)) - 0.25 * np.maximum(np.abs(w * p0 - dg), np.abs(w * p1 - dg))
+    cand = np.nonzero((g0 * g1 <= 0.0) | (bound <= floor))[0]
+    if gr.monotone_length and math.isfinite(lengths[1]):   # cells beyond the length bound: no root below it
+        cand = cand[c["s0"][cand] <= lengths[1] + 1e-9]
+    crit = np.full((o.size, 2), np.nan)
+    g0c, p0c, g1c, p1c, wc = g0[cand], p0[cand], g1[cand], p1[cand], w[cand]
+    cc = _critical(g0c, p0c, g1c, p1c, wc)
+    crit[cand] = cc
+    has = ~np.isnan(cc)
+    hcrit = _hermite(g0c[:, None], p0c[:, None], g1c[:, None], p1c[:, None], wc[:, None], np.where(has, cc, 0.0))
+    hc = np.where(has, np.abs(hcrit), np.inf)
+    crosses = (has & (hcrit * g0c[:, None] <= 0)).any(axis=1)    # H changes sign inside
+    low = np.minimum(np.minimum(np.abs(g0c), np.abs(g1c)), hc.min(axis=1))
+    sign_change = (np.sign(g0c) != np.sign(g1c)) | (np.sign(g0c) != np.sign(gm[cand]))
+    act = cand[sign_change | crosses | (low <= floor[cand])]
     if act.size == 0:
         return []
-    if not first_only:
-        xr, orr, kinds = _examine(act, c, crit, eta, hh, k, table, eps_g)
+    if not (first_only and gr.monotone_length):
+        xr, orr, kinds = _examine(gr, act, c, crit, gr.eps_g)
     else:   # the active cells of each branch in order, a few at a time, until it has a root
         rank = np.arange(act.size) - np.searchsorted(o[act], o[act])
-        parts, done, start = [], np.zeros(len(brs), bool), 0
+        parts, done, start = [], np.zeros(o.max() + 1, bool), 0
         while True:
             sel = act[(rank >= start) & (rank < start + 2) & ~done[o[act]]]
             if sel.size == 0:
                 break
-            part = _examine(sel, c, crit, eta, hh, k, table, eps_g)
+            part = _examine(gr, sel, c, crit, gr.eps_g)
             parts.append(part)
             done[part[1][part[0] > 0.0]] = True
             start += 2
         xr, orr, kinds = (np.concatenate([q[j] for q in parts]) for j in range(3))
-    ok = xr > 0.0
-    xr, orr, kinds = xr[ok], orr[ok], kinds[ok]
     order = np.lexsort((xr, orr))
     xr, orr, kinds = xr[order], orr[order], kinds[order]
-    if first_only:     # the first two of each branch: polishing may merge a close pair
+    if first_only and gr.monotone_length:     # the first two of each branch: polishing may merge a close pair
         rank = np.arange(xr.size) - np.searchsorted(orr, orr)
         keep = rank < 2
         xr, orr, kinds = xr[keep], orr[keep], kinds[keep]
-    xr = _polish(xr, eta[orr], hh[orr], k, np.array([br.x_end for br in brs])[orr])
-    order = np.lexsort((xr, orr))
-    xr, orr, kinds = xr[order], orr[order], kinds[order]
-    dup = np.zeros(xr.size, bool)
-    dup[1:] = (orr[1:] == orr[:-1]) & (np.abs(xr[1:] - xr[:-1]) <= 1e-13)
-    xr, orr, kinds = xr[~dup], orr[~dup], kinds[~dup]
-    if first_only:
-        first = np.ones(xr.size, bool)
-        first[1:] = orr[1:] != orr[:-1]
-        xr, orr, kinds = xr[first], orr[first], kinds[first]
     if xr.size == 0:
         return []
-    _, _, a, b = branch_values(xr, eta[orr], hh[orr], k)
-    out = [Root(brs[orr[i]].m, brs[orr[i]].eta, brs[orr[i]].h, float(a[i]), float(b[i]), float(xr[i]), str(kinds[i]))
-           for i in range(xr.size)]
+    if polish:
+        xr, a, b = _polish(gr, xr, orr)
+    else:
+        _, _, a, b = gr.values(xr, orr)
+    bi = gr.br[orr]
+    length = a + b
+    ok = (a > 0.0) & (b > 0.0) & (length >= lengths[0] - 1e-12) & (length <= lengths[1] + 1e-12)
+    a, b, bi, kinds, length = a[ok], b[ok], bi[ok], kinds[ok], length[ok]
+    order = np.lexsort((length, bi))
+    a, b, bi, kinds, length = a[order], b[order], bi[order], kinds[order], length[order]
+    dup = np.zeros(a.size, bool)    # the same root twice (a close pair merged, a corner shared by graphs)
+    dup[1:] = (bi[1:] == bi[:-1]) & (np.abs(a[1:] - a[:-1]) <= 1e-12) & (np.abs(b[1:] - b[:-1]) <= 1e-12)
+    a, b, bi, kinds = a[~dup], b[~dup], bi[~dup], kinds[~dup]
+    if first_only:
+        first = np.ones(a.size, bool)
+        first[1:] = bi[1:] != bi[:-1]
+        a, b, bi, kinds = a[first], b[first], bi[first], kinds[first]
+    names = ("", "simple", "double")
+    out = [Root(brs[j].m, brs[j].eta, brs[j].h, ai, bi_, min(ai, bi_), names[kd])
+           for j, ai, bi_, kd in zip(bi.tolist(), a.tolist(), b.tolist(), kinds.tolist())]
     return sorted(out, key=lambda r: r.a + r.b)

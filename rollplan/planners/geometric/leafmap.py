@@ -32,8 +32,14 @@ the contact path turns at rate ``c`` and ``|(u_a', v_a')| = r``), so
     E(r, k) = 2 pi (1 - c) + 2 pi k c (1 - 1/s),                     dE/dr = (2 pi r / c) (1 - k (1 + s^-3)),
     u_a' + i v_a' = r exp(i theta(phi)),   theta = (1 - k) c phi + (k c / s) chi(phi).
 
-E is strictly decreasing on (0, A_MAX] for every ``k >= 1/2`` (``1 + s^-3 > 2``), which the
-complete enumeration (:mod:`.enumerate`) uses.
+The sign of dE/dr is that of ``1 - k (1 + s^-3)``, and ``1 + s^-3`` increases with r from 2 to
+``Q = 1 + s(A_MAX)^-3``: E is strictly decreasing on (0, A_MAX] for every ``k >= 1/2``, strictly
+increasing for ``k <= 1/Q``, and for ``1/Q < k < 1/2`` increasing up to its only interior maximum
+``r* = sqrt((1 - s*^2) / 2)``, ``s* = (1/k - 1)^(-1/3)``, then decreasing (:func:`turn_pieces`; the
+complete enumeration, :mod:`.enumerate`, works on these monotone pieces). For ``k > 1/2`` the
+*root phase* ``w = sqrt(-E)`` is ``r sqrt(phi(r^2))`` with ``phi(u) = -E / u > 0`` smooth
+(``phi(0) = pi (2 k - 1)``), so w is a smooth increasing coordinate on (0, A_MAX]
+(:func:`root_phase`).
 
 The displacement, in the variable ``chi`` (the argument of a Blaschke factor, inverse
 ``phi(chi) = chi + 2 atan(rho sin chi / (1 - rho cos chi))``,
@@ -64,7 +70,8 @@ import numpy as np
 from ...core.curves import A_MAX
 from ...problem import K_MAX
 
-__all__ = ["ORDER", "BUCKETS", "panels_for", "gauss_nodes", "turn", "turn_dr", "turn_inverse",
+__all__ = ["ORDER", "BUCKETS", "panels_for", "gauss_nodes", "turn", "turn_dr", "turn_inverse", "turn_pieces",
+           "root_phase", "radius_of_root_phase",
            "displacement", "signed_length", "leaf_values", "step_values"]
 
 #: Gauss-Legendre nodes per panel.
@@ -125,6 +132,39 @@ def _turn_u(u, k: float):
     s = np.sqrt(1.0 - 2.0 * u)
     return (_TWO_PI * u / (1.0 + c) - 2.0 * _TWO_PI * k * c * u / (s * (1.0 + s)),
             math.pi / c * (1.0 - k * (1.0 + 1.0 / (s * s * s))))
+
+
+def turn_pieces(k: float) -> tuple:
+    """The monotone pieces of E(., k) on [0, A_MAX]: ``((r_lo, r_hi, sign), ...)`` with ``sign`` that of
+    dE/dr inside (module docstring)."""
+    q = 1.0 + (1.0 - 2.0 * A_MAX * A_MAX) ** -1.5
+    if k >= 0.5:
+        return ((0.0, A_MAX, -1),)
+    if k * q <= 1.0:
+        return ((0.0, A_MAX, 1),)
+    s = (1.0 / k - 1.0) ** (-1.0 / 3.0)
+    r_star = math.sqrt(0.5 * (1.0 - s * s))
+    return ((0.0, r_star, 1), (r_star, A_MAX, -1))
+
+
+def root_phase(r, k: float):
+    """``(w, dw/dr)`` with ``w = sqrt(-E(r, k))`` for ``k > 1/2`` (module docstring), without cancellation:
+    ``w = r sqrt(phi)``, ``dw/dr = (pi / c) (k (1 + s^-3) - 1) / sqrt(phi)``."""
+    r = np.asarray(r, float)
+    c, s, _ = _consts(r)
+    sq = np.sqrt(4.0 * math.pi * k * c / (s * (1.0 + s)) - _TWO_PI / (1.0 + c))
+    return r * sq, math.pi / c * (k * (1.0 + 1.0 / (s * s * s)) - 1.0) / sq
+
+
+def radius_of_root_phase(w, k: float, r0, steps: int = 2):
+    """Radius with root phase w (``E(r) = -w^2``, ``k > 1/2``) by ``steps`` Newton steps in ``u = r^2``
+    (E is smooth in u with ``dE/du < 0``) from the close start ``r0``, kept in ``[0, A_MAX]``."""
+    u = np.asarray(r0, float) ** 2
+    target = -np.asarray(w, float) ** 2
+    for _ in range(steps):
+        f, df = _turn_u(u, k)
+        u = np.minimum(np.maximum(u - (f - target) / df, 0.0), A_MAX * A_MAX)
+    return np.sqrt(u)
 
 
 @lru_cache(maxsize=16)
@@ -204,8 +244,8 @@ def displacement(r, k: float, derivative: bool = False, chunk: int = 2048):
         phi = chi + 2.0 * np.arctan2(rho * schi, den)
         jac = (1.0 - rho * rho) / q
         theta = (1.0 - k) * c * phi + (k * c / s) * chi
-        e = np.exp(1j * theta)
-        base = (jac * e) @ w
+        ct, st = np.cos(theta), np.sin(theta)                 # exp(i theta), in real arithmetic
+        base = (jac * ct) @ w + 1j * ((jac * st) @ w)
         out[i:i + chunk] = rr[:, 0] * base
         if derivative:
             c_r, s_r = -rr / c, -2.0 * rr / s
@@ -214,7 +254,8 @@ def displacement(r, k: float, derivative: bool = False, chunk: int = 2048):
             phi_rho = 2.0 * schi / q
             jac_rho = (-2.0 * rho * q - (1.0 - rho * rho) * (2.0 * rho - 2.0 * cchi)) / (q * q)
             theta_r = (1.0 - k) * (c_r * phi + c * phi_rho * rho_r) + k * chi * (c_r * s - c * s_r) / (s * s)
-            dterm = ((jac_rho * rho_r + 1j * theta_r * jac) * e) @ w
+            re, im = jac_rho * rho_r, theta_r * jac              # (re + i im) exp(i theta)
+            dterm = (re * ct - im * st) @ w + 1j * ((re * st + im * ct) @ w)
             dout[i:i + chunk] = base + rr[:, 0] * dterm
     return (out, dout) if derivative else out
 

@@ -26,23 +26,23 @@ So, for a branch ``m`` (psi is an angle: ``n eta = psi + 2 pi m``), solve
 ``sin(eta/2) = 0`` the limit is ``h_des / n``, (34); see :mod:`rollplan.core.plane`),
 then ``gamma = arg(target) - arg(sum_j Rot(-j eta) D_bar)``.
 
-The pieces. For ``k >= 1/2`` (every physical robot) the roots of (32)-(33) are
-enumerated completely, branch by branch, as the roots of one scalar function
-of one leaf radius (:mod:`.enumerate`, whose docstring holds the completeness
-argument) on the accurate leaf map (:mod:`.leafmap`: the turn in closed form,
-the displacement by a Gauss rule accurate to K_MAX). The shortest plan is
-found by a bounded search: branches are visited in increasing order of the
-smallest ``a + b`` they can hold, the first root of each branch is its
-shortest, and the search stops when no branch left can beat the best
-certified plan. Each root is then polished by the solver of the shooting problem (32)-(33) chosen by
-name, IPOPT through CasADi by default (:func:`.refine.polisher`: compiled residual and Jacobian of the
-leaf map, started at the enumerated root, one or two iterations). For ``k < 1/2`` the turn is not
-monotone and the branches are bracketed on tables of the two leaves instead (:mod:`.leaves`,
-:mod:`.brackets`) and refined by a root solver chosen by name (:mod:`.refine`),
-without the completeness guarantee. Every plan is certified by an independent
-integration of all ``n`` steps (:mod:`.certify`: compiled RK8 with a step-doubling error bound by
-default, CVODES by name); a plan whose certified residual plus error bound exceeds the tolerance is
-never returned.
+The pieces. For every k the roots of (32)-(33) are enumerated completely,
+branch by branch, as the roots of one scalar function along graphs that cover
+the level set of (32) (:mod:`.enumerate`, whose docstring holds the
+completeness argument) on the accurate leaf map (:mod:`.leafmap`: the turn in
+closed form, the displacement by a Gauss rule accurate to K_MAX). The shortest
+plan is found by a bounded search: branches are visited in increasing order of
+a lower bound of ``a + b`` on them, the shortest root of each branch is found
+first, and the search stops when no branch left can beat the best certified
+plan. Each root is then polished by the solver of the shooting problem (32)-(33)
+chosen by name, IPOPT through CasADi by default (:func:`.refine.polisher`:
+compiled residual and Jacobian of the leaf map, started at the enumerated root,
+one or two iterations). (The bracketing of the leaf tables, :mod:`.leaves`,
+:mod:`.brackets`, remains for the atlas and the benchmarks.) Every plan is
+certified by an independent integration of all ``n`` steps (:mod:`.certify`:
+compiled RK8 with a step-doubling error bound by default, CVODES by name); a
+plan whose certified residual plus error bound exceeds the tolerance is never
+returned.
 """
 
 from __future__ import annotations
@@ -50,7 +50,6 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections import Counter
 from dataclasses import dataclass, field, replace
 from functools import cached_property, lru_cache
 from typing import NamedTuple
@@ -65,7 +64,6 @@ from ...core.plane import n_step_sum, wrap, wrap_exact
 from ...errors import (
     InputError,
     NoPlanError,
-    SolverError,
     check_choice,
     check_finite,
     check_flag,
@@ -78,10 +76,10 @@ from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from .brackets import find_brackets
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
-from .enumerate import K_MONOTONE, branches, roots
+from .enumerate import branches, roots
 from .leafmap import panels_for, step_values
 from .leaves import LeafTables
-from .refine import SOLVER_ERROR_STATUSES, SOLVERS, polisher, step_residual
+from .refine import SOLVERS, polisher, step_residual
 
 __all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
 
@@ -94,9 +92,6 @@ _CHUNK = 64
 #: A polished root farther than this from the enumerated one (in a or b [R]) is not taken (the solver
 #: left the root it was started at); the enumerated root is certified instead.
 _POLISH_MOVE = 1e-6
-#: Brackets whose tables' model root lies within this many cell widths of the cell centre are
-#: solved first (see :func:`.brackets.cell_start`).
-_PLAUSIBLE_OFFSET = 1.5
 
 
 class _Root(NamedTuple):
@@ -243,10 +238,6 @@ class GeometricPhasePlanner:
         return step_residual(self.step_map)
 
     @cached_property
-    def _solve(self):
-        return SOLVERS[self.method](self.residual)
-
-    @cached_property
     def tables(self) -> LeafTables:
         return LeafTables()
 
@@ -280,7 +271,6 @@ class GeometricPhasePlanner:
         all_solutions = check_flag("all_solutions", all_solutions)
         if branch is not None:
             branch = check_whole("branch", branch)
-        k, steps = problem.k, problem.steps
         goal_r = problem.scaled(problem.goal)
         psi_des, turns = wrap_exact(goal_r.psi)  # psi is an angle; branch numbers stay relative to psi as given
         h_des = math.hypot(goal_r.u_a, goal_r.v_a)
@@ -289,66 +279,8 @@ class GeometricPhasePlanner:
             raise NoPlanError(f"no plan for {where}: the target is the start point, and rollplan plans "
                               "motions with a nonzero displacement")
         target = (goal_r.u_a, goal_r.v_a, psi_des)
-        if k >= K_MONOTONE:
-            return self._solve_enumerated(problem, all_solutions, None if branch is None else branch + turns,
-                                          target, turns, t_start)
-        brackets = self.brackets(k, h_des, psi_des, steps, fine=all_solutions)
-        if branch is not None:
-            brackets = brackets[brackets["m"] == branch + turns]
-        log.info("k=%g: %d brackets", k, len(brackets))
-        found: list = []      # certified plans, shortest first
-        seen: list = []       # (a, b, m) of every converged root, certified or not
-        rejected: list = []   # certified residuals of the roots that failed certification
-        statuses: Counter = Counter()
-        solves = 0
-        # Brackets whose model root lies well outside the cell are mostly false (parallel zero
-        # curves); the shortest plan is sought among the others first, and they are solved only
-        # for all solutions or when the others give no plan.
-        plausible = brackets["off"] <= _PLAUSIBLE_OFFSET
-        passes = [brackets] if all_solutions else [brackets[plausible], brackets[~plausible]]
-        for rows in passes:
-            if found:
-                break
-            for br in rows:
-                m = int(br["m"])
-                if not all_solutions and found and found[0][0].a + found[0][0].b <= br["lower"]:
-                    break  # no bracket left can hold a shorter path
-                if any(sm == m and abs(sa - br["a0"]) <= br["da"] and abs(sb - br["b0"]) <= br["db"]
-                       for sa, sb, sm in seen):
-                    continue  # the root in this cell is known
-                # Solve within the bracketing cell widened by two cells each way: near A_MAX eta is
-                # steep, and an unbounded step can jump to another root and leave this one unfound.
-                box_lo = np.maximum([br["a0"] - 3 * br["da"], br["b0"] - 3 * br["db"]], 1e-6)
-                box_hi = np.minimum([br["a0"] + 3 * br["da"], br["b0"] + 3 * br["db"]], A_MAX)
-                x, status, iters, ok = self._solve([br["a_s"], br["b_s"]], [k, br["eta_m"], br["h_m"]], box_lo, box_hi)
-                solves += 1
-                statuses[str(status)] += 1
-                if not ok or any(abs(x[0] - sa) < 1e-7 and abs(x[1] - sb) < 1e-7 for sa, sb, _ in seen):
-                    continue
-                seen.append((float(x[0]), float(x[1]), m))
-                cand = self._certified(problem, x, m - turns, target, str(status), iters)
-                if not cand[1].passed:
-                    log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual + bound %.2e > %.0e",
-                                m - turns, x[0], x[1], cand[1].residual + cand[1].error_bound, self.tol)
-                    rejected.append(cand[1].residual + cand[1].error_bound)
-                    continue
-                found.append(cand)
-                found.sort(key=lambda c: c[0].a + c[0].b)
-        elapsed = time.perf_counter() - t_start
-        if not found:
-            self._raise_if_rejected(where, rejected)
-            errors = Counter({s: c for s, c in statuses.items() if s in SOLVER_ERROR_STATUSES})
-            if errors:
-                status = errors.most_common(1)[0][0]
-                raise SolverError(f"the root solver failed for {where} ({solves} solves from {len(brackets)} "
-                                  f"brackets, {status}); try method='newton' or more steps", status)
-            tried = ", ".join(f"{s} x{c}" for s, c in statuses.most_common(3))
-            raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R"
-                              f"{f' ({solves} bracket solves without a root: {tried})' if solves else ''}; "
-                              "try more steps")
-        details = {"candidates": int(len(brackets)), "solves": solves}
-        plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
-        return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
+        return self._solve_enumerated(problem, all_solutions, None if branch is None else branch + turns,
+                                      target, turns, t_start)
 
     def _raise_if_rejected(self, where: str, rejected: list) -> None:
         """NoPlanError naming the best certified residual when roots were found but none certified."""
@@ -359,7 +291,7 @@ class GeometricPhasePlanner:
                               "try more steps")
 
     def _solve_enumerated(self, problem, all_solutions, branch, target, turns, t_start) -> Plan:
-        """Complete enumeration (``k >= 1/2``): every root of every branch (``all_solutions``) or the
+        """Complete enumeration (every k): every root of every branch (``all_solutions``) or the
         bounded search for the shortest certified plan (module docstring; :mod:`.enumerate`)."""
         k, steps = problem.k, problem.steps
         h_des = math.hypot(target[0], target[1])
@@ -520,9 +452,6 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
         Bad input.
     NoPlanError
         No certified plan exists in the admissible range ``0 < a, b <= A_MAX R``.
-    SolverError
-        The root solver broke down (an internal IPOPT error; carries its status). A bracket
-        whose solve does not converge is taken to hold no root.
     """
     check_choice("method", method, SOLVERS)
     problem = Problem(target, k=k, robot=robot, radius=radius, steps=steps)
