@@ -77,11 +77,10 @@ from ..core.curves import A_MAX, figure_eight
 from ..core.integrate import check_heading_structure, heading_free_rates, piece_rhs, rk8_step, spectral_leaf
 from ..errors import InputError, NoPlanError, OutputError, show_limit
 from ..outputs import check_writable, make_folder, write_atomic
+from ..planners.geometric import GeometricPhasePlanner, leafmap
 from ..planners.geometric import enumerate as enumerate_
-from ..planners.geometric import leafmap
-from ..planners.geometric import plan as gp_plan
 from ..planners.geometric.enumerate import K_MONOTONE
-from ..problem import K_MAX, MAX_STEPS
+from ..problem import K_MAX, MAX_STEPS, Problem
 
 __all__ = [
     "DEFAULT_STEPS_PER_LEAF",
@@ -408,22 +407,21 @@ def _check_k_max(k_max, steps_per_leaf: int, step: ca.Function) -> float:
     return k_max
 
 
-def reference_plan(target, steps: int, k: float, near=None):
-    """The Python planner's verified plan on branch m = 0, for cross-checking the C planner.
+def reference_plan(target, steps: int, k: float, near=None, branch: int | None = None):
+    """The Python planner's certified plan for the same target, for cross-checking the C planner.
 
-    Solves (32)-(33) with ``m = 0`` by :mod:`rollplan.planners.geometric` (IPOPT on the
-    spectral step map, CVODES verification). Returns the shortest such plan,
-    or with ``near = (a, b)`` the one closest to it; None if there is none.
-    Uses :func:`rollplan.planners.geometric.plan` restricted to ``branch=0`` (all of its
-    roots when ``near`` is given).
+    :class:`rollplan.planners.geometric.GeometricPhasePlanner` on ``Problem(target, k, steps)``: the shortest
+    plan over all branches (the C planner's default), or on ``branch`` only; with ``near = (a, b)`` the plan
+    of all certified ones closest to it. None if there is none.
     """
-    u, v, psi = (float(x) for x in target)
-    dist = (lambda q: 0.0) if near is None else (lambda q: max(abs(q.a - near[0]), abs(q.b - near[1])))
+    problem = Problem(tuple(float(x) for x in target), k=k, steps=steps)
     try:
-        best = gp_plan((u, v, psi), steps, k=k, branch=0, all_solutions=near is not None)
+        best = GeometricPhasePlanner().solve(problem, all_solutions=near is not None, branch=branch)
     except NoPlanError:
         return None
-    return min((best,) + best.alternatives, key=lambda q: (dist(q), q.a + q.b))
+    if near is None:
+        return best
+    return min((best,) + best.alternatives, key=lambda q: (max(abs(q.a - near[0]), abs(q.b - near[1])), q.a + q.b))
 
 
 # ----------------------------------------------------------------------------- C sources
