@@ -23,6 +23,7 @@
 #define SZ_IW @SZ_IW@
 #define SZ_W @SZ_W@
 #define REAL_TINY @REAL_TINY@          /* smallest normal casadi_real */
+#define REAL_MAX @REAL_MAX@            /* largest finite casadi_real */
 #define A_MAX @PREFIX_UPPER@_A_MAX
 #define K_MIN @PREFIX_UPPER@_K_MIN
 #define K_MAX @PREFIX_UPPER@_K_MAX
@@ -487,7 +488,7 @@ static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int 
                           casadi_real *dg, casadi_real *a, casadi_real *b) {
     casadi_real y = other(x, br->e, k), dy, da, db, ra, rb, pa, pb, c;
     dy = br->e == 0.0 ? 1.0 : turn_dr(x, k) / turn_dr(y, k);
-    if (!isfinite(dy)) dy = isnan(dy) ? 0.0 : (dy > 0.0 ? DBL_MAX : -DBL_MAX);   /* numpy's nan_to_num */
+    if (!isfinite(dy)) dy = isnan(dy) ? 0.0 : (dy > 0.0 ? REAL_MAX : -REAL_MAX);   /* numpy's nan_to_num */
     if (br->eta >= 0.0) {
         *a = x;
         *b = y;
