@@ -380,7 +380,9 @@ def certify(clib, a, b, gamma, steps, k, target):
 @pytest.mark.parametrize("a, b, gamma, steps, k", [
     (0.3004288061954572, 0.3004288061954572, 0.93188347081455891, 1, 2.5), (0.69, 0.69, 0.3, 1, DEFAULT_K_MAX),
     (0.05, 0.69, -2.0, 2, DEFAULT_K_MAX), (0.2, 0.45, 1.0, 3, 0.0), (0.6, 0.1, 3.0, 1, 1.5),
-    (0.685, 0.2, 0.0, 1, 1.0)])   # near A_MAX at small k: certified only after the steps are doubled again
+    (0.685, 0.2, 0.0, 1, 1.0),    # near A_MAX at small k: certified only after the steps are doubled again
+    (0.69, 0.01, 1.0, 2, 0.5), (0.5, 0.6, 0.7, 4, 2.5), (0.4, 0.4, 0.0, 1, DEFAULT_K_MAX), (0.1, 0.1, 0.0, 3, 2.5),
+    (0.66, 0.62, -1.0, 2, 3.7)])  # step counts from (k, radius): the estimate still bounds the true error
 def test_certificate_final_state_is_within_its_bound(clib, a, b, gamma, steps, k):
     """The RK8 certificate's final state against DOP853 on the printed (28)-(30) (rtol 1e-13)."""
     ref = references.trace(a, b, k, gamma, steps)
@@ -475,3 +477,60 @@ def test_float_build_has_no_double_and_certifies_to_its_tolerance(built_float, b
         assert f32.returncode == f64.returncode == 0
         assert np.max(np.abs(np.array(f32.stdout.split()[:3], float) - np.array(f64.stdout.split()[:3], float))) < 1e-4
     assert 0 in _fuzz(built_float, 7, 10, 3, FLOAT_CERT_TOL)
+
+
+# ----------------------------------------------------------------------------- the time law in C
+
+class _Plan(ctypes.Structure):
+    _fields_ = [("a", ctypes.c_double), ("b", ctypes.c_double), ("gamma", ctypes.c_double), ("eta", ctypes.c_double),
+                ("h", ctypes.c_double), ("m", ctypes.c_long), ("residual", ctypes.c_double),
+                ("bound", ctypes.c_double), ("predicted", ctypes.c_double), ("branches", ctypes.c_int),
+                ("roots", ctypes.c_long)]
+
+
+@pytest.mark.parametrize("target, steps, duration", [((0.3, -0.2, 0.5), 2, 7.0), ((0.0, 1.0, 0.0), 1, 2.0)])
+def test_sample_is_the_python_min_jerk_law(clib, target, steps, duration):
+    """rollplan_sample at random times against rollplan.execution.actuation (the min-jerk law of
+    rollplan.execution.timing, rotor rates from the model's (11), angles and state integrated by CVODES):
+    rates to 1e-10, state and rotor angles to 1e-10 of their size (the accuracy of the Python side's
+    integration); its angles' time derivative is its rates; and at the end the state is the target (to the
+    certificate's tolerance; DOP853 on the printed equations certifies the plan's end state)."""
+    from rollplan import Problem, default_robot
+    from rollplan.execution.actuation import actuate
+    from rollplan.planners.geometric import GeometricPhasePlanner
+
+    robot = default_robot()
+    R, k = robot.radius, robot.k
+    plan = GeometricPhasePlanner().solve(Problem(tuple(x * R if i < 2 else x for i, x in enumerate(target)),
+                                                 robot=robot, steps=steps))
+    motion = actuate(plan, robot, duration=duration, samples=200)
+    d = ctypes.c_double
+    clib.rollplan_sample.argtypes = [ctypes.POINTER(_Plan), ctypes.c_int, d, d, d, d, d, d, ctypes.POINTER(d),
+                                     ctypes.POINTER(d), ctypes.POINTER(d)]
+    p = _Plan(plan.a / R, plan.b / R, plan.gamma)
+    args = (steps, k, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, duration)
+
+    def sample(t):
+        rates, angles, state = (d * 2)(), (d * 2)(), (d * 5)()
+        assert clib.rollplan_sample(ctypes.byref(p), *args, t, rates, angles, state) == 0
+        return np.array(rates), np.array(angles), np.array(state)
+
+    rng = np.random.default_rng(5)
+    size = max(1.0, float(np.abs(motion.rotor_angles).max()))
+    for i in rng.choice(motion.time.size, 12, replace=False):
+        rates, angles, state = sample(motion.time[i])
+        assert np.abs(rates - motion.rotor_rates[i]).max() <= 1e-10
+        assert np.abs(angles - motion.rotor_angles[i]).max() <= 1e-10 * size
+        assert np.all(np.abs(state * [R, R, 1, 1, 1] - motion.state[i]) <= 1e-10 * (1 + np.abs(motion.state[i])))
+    for t in rng.uniform(0.05, 0.95, 3) * duration:
+        fd = (sample(t + 1e-6)[1] - sample(t - 1e-6)[1]) / 2e-6
+        np.testing.assert_allclose(fd, sample(t)[0], rtol=1e-6, atol=1e-6)
+    rates, angles, state = sample(duration)
+    end = references.trace(plan.a / R, plan.b / R, k, plan.gamma, steps)
+    assert np.abs(rates).max() == 0.0 and np.linalg.norm(state[:3] - end) <= 1e-9
+    assert np.linalg.norm(state[:2] - target[:2]) + abs(references.wrap(state[2] - target[2])) <= 1e-9
+    rates = (d * 2)()
+    for bad in ((steps, k, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, duration, duration * 1.01),
+                (steps, k, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, 0.0, 0.0),
+                (0, k, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, duration, 0.0)):
+        assert clib.rollplan_sample(ctypes.byref(p), *bad, rates, None, None) == 2

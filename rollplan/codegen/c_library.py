@@ -76,6 +76,7 @@ from ..core import model
 from ..core.curves import A_MAX, figure_eight
 from ..core.integrate import check_heading_structure, heading_free_rates, piece_rhs, rk8_step, spectral_leaf
 from ..errors import InputError, NoPlanError, OutputError, show_limit
+from ..execution.path import curve_piece_function
 from ..outputs import check_writable, make_folder, write_atomic
 from ..planners.geometric import GeometricPhasePlanner, leafmap
 from ..planners.geometric import enumerate as enumerate_
@@ -92,6 +93,7 @@ __all__ = [
     "leaf_function",
     "step_functions",
     "certificate_functions",
+    "motion_functions",
     "algebraic",
     "DEFAULT_K_MAX",
     "CERT_TOL",
@@ -355,9 +357,40 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
     return named + steps
 
 
+def motion_functions(prefix: str = DEFAULT_PREFIX) -> list:
+    """What the C time law needs along each leaf, per unit of the leaf's parameter phi.
+
+    Returns
+    -------
+    list of casadi.Function
+        ``<prefix>_piece<i>(phi, x[5], p[2], k, gamma, jxx, jzz, jr) -> (xdot[5], uv[2], g[2])`` for leaf i = 0, 1:
+        d/dphi of (u_a, v_a, psi, rotor angle 1, rotor angle 2), the contact coordinates (u_o, v_o) (24)-(25)
+        and the rotor rates per unit phi' (11) at psi = x[2]
+        (:func:`rollplan.execution.path.curve_piece_function`, the function the Python time laws sample);
+        then ``<prefix>_rk8x_<i>(x[5], t, h, p[2], k, gamma, jxx, jzz, jr) -> x_next[5]``, one RK8 step of it.
+        All in :func:`algebraic` form.
+    """
+    curve = figure_eight()
+    pieces, steps = [], []
+    for i in range(len(curve.pieces)):
+        f = curve_piece_function(curve, i)
+        phi, x, p = ca.SX.sym("phi"), ca.SX.sym("x", 5), ca.SX.sym("p", curve.n_params)
+        k, gamma, jxx, jzz, jr = (ca.SX.sym(n) for n in ("k", "gamma", "jxx", "jzz", "jr"))
+        xdot, uv, _, g, _, _ = f(phi, x[2], p, gamma, k, jxx, jzz, jr)
+        args, names = [phi, x, p, k, gamma, jxx, jzz, jr], ["phi", "x", "p", "k", "gamma", "jxx", "jzz", "jr"]
+        piece = ca.Function(f"{prefix}_piece{i}", args, [xdot, uv, g], names, ["xdot", "uv", "g"])
+        pieces.append(algebraic(piece))
+        rhs = ca.Function("rhs", args, [xdot], names, ["xdot"])
+        rk = rk8_step(rhs)
+        steps.append(algebraic(ca.Function(f"{prefix}_rk8x_{i}", rk.sx_in(), rk.call(rk.sx_in()), rk.name_in(),
+                                           rk.name_out())))
+    return pieces + steps
+
+
 def generated_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX) -> list:
     """Every function that :func:`generate` writes to C, in order (the symbolic twins)."""
-    return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix), *certificate_functions(prefix)]
+    return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix), *certificate_functions(prefix),
+            *motion_functions(prefix)]
 
 
 def rk8_trace(ab, k: float, gamma: float = 0.0, delta: float = 0.1, x0=(0.0, 0.0, 0.0)) -> np.ndarray:

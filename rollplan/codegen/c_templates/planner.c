@@ -103,6 +103,27 @@ static int curve_rhs(int leaf, casadi_real phi, const casadi_real x[3], const ca
     return leaf ? @PREFIX@_rhs1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rhs0(s_arg, s_res, s_iw, s_w, 0);
 }
 
+/* RK8 steps per panel of each leaf into s_counts: ceil(w (CERT_BASE + max |psi'|) / CERT_DELTA) for a panel of
+ * width w, psi' of (30) (it does not depend on the state) sampled at 5 points. Returns 0 on success. */
+static int counts(const casadi_real ab[2], casadi_real k, casadi_real gamma) {
+    const casadi_real zero[3] = {0.0, 0.0, 0.0};
+    casadi_real w, rate, n, xd[3];
+    int leaf, j, q;
+    for (leaf = 0; leaf < 2; ++leaf) {
+        for (j = 0; j < NPANEL; ++j) {
+            w = s_breaks[j + 1] - s_breaks[j];
+            rate = 0.0;
+            for (q = 0; q <= 4; ++q) {
+                if (curve_rhs(leaf, s_breaks[j] + 0.25 * q * w, zero, ab, k, gamma, xd) || !isfinite(xd[2])) return 1;
+                rate = fmax(rate, fabs(xd[2]));
+            }
+            n = ceil(w * (CERT_BASE + rate) / CERT_DELTA);
+            s_counts[leaf][j] = n > CERT_MAX_PANEL_STEPS ? CERT_MAX_PANEL_STEPS : (int)n;
+        }
+    }
+    return 0;
+}
+
 /* `n` equal RK8 steps (generated) over [t0, t0 + n h] along leaf `leaf`, x in place. */
 static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, int n, const casadi_real ab[2], casadi_real k, casadi_real gamma) {
     casadi_real t, xn[3];
@@ -140,9 +161,8 @@ static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2]
 
 int @PREFIX@_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps, casadi_real k, casadi_real u, casadi_real v, casadi_real psi,
                      casadi_real final[3], casadi_real *residual, casadi_real *bound) {
-    const casadi_real zero[3] = {0.0, 0.0, 0.0};
-    casadi_real ab[2], xc[3] = {0.0, 0.0, 0.0}, xf[3] = {0.0, 0.0, 0.0}, xd[3], w, rate, n;
-    int leaf, j, q, mult;
+    casadi_real ab[2], xc[3] = {0.0, 0.0, 0.0}, xf[3] = {0.0, 0.0, 0.0}, w, rate, n;
+    int mult;
     if (residual) *residual = INFINITY;
     if (bound) *bound = INFINITY;
     if (!(isfinite(a) && isfinite(b) && isfinite(gamma) && isfinite(u) && isfinite(v) && isfinite(psi))
@@ -151,20 +171,7 @@ int @PREFIX@_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps,
         return @PREFIX_UPPER@_BAD_INPUT;
     ab[0] = a;
     ab[1] = b;
-    /* steps per panel from the turn rate psi', which does not depend on the state */
-    for (leaf = 0; leaf < 2; ++leaf) {
-        for (j = 0; j < NPANEL; ++j) {
-            w = s_breaks[j + 1] - s_breaks[j];
-            rate = 0.0;
-            for (q = 0; q <= 4; ++q) {
-                if (curve_rhs(leaf, s_breaks[j] + 0.25 * q * w, zero, ab, k, gamma, xd) || !isfinite(xd[2]))
-                    return @PREFIX_UPPER@_NOT_CERTIFIED;
-                rate = fmax(rate, fabs(xd[2]));
-            }
-            n = ceil(w * (CERT_BASE + rate) / CERT_DELTA);
-            s_counts[leaf][j] = n > CERT_MAX_PANEL_STEPS ? CERT_MAX_PANEL_STEPS : (int)n;
-        }
-    }
+    if (counts(ab, k, gamma)) return @PREFIX_UPPER@_NOT_CERTIFIED;
     if (motion(xc, 1, steps, ab, k, gamma) || motion(xf, 2, steps, ab, k, gamma)) return @PREFIX_UPPER@_NOT_CERTIFIED;
     for (mult = 2;; mult *= 2) {
         /* step doubling: |x_2N - x_N| / (2^8 - 1) estimates the error of x_2N for an order-8 method; divided
@@ -907,4 +914,99 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
 
 int @PREFIX@_plan(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k, @PREFIX@_plan_t *plan) {
     return @PREFIX@_plan_with(u, v, psi, steps, k, NULL, plan);
+}
+
+/* ------------------------------------------------------------------ time law (rollplan.execution.timing) */
+
+/* Leaf `leaf` from phi = 0 to phi_end <= 2 pi by the generated RK8 steps of (u_a, v_a, psi, rotor angles)'
+ * (x in place), 2 s_counts steps per panel (the certificate's finer run). */
+static int leaf_to(int leaf, casadi_real x[5], casadi_real phi_end, const casadi_real ab[2], casadi_real k,
+                   casadi_real gamma, const casadi_real jj[3]) {
+    casadi_real t, h, b1, xn[5];
+    int j, q, n;
+    for (j = 0; j < NPANEL && s_breaks[j] < phi_end; ++j) {
+        b1 = s_breaks[j + 1] < phi_end ? s_breaks[j + 1] : phi_end;
+        n = 2 * s_counts[leaf][j];
+        h = (b1 - s_breaks[j]) / n;
+        for (q = 0; q < n; ++q) {
+            t = s_breaks[j] + q * h;
+            s_arg[0] = x;
+            s_arg[1] = &t;
+            s_arg[2] = &h;
+            s_arg[3] = ab;
+            s_arg[4] = &k;
+            s_arg[5] = &gamma;
+            s_arg[6] = jj;
+            s_arg[7] = jj + 1;
+            s_arg[8] = jj + 2;
+            s_res[0] = xn;
+            if (leaf ? @PREFIX@_rk8x_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8x_0(s_arg, s_res, s_iw, s_w, 0)) return 1;
+            x[0] = xn[0];
+            x[1] = xn[1];
+            x[2] = xn[2];
+            x[3] = xn[3];
+            x[4] = xn[4];
+        }
+    }
+    return 0;
+}
+
+int @PREFIX@_sample(const @PREFIX@_plan_t *plan, int steps, casadi_real k, casadi_real j_xx, casadi_real j_zz,
+                    casadi_real j_r, casadi_real duration, casadi_real t, casadi_real rates[2], casadi_real angles[2],
+                    casadi_real state[5]) {
+    casadi_real ab[2], jj[3], x[5] = {0.0, 0.0, 0.0, 0.0, 0.0}, piece_t, tau, f, df, phi, xdot[5], uv[2], g[2];
+    int pieces, j, q;
+    if (plan == NULL || rates == NULL) return @PREFIX_UPPER@_BAD_INPUT;
+    if (!(plan->a > 0.0 && plan->a <= A_MAX && plan->b > 0.0 && plan->b <= A_MAX) || !isfinite(plan->gamma)
+        || steps < 1 || steps > MAX_STEPS || !(k >= 0.0 && k <= K_MAX) || !(j_xx > 0.0 && isfinite(j_xx))
+        || !(j_zz > 0.0 && isfinite(j_zz)) || !(j_r > 0.0 && isfinite(j_r)) || !(duration > 0.0 && isfinite(duration))
+        || !(t >= 0.0 && t <= duration))
+        return @PREFIX_UPPER@_BAD_INPUT;
+    ab[0] = plan->a;
+    ab[1] = plan->b;
+    jj[0] = j_xx;
+    jj[1] = j_zz;
+    jj[2] = j_r;
+    /* min-jerk: each of the 2 n leaves in duration / (2 n), phi = 2 pi (10 tau^3 - 15 tau^4 + 6 tau^5) */
+    pieces = 2 * steps;
+    piece_t = duration / pieces;
+    j = (int)floor(t / piece_t);
+    if (j >= pieces) j = pieces - 1;
+    if (j < 0) j = 0;
+    tau = (t - j * piece_t) / piece_t;
+    tau = tau < 0.0 ? 0.0 : (tau > 1.0 ? 1.0 : tau);
+    f = tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
+    df = 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau);
+    phi = TWO_PI * f;
+    if (counts(ab, k, plan->gamma)) return @PREFIX_UPPER@_NOT_CERTIFIED;
+    for (q = 0; q < j; ++q)
+        if (leaf_to(q % 2, x, TWO_PI, ab, k, plan->gamma, jj)) return @PREFIX_UPPER@_NOT_CERTIFIED;
+    if (leaf_to(j % 2, x, phi, ab, k, plan->gamma, jj)) return @PREFIX_UPPER@_NOT_CERTIFIED;
+    s_arg[0] = &phi;
+    s_arg[1] = x;
+    s_arg[2] = ab;
+    s_arg[3] = &k;
+    s_arg[4] = &plan->gamma;
+    s_arg[5] = jj;
+    s_arg[6] = jj + 1;
+    s_arg[7] = jj + 2;
+    s_res[0] = xdot;
+    s_res[1] = uv;
+    s_res[2] = g;
+    if ((j % 2 ? @PREFIX@_piece1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_piece0(s_arg, s_res, s_iw, s_w, 0)))
+        return @PREFIX_UPPER@_NOT_CERTIFIED;
+    rates[0] = g[0] * TWO_PI * df / piece_t;
+    rates[1] = g[1] * TWO_PI * df / piece_t;
+    if (angles) {
+        angles[0] = x[3];
+        angles[1] = x[4];
+    }
+    if (state) {
+        state[0] = x[0];
+        state[1] = x[1];
+        state[2] = x[2];
+        state[3] = uv[0];
+        state[4] = uv[1];
+    }
+    return isfinite(rates[0]) && isfinite(rates[1]) ? @PREFIX_UPPER@_OK : @PREFIX_UPPER@_NOT_CERTIFIED;
 }

@@ -31,6 +31,10 @@
  *       eight with radii p = (a, b) rotated by gamma, x = (u_a, v_a, psi).
  *   @PREFIX@_rk8_0(x[3], t, h, p[2], k, gamma) -> x_next[3], @PREFIX@_rk8_1(...)
  *       one step of the eighth-order Runge-Kutta formula of Dormand and Prince of it.
+ *   @PREFIX@_piece0(phi, x[5], p[2], k, gamma, jxx, jzz, jr) -> xdot[5], uv[2], g[2], @PREFIX@_piece1(...)
+ *       along a leaf, per unit phi: d/dphi of (u_a, v_a, psi, rotor angles), the contact coordinates (u_o, v_o)
+ *       and the rotor rates (11) at psi = x[2]; @PREFIX@_rk8x_0(x[5], t, h, p[2], k, gamma, jxx, jzz, jr), _1:
+ *       one RK8 step of it (for the time law @PREFIX@_sample).
  */
 #ifndef @PREFIX_UPPER@_H
 #define @PREFIX_UPPER@_H
@@ -128,6 +132,21 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
  */
 int @PREFIX@_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps, casadi_real k, casadi_real u, casadi_real v, casadi_real psi,
                      casadi_real final[3], casadi_real *residual, casadi_real *bound);
+
+/*
+ * Time law: rotor-rate set points of a plan run by the min-jerk law of rollplan.execution.timing ("min-jerk":
+ * each of the 2 n leaves in duration / (2 n), the leaf parameter phi = 2 pi (10 tau^3 - 15 tau^4 + 6 tau^5),
+ * tau the fraction of the leaf's time; rest at every pole), for a robot with the inertias j_xx, j_zz (about the
+ * contact point and the vertical, (14): k = j_xx / j_zz) and rotor inertia j_r [kg m^2, any consistent unit].
+ * At time t in [0, duration] [s]: rates = the rotor rates phi_1_dot, phi_2_dot of (11) [rad/s]; angles (may be
+ * NULL) = the rotor angles, zero at t = 0 [rad]; state (may be NULL) = (u_a, v_a [R], psi, u_o, v_o [rad]).
+ * The rates are (11) per unit phi' (@PREFIX@_piece0/1) times phi'; angles and state integrate the motion from
+ * rest up to t by the generated RK8 steps (@PREFIX@_rk8x_0/1) at the certificate's finer step count, so the
+ * cost grows with t (at most the motion's full length). Returns @PREFIX_UPPER@_OK, @PREFIX_UPPER@_BAD_INPUT.
+ */
+int @PREFIX@_sample(const @PREFIX@_plan_t *plan, int steps, casadi_real k, casadi_real j_xx, casadi_real j_zz,
+                    casadi_real j_r, casadi_real duration, casadi_real t, casadi_real rates[2], casadi_real angles[2],
+                    casadi_real state[5]);
 
 /* Drop the leaf map's table kept for the last k (the next plan recomputes it). */
 void @PREFIX@_forget_table(void);
