@@ -747,7 +747,8 @@ static int search_branch(search_t *S, const branch_t *br) {
     const casadi_real k = S->k, floor_g = 1e-13 * (1.0 + br->h * br->h) + s_eps_g;
     casadi_real t1 = turn(br->x_end, k), xp, xl, prev, g, p, crit[2], hc, low, gm, pm, err, big, xm, xs[MAX_CELL_ROOTS];
     casadi_real last_root = -1.0, hv, t;
-    cell_t stack[STACK_CELLS], c;
+    static cell_t stack[STACK_CELLS];   /* static: the planner is not reentrant anyway, and the stack stays small */
+    cell_t c;
     int nt, nx, ip = 1, ix = 1, top, nroot, i, j, crosses, status;
     long cells = 0;
     nt = (int)ceil(fabs(t1) / PHASE_STEP) + 1;
