@@ -1,62 +1,50 @@
 """C code generation: a self-contained C99 planner for the robot's microcontroller.
 
-Everything numerical in the generated library comes from the symbolic model
-through CasADi's :class:`~casadi.CodeGenerator`; no equation is typed twice:
+Everything that is a model equation comes from the symbolic model through CasADi's
+:class:`~casadi.CodeGenerator`; no equation is typed twice:
 
 * the realizability condition (13) solved for the spin ``omega_z``
   (:func:`rollplan.core.model.omega_z_realizable`);
 * the rotor-rate map (11) (:func:`rollplan.core.model.rotor_rates`);
 * Montana's contact kinematics (6)-(10) (:func:`rollplan.core.model.montana`);
-* the step map ``(a, b, k) -> (shift, eta, direction)`` of one trace of the
-  figure eight (31), (35), integrated along the curve ODE (28)-(30)
-  (:func:`rollplan.core.integrate.piece_rhs`), and its Jacobian;
-* a coarse table of the two leaves on a fixed grid of radii, used only to
-  bracket the root of (32)-(33) on branch ``m = 0``.
+* the curve ODE (28)-(30) along each leaf and one RK8 step of it, for the on-board certificate
+  (:func:`certificate_functions`);
+* the per-phi functions of the time law along each leaf and one RK8 step of them
+  (:func:`motion_functions`, from :func:`rollplan.execution.path.curve_piece_function`);
+* the step map ``(a, b, k) -> (shift, eta, direction)`` of one trace of the figure eight (31), (35) and its
+  Jacobian, by the Chebyshev spectral quadrature of :mod:`rollplan.core.integrate`
+  (:func:`~rollplan.core.integrate.spectral_leaf`, written with loops over 10 graded panels of ``degree + 1``
+  nodes; ``steps_per_leaf`` = panels x degree), for ``<prefix>_step_eval``; :func:`_check_k_max` refuses a
+  ``k_max`` it is not accurate to ``STEP_MAP_TOL`` up to (``results/codegen_accuracy.json``).
 
-The step map is the Chebyshev spectral quadrature of :mod:`rollplan.core.integrate`
-(:func:`~rollplan.core.integrate.spectral_leaf`), written with loops: each leaf is integrated over the
-curve's 10 graded panels
-(its fixed steps), each panel on ``degree + 1`` Chebyshev points. Along a
-curve psi' in (30) does not depend on the state, and (28)-(29) are
-``[u_a', v_a'] = Rot(-psi) [A, B]`` with ``(A, B)`` their value at psi = 0
-(checked when the function is built). So one ``map`` over the nodes evaluates
-``(A, B, psi')`` and their derivatives by the leaf radius, a cumulative
-Chebyshev integration gives psi at the nodes, and weighted sums give
-``(u_a, v_a)``. The generated C loops over the nodes instead of unrolling
-them. The Jacobian by (a, b) is assembled by the chain rule from the leaves'
-derivatives.
+The certificate's and the time law's functions are written in :func:`algebraic` form (no cos, sin or tan of an
+atan2 or asin result), checked against the original graph when generated.
 
-``steps_per_leaf`` counts node intervals per leaf: panels x degree. The
-default, :data:`DEFAULT_STEPS_PER_LEAF`, was chosen from the measured error of
-the generated step map against steps per leaf over the admissible range
-(``scripts/bench_codegen.py --accuracy`` writes ``results/codegen_accuracy.json``);
-larger k needs more steps per leaf.
+The planner (``c_templates/planner.c``) is :mod:`rollplan.planners.geometric` in C, with the same algorithm
+and the same choice: the closed-form turn ``E(r, k)``, its inverse, and the leaf's displacement by the Gauss
+rule in chi of :mod:`rollplan.planners.geometric.leafmap`; the branches of (32), the scalar equation g(x) of
+(33) on each, the rho table per k and the complete enumeration of the roots with its argument, of
+:mod:`rollplan.planners.geometric.enumerate` (every formula ported once, citing the Python function; the
+rule's nodes and every constant written from the Python definitions by :func:`generate`); and the bounded
+search of :meth:`GeometricPhasePlanner._solve_enumerated <rollplan.planners.geometric.GeometricPhasePlanner>`:
+branches in increasing order of the smallest ``a + b`` they can hold, each branch's roots in increasing x
+(the first root of a branch is its shortest plan), every root polished on the accurate leaf map and
+certified, until no branch can hold a shorter plan. So the C planner returns the Python planner's plan
+(same branch, same (a, b, gamma) up to rounding); ``branch=`` restricts to one branch. The enumeration needs
+E strictly decreasing, which holds for ``k >= 1/2`` (:data:`~rollplan.planners.geometric.enumerate.K_MONOTONE`):
+the generated code accepts ``1/2 <= k <= k_max`` and refuses the rest with status 2 (the Python planner falls
+back to bracketing below 1/2, without the completeness guarantee). The rho table depends on k only and is kept
+for the last k.
 
-The planner (hand-written C glue, not model equations) solves, for branch
-``m = 0``,
-
-    eta(a, b) = psi / n                                                 (32)
-    h(a, b)   = h_des |sin(eta / 2) / sin(n eta / 2)|   (h_des / n if psi = 0)   (33)
-
-by a damped Newton iteration (backtracking on the residual norm, iterates kept
-in ``(0, A_MAX]``) on the generated step map and its Jacobian. It starts in the
-bracketing cells of the leaf table in order of their smallest ``a + b`` (as the
-Python planner orders its brackets), from the targets interpolated linearly in
-the cell, then sets ``gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift)``
-(see :mod:`rollplan.planners.geometric`). The table depends on k only and is kept for
-the last k.
-
-Every converged root is certified on board before it is returned (``<prefix>_certify``): the whole
-n-step motion is integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_step`
-of the state-dependent right side (28)-(30), :func:`certificate_functions`), at N and 2N steps per
-panel with N from the turn rate psi' on the panel (doubled again, up to 3 times, while the outcome is
-undecided); the error bound is the step-doubling difference over ``CERT_SAFETY``; a plan is returned
-only if residual + bound <= ``CERT_TOL``. This shares
-neither the heading structure nor the quadrature of the step map, so a step map that is wrong
-(beyond its accurate range, or by a bug) cannot certify its own plan. The generated code accepts
-``0 <= k <= k_max``, a generation option refused unless the step map is accurate to
-``STEP_MAP_TOL`` up to it. Static memory only, a bounded number of iterations, and a status code
-(0 certified plan, 2 bad input, 3 no bracket, 4 no convergence, 5 not certified).
+Every root is certified on board before it is returned (``<prefix>_certify``): the whole n-step motion is
+integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_step` of the state-dependent
+right side (28)-(30)), at N and 2N steps per panel with N from the turn rate psi' on the panel, so from k
+and the radius (doubled again, up to 3 times, while the outcome is undecided); the error bound is the
+step-doubling difference over ``CERT_SAFETY`` (Richardson's 255 would be the asymptotic value; tests check
+that the bound exceeds the true error against DOP853); a plan is returned only if residual + bound <=
+``CERT_TOL``. This shares neither the heading structure nor the quadrature of the leaf map, so a leaf map
+that is wrong cannot certify its own plan. Static memory only, bounded time, and a status code (0 certified
+plan, 2 bad input, 3 no plan, 4 search incomplete, 5 not certified).
 """
 
 from __future__ import annotations
