@@ -124,10 +124,13 @@ static int counts(const casadi_real ab[2], casadi_real k, casadi_real gamma) {
     return 0;
 }
 
-/* `n` equal RK8 steps (generated) over [t0, t0 + n h] along leaf `leaf`, x in place. */
-static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, int n, const casadi_real ab[2], casadi_real k, casadi_real gamma) {
-    casadi_real t, xn[3];
-    int q;
+/* `n` equal RK8 steps (generated) over [t0, t0 + n h] along leaf `leaf`, x in place: of the curve ODE
+ * (x = (u_a, v_a, psi), jj = NULL) or of the time law's ODE (x = (u_a, v_a, psi, rotor angles), jj = the
+ * inertias). */
+static int rk8_steps(int leaf, casadi_real *x, casadi_real t0, casadi_real h, int n, const casadi_real ab[2],
+                     casadi_real k, casadi_real gamma, const casadi_real *jj) {
+    casadi_real t, xn[5];
+    int q, i, status;
     for (q = 0; q < n; ++q) {
         t = t0 + q * h;
         s_arg[0] = x;
@@ -137,10 +140,16 @@ static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, 
         s_arg[4] = &k;
         s_arg[5] = &gamma;
         s_res[0] = xn;
-        if (leaf ? @PREFIX@_rk8_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8_0(s_arg, s_res, s_iw, s_w, 0)) return 1;
-        x[0] = xn[0];
-        x[1] = xn[1];
-        x[2] = xn[2];
+        if (jj) {
+            s_arg[6] = jj;
+            s_arg[7] = jj + 1;
+            s_arg[8] = jj + 2;
+            status = leaf ? @PREFIX@_rk8x_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8x_0(s_arg, s_res, s_iw, s_w, 0);
+        } else {
+            status = leaf ? @PREFIX@_rk8_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8_0(s_arg, s_res, s_iw, s_w, 0);
+        }
+        if (status) return 1;
+        for (i = 0; i < (jj ? 5 : 3); ++i) x[i] = xn[i];
     }
     return 0;
 }
@@ -152,7 +161,8 @@ static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2]
         for (leaf = 0; leaf < 2; ++leaf) {
             for (j = 0; j < NPANEL; ++j) {
                 nj = mult * s_counts[leaf][j];
-                if (rk8_steps(leaf, x, s_breaks[j], (s_breaks[j + 1] - s_breaks[j]) / nj, nj, ab, k, gamma)) return 1;
+                if (rk8_steps(leaf, x, s_breaks[j], (s_breaks[j + 1] - s_breaks[j]) / nj, nj, ab, k, gamma, NULL))
+                    return 1;
             }
         }
     }
@@ -923,31 +933,12 @@ int @PREFIX@_plan(casadi_real u, casadi_real v, casadi_real psi, int steps, casa
  * (x in place), 2 s_counts steps per panel (the certificate's finer run). */
 static int leaf_to(int leaf, casadi_real x[5], casadi_real phi_end, const casadi_real ab[2], casadi_real k,
                    casadi_real gamma, const casadi_real jj[3]) {
-    casadi_real t, h, b1, xn[5];
-    int j, q, n;
+    casadi_real b1;
+    int j, n;
     for (j = 0; j < NPANEL && s_breaks[j] < phi_end; ++j) {
         b1 = s_breaks[j + 1] < phi_end ? s_breaks[j + 1] : phi_end;
         n = 2 * s_counts[leaf][j];
-        h = (b1 - s_breaks[j]) / n;
-        for (q = 0; q < n; ++q) {
-            t = s_breaks[j] + q * h;
-            s_arg[0] = x;
-            s_arg[1] = &t;
-            s_arg[2] = &h;
-            s_arg[3] = ab;
-            s_arg[4] = &k;
-            s_arg[5] = &gamma;
-            s_arg[6] = jj;
-            s_arg[7] = jj + 1;
-            s_arg[8] = jj + 2;
-            s_res[0] = xn;
-            if (leaf ? @PREFIX@_rk8x_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8x_0(s_arg, s_res, s_iw, s_w, 0)) return 1;
-            x[0] = xn[0];
-            x[1] = xn[1];
-            x[2] = xn[2];
-            x[3] = xn[3];
-            x[4] = xn[4];
-        }
+        if (rk8_steps(leaf, x, s_breaks[j], (b1 - s_breaks[j]) / n, n, ab, k, gamma, jj)) return 1;
     }
     return 0;
 }
