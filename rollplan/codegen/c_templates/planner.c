@@ -279,7 +279,7 @@ static casadi_real turn_inverse(casadi_real e, casadi_real k) {
         c = sqrt(1.0 - u);
         s = sqrt(1.0 - 2.0 * u);
         f = TWO_PI * u / (1.0 + c) - 2.0 * TWO_PI * k * c * u / (s * (1.0 + s)) - e;
-        if (f == 0.0) break;
+        if (fabs(f) <= 4e-16 * (1.0 + fabs(e)) * (1.0 + k)) break;    /* rounding level (leafmap.turn_inverse) */
         if (f > 0.0) lo = u; else hi = u;                   /* E decreasing: the root is to the right of u if f > 0 */
         df = PI / c * (1.0 - k * (1.0 + 1.0 / (s * s * s)));
         nxt = u - f / df;
