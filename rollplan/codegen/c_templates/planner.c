@@ -103,19 +103,24 @@ static int curve_rhs(int leaf, casadi_real phi, const casadi_real x[3], const ca
     return leaf ? @PREFIX@_rhs1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rhs0(s_arg, s_res, s_iw, s_w, 0);
 }
 
-/* RK8 steps per panel of each leaf into s_counts: ceil(w (CERT_BASE + max |psi'|) / CERT_DELTA) for a panel of
- * width w, psi' of (30) (it does not depend on the state) sampled at 5 points. Returns 0 on success. */
+/* RK8 steps per panel of each leaf into s_counts: ceil(w (CERT_BASE + rate) / CERT_DELTA) for a panel of
+ * width w, rate = max |psi'_0| + |psi'_k - psi'_0| over 5 points of the panel: psi' of (30) at k = 0 (the
+ * rolling part) and at k (plus the spin part k w); psi' does not depend on the state. Both parts count
+ * separately: near A_MAX they are large and cancel in part for k near 1/2, while the path is still steep. */
 static int counts(const casadi_real ab[2], casadi_real k, casadi_real gamma) {
     const casadi_real zero[3] = {0.0, 0.0, 0.0};
-    casadi_real w, rate, n, xd[3];
+    casadi_real w, rate, n, xd[3], x0[3], phi;
     int leaf, j, q;
     for (leaf = 0; leaf < 2; ++leaf) {
         for (j = 0; j < NPANEL; ++j) {
             w = s_breaks[j + 1] - s_breaks[j];
             rate = 0.0;
             for (q = 0; q <= 4; ++q) {
-                if (curve_rhs(leaf, s_breaks[j] + 0.25 * q * w, zero, ab, k, gamma, xd) || !isfinite(xd[2])) return 1;
-                rate = fmax(rate, fabs(xd[2]));
+                phi = s_breaks[j] + 0.25 * q * w;
+                if (curve_rhs(leaf, phi, zero, ab, k, gamma, xd) || curve_rhs(leaf, phi, zero, ab, 0.0, gamma, x0)
+                    || !isfinite(xd[2]) || !isfinite(x0[2]))
+                    return 1;
+                rate = fmax(rate, fabs(x0[2]) + fabs(xd[2] - x0[2]));
             }
             n = ceil(w * (CERT_BASE + rate) / CERT_DELTA);
             s_counts[leaf][j] = n > CERT_MAX_PANEL_STEPS ? CERT_MAX_PANEL_STEPS : (int)n;
