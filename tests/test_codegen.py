@@ -383,7 +383,8 @@ def certify(clib, a, b, gamma, steps, k, target):
     (0.05, 0.69, -2.0, 2, DEFAULT_K_MAX), (0.2, 0.45, 1.0, 3, 0.0), (0.6, 0.1, 3.0, 1, 1.5),
     (0.685, 0.2, 0.0, 1, 1.0),    # near A_MAX at small k: certified only after the steps are doubled again
     (0.69, 0.01, 1.0, 2, 0.5), (0.5, 0.6, 0.7, 4, 2.5), (0.4, 0.4, 0.0, 1, DEFAULT_K_MAX), (0.1, 0.1, 0.0, 3, 2.5),
-    (0.66, 0.62, -1.0, 2, 3.7)])  # step counts from (k, radius): the estimate still bounds the true error
+    (0.66, 0.62, -1.0, 2, 3.7), (0.66, 0.66, 0.2, 3, 1.0), (0.69, 0.2, 1.0, 4, 1.5), (0.68, 0.05, 0.0, 6, 2.0),
+    (0.6597467940923643, 0.03704584696412159, 0.5035557975055616, 6, 1.5)])   # too few steps once: bound < error
 def test_certificate_final_state_is_within_its_bound(clib, a, b, gamma, steps, k):
     """The RK8 certificate's final state against DOP853 on the printed (28)-(30) (rtol 1e-13)."""
     ref = references.trace(a, b, k, gamma, steps)

@@ -104,8 +104,8 @@ STEP_MAP_TOL = 1e-10
 #: Tolerance of the on-board certificate: residual + error bound [R and rad] (the project's tolerance).
 CERT_TOL = 1e-9
 #: Steps of the RK8 certificate: a panel of width w gets ceil(w (CERT_BASE + max |psi'|) / CERT_DELTA) of them.
-CERT_DELTA = 1.6
-CERT_BASE = 1.0
+CERT_DELTA = 1.0
+CERT_BASE = 2.0
 #: The certificate's error bound is |x_2N - x_N| / CERT_SAFETY (Richardson's estimate for order 8 divides by 255).
 CERT_SAFETY = 16.0
 #: Tolerance of the certificate of a single-precision build (``generate(real="float")``): float rounding

@@ -706,7 +706,8 @@ typedef struct {
     casadi_real u, v, psi_w, k, best;   /* target (psi wrapped), inertia ratio, shortest certified a + b so far */
     int steps, certify, rejected, incomplete;
     long turns, roots;
-    @PREFIX@_plan_t *plan;
+    casadi_real rej[5];                 /* a, b, gamma, residual, bound of the best rejected root */
+    @PREFIX@_plan_t *plan;              /* filled in by an accepted root only */
 } search_t;
 
 /* A root x of branch br (from the table): polish, and accept it as the best plan if a + b < best and
@@ -724,12 +725,12 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
     if (S->certify)
         status = @PREFIX@_certify(a, b, gamma, S->steps, S->k, S->u, S->v, S->psi_w, NULL, &residual, &bound);
     if (status != @PREFIX_UPPER@_OK) {
-        if (!S->rejected || residual < S->plan->residual) {   /* the best rejected one, for the report */
-            S->plan->a = a;
-            S->plan->b = b;
-            S->plan->gamma = gamma;
-            S->plan->residual = residual;
-            S->plan->bound = bound;
+        if (!S->rejected || residual < S->rej[3]) {   /* the best rejected root, reported if no plan is found */
+            S->rej[0] = a;
+            S->rej[1] = b;
+            S->rej[2] = gamma;
+            S->rej[3] = residual;
+            S->rej[4] = bound;
         }
         S->rejected++;
         return 0;
@@ -924,6 +925,13 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
     }
     plan->roots = S.roots;
     if (S.best < INFINITY) return @PREFIX_UPPER@_OK;
+    if (S.rejected) {
+        plan->a = S.rej[0];
+        plan->b = S.rej[1];
+        plan->gamma = S.rej[2];
+        plan->residual = S.rej[3];
+        plan->bound = S.rej[4];
+    }
     if (S.incomplete) return @PREFIX_UPPER@_NO_CONVERGENCE;
     return S.rejected ? @PREFIX_UPPER@_NOT_CERTIFIED : @PREFIX_UPPER@_NO_PLAN;
 }
