@@ -36,7 +36,7 @@ TARGETS = [
     (0.3, -0.2, 0.5, 1, 2.5),
     (2.0, 1.0, 1.0, 3, 2.5),
     (0.5, 0.5, -2.0, 2, 2.5),
-    (0.0, 1.0, 0.0, 1, 0.0),
+    (0.0, 1.0, 0.0, 1, 0.5),
     (0.0, 1.0, 0.0, 1, 5.0),
     (-0.4, 0.8, 0.3, 1, 1.5),
 ]
@@ -45,7 +45,7 @@ TARGETS = [
 LARGE_TARGETS = [
     (0.0, 2.8, 0.0, 1, 2.5),
     (1.0, 2.0, 0.3, 1, 2.5),
-    (0.0, 2.0, 0.0, 1, 0.0),
+    (0.0, 2.0, 0.0, 1, 0.5),
     (3.0, 3.0, 0.2, 2, 2.5),
 ]
 
@@ -75,34 +75,38 @@ static double now_us(void) {
     clock_gettime(CLOCK_MONOTONIC, &t);
     return t.tv_sec * 1e6 + t.tv_nsec / 1e3;
 }
-/* Mean over the targets of the best of reps plans (the machine is shared); with forget,
- * the leaf table is recomputed for every plan (a new k each time). With cert, the time of
- * the certificate of the plan alone (@PREFIX@_certify). */
-static double run(int reps, int forget, int cert, int *fails) {
-    int n = (int)(sizeof T / sizeof T[0]), r, i;
-    @PREFIX@_plan_t p;
-    double total = 0.0, best, t, res, bound;
-    for (i = 0; i < n; ++i) {
-        *fails += @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p) != 0;
-        for (best = 1e300, r = 0; r < reps; ++r) {
-            if (forget) @PREFIX@_forget_table();
-            t = now_us();
-            if (cert)
-                @PREFIX@_certify(p.a, p.b, p.gamma, (int)T[i][3], T[i][4], T[i][0], T[i][1], T[i][2], NULL,
-                                 &res, &bound);
-            else
-                @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p);
-            t = now_us() - t;
-            if (t < best) best = t;
-        }
-        total += best;
-    }
-    return total / n;
-}
+/* Per target, the best of reps: a plan for a new k (the leaf map's table rebuilt first), a plan with the
+ * table kept (same k), the same without the certificate, and the plan's certificate alone. One line per
+ * target: "new_k same_k no_cert cert status". */
 int main(int argc, char **argv) {
-    int reps = argc > 1 ? atoi(argv[1]) : 20, fails = 0;
-    double cold = run(reps, 1, 0, &fails), warm = run(reps, 0, 0, &fails), cert = run(reps, 0, 1, &fails);
-    printf("%.3f %.3f %.3f %d\n", cold, warm, cert, fails / 3);
+    int reps = argc > 1 ? atoi(argv[1]) : 20, n = (int)(sizeof T / sizeof T[0]), r, i, q, status;
+    @PREFIX@_plan_t p;
+    @PREFIX@_options_t no_cert = {0, 0, 0};
+    double best[4], t, res, bound;
+    for (i = 0; i < n; ++i) {
+        status = @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p);
+        for (q = 0; q < 4; ++q) best[q] = 1e300;
+        for (r = 0; r < reps; ++r) {
+            @PREFIX@_forget_table();
+            t = now_us();
+            @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p);
+            t = now_us() - t;
+            if (t < best[0]) best[0] = t;
+            t = now_us();
+            @PREFIX@_plan(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &p);
+            t = now_us() - t;
+            if (t < best[1]) best[1] = t;
+            t = now_us();
+            @PREFIX@_plan_with(T[i][0], T[i][1], T[i][2], (int)T[i][3], T[i][4], &no_cert, &p);
+            t = now_us() - t;
+            if (t < best[2]) best[2] = t;
+            t = now_us();
+            @PREFIX@_certify(p.a, p.b, p.gamma, (int)T[i][3], T[i][4], T[i][0], T[i][1], T[i][2], NULL, &res, &bound);
+            t = now_us() - t;
+            if (t < best[3]) best[3] = t;
+        }
+        printf("%.3f %.3f %.3f %.3f %d\n", best[0], best[1], best[2], best[3], status);
+    }
     return 0;
 }
 """
@@ -116,61 +120,65 @@ def build(out: Path, steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, prefi
 
 
 def time_plans(out: Path, prefix: str = "rollplan", targets=TARGETS, reps: int = 20):
-    """Microseconds per C plan, mean over ``targets`` of the best of ``reps`` runs (built with -O2).
-
-    Returns (us with the leaf table recomputed for every plan, us with the table
-    kept from the previous plan of the same k, us of the plan's certificate alone, failed plans).
-    """
+    """Microseconds of each C plan of ``targets`` (best of ``reps``; built with -O2): rows of
+    (new k: leaf table rebuilt, same k, same k without the certificate, the certificate alone, status)."""
     text = _BENCH_C.replace("@PREFIX@", prefix).replace(
         "@TARGETS@", ", ".join("{" + ", ".join(repr(float(x)) for x in t) + "}" for t in targets))
     (out / "bench.c").write_text(text)
     exe = out / "bench"
     subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(exe), str(out / "bench.c"),
-                    str(out / f"{prefix}_planner.c"),
-                    str(out / f"{prefix}_model.c"), "-lm"], check=True, capture_output=True)
-    out = subprocess.run([str(exe), str(reps)], check=True, capture_output=True, text=True).stdout.split()
-    return float(out[0]), float(out[1]), float(out[2]), int(out[3])
+                    str(out / f"{prefix}_planner.c"), str(out / f"{prefix}_model.c"), "-lm"], check=True,
+                   capture_output=True)
+    lines = subprocess.run([str(exe), str(reps)], check=True, capture_output=True, text=True).stdout.splitlines()
+    return [tuple(float(x) for x in line.split()[:4]) + (int(line.split()[4]),) for line in lines]
 
 
 def python_plan_times(targets=TARGETS) -> list:
-    """Milliseconds of each Python plan (IPOPT, with CVODES verification) of ``targets``, after a warm-up plan."""
-    geometric.plan(targets[0][:3], targets[0][3], k=targets[0][4])  # warm up (builds the planner)
+    """Milliseconds of each Python plan of ``targets`` (the geometric-phase planner: complete enumeration and
+    its certificate), after a warm-up plan of each k."""
+    planner = geometric.GeometricPhasePlanner()
+    for k in sorted({t[4] for t in targets}):
+        planner.solve(Problem(targets[0][:3], k=k, steps=targets[0][3]))   # warm up (builds the k's tables)
     out = []
     for u, v, psi, n, k in targets:
         t0 = time.perf_counter()
-        geometric.plan((u, v, psi), n, k=k)
+        planner.solve(Problem((u, v, psi), k=k, steps=n))
         out.append((time.perf_counter() - t0) * 1e3)
     return out
 
 
 def python_plan_ms(targets=TARGETS) -> float:
-    """Milliseconds per Python plan (IPOPT, with CVODES verification), mean over ``targets``."""
+    """Milliseconds per Python plan, mean over ``targets``."""
     return float(np.mean(python_plan_times(targets)))
 
 
 def measure(steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, reps: int = 20, python: bool = True,
             targets=TARGETS) -> dict:
-    """Timing and size of the C planner (and of the Python planner for comparison).
+    """Timing and size of the C planner, side by side with the Python planner on the same targets.
 
-    ``targets`` are (u, v, psi, steps, k) tuples. Keys of the result: ``c_us_per_plan``
-    (leaf table recomputed for every plan, i.e. a new k each time),
-    ``c_us_per_plan_same_k`` (table kept between plans of equal k), ``c_us_certificate`` (the on-board
-    certificate of the plan alone, included in the plan times), ``c_code_bytes``
-    (generated .c and .h), ``c_static_lib_bytes``, ``plan_demo_bytes``,
-    ``c_work_doubles`` (static work memory), ``python_ms_per_plan`` (mean over the targets),
-    ``python_ms_per_target`` (one plan of each target).
+    ``targets`` are (u, v, psi, steps, k) tuples. Keys of the result: ``c_us_per_plan`` (mean over the targets
+    of a plan for a new k: the leaf map's table rebuilt first), ``c_us_per_plan_same_k`` (table kept),
+    ``c_us_per_plan_same_k_without_certificate``, ``c_us_certificate`` (the certificate alone), their medians
+    and maxima (``..._median``, ``..._max``), ``c_per_target`` (rows of the four and the status),
+    ``c_failed_plans``, ``c_code_bytes`` (generated .c and .h), ``c_static_lib_bytes``, ``plan_demo_bytes``,
+    ``c_work_doubles`` (static work memory), ``python_ms_per_target`` and ``python_ms_per_plan`` (mean).
     """
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "c"
         g = build(out, steps_per_leaf)
-        cold, warm, cert, fails = time_plans(out, targets=targets, reps=reps)
+        rows = time_plans(out, targets=targets, reps=reps)
         binary = (out / "plan_demo").stat().st_size
         lib = (out / "librollplan.a").stat().st_size
-    res = {"steps_per_leaf": steps_per_leaf, "c_us_per_plan": cold, "c_us_per_plan_same_k": warm,
-           "c_us_certificate": cert, "c_us_per_plan_same_k_without_certificate": warm - cert,
-           "c_failed_plans": fails,
-           "c_code_bytes": g.code_bytes, "c_model_bytes": g.model_bytes, "c_static_lib_bytes": lib,
-           "plan_demo_bytes": binary, "c_work_doubles": g.work_doubles, "targets": len(targets)}
+    cols = np.array([r[:4] for r in rows])
+    res = {"steps_per_leaf": steps_per_leaf, "targets": len(targets), "c_per_target": [list(r) for r in rows],
+           "c_failed_plans": sum(r[4] != 0 for r in rows)}
+    for j, key in enumerate(("c_us_per_plan", "c_us_per_plan_same_k", "c_us_per_plan_same_k_without_certificate",
+                             "c_us_certificate")):
+        res[key] = float(cols[:, j].mean())
+        res[key + "_median"] = float(np.median(cols[:, j]))
+        res[key + "_max"] = float(cols[:, j].max())
+    res.update({"c_code_bytes": g.code_bytes, "c_model_bytes": g.model_bytes, "c_static_lib_bytes": lib,
+                "plan_demo_bytes": binary, "c_work_doubles": g.work_doubles})
     if python:
         res["python_ms_per_target"] = python_plan_times(targets)
         res["python_ms_per_plan"] = float(np.mean(res["python_ms_per_target"]))

@@ -24,6 +24,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
+
 from rollplan.codegen import c_library as codegen
 from rollplan.io import write_atomic, write_json
 
@@ -36,7 +38,7 @@ BOARDS = {"m7": "mps2-an500", "m4f": "mps2-an386"}
 
 _BENCH_FW = r"""
 /* bench_fw U V PSI STEPS K -- instructions (under QEMU -icount shift=0) of the first plan (builds the
- * leaf table), a plan with the table kept, and the plan's certificate alone. */
+ * rho table of the leaf map), a plan with the table kept, and the plan's certificate alone. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -117,7 +119,8 @@ def report(data: dict) -> str:
     lines = ["# The C planner on microcontrollers", "",
              "Regenerate: `python scripts/embedded_report.py` (writes this file and `embedded.json`).",
              f"Toolchain: {data['versions']['arm-none-eabi-gcc']}; {data['versions']['qemu-system-arm']}.",
-             f"Planner: {data['steps_per_leaf']} steps per leaf, 0 <= k <= {data['k_max']:g}, certificate "
+             f"Planner: {codegen.K_MONOTONE:g} <= k <= {data['k_max']:g} (step map of rollplan_step_eval: "
+             f"{data['steps_per_leaf']} steps per leaf), certificate "
              f"tolerance {codegen.CERT_TOL:g} (double) / {codegen.FLOAT_CERT_TOL:g} (float).", "",
              "## Memory (bytes; static only, no heap)", "",
              "| build | board | planner firmware flash | RAM | plan_demo flash | RAM | stack bound of plan | "
@@ -133,7 +136,7 @@ def report(data: dict) -> str:
               "deepest call chain of the linked ELF, libm included; scripts: stack_bound.py of the generated "
               "folder), without interrupts. A double build on the M4F runs in software double.", "",
               "## Instructions per plan on the emulated boards (QEMU -icount; not cycles)", "",
-              "| build | board | target (u, v, psi, n, k) | status | first plan (builds the leaf table) | plan | "
+              "| build | board | target (u, v, psi, n, k) | status | first plan (builds the rho table) | plan | "
               "of which the certificate |", "|---|---|---|---|---|---|---|"]
     for real in ("double", "float"):
         for t in BOARDS:
@@ -142,13 +145,24 @@ def report(data: dict) -> str:
                              f"{row['plan']} | {row['certificate']} |")
     if data.get("host"):
         h = data["host"]
-        lines += ["", "## Host (x86-64, cc -O2; mean over scripts/bench_codegen.py's targets, best of repeats)", "",
-                  "| quantity | us |", "|---|---|",
-                  f"| plan, new k (leaf table rebuilt) | {h['c_us_per_plan']:.1f} |",
-                  f"| plan, same k | {h['c_us_per_plan_same_k']:.1f} |",
-                  f"| of which the certificate | {h['c_us_certificate']:.1f} |",
-                  f"| plan without the certificate | {h['c_us_per_plan_same_k_without_certificate']:.1f} |",
-                  "", f"Load average at the start: {data['load']}. The machine is shared: the instruction counts "
+        lines += ["", "## Host (x86-64, cc -O2), side by side with the Python planner", "",
+                  "Per target of scripts/bench_codegen.py: the best of repeated C plans (a new k: the leaf map's "
+                  "rho table is built first; the same k: the table kept), the certificate alone, and one warm "
+                  "Python plan (GeometricPhasePlanner.solve, the same algorithm, its certificate included).", "",
+                  "| target (u, v, psi, n, k) | C new k [us] | C same k [us] | C without certificate [us] | "
+                  "certificate [us] | Python [ms] |", "|---|---|---|---|---|---|"]
+        py = h.get("python_ms_per_target") or [float("nan")] * len(h["c_per_target"])
+        for target, row, ms in zip(bench_codegen.TARGETS, h["c_per_target"], py):
+            lines.append(f"| {tuple(target)} | {row[0]:.0f} | {row[1]:.1f} | {row[2]:.1f} | {row[3]:.1f} | {ms:.2f} |")
+        lines += ["", "| quantity | mean | median | max |", "|---|---|---|---|"]
+        for name, key in (("C plan, new k [us]", "c_us_per_plan"), ("C plan, same k [us]", "c_us_per_plan_same_k"),
+                          ("C plan without the certificate [us]", "c_us_per_plan_same_k_without_certificate"),
+                          ("certificate alone [us]", "c_us_certificate")):
+            lines.append(f"| {name} | {h[key]:.1f} | {h[key + '_median']:.1f} | {h[key + '_max']:.1f} |")
+        if h.get("python_ms_per_target"):
+            lines.append(f"| Python plan [us] | {1e3 * h['python_ms_per_plan']:.0f} | "
+                         f"{1e3 * float(np.median(py)):.0f} | {1e3 * max(py):.0f} |")
+        lines += ["", f"Load average at the start: {data['load']}. The machine is shared: the instruction counts "
                   "above are the stable figures."]
     return "\n".join(lines) + "\n"
 
@@ -169,7 +183,7 @@ def main() -> None:
             data[real] = {"sizes": sizes(out), "instructions": instructions(out, g.prefix)}
             print(f"{real}: {data[real]['sizes']}", file=sys.stderr)
     if not args.no_host:
-        data["host"] = bench_codegen.measure(reps=20, python=False)
+        data["host"] = bench_codegen.measure(reps=20, python=True)
     out_dir = Path(args.out_dir)
     out_dir.mkdir(exist_ok=True)
     write_json(out_dir / "embedded.json", data)

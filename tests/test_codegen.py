@@ -18,10 +18,11 @@ from rollplan.codegen.c_library import (
     CERT_TOL,
     DEFAULT_K_MAX,
     FLOAT_CERT_TOL,
-    TABLE_STEPS_PER_LEAF,
+    PSI_MAX,
+    algebraic,
+    certificate_functions,
     generated_functions,
     reference_plan,
-    table_radii,
 )
 from rollplan.core import model
 from rollplan.core.curves import A_MAX, figure_eight
@@ -154,43 +155,69 @@ def test_step_map_matches_cvodes(built):
         np.testing.assert_allclose([*shift.ravel(), eta.item()], xs[-1], atol=1e-9)
 
 
-def test_leaf_table_matches_twin_and_single_leaves(built, twins):
-    table = external(built, "rollplan_leaf_table")
-    got = _values(table, (2.5,))
-    for g, w in zip(got, _values(twins["rollplan_leaf_table"], (2.5,))):
-        np.testing.assert_allclose(g, w, rtol=1e-13, atol=1e-13)
-    radii = table_radii()
-    degree = TABLE_STEPS_PER_LEAF // (len(figure_eight().pieces[0].breaks) - 1)
-    for i in range(2):
-        leaf = spectral_step(figure_eight(), degree, pieces=(i,))
-        for j in (0, len(radii) // 2, len(radii) - 1):
-            p = [radii[j], radii[j]]
-            np.testing.assert_allclose(got[i][:, j], np.array(leaf(ca.DM.zeros(3), p, 2.5, 0)).ravel(), atol=1e-12)
+def test_algebraic_form_of_the_certificate_is_the_piece_rhs():
+    """The certificate's right side in algebraic form (no trig of inverse trig) against the curve ODE
+    (28)-(30) as the model writes it, and against the printed equations."""
+    from rollplan.core.integrate import piece_rhs
+
+    curve = figure_eight()
+    rng = np.random.default_rng(4)
+    for i, f in enumerate(certificate_functions()[:2]):
+        ops = {f.instruction_id(j) for j in range(f.n_instructions())}
+        assert not ops & {ca.OP_ASIN, ca.OP_ATAN2, ca.OP_TAN}
+        plain = piece_rhs(curve, i)
+        for _ in range(5):
+            phi, x, p, k, gamma = rng.uniform(0, 6.28), rng.uniform(-1, 1, 3), rng.uniform(0.01, A_MAX, 2), \
+                rng.uniform(0.5, 5), rng.uniform(-3, 3)
+            got = np.array(f(phi, x, p, k, gamma)).ravel()
+            np.testing.assert_allclose(got, np.array(plain(phi, x, p, k, gamma)).ravel(), rtol=1e-13, atol=1e-14)
+    g = ca.Function("g", [y := ca.SX.sym("y"), z := ca.SX.sym("z")],
+                    [ca.cos(ca.atan2(y, z)) + ca.tan(ca.asin(y / 3)) * ca.sin(ca.atan2(y, z))])
+    h = algebraic(g)
+    assert not {h.instruction_id(j) for j in range(h.n_instructions())} & {ca.OP_ASIN, ca.OP_ATAN2, ca.OP_TAN}
+    for y0, z0 in ((0.3, -0.7), (-1.2, 0.4), (2.0, 2.0)):
+        t = np.arctan2(y0, z0)
+        assert abs(float(h(y0, z0)) - (np.cos(t) + np.tan(np.arcsin(y0 / 3)) * np.sin(t))) < 1e-14
 
 
 TARGETS = [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 1, 2.5), (2.0, 1.0, 1.0, 3, 2.5)]
-SLOW_TARGETS = [(0.5, 0.5, -2.0, 2, 2.5), (0.0, 1.0, 0.0, 1, 0.0), (-0.4, 0.8, 0.3, 1, 1.5), (1.0, 0.5, 0.2, 2, 4.0),
+SLOW_TARGETS = [(0.5, 0.5, -2.0, 2, 2.5), (0.0, 1.0, 0.0, 1, 0.5), (-0.4, 0.8, 0.3, 1, 1.5), (1.0, 0.5, 0.2, 2, 4.0),
                 (0.0, 2.8, 0.0, 1, 2.5), (1.0, 2.0, 0.3, 1, 2.5),   # leaves near A_MAX
-                (1.5, 0.0, 0.0, 3, 2.5)]                            # psi = 0, n > 1: the limit h_des / n (34)
+                (1.5, 0.0, 0.0, 3, 2.5),                            # psi = 0, n > 1: the limit h_des / n (34)
+                (0.1, -0.3, 3.0, 2, 5.0), (0.0, 1.0, 3.0, 1, 5.0),  # the issue's examples (k = 10 is above K_MAX)
+                (0.0621, 0.0847, 2.4915, 5, 2.5), (-0.2724, 0.1488, -2.9291, 3, 2.5), (0.3, 0.2, 20.0, 2, 3.0),
+                (-0.017225508301479647, 0.0249278638274345, 20.41012902950338, 5, 0.5),   # b near A_MAX, k = 1/2
+                (-0.32010604239559476, 0.45238485573887033, -28.48818775189438, 6, 1.5)]  # rejected root after a plan
 
 
-def _check_plan(built, planner, target):
+def _parse(run):
+    a, b, gamma, residual, bound, m = run.stdout.split()
+    return float(a), float(b), float(gamma), float(residual), float(bound), int(m)
+
+
+def _same_plan(c, q):
+    """C plan (a, b, gamma, ..., m) and Python plan q: the same branch and (a, b, gamma) to 1e-8."""
+    gap = max(abs(q.a - c[0]), abs(q.b - c[1]), abs(float(references.wrap(q.gamma - c[2]))))
+    return c[5] == q.branch and gap < 1e-8
+
+
+def _check_plan(built, planner, target, branch=None):
     u, v, psi, n, k = target
-    run = demo(built, u, v, psi, n, k)
+    run = demo(built, u, v, psi, n, k, *(() if branch is None else (branch,)))
     assert run.returncode == 0, run.stderr
-    a, b, gamma, residual, bound = (float(x) for x in run.stdout.split())
-    assert residual + bound <= 1e-9
-    # exact when integrated accurately (CVODES, independent of the step map)
+    c = _parse(run)
+    a, b, gamma, residual, bound, m = c
+    assert residual + bound <= 1e-9 and (branch is None or m == branch)
+    # exact when integrated accurately (CVODES, independent of both planners' leaf maps)
     final = planner.certifier.final(a, b, k, gamma, n)
     err = [final.u_a - u, final.v_a - v, float(references.wrap(final.psi - psi)), final.u_o, final.v_o]
-    assert np.linalg.norm(err) < 1e-7
+    assert np.linalg.norm(err) < 1e-9
     # and by the printed (28)-(30) integrated by DOP853
     x = references.trace(a, b, k, gamma, n)
-    assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) < 1e-7
-    # the same plan as the Python planner on branch m = 0
-    q = reference_plan((u, v, psi), n, k, near=(a, b))
-    assert q is not None and q.branch == 0, "Python planner found no plan on branch m = 0"
-    assert max(abs(q.a - a), abs(q.b - b), abs(float(references.wrap(q.gamma - gamma)))) < 1e-8
+    assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) < 1e-9 + 1e-11 * n
+    # the same plan as the Python planner: the shortest over all branches, or the one of the branch asked for
+    q = reference_plan((u, v, psi), n, k, branch=branch)
+    assert q is not None and _same_plan(c, q), (c, q and (q.a, q.b, q.gamma, q.branch))
 
 
 @pytest.mark.parametrize("target", TARGETS)
@@ -204,6 +231,37 @@ def test_plan_demo_matches_python_plan_more(built, planner, target):
     _check_plan(built, planner, target)
 
 
+@pytest.mark.parametrize("target, branch", [((0.1, -0.3, 3.0, 2, 5.0), -2), ((0.0, 1.0, 0.0, 1, 2.5), -1),
+                                            ((0.3, 0.2, 20.0, 2, 3.0), -5)])
+def test_plan_demo_on_a_branch_matches_python(built, planner, target, branch):
+    _check_plan(built, planner, target, branch)
+
+
+@pytest.mark.parametrize("target, branch", [((0.1, -0.3, 3.0, 2, 5.0), 0), ((0.3, 0.2, 20.0, 2, 3.0), -6)])
+def test_plan_demo_branch_without_plan_agrees_with_python(built, target, branch):
+    run = demo(built, *target, branch)
+    assert run.returncode == 3 and run.stdout == "" and "no plan" in run.stderr
+    assert reference_plan(target[:3], target[3], target[4], branch=branch) is None
+
+
+@pytest.mark.slow
+def test_random_targets_same_plan_as_python(built):
+    """Random targets, k in [1/2, K_MAX]: the C planner and the Python planner give the same outcome, and
+    where there is a plan, the same branch and (a, b, gamma) to 1e-8."""
+    rng = np.random.default_rng(11)
+    plans = 0
+    for _ in range(30):
+        u, v = rng.uniform(-2, 2, 2)
+        psi, n, k = rng.uniform(-4, 4), int(rng.integers(1, 5)), float(rng.uniform(0.5, DEFAULT_K_MAX))
+        run = demo(built, repr(float(u)), repr(float(v)), repr(float(psi)), n, repr(k))
+        q = reference_plan((u, v, psi), n, k)
+        assert (run.returncode == 0) == (q is not None), (u, v, psi, n, k, run.stderr)
+        if q is not None:
+            plans += 1
+            assert _same_plan(_parse(run), q), (u, v, psi, n, k)
+    assert plans >= 20
+
+
 def test_plan_demo_reproduces_paper_radius(built):
     """Paper, Section IV: k = 2.5, h/R = 1 has the smallest solution a1 = 0.300429 R (a = b, n = 1)."""
     run = demo(built, 0, 1, 0, 1, 2.5)
@@ -215,8 +273,10 @@ def test_plan_demo_reproduces_paper_radius(built):
     (("x", 1, 0, 1, 2.5), 2), ((0, 1, 0, 0, 2.5), 2), ((0, 1, 0, 1.5, 2.5), 2), ((0, 1, 0, 1, -1), 2),
     ((0, 0, 0, 1, 2.5), 2), ((0, 1, 0, 1), 2), ((0, 1, "nan", 1, 2.5), 2),
     ((0, 2, 0, 1, 50), 2), ((0, 1, 0, 1, 5.000001), 2), ((0, 1, 0, 1001, 2.5), 2), ((0, 1, 0, 1, "inf"), 2),
+    ((0, 1, 0, 1, 0.49), 2),        # below K_MIN = 1/2: the complete enumeration does not apply
+    ((0, 1, 1e7, 1, 2.5), 2), ((0, 1, 0, 1, 2.5, 0.5), 2),
     ((30, 0, 0, 1, 2.5), 3),        # farther than any figure eight reaches in one step
-    ((0, 1, 6.2, 2, 2.5), 3),       # sin(psi/2) small: branch m = 0 needs h = 24 R
+    ((0, 1, 6.2, 2, 2.5, 0), 3),    # sin(psi/2) small: branch m = 0 needs h = 24 R
 ])
 def test_plan_demo_reports_bad_input_and_no_plan(built, args, status):
     run = demo(built, *args)
@@ -227,7 +287,8 @@ def test_plan_demo_reports_bad_input_and_no_plan(built, args, status):
 @pytest.mark.parametrize("args, needle", [
     (("0", "0x10", "0", "1", "2.5"), "usage"),          # hexadecimal is not a decimal number (strtod reads 16)
     (("0", "1", "0", "1", "1e308"), "K = 1e308"),       # beyond K_MAX: bad input, not "no convergence"
-    (("0", "1", "0", "1", "100.5"), f"[0, {DEFAULT_K_MAX!r}]"),   # the k range fixed at generation
+    (("0", "1", "0", "1", "100.5"), f"[0.5, {DEFAULT_K_MAX!r}]"),   # the k range fixed at generation
+    (("0", "1", "0", "1", "0.25"), "below 0.5"), (("0", "1", "2e6", "1", "2.5"), f"at most {PSI_MAX!r}"),
     (("0", "1", "0", "1001", "2.5"), "[1, 1000]"),
     (("0", "1", "0", "1", "inf"), "usage"), ((" 0", "1", "0", "1", "2.5"), "usage"),
     (("0", "1_0", "0", "1", "2.5"), "usage"), (("0", "1e400", "0", "1", "2.5"), "usage"),
@@ -267,11 +328,10 @@ def test_cli_codegen(tmp_path, capsys):
     assert "not allowed" in capsys.readouterr().err
 
 
-def test_plan_demo_no_convergence_is_nonzero(built):
-    """k = 5, h = 2.8 R in one step: the coarse table brackets cells, but branch m = 0 has no root
-    (the Python planner finds none either); the demo says so and exits with 4."""
+def test_plan_demo_no_plan_agrees_with_python(built):
+    """k = 5, (2, 2) in one step: no branch has a root (the Python planner finds none either)."""
     run = demo(built, 2, 2, 0, 1, 5)
-    assert run.returncode == 4 and run.stdout == "" and "no convergence" in run.stderr
+    assert run.returncode == 3 and run.stdout == "" and "no plan" in run.stderr
     assert reference_plan((2.0, 2.0, 0.0), 1, 5.0) is None
 
 
@@ -293,8 +353,12 @@ def test_generated_prefix_builds_and_plans(tmp_path):
         assert run.returncode == 0, run.stderr
         a, b, gamma = (float(x) for x in run.stdout.split()[:3])
         x = references.trace(a, b, 10.0, gamma, n)
+        q = reference_plan((u, v, psi), n, 10.0)
+        assert q is not None and _same_plan(_parse(run), q)
         assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) <= CERT_TOL
     run = subprocess.run([str(out / "plan_demo"), "0", "2", "0", "1", "10.5"], check=False, capture_output=True)
+    assert run.returncode == 2
+    run = subprocess.run([str(out / "plan_demo"), "0", "2", "0", "1", "0.4"], check=False, capture_output=True)
     assert run.returncode == 2
 
 
@@ -318,7 +382,10 @@ def certify(clib, a, b, gamma, steps, k, target):
 @pytest.mark.parametrize("a, b, gamma, steps, k", [
     (0.3004288061954572, 0.3004288061954572, 0.93188347081455891, 1, 2.5), (0.69, 0.69, 0.3, 1, DEFAULT_K_MAX),
     (0.05, 0.69, -2.0, 2, DEFAULT_K_MAX), (0.2, 0.45, 1.0, 3, 0.0), (0.6, 0.1, 3.0, 1, 1.5),
-    (0.685, 0.2, 0.0, 1, 1.0)])   # near A_MAX at small k: certified only after the steps are doubled again
+    (0.685, 0.2, 0.0, 1, 1.0),    # near A_MAX at small k: certified only after the steps are doubled again
+    (0.69, 0.01, 1.0, 2, 0.5), (0.5, 0.6, 0.7, 4, 2.5), (0.4, 0.4, 0.0, 1, DEFAULT_K_MAX), (0.1, 0.1, 0.0, 3, 2.5),
+    (0.66, 0.62, -1.0, 2, 3.7), (0.66, 0.66, 0.2, 3, 1.0), (0.69, 0.2, 1.0, 4, 1.5), (0.68, 0.05, 0.0, 6, 2.0),
+    (0.6597467940923643, 0.03704584696412159, 0.5035557975055616, 6, 1.5)])   # too few steps once: bound < error
 def test_certificate_final_state_is_within_its_bound(clib, a, b, gamma, steps, k):
     """The RK8 certificate's final state against DOP853 on the printed (28)-(30) (rtol 1e-13)."""
     ref = references.trace(a, b, k, gamma, steps)
@@ -352,12 +419,12 @@ def test_k_max_is_checked_at_generation(tmp_path):
 
 def _fuzz_inputs(rng, count, many_steps):
     special = {"u": [0.0, 1e-300, -1e-9, 1e3, 3.0], "psi": [0.0, 1e-300, np.pi, -np.pi, 50.0, 1e6],
-               "steps": [1, 2, many_steps], "k": [0.0, 1e-300, DEFAULT_K_MAX, 2.5]}
+               "steps": [1, 2, many_steps], "k": [0.0, 1e-300, 0.5, 0.4999999, DEFAULT_K_MAX, 2.5]}
     for _ in range(count):
         u, v = (rng.choice(special["u"]) if rng.random() < 0.2 else rng.uniform(-3, 3) for _ in range(2))
         psi = rng.choice(special["psi"]) if rng.random() < 0.2 else rng.uniform(-4, 4)
         steps = int(rng.choice(special["steps"])) if rng.random() < 0.2 else int(rng.integers(1, 5))
-        k = rng.choice(special["k"]) if rng.random() < 0.2 else rng.uniform(0, DEFAULT_K_MAX)
+        k = rng.choice(special["k"]) if rng.random() < 0.2 else rng.uniform(0.5, DEFAULT_K_MAX)
         yield float(u), float(v), float(psi), steps, float(k)
 
 
@@ -373,7 +440,7 @@ def _fuzz(built, seed, count, many_steps, tol=CERT_TOL):
         if run.returncode:
             assert run.stdout == "" and run.stderr.count("\n") == 1
             continue
-        a, b, gamma, residual, bound = (float(x) for x in run.stdout.split())
+        a, b, gamma, residual, bound, _ = _parse(run)
         assert 0 < a <= A_MAX and 0 < b <= A_MAX and residual + bound <= tol
         x = references.trace(a, b, k, gamma, steps)
         miss = np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)])
@@ -413,3 +480,60 @@ def test_float_build_has_no_double_and_certifies_to_its_tolerance(built_float, b
         assert f32.returncode == f64.returncode == 0
         assert np.max(np.abs(np.array(f32.stdout.split()[:3], float) - np.array(f64.stdout.split()[:3], float))) < 1e-4
     assert 0 in _fuzz(built_float, 7, 10, 3, FLOAT_CERT_TOL)
+
+
+# ----------------------------------------------------------------------------- the time law in C
+
+class _Plan(ctypes.Structure):
+    _fields_ = [("a", ctypes.c_double), ("b", ctypes.c_double), ("gamma", ctypes.c_double), ("eta", ctypes.c_double),
+                ("h", ctypes.c_double), ("m", ctypes.c_long), ("residual", ctypes.c_double),
+                ("bound", ctypes.c_double), ("predicted", ctypes.c_double), ("branches", ctypes.c_int),
+                ("roots", ctypes.c_long)]
+
+
+@pytest.mark.parametrize("target, steps, duration", [((0.3, -0.2, 0.5), 2, 7.0), ((0.0, 1.0, 0.0), 1, 2.0)])
+def test_sample_is_the_python_min_jerk_law(clib, target, steps, duration):
+    """rollplan_sample at random times against rollplan.execution.actuation (the min-jerk law of
+    rollplan.execution.timing, rotor rates from the model's (11), angles and state integrated by CVODES):
+    rates to 1e-10, state and rotor angles to 1e-10 of their size (the accuracy of the Python side's
+    integration); its angles' time derivative is its rates; and at the end the state is the target (to the
+    certificate's tolerance; DOP853 on the printed equations certifies the plan's end state)."""
+    from rollplan import Problem, default_robot
+    from rollplan.execution.actuation import actuate
+    from rollplan.planners.geometric import GeometricPhasePlanner
+
+    robot = default_robot()
+    R, k = robot.radius, robot.k
+    plan = GeometricPhasePlanner().solve(Problem(tuple(x * R if i < 2 else x for i, x in enumerate(target)),
+                                                 robot=robot, steps=steps))
+    motion = actuate(plan, robot, duration=duration, samples=200)
+    d = ctypes.c_double
+    clib.rollplan_sample.argtypes = [ctypes.POINTER(_Plan), ctypes.c_int, d, d, d, d, d, d, ctypes.POINTER(d),
+                                     ctypes.POINTER(d), ctypes.POINTER(d)]
+    p = _Plan(plan.a / R, plan.b / R, plan.gamma)
+    args = (steps, k, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, duration)
+
+    def sample(t):
+        rates, angles, state = (d * 2)(), (d * 2)(), (d * 5)()
+        assert clib.rollplan_sample(ctypes.byref(p), *args, t, rates, angles, state) == 0
+        return np.array(rates), np.array(angles), np.array(state)
+
+    rng = np.random.default_rng(5)
+    size = max(1.0, float(np.abs(motion.rotor_angles).max()))
+    for i in rng.choice(motion.time.size, 12, replace=False):
+        rates, angles, state = sample(motion.time[i])
+        assert np.abs(rates - motion.rotor_rates[i]).max() <= 1e-10
+        assert np.abs(angles - motion.rotor_angles[i]).max() <= 1e-10 * size
+        assert np.all(np.abs(state * [R, R, 1, 1, 1] - motion.state[i]) <= 1e-10 * (1 + np.abs(motion.state[i])))
+    for t in rng.uniform(0.05, 0.95, 3) * duration:
+        fd = (sample(t + 1e-6)[1] - sample(t - 1e-6)[1]) / 2e-6
+        np.testing.assert_allclose(fd, sample(t)[0], rtol=1e-6, atol=1e-6)
+    rates, angles, state = sample(duration)
+    end = references.trace(plan.a / R, plan.b / R, k, plan.gamma, steps)
+    assert np.abs(rates).max() == 0.0 and np.linalg.norm(state[:3] - end) <= 1e-9
+    assert np.linalg.norm(state[:2] - target[:2]) + abs(references.wrap(state[2] - target[2])) <= 1e-9
+    rates = (d * 2)()
+    for bad in ((steps, k, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, duration, duration * 1.01),
+                (steps, k, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, 0.0, 0.0),
+                (0, k, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, duration, 0.0)):
+        assert clib.rollplan_sample(ctypes.byref(p), *bad, rates, None, None) == 2

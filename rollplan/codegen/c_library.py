@@ -1,72 +1,60 @@
 """C code generation: a self-contained C99 planner for the robot's microcontroller.
 
-Everything numerical in the generated library comes from the symbolic model
-through CasADi's :class:`~casadi.CodeGenerator`; no equation is typed twice:
+Everything that is a model equation comes from the symbolic model through CasADi's
+:class:`~casadi.CodeGenerator`; no equation is typed twice:
 
 * the realizability condition (13) solved for the spin ``omega_z``
   (:func:`rollplan.core.model.omega_z_realizable`);
 * the rotor-rate map (11) (:func:`rollplan.core.model.rotor_rates`);
 * Montana's contact kinematics (6)-(10) (:func:`rollplan.core.model.montana`);
-* the step map ``(a, b, k) -> (shift, eta, direction)`` of one trace of the
-  figure eight (31), (35), integrated along the curve ODE (28)-(30)
-  (:func:`rollplan.core.integrate.piece_rhs`), and its Jacobian;
-* a coarse table of the two leaves on a fixed grid of radii, used only to
-  bracket the root of (32)-(33) on branch ``m = 0``.
+* the curve ODE (28)-(30) along each leaf and one RK8 step of it, for the on-board certificate
+  (:func:`certificate_functions`);
+* the per-phi functions of the time law along each leaf and one RK8 step of them
+  (:func:`motion_functions`, from :func:`rollplan.execution.path.curve_piece_function`);
+* the step map ``(a, b, k) -> (shift, eta, direction)`` of one trace of the figure eight (31), (35) and its
+  Jacobian, by the Chebyshev spectral quadrature of :mod:`rollplan.core.integrate`
+  (:func:`~rollplan.core.integrate.spectral_leaf`, written with loops over 10 graded panels of ``degree + 1``
+  nodes; ``steps_per_leaf`` = panels x degree), for ``<prefix>_step_eval``; :func:`_check_k_max` refuses a
+  ``k_max`` it is not accurate to ``STEP_MAP_TOL`` up to (``results/codegen_accuracy.json``).
 
-The step map is the Chebyshev spectral quadrature of :mod:`rollplan.core.integrate`
-(:func:`~rollplan.core.integrate.spectral_leaf`), written with loops: each leaf is integrated over the
-curve's 10 graded panels
-(its fixed steps), each panel on ``degree + 1`` Chebyshev points. Along a
-curve psi' in (30) does not depend on the state, and (28)-(29) are
-``[u_a', v_a'] = Rot(-psi) [A, B]`` with ``(A, B)`` their value at psi = 0
-(checked when the function is built). So one ``map`` over the nodes evaluates
-``(A, B, psi')`` and their derivatives by the leaf radius, a cumulative
-Chebyshev integration gives psi at the nodes, and weighted sums give
-``(u_a, v_a)``. The generated C loops over the nodes instead of unrolling
-them. The Jacobian by (a, b) is assembled by the chain rule from the leaves'
-derivatives.
+The certificate's and the time law's functions are written in :func:`algebraic` form (no cos, sin or tan of an
+atan2 or asin result), checked against the original graph when generated.
 
-``steps_per_leaf`` counts node intervals per leaf: panels x degree. The
-default, :data:`DEFAULT_STEPS_PER_LEAF`, was chosen from the measured error of
-the generated step map against steps per leaf over the admissible range
-(``scripts/bench_codegen.py --accuracy`` writes ``results/codegen_accuracy.json``);
-larger k needs more steps per leaf.
+The planner (``c_templates/planner.c``) is :mod:`rollplan.planners.geometric` in C, with the same algorithm
+and the same choice: the closed-form turn ``E(r, k)``, its inverse, and the leaf's displacement by the Gauss
+rule in chi of :mod:`rollplan.planners.geometric.leafmap`; the branches of (32), the scalar equation g(x) of
+(33) on each, the rho table per k and the complete enumeration of the roots with its argument, of
+:mod:`rollplan.planners.geometric.enumerate` (every formula ported once, citing the Python function; the
+rule's nodes and every constant written from the Python definitions by :func:`generate`); and the bounded
+search of :meth:`GeometricPhasePlanner._solve_enumerated <rollplan.planners.geometric.GeometricPhasePlanner>`:
+branches in increasing order of the smallest ``a + b`` they can hold, each branch's roots in increasing x
+(the first root of a branch is its shortest plan), every root polished on the accurate leaf map and
+certified, until no branch can hold a shorter plan. So the C planner returns the Python planner's plan
+(same branch, same (a, b, gamma) up to rounding); ``branch=`` restricts to one branch. The enumeration needs
+E strictly decreasing, which holds for ``k >= 1/2`` (:data:`~rollplan.planners.geometric.enumerate.K_MONOTONE`):
+the generated code accepts ``1/2 <= k <= k_max`` and refuses the rest with status 2 (the Python planner falls
+back to bracketing below 1/2, without the completeness guarantee). The rho table depends on k only and is kept
+for the last k.
 
-The planner (hand-written C glue, not model equations) solves, for branch
-``m = 0``,
-
-    eta(a, b) = psi / n                                                 (32)
-    h(a, b)   = h_des |sin(eta / 2) / sin(n eta / 2)|   (h_des / n if psi = 0)   (33)
-
-by a damped Newton iteration (backtracking on the residual norm, iterates kept
-in ``(0, A_MAX]``) on the generated step map and its Jacobian. It starts in the
-bracketing cells of the leaf table in order of their smallest ``a + b`` (as the
-Python planner orders its brackets), from the targets interpolated linearly in
-the cell, then sets ``gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift)``
-(see :mod:`rollplan.planners.geometric`). The table depends on k only and is kept for
-the last k.
-
-Every converged root is certified on board before it is returned (``<prefix>_certify``): the whole
-n-step motion is integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_step`
-of the state-dependent right side (28)-(30), :func:`certificate_functions`), at N and 2N steps per
-panel with N from the turn rate psi' on the panel (doubled again, up to 3 times, while the outcome is
-undecided); the error bound is the step-doubling difference over ``CERT_SAFETY``; a plan is returned
-only if residual + bound <= ``CERT_TOL``. This shares
-neither the heading structure nor the quadrature of the step map, so a step map that is wrong
-(beyond its accurate range, or by a bug) cannot certify its own plan. The generated code accepts
-``0 <= k <= k_max``, a generation option refused unless the step map is accurate to
-``STEP_MAP_TOL`` up to it. Static memory only, a bounded number of iterations, and a status code
-(0 certified plan, 2 bad input, 3 no bracket, 4 no convergence, 5 not certified).
+Every root is certified on board before it is returned (``<prefix>_certify``): the whole n-step motion is
+integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_step` of the state-dependent
+right side (28)-(30)), at N and 2N steps per panel with N from the turn rate psi' on the panel, so from k
+and the radius (doubled again, up to 3 times, while the outcome is undecided); the error bound is the
+step-doubling difference over ``CERT_SAFETY`` (Richardson's 255 would be the asymptotic value; tests check
+that the bound exceeds the true error against DOP853); a plan is returned only if residual + bound <=
+``CERT_TOL``. This shares neither the heading structure nor the quadrature of the leaf map, so a leaf map
+that is wrong cannot certify its own plan. Static memory only, bounded time, and a status code (0 certified
+plan, 2 bad input, 3 no plan, 4 search incomplete, 5 not certified).
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import os
 import re
 import tempfile
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
@@ -76,23 +64,25 @@ from ..core import model
 from ..core.curves import A_MAX, figure_eight
 from ..core.integrate import check_heading_structure, heading_free_rates, piece_rhs, rk8_step, spectral_leaf
 from ..errors import InputError, NoPlanError, OutputError, show_limit
+from ..execution.path import curve_piece_function
 from ..outputs import check_writable, make_folder, write_atomic
-from ..planners.geometric import plan as gp_plan
-from ..problem import K_MAX, MAX_STEPS
+from ..planners.geometric import GeometricPhasePlanner, leafmap
+from ..planners.geometric import enumerate as enumerate_
+from ..planners.geometric.enumerate import K_MONOTONE
+from ..problem import K_MAX, MAX_STEPS, Problem
 
 __all__ = [
     "DEFAULT_STEPS_PER_LEAF",
     "DEFAULT_PREFIX",
     "MAX_STEPS_PER_LEAF",
     "MAX_PREFIX_CHARS",
-    "TABLE_RADII",
-    "TABLE_STEPS_PER_LEAF",
     "GeneratedCode",
     "model_functions",
     "leaf_function",
     "step_functions",
-    "table_function",
     "certificate_functions",
+    "motion_functions",
+    "algebraic",
     "DEFAULT_K_MAX",
     "CERT_TOL",
     "FLOAT_CERT_TOL",
@@ -106,12 +96,6 @@ log = logging.getLogger(__name__)
 #: Node intervals per leaf of the generated step map (10 graded panels x degree 24): accurate to STEP_MAP_TOL
 #: on the whole admissible box for k <= DEFAULT_K_MAX (results/codegen_accuracy.json).
 DEFAULT_STEPS_PER_LEAF = 240
-#: Node intervals per leaf of the coarse bracketing table (10 panels x degree 4).
-TABLE_STEPS_PER_LEAF = 40
-#: Radii of the bracketing table on (0, A_MAX], graded towards A_MAX (see :func:`table_radii`).
-TABLE_RADII = 64
-#: Inertia ratio for which the table's radii equidistribute the turn of psi.
-_TABLE_K = 2.5
 #: Default largest inertia ratio k the generated planner accepts (``generate(k_max=...)``): the step map at
 #: the default steps per leaf is checked to :data:`STEP_MAP_TOL` up to it when the code is generated.
 DEFAULT_K_MAX = 5.0
@@ -120,8 +104,8 @@ STEP_MAP_TOL = 1e-10
 #: Tolerance of the on-board certificate: residual + error bound [R and rad] (the project's tolerance).
 CERT_TOL = 1e-9
 #: Steps of the RK8 certificate: a panel of width w gets ceil(w (CERT_BASE + max |psi'|) / CERT_DELTA) of them.
-CERT_DELTA = 0.8
-CERT_BASE = 3.0
+CERT_DELTA = 1.0
+CERT_BASE = 2.0
 #: The certificate's error bound is |x_2N - x_N| / CERT_SAFETY (Richardson's estimate for order 8 divides by 255).
 CERT_SAFETY = 16.0
 #: Tolerance of the certificate of a single-precision build (``generate(real="float")``): float rounding
@@ -134,11 +118,8 @@ MAX_STEPS_PER_LEAF = 2000
 #: Longest prefix (it starts every C symbol and file name).
 MAX_PREFIX_CHARS = 64
 
-# Planner constants (written into the C code).
-_MAX_ITER = 25
-_MAX_CELLS = 12
-_TOL = {"double": 1e-13, "float": 5e-6}
-_A_MIN = 1e-6
+#: Largest |psi| [rad] the C planner accepts (its reduction modulo 2 pi is exact up to it).
+PSI_MAX = 1e6
 
 
 @dataclass(frozen=True)
@@ -284,49 +265,56 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
     return step, step_jac
 
 
-@lru_cache(maxsize=4)
-def table_radii(count: int = TABLE_RADII) -> np.ndarray:
-    """Radii of the bracketing table, graded towards A_MAX.
+def algebraic(f: ca.Function, check: int = 6) -> ca.Function:
+    """``f`` (an SX Function) with the trigonometric functions of angles that are themselves inverse
+    trigonometric results written algebraically, and common subexpressions shared.
 
-    A quarter of the cells are spread evenly over (0, A_MAX], three quarters
-    follow the turn of psi over the first leaf for k = 2.5, which grows steeply
-    towards the singular radius R/sqrt(2) (and with it the density of roots of
-    (32)-(33)): the radii equidistribute ``1/A_MAX + 3 |d eta_0/d r| / TV(eta_0)``.
+    The contact coordinates of a point on the sphere are ``u_o = atan2(-x, -z)``, ``v_o = asin(y)`` (24)-(25),
+    and the model takes cos, sin and tan of them; the rewrite uses the identities
+    ``cos(atan2(p, q)) = q / sqrt(p^2 + q^2)``, ``sin(atan2(p, q)) = p / sqrt(p^2 + q^2)``,
+    ``tan(atan2(p, q)) = p / q``,
+    ``cos(asin(p)) = sqrt(1 - p^2)``, ``sin(asin(p)) = p``, ``tan(asin(p)) = p / sqrt(1 - p^2)`` on the expression
+    graph (no equation of the model is retyped: the graph is replayed instruction by instruction), then
+    :func:`casadi.cse`. The result is checked against ``f`` at ``check`` random points (relative 1e-12).
     """
-    curve = figure_eight()
-    leaf = leaf_function(curve, 0, 8, "grading")
-    fine = np.linspace(0.0, A_MAX, 801)
-    eta = np.array(leaf.map(fine.size)(ca.DM.zeros(3), ca.DM(fine).T, _TABLE_K))[2]
-    turn = np.abs(np.diff(eta))
-    monitor = np.concatenate([[0.0], np.cumsum(np.diff(fine) / A_MAX + 3.0 * turn / turn.sum())])
-    radii = np.interp(np.linspace(0.0, monitor[-1], count + 1)[1:], monitor, fine)
-    radii[-1] = A_MAX
-    return radii
+    ins = f.sx_in()
+    flat_in = [ca.vertsplit(ca.vec(x)) if x.numel() else [] for x in ins]
+    w, src = [None] * f.sz_w(), [None] * f.sz_w()
+    outs = [[ca.SX(0)] * f.nnz_out(i) for i in range(f.n_out())]
+    trig = (ca.OP_COS, ca.OP_SIN, ca.OP_TAN)
+    for n in range(f.n_instructions()):
+        op, o, i = f.instruction_id(n), f.instruction_output(n), f.instruction_input(n)
+        if op == ca.OP_INPUT:
+            w[o[0]], src[o[0]] = flat_in[i[0]][i[1]], None
+        elif op == ca.OP_OUTPUT:
+            outs[o[0]][o[1]] = w[i[0]]
+        elif op == ca.OP_CONST:
+            w[o[0]], src[o[0]] = ca.SX(f.instruction_constant(n)), None
+        else:
+            a, origin, val = w[i[0]], src[i[0]], None
+            if op in trig and origin is not None:
+                p, q = origin[1], origin[2]
+                if origin[0] == ca.OP_ATAN2:
+                    r = ca.sqrt(p * p + q * q)
+                    val = (q / r, p / r, p / q)[trig.index(op)]
+                else:
+                    c = ca.sqrt(1 - p * p)
+                    val = (c, p, p / c)[trig.index(op)]
+            if val is None:
+                val = ca.SX.unary(op, a) if len(i) < 2 or i[1] < 0 else ca.SX.binary(op, a, w[i[1]])
+            w[o[0]] = val
+            src[o[0]] = (op, a, w[i[1]]) if op == ca.OP_ATAN2 else ((op, a, None) if op == ca.OP_ASIN else None)
+    res = [ca.SX(f.sparsity_out(j), ca.vertcat(*outs[j])) if outs[j] else ca.SX(f.sparsity_out(j))
+           for j in range(f.n_out())]
+    g = ca.Function(f.name(), ins, ca.cse(res), f.name_in(), f.name_out())
+    rng = np.random.default_rng(1)
+    for _ in range(check):
+        args = [rng.uniform(0.05, 0.65, x.numel()) for x in ins]
+        want, got = (np.concatenate([np.array(v).ravel() for v in h.call(args)]) for h in (f, g))
+        if not np.allclose(got, want, rtol=1e-12, atol=1e-12 * (1.0 + np.abs(want).max())):
+            raise ValueError(f"the algebraic form of {f.name()} differs from the original")
+    return g
 
-
-def table_function(prefix: str = DEFAULT_PREFIX, steps_per_leaf: int = TABLE_STEPS_PER_LEAF,
-                   count: int = TABLE_RADII) -> ca.Function:
-    """Coarse leaf maps on the fixed radii grid, for bracketing only.
-
-    ``<prefix>_leaf_table(k) -> (leaf0[3 x count], leaf1[3 x count])``: columns
-    are (u_a, v_a, psi) at the end of each leaf traced alone from zero state.
-    The second leaf is the mirror image (y -> -y) of the first, so its table is
-    ``diag(1, -1, -1)`` times the first one's; this is checked here against a
-    direct integration of the second leaf (and in ``tests/test_codegen.py``).
-    """
-    curve = figure_eight()
-    degree = _degree(steps_per_leaf, len(curve.pieces[0].breaks) - 1)
-    k = ca.MX.sym("k")
-    radii = table_radii(count)
-    leaves = [leaf_function(curve, i, degree, f"{prefix}_tleaf{i}") for i in range(2)]
-    mirror = ca.DM([1.0, -1.0, -1.0])
-    for r, kk in ((radii[3], 2.5), (radii[-1], 5.0)):
-        first, second = (np.array(f(ca.DM.zeros(3), r, kk)).ravel() for f in leaves)
-        if not np.allclose(second, np.array(mirror).ravel() * first, rtol=1e-10, atol=1e-12):
-            raise ValueError("the second leaf is not the mirror image of the first")
-    leaf0 = leaves[0].map(count, "serial")(ca.DM.zeros(3, 1), ca.DM(radii).T, k)
-    leaf1 = ca.repmat(mirror, 1, count) * leaf0
-    return ca.Function(f"{prefix}_leaf_table", [k], [leaf0, leaf1], ["k"], ["leaf0", "leaf1"])
 
 
 def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
@@ -341,24 +329,56 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
         eighth-order Runge-Kutta formula (:func:`rollplan.core.integrate.rk8_step`) of it.
 
     The C certificate integrates the whole n-step motion with these steps from the start state, the
-    state-dependent right side as it is (no use of the heading structure the planner's step map
-    relies on, no Chebyshev quadrature), so its result is independent of the planner's.
+    state-dependent right side as it is (no use of the heading structure the planner's leaf map
+    relies on, no quadrature), so its result is independent of the planner's. The functions are written in
+    :func:`algebraic` form (no trigonometric function of an inverse trigonometric result).
     """
     curve = figure_eight()
     rhs = [piece_rhs(curve, i) for i in range(len(curve.pieces))]
-    named = [ca.Function(f"{prefix}_rhs{i}", f.sx_in(), f.call(f.sx_in()), f.name_in(), f.name_out())
+    named = [algebraic(ca.Function(f"{prefix}_rhs{i}", f.sx_in(), f.call(f.sx_in()), f.name_in(), f.name_out()))
              for i, f in enumerate(rhs)]
     steps = []
     for i, f in enumerate(rhs):
         rk = rk8_step(f)
-        steps.append(ca.Function(f"{prefix}_rk8_{i}", rk.sx_in(), rk.call(rk.sx_in()), rk.name_in(), rk.name_out()))
+        steps.append(algebraic(ca.Function(f"{prefix}_rk8_{i}", rk.sx_in(), rk.call(rk.sx_in()), rk.name_in(),
+                                           rk.name_out())))
     return named + steps
+
+
+def motion_functions(prefix: str = DEFAULT_PREFIX) -> list:
+    """What the C time law needs along each leaf, per unit of the leaf's parameter phi.
+
+    Returns
+    -------
+    list of casadi.Function
+        ``<prefix>_piece<i>(phi, x[5], p[2], k, gamma, jxx, jzz, jr) -> (xdot[5], uv[2], g[2])`` for leaf i = 0, 1:
+        d/dphi of (u_a, v_a, psi, rotor angle 1, rotor angle 2), the contact coordinates (u_o, v_o) (24)-(25)
+        and the rotor rates per unit phi' (11) at psi = x[2]
+        (:func:`rollplan.execution.path.curve_piece_function`, the function the Python time laws sample);
+        then ``<prefix>_rk8x_<i>(x[5], t, h, p[2], k, gamma, jxx, jzz, jr) -> x_next[5]``, one RK8 step of it.
+        All in :func:`algebraic` form.
+    """
+    curve = figure_eight()
+    pieces, steps = [], []
+    for i in range(len(curve.pieces)):
+        f = curve_piece_function(curve, i)
+        phi, x, p = ca.SX.sym("phi"), ca.SX.sym("x", 5), ca.SX.sym("p", curve.n_params)
+        k, gamma, jxx, jzz, jr = (ca.SX.sym(n) for n in ("k", "gamma", "jxx", "jzz", "jr"))
+        xdot, uv, _, g, _, _ = f(phi, x[2], p, gamma, k, jxx, jzz, jr)
+        args, names = [phi, x, p, k, gamma, jxx, jzz, jr], ["phi", "x", "p", "k", "gamma", "jxx", "jzz", "jr"]
+        piece = ca.Function(f"{prefix}_piece{i}", args, [xdot, uv, g], names, ["xdot", "uv", "g"])
+        pieces.append(algebraic(piece))
+        rhs = ca.Function("rhs", args, [xdot], names, ["xdot"])
+        rk = rk8_step(rhs)
+        steps.append(algebraic(ca.Function(f"{prefix}_rk8x_{i}", rk.sx_in(), rk.call(rk.sx_in()), rk.name_in(),
+                                           rk.name_out())))
+    return pieces + steps
 
 
 def generated_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX) -> list:
     """Every function that :func:`generate` writes to C, in order (the symbolic twins)."""
-    return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix), table_function(prefix),
-            *certificate_functions(prefix)]
+    return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix), *certificate_functions(prefix),
+            *motion_functions(prefix)]
 
 
 def rk8_trace(ab, k: float, gamma: float = 0.0, delta: float = 0.1, x0=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -392,8 +412,8 @@ def _check_k_max(k_max, steps_per_leaf: int, step: ca.Function) -> float:
     corners of the admissible box, ``a, b in {0.05, A_MAX}``, for ``k in {0, k_max / 2, k_max}``.
     """
     if isinstance(k_max, bool) or not isinstance(k_max, (int, float, np.integer, np.floating)) \
-            or not 0.0 <= float(k_max) <= K_MAX:
-        raise InputError(f"k_max = {k_max!r} is not allowed: it must be a number in [0, {K_MAX:g}]")
+            or not K_MONOTONE <= float(k_max) <= K_MAX:
+        raise InputError(f"k_max = {k_max!r} is not allowed: it must be a number in [{K_MONOTONE:g}, {K_MAX:g}]")
     k_max = float(k_max)
     worst = 0.0
     for k in (0.0, 0.5 * k_max, k_max):
@@ -408,22 +428,21 @@ def _check_k_max(k_max, steps_per_leaf: int, step: ca.Function) -> float:
     return k_max
 
 
-def reference_plan(target, steps: int, k: float, near=None):
-    """The Python planner's verified plan on branch m = 0, for cross-checking the C planner.
+def reference_plan(target, steps: int, k: float, near=None, branch: int | None = None):
+    """The Python planner's certified plan for the same target, for cross-checking the C planner.
 
-    Solves (32)-(33) with ``m = 0`` by :mod:`rollplan.planners.geometric` (IPOPT on the
-    spectral step map, CVODES verification). Returns the shortest such plan,
-    or with ``near = (a, b)`` the one closest to it; None if there is none.
-    Uses :func:`rollplan.planners.geometric.plan` restricted to ``branch=0`` (all of its
-    roots when ``near`` is given).
+    :class:`rollplan.planners.geometric.GeometricPhasePlanner` on ``Problem(target, k, steps)``: the shortest
+    plan over all branches (the C planner's default), or on ``branch`` only; with ``near = (a, b)`` the plan
+    of all certified ones closest to it. None if there is none.
     """
-    u, v, psi = (float(x) for x in target)
-    dist = (lambda q: 0.0) if near is None else (lambda q: max(abs(q.a - near[0]), abs(q.b - near[1])))
+    problem = Problem(tuple(float(x) for x in target), k=k, steps=steps)
     try:
-        best = gp_plan((u, v, psi), steps, k=k, branch=0, all_solutions=near is not None)
+        best = GeometricPhasePlanner().solve(problem, all_solutions=near is not None, branch=branch)
     except NoPlanError:
         return None
-    return min((best,) + best.alternatives, key=lambda q: (dist(q), q.a + q.b))
+    if near is None:
+        return best
+    return min((best,) + best.alternatives, key=lambda q: (max(abs(q.a - near[0]), abs(q.b - near[1])), q.a + q.b))
 
 
 # ----------------------------------------------------------------------------- C sources
@@ -476,6 +495,52 @@ def _check_prefix(prefix) -> str:
 
 #: Files for the microcontroller builds (QEMU's mps2-an500 and mps2-an386 boards), copied into the output.
 _EMBEDDED = ("startup.c", "mps2-common.ld", "mps2-an500.ld", "mps2-an386.ld", "planner_only.c", "stack_bound.py")
+
+
+#: 2 pi to 50 digits.
+_TWO_PI_DIGITS = "6.2831853071795864769252867665590057683943387987502"
+
+
+def _two_pi_parts() -> dict:
+    """2 pi as TWO_PI_1 + TWO_PI_2 + TWO_PI_3, the first two with 32 significant bits, so that m * TWO_PI_1 and
+    m * TWO_PI_2 are exact for |m| < 2^21 (Cody and Waite's argument reduction, used by the C planner)."""
+    from fractions import Fraction
+
+    parts, rest = [], Fraction(_TWO_PI_DIGITS)
+    for _ in range(2):
+        e = math.frexp(float(rest))[1]
+        part = Fraction(math.floor(rest * 2 ** (32 - e)), 2 ** (32 - e))
+        parts.append(float(part))
+        rest -= part
+    parts.append(float(rest))
+    return {f"@TWO_PI_{i + 1}@": repr(p) for i, p in enumerate(parts)}
+
+
+def _enumeration_constants(k_max: float) -> dict:
+    """The constants of :mod:`rollplan.planners.geometric.leafmap` and :mod:`~rollplan.planners.geometric.enumerate`
+    the C planner uses, and the sizes of its static tables for ``k <= k_max``."""
+    x, w = np.polynomial.legendre.leggauss(leafmap.ORDER)
+    buckets = [(kk, p) for kk, p in leafmap.BUCKETS if kk < k_max] + [next((kk, p) for kk, p in leafmap.BUCKETS
+                                                                           if kk >= k_max)]
+    t_end = abs(float(leafmap.turn(A_MAX, k_max)))
+    ntable = math.ceil(t_end / enumerate_.TABLE_PHASE) + 2 + math.ceil(A_MAX / enumerate_.TABLE_STEP) + 1
+    return {
+        "@ORDER@": str(leafmap.ORDER),
+        "@GAUSS_X@": ", ".join(repr(float(v)) for v in x),
+        "@GAUSS_W@": ", ".join(repr(float(v)) for v in w),
+        "@NBUCKET@": str(len(buckets)),
+        "@BUCKET_K@": ", ".join(repr(float(kk)) for kk, _ in buckets),
+        "@BUCKET_P@": ", ".join(str(p) for _, p in buckets),
+        "@MAX_PANELS@": str(buckets[-1][1]),
+        "@PHASE_STEP@": repr(enumerate_.PHASE_STEP),
+        "@X_STEP@": repr(enumerate_.X_STEP),
+        "@HERMITE_REL@": repr(enumerate_.HERMITE_REL),
+        "@SAFETY@": repr(enumerate_.SAFETY),
+        "@MIN_WIDTH@": repr(enumerate_.MIN_WIDTH),
+        "@TABLE_PHASE@": repr(enumerate_.TABLE_PHASE),
+        "@TABLE_STEP@": repr(enumerate_.TABLE_STEP),
+        "@NTABLE@": str(ntable),
+    }
 
 
 def _template(name: str) -> str:
@@ -540,19 +605,18 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@SZ_RES@": str(sizes["sz_res"]),
         "@SZ_IW@": str(max(sizes["sz_iw"], 1)),
         "@SZ_W@": str(max(sizes["sz_w"], 1)),
-        "@TABLE_RADII@": str(TABLE_RADII),
-        "@RADII@": ", ".join(repr(float(r)) for r in (0.0, *table_radii())),
         "@A_MAX@": repr(float(A_MAX)),
-        "@A_MIN@": repr(_A_MIN),
-        "@MAX_ITER@": str(_MAX_ITER),
-        "@MAX_CELLS@": str(_MAX_CELLS),
-        "@TOL@": repr(_TOL[real]),
+        "@K_MIN@": repr(float(K_MONOTONE)),
+        "@PSI_MAX@": repr(PSI_MAX),
+        **_two_pi_parts(),
+        **_enumeration_constants(k_max),
         "@STEPS_PER_LEAF@": str(int(steps_per_leaf)),
         "@REAL@": real,
         "@K_MAX@": repr(k_max),
         "@MAX_STEPS@": show_limit(MAX_STEPS),
         "@CERT_TOL@": repr(CERT_TOL if real == "double" else FLOAT_CERT_TOL),
         "@REAL_TINY@": "DBL_MIN" if real == "double" else "FLT_MIN",
+        "@REAL_MAX@": "DBL_MAX" if real == "double" else "FLT_MAX",
         "@ACCURACY@": "plans are certified to 1e-9." if real == "double" else
                       f"single precision: plans are certified to {FLOAT_CERT_TOL:g} (R and rad) only.",
         "@CERT_DELTA@": repr(CERT_DELTA),

@@ -1,10 +1,12 @@
-/* plan_demo U V PSI STEPS K -- print one line "a b gamma residual bound" of the embedded plan: leaf
- * radii [R], rotation [rad], and its certificate (residual of the RK8 integration of the whole motion
- * and the integration's error bound, see @PREFIX@_certify).
+/* plan_demo U V PSI STEPS K [BRANCH] -- print one line "a b gamma residual bound m" of the embedded plan:
+ * leaf radii [R], rotation [rad], its certificate (residual of the RK8 integration of the whole motion
+ * and the integration's error bound, see @PREFIX@_certify) and its branch m (n eta = psi + 2 pi m).
+ * The shortest certified plan over all branches, or on branch BRANCH (a whole number) if given.
  * Numbers are ASCII decimals as on rollplan's command line (2.5, -1e-3; no hex, inf, nan or spaces);
- * STEPS is a whole number in [1, @MAX_STEPS@], K lies in [0, @K_MAX@] (rollplan codegen --k-max).
- * Exit status: 0 certified plan, 2 bad input, 3 no bracket on branch m = 0, 4 no convergence,
- * 5 no converged plan passed the certificate. */
+ * STEPS is a whole number in [1, @MAX_STEPS@], K lies in [@K_MIN@, @K_MAX@] (rollplan codegen --k-max),
+ * |PSI| <= @PSI_MAX@.
+ * Exit status: 0 certified plan, 2 bad input, 3 no root on any branch searched, 4 search incomplete,
+ * 5 roots found but none passed the certificate. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,47 +39,62 @@ static int number(const char *text, double *x) {
 }
 
 int main(int argc, char **argv) {
-    double u, v, psi, steps_d, k;
+    double u, v, psi, steps_d, k, branch = 0.0;
     @PREFIX@_plan_t plan;
+    @PREFIX@_options_t options = {0, 0, 1};
     int status;
-    if (argc != 6 || !number(argv[1], &u) || !number(argv[2], &v) || !number(argv[3], &psi)
-        || !number(argv[4], &steps_d) || !number(argv[5], &k)) {
-        fprintf(stderr, "usage: %s U V PSI STEPS K   (decimal numbers such as 2.5 or -1e-3; STEPS a whole number "
-                "in [1, @MAX_STEPS@], K in [0, @K_MAX@])\n", argv[0]);
+    if ((argc != 6 && argc != 7) || !number(argv[1], &u) || !number(argv[2], &v) || !number(argv[3], &psi)
+        || !number(argv[4], &steps_d) || !number(argv[5], &k) || (argc == 7 && !number(argv[6], &branch))) {
+        fprintf(stderr, "usage: %s U V PSI STEPS K [BRANCH]   (decimal numbers such as 2.5 or -1e-3; STEPS a whole "
+                "number in [1, @MAX_STEPS@], K in [@K_MIN@, @K_MAX@], BRANCH a whole number)\n", argv[0]);
         return @PREFIX_UPPER@_BAD_INPUT;
+    }
+    if (argc == 7) {
+        if (branch != floor(branch) || fabs(branch) > 1e9) {
+            fprintf(stderr, "%s: BRANCH = %s is not allowed: it must be a whole number in [-1e9, 1e9]\n", argv[0],
+                    argv[6]);
+            return @PREFIX_UPPER@_BAD_INPUT;
+        }
+        options.use_branch = 1;
+        options.branch = (long)branch;
     }
     if (steps_d < 1 || steps_d > @PREFIX_UPPER@_MAX_STEPS || steps_d != floor(steps_d)) {
         fprintf(stderr, "%s: STEPS = %s is not allowed: it must be a whole number in [1, @MAX_STEPS@]\n", argv[0],
                 argv[4]);
         return @PREFIX_UPPER@_BAD_INPUT;
     }
-    if (!(k >= 0.0 && k <= (double)@PREFIX_UPPER@_K_MAX)) {
-        fprintf(stderr, "%s: K = %s is not allowed: it must lie in [0, @K_MAX@] (the range this planner was "
-                "generated for: rollplan codegen --k-max)\n", argv[0], argv[5]);
+    if (!(k >= (double)@PREFIX_UPPER@_K_MIN && k <= (double)@PREFIX_UPPER@_K_MAX)) {
+        fprintf(stderr, "%s: K = %s is not allowed: it must lie in [@K_MIN@, @K_MAX@] (the range this planner was "
+                "generated for: rollplan codegen --k-max; below @K_MIN@ the complete enumeration does not apply)\n",
+                argv[0], argv[5]);
+        return @PREFIX_UPPER@_BAD_INPUT;
+    }
+    if (!(fabs(psi) <= (double)@PREFIX_UPPER@_PSI_MAX)) {
+        fprintf(stderr, "%s: PSI = %s is not allowed: |PSI| must be at most @PSI_MAX@\n", argv[0], argv[3]);
         return @PREFIX_UPPER@_BAD_INPUT;
     }
     /* ranges checked in double above, before the conversion to casadi_real (@REAL@ in this build) */
-    status = @PREFIX@_plan((casadi_real)u, (casadi_real)v, (casadi_real)psi, (int)steps_d, (casadi_real)k, &plan);
+    status = @PREFIX@_plan_with((casadi_real)u, (casadi_real)v, (casadi_real)psi, (int)steps_d, (casadi_real)k, &options, &plan);
     switch (status) {
     case @PREFIX_UPPER@_OK:
-        printf("%.17g %.17g %.17g %.3e %.3e\n", (double)plan.a, (double)plan.b, (double)plan.gamma,
-               (double)plan.residual, (double)plan.bound);
+        printf("%.17g %.17g %.17g %.3e %.3e %ld\n", (double)plan.a, (double)plan.b, (double)plan.gamma,
+               (double)plan.residual, (double)plan.bound, plan.m);
         return 0;
     case @PREFIX_UPPER@_BAD_INPUT:
         fprintf(stderr, "%s: bad input: the target (U, V) must be away from the origin\n", argv[0]);
         break;
     case @PREFIX_UPPER@_NO_PLAN:
-        fprintf(stderr, "%s: no plan: no root of branch m = 0 with 0 < a, b <= %g; try more steps\n", argv[0],
-                (double)@PREFIX_UPPER@_A_MAX);
+        fprintf(stderr, "%s: no plan: no branch of (32)-(33)%s has a root with 0 < a, b <= %g; try more steps\n",
+                argv[0], options.use_branch ? " searched" : "", (double)@PREFIX_UPPER@_A_MAX);
         break;
     case @PREFIX_UPPER@_NOT_CERTIFIED:
-        fprintf(stderr, "%s: not certified: the best converged plan (a %.6g, b %.6g) misses by %.3e with an "
+        fprintf(stderr, "%s: not certified: the best root (a %.6g, b %.6g) misses by %.3e with an "
                 "integration error bound %.3e (tolerance %g)\n", argv[0], (double)plan.a, (double)plan.b,
                 (double)plan.residual, (double)plan.bound, (double)@PREFIX_UPPER@_CERT_TOL);
         break;
     default:
-        fprintf(stderr, "%s: no convergence after %d cells (last residual %.3e)\n", argv[0], plan.cells,
-                (double)plan.predicted);
+        fprintf(stderr, "%s: search incomplete: a branch needed more cells than the bound (%d branches "
+                "searched)\n", argv[0], plan.branches);
         break;
     }
     return status;

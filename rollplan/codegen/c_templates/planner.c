@@ -1,5 +1,17 @@
-/* @PREFIX@_planner.c -- damped Newton planner on the generated step map (hand-written glue).
- * The model equations are all in @PREFIX@_model.c, generated from rollplan's symbolic model. */
+/* @PREFIX@_planner.c -- the planner of rollplan.planners.geometric in C (hand-written glue).
+ *
+ * The ODE of the certificate is in @PREFIX@_model.c, generated from rollplan's symbolic model. The
+ * planner follows rollplan.planners.geometric line by line; each formula is written once, here, with
+ * the Python function it ports:
+ *   leafmap.turn / turn_dr / turn_inverse   closed-form turn E(r, k) of a leaf and its inverse
+ *   leafmap.displacement / signed_length    the leaf's displacement d(r, k) by the Gauss rule in chi,
+ *                                           and rho = Re(exp(i E / 2) d)
+ *   enumerate.branches / branch_values      branches m of (32), the scalar equation g(x) of (33)
+ *   enumerate.rho_table / rho_lookup        rho tabulated once per k (cubic Hermite)
+ *   enumerate.roots (_cells, _critical, _examine, _bracketed, _polish)   every root on a branch
+ *   planner._solve_enumerated               the bounded search for the shortest certified plan
+ *   planner._certified                      gamma from the geometry
+ * Static memory only; not reentrant (one static work area and the table of the last k). */
 #include <float.h>
 #include <math.h>
 #include <stddef.h>
@@ -10,48 +22,60 @@
 #define SZ_RES @SZ_RES@
 #define SZ_IW @SZ_IW@
 #define SZ_W @SZ_W@
-#define NR @TABLE_RADII@        /* radii of the bracketing table (plus r = 0) */
-#define A_MIN @A_MIN@
-#define MAX_ITER @MAX_ITER@
-#define MAX_CELLS @MAX_CELLS@
-#define TOL @TOL@
 #define REAL_TINY @REAL_TINY@          /* smallest normal casadi_real */
+#define REAL_MAX @REAL_MAX@            /* largest finite casadi_real */
+#define A_MAX @PREFIX_UPPER@_A_MAX
+#define K_MIN @PREFIX_UPPER@_K_MIN
 #define K_MAX @PREFIX_UPPER@_K_MAX
+#define PSI_MAX @PREFIX_UPPER@_PSI_MAX
 #define MAX_STEPS @PREFIX_UPPER@_MAX_STEPS
 #define CERT_TOL @PREFIX_UPPER@_CERT_TOL
 #define CERT_DELTA @CERT_DELTA@
 #define CERT_BASE @CERT_BASE@
 #define CERT_SAFETY @CERT_SAFETY@
-#define NPANEL @NPANEL@                /* panels of each leaf (the spectral step map's) */
+#define NPANEL @NPANEL@                /* panels of each leaf (the curve's) */
 #define CERT_REFINE 3                  /* at most 3 more doublings when only the bound is too large */
 #define CERT_MAX_PANEL_STEPS 2048      /* bounds the certificate's time; k <= K_MAX needs far fewer */
-#define MIN_STEP (1.0 / 256.0)  /* smallest damping factor of the line search (9 trials) */
 #define PI 3.14159265358979323846
+#define TWO_PI 6.28318530717958647692
+/* 2 pi = TWO_PI_1 + TWO_PI_2 + TWO_PI_3, the first two with 32 significant bits (Cody and Waite) */
+#define TWO_PI_1 @TWO_PI_1@
+#define TWO_PI_2 @TWO_PI_2@
+#define TWO_PI_3 @TWO_PI_3@
+
+/* enumerate.py and leafmap.py constants */
+#define ORDER @ORDER@                  /* Gauss-Legendre nodes per panel (leafmap.ORDER) */
+#define MAX_PANELS @MAX_PANELS@        /* panels of the rule at K_MAX (leafmap.BUCKETS) */
+#define NBUCKET @NBUCKET@
+#define PHASE_STEP @PHASE_STEP@
+#define X_STEP @X_STEP@
+#define HERMITE_REL @HERMITE_REL@
+#define SAFETY @SAFETY@
+#define MIN_WIDTH @MIN_WIDTH@
+#define TABLE_PHASE @TABLE_PHASE@
+#define TABLE_STEP @TABLE_STEP@
+#define NTABLE @NTABLE@                /* most radii of the rho table (at K_MAX) */
+#define STACK_CELLS 96                 /* pending cells of a branch's splitting (depth <= log2(X_STEP / MIN_WIDTH)) */
+#define MAX_CELLS_PER_BRANCH 1000000L  /* bounds the time of one branch; beyond it the search is incomplete */
+#define MAX_CELL_ROOTS 16
 
 /* Static work area shared by all calls (no malloc; not reentrant). */
 static const casadi_real *s_arg[SZ_ARG];
 static casadi_real *s_res[SZ_RES];
 static casadi_int s_iw[SZ_IW];
 static casadi_real s_w[SZ_W];
-static casadi_real s_leaf0[3 * NR], s_leaf1[3 * NR];
-/* Corner values eta, h of the (a, b) grid: only for bracketing, so single precision (half the RAM). */
-static float s_eta[(NR + 1) * (NR + 1)], s_h[(NR + 1) * (NR + 1)];
-/* Radii of the table rows/columns [R]: 0, then the generated function's grid. */
-static const casadi_real s_radii[NR + 1] = {@RADII@};
 
 /* Panel boundaries of each leaf in phi [rad]. */
 static const casadi_real s_breaks[NPANEL + 1] = {@BREAKS@};
 /* RK8 steps per panel of each leaf for the certificate (set per plan). */
 static int s_counts[2][NPANEL];
 
-/* Angle wrapped to (-pi, pi]. */
+/* Angle wrapped to (-pi, pi] (rollplan.core.plane.wrap). */
 static casadi_real wrap(casadi_real x) {
     casadi_real m = fmod(PI - x, 2.0 * PI);
     if (m < 0.0) m += 2.0 * PI;
     return PI - m;
 }
-
-static casadi_real clamp(casadi_real x) { return x < A_MIN ? A_MIN : (x > @PREFIX_UPPER@_A_MAX ? @PREFIX_UPPER@_A_MAX : x); }
 
 int @PREFIX@_step_eval(casadi_real a, casadi_real b, casadi_real k, casadi_real shift[2], casadi_real *eta, casadi_real *direction,
                        casadi_real jac[8]) {
@@ -67,64 +91,6 @@ int @PREFIX@_step_eval(casadi_real a, casadi_real b, casadi_real k, casadi_real 
     return @PREFIX@_step_jac(s_arg, s_res, s_iw, s_w, 0);
 }
 
-/* Residual of (32)-(33) and its Jacobian at (a, b). Returns 0 on success. */
-static int residual(const casadi_real x[2], casadi_real k, casadi_real eta_m, casadi_real h_m, casadi_real r[2], casadi_real jr[4],
-                    casadi_real shift[2], casadi_real *eta) {
-    casadi_real jac[8], dir, h;
-    if (@PREFIX@_step_eval(x[0], x[1], k, shift, eta, &dir, jac)) return 1;
-    h = hypot(shift[0], shift[1]);
-    r[0] = *eta - eta_m;
-    r[1] = h - h_m;
-    jr[0] = jac[2];                     /* d eta / d a */
-    jr[1] = jac[6];                     /* d eta / d b */
-    if (h < REAL_TINY) h = REAL_TINY;
-    jr[2] = (shift[0] * jac[0] + shift[1] * jac[1]) / h;   /* d h / d a */
-    jr[3] = (shift[0] * jac[4] + shift[1] * jac[5]) / h;   /* d h / d b */
-    return !(isfinite(r[0]) && isfinite(r[1]));
-}
-
-/* Damped Newton from x (in place). Returns 1 if converged. */
-static int newton(casadi_real x[2], casadi_real k, casadi_real eta_m, casadi_real h_m, casadi_real tol, casadi_real *res_norm, int *iters,
-                  casadi_real shift[2], casadi_real *eta) {
-    casadi_real r[2], jr[4], xt[2] = {0.0, 0.0}, rt[2] = {0.0, 0.0}, jt[4] = {0.0, 0.0, 0.0, 0.0};
-    casadi_real st[2] = {0.0, 0.0}, et = 0.0, nr, nrt = INFINITY, det, dx0, dx1, alpha;
-    int it;
-    *iters = 0;
-    if (residual(x, k, eta_m, h_m, r, jr, shift, eta)) return 0;
-    nr = hypot(r[0], r[1]);
-    for (it = 0; it < MAX_ITER; ++it) {
-        *res_norm = nr;
-        if (nr <= tol) return 1;
-        det = jr[0] * jr[3] - jr[1] * jr[2];
-        if (!(fabs(det) > 0.0) || !isfinite(det)) return 0;
-        dx0 = -(jr[3] * r[0] - jr[1] * r[1]) / det;
-        dx1 = -(-jr[2] * r[0] + jr[0] * r[1]) / det;
-        for (alpha = 1.0; alpha >= MIN_STEP; alpha *= 0.5) {
-            xt[0] = clamp(x[0] + alpha * dx0);
-            xt[1] = clamp(x[1] + alpha * dx1);
-            if (residual(xt, k, eta_m, h_m, rt, jt, st, &et)) continue;
-            nrt = hypot(rt[0], rt[1]);
-            if (nrt < (1.0 - 1e-4 * alpha) * nr || nrt <= tol) break;
-        }
-        *iters = it + 1;
-        if (alpha < MIN_STEP) {
-            /* no decrease: converged to rounding level, or stuck */
-            return nr <= 1e3 * tol;
-        }
-        x[0] = xt[0];
-        x[1] = xt[1];
-        r[0] = rt[0];
-        r[1] = rt[1];
-        jr[0] = jt[0]; jr[1] = jt[1]; jr[2] = jt[2]; jr[3] = jt[3];
-        shift[0] = st[0];
-        shift[1] = st[1];
-        *eta = et;
-        nr = nrt;
-    }
-    *res_norm = nr;
-    return nr <= tol;
-}
-
 /* The curve ODE (28)-(30) along leaf `leaf` at phi (generated). Returns 0 on success. */
 static int curve_rhs(int leaf, casadi_real phi, const casadi_real x[3], const casadi_real ab[2], casadi_real k, casadi_real gamma,
                      casadi_real xdot[3]) {
@@ -137,10 +103,39 @@ static int curve_rhs(int leaf, casadi_real phi, const casadi_real x[3], const ca
     return leaf ? @PREFIX@_rhs1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rhs0(s_arg, s_res, s_iw, s_w, 0);
 }
 
-/* `n` equal RK8 steps (generated) over [t0, t0 + n h] along leaf `leaf`, x in place. */
-static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, int n, const casadi_real ab[2], casadi_real k, casadi_real gamma) {
-    casadi_real t, xn[3];
-    int q;
+/* RK8 steps per panel of each leaf into s_counts: ceil(w (CERT_BASE + rate) / CERT_DELTA) for a panel of
+ * width w, rate = max |psi'_0| + |psi'_k - psi'_0| over 5 points of the panel: psi' of (30) at k = 0 (the
+ * rolling part) and at k (plus the spin part k w); psi' does not depend on the state. Both parts count
+ * separately: near A_MAX they are large and cancel in part for k near 1/2, while the path is still steep. */
+static int counts(const casadi_real ab[2], casadi_real k, casadi_real gamma) {
+    const casadi_real zero[3] = {0.0, 0.0, 0.0};
+    casadi_real w, rate, n, xd[3], x0[3], phi;
+    int leaf, j, q;
+    for (leaf = 0; leaf < 2; ++leaf) {
+        for (j = 0; j < NPANEL; ++j) {
+            w = s_breaks[j + 1] - s_breaks[j];
+            rate = 0.0;
+            for (q = 0; q <= 4; ++q) {
+                phi = s_breaks[j] + 0.25 * q * w;
+                if (curve_rhs(leaf, phi, zero, ab, k, gamma, xd) || curve_rhs(leaf, phi, zero, ab, 0.0, gamma, x0)
+                    || !isfinite(xd[2]) || !isfinite(x0[2]))
+                    return 1;
+                rate = fmax(rate, fabs(x0[2]) + fabs(xd[2] - x0[2]));
+            }
+            n = ceil(w * (CERT_BASE + rate) / CERT_DELTA);
+            s_counts[leaf][j] = n > CERT_MAX_PANEL_STEPS ? CERT_MAX_PANEL_STEPS : (int)n;
+        }
+    }
+    return 0;
+}
+
+/* `n` equal RK8 steps (generated) over [t0, t0 + n h] along leaf `leaf`, x in place: of the curve ODE
+ * (x = (u_a, v_a, psi), jj = NULL) or of the time law's ODE (x = (u_a, v_a, psi, rotor angles), jj = the
+ * inertias). */
+static int rk8_steps(int leaf, casadi_real *x, casadi_real t0, casadi_real h, int n, const casadi_real ab[2],
+                     casadi_real k, casadi_real gamma, const casadi_real *jj) {
+    casadi_real t, xn[5];
+    int q, i, status;
     for (q = 0; q < n; ++q) {
         t = t0 + q * h;
         s_arg[0] = x;
@@ -150,10 +145,16 @@ static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, 
         s_arg[4] = &k;
         s_arg[5] = &gamma;
         s_res[0] = xn;
-        if (leaf ? @PREFIX@_rk8_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8_0(s_arg, s_res, s_iw, s_w, 0)) return 1;
-        x[0] = xn[0];
-        x[1] = xn[1];
-        x[2] = xn[2];
+        if (jj) {
+            s_arg[6] = jj;
+            s_arg[7] = jj + 1;
+            s_arg[8] = jj + 2;
+            status = leaf ? @PREFIX@_rk8x_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8x_0(s_arg, s_res, s_iw, s_w, 0);
+        } else {
+            status = leaf ? @PREFIX@_rk8_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8_0(s_arg, s_res, s_iw, s_w, 0);
+        }
+        if (status) return 1;
+        for (i = 0; i < (jj ? 5 : 3); ++i) x[i] = xn[i];
     }
     return 0;
 }
@@ -165,7 +166,8 @@ static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2]
         for (leaf = 0; leaf < 2; ++leaf) {
             for (j = 0; j < NPANEL; ++j) {
                 nj = mult * s_counts[leaf][j];
-                if (rk8_steps(leaf, x, s_breaks[j], (s_breaks[j + 1] - s_breaks[j]) / nj, nj, ab, k, gamma)) return 1;
+                if (rk8_steps(leaf, x, s_breaks[j], (s_breaks[j + 1] - s_breaks[j]) / nj, nj, ab, k, gamma, NULL))
+                    return 1;
             }
         }
     }
@@ -174,9 +176,8 @@ static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2]
 
 int @PREFIX@_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps, casadi_real k, casadi_real u, casadi_real v, casadi_real psi,
                      casadi_real final[3], casadi_real *residual, casadi_real *bound) {
-    const casadi_real zero[3] = {0.0, 0.0, 0.0};
-    casadi_real ab[2], xc[3] = {0.0, 0.0, 0.0}, xf[3] = {0.0, 0.0, 0.0}, xd[3], w, rate, n;
-    int leaf, j, q, mult;
+    casadi_real ab[2], xc[3] = {0.0, 0.0, 0.0}, xf[3] = {0.0, 0.0, 0.0}, w, rate, n;
+    int mult;
     if (residual) *residual = INFINITY;
     if (bound) *bound = INFINITY;
     if (!(isfinite(a) && isfinite(b) && isfinite(gamma) && isfinite(u) && isfinite(v) && isfinite(psi))
@@ -185,20 +186,7 @@ int @PREFIX@_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps,
         return @PREFIX_UPPER@_BAD_INPUT;
     ab[0] = a;
     ab[1] = b;
-    /* steps per panel from the turn rate psi', which does not depend on the state */
-    for (leaf = 0; leaf < 2; ++leaf) {
-        for (j = 0; j < NPANEL; ++j) {
-            w = s_breaks[j + 1] - s_breaks[j];
-            rate = 0.0;
-            for (q = 0; q <= 4; ++q) {
-                if (curve_rhs(leaf, s_breaks[j] + 0.25 * q * w, zero, ab, k, gamma, xd) || !isfinite(xd[2]))
-                    return @PREFIX_UPPER@_NOT_CERTIFIED;
-                rate = fmax(rate, fabs(xd[2]));
-            }
-            n = ceil(w * (CERT_BASE + rate) / CERT_DELTA);
-            s_counts[leaf][j] = n > CERT_MAX_PANEL_STEPS ? CERT_MAX_PANEL_STEPS : (int)n;
-        }
-    }
+    if (counts(ab, k, gamma)) return @PREFIX_UPPER@_NOT_CERTIFIED;
     if (motion(xc, 1, steps, ab, k, gamma) || motion(xf, 2, steps, ab, k, gamma)) return @PREFIX_UPPER@_NOT_CERTIFIED;
     for (mult = 2;; mult *= 2) {
         /* step doubling: |x_2N - x_N| / (2^8 - 1) estimates the error of x_2N for an order-8 method; divided
@@ -226,169 +214,804 @@ int @PREFIX@_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps,
     return isfinite(n + w) && n + w <= CERT_TOL ? @PREFIX_UPPER@_OK : @PREFIX_UPPER@_NOT_CERTIFIED;
 }
 
-/* The table depends on k only; a robot has one k, so it is kept for the last k. */
-static int s_have_table = 0;
-static casadi_real s_table_k = 0.0;
+/* ------------------------------------------------------------------ leaf map (leafmap.py) */
 
-void @PREFIX@_forget_table(void) { s_have_table = 0; }
+/* Gauss-Legendre nodes and weights on [-1, 1] (numpy's leggauss, written at generation). */
+static const casadi_real s_gx[ORDER] = {@GAUSS_X@};
+static const casadi_real s_gw[ORDER] = {@GAUSS_W@};
+/* leafmap.BUCKETS: for k <= s_bucket_k[i] (and above the previous bucket) the rule has s_bucket_p[i] panels */
+static const casadi_real s_bucket_k[NBUCKET] = {@BUCKET_K@};
+static const int s_bucket_p[NBUCKET] = {@BUCKET_P@};
 
-/* Leaf tables and the corner values eta, h of the (a, b) grid (index 0 is r = 0). */
-static int tabulate(casadi_real k) {
-    int i, j;
-    if (s_have_table && s_table_k == k) return 0;
-    s_have_table = 0;
-    s_arg[0] = &k;
-    s_res[0] = s_leaf0;
-    s_res[1] = s_leaf1;
-    if (@PREFIX@_leaf_table(s_arg, s_res, s_iw, s_w, 0)) return 1;
-    for (i = 0; i <= NR; ++i) {
-        casadi_real u0 = i ? s_leaf0[3 * (i - 1)] : 0.0, v0 = i ? s_leaf0[3 * (i - 1) + 1] : 0.0;
-        casadi_real p0 = i ? s_leaf0[3 * (i - 1) + 2] : 0.0;
-        casadi_real c = cos(p0), s = sin(p0);
-        for (j = 0; j <= NR; ++j) {
-            casadi_real u1 = j ? s_leaf1[3 * (j - 1)] : 0.0, v1 = j ? s_leaf1[3 * (j - 1) + 1] : 0.0;
-            casadi_real p1 = j ? s_leaf1[3 * (j - 1) + 2] : 0.0;
-            /* second leaf starts at heading p0: its shift turns by -p0 */
-            s_eta[i * (NR + 1) + j] = (float)(p0 + p1);
-            s_h[i * (NR + 1) + j] = (float)hypot(u0 + c * u1 + s * v1, v0 - s * u1 + c * v1);
+/* State kept for the last k: the rule's nodes, E(A_MAX) and the rho table. */
+static int s_ready = 0;
+static casadi_real s_k = 0.0;
+static int s_nodes;                                       /* ORDER x panels */
+static casadi_real s_chi[ORDER * MAX_PANELS], s_cchi[ORDER * MAX_PANELS], s_schi[ORDER * MAX_PANELS],
+    s_wchi[ORDER * MAX_PANELS];
+static casadi_real s_e_min;                               /* E(A_MAX, k) < 0 */
+static int s_nt;                                          /* radii of the table */
+static casadi_real s_tr[NTABLE], s_te[NTABLE], s_trho[NTABLE], s_tdrho[NTABLE];
+static casadi_real s_eps, s_eps_g;                        /* table error bound; its effect on g */
+
+/* (c, s, rho) of radius r: c = sqrt(1 - r^2), s = sqrt(1 - 2 r^2), rho = r^2 / (c^2 + s) (leafmap._consts). */
+static void consts(casadi_real r, casadi_real *c, casadi_real *s, casadi_real *rho) {
+    *c = sqrt(1.0 - r * r);
+    *s = sqrt(1.0 - 2.0 * r * r);
+    *rho = r * r / (*c * *c + *s);
+}
+
+/* Turn of psi over the +y leaf, E(r, k) = 2 pi r^2 / (1 + c) - 4 pi k c r^2 / (s (1 + s)) (leafmap.turn). */
+static casadi_real turn(casadi_real r, casadi_real k) {
+    casadi_real c, s, rho;
+    consts(r, &c, &s, &rho);
+    return TWO_PI * r * r / (1.0 + c) - 2.0 * TWO_PI * k * c * r * r / (s * (1.0 + s));
+}
+
+/* dE/dr = (2 pi r / c) (1 - k (1 + s^-3)) (leafmap.turn_dr). */
+static casadi_real turn_dr(casadi_real r, casadi_real k) {
+    casadi_real c, s, rho;
+    consts(r, &c, &s, &rho);
+    return TWO_PI * r / c * (1.0 - k * (1.0 + 1.0 / (s * s * s)));
+}
+
+/* Radius r in [0, A_MAX] with E(r, k) = e (k >= 1/2: E strictly decreasing), NaN for e outside
+ * [E(A_MAX), 0] (leafmap.turn_inverse): safeguarded Newton in u = r^2 (E is smooth in u, with
+ * dE/du = (pi / c) (1 - k (1 + s^-3))) from a start interpolated in the table of the last k,
+ * bisecting whenever a step leaves the bracket. */
+static casadi_real turn_inverse(casadi_real e, casadi_real k) {
+    const casadi_real umax = A_MAX * A_MAX;
+    casadi_real lo = 0.0, hi = umax, u, f, df, c, s, nxt;
+    int it, i0, i1, im;
+    if (!(e <= 0.0 && e >= s_e_min)) return NAN;
+    if (e >= 0.0) return 0.0;
+    if (e <= s_e_min) return A_MAX;
+    if (s_nt > 1) {           /* s_te decreases along the table: bisection for s_te[i0] >= e > s_te[i1] */
+        i0 = 0;
+        i1 = s_nt - 1;
+        while (i1 - i0 > 1) {
+            im = (i0 + i1) / 2;
+            if (s_te[im] >= e) i0 = im; else i1 = im;
+        }
+        lo = s_tr[i0] * s_tr[i0];
+        hi = s_tr[i1] * s_tr[i1];
+        u = lo + (hi - lo) * (e - s_te[i0]) / (s_te[i1] - s_te[i0]);
+        if (!(u >= lo && u <= hi)) u = 0.5 * (lo + hi);
+    } else {
+        u = umax * e / s_e_min;
+    }
+    for (it = 0; it < 200; ++it) {
+        c = sqrt(1.0 - u);
+        s = sqrt(1.0 - 2.0 * u);
+        f = TWO_PI * u / (1.0 + c) - 2.0 * TWO_PI * k * c * u / (s * (1.0 + s)) - e;
+        if (fabs(f) <= 4e-16 * (1.0 + fabs(e)) * (1.0 + k)) break;    /* rounding level (leafmap.turn_inverse) */
+        if (f > 0.0) lo = u; else hi = u;                   /* E decreasing: the root is to the right of u if f > 0 */
+        df = PI / c * (1.0 - k * (1.0 + 1.0 / (s * s * s)));
+        nxt = u - f / df;
+        if (!isfinite(nxt) || nxt <= lo || nxt >= hi) nxt = 0.5 * (lo + hi);
+        if (fabs(nxt - u) <= 1e-15 * nxt || hi - lo <= 1e-15 * hi) {
+            u = nxt;
+            break;
+        }
+        u = nxt;
+    }
+    return sqrt(u);
+}
+
+/* Displacement d = u_a + i v_a of the +y leaf of radius r from zero (leafmap.displacement):
+ *   d = r int_0^{2 pi} phi'(chi) exp(i [(1 - k) c phi(chi) + (k c / s) chi]) d chi,
+ *   phi(chi) = chi + 2 atan(rho sin chi / (1 - rho cos chi)), phi'(chi) = (1 - rho^2) / (1 - 2 rho cos chi + rho^2),
+ * by the composite Gauss rule of the last k; with dd (not NULL) also dd/dr, the rule applied to the
+ * r-derivative of the integrand. */
+/* The last MEMO evaluations of displacement (a plan evaluates the same radii several times: the polished
+ * root, its gamma, and both leaves when a = b). */
+#define MEMO 4
+static struct {
+    casadi_real r, k, d[2], dd[2];
+    int has_dd;
+} s_memo[MEMO];
+static int s_memo_next = 0, s_memo_used = 0;
+
+static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_real dd[2]) {
+    casadi_real c, s, rho, br = 0.0, bi = 0.0, tr = 0.0, ti = 0.0, c_r = 0.0, s_r = 0.0, g, rho_r = 0.0;
+    casadi_real cx, sx, den, q, phi, jac, theta, ec, es, w, phi_rho, jac_rho, theta_r, p1, p2;
+    int j;
+    for (j = 0; j < s_memo_used; ++j) {
+        if (s_memo[j].r == r && s_memo[j].k == k && (s_memo[j].has_dd || !dd)) {
+            d[0] = s_memo[j].d[0];
+            d[1] = s_memo[j].d[1];
+            if (dd) {
+                dd[0] = s_memo[j].dd[0];
+                dd[1] = s_memo[j].dd[1];
+            }
+            return;
         }
     }
-    s_have_table = 1;
-    s_table_k = k;
+    consts(r, &c, &s, &rho);
+    if (dd) {
+        c_r = -r / c;
+        s_r = -2.0 * r / s;
+        g = c * c + s;
+        rho_r = (2.0 * r * g - r * r * (-2.0 * r + s_r)) / (g * g);
+    }
+    for (j = 0; j < s_nodes; ++j) {
+        cx = s_cchi[j];
+        sx = s_schi[j];
+        w = s_wchi[j];
+        den = 1.0 - rho * cx;
+        q = den * den + (rho * sx) * (rho * sx);
+        phi = s_chi[j] + 2.0 * atan2(rho * sx, den);
+        jac = (1.0 - rho * rho) / q;
+        theta = (1.0 - k) * c * phi + (k * c / s) * s_chi[j];
+        ec = cos(theta);
+        es = sin(theta);
+        br += w * jac * ec;
+        bi += w * jac * es;
+        if (dd) {
+            phi_rho = 2.0 * sx / q;
+            jac_rho = (-2.0 * rho * q - (1.0 - rho * rho) * (2.0 * rho - 2.0 * cx)) / (q * q);
+            theta_r = (1.0 - k) * (c_r * phi + c * phi_rho * rho_r) + k * s_chi[j] * (c_r * s - c * s_r) / (s * s);
+            p1 = jac_rho * rho_r;
+            p2 = theta_r * jac;
+            tr += w * (p1 * ec - p2 * es);
+            ti += w * (p1 * es + p2 * ec);
+        }
+    }
+    d[0] = r * br;
+    d[1] = r * bi;
+    if (dd) {
+        dd[0] = br + r * tr;
+        dd[1] = bi + r * ti;
+    }
+    j = s_memo_next;
+    s_memo_next = (s_memo_next + 1) % MEMO;
+    if (s_memo_used < MEMO) ++s_memo_used;
+    s_memo[j].r = r;
+    s_memo[j].k = k;
+    s_memo[j].d[0] = d[0];
+    s_memo[j].d[1] = d[1];
+    s_memo[j].has_dd = dd != NULL;
+    if (dd) {
+        s_memo[j].dd[0] = dd[0];
+        s_memo[j].dd[1] = dd[1];
+    }
+}
+
+/* rho(r, k) = Re(exp(i E / 2) d) and d rho / dr (leafmap.signed_length): d = rho exp(-i E / 2). */
+static void signed_length(casadi_real r, casadi_real k, casadi_real *rho, casadi_real *drho) {
+    casadi_real d[2], dd[2], e = turn(r, k), ch = cos(0.5 * e), sh = sin(0.5 * e), zr, zi, de;
+    displacement(r, k, d, drho ? dd : NULL);
+    *rho = d[0] * ch - d[1] * sh;
+    if (drho) {
+        de = turn_dr(r, k);
+        zr = dd[0] - 0.5 * de * d[1];
+        zi = dd[1] + 0.5 * de * d[0];
+        *drho = zr * ch - zi * sh;
+    }
+}
+
+/* ------------------------------------------------------------------ rho table (enumerate.rho_table) */
+
+/* Cubic Hermite lookup of (rho, d rho / dr) at r in the table (enumerate.rho_lookup). */
+static void rho_lookup(casadi_real r, casadi_real *rho, casadi_real *drho) {
+    int i0 = 0, i1 = s_nt - 1, im;
+    casadi_real w, t, t2, t3, g0, g1, p0, p1;
+    while (i1 - i0 > 1) {
+        im = (i0 + i1) / 2;
+        if (s_tr[im] <= r) i0 = im; else i1 = im;
+    }
+    w = s_tr[i1] - s_tr[i0];
+    t = (r - s_tr[i0]) / w;
+    t2 = t * t;
+    t3 = t2 * t;
+    g0 = s_trho[i0];
+    g1 = s_trho[i1];
+    p0 = s_tdrho[i0];
+    p1 = s_tdrho[i1];
+    *rho = (2 * t3 - 3 * t2 + 1) * g0 + (t3 - 2 * t2 + t) * w * p0 + (-2 * t3 + 3 * t2) * g1 + (t3 - t2) * w * p1;
+    if (drho)
+        *drho = ((6 * t2 - 6 * t) * g0 + (-6 * t2 + 6 * t) * g1) / w + (3 * t2 - 4 * t + 1) * p0 + (3 * t2 - 2 * t) * p1;
+}
+
+/* Rule, E(A_MAX) and the rho table for k (kept for the last k). The radii are uniform in E (steps
+ * TABLE_PHASE) and in r (TABLE_STEP); eps is SAFETY times the largest error at the midpoints against the
+ * accurate map, plus rounding (enumerate._build_rho_table). Returns 0 on success. */
+static int prepare(casadi_real k) {
+    int panels = s_bucket_p[NBUCKET - 1], i, j, ne, nr, n;
+    casadi_real h, t_end, re, rr, x, rho, err, big;
+    if (s_ready && s_k == k) return 0;
+    s_ready = 0;
+    for (i = 0; i < NBUCKET; ++i) {
+        if (k <= s_bucket_k[i]) {
+            panels = s_bucket_p[i];
+            break;
+        }
+    }
+    h = PI / panels;
+    s_nodes = ORDER * panels;
+    for (i = 0; i < panels; ++i) {
+        for (j = 0; j < ORDER; ++j) {
+            x = (2.0 * i + 1.0) * h + h * s_gx[j];
+            s_chi[i * ORDER + j] = x;
+            s_cchi[i * ORDER + j] = cos(x);
+            s_schi[i * ORDER + j] = sin(x);
+            s_wchi[i * ORDER + j] = h * s_gw[j];
+        }
+    }
+    s_e_min = turn(A_MAX, k);
+    s_nt = 0;
+    t_end = s_e_min;
+    ne = (int)ceil(fabs(t_end) / TABLE_PHASE) + 2;
+    nr = (int)ceil(A_MAX / TABLE_STEP) + 1;
+    if (ne + nr > NTABLE) return 1;
+    /* merge the two increasing sequences of radii, dropping repeats */
+    for (i = 0, j = 0, n = 0; i < ne || j < nr;) {
+        re = i < ne ? (i == ne - 1 ? A_MAX : turn_inverse(t_end * i / (ne - 1), k)) : INFINITY;
+        rr = j < nr ? A_MAX * j / (nr - 1) : INFINITY;
+        if (isnan(re)) re = A_MAX;
+        if (re == rr) ++j;
+        x = re <= rr ? re : rr;
+        if (re <= rr) ++i; else ++j;
+        if (!isfinite(x)) continue;
+        x = x < 0.0 ? 0.0 : (x > A_MAX ? A_MAX : x);
+        if (n && x <= s_tr[n - 1] + 1e-12) continue;
+        s_tr[n++] = x;
+    }
+    for (i = 0; i < n; ++i) {
+        signed_length(s_tr[i], k, &s_trho[i], &s_tdrho[i]);
+        s_te[i] = turn(s_tr[i], k);
+        if (!(isfinite(s_trho[i]) && isfinite(s_tdrho[i]))) return 1;
+    }
+    s_nt = n;
+    err = 0.0;
+    big = 0.0;
+    for (i = 0; i + 1 < n; ++i) {
+        x = 0.5 * (s_tr[i] + s_tr[i + 1]);
+        signed_length(x, k, &rho, NULL);
+        rho_lookup(x, &re, NULL);
+        err = fmax(err, fabs(re - rho));
+    }
+    for (i = 0; i < n; ++i) big = fmax(big, fabs(s_trho[i]));
+    s_eps = SAFETY * err + 1e-13;
+    s_eps_g = 8.0 * big * s_eps + s_eps * s_eps;    /* the table's error carried into g (enumerate.roots) */
+    s_k = k;
+    s_ready = 1;
     return 0;
 }
 
-static int brackets(int i, int j, casadi_real eta_m, casadi_real h_m) {
-    int c[4], q;
-    casadi_real emin, emax, hmin, hmax;
-    c[0] = i * (NR + 1) + j;
-    c[1] = c[0] + 1;
-    c[2] = c[0] + NR + 1;
-    c[3] = c[2] + 1;
-    emin = emax = s_eta[c[0]];
-    hmin = hmax = s_h[c[0]];
-    for (q = 1; q < 4; ++q) {
-        emin = fmin(emin, s_eta[c[q]]);
-        emax = fmax(emax, s_eta[c[q]]);
-        hmin = fmin(hmin, s_h[c[q]]);
-        hmax = fmax(hmax, s_h[c[q]]);
-    }
-    return emin <= eta_m && eta_m <= emax && hmin <= h_m && h_m <= hmax;
+void @PREFIX@_forget_table(void) {
+    s_ready = 0;
+    s_memo_used = 0;
 }
 
-/* Initial guess in cell (i, j): the targets interpolated linearly from the corner values
- * (kept inside the cell), or the cell centre where that is singular. */
-static void start(int i, int j, casadi_real eta_m, casadi_real h_m, casadi_real x[2]) {
-    const int c0 = i * (NR + 1) + j, c1 = c0 + NR + 1;   /* (i, j) and (i + 1, j) */
-    casadi_real ec = 0.25 * (s_eta[c0] + s_eta[c0 + 1] + s_eta[c1] + s_eta[c1 + 1]);
-    casadi_real hc = 0.25 * (s_h[c0] + s_h[c0 + 1] + s_h[c1] + s_h[c1 + 1]);
-    casadi_real ea = 0.5 * (s_eta[c1] + s_eta[c1 + 1] - s_eta[c0] - s_eta[c0 + 1]);
-    casadi_real eb = 0.5 * (s_eta[c0 + 1] + s_eta[c1 + 1] - s_eta[c0] - s_eta[c1]);
-    casadi_real ha = 0.5 * (s_h[c1] + s_h[c1 + 1] - s_h[c0] - s_h[c0 + 1]);
-    casadi_real hb = 0.5 * (s_h[c0 + 1] + s_h[c1 + 1] - s_h[c0] - s_h[c1]);
-    casadi_real det = ea * hb - eb * ha, di = 0.0, dj = 0.0;
-    if (fabs(det) > REAL_TINY && isfinite(det)) {
-        di = (hb * (eta_m - ec) - eb * (h_m - hc)) / det;
-        dj = (ea * (h_m - hc) - ha * (eta_m - ec)) / det;
-        di = di < -0.5 ? -0.5 : (di > 0.5 ? 0.5 : di);
-        dj = dj < -0.5 ? -0.5 : (dj > 0.5 ? 0.5 : dj);
-    }
-    x[0] = clamp(s_radii[i] + (0.5 + di) * (s_radii[i + 1] - s_radii[i]));
-    x[1] = clamp(s_radii[j] + (0.5 + dj) * (s_radii[j + 1] - s_radii[j]));
+/* ------------------------------------------------------------------ branches (enumerate.py) */
+
+typedef struct {
+    long m;              /* branch of n eta = psi_w + 2 pi m (psi_w the wrapped target heading) */
+    casadi_real eta;     /* turn per step eta_m */
+    casadi_real e;       /* |eta_m| */
+    casadi_real h;       /* shift per step h_m (33)-(34) */
+    casadi_real x_end;   /* range [0, x_end] of the smaller radius */
+    casadi_real y0;      /* smallest a + b on the branch */
+} branch_t;
+
+/* Larger radius y(x) = E^-1(E(x) - e) of the branch at the smaller radius x (enumerate._other). */
+static casadi_real other(casadi_real x, casadi_real e, casadi_real k) {
+    casadi_real y;
+    if (e == 0.0) return x;
+    y = turn_inverse(turn(x, k) - e, k);
+    return isnan(y) ? A_MAX : y;
 }
 
-/* gamma = arg(target) - arg(sum_{j<n} exp(-i j eta) shift), and the step map's prediction of the miss. */
-static casadi_real rotation(casadi_real u, casadi_real v, casadi_real psi, int steps, const casadi_real shift[2], casadi_real eta,
-                       casadi_real *predicted) {
-    casadi_real sr = 0.0, si = 0.0, tr, ti, gamma, c, s, fu, fv, dr;
+/* (g, g', a, b) at x on branch br (enumerate.branch_values): with (a, b) = (x, y) if eta >= 0 else (y, x),
+ *   g = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta / 2) - h^2,  dy/dx = E'(x) / E'(y);
+ * rho from the table (accurate = 0) or from the accurate map (accurate = 1). */
+static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int accurate, casadi_real *g,
+                          casadi_real *dg, casadi_real *a, casadi_real *b) {
+    casadi_real y = other(x, br->e, k), dy, da, db, ra, rb, pa, pb, c;
+    dy = br->e == 0.0 ? 1.0 : turn_dr(x, k) / turn_dr(y, k);
+    if (!isfinite(dy)) dy = isnan(dy) ? 0.0 : (dy > 0.0 ? REAL_MAX : -REAL_MAX);   /* numpy's nan_to_num */
+    if (br->eta >= 0.0) {
+        *a = x;
+        *b = y;
+        da = 1.0;
+        db = dy;
+    } else {
+        *a = y;
+        *b = x;
+        da = dy;
+        db = 1.0;
+    }
+    if (accurate) {
+        signed_length(*a, k, &ra, &pa);
+        signed_length(*b, k, &rb, &pb);
+    } else {
+        rho_lookup(*a, &ra, &pa);
+        rho_lookup(*b, &rb, &pb);
+    }
+    c = cos(0.5 * br->eta);
+    *g = ra * ra + rb * rb + 2.0 * c * ra * rb - br->h * br->h;
+    *dg = 2.0 * (ra + c * rb) * pa * da + 2.0 * (rb + c * ra) * pb * db;
+}
+
+static casadi_real gval(casadi_real x, const branch_t *br, casadi_real k, casadi_real *dg) {
+    casadi_real g, d, a, b;
+    branch_values(x, br, k, 0, &g, &d, &a, &b);
+    if (dg) *dg = d;
+    return g;
+}
+
+static int sgn(casadi_real x) { return (x > 0.0) - (x < 0.0); }
+
+/* Branch m (enumerate.branches): eta_m = (psi_w + 2 pi m) / n, h_m = h_des / |sin(n eta / 2) / sin(eta / 2)|
+ * (h_des / n where |sin(eta / 2)| < 1e-12; brackets.target_shift, core.plane.n_step_gain). Returns 0 if the
+ * branch cannot hold a root (|eta_m| > |E(A_MAX)| or h_m unreachable). */
+static int make_branch(long m, casadi_real psi_w, int steps, casadi_real h_des, casadi_real k, branch_t *br) {
+    casadi_real eta = (psi_w + TWO_PI * (casadi_real)m) / steps, num, den, gain;
+    num = sin(steps * eta / 2.0);
+    den = sin(eta / 2.0);
+    gain = fabs(den) < 1e-12 ? (casadi_real)steps : fabs(num / den);
+    if (gain < 1e-12 || !(fabs(eta) <= -s_e_min)) return 0;
+    br->m = m;
+    br->eta = eta;
+    br->e = fabs(eta);
+    br->h = h_des / gain;
+    br->y0 = turn_inverse(-br->e, k);
+    br->x_end = turn_inverse(s_e_min + br->e, k);
+    return isfinite(br->h) && isfinite(br->y0) && isfinite(br->x_end);
+}
+
+/* Local coordinates in (0, 1) of the critical points of the Hermite cubic of a cell, sorted, NaN if none
+ * (enumerate._critical). */
+static void critical(casadi_real g0, casadi_real p0, casadi_real g1, casadi_real p1, casadi_real w, casadi_real out[2]) {
+    casadi_real A = 3.0 * (2 * g0 + w * p0 - 2 * g1 + w * p1) / w, B = 2.0 * (-3 * g0 - 2 * w * p0 + 3 * g1 - w * p1) / w;
+    casadi_real C = p0, disc = B * B - 4 * A * C, sq = sqrt(disc > 0.0 ? disc : 0.0), r[2], t;
+    int j, quad = fabs(A) > REAL_TINY;
+    r[0] = quad ? (-B - sq) / (2 * A) : -C / B;
+    r[1] = quad ? (-B + sq) / (2 * A) : NAN;
+    for (j = 0; j < 2; ++j) out[j] = (disc >= 0 && isfinite(r[j]) && r[j] > 0 && r[j] < 1) ? r[j] : NAN;
+    if (isnan(out[0]) || (!isnan(out[1]) && out[1] < out[0])) {
+        t = out[0];
+        out[0] = out[1];
+        out[1] = t;
+    }
+}
+
+static casadi_real hermite(casadi_real g0, casadi_real p0, casadi_real g1, casadi_real p1, casadi_real w, casadi_real s) {
+    return (2 * s * s * s - 3 * s * s + 1) * g0 + (s * s * s - 2 * s * s + s) * w * p0 + (-2 * s * s * s + 3 * s * s) * g1
+           + (s * s * s - s * s) * w * p1;
+}
+
+/* A root in [lo, hi] of g (which = 0) or g' (1) with a sign change there: Newton on g (the secant on g')
+ * kept inside the shrinking bracket, bisection otherwise (enumerate._bracketed). */
+static casadi_real bracketed(casadi_real lo, casadi_real hi, casadi_real glo, const branch_t *br, casadi_real k, int which) {
+    int slo = sgn(glo), it;
+    casadi_real x = 0.5 * (lo + hi), prev_x = lo, prev_f = glo, f, dg, nxt;
+    for (it = 0; it < 100; ++it) {
+        f = gval(x, br, k, &dg);
+        if (which) f = dg;
+        if (sgn(f) == slo) lo = x; else hi = x;
+        nxt = which ? x - f * (x - prev_x) / (f - prev_f) : x - f / dg;
+        prev_x = x;
+        prev_f = f;
+        if (!isfinite(nxt) || nxt <= lo || nxt >= hi) nxt = 0.5 * (lo + hi);
+        if (!(f != 0.0 && fabs(nxt - x) > 2e-16 * (1.0 + fabs(x)) && hi - lo > 4e-16 * (1.0 + fabs(x)))) {
+            x = nxt;
+            break;
+        }
+        x = nxt;
+    }
+    return x;
+}
+
+/* Roots in one resolved cell [x0, x1] (enumerate._examine): sign changes of g between the ends and the
+ * critical points of the Hermite cubic H (simple roots), and where g keeps its sign around a point where
+ * g' changes sign, the critical point of g: two roots if g changes sign there, a double root if |g| is
+ * within the floor. Returns the number of roots written to xs (unsorted). */
+static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p0, casadi_real g1, casadi_real p1,
+                   const casadi_real crit[2], const branch_t *br, casadi_real k, casadi_real *xs) {
+    casadi_real w = x1 - x0, pts[4], vals[4], dv[4], lo, mid, hi, sl, sh, dl, dh, xc, gc, gl;
+    int n = 0, j, half;
+    pts[0] = x0;
+    pts[3] = x1;
+    vals[0] = g0;
+    vals[3] = g1;
+    dv[0] = p0;
+    dv[3] = p1;
+    for (j = 0; j < 2; ++j) {
+        pts[j + 1] = isnan(crit[j]) ? x1 : x0 + w * crit[j];
+        vals[j + 1] = gval(pts[j + 1], br, k, &dv[j + 1]);
+    }
+    for (j = 0; j < 3; ++j) {
+        if (pts[j + 1] > pts[j] && vals[j] * vals[j + 1] < 0) xs[n++] = bracketed(pts[j], pts[j + 1], vals[j], br, k, 0);
+        if (vals[j + 1] == 0.0 && pts[j + 1] > 0) xs[n++] = pts[j + 1];
+    }
+    for (j = 1; j <= 2; ++j) {
+        lo = pts[j - 1];
+        mid = pts[j];
+        hi = pts[j + 1];
+        if (!(vals[j] * vals[j - 1] > 0 && vals[j] * vals[j + 1] > 0 && hi > lo)) continue;
+        for (half = 0; half < 2; ++half) {
+            sl = half ? mid : lo;
+            sh = half ? hi : mid;
+            dl = dv[j - 1 + half];
+            dh = dv[j + half];
+            if (!(sh > sl && dl * dh < 0)) continue;
+            xc = bracketed(sl, sh, dl, br, k, 1);
+            gc = gval(xc, br, k, NULL);
+            if (gc * vals[j] < 0) {
+                gl = gval(sl, br, k, NULL);
+                xs[n++] = bracketed(sl, xc, gl, br, k, 0);
+                xs[n++] = bracketed(xc, sh, gc, br, k, 0);
+            } else if (fabs(gc) <= 1e-13 * (1.0 + br->h * br->h) + s_eps_g) {
+                xs[n++] = xc;
+            }
+        }
+    }
+    return n;
+}
+
+/* Newton on g of the accurate map from a root of the table (a step that would leave [0, x_end] or does
+ * not decrease |g| is not taken; at most 6): the root to rounding (enumerate._polish). */
+static casadi_real polish(casadi_real x, const branch_t *br, casadi_real k) {
+    casadi_real g, dg, g2, dg2, a, b, nxt;
+    int it;
+    branch_values(x, br, k, 1, &g, &dg, &a, &b);
+    for (it = 0; it < 6; ++it) {
+        nxt = x - g / dg;
+        nxt = nxt < 0.0 ? 0.0 : (nxt > br->x_end ? br->x_end : nxt);
+        if (!isfinite(nxt)) break;
+        branch_values(nxt, br, k, 1, &g2, &dg2, &a, &b);
+        if (!(fabs(g2) < fabs(g))) break;
+        x = nxt;
+        g = g2;
+        dg = dg2;
+    }
+    return x;
+}
+
+/* gamma = arg(target) - arg(sum_{j<n} exp(-i j eta) S) with S = d(a) + exp(-i E(a)) conj(d(b)), eta = E(a) - E(b)
+ * (planner._certified, leafmap.step_values); also eta, h = |S| and the miss predicted by the leaf map. */
+static casadi_real rotation(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real a, casadi_real b,
+                            casadi_real k, casadi_real *eta, casadi_real *h, casadi_real *predicted) {
+    casadi_real da[2], db[2], ea = turn(a, k), eb = turn(b, k), sr, si, cr = 0.0, ci = 0.0, tr, ti, gamma, c, s, fu, fv, dr;
     int i;
+    displacement(a, k, da, NULL);
+    displacement(b, k, db, NULL);
+    c = cos(ea);
+    s = sin(ea);
+    sr = da[0] + c * db[0] - s * db[1];            /* d(a) + exp(-i E(a)) conj(d(b)) */
+    si = da[1] - s * db[0] - c * db[1];
+    *eta = ea - eb;
+    *h = hypot(sr, si);
     for (i = 0; i < steps; ++i) {
-        sr += cos(i * eta);
-        si -= sin(i * eta);
+        cr += cos(i * *eta);
+        ci -= sin(i * *eta);
     }
-    tr = sr * shift[0] - si * shift[1];
-    ti = sr * shift[1] + si * shift[0];
+    tr = cr * sr - ci * si;
+    ti = cr * si + ci * sr;
     gamma = wrap(atan2(v, u) - atan2(ti, tr));
-    /* n steps of the step map, the displacement turned by gamma */
     c = cos(gamma);
     s = sin(gamma);
     fu = c * tr - s * ti;
     fv = s * tr + c * ti;
-    dr = wrap(steps * eta - psi);
+    dr = wrap(steps * *eta - psi);
     *predicted = sqrt((fu - u) * (fu - u) + (fv - v) * (fv - v) + dr * dr);
     return gamma;
 }
 
-int @PREFIX@_plan(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k, @PREFIX@_plan_t *plan) {
-    casadi_real h_des, eta_m, h_m, num, den, tol, x[2], shift[2], eta = 0.0, res_norm = INFINITY;
-    casadi_real cand_lower[MAX_CELLS];
-    int cand[MAX_CELLS], ncand = 0, sum, i, j, iters, cells = 0, converged = 0, status;
+/* ------------------------------------------------------------------ search (planner._solve_enumerated) */
+
+typedef struct {
+    casadi_real u, v, psi_w, k, best;   /* target (psi wrapped), inertia ratio, shortest certified a + b so far */
+    int steps, certify, rejected, incomplete;
+    long turns, roots;
+    casadi_real rej[5];                 /* a, b, gamma, residual, bound of the best rejected root */
+    @PREFIX@_plan_t *plan;              /* filled in by an accepted root only */
+} search_t;
+
+/* A root x of branch br (from the table): polish, and accept it as the best plan if a + b < best and
+ * (with the certificate) it certifies. Returns 1 if accepted, -1 if a + b >= best (the branch is done), 0 if
+ * rejected by the certificate. */
+static int candidate(search_t *S, const branch_t *br, casadi_real x) {
+    casadi_real g, dg, a, b, gamma, eta, h, predicted, residual = NAN, bound = NAN;
+    int status = @PREFIX_UPPER@_OK;
+    x = polish(x, br, S->k);
+    branch_values(x, br, S->k, 1, &g, &dg, &a, &b);
+    if (!(a + b < S->best)) return -1;
+    if (!(a > 0.0 && b > 0.0)) return 0;
+    S->roots++;
+    gamma = rotation(S->u, S->v, S->psi_w, S->steps, a, b, S->k, &eta, &h, &predicted);
+    if (S->certify)
+        status = @PREFIX@_certify(a, b, gamma, S->steps, S->k, S->u, S->v, S->psi_w, NULL, &residual, &bound);
+    if (status != @PREFIX_UPPER@_OK) {
+        if (!S->rejected || residual < S->rej[3]) {   /* the best rejected root, reported if no plan is found */
+            S->rej[0] = a;
+            S->rej[1] = b;
+            S->rej[2] = gamma;
+            S->rej[3] = residual;
+            S->rej[4] = bound;
+        }
+        S->rejected++;
+        return 0;
+    }
+    S->best = a + b;
+    S->plan->a = a;
+    S->plan->b = b;
+    S->plan->gamma = gamma;
+    S->plan->eta = eta;
+    S->plan->h = h;
+    S->plan->m = br->m - S->turns;
+    S->plan->predicted = predicted;
+    S->plan->residual = residual;
+    S->plan->bound = bound;
+    return 1;
+}
+
+typedef struct {
+    casadi_real x0, x1, g0, p0, g1, p1;
+} cell_t;
+
+/* The roots of branch br in increasing x until one is accepted or a + b reaches S->best (enumerate.roots
+ * with first_only, then the next roots of the branch if the first is rejected). The branch is sampled on a
+ * grid uniform in the phase E(x) (PHASE_STEP) and in x (X_STEP); each cell is split at its midpoint while
+ * the Hermite interpolant of (g, g') at its ends misses g there by more than HERMITE_REL of the cell's
+ * largest |g| and more than rounding (down to MIN_WIDTH); a resolved cell is examined unless
+ * min |H| > SAFETY |g(mid) - H(mid)| + floor (module docstring of enumerate.py: the completeness argument).
+ * Returns 1 if a plan was accepted on the branch. */
+static int search_branch(search_t *S, const branch_t *br) {
+    const casadi_real k = S->k, floor_g = 1e-13 * (1.0 + br->h * br->h) + s_eps_g;
+    casadi_real t1 = turn(br->x_end, k), xp, xl, prev, g, p, crit[2], hc, low, gm, pm, err, big, xm, xs[MAX_CELL_ROOTS];
+    casadi_real last_root = -1.0, hv, t;
+    static cell_t stack[STACK_CELLS];   /* static: the planner is not reentrant anyway, and the stack stays small */
+    cell_t c;
+    int nt, nx, ip = 1, ix = 1, top, nroot, i, j, crosses, status;
+    long cells = 0;
+    nt = (int)ceil(fabs(t1) / PHASE_STEP) + 1;
+    nx = (int)ceil(br->x_end / X_STEP) + 1;
+    if (nt < 2) nt = 2;
+    if (nx < 2) nx = 2;
+    if (!(br->x_end > 0.0)) return 0;
+    prev = 0.0;
+    g = gval(prev, br, k, &p);
+    while (prev < br->x_end) {
+        /* next grid point: the smaller of the next phase point and the next uniform point */
+        xp = ip < nt ? (ip == nt - 1 ? br->x_end : turn_inverse(t1 * ip / (nt - 1), k)) : INFINITY;
+        xl = ix < nx ? (ix == nx - 1 ? br->x_end : br->x_end * ix / (nx - 1)) : INFINITY;
+        if (isnan(xp)) xp = br->x_end;
+        if (xp <= xl) ++ip; else ++ix;
+        t = xp <= xl ? xp : xl;
+        if (!(t > prev)) continue;
+        if (t > br->x_end) t = br->x_end;
+        /* nothing on or after this cell can be shorter than the best plan: a + b = x + y(x) grows with x */
+        if (prev + other(prev, br->e, k) >= S->best) return 0;
+        stack[0].x0 = prev;
+        stack[0].x1 = t;
+        stack[0].g0 = g;
+        stack[0].p0 = p;
+        stack[0].g1 = g = gval(t, br, k, &p);
+        stack[0].p1 = p;
+        prev = t;
+        top = 1;
+        while (top) {
+            c = stack[--top];
+            if (++cells > MAX_CELLS_PER_BRANCH) {
+                S->incomplete = 1;
+                return 0;
+            }
+            xm = 0.5 * (c.x0 + c.x1);
+            gm = gval(xm, br, k, &pm);
+            hv = hermite(c.g0, c.p0, c.g1, c.p1, c.x1 - c.x0, 0.5);
+            err = fabs(gm - hv);
+            big = fmax(fmax(fabs(c.g0), fabs(c.g1)), fabs(gm));
+            if (err > HERMITE_REL * big && err > 1e-15 * (1.0 + br->h * br->h) && c.x1 - c.x0 > MIN_WIDTH
+                && top + 2 <= STACK_CELLS) {
+                /* split: the right half below the left one, so the cells come in increasing x */
+                stack[top].x0 = xm;
+                stack[top].x1 = c.x1;
+                stack[top].g0 = gm;
+                stack[top].p0 = pm;
+                stack[top].g1 = c.g1;
+                stack[top].p1 = c.p1;
+                ++top;
+                stack[top].x0 = c.x0;
+                stack[top].x1 = xm;
+                stack[top].g0 = c.g0;
+                stack[top].p0 = c.p0;
+                stack[top].g1 = gm;
+                stack[top].p1 = pm;
+                ++top;
+                continue;
+            }
+            if (err > HERMITE_REL * big && err > 1e-15 * (1.0 + br->h * br->h) && c.x1 - c.x0 > MIN_WIDTH)
+                S->incomplete = 1;   /* cannot happen: the stack holds the deepest split */
+            critical(c.g0, c.p0, c.g1, c.p1, c.x1 - c.x0, crit);
+            crosses = 0;
+            low = fmin(fabs(c.g0), fabs(c.g1));
+            for (j = 0; j < 2; ++j) {
+                if (isnan(crit[j])) continue;
+                hc = hermite(c.g0, c.p0, c.g1, c.p1, c.x1 - c.x0, crit[j]);
+                if (hc * c.g0 <= 0) crosses = 1;
+                low = fmin(low, fabs(hc));
+            }
+            if (!(sgn(c.g0) != sgn(c.g1) || sgn(c.g0) != sgn(gm) || crosses || low <= SAFETY * err + floor_g))
+                continue;
+            nroot = examine(c.x0, c.x1, c.g0, c.p0, c.g1, c.p1, crit, br, k, xs);
+            for (i = 1; i < nroot; ++i) {           /* sort (few) */
+                for (j = i; j > 0 && xs[j - 1] > xs[j]; --j) {
+                    hv = xs[j];
+                    xs[j] = xs[j - 1];
+                    xs[j - 1] = hv;
+                }
+            }
+            for (i = 0; i < nroot; ++i) {
+                if (!(xs[i] > 0.0) || fabs(xs[i] - last_root) <= 1e-13) continue;
+                last_root = xs[i];
+                status = candidate(S, br, xs[i]);
+                if (status) return status > 0;
+            }
+        }
+    }
+    return 0;
+}
+
+/* psi = psi_w + 2 pi turns with psi_w in [-pi, pi] (core.plane.wrap_exact, exact for |psi| <= PSI_MAX). */
+static casadi_real wrap_turns(casadi_real psi, long *turns) {
+    casadi_real m = floor(psi / TWO_PI + 0.5), w = ((psi - m * TWO_PI_1) - m * TWO_PI_2) - m * TWO_PI_3;
+    if (w > PI) {
+        w = ((psi - (m + 1) * TWO_PI_1) - (m + 1) * TWO_PI_2) - (m + 1) * TWO_PI_3;
+        m += 1;
+    } else if (w < -PI) {
+        w = ((psi - (m - 1) * TWO_PI_1) - (m - 1) * TWO_PI_2) - (m - 1) * TWO_PI_3;
+        m -= 1;
+    }
+    *turns = (long)m;
+    return w;
+}
+
+int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k,
+                       const @PREFIX@_options_t *options, @PREFIX@_plan_t *plan) {
+    search_t S;
+    branch_t br;
+    casadi_real h_des, lam, dm;
+    long lo, hi, mp, mn, m;
+    int only = options && options->use_branch;
     if (plan == NULL) return @PREFIX_UPPER@_BAD_INPUT;
     plan->a = plan->b = plan->gamma = plan->eta = plan->h = NAN;
     plan->residual = plan->bound = plan->predicted = INFINITY;
-    plan->iterations = plan->cells = 0;
-    if (!(isfinite(u) && isfinite(v) && isfinite(psi)) || !(k >= 0.0 && k <= K_MAX) || steps < 1
-        || steps > MAX_STEPS)
+    plan->m = 0;
+    plan->branches = 0;
+    plan->roots = 0;
+    if (!(isfinite(u) && isfinite(v) && isfinite(psi)) || !(fabs(psi) <= PSI_MAX) || !(k >= K_MIN && k <= K_MAX)
+        || steps < 1 || steps > MAX_STEPS)
         return @PREFIX_UPPER@_BAD_INPUT;
     h_des = hypot(u, v);
     if (!(h_des > 0.0)) return @PREFIX_UPPER@_BAD_INPUT;
-    /* branch m = 0 of (32)-(33); the limit (34) where sin(n eta / 2) = sin(eta / 2) = 0 */
-    eta_m = psi / steps;
-    num = sin(eta_m / 2.0);
-    den = sin(steps * eta_m / 2.0);
-    if (fabs(den) < 1e-12) {
-        if (fabs(num) >= 1e-12) return @PREFIX_UPPER@_NO_PLAN;
-        h_m = h_des / steps;
+    if (prepare(k)) return @PREFIX_UPPER@_NO_CONVERGENCE;
+    s_memo_used = 0;   /* the memo serves one plan (timings of repeated plans stay honest) */
+    S.u = u;
+    S.v = v;
+    S.k = k;
+    S.steps = steps;
+    S.best = INFINITY;
+    S.certify = !options || options->certify;
+    S.rejected = S.incomplete = 0;
+    S.roots = 0;
+    S.plan = plan;
+    S.psi_w = wrap_turns(psi, &S.turns);
+    lam = -s_e_min;
+    /* branches with |eta_m| <= lam, in increasing |psi_w + 2 pi m| (the order of their smallest a + b, y0;
+     * ties: smaller m first) */
+    dm = floor((steps * lam - S.psi_w) / TWO_PI);
+    hi = (long)dm;
+    lo = (long)ceil((-steps * lam - S.psi_w) / TWO_PI);
+    if (only) {
+        m = options->branch + S.turns;
+        if (m >= lo && m <= hi && make_branch(m, S.psi_w, steps, h_des, k, &br)) {
+            plan->branches = 1;
+            search_branch(&S, &br);
+        }
     } else {
-        h_m = h_des * fabs(num / den);
-    }
-    tol = TOL * (1.0 + fabs(eta_m) + h_m);
-    if (tabulate(k)) return @PREFIX_UPPER@_NO_CONVERGENCE;
-    /* the MAX_CELLS bracketing cells of smallest a + b (lower corner), by insertion */
-    for (i = 0; i < NR; ++i) {
-        for (j = 0; j < NR; ++j) {
-            int q;
-            casadi_real lower = s_radii[i] + s_radii[j];
-            if ((ncand == MAX_CELLS && lower >= cand_lower[MAX_CELLS - 1]) || !brackets(i, j, eta_m, h_m)) continue;
-            q = ncand < MAX_CELLS ? ncand++ : MAX_CELLS - 1;
-            for (; q > 0 && cand_lower[q - 1] > lower; --q) {
-                cand_lower[q] = cand_lower[q - 1];
-                cand[q] = cand[q - 1];
-            }
-            cand_lower[q] = lower;
-            cand[q] = i * NR + j;
+        /* two runs from the centre c = -psi_w / (2 pi) in [-1/2, 1/2]: mn = floor(c) down, mp = mn + 1 up */
+        mn = (long)floor(-S.psi_w / TWO_PI);
+        for (mp = mn + 1; mn >= lo || mp <= hi;) {
+            int use_neg = mp > hi || (mn >= lo && fabs(S.psi_w + TWO_PI * mn) <= fabs(S.psi_w + TWO_PI * mp));
+            m = use_neg ? mn-- : mp++;
+            if (m < lo || m > hi || !make_branch(m, S.psi_w, steps, h_des, k, &br)) continue;
+            if (!(br.y0 < S.best)) break;   /* y0 grows along the order: nothing left can be shorter */
+            plan->branches++;
+            search_branch(&S, &br);
         }
     }
-    /* the first converged root whose certificate holds, in the order of the cells */
-    for (sum = 0; sum < ncand; ++sum) {
-        casadi_real gamma, predicted, residual, bound;
-        ++cells;
-        start(cand[sum] / NR, cand[sum] % NR, eta_m, h_m, x);
-        if (!newton(x, k, eta_m, h_m, tol, &res_norm, &iters, shift, &eta)) {
-            if (!converged) {
-                plan->a = x[0];
-                plan->b = x[1];
-                plan->iterations = iters;
-                plan->predicted = res_norm;
-            }
-            continue;
-        }
-        converged = 1;
-        gamma = rotation(u, v, psi, steps, shift, eta, &predicted);
-        status = @PREFIX@_certify(x[0], x[1], gamma, steps, k, u, v, psi, NULL, &residual, &bound);
-        plan->a = x[0];
-        plan->b = x[1];
-        plan->gamma = gamma;
-        plan->eta = eta;
-        plan->h = hypot(shift[0], shift[1]);
-        plan->iterations = iters;
-        plan->predicted = predicted;
-        plan->residual = residual;
-        plan->bound = bound;
-        plan->cells = cells;
-        if (status == @PREFIX_UPPER@_OK) return @PREFIX_UPPER@_OK;
+    plan->roots = S.roots;
+    if (S.best < INFINITY) return @PREFIX_UPPER@_OK;
+    if (S.rejected) {
+        plan->a = S.rej[0];
+        plan->b = S.rej[1];
+        plan->gamma = S.rej[2];
+        plan->residual = S.rej[3];
+        plan->bound = S.rej[4];
     }
-    plan->cells = cells;
-    if (!cells) return @PREFIX_UPPER@_NO_PLAN;
-    return converged ? @PREFIX_UPPER@_NOT_CERTIFIED : @PREFIX_UPPER@_NO_CONVERGENCE;
+    if (S.incomplete) return @PREFIX_UPPER@_NO_CONVERGENCE;
+    return S.rejected ? @PREFIX_UPPER@_NOT_CERTIFIED : @PREFIX_UPPER@_NO_PLAN;
+}
+
+int @PREFIX@_plan(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k, @PREFIX@_plan_t *plan) {
+    return @PREFIX@_plan_with(u, v, psi, steps, k, NULL, plan);
+}
+
+/* ------------------------------------------------------------------ time law (rollplan.execution.timing) */
+
+/* Leaf `leaf` from phi = 0 to phi_end <= 2 pi by the generated RK8 steps of (u_a, v_a, psi, rotor angles)'
+ * (x in place), 2 s_counts steps per panel (the certificate's finer run). */
+static int leaf_to(int leaf, casadi_real x[5], casadi_real phi_end, const casadi_real ab[2], casadi_real k,
+                   casadi_real gamma, const casadi_real jj[3]) {
+    casadi_real b1;
+    int j, n;
+    for (j = 0; j < NPANEL && s_breaks[j] < phi_end; ++j) {
+        b1 = s_breaks[j + 1] < phi_end ? s_breaks[j + 1] : phi_end;
+        n = 2 * s_counts[leaf][j];
+        if (rk8_steps(leaf, x, s_breaks[j], (b1 - s_breaks[j]) / n, n, ab, k, gamma, jj)) return 1;
+    }
+    return 0;
+}
+
+int @PREFIX@_sample(const @PREFIX@_plan_t *plan, int steps, casadi_real k, casadi_real j_xx, casadi_real j_zz,
+                    casadi_real j_r, casadi_real duration, casadi_real t, casadi_real rates[2], casadi_real angles[2],
+                    casadi_real state[5]) {
+    casadi_real ab[2], jj[3], x[5] = {0.0, 0.0, 0.0, 0.0, 0.0}, piece_t, tau, f, df, phi, xdot[5], uv[2], g[2];
+    int pieces, j, q;
+    if (plan == NULL || rates == NULL) return @PREFIX_UPPER@_BAD_INPUT;
+    if (!(plan->a > 0.0 && plan->a <= A_MAX && plan->b > 0.0 && plan->b <= A_MAX) || !isfinite(plan->gamma)
+        || steps < 1 || steps > MAX_STEPS || !(k >= 0.0 && k <= K_MAX) || !(j_xx > 0.0 && isfinite(j_xx))
+        || !(j_zz > 0.0 && isfinite(j_zz)) || !(j_r > 0.0 && isfinite(j_r)) || !(duration > 0.0 && isfinite(duration))
+        || !(t >= 0.0 && t <= duration))
+        return @PREFIX_UPPER@_BAD_INPUT;
+    ab[0] = plan->a;
+    ab[1] = plan->b;
+    jj[0] = j_xx;
+    jj[1] = j_zz;
+    jj[2] = j_r;
+    /* min-jerk: each of the 2 n leaves in duration / (2 n), phi = 2 pi (10 tau^3 - 15 tau^4 + 6 tau^5) */
+    pieces = 2 * steps;
+    piece_t = duration / pieces;
+    j = (int)floor(t / piece_t);
+    if (j >= pieces) j = pieces - 1;
+    if (j < 0) j = 0;
+    tau = (t - j * piece_t) / piece_t;
+    tau = tau < 0.0 ? 0.0 : (tau > 1.0 ? 1.0 : tau);
+    f = tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
+    df = 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau);
+    phi = TWO_PI * f;
+    if (counts(ab, k, plan->gamma)) return @PREFIX_UPPER@_NOT_CERTIFIED;
+    for (q = 0; q < j; ++q)
+        if (leaf_to(q % 2, x, TWO_PI, ab, k, plan->gamma, jj)) return @PREFIX_UPPER@_NOT_CERTIFIED;
+    if (leaf_to(j % 2, x, phi, ab, k, plan->gamma, jj)) return @PREFIX_UPPER@_NOT_CERTIFIED;
+    s_arg[0] = &phi;
+    s_arg[1] = x;
+    s_arg[2] = ab;
+    s_arg[3] = &k;
+    s_arg[4] = &plan->gamma;
+    s_arg[5] = jj;
+    s_arg[6] = jj + 1;
+    s_arg[7] = jj + 2;
+    s_res[0] = xdot;
+    s_res[1] = uv;
+    s_res[2] = g;
+    if ((j % 2 ? @PREFIX@_piece1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_piece0(s_arg, s_res, s_iw, s_w, 0)))
+        return @PREFIX_UPPER@_NOT_CERTIFIED;
+    rates[0] = g[0] * TWO_PI * df / piece_t;
+    rates[1] = g[1] * TWO_PI * df / piece_t;
+    if (angles) {
+        angles[0] = x[3];
+        angles[1] = x[4];
+    }
+    if (state) {
+        state[0] = x[0];
+        state[1] = x[1];
+        state[2] = x[2];
+        state[3] = uv[0];
+        state[4] = uv[1];
+    }
+    return isfinite(rates[0]) && isfinite(rates[1]) ? @PREFIX_UPPER@_OK : @PREFIX_UPPER@_NOT_CERTIFIED;
 }

@@ -26,14 +26,15 @@
  *       (28)-(30) with @STEPS_PER_LEAF@ node intervals per leaf.
  *   @PREFIX@_step_jac(ab[2], k) -> shift[2], eta, direction, jac[4x2]
  *       the same and the Jacobian of (shift, eta, direction) by (a, b).
- *   @PREFIX@_leaf_table(k) -> leaf0[3x@TABLE_RADII@], leaf1[3x@TABLE_RADII@]
- *       coarse (u_a, v_a, psi) of each leaf alone at @TABLE_RADII@ fixed radii graded
- *       towards A_MAX, used by the planner to bracket a root.
  *   @PREFIX@_rhs0(phi, x[3], p[2], k, gamma) -> xdot[3], @PREFIX@_rhs1(...)
  *       the curve ODE (28)-(30) along the first (+y) and the second (-y) leaf of the figure
  *       eight with radii p = (a, b) rotated by gamma, x = (u_a, v_a, psi).
  *   @PREFIX@_rk8_0(x[3], t, h, p[2], k, gamma) -> x_next[3], @PREFIX@_rk8_1(...)
  *       one step of the eighth-order Runge-Kutta formula of Dormand and Prince of it.
+ *   @PREFIX@_piece0(phi, x[5], p[2], k, gamma, jxx, jzz, jr) -> xdot[5], uv[2], g[2], @PREFIX@_piece1(...)
+ *       along a leaf, per unit phi: d/dphi of (u_a, v_a, psi, rotor angles), the contact coordinates (u_o, v_o)
+ *       and the rotor rates (11) at psi = x[2]; @PREFIX@_rk8x_0(x[5], t, h, p[2], k, gamma, jxx, jzz, jr), _1:
+ *       one RK8 step of it (for the time law @PREFIX@_sample).
  */
 #ifndef @PREFIX_UPPER@_H
 #define @PREFIX_UPPER@_H
@@ -45,18 +46,26 @@ extern "C" {
 #endif
 
 /* Status codes (equal to the exit codes of plan_demo and, for 0, 2, 3, of the `rollplan` command). */
-#define @PREFIX_UPPER@_OK 0             /* a plan whose certificate holds: residual + bound <= CERT_TOL */
-#define @PREFIX_UPPER@_BAD_INPUT 2      /* non-finite input, steps outside [1, MAX_STEPS], k outside [0, K_MAX]
-                                   (the range this code was generated for), zero shift */
-#define @PREFIX_UPPER@_NO_PLAN 3        /* no grid cell brackets a root of branch m = 0 */
-#define @PREFIX_UPPER@_NO_CONVERGENCE 4 /* Newton did not converge from any bracketing cell */
-#define @PREFIX_UPPER@_NOT_CERTIFIED 5  /* Newton converged, but no converged plan passed the certificate */
+#define @PREFIX_UPPER@_OK 0             /* a plan whose certificate holds: residual + bound <= CERT_TOL
+                                   (or, with options.certify = 0, an uncertified root of the leaf map) */
+#define @PREFIX_UPPER@_BAD_INPUT 2      /* non-finite input, |psi| > PSI_MAX, steps outside [1, MAX_STEPS],
+                                   k outside [K_MIN, K_MAX] (the range this code was generated for), zero shift */
+#define @PREFIX_UPPER@_NO_PLAN 3        /* no branch of (32)-(33) has a root with 0 < a, b <= A_MAX */
+#define @PREFIX_UPPER@_NO_CONVERGENCE 4 /* the search could not be completed (a branch needed more than
+                                   its bounded number of cells, or the leaf table is not finite) */
+#define @PREFIX_UPPER@_NOT_CERTIFIED 5  /* roots were found, but none passed the certificate */
 
 /* Largest admissible leaf radius [R] (the equator of the body frame is singular). */
 #define @PREFIX_UPPER@_A_MAX @A_MAX@
-/* Largest inertia ratio k accepted: the generated step map is accurate to 1e-10 up to it (checked by
- * `rollplan codegen --k-max`). */
+/* Smallest inertia ratio k accepted: the turn E(r, k) of a leaf is strictly decreasing in r for k >= 1/2,
+ * which the complete enumeration relies on (rollplan.planners.geometric.enumerate; the Python planner
+ * falls back to bracketing below it, without the guarantee; this code refuses). */
+#define @PREFIX_UPPER@_K_MIN @K_MIN@
+/* Largest inertia ratio k accepted (`rollplan codegen --k-max`): the leaf map's Gauss rule is accurate up to
+ * rollplan's K_MAX, the step map @PREFIX@_step_jac to 1e-10 up to this k, and the rho table is sized for it. */
 #define @PREFIX_UPPER@_K_MAX @K_MAX@
+/* Largest |psi| [rad] accepted: psi is reduced modulo 2 pi exactly up to it. */
+#define @PREFIX_UPPER@_PSI_MAX @PSI_MAX@
 /* Largest number of figure-eight steps of a plan. */
 #define @PREFIX_UPPER@_MAX_STEPS @MAX_STEPS@
 /* Tolerance of the certificate: |final - target| + error bound <= CERT_TOL [R and rad]. */
@@ -67,42 +76,50 @@ typedef struct {
     casadi_real a;          /* first leaf radius [R], 0 < a <= A_MAX */
     casadi_real b;          /* second leaf radius [R], 0 < b <= A_MAX */
     casadi_real gamma;      /* rotation of the figure eight about OZ, eq. (31) [rad], in (-pi, pi] */
-    casadi_real eta;        /* holonomy of one step [rad] (= psi / n on branch m = 0) */
+    casadi_real eta;        /* holonomy of one step [rad]: n eta = psi + 2 pi m */
     casadi_real h;          /* shift of one step [R] */
+    long m;                 /* branch of (32): n eta = psi + 2 pi m, psi as given */
     casadi_real residual;   /* certificate: |final - target| (u_a, v_a in R, psi wrapped, in rad) of the whole
-                          n-step motion integrated from rest by fixed-step RK8 (@PREFIX@_certify) */
+                          n-step motion integrated from rest by fixed-step RK8 (@PREFIX@_certify); NaN without it */
     casadi_real bound;      /* certificate: step-doubling estimate of the error of that integration, with a
-                          margin (see @PREFIX@_certify) */
-    casadi_real predicted;  /* |final - target| predicted by the planner's own step map composed n times */
-    int iterations;    /* Newton iterations of the accepted solve */
-    int cells;         /* bracketing cells tried */
+                          margin (see @PREFIX@_certify); NaN without it */
+    casadi_real predicted;  /* |final - target| predicted by the closed-form leaf map composed n times */
+    int branches;      /* branches searched */
+    long roots;        /* roots tried (polished, and certified unless options.certify = 0) */
 } @PREFIX@_plan_t;
 
+/* Options of @PREFIX@_plan_with. */
+typedef struct {
+    int use_branch;    /* 1: search branch `branch` only (n eta = psi + 2 pi branch); 0: all branches, shortest */
+    long branch;
+    int certify;       /* 1: a plan is returned only if its certificate holds (the default); 0: the shortest
+                          root of the leaf map, uncertified (residual and bound are NaN) */
+} @PREFIX@_options_t;
+
 /*
- * Plan a motion from rest at the origin to (u_a, v_a, psi) = (u, v, psi) in `steps`
- * traces of the figure eight for inertia ratio k (eq. 14), on branch m = 0 of
- * (32)-(33):  eta(a, b) = psi / steps  and  h(a, b) = h_des |sin(eta/2) / sin(steps eta/2)|
- * (h_des / steps when eta = 0), h_des = |(u, v)|; then
- * gamma = atan2(v, u) - arg(sum_{j<steps} exp(-i j eta) shift(a, b)).
- *
- * A converged root is certified by @PREFIX@_certify; a plan that fails is never returned as
- * @PREFIX_UPPER@_OK (the search goes on with the next cell, and ends with NOT_CERTIFIED).
- * Brackets the root on the coarse leaf table (the @MAX_CELLS@ bracketing cells of smallest
- * a + b, in that order), refines by a damped Newton iteration on @PREFIX@_step_jac from a
- * start interpolated in the cell (at most @MAX_ITER@ iterations per cell). The table
- * depends on k only and is kept for the last k, so repeated plans for one robot skip
- * it. Deterministic; static memory only; not reentrant (one static work area).
- * Bounded time: at most @MAX_CELLS@ x @MAX_ITER@ x 9 evaluations of @PREFIX@_step_jac and
- * @MAX_CELLS@ certificates, each proportional to `steps` (a plan typically takes a few evaluations
- * and one certificate). Returns one of the status codes above; `plan` is filled in on
- * @PREFIX_UPPER@_OK (and holds the last converged or the last iterate otherwise).
+ * Plan a motion from rest at the origin to (u_a, v_a, psi) = (u, v, psi) in `steps` traces of the figure
+ * eight for inertia ratio k (eq. 14): the shortest certified plan over all branches m of (32)-(33),
+ *   n eta = psi + 2 pi m,  h(a, b) = h_des |sin(eta/2) / sin(n eta/2)|  (h_des / n where sin(eta/2) = 0),
+ * h_des = |(u, v)|, then gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift(a, b)); the same algorithm
+ * and the same choice as rollplan.planners.geometric (complete enumeration of the roots on each branch as
+ * one scalar equation in the smaller leaf radius, the closed-form leaf map, a bounded search over branches
+ * in the order of the smallest a + b they can hold). Every root is certified by @PREFIX@_certify before it
+ * is taken; a plan that fails is never returned as @PREFIX_UPPER@_OK.
+ * Time: the first plan for a new k builds the leaf map's table for k (kept for the last k); then
+ * proportional to the branches searched. Deterministic; static memory only; not reentrant.
+ * Returns one of the status codes above; `plan` is filled in on @PREFIX_UPPER@_OK (on NOT_CERTIFIED it holds
+ * the root with the smallest certified residual).
  */
 int @PREFIX@_plan(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k, @PREFIX@_plan_t *plan);
+
+/* The same with options (NULL: the defaults of @PREFIX@_plan): one branch, or no certificate. */
+int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k,
+                       const @PREFIX@_options_t *options, @PREFIX@_plan_t *plan);
 
 /*
  * Certificate of a plan: integrate the n-step motion (figure eight (a, b) rotated by gamma, traced
  * `steps` times from rest at the origin) with the generated RK8 steps, the right side (28)-(30) as
- * it is (independent of the planner's step map and its quadrature). Each panel of a leaf of width w
+ * it is (independent of the planner's leaf map and its quadrature). Each panel of a leaf of width w
  * gets N = ceil(w (@CERT_BASE@ + max|psi'|) / @CERT_DELTA@) equal steps (psi' sampled at 5 points; it does not
  * depend on the state); the motion is integrated with N and with 2N steps per panel, `bound` is
  * |x_2N - x_N| / @CERT_SAFETY@ (step doubling: the error of x_2N of an order-8 method is about
@@ -116,7 +133,22 @@ int @PREFIX@_plan(casadi_real u, casadi_real v, casadi_real psi, int steps, casa
 int @PREFIX@_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps, casadi_real k, casadi_real u, casadi_real v, casadi_real psi,
                      casadi_real final[3], casadi_real *residual, casadi_real *bound);
 
-/* Drop the leaf table kept for the last k (the next plan recomputes it). */
+/*
+ * Time law: rotor-rate set points of a plan run by the min-jerk law of rollplan.execution.timing ("min-jerk":
+ * each of the 2 n leaves in duration / (2 n), the leaf parameter phi = 2 pi (10 tau^3 - 15 tau^4 + 6 tau^5),
+ * tau the fraction of the leaf's time; rest at every pole), for a robot with the inertias j_xx, j_zz (about the
+ * contact point and the vertical, (14): k = j_xx / j_zz) and rotor inertia j_r [kg m^2, any consistent unit].
+ * At time t in [0, duration] [s]: rates = the rotor rates phi_1_dot, phi_2_dot of (11) [rad/s]; angles (may be
+ * NULL) = the rotor angles, zero at t = 0 [rad]; state (may be NULL) = (u_a, v_a [R], psi, u_o, v_o [rad]).
+ * The rates are (11) per unit phi' (@PREFIX@_piece0/1) times phi'; angles and state integrate the motion from
+ * rest up to t by the generated RK8 steps (@PREFIX@_rk8x_0/1) at the certificate's finer step count, so the
+ * cost grows with t (at most the motion's full length). Returns @PREFIX_UPPER@_OK, @PREFIX_UPPER@_BAD_INPUT.
+ */
+int @PREFIX@_sample(const @PREFIX@_plan_t *plan, int steps, casadi_real k, casadi_real j_xx, casadi_real j_zz,
+                    casadi_real j_r, casadi_real duration, casadi_real t, casadi_real rates[2], casadi_real angles[2],
+                    casadi_real state[5]);
+
+/* Drop the leaf map's table kept for the last k (the next plan recomputes it). */
 void @PREFIX@_forget_table(void);
 
 /*
