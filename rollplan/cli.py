@@ -18,7 +18,10 @@ import re
 import sys
 from contextlib import ExitStack
 
-from . import interrupts
+from . import (
+    interrupts,
+    threads,  # noqa: F401  (before anything that loads numpy: one BLAS thread per process)
+)
 from .core.curves import A_MAX
 from .errors import InputError, NoPlanError, SolverError, check_finite, check_whole
 from .inputs import parse_number, parse_whole, show_path

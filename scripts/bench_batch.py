@@ -31,6 +31,9 @@ is an estimate from measured CPU times, labelled as such, not a wall-clock measu
 The targets are drawn once from a fixed seed: (u_a, v_a) uniform in the disk of radius 1.2 R,
 psi uniform in [-1, 1] rad, steps uniform in {1, 2, 3}, k = 2.5; rows that have no plan count
 as they would in a user's batch. Both runs must write the same lines (solver times aside).
+Both runs use one BLAS thread per process (:mod:`rollplan.threads`, as the command sets it): numpy's
+multi-threaded OpenBLAS spins threads beside the small arrays of a plan and takes CPU from the other
+worker.
 """
 
 from __future__ import annotations
@@ -46,13 +49,15 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
+import rollplan.threads  # noqa: F401  (the rows phase runs in this process: one BLAS thread, as the command)
 
 #: The budget of issue 18: --jobs 2 at least this many times faster than --jobs 1 on 200 targets.
 BUDGET_SPEEDUP = 1.7
 
 
 def write_targets(path: Path, n: int, seed: int = 18) -> None:
+    import numpy as np  # after rollplan.threads (one BLAS thread)
+
     rng = np.random.default_rng(seed)
     r = 1.2 * np.sqrt(rng.uniform(0, 1, n))
     phi = rng.uniform(-np.pi, np.pi, n)

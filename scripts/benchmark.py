@@ -547,12 +547,11 @@ def section_c_planner(ctx):
             {"quantity": "plan_demo executable [bytes]", "value": res["plan_demo_bytes"]},
             {"quantity": "static work memory [doubles]", "value": res["c_work_doubles"]}]
     worst = max(res["c_us_per_plan"], res["c_us_per_plan_same_k"])
-    notes = [f"{res['targets']} targets (bench_codegen.TARGETS, k in 0..5, n in 1..3), {res['steps_per_leaf']} steps "
-             f"per leaf; C time = mean over the targets of the best of {ctx['c_reps']} plans (cc -O2); Python time = "
-             "mean of one pass over the same targets after a warm-up on the first (IPOPT + CVODES verification), "
-             "then of "
-             "a second pass. Measured by "
-             "scripts/bench_codegen.py:measure.",
+    notes = [f"{res['targets']} targets (bench_codegen.TARGETS, k in 0.5..5, n in 1..3; {res['steps_per_leaf']} "
+             "steps per leaf for the C step map rollplan_step_eval, the planner uses the leaf map); C time = mean "
+             f"over the targets of the best of {ctx['c_reps']} plans (cc -O2); Python time = mean of one pass over "
+             "the same targets after a warm-up on the first (enumeration, IPOPT polish, RK8 certificate), then of "
+             "a second pass. Measured by scripts/bench_codegen.py:measure.",
              f"Slowest Python plan of the second pass: target (u, v, psi, n, k) = {bench_codegen.TARGETS[slow]}, "
              f"{second[slow]:.0f} ms (the mean is dominated by it; the median is {py_median_us / 1e3:.1f} ms).",
              f"Budget (issue 6) C plan < {BUDGET_C_PLAN_US:g} us: {'MET' if worst < BUDGET_C_PLAN_US else 'MISSED'} "

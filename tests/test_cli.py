@@ -507,3 +507,21 @@ def test_composed_figure_colours_follow_the_convention():
     fig = plot_composed(p, traj)
     legend = {t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()}
     assert {LEAF_LABELS[0], LEAF_LABELS[1], "approach roll (to the pole)", "start", "target"} <= legend
+
+
+@pytest.mark.parametrize("given, expected", [(None, "1"), ("3", "3")])
+def test_command_uses_one_blas_thread_unless_told(given, expected):
+    """rollplan.cli sets OPENBLAS/OMP/MKL_NUM_THREADS to 1 before numpy loads, and keeps a value the user set."""
+    import subprocess
+
+    from rollplan.threads import THREAD_VARIABLES
+
+    env = {k: v for k, v in os.environ.items() if k not in THREAD_VARIABLES}
+    if given is not None:
+        env.update({k: given for k in THREAD_VARIABLES})
+    code = ("import sys; import rollplan.cli, os; "
+            "print(' '.join(os.environ[k] for k in ('OPENBLAS_NUM_THREADS', 'OMP_NUM_THREADS', 'MKL_NUM_THREADS')))")
+    done = subprocess.run([sys.executable, "-c", code], check=False, capture_output=True, text=True, env=env,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.split() == [expected] * 3
