@@ -85,6 +85,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ...core.compiled import cache_dir
 from ...core.curves import A_MAX
 from ...progress import report
 from . import leafmap
@@ -178,14 +179,6 @@ def rho_lookup(r, t: RhoTable):
     (h00, h10, h01, h11), (d00, d10, d01, d11) = _hermite_parts(s)
     g0, g1, p0, p1 = t.rho[i], t.rho[i + 1], t.drho[i], t.drho[i + 1]
     return h00 * g0 + h10 * w * p0 + h01 * g1 + h11 * w * p1, (d00 * g0 + d01 * g1) / w + d10 * p0 + d11 * p1
-
-
-def cache_dir() -> Path:
-    """Directory of the per-k tables: ``$ROLLPLAN_CACHE_DIR``, else ``$XDG_CACHE_HOME/rollplan``, else
-    ``~/.cache/rollplan``."""
-    if os.environ.get("ROLLPLAN_CACHE_DIR"):
-        return Path(os.environ["ROLLPLAN_CACHE_DIR"])
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rollplan"
 
 
 def _table_file(k: float) -> Path:
