@@ -58,11 +58,11 @@ from ...core import model
 from ...core.plane import wrap_exact
 from ...errors import InputError, SolverError, check_choice, check_range, check_whole
 from ...problem import Problem, State
-from ...result import Certificate, CertifiedMotion, Measures, SolverStats, Trajectory
+from ...result import Certificate, Measures, SolverStats, Trajectory
 from ...robot import Robot
 from ..geometric.composed import as_composed, default_composed_planner
 from .costs import COSTS, N_PAR, Cost
-from .transcription import SCHEMES, Guess, Transcription, check_contact_bound, ipopt_options
+from .transcription import SCHEMES, CollocationRun, Guess, Transcription, check_contact_bound, ipopt_options
 
 __all__ = ["SCHEMES", "COSTS", "GUESSES", "CONTACT_BOUND", "SMOOTHING", "TOLERANCE", "Guess", "Certifier",
            "CollocationSolution", "CollocationResult", "CollocationPlanner", "collocate"]
@@ -121,24 +121,13 @@ class CollocationSolution:
 
 
 @dataclass(frozen=True)
-class CollocationResult(CertifiedMotion):
+class CollocationResult(CollocationRun):
     """A certified direct-collocation solution (satisfies :class:`rollplan.result.PlanResult`).
 
     Attributes
     ----------
-    problem : Problem
-    cost : str
-        Name in :data:`COSTS`.
-    transcription : Transcription
-        N, d, scheme.
-    horizon : float
-        T [s].
-    turns : int
-        m: psi is steered to ``goal.psi + 2 pi m``.
-    guess : str
-        Name of the initial guess.
-    contact_bound : float
-        Largest polar angle of the contact point from the south pole [rad].
+    problem, cost, transcription, horizon, turns, guess, contact_bound
+        As in :class:`.transcription.CollocationRun` (``cost`` a name in :data:`COSTS`).
     solution : CollocationSolution
     measures : Measures
     certificate : Certificate
@@ -153,15 +142,6 @@ class CollocationResult(CertifiedMotion):
         Angular velocity at the samples of ``trajectory`` [rad/s], plane frame.
     """
 
-    method = "collocation"
-
-    problem: Problem
-    cost: str
-    transcription: Transcription
-    horizon: float
-    turns: int
-    guess: str
-    contact_bound: float
     solution: CollocationSolution
     measures: Measures
     certificate: Certificate

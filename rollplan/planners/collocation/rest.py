@@ -45,10 +45,10 @@ from ...core import model
 from ...errors import InputError, SolverError, check_range, check_whole
 from ...measures import TimedMotion, measure
 from ...problem import Problem, State
-from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
+from ...result import Certificate, SolverStats, Trajectory
 from ...robot import Robot
 from .costs import N_PAR
-from .transcription import Guess, Transcription, check_contact_bound, ipopt_options
+from .transcription import CollocationRun, Guess, Transcription, check_contact_bound, ipopt_options
 
 __all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "MinimumTimePlanner", "certify", "rest_parameters",
            "motion_function", "naive_guess", "guess_from_samples"]
@@ -90,23 +90,13 @@ def motion_function() -> ca.Function:
 
 
 @dataclass(frozen=True)
-class RestResult(CertifiedMotion):
+class RestResult(CollocationRun):
     """A certified rest-to-rest collocation solution (satisfies :class:`rollplan.result.PlanResult`).
 
     Attributes
     ----------
-    problem : Problem
-    cost : str
-        Name in :data:`REST_COSTS`.
-    transcription : Transcription
-    horizon : float
-        T [s].
-    turns : int
-        m: psi is steered to ``goal.psi + 2 pi m``.
-    guess : str
-        Name of the initial guess.
-    contact_bound : float
-        Largest polar angle of the contact point from the south pole [rad].
+    problem, cost, transcription, horizon, turns, guess, contact_bound
+        As in :class:`.transcription.CollocationRun` (``cost`` a name in :data:`REST_COSTS`).
     controls : ndarray, shape (N, 2)
         Contact accelerations on each interval [rad/s^2].
     objective : float
@@ -117,15 +107,6 @@ class RestResult(CertifiedMotion):
     stats : SolverStats
     """
 
-    method = "collocation"
-
-    problem: Problem
-    cost: str
-    transcription: Transcription
-    horizon: float
-    turns: int
-    guess: str
-    contact_bound: float
     controls: np.ndarray
     objective: float
     motion: TimedMotion

@@ -29,8 +29,10 @@ import numpy as np
 from ... import interrupts
 from ...core import model
 from ...errors import InputError, check_choice, check_whole
+from ...problem import Problem
+from ...result import CertifiedMotion
 
-__all__ = ["SCHEMES", "Guess", "Transcription", "ipopt_options", "check_contact_bound"]
+__all__ = ["SCHEMES", "Guess", "Transcription", "CollocationRun", "ipopt_options", "check_contact_bound"]
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
 SCHEMES = ("legendre", "radau")
@@ -263,3 +265,35 @@ class Transcription:
             x = np.array(end(z, x)).ravel()
             out.append(x)
         return np.array(out)
+
+
+@dataclass(frozen=True)
+class CollocationRun(CertifiedMotion):
+    """What every collocation result holds first: the problem and how its OCP was set up.
+
+    Attributes
+    ----------
+    problem : Problem
+    cost : str
+        Name of the cost (the planner's registry of costs).
+    transcription : Transcription
+        N, d, scheme.
+    horizon : float
+        T [s].
+    turns : int
+        m: psi is steered to ``goal.psi + 2 pi m``.
+    guess : str
+        Name of the initial guess.
+    contact_bound : float
+        Largest polar angle of the contact point from the south pole [rad].
+    """
+
+    method = "collocation"
+
+    problem: Problem
+    cost: str
+    transcription: Transcription
+    horizon: float
+    turns: int
+    guess: str
+    contact_bound: float
