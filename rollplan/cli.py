@@ -899,6 +899,14 @@ def _cli_syntax(message: str, args) -> str:
 
 
 def main(argv=None) -> int:
+    """Run the command in ``argv`` (default ``sys.argv[1:]``) and return its exit status (module docstring)."""
+    status = _main(argv)
+    if status == EXIT_INTERRUPTED:
+        interrupts.forget_unhandled()
+    return status
+
+
+def _main(argv) -> int:
     try:
         interrupts.end_start_up()   # from here Ctrl-C is KeyboardInterrupt: exit 130 below
         parser = build_parser()

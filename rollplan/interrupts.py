@@ -24,6 +24,12 @@ makes a Ctrl-C while the modules load exit 130 with one line when the program
 is the ``rollplan`` command or ``python -m rollplan.cli``; :func:`end_start_up`
 (first thing in :func:`rollplan.cli.main`, inside its Ctrl-C handling) gives
 SIGINT back to Python's default handler.
+
+Exit status 130 after a handled Ctrl-C: CPython (3.11, ``Python/pythonrun.c``) marks a KeyboardInterrupt
+that leaves code run by ``exec`` of a string (``dataclasses`` builds every ``__init__`` that way while
+modules load) as *unhandled*, keeps the mark although the command catches the interrupt later, and at the exit of
+``python -m rollplan.cli`` kills the process with SIGINT instead of returning the command's status. :func:`forget_unhandled` clears
+the mark (every string ``exec`` resets it first); :func:`rollplan.cli.main` calls it when it returns 130.
 """
 
 from __future__ import annotations
@@ -33,7 +39,7 @@ import signal
 import sys
 import threading
 
-__all__ = ["call", "guard_start_up", "cli_follows", "end_start_up"]
+__all__ = ["call", "guard_start_up", "cli_follows", "end_start_up", "forget_unhandled"]
 
 class _State:
     pending = False   # SIGINT arrived during the outermost call
@@ -100,3 +106,9 @@ def end_start_up() -> None:
             signal.getsignal(signal.SIGINT) is _interrupted_at_start:
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
+
+
+def forget_unhandled() -> None:
+    """Clear CPython's record of a KeyboardInterrupt that left an ``exec`` of a string (module docstring), so
+    that a command which handled the interrupt exits with its own status."""
+    exec("")

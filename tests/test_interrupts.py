@@ -174,3 +174,50 @@ def test_ctrl_c_during_start_up_is_one_line_and_exit_130(launcher, tmp_path):
         _, err = proc.communicate(timeout=60)
         assert proc.returncode == 130, (delay, proc.returncode, err)
         assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted", (delay, err)
+
+
+
+_EXEC_INTERRUPT = """
+import sys
+{setup}
+try:
+    exec("raise KeyboardInterrupt")   # as dataclasses' generated __init__ is exec'd while modules load
+except KeyboardInterrupt:
+    pass
+{before_exit}
+sys.exit(130)
+"""
+
+
+def run_as_module(tmp_path, source):
+    """``python -m`` of ``source`` (the launcher where CPython checks its mark of an unhandled interrupt at exit;
+    ``-c`` and a script file exit through another path)."""
+    (tmp_path / "launched.py").write_text(source)
+    return subprocess.run([sys.executable, "-m", "launched"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=120)
+
+
+def test_cpython_kills_with_sigint_after_a_handled_interrupt_in_exec_and_forget_unhandled_clears_it(tmp_path):
+    """The CI failure this pins: Ctrl-C at 0.4 s landed in dataclasses' exec, the command caught it and returned
+    130, and CPython still killed `python -m rollplan.cli` with SIGINT (exit -2). The mechanism shown in a bare
+    interpreter, then interrupts.forget_unhandled undoing it."""
+    bare = run_as_module(tmp_path, _EXEC_INTERRUPT.format(setup="", before_exit=""))
+    assert bare.returncode in (-signal.SIGINT, 130)   # -2 on CPython versions with the stale mark (3.11)
+    cleared = run_as_module(tmp_path, _EXEC_INTERRUPT.format(setup="from rollplan import interrupts",
+                                                             before_exit="interrupts.forget_unhandled()"))
+    assert cleared.returncode == 130, cleared.stderr
+
+
+def test_cli_main_exits_130_when_the_interrupt_left_an_exec(tmp_path):
+    """rollplan.cli.main, run by `python -m`, with the planner interrupted inside an exec of a string (a
+    deterministic stand-in for the Ctrl-C during module loading): one line and exit 130, not a death by SIGINT."""
+    proc = run_as_module(tmp_path, (
+        "import sys\n"
+        "from rollplan import cli\n"
+        "from rollplan.planners import geometric\n"
+        "def interrupted(*args, **kwargs):\n"
+        "    exec('raise KeyboardInterrupt')\n"
+        "geometric.plan = interrupted\n"
+        "sys.exit(cli.main(['plan', '--to', '0', '1']))\n"))
+    assert proc.returncode == 130, (proc.returncode, proc.stderr)
+    assert proc.stderr.strip().splitlines()[-1] == "rollplan: interrupted"
