@@ -27,9 +27,10 @@ SIGINT back to Python's default handler.
 
 Exit status 130 after a handled Ctrl-C: CPython (3.11, ``Python/pythonrun.c``) marks a KeyboardInterrupt
 that leaves code run by ``exec`` of a string (``dataclasses`` builds every ``__init__`` that way while
-modules load) as *unhandled*, keeps the mark although the command catches the interrupt later, and at the exit of
-``python -m rollplan.cli`` kills the process with SIGINT instead of returning the command's status. :func:`forget_unhandled` clears
-the mark (every string ``exec`` resets it first); :func:`rollplan.cli.main` calls it when it returns 130.
+modules load) as *unhandled*, keeps the mark although the command catches the interrupt later, and at the
+exit of ``python -m rollplan.cli`` kills the process with SIGINT instead of returning the command's status.
+:func:`forget_unhandled` clears the mark (every string ``exec`` resets it first); :func:`rollplan.cli.main`
+calls it when it returns 130.
 """
 
 from __future__ import annotations

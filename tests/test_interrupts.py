@@ -194,7 +194,7 @@ def run_as_module(tmp_path, source):
     ``-c`` and a script file exit through another path)."""
     (tmp_path / "launched.py").write_text(source)
     return subprocess.run([sys.executable, "-m", "launched"], cwd=tmp_path, capture_output=True, text=True,
-                          timeout=120)
+                          timeout=120, check=False)
 
 
 def test_cpython_kills_with_sigint_after_a_handled_interrupt_in_exec_and_forget_unhandled_clears_it(tmp_path):
