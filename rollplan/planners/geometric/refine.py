@@ -22,8 +22,11 @@ that does not converge says only that its start holds no root; the statuses in
     IPOPT through CasADi's ``nlpsol`` on the feasibility problem ``min 0 s.t. F = 0, lbx <= ab <=
     ubx`` (the shooting problem of the design), quiet, with a limited-memory Hessian (the objective
     is zero; the constraints' curvature is not needed to converge from a start near the root); near a
-    root without problem scaling and with a small monotone barrier parameter.
-    Started at the enumerated root (:mod:`.enumerate`) it needs one or two iterations.
+    root (``near_root``) without problem scaling, with a small monotone barrier parameter, and without
+    the box: the square system ``F = 0`` has no inequality whose barrier would move a start that
+    already solves it, so IPOPT accepts a start that satisfies its tolerance at iteration 0 and
+    otherwise takes Newton-like steps; the end point counts only inside ``[lbx, ubx]``.
+    Started at the enumerated root (:mod:`.enumerate`) it needs zero to two iterations.
 ``"newton"``
     CasADi's ``rootfinder`` (plain Newton on F, exact Jacobian).
 
@@ -144,18 +147,24 @@ def _ipopt_solver(residual: ca.Function, near_root: bool = False):
             "ipopt.hessian_approximation": "limited-memory", "ipopt.print_timing_statistics": "no",
             "ipopt.print_user_options": "no", "ipopt.print_options_documentation": "no"}
     if near_root:   # a 2 x 2 problem in units of R and rad started next to its root: no scaling (which costs
-        # a Jacobian evaluation per solve) and a small, monotone barrier parameter
-        opts.update({"ipopt.nlp_scaling_method": "none", "ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-6})
+        # a Jacobian evaluation per solve), a small, monotone barrier parameter, no timing records
+        opts.update({"ipopt.nlp_scaling_method": "none", "ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-6,
+                     "record_time": False, "ipopt.timing_statistics": "no"})
     solver = ca.nlpsol("gp_ipopt", "ipopt", nlp, opts)
 
     def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
-        sol = interrupts.call(solver, x0=x0, p=par_value, lbx=lbx, ubx=ubx, lbg=0, ubg=0)
+        if near_root:   # the square system without the box (checked below): from a root, no iteration
+            sol = interrupts.call(solver, x0=x0, p=par_value, lbg=0, ubg=0)
+        else:
+            sol = interrupts.call(solver, x0=x0, p=par_value, lbx=lbx, ubx=ubx, lbg=0, ubg=0)
         st = solver.stats()
+        x = np.array(sol["x"]).ravel()
         # Where eta is steep near A_MAX IPOPT may stop short of its tolerance at a point that
         # solves (32)-(33) to rounding ("Search_Direction_Becomes_Too_Small"); such a point is a
         # candidate too: the certificate decides.
         ok = bool(st["success"]) or float(np.abs(np.array(sol["g"])).max()) < ROOT_TOL
-        return np.array(sol["x"]).ravel(), st["return_status"], int(st["iter_count"]), ok
+        ok = ok and bool(np.all((x >= lbx) & (x <= ubx)))
+        return x, st["return_status"], int(st["iter_count"]), ok
 
     return solve
 
