@@ -79,7 +79,7 @@ from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
 from .enumerate import branches, roots
 from .leafmap import panels_for, step_values
 from .leaves import LeafTables
-from .refine import SOLVERS, polisher, step_residual
+from .refine import SOLVERS, leaf_step, polisher, step_residual
 
 __all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
 
@@ -358,8 +358,8 @@ class GeometricPhasePlanner:
     def _certified(self, problem, x, m, target_r, status, iters, method=None):
         """Gamma from the geometry (module docstring), then the certificate: a tuple for :meth:`_plan`."""
         a, b = float(x[0]), float(x[1])
-        shift, eta = step_values(a, b, problem.k)
-        shift, eta = complex(shift[0]), float(eta[0])
+        u, v, eta = leaf_step(panels_for(problem.k)).call([[a, b], problem.k])[0].nonzeros()
+        shift = complex(u, v)
         total = shift * n_step_sum(eta, problem.steps)
         gamma = float(wrap(math.atan2(target_r[1], target_r[0]) - math.atan2(total.imag, total.real)))
         final_r, bound, _ = self.certifier.certify(a, b, problem.k, gamma, problem.steps, self.tol)

@@ -51,7 +51,7 @@ from . import leafmap
 from .leafmap import gauss_nodes
 
 __all__ = ["SOLVERS", "SOLVER_ERROR_STATUSES", "ROOT_TOL", "step_residual", "leaf_turn", "leaf_displacement",
-           "leaf_residual", "polisher"]
+           "leaf_residual", "leaf_step", "polisher"]
 
 #: Statuses that mean the solver broke (not that a start held no root).
 SOLVER_ERROR_STATUSES = frozenset({"Invalid_Number_Detected", "Error_In_Step_Computation", "Internal_Error",
@@ -107,20 +107,30 @@ def leaf_displacement(r, k, panels: int):
     return r * ca.sum2(re), r * ca.sum2(im)
 
 
-def _leaf_residual(panels: int) -> ca.Function:
-    ab = ca.MX.sym("ab", 2)
-    par = ca.MX.sym("par", 3)
-    k = par[0]
+def _step_expressions(ab, k, panels: int):
+    """``(Re S, Im S, eta)`` of one figure eight from zero (MX expressions; module docstring)."""
     a, b = ab[0], ab[1]
     ea, eb = leaf_turn(a, k), leaf_turn(b, k)
     ua, va = leaf_displacement(a, k, panels)
     ub, vb = leaf_displacement(b, k, panels)
     # S = d(a) + exp(-i E(a)) conj(d(b))
     cs, sn = ca.cos(ea), ca.sin(ea)
-    su = ua + cs * ub - sn * vb
-    sv = va - sn * ub - cs * vb
+    return ua + cs * ub - sn * vb, va - sn * ub - cs * vb, ea - eb
+
+
+def _leaf_residual(panels: int) -> ca.Function:
+    ab = ca.MX.sym("ab", 2)
+    par = ca.MX.sym("par", 3)
+    su, sv, eta = _step_expressions(ab, par[0], panels)
     return ca.Function(f"gp_residual_{panels}", [ab, par],
-                       [ca.vertcat(ea - eb - par[1], ca.sqrt(su * su + sv * sv) - par[2])], ["ab", "par"], ["F"])
+                       [ca.vertcat(eta - par[1], ca.sqrt(su * su + sv * sv) - par[2])], ["ab", "par"], ["F"])
+
+
+def _leaf_step(panels: int) -> ca.Function:
+    ab = ca.MX.sym("ab", 2)
+    k = ca.MX.sym("k")
+    su, sv, eta = _step_expressions(ab, k, panels)
+    return ca.Function(f"gp_step_{panels}", [ab, k], [ca.vertcat(su, sv, eta)], ["ab", "k"], ["step"])
 
 
 _SOURCES = (Path(__file__), Path(leafmap.__file__), Path(_compiled_mod.__file__))
@@ -136,6 +146,16 @@ def leaf_residual(panels: int, compile: bool = True) -> ca.Function:
                          jacobian=True)
 
 
+@lru_cache(maxsize=16)
+def leaf_step(panels: int, compile: bool = True) -> ca.Function:
+    """``(ab[2], k) -> (u_a, v_a, eta)`` of one figure eight (+y leaf a, then -y leaf b) from zero with gamma
+    = 0, on the leaf map with ``panels`` Gauss panels (the expressions of :func:`leaf_residual`), compiled
+    (unless ``compile`` is false): the planner's shift for gamma."""
+    if not compile:
+        return _leaf_step(panels)
+    return compiled_lazy(f"gp_step_{panels}", lambda: _leaf_step(panels), f"panels={panels}", _SOURCES)
+
+
 def _ipopt_solver(residual: ca.Function, near_root: bool = False):
     ab = ca.MX.sym("ab", 2)
     par = ca.MX.sym("par", 3)
@@ -149,7 +169,7 @@ def _ipopt_solver(residual: ca.Function, near_root: bool = False):
     if near_root:   # a 2 x 2 problem in units of R and rad started next to its root: no scaling (which costs
         # a Jacobian evaluation per solve), a small, monotone barrier parameter, no timing records
         opts.update({"ipopt.nlp_scaling_method": "none", "ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-6,
-                     "record_time": False, "ipopt.timing_statistics": "no"})
+                     "record_time": False, "ipopt.timing_statistics": "no", "ipopt.constr_mult_init_max": 0.0})
     solver = ca.nlpsol("gp_ipopt", "ipopt", nlp, opts)
 
     def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
