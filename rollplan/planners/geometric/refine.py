@@ -167,9 +167,12 @@ def _ipopt_solver(residual: ca.Function, near_root: bool = False):
             "ipopt.hessian_approximation": "limited-memory", "ipopt.print_timing_statistics": "no",
             "ipopt.print_user_options": "no", "ipopt.print_options_documentation": "no"}
     if near_root:   # a 2 x 2 problem in units of R and rad started next to its root: no scaling (which costs
-        # a Jacobian evaluation per solve), a small, monotone barrier parameter, no timing records
+        # a Jacobian evaluation per solve), a small, monotone barrier parameter, no timing records, no
+        # least-squares estimate of the constraint multipliers (zero for a zero objective) and none of
+        # the multipliers the solve does not return
         opts.update({"ipopt.nlp_scaling_method": "none", "ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-6,
-                     "record_time": False, "ipopt.timing_statistics": "no", "ipopt.constr_mult_init_max": 0.0})
+                     "record_time": False, "ipopt.timing_statistics": "no", "ipopt.constr_mult_init_max": 0.0,
+                     "calc_lam_p": False, "calc_lam_x": False, "bound_consistency": False})
     solver = ca.nlpsol("gp_ipopt", "ipopt", nlp, opts)
 
     def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
