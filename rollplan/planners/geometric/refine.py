@@ -85,17 +85,18 @@ def leaf_turn(r, k):
 
 
 def _node_kernel() -> ca.Function:
-    """``(chi, w, r, k) -> w phi'(chi) (cos, sin)(theta)``: one node of the displacement integral of
-    :func:`.leafmap.displacement` (its module docstring)."""
-    chi, w, r, k = (ca.SX.sym(n) for n in ("chi", "w", "r", "k"))
-    c, s, rho = _consts(r)
-    den = 1.0 - rho * ca.cos(chi)
-    q = den * den + (rho * ca.sin(chi)) ** 2
-    phi = chi + 2.0 * ca.atan2(rho * ca.sin(chi), den)
+    """``(chi, cos chi, sin chi, w, rho, A, B) -> w phi'(chi) (cos, sin)(theta)``: one node of the displacement
+    integral of :func:`.leafmap.displacement` (its module docstring), with ``theta = A phi(chi) + B chi``,
+    ``A = (1 - k) c`` and ``B = k c / s``; the leaf's constants and the nodes' cos and sin are computed once
+    outside the kernel, as in :func:`.leafmap.displacement`."""
+    chi, cchi, schi, w, rho, A, B = (ca.SX.sym(n) for n in ("chi", "cchi", "schi", "w", "rho", "A", "B"))
+    den = 1.0 - rho * cchi
+    q = den * den + (rho * schi) ** 2
+    phi = chi + 2.0 * ca.atan2(rho * schi, den)
     jac = (1.0 - rho * rho) / q
-    theta = (1.0 - k) * c * phi + (k * c / s) * chi
-    return ca.Function("gp_node", [chi, w, r, k], [w * jac * ca.cos(theta), w * jac * ca.sin(theta)])
-
+    theta = A * phi + B * chi
+    wj = w * jac
+    return ca.Function("gp_node", [chi, cchi, schi, w, rho, A, B], [wj * ca.cos(theta), wj * ca.sin(theta)])
 
 
 def leaf_displacement(r, k, panels: int):
@@ -103,7 +104,9 @@ def leaf_displacement(r, k, panels: int):
     :func:`.leafmap.gauss_nodes` with ``panels`` panels (the rule of :func:`.leafmap.displacement`)."""
     chi, w = gauss_nodes(panels)
     kernel = _node_kernel().map(chi.size, "serial")
-    re, im = kernel(ca.DM(chi).T, ca.DM(w).T, r, k)
+    c, s, rho = _consts(r)
+    row = lambda v: ca.DM(v).T  # noqa: E731
+    re, im = kernel(row(chi), row(np.cos(chi)), row(np.sin(chi)), row(w), rho, (1.0 - k) * c, k * c / s)
     return r * ca.sum2(re), r * ca.sum2(im)
 
 
