@@ -236,7 +236,8 @@ def section_plan(ctx):
              "tables and compiled functions loaded); scipy = median of "
              f"{ctx['scipy_repeats']} runs. 'of which' columns: the IPOPT polish and the RK8 certificate timed alone "
              "on the plan's root (median of 21); the rest of a warm plan is the enumeration of the roots "
-             "(planners/geometric/enumerate.py) and Python glue.",
+             "(planners/geometric/enumerate.py) and Python glue; each phase timed inside the plan: "
+             "results/plan_profile.md (scripts/profile_plan.py).",
              "Residual (CVODES) = |(u_a, v_a, psi, u_o, v_o) - (target, 0, 0)| after n steps by the same CVODES "
              f"verifier ({ctx['verifier']}) for both plans; 'certified residual + bound' is rollplan's own RK8 "
              "certificate (accepted when <= 1e-9).",

@@ -54,7 +54,8 @@ def test_wrap_is_elementwise():
 
 
 @pytest.mark.parametrize("x", [1e16, -1e16, 1e300, -1e300, 1e20, 2 * math.pi, -2 * math.pi, math.pi, -math.pi,
-                               3 * math.pi, 1000.5, 0.8 + 2 * math.pi * 50, 5e-324, 0.0, 1.7976931348623157e308])
+                               3 * math.pi, 1000.5, 0.8 + 2 * math.pi * 50, 5e-324, 0.0, 1.7976931348623157e308,
+                               0.4, -3.1415, math.nextafter(math.pi, 4.0)])
 def test_wrap_exact_is_the_exact_remainder(x):
     w, m = wrap_exact(x)
     assert (w, m) == exact_reduction(x)

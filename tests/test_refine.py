@@ -22,6 +22,16 @@ def test_casadi_residual_is_the_leaf_map(k):
         assert res[1] == pytest.approx(abs(shift[0]), abs=1e-12)
 
 
+@pytest.mark.parametrize("k", [2.5, 29.0])
+def test_casadi_step_is_the_leaf_map(k):
+    """The planner's compiled shift and turn of one step (for gamma) against the numpy leaf map."""
+    f = refine.leaf_step(leafmap.panels_for(k))
+    for a, b in [(leafmap.A_MAX, 0.05), (0.31, 0.17), (1e-4, 0.69)]:
+        shift, eta = leafmap.step_values(a, b, k)
+        u, v, e = np.array(f([a, b], k)).ravel()
+        assert abs(complex(u, v) - shift[0]) < 1e-12 and e == pytest.approx(eta[0], abs=1e-12 * (1 + abs(eta[0])))
+
+
 def test_residual_against_dop853():
     a, b, k = 0.62, 0.15, 20.0
     ref = references.trace(a, b, k)

@@ -93,7 +93,10 @@ def wrap_exact(angle: float) -> tuple[float, int]:
     every finite input (``wrap(1e16)`` in float arithmetic is off by 0.5 rad).
     ``m`` is an exact integer.
     """
-    x = Decimal(float(angle))  # exact: every double is a finite decimal
+    angle = float(angle)
+    if -math.pi <= angle <= math.pi:   # the double pi is below the real one: already reduced, m = 0
+        return angle, 0
+    x = Decimal(angle)  # exact: every double is a finite decimal
     with localcontext() as ctx:
         ctx.prec = 400
         m = int((x / _TWO_PI_DEC).to_integral_value())  # nearest integer

@@ -181,8 +181,9 @@ class RK8Certifier:
             scale = 0.0
             for _ in range(int(steps)):
                 yc, yf, mid = f.call([xc, xf, pa, pb])
-                xc, xf = np.array(yc).ravel(), np.array(yf).ravel()
-                scale = max(scale, abs(float(mid[2])), abs(xf[2]))
+                xc, xf = yc.nonzeros(), yf.nonzeros()    # dense (3,): lists of floats
+                scale = max(scale, abs(mid.nonzeros()[2]), abs(xf[2]))
+            xc, xf = np.array(xc), np.array(xf)
             est = float(np.linalg.norm(xf - xc) + rounding_allowance(scale, steps, 2 * n))
             if not math.isfinite(est):
                 est = math.inf
@@ -190,7 +191,7 @@ class RK8Certifier:
             if est <= REFINE_BELOW * tol or 4 * n > MAX_STEPS_PER_LEAF:
                 break
             n *= 2
-        u_o, v_o = (float(v) for v in _end_contact()(b, gamma))
+        u_o, v_o = (v.nonzeros()[0] for v in _end_contact().call([b, gamma]))
         return State(float(xf[0]), float(xf[1]), float(xf[2]), u_o, v_o), est, 2 * n
 
     def final(self, a: float, b: float, k: float, gamma: float, steps: int) -> State:

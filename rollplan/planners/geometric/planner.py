@@ -36,9 +36,10 @@ a lower bound of ``a + b`` on them, the shortest root of each branch is found
 first, and the search stops when no branch left can beat the best certified
 plan. Each root is then polished by the solver of the shooting problem (32)-(33)
 chosen by name, IPOPT through CasADi by default (:func:`.refine.polisher`:
-compiled residual and Jacobian of the leaf map, started at the enumerated root,
-one or two iterations). (The bracketing of the leaf tables, :mod:`.leaves`,
-:mod:`.brackets`, remains for the atlas and the benchmarks.) Every plan is
+compiled residual and Jacobian of the leaf map, started at the enumerated root:
+no iteration when that already solves (32)-(33) to the solver's tolerance, else one or
+two). (The bracketing of the leaf tables, :mod:`.leaves`, :mod:`.brackets`, remains for
+the atlas and the benchmarks.) Every plan is
 certified by an independent integration of all ``n`` steps (:mod:`.certify`:
 compiled RK8 with a step-doubling error bound by default, CVODES by name); a
 plan whose certified residual plus error bound exceeds the tolerance is never
@@ -79,7 +80,7 @@ from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
 from .enumerate import branches, roots
 from .leafmap import panels_for, step_values
 from .leaves import LeafTables
-from .refine import SOLVERS, polisher, step_residual
+from .refine import SOLVERS, leaf_step, polisher, step_residual
 
 __all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
 
@@ -203,8 +204,8 @@ class GeometricPhasePlanner:
     ----------
     method : str
         Solver of the shooting problem (32)-(33) from :data:`.refine.SOLVERS`: ``"ipopt"`` (the
-        default) or ``"newton"``. For ``k >= 1/2`` it polishes each enumerated root (started there, it
-        needs one or two iterations); for ``k < 1/2`` it refines the brackets.
+        default) or ``"newton"``. It polishes each enumerated root (started there, it needs at most one or
+        two iterations).
     nodes : int
         Chebyshev degree per panel of the spectral step map, in [4, 200].
     tol : float
@@ -358,8 +359,8 @@ class GeometricPhasePlanner:
     def _certified(self, problem, x, m, target_r, status, iters, method=None):
         """Gamma from the geometry (module docstring), then the certificate: a tuple for :meth:`_plan`."""
         a, b = float(x[0]), float(x[1])
-        shift, eta = step_values(a, b, problem.k)
-        shift, eta = complex(shift[0]), float(eta[0])
+        u, v, eta = leaf_step(panels_for(problem.k)).call([[a, b], problem.k])[0].nonzeros()
+        shift = complex(u, v)
         total = shift * n_step_sum(eta, problem.steps)
         gamma = float(wrap(math.atan2(target_r[1], target_r[0]) - math.atan2(total.imag, total.real)))
         final_r, bound, _ = self.certifier.certify(a, b, problem.k, gamma, problem.steps, self.tol)

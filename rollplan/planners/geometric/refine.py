@@ -22,8 +22,11 @@ that does not converge says only that its start holds no root; the statuses in
     IPOPT through CasADi's ``nlpsol`` on the feasibility problem ``min 0 s.t. F = 0, lbx <= ab <=
     ubx`` (the shooting problem of the design), quiet, with a limited-memory Hessian (the objective
     is zero; the constraints' curvature is not needed to converge from a start near the root); near a
-    root without problem scaling and with a small monotone barrier parameter.
-    Started at the enumerated root (:mod:`.enumerate`) it needs one or two iterations.
+    root (``near_root``) without problem scaling, with a small monotone barrier parameter, and without
+    the box: the square system ``F = 0`` has no inequality whose barrier would move a start that
+    already solves it, so IPOPT accepts a start that satisfies its tolerance at iteration 0 and
+    otherwise takes Newton-like steps; the end point counts only inside ``[lbx, ubx]``.
+    Started at the enumerated root (:mod:`.enumerate`) it needs zero to two iterations.
 ``"newton"``
     CasADi's ``rootfinder`` (plain Newton on F, exact Jacobian).
 
@@ -48,7 +51,7 @@ from . import leafmap
 from .leafmap import gauss_nodes
 
 __all__ = ["SOLVERS", "SOLVER_ERROR_STATUSES", "ROOT_TOL", "step_residual", "leaf_turn", "leaf_displacement",
-           "leaf_residual", "polisher"]
+           "leaf_residual", "leaf_step", "polisher"]
 
 #: Statuses that mean the solver broke (not that a start held no root).
 SOLVER_ERROR_STATUSES = frozenset({"Invalid_Number_Detected", "Error_In_Step_Computation", "Internal_Error",
@@ -82,17 +85,18 @@ def leaf_turn(r, k):
 
 
 def _node_kernel() -> ca.Function:
-    """``(chi, w, r, k) -> w phi'(chi) (cos, sin)(theta)``: one node of the displacement integral of
-    :func:`.leafmap.displacement` (its module docstring)."""
-    chi, w, r, k = (ca.SX.sym(n) for n in ("chi", "w", "r", "k"))
-    c, s, rho = _consts(r)
-    den = 1.0 - rho * ca.cos(chi)
-    q = den * den + (rho * ca.sin(chi)) ** 2
-    phi = chi + 2.0 * ca.atan2(rho * ca.sin(chi), den)
+    """``(chi, cos chi, sin chi, w, rho, A, B) -> w phi'(chi) (cos, sin)(theta)``: one node of the displacement
+    integral of :func:`.leafmap.displacement` (its module docstring), with ``theta = A phi(chi) + B chi``,
+    ``A = (1 - k) c`` and ``B = k c / s``; the leaf's constants and the nodes' cos and sin are computed once
+    outside the kernel, as in :func:`.leafmap.displacement`."""
+    chi, cchi, schi, w, rho, A, B = (ca.SX.sym(n) for n in ("chi", "cchi", "schi", "w", "rho", "A", "B"))
+    den = 1.0 - rho * cchi
+    q = den * den + (rho * schi) ** 2
+    phi = chi + 2.0 * ca.atan2(rho * schi, den)
     jac = (1.0 - rho * rho) / q
-    theta = (1.0 - k) * c * phi + (k * c / s) * chi
-    return ca.Function("gp_node", [chi, w, r, k], [w * jac * ca.cos(theta), w * jac * ca.sin(theta)])
-
+    theta = A * phi + B * chi
+    wj = w * jac
+    return ca.Function("gp_node", [chi, cchi, schi, w, rho, A, B], [wj * ca.cos(theta), wj * ca.sin(theta)])
 
 
 def leaf_displacement(r, k, panels: int):
@@ -100,24 +104,36 @@ def leaf_displacement(r, k, panels: int):
     :func:`.leafmap.gauss_nodes` with ``panels`` panels (the rule of :func:`.leafmap.displacement`)."""
     chi, w = gauss_nodes(panels)
     kernel = _node_kernel().map(chi.size, "serial")
-    re, im = kernel(ca.DM(chi).T, ca.DM(w).T, r, k)
+    c, s, rho = _consts(r)
+    row = lambda v: ca.DM(v).T  # noqa: E731
+    re, im = kernel(row(chi), row(np.cos(chi)), row(np.sin(chi)), row(w), rho, (1.0 - k) * c, k * c / s)
     return r * ca.sum2(re), r * ca.sum2(im)
 
 
-def _leaf_residual(panels: int) -> ca.Function:
-    ab = ca.MX.sym("ab", 2)
-    par = ca.MX.sym("par", 3)
-    k = par[0]
+def _step_expressions(ab, k, panels: int):
+    """``(Re S, Im S, eta)`` of one figure eight from zero (MX expressions; module docstring)."""
     a, b = ab[0], ab[1]
     ea, eb = leaf_turn(a, k), leaf_turn(b, k)
     ua, va = leaf_displacement(a, k, panels)
     ub, vb = leaf_displacement(b, k, panels)
     # S = d(a) + exp(-i E(a)) conj(d(b))
     cs, sn = ca.cos(ea), ca.sin(ea)
-    su = ua + cs * ub - sn * vb
-    sv = va - sn * ub - cs * vb
+    return ua + cs * ub - sn * vb, va - sn * ub - cs * vb, ea - eb
+
+
+def _leaf_residual(panels: int) -> ca.Function:
+    ab = ca.MX.sym("ab", 2)
+    par = ca.MX.sym("par", 3)
+    su, sv, eta = _step_expressions(ab, par[0], panels)
     return ca.Function(f"gp_residual_{panels}", [ab, par],
-                       [ca.vertcat(ea - eb - par[1], ca.sqrt(su * su + sv * sv) - par[2])], ["ab", "par"], ["F"])
+                       [ca.vertcat(eta - par[1], ca.sqrt(su * su + sv * sv) - par[2])], ["ab", "par"], ["F"])
+
+
+def _leaf_step(panels: int) -> ca.Function:
+    ab = ca.MX.sym("ab", 2)
+    k = ca.MX.sym("k")
+    su, sv, eta = _step_expressions(ab, k, panels)
+    return ca.Function(f"gp_step_{panels}", [ab, k], [ca.vertcat(su, sv, eta)], ["ab", "k"], ["step"])
 
 
 _SOURCES = (Path(__file__), Path(leafmap.__file__), Path(_compiled_mod.__file__))
@@ -133,6 +149,16 @@ def leaf_residual(panels: int, compile: bool = True) -> ca.Function:
                          jacobian=True)
 
 
+@lru_cache(maxsize=16)
+def leaf_step(panels: int, compile: bool = True) -> ca.Function:
+    """``(ab[2], k) -> (u_a, v_a, eta)`` of one figure eight (+y leaf a, then -y leaf b) from zero with gamma
+    = 0, on the leaf map with ``panels`` Gauss panels (the expressions of :func:`leaf_residual`), compiled
+    (unless ``compile`` is false): the planner's shift for gamma."""
+    if not compile:
+        return _leaf_step(panels)
+    return compiled_lazy(f"gp_step_{panels}", lambda: _leaf_step(panels), f"panels={panels}", _SOURCES)
+
+
 def _ipopt_solver(residual: ca.Function, near_root: bool = False):
     ab = ca.MX.sym("ab", 2)
     par = ca.MX.sym("par", 3)
@@ -144,18 +170,27 @@ def _ipopt_solver(residual: ca.Function, near_root: bool = False):
             "ipopt.hessian_approximation": "limited-memory", "ipopt.print_timing_statistics": "no",
             "ipopt.print_user_options": "no", "ipopt.print_options_documentation": "no"}
     if near_root:   # a 2 x 2 problem in units of R and rad started next to its root: no scaling (which costs
-        # a Jacobian evaluation per solve) and a small, monotone barrier parameter
-        opts.update({"ipopt.nlp_scaling_method": "none", "ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-6})
+        # a Jacobian evaluation per solve), a small, monotone barrier parameter, no timing records, no
+        # least-squares estimate of the constraint multipliers (zero for a zero objective) and none of
+        # the multipliers the solve does not return
+        opts.update({"ipopt.nlp_scaling_method": "none", "ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-6,
+                     "record_time": False, "ipopt.timing_statistics": "no", "ipopt.constr_mult_init_max": 0.0,
+                     "calc_lam_p": False, "calc_lam_x": False, "bound_consistency": False})
     solver = ca.nlpsol("gp_ipopt", "ipopt", nlp, opts)
 
     def solve(x0, par_value, lbx=1e-6, ubx=A_MAX):
-        sol = interrupts.call(solver, x0=x0, p=par_value, lbx=lbx, ubx=ubx, lbg=0, ubg=0)
+        if near_root:   # the square system without the box (checked below): from a root, no iteration
+            sol = interrupts.call(solver, x0=x0, p=par_value, lbg=0, ubg=0)
+        else:
+            sol = interrupts.call(solver, x0=x0, p=par_value, lbx=lbx, ubx=ubx, lbg=0, ubg=0)
         st = solver.stats()
+        x = np.array(sol["x"]).ravel()
         # Where eta is steep near A_MAX IPOPT may stop short of its tolerance at a point that
         # solves (32)-(33) to rounding ("Search_Direction_Becomes_Too_Small"); such a point is a
         # candidate too: the certificate decides.
         ok = bool(st["success"]) or float(np.abs(np.array(sol["g"])).max()) < ROOT_TOL
-        return np.array(sol["x"]).ravel(), st["return_status"], int(st["iter_count"]), ok
+        ok = ok and bool(np.all((x >= lbx) & (x <= ubx)))
+        return x, st["return_status"], int(st["iter_count"]), ok
 
     return solve
 
