@@ -62,7 +62,15 @@ import numpy as np
 
 from ..core import model
 from ..core.curves import A_MAX, figure_eight
-from ..core.integrate import check_heading_structure, heading_free_rates, piece_rhs, rk8_step, spectral_leaf
+from ..core.integrate import (
+    DOP853_C,
+    check_heading_structure,
+    heading_free_rates,
+    piece_rhs,
+    rk8_formula,
+    rk8_step,
+    spectral_leaf,
+)
 from ..errors import InputError, NoPlanError, OutputError, show_limit
 from ..execution.path import curve_piece_function
 from ..outputs import check_writable, make_folder, write_atomic
@@ -111,6 +119,8 @@ CERT_SAFETY = 16.0
 #: Tolerance of the certificate of a single-precision build (``generate(real="float")``): float rounding
 #: alone leaves errors of 1e-6 R, and more near A_MAX, so such plans are good to this, not to CERT_TOL.
 FLOAT_CERT_TOL = 1e-4
+#: Stages of the RK8 formula (:data:`rollplan.core.integrate.DOP853_C`).
+RK8_STAGES = len(DOP853_C)
 #: Default name prefix of the generated C symbols and files.
 DEFAULT_PREFIX = "rollplan"
 #: Most node intervals per leaf (the accuracy of the step map stops improving long before).
@@ -265,7 +275,7 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
     return step, step_jac
 
 
-def algebraic(f: ca.Function, check: int = 6) -> ca.Function:
+def algebraic(f: ca.Function, check: int = 6, angle: int | None = None) -> ca.Function:
     """``f`` (an SX Function) with the trigonometric functions of angles that are themselves inverse
     trigonometric results written algebraically, and common subexpressions shared.
 
@@ -276,16 +286,24 @@ def algebraic(f: ca.Function, check: int = 6) -> ca.Function:
     ``cos(asin(p)) = sqrt(1 - p^2)``, ``sin(asin(p)) = p``, ``tan(asin(p)) = p / sqrt(1 - p^2)`` on the expression
     graph (no equation of the model is retyped: the graph is replayed instruction by instruction), then
     :func:`casadi.cse`. The result is checked against ``f`` at ``check`` random points (relative 1e-12).
+
+    With ``angle`` (the index of a scalar input t), the result takes ``cos t`` and ``sin t`` (inputs ``cos_<name>``,
+    ``sin_<name>``) in place of t: ``cos t``, ``sin t`` and ``tan t`` of the graph become them; a ValueError if the
+    graph uses t otherwise.
     """
     ins = f.sx_in()
     flat_in = [ca.vertsplit(ca.vec(x)) if x.numel() else [] for x in ins]
+    names = list(f.name_in())
+    if angle is not None:
+        t, unit = ins[angle], [ca.SX.sym(f"{how}_{names[angle]}") for how in ("cos", "sin")]
+        ins, names = ins[:angle] + unit + ins[angle + 1:], names[:angle] + [u.name() for u in unit] + names[angle + 1:]
     w, src = [None] * f.sz_w(), [None] * f.sz_w()
     outs = [[ca.SX(0)] * f.nnz_out(i) for i in range(f.n_out())]
     trig = (ca.OP_COS, ca.OP_SIN, ca.OP_TAN)
     for n in range(f.n_instructions()):
         op, o, i = f.instruction_id(n), f.instruction_output(n), f.instruction_input(n)
         if op == ca.OP_INPUT:
-            w[o[0]], src[o[0]] = flat_in[i[0]][i[1]], None
+            w[o[0]], src[o[0]] = flat_in[i[0]][i[1]], ("angle", None, None) if i[0] == angle else None
         elif op == ca.OP_OUTPUT:
             outs[o[0]][o[1]] = w[i[0]]
         elif op == ca.OP_CONST:
@@ -294,7 +312,9 @@ def algebraic(f: ca.Function, check: int = 6) -> ca.Function:
             a, origin, val = w[i[0]], src[i[0]], None
             if op in trig and origin is not None:
                 p, q = origin[1], origin[2]
-                if origin[0] == ca.OP_ATAN2:
+                if origin[0] == "angle":
+                    val = (unit[0], unit[1], unit[1] / unit[0])[trig.index(op)]
+                elif origin[0] == ca.OP_ATAN2:
                     r = ca.sqrt(p * p + q * q)
                     val = (q / r, p / r, p / q)[trig.index(op)]
                 else:
@@ -306,11 +326,14 @@ def algebraic(f: ca.Function, check: int = 6) -> ca.Function:
             src[o[0]] = (op, a, w[i[1]]) if op == ca.OP_ATAN2 else ((op, a, None) if op == ca.OP_ASIN else None)
     res = [ca.SX(f.sparsity_out(j), ca.vertcat(*outs[j])) if outs[j] else ca.SX(f.sparsity_out(j))
            for j in range(f.n_out())]
-    g = ca.Function(f.name(), ins, ca.cse(res), f.name_in(), f.name_out())
+    if angle is not None and any(ca.depends_on(r, t) for r in res):
+        raise ValueError(f"{f.name()} depends on {f.name_in(angle)} otherwise than by its cos and sin")
+    g = ca.Function(f.name(), ins, ca.cse(res), names, f.name_out())
     rng = np.random.default_rng(1)
     for _ in range(check):
-        args = [rng.uniform(0.05, 0.65, x.numel()) for x in ins]
-        want, got = (np.concatenate([np.array(v).ravel() for v in h.call(args)]) for h in (f, g))
+        args = [rng.uniform(0.05, 0.65, x.numel()) for x in f.sx_in()]
+        g_args = args if angle is None else args[:angle] + [np.cos(args[angle]), np.sin(args[angle])] + args[angle + 1:]
+        want, got = (np.concatenate([np.array(v).ravel() for v in h.call(a)]) for h, a in ((f, args), (g, g_args)))
         if not np.allclose(got, want, rtol=1e-12, atol=1e-12 * (1.0 + np.abs(want).max())):
             raise ValueError(f"the algebraic form of {f.name()} differs from the original")
     return g
@@ -325,8 +348,11 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
     list of casadi.Function
         ``<prefix>_rhs<i>(phi, x[3], p[2], k, gamma) -> xdot[3]``: (28)-(30) along leaf ``i`` of the
         figure eight (31), (35) rotated by gamma (:func:`rollplan.core.integrate.piece_rhs`), for
-        i = 0, 1; then ``<prefix>_rk8_<i>(x[3], t, h, p[2], k, gamma) -> x_next[3]``: one step of the
-        eighth-order Runge-Kutta formula (:func:`rollplan.core.integrate.rk8_step`) of it.
+        i = 0, 1; then ``<prefix>_rk8_<i>(x[3], cos_t[12], sin_t[12], h, p[2], k, gamma) -> x_next[3]``: one step
+        from phi = t to t + h of the eighth-order Runge-Kutta formula of DOP853
+        (:func:`rollplan.core.integrate.rk8_formula`) of it, given the cosine and sine of phi at its 12 stages,
+        ``t + DOP853_C[s] h`` (the right side depends on phi through them only, checked by :func:`algebraic`): the
+        C certificate gets them by rotating a per-panel table, without a trigonometric call per stage.
 
     The C certificate integrates the whole n-step motion with these steps from the start state, the
     state-dependent right side as it is (no use of the heading structure the planner's leaf map
@@ -339,9 +365,12 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
              for i, f in enumerate(rhs)]
     steps = []
     for i, f in enumerate(rhs):
-        rk = rk8_step(f)
-        steps.append(algebraic(ca.Function(f"{prefix}_rk8_{i}", rk.sx_in(), rk.call(rk.sx_in()), rk.name_in(),
-                                           rk.name_out())))
+        g = algebraic(named[i], angle=0)          # (cos phi, sin phi, x, p, k, gamma) -> xdot
+        x, h, c, s = ca.SX.sym("x", 3), ca.SX.sym("h"), ca.SX.sym("cos_t", RK8_STAGES), ca.SX.sym("sin_t", RK8_STAGES)
+        params = [ca.SX.sym(f.name_in(j), f.sparsity_in(j)) for j in range(2, f.n_in())]
+        x_next = rk8_formula(x, h, lambda q, xs, g=g, c=c, s=s, params=params: g(c[q], s[q], xs, *params))
+        steps.append(algebraic(ca.Function(f"{prefix}_rk8_{i}", [x, c, s, h, *params], [x_next],
+                                           ["x", "cos_t", "sin_t", "h", *f.name_in()[2:]], ["x_next"])))
     return named + steps
 
 
@@ -623,6 +652,8 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@CERT_BASE@": repr(CERT_BASE),
         "@CERT_SAFETY@": repr(CERT_SAFETY),
         "@NPANEL@": str(len(breaks) - 1),
+        "@RK8_STAGES@": str(RK8_STAGES),
+        "@RK8_C@": ", ".join(repr(float(c)) for c in DOP853_C),
         "@BREAKS@": ", ".join(repr(float(b)) for b in breaks),
         "@QEMU_TOL@": "1e-12" if real == "double" else "1e-5",
         "@M4F_EXTRA@": "" if real == "double" else "-Wdouble-promotion",

@@ -129,13 +129,12 @@ static int counts(const casadi_real ab[2], casadi_real k, casadi_real gamma) {
     return 0;
 }
 
-/* `n` equal RK8 steps (generated) over [t0, t0 + n h] along leaf `leaf`, x in place: of the curve ODE
- * (x = (u_a, v_a, psi), jj = NULL) or of the time law's ODE (x = (u_a, v_a, psi, rotor angles), jj = the
- * inertias). */
-static int rk8_steps(int leaf, casadi_real *x, casadi_real t0, casadi_real h, int n, const casadi_real ab[2],
-                     casadi_real k, casadi_real gamma, const casadi_real *jj) {
+/* `n` equal RK8 steps (generated) of the time law's ODE over [t0, t0 + n h] along leaf `leaf`, x = (u_a, v_a, psi,
+ * rotor angles) in place, jj = the inertias. */
+static int rk8x_steps(int leaf, casadi_real x[5], casadi_real t0, casadi_real h, int n, const casadi_real ab[2],
+                      casadi_real k, casadi_real gamma, const casadi_real jj[3]) {
     casadi_real t, xn[5];
-    int q, i, status;
+    int q, i;
     for (q = 0; q < n; ++q) {
         t = t0 + q * h;
         s_arg[0] = x;
@@ -144,30 +143,76 @@ static int rk8_steps(int leaf, casadi_real *x, casadi_real t0, casadi_real h, in
         s_arg[3] = ab;
         s_arg[4] = &k;
         s_arg[5] = &gamma;
+        s_arg[6] = jj;
+        s_arg[7] = jj + 1;
+        s_arg[8] = jj + 2;
         s_res[0] = xn;
-        if (jj) {
-            s_arg[6] = jj;
-            s_arg[7] = jj + 1;
-            s_arg[8] = jj + 2;
-            status = leaf ? @PREFIX@_rk8x_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8x_0(s_arg, s_res, s_iw, s_w, 0);
-        } else {
-            status = leaf ? @PREFIX@_rk8_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8_0(s_arg, s_res, s_iw, s_w, 0);
-        }
-        if (status) return 1;
-        for (i = 0; i < (jj ? 5 : 3); ++i) x[i] = xn[i];
+        if (leaf ? @PREFIX@_rk8x_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8x_0(s_arg, s_res, s_iw, s_w, 0)) return 1;
+        for (i = 0; i < 5; ++i) x[i] = xn[i];
     }
     return 0;
 }
 
-/* The whole n-step motion from rest with mult x s_counts RK8 steps per panel; x in place. */
+/* Stages of the RK8 formula and their nodes c (rollplan.core.integrate.DOP853_C): stage j of a step from phi = t
+ * is at t + c[j] h. */
+#define NSTAGE @RK8_STAGES@
+static const casadi_real s_rk8_c[NSTAGE] = {@RK8_C@};
+
+/* cos(c[j] h) (rot[j]) and sin(c[j] h) (rot[NSTAGE + j]) of the stages of a step h. */
+static void stage_rotations(casadi_real h, casadi_real rot[2 * NSTAGE]) {
+    int j;
+    for (j = 0; j < NSTAGE; ++j) {
+        rot[j] = cos(s_rk8_c[j] * h);
+        rot[NSTAGE + j] = sin(s_rk8_c[j] * h);
+    }
+}
+
+/* `n` equal RK8 steps (generated) of the curve ODE over [t0, t0 + n h] along leaf `leaf`, x = (u_a, v_a, psi) in
+ * place. The right side depends on phi through cos phi and sin phi only; at the stages they are
+ * cos(t + c h) = cos t cos(c h) - sin t sin(c h) and sin(t + c h) = sin t cos(c h) + cos t sin(c h) with the
+ * stage table rot of h (stage_rotations): one cos and sin per step instead of one per stage. */
+static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, int n, const casadi_real rot[2 * NSTAGE],
+                     const casadi_real ab[2], casadi_real k, casadi_real gamma) {
+    casadi_real t, ct, st, cs[NSTAGE], sn[NSTAGE], xn[3];
+    int q, j;
+    for (q = 0; q < n; ++q) {
+        t = t0 + q * h;
+        ct = cos(t);
+        st = sin(t);
+        for (j = 0; j < NSTAGE; ++j) {
+            cs[j] = ct * rot[j] - st * rot[NSTAGE + j];
+            sn[j] = st * rot[j] + ct * rot[NSTAGE + j];
+        }
+        s_arg[0] = x;
+        s_arg[1] = cs;
+        s_arg[2] = sn;
+        s_arg[3] = &h;
+        s_arg[4] = ab;
+        s_arg[5] = &k;
+        s_arg[6] = &gamma;
+        s_res[0] = xn;
+        if (leaf ? @PREFIX@_rk8_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8_0(s_arg, s_res, s_iw, s_w, 0)) return 1;
+        x[0] = xn[0];
+        x[1] = xn[1];
+        x[2] = xn[2];
+    }
+    return 0;
+}
+
+/* The whole n-step motion from rest with mult x s_counts RK8 steps per panel; x in place. Every step of the
+ * motion is integrated (from the state the previous one left); only the stage tables of the panels, which
+ * depend on the panel's step h alone, are computed once, in the first step. */
 static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2], casadi_real k, casadi_real gamma) {
+    static casadi_real rot[2][NPANEL][2 * NSTAGE];   /* static: not reentrant anyway; keeps the stack small */
+    casadi_real h;
     int s, leaf, j, nj;
     for (s = 0; s < steps; ++s) {
         for (leaf = 0; leaf < 2; ++leaf) {
             for (j = 0; j < NPANEL; ++j) {
                 nj = mult * s_counts[leaf][j];
-                if (rk8_steps(leaf, x, s_breaks[j], (s_breaks[j + 1] - s_breaks[j]) / nj, nj, ab, k, gamma, NULL))
-                    return 1;
+                h = (s_breaks[j + 1] - s_breaks[j]) / nj;
+                if (s == 0) stage_rotations(h, rot[leaf][j]);
+                if (rk8_steps(leaf, x, s_breaks[j], h, nj, rot[leaf][j], ab, k, gamma)) return 1;
             }
         }
     }
@@ -951,7 +996,7 @@ static int leaf_to(int leaf, casadi_real x[5], casadi_real phi_end, const casadi
     for (j = 0; j < NPANEL && s_breaks[j] < phi_end; ++j) {
         b1 = s_breaks[j + 1] < phi_end ? s_breaks[j + 1] : phi_end;
         n = 2 * s_counts[leaf][j];
-        if (rk8_steps(leaf, x, s_breaks[j], (b1 - s_breaks[j]) / n, n, ab, k, gamma, jj)) return 1;
+        if (rk8x_steps(leaf, x, s_breaks[j], (b1 - s_breaks[j]) / n, n, ab, k, gamma, jj)) return 1;
     }
     return 0;
 }
