@@ -553,6 +553,8 @@ def _enumeration_constants(k_max: float) -> dict:
                                                                            if kk >= k_max)]
     t_end = abs(float(leafmap.turn(A_MAX, k_max)))
     ntable = math.ceil(t_end / enumerate_.TABLE_PHASE) + 2 + math.ceil(A_MAX / enumerate_.TABLE_STEP) + 1
+    if ntable >= 2 ** 16:
+        raise ValueError(f"the rho table at k_max = {k_max:g} needs {ntable} radii: its buckets hold 16-bit indices")
     return {
         "@ORDER@": str(leafmap.ORDER),
         "@GAUSS_X@": ", ".join(repr(float(v)) for v in x),

@@ -277,6 +277,10 @@ static casadi_real s_chi[ORDER * MAX_PANELS], s_cchi[ORDER * MAX_PANELS], s_schi
 static casadi_real s_e_min;                               /* E(A_MAX, k) < 0 */
 static int s_nt;                                          /* radii of the table */
 static casadi_real s_tr[NTABLE], s_te[NTABLE], s_trho[NTABLE], s_tdrho[NTABLE];
+static casadi_real s_tdu[NTABLE];                         /* du/dE at the radii, u = r^2 (inf where dE/du = 0) */
+/* Buckets of the table: radius bucket j (r >= A_MAX j / NTABLE) starts at the last radius s_tr[i] <= A_MAX j / NTABLE,
+ * s_rb[j] = i; turn bucket j (E <= e_min j / NTABLE) starts at the last radius with s_te[i] >= e_min j / NTABLE. */
+static unsigned short s_rb[NTABLE + 1], s_eb[NTABLE + 1];
 static casadi_real s_eps, s_eps_g;                        /* table error bound; its effect on g */
 
 /* (c, s, rho) of radius r: c = sqrt(1 - r^2), s = sqrt(1 - 2 r^2), rho = r^2 / (c^2 + s) (leafmap._consts). */
@@ -300,27 +304,47 @@ static casadi_real turn_dr(casadi_real r, casadi_real k) {
     return TWO_PI * r / c * (1.0 - k * (1.0 + 1.0 / (s * s * s)));
 }
 
+/* Table radii i0 < i1 = i0 + 1 around x (s_tr[i0] <= x < s_tr[i1], i1 = s_nt - 1 at the end) if turn = 0, or around
+ * the turn x (s_te[i0] >= x > s_te[i1]) if turn = 1: bisection started in x's bucket (the whole table if the bucket's
+ * bounds do not hold x, which rounding at a bucket's edge may cause). */
+static void bracket(casadi_real x, int turn, int *lo, int *hi) {
+    const casadi_real *tab = turn ? s_te : s_tr;
+    const unsigned short *bucket = turn ? s_eb : s_rb;
+    casadi_real pos = turn ? x / s_e_min * NTABLE : x / A_MAX * NTABLE;
+    int j = pos >= 0.0 ? (pos < NTABLE ? (int)pos : NTABLE - 1) : 0, i0 = bucket[j], i1 = bucket[j + 1] + 1, im;
+    if (i1 > s_nt - 1) i1 = s_nt - 1;
+    if (i0 >= i1) i0 = i1 - 1;
+    if (turn ? !(tab[i0] >= x) : !(tab[i0] <= x)) i0 = 0;
+    if (i1 < s_nt - 1 && (turn ? !(tab[i1] < x) : !(tab[i1] > x))) i1 = s_nt - 1;
+    while (i1 - i0 > 1) {
+        im = (i0 + i1) / 2;
+        if (turn ? tab[im] >= x : tab[im] <= x) i0 = im; else i1 = im;
+    }
+    *lo = i0;
+    *hi = i1;
+}
+
 /* Radius r in [0, A_MAX] with E(r, k) = e (k >= 1/2: E strictly decreasing), NaN for e outside
  * [E(A_MAX), 0] (leafmap.turn_inverse): safeguarded Newton in u = r^2 (E is smooth in u, with
- * dE/du = (pi / c) (1 - k (1 + s^-3))) from a start interpolated in the table of the last k,
- * bisecting whenever a step leaves the bracket. */
+ * dE/du = (pi / c) (1 - k (1 + s^-3))) from a start interpolated in the table of the last k (cubic Hermite in E
+ * with the tabulated du/dE, linear where that is not finite or leaves the cell), bisecting whenever a step leaves
+ * the bracket. */
 static casadi_real turn_inverse(casadi_real e, casadi_real k) {
     const casadi_real umax = A_MAX * A_MAX;
-    casadi_real lo = 0.0, hi = umax, u, f, df, c, s, nxt;
-    int it, i0, i1, im;
+    casadi_real lo = 0.0, hi = umax, u, f, df, c, s, nxt, w, t;
+    int it, i0, i1;
     if (!(e <= 0.0 && e >= s_e_min)) return NAN;
     if (e >= 0.0) return 0.0;
     if (e <= s_e_min) return A_MAX;
-    if (s_nt > 1) {           /* s_te decreases along the table: bisection for s_te[i0] >= e > s_te[i1] */
-        i0 = 0;
-        i1 = s_nt - 1;
-        while (i1 - i0 > 1) {
-            im = (i0 + i1) / 2;
-            if (s_te[im] >= e) i0 = im; else i1 = im;
-        }
+    if (s_nt > 1) {
+        bracket(e, 1, &i0, &i1);
         lo = s_tr[i0] * s_tr[i0];
         hi = s_tr[i1] * s_tr[i1];
-        u = lo + (hi - lo) * (e - s_te[i0]) / (s_te[i1] - s_te[i0]);
+        w = s_te[i1] - s_te[i0];
+        t = (e - s_te[i0]) / w;
+        u = (2 * t * t * t - 3 * t * t + 1) * lo + (t * t * t - 2 * t * t + t) * w * s_tdu[i0]
+            + (-2 * t * t * t + 3 * t * t) * hi + (t * t * t - t * t) * w * s_tdu[i1];
+        if (!(u >= lo && u <= hi)) u = lo + (hi - lo) * t;
         if (!(u >= lo && u <= hi)) u = 0.5 * (lo + hi);
     } else {
         u = umax * e / s_e_min;
@@ -439,12 +463,9 @@ static void signed_length(casadi_real r, casadi_real k, casadi_real *rho, casadi
 
 /* Cubic Hermite lookup of (rho, d rho / dr) at r in the table (enumerate.rho_lookup). */
 static void rho_lookup(casadi_real r, casadi_real *rho, casadi_real *drho) {
-    int i0 = 0, i1 = s_nt - 1, im;
+    int i0, i1;
     casadi_real w, t, t2, t3, g0, g1, p0, p1;
-    while (i1 - i0 > 1) {
-        im = (i0 + i1) / 2;
-        if (s_tr[im] <= r) i0 = im; else i1 = im;
-    }
+    bracket(r, 0, &i0, &i1);
     w = s_tr[i1] - s_tr[i0];
     t = (r - s_tr[i0]) / w;
     t2 = t * t;
@@ -505,7 +526,18 @@ static int prepare(casadi_real k) {
     for (i = 0; i < n; ++i) {
         signed_length(s_tr[i], k, &s_trho[i], &s_tdrho[i]);
         s_te[i] = turn(s_tr[i], k);
+        re = sqrt(1.0 - s_tr[i] * s_tr[i]);                 /* c and s of consts(); du/dE = 1 / (dE/du) */
+        rr = sqrt(1.0 - 2.0 * s_tr[i] * s_tr[i]);
+        s_tdu[i] = re / (PI * (1.0 - k * (1.0 + 1.0 / (rr * rr * rr))));
         if (!(isfinite(s_trho[i]) && isfinite(s_tdrho[i]))) return 1;
+    }
+    for (i = 0, j = 0; j <= NTABLE; ++j) {   /* buckets (both sequences increase along the table) */
+        while (i + 1 < n && s_tr[i + 1] <= A_MAX * j / NTABLE) ++i;
+        s_rb[j] = (unsigned short)i;
+    }
+    for (i = 0, j = 0; j <= NTABLE; ++j) {
+        while (i + 1 < n && s_te[i + 1] >= s_e_min * j / NTABLE) ++i;
+        s_eb[j] = (unsigned short)i;
     }
     s_nt = n;
     err = 0.0;
@@ -583,6 +615,15 @@ static casadi_real gval(casadi_real x, const branch_t *br, casadi_real k, casadi
     casadi_real g, d, a, b;
     branch_values(x, br, k, 0, &g, &d, &a, &b);
     if (dg) *dg = d;
+    return g;
+}
+
+/* gval and the larger radius y(x) (other()) that it computed. */
+static casadi_real gvaly(casadi_real x, const branch_t *br, casadi_real k, casadi_real *dg, casadi_real *y) {
+    casadi_real g, d, a, b;
+    branch_values(x, br, k, 0, &g, &d, &a, &b);
+    if (dg) *dg = d;
+    *y = br->eta >= 0.0 ? b : a;
     return g;
 }
 
@@ -807,7 +848,7 @@ typedef struct {
 static int search_branch(search_t *S, const branch_t *br) {
     const casadi_real k = S->k, floor_g = 1e-13 * (1.0 + br->h * br->h) + s_eps_g;
     casadi_real t1 = turn(br->x_end, k), xp, xl, prev, g, p, crit[2], hc, low, gm, pm, err, big, xm, xs[MAX_CELL_ROOTS];
-    casadi_real last_root = -1.0, hv, t;
+    casadi_real last_root = -1.0, hv, t, y_prev;
     static cell_t stack[STACK_CELLS];   /* static: the planner is not reentrant anyway, and the stack stays small */
     cell_t c;
     int nt, nx, ip = 1, ix = 1, top, nroot, i, j, crosses, status;
@@ -819,22 +860,31 @@ static int search_branch(search_t *S, const branch_t *br) {
     if (!(br->x_end > 0.0)) return 0;
     prev = 0.0;
     g = gval(prev, br, k, &p);
+    y_prev = other(prev, br->e, k);
+    xp = -1.0;                          /* the next phase point, computed when ip moves on */
     while (prev < br->x_end) {
         /* next grid point: the smaller of the next phase point and the next uniform point */
-        xp = ip < nt ? (ip == nt - 1 ? br->x_end : turn_inverse(t1 * ip / (nt - 1), k)) : INFINITY;
+        if (xp < 0.0) {
+            xp = ip < nt ? (ip == nt - 1 ? br->x_end : turn_inverse(t1 * ip / (nt - 1), k)) : INFINITY;
+            if (isnan(xp)) xp = br->x_end;
+        }
         xl = ix < nx ? (ix == nx - 1 ? br->x_end : br->x_end * ix / (nx - 1)) : INFINITY;
-        if (isnan(xp)) xp = br->x_end;
-        if (xp <= xl) ++ip; else ++ix;
         t = xp <= xl ? xp : xl;
+        if (xp <= xl) {
+            ++ip;
+            xp = -1.0;
+        } else {
+            ++ix;
+        }
         if (!(t > prev)) continue;
         if (t > br->x_end) t = br->x_end;
         /* nothing on or after this cell can be shorter than the best plan: a + b = x + y(x) grows with x */
-        if (prev + other(prev, br->e, k) >= S->best) return 0;
+        if (prev + y_prev >= S->best) return 0;
         stack[0].x0 = prev;
         stack[0].x1 = t;
         stack[0].g0 = g;
         stack[0].p0 = p;
-        stack[0].g1 = g = gval(t, br, k, &p);
+        stack[0].g1 = g = gvaly(t, br, k, &p, &y_prev);
         stack[0].p1 = p;
         prev = t;
         top = 1;
