@@ -275,7 +275,7 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
     return step, step_jac
 
 
-def algebraic(f: ca.Function, check: int = 6, angle: int | None = None) -> ca.Function:
+def algebraic(f: ca.Function, check: int = 6, angles: tuple = ()) -> ca.Function:
     """``f`` (an SX Function) with the trigonometric functions of angles that are themselves inverse
     trigonometric results written algebraically, and common subexpressions shared.
 
@@ -287,23 +287,22 @@ def algebraic(f: ca.Function, check: int = 6, angle: int | None = None) -> ca.Fu
     graph (no equation of the model is retyped: the graph is replayed instruction by instruction), then
     :func:`casadi.cse`. The result is checked against ``f`` at ``check`` random points (relative 1e-12).
 
-    With ``angle`` (the index of a scalar input t), the result takes ``cos t`` and ``sin t`` (inputs ``cos_<name>``,
-    ``sin_<name>``) in place of t: ``cos t``, ``sin t`` and ``tan t`` of the graph become them; a ValueError if the
-    graph uses t otherwise.
+    With ``angles`` (indices of scalar inputs), the result takes ``cos t`` and ``sin t`` (inputs ``cos_<name>``,
+    ``sin_<name>``) in place of each such input t: ``cos t``, ``sin t`` and ``tan t`` of the graph become them; a
+    ValueError if the graph uses t otherwise.
     """
     ins = f.sx_in()
     flat_in = [ca.vertsplit(ca.vec(x)) if x.numel() else [] for x in ins]
-    names = list(f.name_in())
-    if angle is not None:
-        t, unit = ins[angle], [ca.SX.sym(f"{how}_{names[angle]}") for how in ("cos", "sin")]
-        ins, names = ins[:angle] + unit + ins[angle + 1:], names[:angle] + [u.name() for u in unit] + names[angle + 1:]
+    unit = {j: [ca.SX.sym(f"{how}_{f.name_in(j)}") for how in ("cos", "sin")] for j in angles}
+    orig, ins = ins, [x for j, x in enumerate(ins) for x in unit.get(j, [x])]
+    names = [n for j, n in enumerate(f.name_in()) for n in ([u.name() for u in unit[j]] if j in unit else [n])]
     w, src = [None] * f.sz_w(), [None] * f.sz_w()
     outs = [[ca.SX(0)] * f.nnz_out(i) for i in range(f.n_out())]
     trig = (ca.OP_COS, ca.OP_SIN, ca.OP_TAN)
     for n in range(f.n_instructions()):
         op, o, i = f.instruction_id(n), f.instruction_output(n), f.instruction_input(n)
         if op == ca.OP_INPUT:
-            w[o[0]], src[o[0]] = flat_in[i[0]][i[1]], ("angle", None, None) if i[0] == angle else None
+            w[o[0]], src[o[0]] = flat_in[i[0]][i[1]], ("angle", i[0], None) if i[0] in unit else None
         elif op == ca.OP_OUTPUT:
             outs[o[0]][o[1]] = w[i[0]]
         elif op == ca.OP_CONST:
@@ -313,7 +312,8 @@ def algebraic(f: ca.Function, check: int = 6, angle: int | None = None) -> ca.Fu
             if op in trig and origin is not None:
                 p, q = origin[1], origin[2]
                 if origin[0] == "angle":
-                    val = (unit[0], unit[1], unit[1] / unit[0])[trig.index(op)]
+                    c, s = unit[p]
+                    val = (c, s, s / c)[trig.index(op)]
                 elif origin[0] == ca.OP_ATAN2:
                     r = ca.sqrt(p * p + q * q)
                     val = (q / r, p / r, p / q)[trig.index(op)]
@@ -326,13 +326,14 @@ def algebraic(f: ca.Function, check: int = 6, angle: int | None = None) -> ca.Fu
             src[o[0]] = (op, a, w[i[1]]) if op == ca.OP_ATAN2 else ((op, a, None) if op == ca.OP_ASIN else None)
     res = [ca.SX(f.sparsity_out(j), ca.vertcat(*outs[j])) if outs[j] else ca.SX(f.sparsity_out(j))
            for j in range(f.n_out())]
-    if angle is not None and any(ca.depends_on(r, t) for r in res):
-        raise ValueError(f"{f.name()} depends on {f.name_in(angle)} otherwise than by its cos and sin")
+    for j in angles:
+        if any(ca.depends_on(r, orig[j]) for r in res):
+            raise ValueError(f"{f.name()} depends on {f.name_in(j)} otherwise than by its cos and sin")
     g = ca.Function(f.name(), ins, ca.cse(res), names, f.name_out())
     rng = np.random.default_rng(1)
     for _ in range(check):
-        args = [rng.uniform(0.05, 0.65, x.numel()) for x in f.sx_in()]
-        g_args = args if angle is None else args[:angle] + [np.cos(args[angle]), np.sin(args[angle])] + args[angle + 1:]
+        args = [rng.uniform(0.05, 0.65, x.numel()) for x in orig]
+        g_args = [v for j, x in enumerate(args) for v in ([np.cos(x), np.sin(x)] if j in unit else [x])]
         want, got = (np.concatenate([np.array(v).ravel() for v in h.call(a)]) for h, a in ((f, args), (g, g_args)))
         if not np.allclose(got, want, rtol=1e-12, atol=1e-12 * (1.0 + np.abs(want).max())):
             raise ValueError(f"the algebraic form of {f.name()} differs from the original")
@@ -348,11 +349,12 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
     list of casadi.Function
         ``<prefix>_rhs<i>(phi, x[3], p[2], k, gamma) -> xdot[3]``: (28)-(30) along leaf ``i`` of the
         figure eight (31), (35) rotated by gamma (:func:`rollplan.core.integrate.piece_rhs`), for
-        i = 0, 1; then ``<prefix>_rk8_<i>(x[3], cos_t[12], sin_t[12], h, p[2], k, gamma) -> x_next[3]``: one step
-        from phi = t to t + h of the eighth-order Runge-Kutta formula of DOP853
+        i = 0, 1; then ``<prefix>_rk8_<i>(x[3], cos_t[12], sin_t[12], h, p[2], k, cos_gamma, sin_gamma) ->
+        x_next[3]``: one step from phi = t to t + h of the eighth-order Runge-Kutta formula of DOP853
         (:func:`rollplan.core.integrate.rk8_formula`) of it, given the cosine and sine of phi at its 12 stages,
-        ``t + DOP853_C[s] h`` (the right side depends on phi through them only, checked by :func:`algebraic`): the
-        C certificate gets them by rotating a per-panel table, without a trigonometric call per stage.
+        ``t + DOP853_C[s] h``, and of gamma (the right side depends on phi and gamma through them only, checked by
+        :func:`algebraic`): the C certificate gets them by rotating a per-panel table, without a trigonometric call
+        per stage.
 
     The C certificate integrates the whole n-step motion with these steps from the start state, the
     state-dependent right side as it is (no use of the heading structure the planner's leaf map
@@ -364,13 +366,13 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
     named = [algebraic(ca.Function(f"{prefix}_rhs{i}", f.sx_in(), f.call(f.sx_in()), f.name_in(), f.name_out()))
              for i, f in enumerate(rhs)]
     steps = []
-    for i, f in enumerate(rhs):
-        g = algebraic(named[i], angle=0)          # (cos phi, sin phi, x, p, k, gamma) -> xdot
+    for i, g0 in enumerate(named):
+        g = algebraic(g0, angles=(0, 4))    # (cos phi, sin phi, x, p, k, cos gamma, sin gamma) -> xdot
         x, h, c, s = ca.SX.sym("x", 3), ca.SX.sym("h"), ca.SX.sym("cos_t", RK8_STAGES), ca.SX.sym("sin_t", RK8_STAGES)
-        params = [ca.SX.sym(f.name_in(j), f.sparsity_in(j)) for j in range(2, f.n_in())]
+        params = [ca.SX.sym(g.name_in(j), g.sparsity_in(j)) for j in range(3, g.n_in())]
         x_next = rk8_formula(x, h, lambda q, xs, g=g, c=c, s=s, params=params: g(c[q], s[q], xs, *params))
         steps.append(algebraic(ca.Function(f"{prefix}_rk8_{i}", [x, c, s, h, *params], [x_next],
-                                           ["x", "cos_t", "sin_t", "h", *f.name_in()[2:]], ["x_next"])))
+                                           ["x", "cos_t", "sin_t", "h", *g.name_in()[3:]], ["x_next"])))
     return named + steps
 
 

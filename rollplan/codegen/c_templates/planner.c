@@ -172,7 +172,7 @@ static void stage_rotations(casadi_real h, casadi_real rot[2 * NSTAGE]) {
  * cos(t + c h) = cos t cos(c h) - sin t sin(c h) and sin(t + c h) = sin t cos(c h) + cos t sin(c h) with the
  * stage table rot of h (stage_rotations): one cos and sin per step instead of one per stage. */
 static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, int n, const casadi_real rot[2 * NSTAGE],
-                     const casadi_real ab[2], casadi_real k, casadi_real gamma) {
+                     const casadi_real ab[2], casadi_real k, const casadi_real cg[2]) {
     casadi_real t, ct, st, cs[NSTAGE], sn[NSTAGE], xn[3];
     int q, j;
     for (q = 0; q < n; ++q) {
@@ -189,7 +189,8 @@ static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, 
         s_arg[3] = &h;
         s_arg[4] = ab;
         s_arg[5] = &k;
-        s_arg[6] = &gamma;
+        s_arg[6] = cg;
+        s_arg[7] = cg + 1;
         s_res[0] = xn;
         if (leaf ? @PREFIX@_rk8_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8_0(s_arg, s_res, s_iw, s_w, 0)) return 1;
         x[0] = xn[0];
@@ -204,15 +205,17 @@ static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, 
  * depend on the panel's step h alone, are computed once, in the first step. */
 static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2], casadi_real k, casadi_real gamma) {
     static casadi_real rot[2][NPANEL][2 * NSTAGE];   /* static: not reentrant anyway; keeps the stack small */
-    casadi_real h;
+    casadi_real h, cg[2];
     int s, leaf, j, nj;
+    cg[0] = cos(gamma);
+    cg[1] = sin(gamma);
     for (s = 0; s < steps; ++s) {
         for (leaf = 0; leaf < 2; ++leaf) {
             for (j = 0; j < NPANEL; ++j) {
                 nj = mult * s_counts[leaf][j];
                 h = (s_breaks[j + 1] - s_breaks[j]) / nj;
                 if (s == 0) stage_rotations(h, rot[leaf][j]);
-                if (rk8_steps(leaf, x, s_breaks[j], h, nj, rot[leaf][j], ab, k, gamma)) return 1;
+                if (rk8_steps(leaf, x, s_breaks[j], h, nj, rot[leaf][j], ab, k, cg)) return 1;
             }
         }
     }

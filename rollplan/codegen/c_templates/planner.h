@@ -29,9 +29,9 @@
  *   @PREFIX@_rhs0(phi, x[3], p[2], k, gamma) -> xdot[3], @PREFIX@_rhs1(...)
  *       the curve ODE (28)-(30) along the first (+y) and the second (-y) leaf of the figure
  *       eight with radii p = (a, b) rotated by gamma, x = (u_a, v_a, psi).
- *   @PREFIX@_rk8_0(x[3], cos_t[12], sin_t[12], h, p[2], k, gamma) -> x_next[3], @PREFIX@_rk8_1(...)
+ *   @PREFIX@_rk8_0(x[3], cos_t[12], sin_t[12], h, p[2], k, cos_gamma, sin_gamma) -> x_next[3], @PREFIX@_rk8_1(...)
  *       one step from phi = t to t + h of the eighth-order Runge-Kutta formula of Dormand and Prince of it,
- *       given cos phi and sin phi at its 12 stages t + c_j h (c_j the nodes of DOP853).
+ *       given cos phi and sin phi at its 12 stages t + c_j h (c_j the nodes of DOP853), and cos and sin of gamma.
  *   @PREFIX@_piece0(phi, x[5], p[2], k, gamma, jxx, jzz, jr) -> xdot[5], uv[2], g[2], @PREFIX@_piece1(...)
  *       along a leaf, per unit phi: d/dphi of (u_a, v_a, psi, rotor angles), the contact coordinates (u_o, v_o)
  *       and the rotor rates (11) at psi = x[2]; @PREFIX@_rk8x_0(x[5], t, h, p[2], k, gamma, jxx, jzz, jr), _1:
