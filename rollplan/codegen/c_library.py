@@ -354,7 +354,8 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
         (:func:`rollplan.core.integrate.rk8_formula`) of it, given the cosine and sine of phi at its 12 stages,
         ``t + DOP853_C[s] h``, and of gamma (the right side depends on phi and gamma through them only, checked by
         :func:`algebraic`): the C certificate gets them by rotating a per-panel table, without a trigonometric call
-        per stage.
+        per stage. Last ``<prefix>_rates<i>(cos_phi, sin_phi, p[2], k, cos_gamma, sin_gamma) -> rates[2]``: the turn
+        rate psi' of (30) at 0 and at k (it does not depend on the state), from which the certificate sets its steps.
 
     The C certificate integrates the whole n-step motion with these steps from the start state, the
     state-dependent right side as it is (no use of the heading structure the planner's leaf map
@@ -373,7 +374,13 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
         x_next = rk8_formula(x, h, lambda q, xs, g=g, c=c, s=s, params=params: g(c[q], s[q], xs, *params))
         steps.append(algebraic(ca.Function(f"{prefix}_rk8_{i}", [x, c, s, h, *params], [x_next],
                                            ["x", "cos_t", "sin_t", "h", *g.name_in()[3:]], ["x_next"])))
-    return named + steps
+    rates = []
+    for i, g0 in enumerate(named):
+        phi, p, k, gamma = ca.SX.sym("phi"), ca.SX.sym("p", g0.sparsity_in(2)), ca.SX.sym("k"), ca.SX.sym("gamma")
+        turn_rates = ca.vertcat(g0(phi, ca.DM.zeros(3), p, 0.0, gamma)[2], g0(phi, ca.DM.zeros(3), p, k, gamma)[2])
+        rates.append(algebraic(ca.Function(f"{prefix}_rates{i}", [phi, p, k, gamma], [turn_rates],
+                                           ["phi", "p", "k", "gamma"], ["rates"]), angles=(0, 3)))
+    return named + steps + rates
 
 
 def motion_functions(prefix: str = DEFAULT_PREFIX) -> list:

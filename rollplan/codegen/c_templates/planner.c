@@ -91,38 +91,39 @@ int @PREFIX@_step_eval(casadi_real a, casadi_real b, casadi_real k, casadi_real 
     return @PREFIX@_step_jac(s_arg, s_res, s_iw, s_w, 0);
 }
 
-/* The curve ODE (28)-(30) along leaf `leaf` at phi (generated). Returns 0 on success. */
-static int curve_rhs(int leaf, casadi_real phi, const casadi_real x[3], const casadi_real ab[2], casadi_real k, casadi_real gamma,
-                     casadi_real xdot[3]) {
-    s_arg[0] = &phi;
-    s_arg[1] = x;
-    s_arg[2] = ab;
-    s_arg[3] = &k;
-    s_arg[4] = &gamma;
-    s_res[0] = xdot;
-    return leaf ? @PREFIX@_rhs1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rhs0(s_arg, s_res, s_iw, s_w, 0);
-}
-
 /* RK8 steps per panel of each leaf into s_counts: ceil(w (CERT_BASE + rate) / CERT_DELTA) for a panel of
  * width w, rate = max |psi'_0| + |psi'_k - psi'_0| over 5 points of the panel: psi' of (30) at k = 0 (the
- * rolling part) and at k (plus the spin part k w); psi' does not depend on the state. Both parts count
- * separately: near A_MAX they are large and cancel in part for k near 1/2, while the path is still steep. */
+ * rolling part) and at k (plus the spin part k w); psi' does not depend on the state (generated rates<i>). Both
+ * parts count separately: near A_MAX they are large and cancel in part for k near 1/2, while the path is still
+ * steep. */
 static int counts(const casadi_real ab[2], casadi_real k, casadi_real gamma) {
-    const casadi_real zero[3] = {0.0, 0.0, 0.0};
-    casadi_real w, rate, n, xd[3], x0[3], phi;
+    casadi_real w, rate[2], n, r[2], phi, cp[2], cg[2];
     int leaf, j, q;
-    for (leaf = 0; leaf < 2; ++leaf) {
-        for (j = 0; j < NPANEL; ++j) {
-            w = s_breaks[j + 1] - s_breaks[j];
-            rate = 0.0;
-            for (q = 0; q <= 4; ++q) {
-                phi = s_breaks[j] + 0.25 * q * w;
-                if (curve_rhs(leaf, phi, zero, ab, k, gamma, xd) || curve_rhs(leaf, phi, zero, ab, 0.0, gamma, x0)
-                    || !isfinite(xd[2]) || !isfinite(x0[2]))
+    cg[0] = cos(gamma);
+    cg[1] = sin(gamma);
+    for (j = 0; j < NPANEL; ++j) {
+        w = s_breaks[j + 1] - s_breaks[j];
+        rate[0] = rate[1] = 0.0;
+        for (q = 0; q <= 4; ++q) {
+            phi = s_breaks[j] + 0.25 * q * w;
+            cp[0] = cos(phi);
+            cp[1] = sin(phi);
+            for (leaf = 0; leaf < 2; ++leaf) {
+                s_arg[0] = cp;
+                s_arg[1] = cp + 1;
+                s_arg[2] = ab;
+                s_arg[3] = &k;
+                s_arg[4] = cg;
+                s_arg[5] = cg + 1;
+                s_res[0] = r;
+                if ((leaf ? @PREFIX@_rates1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rates0(s_arg, s_res, s_iw, s_w, 0))
+                    || !isfinite(r[0]) || !isfinite(r[1]))
                     return 1;
-                rate = fmax(rate, fabs(x0[2]) + fabs(xd[2] - x0[2]));
+                rate[leaf] = fmax(rate[leaf], fabs(r[0]) + fabs(r[1] - r[0]));
             }
-            n = ceil(w * (CERT_BASE + rate) / CERT_DELTA);
+        }
+        for (leaf = 0; leaf < 2; ++leaf) {
+            n = ceil(w * (CERT_BASE + rate[leaf]) / CERT_DELTA);
             s_counts[leaf][j] = n > CERT_MAX_PANEL_STEPS ? CERT_MAX_PANEL_STEPS : (int)n;
         }
     }

@@ -32,6 +32,8 @@
  *   @PREFIX@_rk8_0(x[3], cos_t[12], sin_t[12], h, p[2], k, cos_gamma, sin_gamma) -> x_next[3], @PREFIX@_rk8_1(...)
  *       one step from phi = t to t + h of the eighth-order Runge-Kutta formula of Dormand and Prince of it,
  *       given cos phi and sin phi at its 12 stages t + c_j h (c_j the nodes of DOP853), and cos and sin of gamma.
+ *   @PREFIX@_rates0(cos_phi, sin_phi, p[2], k, cos_gamma, sin_gamma) -> rates[2], @PREFIX@_rates1(...)
+ *       the turn rate psi' of (30) along the leaf at inertia ratio 0 and k (independent of the state).
  *   @PREFIX@_piece0(phi, x[5], p[2], k, gamma, jxx, jzz, jr) -> xdot[5], uv[2], g[2], @PREFIX@_piece1(...)
  *       along a leaf, per unit phi: d/dphi of (u_a, v_a, psi, rotor angles), the contact coordinates (u_o, v_o)
  *       and the rotor rates (11) at psi = x[2]; @PREFIX@_rk8x_0(x[5], t, h, p[2], k, gamma, jxx, jzz, jr), _1:
