@@ -28,8 +28,9 @@ rule in chi of :mod:`rollplan.planners.geometric.leafmap`; the branches of (32),
 rule's nodes and every constant written from the Python definitions by :func:`generate`); and the bounded
 search of :meth:`GeometricPhasePlanner._solve_enumerated <rollplan.planners.geometric.GeometricPhasePlanner>`:
 branches in increasing order of the smallest ``a + b`` they can hold, each branch's roots in increasing x
-(the first root of a branch is its shortest plan), every root polished on the accurate leaf map and
-certified, until no branch can hold a shorter plan. So the C planner returns the Python planner's plan
+(the first root of a branch is its shortest plan), every root polished on the accurate leaf map, until no
+branch can hold a shorter plan; then the shortest root is certified (if it fails, the search is run again
+certifying every root, the pruning by certified plans only). So the C planner returns the Python planner's plan
 (same branch, same (a, b, gamma) up to rounding); ``branch=`` restricts to one branch. The enumeration needs
 E strictly decreasing, which holds for ``k >= 1/2`` (:data:`~rollplan.planners.geometric.enumerate.K_MONOTONE`):
 the generated code accepts ``1/2 <= k <= k_max`` and refuses the rest with status 2 (the Python planner falls

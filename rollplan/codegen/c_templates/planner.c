@@ -794,7 +794,7 @@ static casadi_real rotation(casadi_real u, casadi_real v, casadi_real psi, int s
 
 typedef struct {
     casadi_real u, v, psi_w, k, best;   /* target (psi wrapped), inertia ratio, shortest certified a + b so far */
-    int steps, certify, rejected, incomplete;
+    int steps, certify, defer, rejected, incomplete;
     long turns, roots;
     casadi_real rej[5];                 /* a, b, gamma, residual, bound of the best rejected root */
     @PREFIX@_plan_t *plan;              /* filled in by an accepted root only */
@@ -812,7 +812,7 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
     if (!(a > 0.0 && b > 0.0)) return 0;
     S->roots++;
     gamma = rotation(S->u, S->v, S->psi_w, S->steps, a, b, S->k, &eta, &h, &predicted);
-    if (S->certify)
+    if (S->certify && !S->defer)
         status = @PREFIX@_certify(a, b, gamma, S->steps, S->k, S->u, S->v, S->psi_w, NULL, &residual, &bound);
     if (status != @PREFIX_UPPER@_OK) {
         if (!S->rejected || residual < S->rej[3]) {   /* the best rejected root, reported if no plan is found */
@@ -968,13 +968,46 @@ static casadi_real wrap_turns(casadi_real psi, long *turns) {
     return w;
 }
 
+/* The search of plan_with over the branches (all, in the order of their smallest a + b, or options->branch only). */
+static void search(search_t *S, const @PREFIX@_options_t *options, casadi_real h_des) {
+    branch_t br;
+    casadi_real lam = -s_e_min, dm;
+    long lo, hi, mp, mn, m;
+    int steps = S->steps;
+    S->best = INFINITY;
+    S->rejected = S->incomplete = 0;
+    S->roots = 0;
+    S->plan->branches = 0;
+    /* branches with |eta_m| <= lam, in increasing |psi_w + 2 pi m| (the order of their smallest a + b, y0;
+     * ties: smaller m first) */
+    dm = floor((steps * lam - S->psi_w) / TWO_PI);
+    hi = (long)dm;
+    lo = (long)ceil((-steps * lam - S->psi_w) / TWO_PI);
+    if (options && options->use_branch) {
+        m = options->branch + S->turns;
+        if (m >= lo && m <= hi && make_branch(m, S->psi_w, steps, h_des, S->k, &br)) {
+            S->plan->branches = 1;
+            search_branch(S, &br);
+        }
+    } else {
+        /* two runs from the centre c = -psi_w / (2 pi) in [-1/2, 1/2]: mn = floor(c) down, mp = mn + 1 up */
+        mn = (long)floor(-S->psi_w / TWO_PI);
+        for (mp = mn + 1; mn >= lo || mp <= hi;) {
+            int use_neg = mp > hi || (mn >= lo && fabs(S->psi_w + TWO_PI * mn) <= fabs(S->psi_w + TWO_PI * mp));
+            m = use_neg ? mn-- : mp++;
+            if (m < lo || m > hi || !make_branch(m, S->psi_w, steps, h_des, S->k, &br)) continue;
+            if (!(br.y0 < S->best)) break;   /* y0 grows along the order: nothing left can be shorter */
+            S->plan->branches++;
+            search_branch(S, &br);
+        }
+    }
+    S->plan->roots = S->roots;
+}
+
 int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k,
                        const @PREFIX@_options_t *options, @PREFIX@_plan_t *plan) {
     search_t S;
-    branch_t br;
-    casadi_real h_des, lam, dm;
-    long lo, hi, mp, mn, m;
-    int only = options && options->use_branch;
+    casadi_real h_des, residual, bound;
     if (plan == NULL) return @PREFIX_UPPER@_BAD_INPUT;
     plan->a = plan->b = plan->gamma = plan->eta = plan->h = NAN;
     plan->residual = plan->bound = plan->predicted = INFINITY;
@@ -992,37 +1025,26 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
     S.v = v;
     S.k = k;
     S.steps = steps;
-    S.best = INFINITY;
     S.certify = !options || options->certify;
-    S.rejected = S.incomplete = 0;
-    S.roots = 0;
     S.plan = plan;
     S.psi_w = wrap_turns(psi, &S.turns);
-    lam = -s_e_min;
-    /* branches with |eta_m| <= lam, in increasing |psi_w + 2 pi m| (the order of their smallest a + b, y0;
-     * ties: smaller m first) */
-    dm = floor((steps * lam - S.psi_w) / TWO_PI);
-    hi = (long)dm;
-    lo = (long)ceil((-steps * lam - S.psi_w) / TWO_PI);
-    if (only) {
-        m = options->branch + S.turns;
-        if (m >= lo && m <= hi && make_branch(m, S.psi_w, steps, h_des, k, &br)) {
-            plan->branches = 1;
-            search_branch(&S, &br);
+    /* First the shortest root of all (no certificate during the search), then its certificate: if it holds, that
+     * root is the shortest certified plan (every certified plan is a root). If it fails, search again certifying
+     * every root on the way (the pruning then uses certified plans only). */
+    S.defer = S.certify;
+    search(&S, options, h_des);
+    if (S.defer && S.best < INFINITY) {
+        if (@PREFIX@_certify(plan->a, plan->b, plan->gamma, steps, k, u, v, S.psi_w, NULL, &residual, &bound)
+            == @PREFIX_UPPER@_OK) {
+            plan->residual = residual;
+            plan->bound = bound;
+            return @PREFIX_UPPER@_OK;
         }
-    } else {
-        /* two runs from the centre c = -psi_w / (2 pi) in [-1/2, 1/2]: mn = floor(c) down, mp = mn + 1 up */
-        mn = (long)floor(-S.psi_w / TWO_PI);
-        for (mp = mn + 1; mn >= lo || mp <= hi;) {
-            int use_neg = mp > hi || (mn >= lo && fabs(S.psi_w + TWO_PI * mn) <= fabs(S.psi_w + TWO_PI * mp));
-            m = use_neg ? mn-- : mp++;
-            if (m < lo || m > hi || !make_branch(m, S.psi_w, steps, h_des, k, &br)) continue;
-            if (!(br.y0 < S.best)) break;   /* y0 grows along the order: nothing left can be shorter */
-            plan->branches++;
-            search_branch(&S, &br);
-        }
+        S.defer = 0;
+        plan->a = plan->b = plan->gamma = plan->eta = plan->h = NAN;
+        plan->residual = plan->bound = plan->predicted = INFINITY;
+        search(&S, options, h_des);
     }
-    plan->roots = S.roots;
     if (S.best < INFINITY) return @PREFIX_UPPER@_OK;
     if (S.rejected) {
         plan->a = S.rej[0];

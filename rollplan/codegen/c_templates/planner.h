@@ -106,8 +106,9 @@ typedef struct {
  * h_des = |(u, v)|, then gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift(a, b)); the same algorithm
  * and the same choice as rollplan.planners.geometric (complete enumeration of the roots on each branch as
  * one scalar equation in the smaller leaf radius, the closed-form leaf map, a bounded search over branches
- * in the order of the smallest a + b they can hold). Every root is certified by @PREFIX@_certify before it
- * is taken; a plan that fails is never returned as @PREFIX_UPPER@_OK.
+ * in the order of the smallest a + b they can hold). The shortest root is certified by @PREFIX@_certify before
+ * it is returned (if it fails, the search runs again and certifies every root before it is taken); a plan
+ * that fails is never returned as @PREFIX_UPPER@_OK.
  * Time: the first plan for a new k builds the leaf map's table for k (kept for the last k); then
  * proportional to the branches searched. Deterministic; static memory only; not reentrant.
  * Returns one of the status codes above; `plan` is filled in on @PREFIX_UPPER@_OK (on NOT_CERTIFIED it holds
