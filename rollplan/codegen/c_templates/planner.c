@@ -285,6 +285,7 @@ static casadi_real s_tdu[NTABLE];                         /* du/dE at the radii,
 /* Buckets of the table: radius bucket j (r >= A_MAX j / NTABLE) starts at the last radius s_tr[i] <= A_MAX j / NTABLE,
  * s_rb[j] = i; turn bucket j (E <= e_min j / NTABLE) starts at the last radius with s_te[i] >= e_min j / NTABLE. */
 static unsigned short s_rb[NTABLE + 1], s_eb[NTABLE + 1];
+static casadi_real s_rscale, s_escale;                    /* bucket of r: r s_rscale; of a turn E: E s_escale */
 static casadi_real s_eps, s_eps_g;                        /* table error bound; its effect on g */
 
 /* (c, s, rho) of radius r: c = sqrt(1 - r^2), s = sqrt(1 - 2 r^2), rho = r^2 / (c^2 + s) (leafmap._consts). */
@@ -314,7 +315,7 @@ static casadi_real turn_dr(casadi_real r, casadi_real k) {
 static void bracket(casadi_real x, int turn, int *lo, int *hi) {
     const casadi_real *tab = turn ? s_te : s_tr;
     const unsigned short *bucket = turn ? s_eb : s_rb;
-    casadi_real pos = turn ? x / s_e_min * NTABLE : x / A_MAX * NTABLE;
+    casadi_real pos = x * (turn ? s_escale : s_rscale);
     int j = pos >= 0.0 ? (pos < NTABLE ? (int)pos : NTABLE - 1) : 0, i0 = bucket[j], i1 = bucket[j + 1] + 1, im;
     if (i1 > s_nt - 1) i1 = s_nt - 1;
     if (i0 >= i1) i0 = i1 - 1;
@@ -535,6 +536,8 @@ static int prepare(casadi_real k) {
         s_tdu[i] = re / (PI * (1.0 - k * (1.0 + 1.0 / (rr * rr * rr))));
         if (!(isfinite(s_trho[i]) && isfinite(s_tdrho[i]))) return 1;
     }
+    s_rscale = NTABLE / A_MAX;
+    s_escale = NTABLE / s_e_min;
     for (i = 0, j = 0; j <= NTABLE; ++j) {   /* buckets (both sequences increase along the table) */
         while (i + 1 < n && s_tr[i + 1] <= A_MAX * j / NTABLE) ++i;
         s_rb[j] = (unsigned short)i;
@@ -574,6 +577,7 @@ typedef struct {
     casadi_real h;       /* shift per step h_m (33)-(34) */
     casadi_real x_end;   /* range [0, x_end] of the smaller radius */
     casadi_real y0;      /* smallest a + b on the branch */
+    casadi_real c_half;  /* cos(eta / 2) */
 } branch_t;
 
 /* Larger radius y(x) = E^-1(E(x) - e) of the branch at the smaller radius x (enumerate._other). */
@@ -610,7 +614,7 @@ static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int 
         rho_lookup(*a, &ra, &pa);
         rho_lookup(*b, &rb, &pb);
     }
-    c = cos(0.5 * br->eta);
+    c = br->c_half;
     *g = ra * ra + rb * rb + 2.0 * c * ra * rb - br->h * br->h;
     *dg = 2.0 * (ra + c * rb) * pa * da + 2.0 * (rb + c * ra) * pb * db;
 }
@@ -646,6 +650,7 @@ static int make_branch(long m, casadi_real psi_w, int steps, casadi_real h_des, 
     br->eta = eta;
     br->e = fabs(eta);
     br->h = h_des / gain;
+    br->c_half = cos(0.5 * eta);
     br->y0 = turn_inverse(-br->e, k);
     br->x_end = turn_inverse(s_e_min + br->e, k);
     return isfinite(br->h) && isfinite(br->y0) && isfinite(br->x_end);
