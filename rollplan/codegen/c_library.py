@@ -558,6 +558,8 @@ def _two_pi_parts() -> dict:
 def _enumeration_constants(k_max: float) -> dict:
     """The constants of :mod:`rollplan.planners.geometric.leafmap` and :mod:`~rollplan.planners.geometric.enumerate`
     the C planner uses, and the sizes of its static tables for ``k <= k_max``."""
+    if leafmap.ORDER % 2:
+        raise ValueError("the C leaf map evaluates the nodes chi < pi only (symmetry): it needs an even ORDER")
     x, w = np.polynomial.legendre.leggauss(leafmap.ORDER)
     buckets = [(kk, p) for kk, p in leafmap.BUCKETS if kk < k_max] + [next((kk, p) for kk, p in leafmap.BUCKETS
                                                                            if kk >= k_max)]

@@ -4,7 +4,8 @@
  * planner follows rollplan.planners.geometric line by line; each formula is written once, here, with
  * the Python function it ports:
  *   leafmap.turn / turn_dr / turn_inverse   closed-form turn E(r, k) of a leaf and its inverse
- *   leafmap.displacement / signed_length    the leaf's displacement d(r, k) by the Gauss rule in chi,
+ *   leafmap.displacement / signed_length    the leaf's displacement d(r, k) by the Gauss rule in chi (the
+ *                                           nodes chi < pi; the others by the symmetry chi -> 2 pi - chi),
  *                                           and rho = Re(exp(i E / 2) d)
  *   enumerate.branches / branch_values      branches m of (32), the scalar equation g(x) of (33)
  *   enumerate.rho_table / rho_lookup        rho tabulated once per k (cubic Hermite)
@@ -275,9 +276,9 @@ static const int s_bucket_p[NBUCKET] = {@BUCKET_P@};
 /* State kept for the last k: the rule's nodes, E(A_MAX) and the rho table. */
 static int s_ready = 0;
 static casadi_real s_k = 0.0;
-static int s_nodes;                                       /* ORDER x panels */
-static casadi_real s_chi[ORDER * MAX_PANELS], s_cchi[ORDER * MAX_PANELS], s_schi[ORDER * MAX_PANELS],
-    s_wchi[ORDER * MAX_PANELS];
+static int s_nodes;                                       /* ORDER x panels / 2: the nodes chi < pi */
+static casadi_real s_chi[ORDER * MAX_PANELS / 2], s_cchi[ORDER * MAX_PANELS / 2], s_schi[ORDER * MAX_PANELS / 2],
+    s_wchi[ORDER * MAX_PANELS / 2];
 static casadi_real s_e_min;                               /* E(A_MAX, k) < 0 */
 static int s_nt;                                          /* radii of the table */
 static casadi_real s_tr[NTABLE], s_te[NTABLE], s_trho[NTABLE], s_tdrho[NTABLE];
@@ -388,7 +389,8 @@ static int s_memo_next = 0, s_memo_used = 0;
 
 static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_real dd[2]) {
     casadi_real c, s, rho, br = 0.0, bi = 0.0, tr = 0.0, ti = 0.0, c_r = 0.0, s_r = 0.0, g, rho_r = 0.0;
-    casadi_real cx, sx, den, q, phi, jac, theta, ec, es, w, phi_rho, jac_rho, theta_r, p1, p2;
+    casadi_real cx, sx, den, q, phi, jac, theta, ec, es, w, phi_rho, jac_rho, theta_r, p1, p2, tt, ct, st, fr, fi, qr,
+        qi, tt_r;
     int j;
     for (j = 0; j < s_memo_used; ++j) {
         if (s_memo[j].r == r && s_memo[j].k == k && (s_memo[j].has_dd || !dd)) {
@@ -431,11 +433,23 @@ static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_
             ti += w * (p1 * es + p2 * ec);
         }
     }
-    d[0] = r * br;
-    d[1] = r * bi;
+    /* the nodes chi > pi: phi(2 pi - chi) = 2 pi - phi(chi), phi' and the weights are symmetric, so
+     * theta(2 pi - chi) = T - theta(chi) with T = 2 pi ((1 - k) c + k c / s), and that half of the rule is
+     * exp(i T) conj(I) for I = br + i bi the half summed above; of the r-derivative, exp(i T) (conj(J) + i T_r conj(I))
+     * for J = tr + i ti */
+    tt = TWO_PI * ((1.0 - k) * c + k * c / s);
+    ct = cos(tt);
+    st = sin(tt);
+    fr = br + ct * br + st * bi;
+    fi = bi + st * br - ct * bi;
+    d[0] = r * fr;
+    d[1] = r * fi;
     if (dd) {
-        dd[0] = br + r * tr;
-        dd[1] = bi + r * ti;
+        tt_r = TWO_PI * ((1.0 - k) * c_r + k * (c_r * s - c * s_r) / (s * s));
+        qr = tr + tt_r * bi;
+        qi = -ti + tt_r * br;
+        dd[0] = fr + r * (tr + ct * qr - st * qi);
+        dd[1] = fi + r * (ti + st * qr + ct * qi);
     }
     j = s_memo_next;
     s_memo_next = (s_memo_next + 1) % MEMO;
@@ -499,16 +513,21 @@ static int prepare(casadi_real k) {
         }
     }
     h = PI / panels;
-    s_nodes = ORDER * panels;
+    /* the rule's nodes chi < pi only (displacement() gets the others by symmetry): the panels' centres are
+     * symmetric about pi, the Gauss nodes about the centres, ORDER is even */
+    s_nodes = 0;
     for (i = 0; i < panels; ++i) {
         for (j = 0; j < ORDER; ++j) {
             x = (2.0 * i + 1.0) * h + h * s_gx[j];
-            s_chi[i * ORDER + j] = x;
-            s_cchi[i * ORDER + j] = cos(x);
-            s_schi[i * ORDER + j] = sin(x);
-            s_wchi[i * ORDER + j] = h * s_gw[j];
+            if (!(x < PI) || s_nodes >= ORDER * MAX_PANELS / 2) continue;
+            s_chi[s_nodes] = x;
+            s_cchi[s_nodes] = cos(x);
+            s_schi[s_nodes] = sin(x);
+            s_wchi[s_nodes] = h * s_gw[j];
+            ++s_nodes;
         }
     }
+    if (2 * s_nodes != ORDER * panels) return 1;
     s_e_min = turn(A_MAX, k);
     s_nt = 0;
     t_end = s_e_min;
