@@ -310,6 +310,14 @@ static casadi_real turn_dr(casadi_real r, casadi_real k) {
     return TWO_PI * r / c * (1.0 - k * (1.0 + 1.0 / (s * s * s)));
 }
 
+/* E(r, k) and dE/dr (turn and turn_dr from one evaluation of c and s). */
+static casadi_real turn_and_dr(casadi_real r, casadi_real k, casadi_real *dr) {
+    casadi_real c, s, rho;
+    consts(r, &c, &s, &rho);
+    *dr = TWO_PI * r / c * (1.0 - k * (1.0 + 1.0 / (s * s * s)));
+    return TWO_PI * r * r / (1.0 + c) - 2.0 * TWO_PI * k * c * r * r / (s * (1.0 + s));
+}
+
 /* Table radii i0 < i1 = i0 + 1 around x (s_tr[i0] <= x < s_tr[i1], i1 = s_nt - 1 at the end) if turn = 0, or around
  * the turn x (s_te[i0] >= x > s_te[i1]) if turn = 1: bisection started in x's bucket (the whole table if the bucket's
  * bounds do not hold x, which rounding at a bucket's edge may cause). */
@@ -612,8 +620,13 @@ static casadi_real other(casadi_real x, casadi_real e, casadi_real k) {
  * rho from the table (accurate = 0) or from the accurate map (accurate = 1). */
 static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int accurate, casadi_real *g,
                           casadi_real *dg, casadi_real *a, casadi_real *b) {
-    casadi_real y = other(x, br->e, k), dy, da, db, ra, rb, pa, pb, c;
-    dy = br->e == 0.0 ? 1.0 : turn_dr(x, k) / turn_dr(y, k);
+    casadi_real y = x, dy = 1.0, ex, dex, da, db, ra, rb, pa, pb, c;
+    if (br->e != 0.0) {   /* y = other(x) and dy/dx = E'(x) / E'(y) */
+        ex = turn_and_dr(x, k, &dex);
+        y = turn_inverse(ex - br->e, k);
+        if (isnan(y)) y = A_MAX;
+        dy = dex / turn_dr(y, k);
+    }
     if (!isfinite(dy)) dy = isnan(dy) ? 0.0 : (dy > 0.0 ? REAL_MAX : -REAL_MAX);   /* numpy's nan_to_num */
     if (br->eta >= 0.0) {
         *a = x;
