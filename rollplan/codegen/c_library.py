@@ -37,10 +37,15 @@ the generated code accepts ``1/2 <= k <= k_max`` and refuses the rest with statu
 back to bracketing below 1/2, without the completeness guarantee). The rho table depends on k only and is kept
 for the last k.
 
-Every root is certified on board before it is returned (``<prefix>_certify``): the whole n-step motion is
-integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_step` of the state-dependent
-right side (28)-(30)), at N and 2N steps per panel with N from the turn rate psi' on the panel, so from k
-and the radius (doubled again, up to 3 times, while the outcome is undecided); the error bound is the
+Every plan is certified on board before it is returned (``<prefix>_certify``): the whole n-step motion is
+integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_formula` of the state-dependent
+right side (28)-(30); the step takes cos and sin of phi at its stages, which the C code gets by rotating a
+per-panel table, and of gamma), every one of the n steps from the state the previous one left. The motion is
+periodic only up to a rigid motion of the plane: psi' does not depend on the state, so every step turns psi by
+the same eta and its displacement is the first step's turned by the heading it starts with (what the planner's
+(33) uses); the certificate does not use that and integrates all n steps. It runs N and 2N RK8 steps per
+panel, with N from the turn rate psi' on the panel, so from k and the radius (doubled again, up to 3 times,
+while the outcome is undecided); the error bound is the
 step-doubling difference over ``CERT_SAFETY`` (Richardson's 255 would be the asymptotic value; tests check
 that the bound exceeds the true error against DOP853); a plan is returned only if residual + bound <=
 ``CERT_TOL``. This shares neither the heading structure nor the quadrature of the leaf map, so a leaf map

@@ -123,7 +123,8 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
 /*
  * Certificate of a plan: integrate the n-step motion (figure eight (a, b) rotated by gamma, traced
  * `steps` times from rest at the origin) with the generated RK8 steps, the right side (28)-(30) as
- * it is (independent of the planner's leaf map and its quadrature). Each panel of a leaf of width w
+ * it is (independent of the planner's leaf map and its quadrature), every one of the `steps` traces from the
+ * state the previous one left (not the first trace turned and shifted). Each panel of a leaf of width w
  * gets N = ceil(w (@CERT_BASE@ + max|psi'|) / @CERT_DELTA@) equal steps (psi' sampled at 5 points; it does not
  * depend on the state); the motion is integrated with N and with 2N steps per panel, `bound` is
  * |x_2N - x_N| / @CERT_SAFETY@ (step doubling: the error of x_2N of an order-8 method is about
