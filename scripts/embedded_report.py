@@ -162,6 +162,16 @@ def report(data: dict) -> str:
         if h.get("python_ms_per_target"):
             lines.append(f"| Python plan [us] | {1e3 * h['python_ms_per_plan']:.0f} | "
                          f"{1e3 * float(np.median(py)):.0f} | {1e3 * max(py):.0f} |")
+        if data.get("host_many"):
+            m = data["host_many"]
+            lines += ["", "Targets whose shortest plan lies below many branches of the search "
+                      "(bench_codegen.MANY_BRANCH_TARGETS), measured the same way:", "",
+                      "| target (u, v, psi, n, k) | C new k [us] | C same k [us] | C without certificate [us] | "
+                      "certificate [us] | Python [ms] |", "|---|---|---|---|---|---|"]
+            py = m.get("python_ms_per_target") or [float("nan")] * len(m["c_per_target"])
+            for target, row, ms in zip(bench_codegen.MANY_BRANCH_TARGETS, m["c_per_target"], py):
+                lines.append(f"| {tuple(target)} | {row[0]:.0f} | {row[1]:.1f} | {row[2]:.1f} | {row[3]:.1f} | "
+                             f"{ms:.2f} |")
         lines += ["", f"Load average at the start: {data['load']}. The machine is shared: the instruction counts "
                   "above are the stable figures."]
     return "\n".join(lines) + "\n"
@@ -184,6 +194,7 @@ def main() -> None:
             print(f"{real}: {data[real]['sizes']}", file=sys.stderr)
     if not args.no_host:
         data["host"] = bench_codegen.measure(reps=20, python=True)
+        data["host_many"] = bench_codegen.measure(reps=20, python=True, targets=bench_codegen.MANY_BRANCH_TARGETS)
     out_dir = Path(args.out_dir)
     out_dir.mkdir(exist_ok=True)
     write_json(out_dir / "embedded.json", data)

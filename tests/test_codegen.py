@@ -158,7 +158,7 @@ def test_step_map_matches_cvodes(built):
 def test_algebraic_form_of_the_certificate_is_the_piece_rhs():
     """The certificate's right side in algebraic form (no trig of inverse trig) against the curve ODE
     (28)-(30) as the model writes it, and against the printed equations."""
-    from rollplan.core.integrate import piece_rhs
+    from rollplan.core.integrate import DOP853_C, piece_rhs, rk8_step
 
     curve = figure_eight()
     rng = np.random.default_rng(4)
@@ -171,6 +171,24 @@ def test_algebraic_form_of_the_certificate_is_the_piece_rhs():
                 rng.uniform(0.5, 5), rng.uniform(-3, 3)
             got = np.array(f(phi, x, p, k, gamma)).ravel()
             np.testing.assert_allclose(got, np.array(plain(phi, x, p, k, gamma)).ravel(), rtol=1e-13, atol=1e-14)
+    # the RK8 steps take cos and sin of phi at the stages and of gamma: the step of rk8_step of the plain right side
+    for i, step in enumerate(certificate_functions()[2:4]):
+        ref = rk8_step(piece_rhs(curve, i))
+        for _ in range(3):
+            t, h, x, p, k, gamma = rng.uniform(0, 6.28), rng.uniform(0.01, 0.5), rng.uniform(-1, 1, 3), \
+                rng.uniform(0.01, A_MAX, 2), rng.uniform(0.5, 5), rng.uniform(-3, 3)
+            phis = t + h * np.array(DOP853_C)
+            got = np.array(step(x, np.cos(phis), np.sin(phis), h, p, k, np.cos(gamma), np.sin(gamma))).ravel()
+            np.testing.assert_allclose(got, np.array(ref(x, t, h, p, k, gamma)).ravel(), rtol=1e-13, atol=1e-14)
+    # the turn rates that set the certificate's steps: psi' of the plain right side at k = 0 and at k, at rest
+    for i, rates in enumerate(certificate_functions()[4:6]):
+        plain = piece_rhs(curve, i)
+        for _ in range(3):
+            phi, p, k, gamma = rng.uniform(0, 6.28), rng.uniform(0.01, A_MAX, 2), rng.uniform(0.5, 5), \
+                rng.uniform(-3, 3)
+            want = [float(plain(phi, np.zeros(3), p, kk, gamma)[2]) for kk in (0.0, k)]
+            got = np.array(rates(np.cos(phi), np.sin(phi), p, k, np.cos(gamma), np.sin(gamma))).ravel()
+            np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-14)
     g = ca.Function("g", [y := ca.SX.sym("y"), z := ca.SX.sym("z")],
                     [ca.cos(ca.atan2(y, z)) + ca.tan(ca.asin(y / 3)) * ca.sin(ca.atan2(y, z))])
     h = algebraic(g)

@@ -28,18 +28,24 @@ rule in chi of :mod:`rollplan.planners.geometric.leafmap`; the branches of (32),
 rule's nodes and every constant written from the Python definitions by :func:`generate`); and the bounded
 search of :meth:`GeometricPhasePlanner._solve_enumerated <rollplan.planners.geometric.GeometricPhasePlanner>`:
 branches in increasing order of the smallest ``a + b`` they can hold, each branch's roots in increasing x
-(the first root of a branch is its shortest plan), every root polished on the accurate leaf map and
-certified, until no branch can hold a shorter plan. So the C planner returns the Python planner's plan
+(the first root of a branch is its shortest plan), every root polished on the accurate leaf map, until no
+branch can hold a shorter plan; then the shortest root is certified (if it fails, the search is run again
+certifying every root, the pruning by certified plans only). So the C planner returns the Python planner's plan
 (same branch, same (a, b, gamma) up to rounding); ``branch=`` restricts to one branch. The enumeration needs
 E strictly decreasing, which holds for ``k >= 1/2`` (:data:`~rollplan.planners.geometric.enumerate.K_MONOTONE`):
 the generated code accepts ``1/2 <= k <= k_max`` and refuses the rest with status 2 (the Python planner falls
 back to bracketing below 1/2, without the completeness guarantee). The rho table depends on k only and is kept
 for the last k.
 
-Every root is certified on board before it is returned (``<prefix>_certify``): the whole n-step motion is
-integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_step` of the state-dependent
-right side (28)-(30)), at N and 2N steps per panel with N from the turn rate psi' on the panel, so from k
-and the radius (doubled again, up to 3 times, while the outcome is undecided); the error bound is the
+Every plan is certified on board before it is returned (``<prefix>_certify``): the whole n-step motion is
+integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_formula` of the state-dependent
+right side (28)-(30); the step takes cos and sin of phi at its stages, which the C code gets by rotating a
+per-panel table, and of gamma), every one of the n steps from the state the previous one left. The motion is
+periodic only up to a rigid motion of the plane: psi' does not depend on the state, so every step turns psi by
+the same eta and its displacement is the first step's turned by the heading it starts with (what the planner's
+(33) uses); the certificate does not use that and integrates all n steps. It runs N and 2N RK8 steps per
+panel, with N from the turn rate psi' on the panel, so from k and the radius (doubled again, up to 3 times,
+while the outcome is undecided); the error bound is the
 step-doubling difference over ``CERT_SAFETY`` (Richardson's 255 would be the asymptotic value; tests check
 that the bound exceeds the true error against DOP853); a plan is returned only if residual + bound <=
 ``CERT_TOL``. This shares neither the heading structure nor the quadrature of the leaf map, so a leaf map
@@ -62,7 +68,15 @@ import numpy as np
 
 from ..core import model
 from ..core.curves import A_MAX, figure_eight
-from ..core.integrate import check_heading_structure, heading_free_rates, piece_rhs, rk8_step, spectral_leaf
+from ..core.integrate import (
+    DOP853_C,
+    check_heading_structure,
+    heading_free_rates,
+    piece_rhs,
+    rk8_formula,
+    rk8_step,
+    spectral_leaf,
+)
 from ..errors import InputError, NoPlanError, OutputError, show_limit
 from ..execution.path import curve_piece_function
 from ..outputs import check_writable, make_folder, write_atomic
@@ -111,6 +125,8 @@ CERT_SAFETY = 16.0
 #: Tolerance of the certificate of a single-precision build (``generate(real="float")``): float rounding
 #: alone leaves errors of 1e-6 R, and more near A_MAX, so such plans are good to this, not to CERT_TOL.
 FLOAT_CERT_TOL = 1e-4
+#: Stages of the RK8 formula (:data:`rollplan.core.integrate.DOP853_C`).
+RK8_STAGES = len(DOP853_C)
 #: Default name prefix of the generated C symbols and files.
 DEFAULT_PREFIX = "rollplan"
 #: Most node intervals per leaf (the accuracy of the step map stops improving long before).
@@ -265,7 +281,7 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
     return step, step_jac
 
 
-def algebraic(f: ca.Function, check: int = 6) -> ca.Function:
+def algebraic(f: ca.Function, check: int = 6, angles: tuple = ()) -> ca.Function:
     """``f`` (an SX Function) with the trigonometric functions of angles that are themselves inverse
     trigonometric results written algebraically, and common subexpressions shared.
 
@@ -276,16 +292,23 @@ def algebraic(f: ca.Function, check: int = 6) -> ca.Function:
     ``cos(asin(p)) = sqrt(1 - p^2)``, ``sin(asin(p)) = p``, ``tan(asin(p)) = p / sqrt(1 - p^2)`` on the expression
     graph (no equation of the model is retyped: the graph is replayed instruction by instruction), then
     :func:`casadi.cse`. The result is checked against ``f`` at ``check`` random points (relative 1e-12).
+
+    With ``angles`` (indices of scalar inputs), the result takes ``cos t`` and ``sin t`` (inputs ``cos_<name>``,
+    ``sin_<name>``) in place of each such input t: ``cos t``, ``sin t`` and ``tan t`` of the graph become them; a
+    ValueError if the graph uses t otherwise.
     """
     ins = f.sx_in()
     flat_in = [ca.vertsplit(ca.vec(x)) if x.numel() else [] for x in ins]
+    unit = {j: [ca.SX.sym(f"{how}_{f.name_in(j)}") for how in ("cos", "sin")] for j in angles}
+    orig, ins = ins, [x for j, x in enumerate(ins) for x in unit.get(j, [x])]
+    names = [n for j, n in enumerate(f.name_in()) for n in ([u.name() for u in unit[j]] if j in unit else [n])]
     w, src = [None] * f.sz_w(), [None] * f.sz_w()
     outs = [[ca.SX(0)] * f.nnz_out(i) for i in range(f.n_out())]
     trig = (ca.OP_COS, ca.OP_SIN, ca.OP_TAN)
     for n in range(f.n_instructions()):
         op, o, i = f.instruction_id(n), f.instruction_output(n), f.instruction_input(n)
         if op == ca.OP_INPUT:
-            w[o[0]], src[o[0]] = flat_in[i[0]][i[1]], None
+            w[o[0]], src[o[0]] = flat_in[i[0]][i[1]], ("angle", i[0], None) if i[0] in unit else None
         elif op == ca.OP_OUTPUT:
             outs[o[0]][o[1]] = w[i[0]]
         elif op == ca.OP_CONST:
@@ -294,7 +317,10 @@ def algebraic(f: ca.Function, check: int = 6) -> ca.Function:
             a, origin, val = w[i[0]], src[i[0]], None
             if op in trig and origin is not None:
                 p, q = origin[1], origin[2]
-                if origin[0] == ca.OP_ATAN2:
+                if origin[0] == "angle":
+                    c, s = unit[p]
+                    val = (c, s, s / c)[trig.index(op)]
+                elif origin[0] == ca.OP_ATAN2:
                     r = ca.sqrt(p * p + q * q)
                     val = (q / r, p / r, p / q)[trig.index(op)]
                 else:
@@ -306,11 +332,15 @@ def algebraic(f: ca.Function, check: int = 6) -> ca.Function:
             src[o[0]] = (op, a, w[i[1]]) if op == ca.OP_ATAN2 else ((op, a, None) if op == ca.OP_ASIN else None)
     res = [ca.SX(f.sparsity_out(j), ca.vertcat(*outs[j])) if outs[j] else ca.SX(f.sparsity_out(j))
            for j in range(f.n_out())]
-    g = ca.Function(f.name(), ins, ca.cse(res), f.name_in(), f.name_out())
+    for j in angles:
+        if any(ca.depends_on(r, orig[j]) for r in res):
+            raise ValueError(f"{f.name()} depends on {f.name_in(j)} otherwise than by its cos and sin")
+    g = ca.Function(f.name(), ins, ca.cse(res), names, f.name_out())
     rng = np.random.default_rng(1)
     for _ in range(check):
-        args = [rng.uniform(0.05, 0.65, x.numel()) for x in ins]
-        want, got = (np.concatenate([np.array(v).ravel() for v in h.call(args)]) for h in (f, g))
+        args = [rng.uniform(0.05, 0.65, x.numel()) for x in orig]
+        g_args = [v for j, x in enumerate(args) for v in ([np.cos(x), np.sin(x)] if j in unit else [x])]
+        want, got = (np.concatenate([np.array(v).ravel() for v in h.call(a)]) for h, a in ((f, args), (g, g_args)))
         if not np.allclose(got, want, rtol=1e-12, atol=1e-12 * (1.0 + np.abs(want).max())):
             raise ValueError(f"the algebraic form of {f.name()} differs from the original")
     return g
@@ -325,8 +355,13 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
     list of casadi.Function
         ``<prefix>_rhs<i>(phi, x[3], p[2], k, gamma) -> xdot[3]``: (28)-(30) along leaf ``i`` of the
         figure eight (31), (35) rotated by gamma (:func:`rollplan.core.integrate.piece_rhs`), for
-        i = 0, 1; then ``<prefix>_rk8_<i>(x[3], t, h, p[2], k, gamma) -> x_next[3]``: one step of the
-        eighth-order Runge-Kutta formula (:func:`rollplan.core.integrate.rk8_step`) of it.
+        i = 0, 1; then ``<prefix>_rk8_<i>(x[3], cos_t[12], sin_t[12], h, p[2], k, cos_gamma, sin_gamma) ->
+        x_next[3]``: one step from phi = t to t + h of the eighth-order Runge-Kutta formula of DOP853
+        (:func:`rollplan.core.integrate.rk8_formula`) of it, given the cosine and sine of phi at its 12 stages,
+        ``t + DOP853_C[s] h``, and of gamma (the right side depends on phi and gamma through them only, checked by
+        :func:`algebraic`): the C certificate gets them by rotating a per-panel table, without a trigonometric call
+        per stage. Last ``<prefix>_rates<i>(cos_phi, sin_phi, p[2], k, cos_gamma, sin_gamma) -> rates[2]``: the turn
+        rate psi' of (30) at 0 and at k (it does not depend on the state), from which the certificate sets its steps.
 
     The C certificate integrates the whole n-step motion with these steps from the start state, the
     state-dependent right side as it is (no use of the heading structure the planner's leaf map
@@ -338,11 +373,20 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
     named = [algebraic(ca.Function(f"{prefix}_rhs{i}", f.sx_in(), f.call(f.sx_in()), f.name_in(), f.name_out()))
              for i, f in enumerate(rhs)]
     steps = []
-    for i, f in enumerate(rhs):
-        rk = rk8_step(f)
-        steps.append(algebraic(ca.Function(f"{prefix}_rk8_{i}", rk.sx_in(), rk.call(rk.sx_in()), rk.name_in(),
-                                           rk.name_out())))
-    return named + steps
+    for i, g0 in enumerate(named):
+        g = algebraic(g0, angles=(0, 4))    # (cos phi, sin phi, x, p, k, cos gamma, sin gamma) -> xdot
+        x, h, c, s = ca.SX.sym("x", 3), ca.SX.sym("h"), ca.SX.sym("cos_t", RK8_STAGES), ca.SX.sym("sin_t", RK8_STAGES)
+        params = [ca.SX.sym(g.name_in(j), g.sparsity_in(j)) for j in range(3, g.n_in())]
+        x_next = rk8_formula(x, h, lambda q, xs, g=g, c=c, s=s, params=params: g(c[q], s[q], xs, *params))
+        steps.append(algebraic(ca.Function(f"{prefix}_rk8_{i}", [x, c, s, h, *params], [x_next],
+                                           ["x", "cos_t", "sin_t", "h", *g.name_in()[3:]], ["x_next"])))
+    rates = []
+    for i, g0 in enumerate(named):
+        phi, p, k, gamma = ca.SX.sym("phi"), ca.SX.sym("p", g0.sparsity_in(2)), ca.SX.sym("k"), ca.SX.sym("gamma")
+        turn_rates = ca.vertcat(g0(phi, ca.DM.zeros(3), p, 0.0, gamma)[2], g0(phi, ca.DM.zeros(3), p, k, gamma)[2])
+        rates.append(algebraic(ca.Function(f"{prefix}_rates{i}", [phi, p, k, gamma], [turn_rates],
+                                           ["phi", "p", "k", "gamma"], ["rates"]), angles=(0, 3)))
+    return named + steps + rates
 
 
 def motion_functions(prefix: str = DEFAULT_PREFIX) -> list:
@@ -519,11 +563,15 @@ def _two_pi_parts() -> dict:
 def _enumeration_constants(k_max: float) -> dict:
     """The constants of :mod:`rollplan.planners.geometric.leafmap` and :mod:`~rollplan.planners.geometric.enumerate`
     the C planner uses, and the sizes of its static tables for ``k <= k_max``."""
+    if leafmap.ORDER % 2:
+        raise ValueError("the C leaf map evaluates the nodes chi < pi only (symmetry): it needs an even ORDER")
     x, w = np.polynomial.legendre.leggauss(leafmap.ORDER)
     buckets = [(kk, p) for kk, p in leafmap.BUCKETS if kk < k_max] + [next((kk, p) for kk, p in leafmap.BUCKETS
                                                                            if kk >= k_max)]
     t_end = abs(float(leafmap.turn(A_MAX, k_max)))
     ntable = math.ceil(t_end / enumerate_.TABLE_PHASE) + 2 + math.ceil(A_MAX / enumerate_.TABLE_STEP) + 1
+    if ntable >= 2 ** 16:
+        raise ValueError(f"the rho table at k_max = {k_max:g} needs {ntable} radii: its buckets hold 16-bit indices")
     return {
         "@ORDER@": str(leafmap.ORDER),
         "@GAUSS_X@": ", ".join(repr(float(v)) for v in x),
@@ -623,6 +671,8 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@CERT_BASE@": repr(CERT_BASE),
         "@CERT_SAFETY@": repr(CERT_SAFETY),
         "@NPANEL@": str(len(breaks) - 1),
+        "@RK8_STAGES@": str(RK8_STAGES),
+        "@RK8_C@": ", ".join(repr(float(c)) for c in DOP853_C),
         "@BREAKS@": ", ".join(repr(float(b)) for b in breaks),
         "@QEMU_TOL@": "1e-12" if real == "double" else "1e-5",
         "@M4F_EXTRA@": "" if real == "double" else "-Wdouble-promotion",

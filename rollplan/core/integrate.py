@@ -38,7 +38,8 @@ from . import model
 from .curves import Curve, rotated_point
 
 __all__ = ["DEFAULT_NODES", "piece_rhs", "heading_free_rates", "check_heading_structure", "chebyshev_matrices",
-           "spectral_leaf", "spectral_step", "CvodesIntegrator", "DOP853_C", "DOP853_A", "DOP853_B", "rk8_step"]
+           "spectral_leaf", "spectral_step", "CvodesIntegrator", "DOP853_C", "DOP853_A", "DOP853_B",
+           "rk8_formula", "rk8_step"]
 
 #: Chebyshev degree per panel of the spectral integrator.
 DEFAULT_NODES = 32
@@ -285,6 +286,26 @@ DOP853_B = (5.42937341165687622380535766363e-2, 0.0, 0.0, 0.0, 0.0, 4.4503128927
             2.01365400804030348374776537501e-1, 4.47106157277725905176885569043e-2)
 
 
+def rk8_formula(x, h, stage):
+    """``x(t + h)`` by the order-8 formula of DOP853 (:data:`DOP853_A`, :data:`DOP853_B`) from ``x = x(t)``.
+
+    ``stage(s, x_s)`` returns the derivative at stage ``s`` (``0 <= s < 12``), at the time ``t + DOP853_C[s] h``
+    and the stage state ``x_s``; it is called once per stage, in order (symbolic or numeric ``x``).
+    """
+    stages = []
+    for s in range(len(DOP853_C)):
+        xs = x
+        for j in range(s):
+            if (s, j) in DOP853_A:
+                xs = xs + h * DOP853_A[s, j] * stages[j]
+        stages.append(stage(s, xs))
+    x_new = x
+    for s, weight in enumerate(DOP853_B):
+        if weight != 0.0:
+            x_new = x_new + h * weight * stages[s]
+    return x_new
+
+
 def rk8_step(f: ca.Function) -> ca.Function:
     """One step of the explicit eighth-order Runge-Kutta formula of Dormand and Prince.
 
@@ -304,16 +325,6 @@ def rk8_step(f: ca.Function) -> ca.Function:
     """
     x, t, h = ca.SX.sym("x", f.size1_in(1)), ca.SX.sym("t"), ca.SX.sym("h")
     params = [ca.SX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(2, f.n_in())]
-    stages = []
-    for s in range(len(DOP853_C)):
-        xs = x
-        for j in range(s):
-            if (s, j) in DOP853_A:
-                xs = xs + h * DOP853_A[s, j] * stages[j]
-        stages.append(f(t + DOP853_C[s] * h, xs, *params))
-    x_new = x
-    for s, weight in enumerate(DOP853_B):
-        if weight != 0.0:
-            x_new = x_new + h * weight * stages[s]
+    x_new = rk8_formula(x, h, lambda s, xs: f(t + DOP853_C[s] * h, xs, *params))
     return ca.Function(f"{f.name()}_rk8", [x, t, h, *params], [x_new],
                        ["x", "t", "h", *[f.name_in(i) for i in range(2, f.n_in())]], ["x_next"])

@@ -4,7 +4,8 @@
  * planner follows rollplan.planners.geometric line by line; each formula is written once, here, with
  * the Python function it ports:
  *   leafmap.turn / turn_dr / turn_inverse   closed-form turn E(r, k) of a leaf and its inverse
- *   leafmap.displacement / signed_length    the leaf's displacement d(r, k) by the Gauss rule in chi,
+ *   leafmap.displacement / signed_length    the leaf's displacement d(r, k) by the Gauss rule in chi (the
+ *                                           nodes chi < pi; the others by the symmetry chi -> 2 pi - chi),
  *                                           and rho = Re(exp(i E / 2) d)
  *   enumerate.branches / branch_values      branches m of (32), the scalar equation g(x) of (33)
  *   enumerate.rho_table / rho_lookup        rho tabulated once per k (cubic Hermite)
@@ -91,51 +92,51 @@ int @PREFIX@_step_eval(casadi_real a, casadi_real b, casadi_real k, casadi_real 
     return @PREFIX@_step_jac(s_arg, s_res, s_iw, s_w, 0);
 }
 
-/* The curve ODE (28)-(30) along leaf `leaf` at phi (generated). Returns 0 on success. */
-static int curve_rhs(int leaf, casadi_real phi, const casadi_real x[3], const casadi_real ab[2], casadi_real k, casadi_real gamma,
-                     casadi_real xdot[3]) {
-    s_arg[0] = &phi;
-    s_arg[1] = x;
-    s_arg[2] = ab;
-    s_arg[3] = &k;
-    s_arg[4] = &gamma;
-    s_res[0] = xdot;
-    return leaf ? @PREFIX@_rhs1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rhs0(s_arg, s_res, s_iw, s_w, 0);
-}
-
 /* RK8 steps per panel of each leaf into s_counts: ceil(w (CERT_BASE + rate) / CERT_DELTA) for a panel of
  * width w, rate = max |psi'_0| + |psi'_k - psi'_0| over 5 points of the panel: psi' of (30) at k = 0 (the
- * rolling part) and at k (plus the spin part k w); psi' does not depend on the state. Both parts count
- * separately: near A_MAX they are large and cancel in part for k near 1/2, while the path is still steep. */
+ * rolling part) and at k (plus the spin part k w); psi' does not depend on the state (generated rates<i>). Both
+ * parts count separately: near A_MAX they are large and cancel in part for k near 1/2, while the path is still
+ * steep. */
 static int counts(const casadi_real ab[2], casadi_real k, casadi_real gamma) {
-    const casadi_real zero[3] = {0.0, 0.0, 0.0};
-    casadi_real w, rate, n, xd[3], x0[3], phi;
+    casadi_real w, rate[2], n, r[2], phi, cp[2], cg[2];
     int leaf, j, q;
-    for (leaf = 0; leaf < 2; ++leaf) {
-        for (j = 0; j < NPANEL; ++j) {
-            w = s_breaks[j + 1] - s_breaks[j];
-            rate = 0.0;
-            for (q = 0; q <= 4; ++q) {
-                phi = s_breaks[j] + 0.25 * q * w;
-                if (curve_rhs(leaf, phi, zero, ab, k, gamma, xd) || curve_rhs(leaf, phi, zero, ab, 0.0, gamma, x0)
-                    || !isfinite(xd[2]) || !isfinite(x0[2]))
+    cg[0] = cos(gamma);
+    cg[1] = sin(gamma);
+    for (j = 0; j < NPANEL; ++j) {
+        w = s_breaks[j + 1] - s_breaks[j];
+        rate[0] = rate[1] = 0.0;
+        for (q = 0; q <= 4; ++q) {
+            phi = s_breaks[j] + 0.25 * q * w;
+            cp[0] = cos(phi);
+            cp[1] = sin(phi);
+            for (leaf = 0; leaf < 2; ++leaf) {
+                s_arg[0] = cp;
+                s_arg[1] = cp + 1;
+                s_arg[2] = ab;
+                s_arg[3] = &k;
+                s_arg[4] = cg;
+                s_arg[5] = cg + 1;
+                s_res[0] = r;
+                if ((leaf ? @PREFIX@_rates1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rates0(s_arg, s_res, s_iw, s_w, 0))
+                    || !isfinite(r[0]) || !isfinite(r[1]))
                     return 1;
-                rate = fmax(rate, fabs(x0[2]) + fabs(xd[2] - x0[2]));
+                rate[leaf] = fmax(rate[leaf], fabs(r[0]) + fabs(r[1] - r[0]));
             }
-            n = ceil(w * (CERT_BASE + rate) / CERT_DELTA);
+        }
+        for (leaf = 0; leaf < 2; ++leaf) {
+            n = ceil(w * (CERT_BASE + rate[leaf]) / CERT_DELTA);
             s_counts[leaf][j] = n > CERT_MAX_PANEL_STEPS ? CERT_MAX_PANEL_STEPS : (int)n;
         }
     }
     return 0;
 }
 
-/* `n` equal RK8 steps (generated) over [t0, t0 + n h] along leaf `leaf`, x in place: of the curve ODE
- * (x = (u_a, v_a, psi), jj = NULL) or of the time law's ODE (x = (u_a, v_a, psi, rotor angles), jj = the
- * inertias). */
-static int rk8_steps(int leaf, casadi_real *x, casadi_real t0, casadi_real h, int n, const casadi_real ab[2],
-                     casadi_real k, casadi_real gamma, const casadi_real *jj) {
+/* `n` equal RK8 steps (generated) of the time law's ODE over [t0, t0 + n h] along leaf `leaf`, x = (u_a, v_a, psi,
+ * rotor angles) in place, jj = the inertias. */
+static int rk8x_steps(int leaf, casadi_real x[5], casadi_real t0, casadi_real h, int n, const casadi_real ab[2],
+                      casadi_real k, casadi_real gamma, const casadi_real jj[3]) {
     casadi_real t, xn[5];
-    int q, i, status;
+    int q, i;
     for (q = 0; q < n; ++q) {
         t = t0 + q * h;
         s_arg[0] = x;
@@ -144,30 +145,79 @@ static int rk8_steps(int leaf, casadi_real *x, casadi_real t0, casadi_real h, in
         s_arg[3] = ab;
         s_arg[4] = &k;
         s_arg[5] = &gamma;
+        s_arg[6] = jj;
+        s_arg[7] = jj + 1;
+        s_arg[8] = jj + 2;
         s_res[0] = xn;
-        if (jj) {
-            s_arg[6] = jj;
-            s_arg[7] = jj + 1;
-            s_arg[8] = jj + 2;
-            status = leaf ? @PREFIX@_rk8x_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8x_0(s_arg, s_res, s_iw, s_w, 0);
-        } else {
-            status = leaf ? @PREFIX@_rk8_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8_0(s_arg, s_res, s_iw, s_w, 0);
-        }
-        if (status) return 1;
-        for (i = 0; i < (jj ? 5 : 3); ++i) x[i] = xn[i];
+        if (leaf ? @PREFIX@_rk8x_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8x_0(s_arg, s_res, s_iw, s_w, 0)) return 1;
+        for (i = 0; i < 5; ++i) x[i] = xn[i];
     }
     return 0;
 }
 
-/* The whole n-step motion from rest with mult x s_counts RK8 steps per panel; x in place. */
+/* Stages of the RK8 formula and their nodes c (rollplan.core.integrate.DOP853_C): stage j of a step from phi = t
+ * is at t + c[j] h. */
+#define NSTAGE @RK8_STAGES@
+static const casadi_real s_rk8_c[NSTAGE] = {@RK8_C@};
+
+/* cos(c[j] h) (rot[j]) and sin(c[j] h) (rot[NSTAGE + j]) of the stages of a step h. */
+static void stage_rotations(casadi_real h, casadi_real rot[2 * NSTAGE]) {
+    int j;
+    for (j = 0; j < NSTAGE; ++j) {
+        rot[j] = cos(s_rk8_c[j] * h);
+        rot[NSTAGE + j] = sin(s_rk8_c[j] * h);
+    }
+}
+
+/* `n` equal RK8 steps (generated) of the curve ODE over [t0, t0 + n h] along leaf `leaf`, x = (u_a, v_a, psi) in
+ * place. The right side depends on phi through cos phi and sin phi only; at the stages they are
+ * cos(t + c h) = cos t cos(c h) - sin t sin(c h) and sin(t + c h) = sin t cos(c h) + cos t sin(c h) with the
+ * stage table rot of h (stage_rotations): one cos and sin per step instead of one per stage. */
+static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, int n, const casadi_real rot[2 * NSTAGE],
+                     const casadi_real ab[2], casadi_real k, const casadi_real cg[2]) {
+    casadi_real t, ct, st, cs[NSTAGE], sn[NSTAGE], xn[3];
+    int q, j;
+    for (q = 0; q < n; ++q) {
+        t = t0 + q * h;
+        ct = cos(t);
+        st = sin(t);
+        for (j = 0; j < NSTAGE; ++j) {
+            cs[j] = ct * rot[j] - st * rot[NSTAGE + j];
+            sn[j] = st * rot[j] + ct * rot[NSTAGE + j];
+        }
+        s_arg[0] = x;
+        s_arg[1] = cs;
+        s_arg[2] = sn;
+        s_arg[3] = &h;
+        s_arg[4] = ab;
+        s_arg[5] = &k;
+        s_arg[6] = cg;
+        s_arg[7] = cg + 1;
+        s_res[0] = xn;
+        if (leaf ? @PREFIX@_rk8_1(s_arg, s_res, s_iw, s_w, 0) : @PREFIX@_rk8_0(s_arg, s_res, s_iw, s_w, 0)) return 1;
+        x[0] = xn[0];
+        x[1] = xn[1];
+        x[2] = xn[2];
+    }
+    return 0;
+}
+
+/* The whole n-step motion from rest with mult x s_counts RK8 steps per panel; x in place. Every step of the
+ * motion is integrated (from the state the previous one left); only the stage tables of the panels, which
+ * depend on the panel's step h alone, are computed once, in the first step. */
 static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2], casadi_real k, casadi_real gamma) {
+    static casadi_real rot[2][NPANEL][2 * NSTAGE];   /* static: not reentrant anyway; keeps the stack small */
+    casadi_real h, cg[2];
     int s, leaf, j, nj;
+    cg[0] = cos(gamma);
+    cg[1] = sin(gamma);
     for (s = 0; s < steps; ++s) {
         for (leaf = 0; leaf < 2; ++leaf) {
             for (j = 0; j < NPANEL; ++j) {
                 nj = mult * s_counts[leaf][j];
-                if (rk8_steps(leaf, x, s_breaks[j], (s_breaks[j + 1] - s_breaks[j]) / nj, nj, ab, k, gamma, NULL))
-                    return 1;
+                h = (s_breaks[j + 1] - s_breaks[j]) / nj;
+                if (s == 0) stage_rotations(h, rot[leaf][j]);
+                if (rk8_steps(leaf, x, s_breaks[j], h, nj, rot[leaf][j], ab, k, cg)) return 1;
             }
         }
     }
@@ -226,12 +276,17 @@ static const int s_bucket_p[NBUCKET] = {@BUCKET_P@};
 /* State kept for the last k: the rule's nodes, E(A_MAX) and the rho table. */
 static int s_ready = 0;
 static casadi_real s_k = 0.0;
-static int s_nodes;                                       /* ORDER x panels */
-static casadi_real s_chi[ORDER * MAX_PANELS], s_cchi[ORDER * MAX_PANELS], s_schi[ORDER * MAX_PANELS],
-    s_wchi[ORDER * MAX_PANELS];
+static int s_nodes;                                       /* ORDER x panels / 2: the nodes chi < pi */
+static casadi_real s_chi[ORDER * MAX_PANELS / 2], s_cchi[ORDER * MAX_PANELS / 2], s_schi[ORDER * MAX_PANELS / 2],
+    s_wchi[ORDER * MAX_PANELS / 2];
 static casadi_real s_e_min;                               /* E(A_MAX, k) < 0 */
 static int s_nt;                                          /* radii of the table */
 static casadi_real s_tr[NTABLE], s_te[NTABLE], s_trho[NTABLE], s_tdrho[NTABLE];
+static casadi_real s_tdu[NTABLE];                         /* du/dE at the radii, u = r^2 (inf where dE/du = 0) */
+/* Buckets of the table: radius bucket j (r >= A_MAX j / NTABLE) starts at the last radius s_tr[i] <= A_MAX j / NTABLE,
+ * s_rb[j] = i; turn bucket j (E <= e_min j / NTABLE) starts at the last radius with s_te[i] >= e_min j / NTABLE. */
+static unsigned short s_rb[NTABLE + 1], s_eb[NTABLE + 1];
+static casadi_real s_rscale, s_escale;                    /* bucket of r: r s_rscale; of a turn E: E s_escale */
 static casadi_real s_eps, s_eps_g;                        /* table error bound; its effect on g */
 
 /* (c, s, rho) of radius r: c = sqrt(1 - r^2), s = sqrt(1 - 2 r^2), rho = r^2 / (c^2 + s) (leafmap._consts). */
@@ -255,27 +310,55 @@ static casadi_real turn_dr(casadi_real r, casadi_real k) {
     return TWO_PI * r / c * (1.0 - k * (1.0 + 1.0 / (s * s * s)));
 }
 
+/* E(r, k) and dE/dr (turn and turn_dr from one evaluation of c and s). */
+static casadi_real turn_and_dr(casadi_real r, casadi_real k, casadi_real *dr) {
+    casadi_real c, s, rho;
+    consts(r, &c, &s, &rho);
+    *dr = TWO_PI * r / c * (1.0 - k * (1.0 + 1.0 / (s * s * s)));
+    return TWO_PI * r * r / (1.0 + c) - 2.0 * TWO_PI * k * c * r * r / (s * (1.0 + s));
+}
+
+/* Table radii i0 < i1 = i0 + 1 around x (s_tr[i0] <= x < s_tr[i1], i1 = s_nt - 1 at the end) if turn = 0, or around
+ * the turn x (s_te[i0] >= x > s_te[i1]) if turn = 1: bisection started in x's bucket (the whole table if the bucket's
+ * bounds do not hold x, which rounding at a bucket's edge may cause). */
+static void bracket(casadi_real x, int turn, int *lo, int *hi) {
+    const casadi_real *tab = turn ? s_te : s_tr;
+    const unsigned short *bucket = turn ? s_eb : s_rb;
+    casadi_real pos = x * (turn ? s_escale : s_rscale);
+    int j = pos >= 0.0 ? (pos < NTABLE ? (int)pos : NTABLE - 1) : 0, i0 = bucket[j], i1 = bucket[j + 1] + 1, im;
+    if (i1 > s_nt - 1) i1 = s_nt - 1;
+    if (i0 >= i1) i0 = i1 - 1;
+    if (turn ? !(tab[i0] >= x) : !(tab[i0] <= x)) i0 = 0;
+    if (i1 < s_nt - 1 && (turn ? !(tab[i1] < x) : !(tab[i1] > x))) i1 = s_nt - 1;
+    while (i1 - i0 > 1) {
+        im = (i0 + i1) / 2;
+        if (turn ? tab[im] >= x : tab[im] <= x) i0 = im; else i1 = im;
+    }
+    *lo = i0;
+    *hi = i1;
+}
+
 /* Radius r in [0, A_MAX] with E(r, k) = e (k >= 1/2: E strictly decreasing), NaN for e outside
  * [E(A_MAX), 0] (leafmap.turn_inverse): safeguarded Newton in u = r^2 (E is smooth in u, with
- * dE/du = (pi / c) (1 - k (1 + s^-3))) from a start interpolated in the table of the last k,
- * bisecting whenever a step leaves the bracket. */
+ * dE/du = (pi / c) (1 - k (1 + s^-3))) from a start interpolated in the table of the last k (cubic Hermite in E
+ * with the tabulated du/dE, linear where that is not finite or leaves the cell), bisecting whenever a step leaves
+ * the bracket. */
 static casadi_real turn_inverse(casadi_real e, casadi_real k) {
     const casadi_real umax = A_MAX * A_MAX;
-    casadi_real lo = 0.0, hi = umax, u, f, df, c, s, nxt;
-    int it, i0, i1, im;
+    casadi_real lo = 0.0, hi = umax, u, f, df, c, s, nxt, w, t;
+    int it, i0, i1;
     if (!(e <= 0.0 && e >= s_e_min)) return NAN;
     if (e >= 0.0) return 0.0;
     if (e <= s_e_min) return A_MAX;
-    if (s_nt > 1) {           /* s_te decreases along the table: bisection for s_te[i0] >= e > s_te[i1] */
-        i0 = 0;
-        i1 = s_nt - 1;
-        while (i1 - i0 > 1) {
-            im = (i0 + i1) / 2;
-            if (s_te[im] >= e) i0 = im; else i1 = im;
-        }
+    if (s_nt > 1) {
+        bracket(e, 1, &i0, &i1);
         lo = s_tr[i0] * s_tr[i0];
         hi = s_tr[i1] * s_tr[i1];
-        u = lo + (hi - lo) * (e - s_te[i0]) / (s_te[i1] - s_te[i0]);
+        w = s_te[i1] - s_te[i0];
+        t = (e - s_te[i0]) / w;
+        u = (2 * t * t * t - 3 * t * t + 1) * lo + (t * t * t - 2 * t * t + t) * w * s_tdu[i0]
+            + (-2 * t * t * t + 3 * t * t) * hi + (t * t * t - t * t) * w * s_tdu[i1];
+        if (!(u >= lo && u <= hi)) u = lo + (hi - lo) * t;
         if (!(u >= lo && u <= hi)) u = 0.5 * (lo + hi);
     } else {
         u = umax * e / s_e_min;
@@ -314,7 +397,8 @@ static int s_memo_next = 0, s_memo_used = 0;
 
 static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_real dd[2]) {
     casadi_real c, s, rho, br = 0.0, bi = 0.0, tr = 0.0, ti = 0.0, c_r = 0.0, s_r = 0.0, g, rho_r = 0.0;
-    casadi_real cx, sx, den, q, phi, jac, theta, ec, es, w, phi_rho, jac_rho, theta_r, p1, p2;
+    casadi_real cx, sx, den, q, phi, jac, theta, ec, es, w, phi_rho, jac_rho, theta_r, p1, p2, tt, ct, st, fr, fi, qr,
+        qi, tt_r;
     int j;
     for (j = 0; j < s_memo_used; ++j) {
         if (s_memo[j].r == r && s_memo[j].k == k && (s_memo[j].has_dd || !dd)) {
@@ -357,11 +441,23 @@ static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_
             ti += w * (p1 * es + p2 * ec);
         }
     }
-    d[0] = r * br;
-    d[1] = r * bi;
+    /* the nodes chi > pi: phi(2 pi - chi) = 2 pi - phi(chi), phi' and the weights are symmetric, so
+     * theta(2 pi - chi) = T - theta(chi) with T = 2 pi ((1 - k) c + k c / s), and that half of the rule is
+     * exp(i T) conj(I) for I = br + i bi the half summed above; of the r-derivative, exp(i T) (conj(J) + i T_r conj(I))
+     * for J = tr + i ti */
+    tt = TWO_PI * ((1.0 - k) * c + k * c / s);
+    ct = cos(tt);
+    st = sin(tt);
+    fr = br + ct * br + st * bi;
+    fi = bi + st * br - ct * bi;
+    d[0] = r * fr;
+    d[1] = r * fi;
     if (dd) {
-        dd[0] = br + r * tr;
-        dd[1] = bi + r * ti;
+        tt_r = TWO_PI * ((1.0 - k) * c_r + k * (c_r * s - c * s_r) / (s * s));
+        qr = tr + tt_r * bi;
+        qi = -ti + tt_r * br;
+        dd[0] = fr + r * (tr + ct * qr - st * qi);
+        dd[1] = fi + r * (ti + st * qr + ct * qi);
     }
     j = s_memo_next;
     s_memo_next = (s_memo_next + 1) % MEMO;
@@ -394,12 +490,9 @@ static void signed_length(casadi_real r, casadi_real k, casadi_real *rho, casadi
 
 /* Cubic Hermite lookup of (rho, d rho / dr) at r in the table (enumerate.rho_lookup). */
 static void rho_lookup(casadi_real r, casadi_real *rho, casadi_real *drho) {
-    int i0 = 0, i1 = s_nt - 1, im;
+    int i0, i1;
     casadi_real w, t, t2, t3, g0, g1, p0, p1;
-    while (i1 - i0 > 1) {
-        im = (i0 + i1) / 2;
-        if (s_tr[im] <= r) i0 = im; else i1 = im;
-    }
+    bracket(r, 0, &i0, &i1);
     w = s_tr[i1] - s_tr[i0];
     t = (r - s_tr[i0]) / w;
     t2 = t * t;
@@ -428,16 +521,21 @@ static int prepare(casadi_real k) {
         }
     }
     h = PI / panels;
-    s_nodes = ORDER * panels;
+    /* the rule's nodes chi < pi only (displacement() gets the others by symmetry): the panels' centres are
+     * symmetric about pi, the Gauss nodes about the centres, ORDER is even */
+    s_nodes = 0;
     for (i = 0; i < panels; ++i) {
         for (j = 0; j < ORDER; ++j) {
             x = (2.0 * i + 1.0) * h + h * s_gx[j];
-            s_chi[i * ORDER + j] = x;
-            s_cchi[i * ORDER + j] = cos(x);
-            s_schi[i * ORDER + j] = sin(x);
-            s_wchi[i * ORDER + j] = h * s_gw[j];
+            if (!(x < PI) || s_nodes >= ORDER * MAX_PANELS / 2) continue;
+            s_chi[s_nodes] = x;
+            s_cchi[s_nodes] = cos(x);
+            s_schi[s_nodes] = sin(x);
+            s_wchi[s_nodes] = h * s_gw[j];
+            ++s_nodes;
         }
     }
+    if (2 * s_nodes != ORDER * panels) return 1;
     s_e_min = turn(A_MAX, k);
     s_nt = 0;
     t_end = s_e_min;
@@ -460,7 +558,20 @@ static int prepare(casadi_real k) {
     for (i = 0; i < n; ++i) {
         signed_length(s_tr[i], k, &s_trho[i], &s_tdrho[i]);
         s_te[i] = turn(s_tr[i], k);
+        re = sqrt(1.0 - s_tr[i] * s_tr[i]);                 /* c and s of consts(); du/dE = 1 / (dE/du) */
+        rr = sqrt(1.0 - 2.0 * s_tr[i] * s_tr[i]);
+        s_tdu[i] = re / (PI * (1.0 - k * (1.0 + 1.0 / (rr * rr * rr))));
         if (!(isfinite(s_trho[i]) && isfinite(s_tdrho[i]))) return 1;
+    }
+    s_rscale = NTABLE / A_MAX;
+    s_escale = NTABLE / s_e_min;
+    for (i = 0, j = 0; j <= NTABLE; ++j) {   /* buckets (both sequences increase along the table) */
+        while (i + 1 < n && s_tr[i + 1] <= A_MAX * j / NTABLE) ++i;
+        s_rb[j] = (unsigned short)i;
+    }
+    for (i = 0, j = 0; j <= NTABLE; ++j) {
+        while (i + 1 < n && s_te[i + 1] >= s_e_min * j / NTABLE) ++i;
+        s_eb[j] = (unsigned short)i;
     }
     s_nt = n;
     err = 0.0;
@@ -493,6 +604,7 @@ typedef struct {
     casadi_real h;       /* shift per step h_m (33)-(34) */
     casadi_real x_end;   /* range [0, x_end] of the smaller radius */
     casadi_real y0;      /* smallest a + b on the branch */
+    casadi_real c_half;  /* cos(eta / 2) */
 } branch_t;
 
 /* Larger radius y(x) = E^-1(E(x) - e) of the branch at the smaller radius x (enumerate._other). */
@@ -508,8 +620,13 @@ static casadi_real other(casadi_real x, casadi_real e, casadi_real k) {
  * rho from the table (accurate = 0) or from the accurate map (accurate = 1). */
 static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int accurate, casadi_real *g,
                           casadi_real *dg, casadi_real *a, casadi_real *b) {
-    casadi_real y = other(x, br->e, k), dy, da, db, ra, rb, pa, pb, c;
-    dy = br->e == 0.0 ? 1.0 : turn_dr(x, k) / turn_dr(y, k);
+    casadi_real y = x, dy = 1.0, ex, dex, da, db, ra, rb, pa, pb, c;
+    if (br->e != 0.0) {   /* y = other(x) and dy/dx = E'(x) / E'(y) */
+        ex = turn_and_dr(x, k, &dex);
+        y = turn_inverse(ex - br->e, k);
+        if (isnan(y)) y = A_MAX;
+        dy = dex / turn_dr(y, k);
+    }
     if (!isfinite(dy)) dy = isnan(dy) ? 0.0 : (dy > 0.0 ? REAL_MAX : -REAL_MAX);   /* numpy's nan_to_num */
     if (br->eta >= 0.0) {
         *a = x;
@@ -529,7 +646,7 @@ static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int 
         rho_lookup(*a, &ra, &pa);
         rho_lookup(*b, &rb, &pb);
     }
-    c = cos(0.5 * br->eta);
+    c = br->c_half;
     *g = ra * ra + rb * rb + 2.0 * c * ra * rb - br->h * br->h;
     *dg = 2.0 * (ra + c * rb) * pa * da + 2.0 * (rb + c * ra) * pb * db;
 }
@@ -538,6 +655,15 @@ static casadi_real gval(casadi_real x, const branch_t *br, casadi_real k, casadi
     casadi_real g, d, a, b;
     branch_values(x, br, k, 0, &g, &d, &a, &b);
     if (dg) *dg = d;
+    return g;
+}
+
+/* gval and the larger radius y(x) (other()) that it computed. */
+static casadi_real gvaly(casadi_real x, const branch_t *br, casadi_real k, casadi_real *dg, casadi_real *y) {
+    casadi_real g, d, a, b;
+    branch_values(x, br, k, 0, &g, &d, &a, &b);
+    if (dg) *dg = d;
+    *y = br->eta >= 0.0 ? b : a;
     return g;
 }
 
@@ -556,6 +682,7 @@ static int make_branch(long m, casadi_real psi_w, int steps, casadi_real h_des, 
     br->eta = eta;
     br->e = fabs(eta);
     br->h = h_des / gain;
+    br->c_half = cos(0.5 * eta);
     br->y0 = turn_inverse(-br->e, k);
     br->x_end = turn_inverse(s_e_min + br->e, k);
     return isfinite(br->h) && isfinite(br->y0) && isfinite(br->x_end);
@@ -704,7 +831,7 @@ static casadi_real rotation(casadi_real u, casadi_real v, casadi_real psi, int s
 
 typedef struct {
     casadi_real u, v, psi_w, k, best;   /* target (psi wrapped), inertia ratio, shortest certified a + b so far */
-    int steps, certify, rejected, incomplete;
+    int steps, certify, defer, rejected, incomplete;
     long turns, roots;
     casadi_real rej[5];                 /* a, b, gamma, residual, bound of the best rejected root */
     @PREFIX@_plan_t *plan;              /* filled in by an accepted root only */
@@ -722,7 +849,7 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
     if (!(a > 0.0 && b > 0.0)) return 0;
     S->roots++;
     gamma = rotation(S->u, S->v, S->psi_w, S->steps, a, b, S->k, &eta, &h, &predicted);
-    if (S->certify)
+    if (S->certify && !S->defer)
         status = @PREFIX@_certify(a, b, gamma, S->steps, S->k, S->u, S->v, S->psi_w, NULL, &residual, &bound);
     if (status != @PREFIX_UPPER@_OK) {
         if (!S->rejected || residual < S->rej[3]) {   /* the best rejected root, reported if no plan is found */
@@ -762,7 +889,7 @@ typedef struct {
 static int search_branch(search_t *S, const branch_t *br) {
     const casadi_real k = S->k, floor_g = 1e-13 * (1.0 + br->h * br->h) + s_eps_g;
     casadi_real t1 = turn(br->x_end, k), xp, xl, prev, g, p, crit[2], hc, low, gm, pm, err, big, xm, xs[MAX_CELL_ROOTS];
-    casadi_real last_root = -1.0, hv, t;
+    casadi_real last_root = -1.0, hv, t, y_prev;
     static cell_t stack[STACK_CELLS];   /* static: the planner is not reentrant anyway, and the stack stays small */
     cell_t c;
     int nt, nx, ip = 1, ix = 1, top, nroot, i, j, crosses, status;
@@ -774,22 +901,31 @@ static int search_branch(search_t *S, const branch_t *br) {
     if (!(br->x_end > 0.0)) return 0;
     prev = 0.0;
     g = gval(prev, br, k, &p);
+    y_prev = other(prev, br->e, k);
+    xp = -1.0;                          /* the next phase point, computed when ip moves on */
     while (prev < br->x_end) {
         /* next grid point: the smaller of the next phase point and the next uniform point */
-        xp = ip < nt ? (ip == nt - 1 ? br->x_end : turn_inverse(t1 * ip / (nt - 1), k)) : INFINITY;
+        if (xp < 0.0) {
+            xp = ip < nt ? (ip == nt - 1 ? br->x_end : turn_inverse(t1 * ip / (nt - 1), k)) : INFINITY;
+            if (isnan(xp)) xp = br->x_end;
+        }
         xl = ix < nx ? (ix == nx - 1 ? br->x_end : br->x_end * ix / (nx - 1)) : INFINITY;
-        if (isnan(xp)) xp = br->x_end;
-        if (xp <= xl) ++ip; else ++ix;
         t = xp <= xl ? xp : xl;
+        if (xp <= xl) {
+            ++ip;
+            xp = -1.0;
+        } else {
+            ++ix;
+        }
         if (!(t > prev)) continue;
         if (t > br->x_end) t = br->x_end;
         /* nothing on or after this cell can be shorter than the best plan: a + b = x + y(x) grows with x */
-        if (prev + other(prev, br->e, k) >= S->best) return 0;
+        if (prev + y_prev >= S->best) return 0;
         stack[0].x0 = prev;
         stack[0].x1 = t;
         stack[0].g0 = g;
         stack[0].p0 = p;
-        stack[0].g1 = g = gval(t, br, k, &p);
+        stack[0].g1 = g = gvaly(t, br, k, &p, &y_prev);
         stack[0].p1 = p;
         prev = t;
         top = 1;
@@ -869,13 +1005,46 @@ static casadi_real wrap_turns(casadi_real psi, long *turns) {
     return w;
 }
 
+/* The search of plan_with over the branches (all, in the order of their smallest a + b, or options->branch only). */
+static void search(search_t *S, const @PREFIX@_options_t *options, casadi_real h_des) {
+    branch_t br;
+    casadi_real lam = -s_e_min, dm;
+    long lo, hi, mp, mn, m;
+    int steps = S->steps;
+    S->best = INFINITY;
+    S->rejected = S->incomplete = 0;
+    S->roots = 0;
+    S->plan->branches = 0;
+    /* branches with |eta_m| <= lam, in increasing |psi_w + 2 pi m| (the order of their smallest a + b, y0;
+     * ties: smaller m first) */
+    dm = floor((steps * lam - S->psi_w) / TWO_PI);
+    hi = (long)dm;
+    lo = (long)ceil((-steps * lam - S->psi_w) / TWO_PI);
+    if (options && options->use_branch) {
+        m = options->branch + S->turns;
+        if (m >= lo && m <= hi && make_branch(m, S->psi_w, steps, h_des, S->k, &br)) {
+            S->plan->branches = 1;
+            search_branch(S, &br);
+        }
+    } else {
+        /* two runs from the centre c = -psi_w / (2 pi) in [-1/2, 1/2]: mn = floor(c) down, mp = mn + 1 up */
+        mn = (long)floor(-S->psi_w / TWO_PI);
+        for (mp = mn + 1; mn >= lo || mp <= hi;) {
+            int use_neg = mp > hi || (mn >= lo && fabs(S->psi_w + TWO_PI * mn) <= fabs(S->psi_w + TWO_PI * mp));
+            m = use_neg ? mn-- : mp++;
+            if (m < lo || m > hi || !make_branch(m, S->psi_w, steps, h_des, S->k, &br)) continue;
+            if (!(br.y0 < S->best)) break;   /* y0 grows along the order: nothing left can be shorter */
+            S->plan->branches++;
+            search_branch(S, &br);
+        }
+    }
+    S->plan->roots = S->roots;
+}
+
 int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k,
                        const @PREFIX@_options_t *options, @PREFIX@_plan_t *plan) {
     search_t S;
-    branch_t br;
-    casadi_real h_des, lam, dm;
-    long lo, hi, mp, mn, m;
-    int only = options && options->use_branch;
+    casadi_real h_des, residual, bound;
     if (plan == NULL) return @PREFIX_UPPER@_BAD_INPUT;
     plan->a = plan->b = plan->gamma = plan->eta = plan->h = NAN;
     plan->residual = plan->bound = plan->predicted = INFINITY;
@@ -893,37 +1062,26 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
     S.v = v;
     S.k = k;
     S.steps = steps;
-    S.best = INFINITY;
     S.certify = !options || options->certify;
-    S.rejected = S.incomplete = 0;
-    S.roots = 0;
     S.plan = plan;
     S.psi_w = wrap_turns(psi, &S.turns);
-    lam = -s_e_min;
-    /* branches with |eta_m| <= lam, in increasing |psi_w + 2 pi m| (the order of their smallest a + b, y0;
-     * ties: smaller m first) */
-    dm = floor((steps * lam - S.psi_w) / TWO_PI);
-    hi = (long)dm;
-    lo = (long)ceil((-steps * lam - S.psi_w) / TWO_PI);
-    if (only) {
-        m = options->branch + S.turns;
-        if (m >= lo && m <= hi && make_branch(m, S.psi_w, steps, h_des, k, &br)) {
-            plan->branches = 1;
-            search_branch(&S, &br);
+    /* First the shortest root of all (no certificate during the search), then its certificate: if it holds, that
+     * root is the shortest certified plan (every certified plan is a root). If it fails, search again certifying
+     * every root on the way (the pruning then uses certified plans only). */
+    S.defer = S.certify;
+    search(&S, options, h_des);
+    if (S.defer && S.best < INFINITY) {
+        if (@PREFIX@_certify(plan->a, plan->b, plan->gamma, steps, k, u, v, S.psi_w, NULL, &residual, &bound)
+            == @PREFIX_UPPER@_OK) {
+            plan->residual = residual;
+            plan->bound = bound;
+            return @PREFIX_UPPER@_OK;
         }
-    } else {
-        /* two runs from the centre c = -psi_w / (2 pi) in [-1/2, 1/2]: mn = floor(c) down, mp = mn + 1 up */
-        mn = (long)floor(-S.psi_w / TWO_PI);
-        for (mp = mn + 1; mn >= lo || mp <= hi;) {
-            int use_neg = mp > hi || (mn >= lo && fabs(S.psi_w + TWO_PI * mn) <= fabs(S.psi_w + TWO_PI * mp));
-            m = use_neg ? mn-- : mp++;
-            if (m < lo || m > hi || !make_branch(m, S.psi_w, steps, h_des, k, &br)) continue;
-            if (!(br.y0 < S.best)) break;   /* y0 grows along the order: nothing left can be shorter */
-            plan->branches++;
-            search_branch(&S, &br);
-        }
+        S.defer = 0;
+        plan->a = plan->b = plan->gamma = plan->eta = plan->h = NAN;
+        plan->residual = plan->bound = plan->predicted = INFINITY;
+        search(&S, options, h_des);
     }
-    plan->roots = S.roots;
     if (S.best < INFINITY) return @PREFIX_UPPER@_OK;
     if (S.rejected) {
         plan->a = S.rej[0];
@@ -951,7 +1109,7 @@ static int leaf_to(int leaf, casadi_real x[5], casadi_real phi_end, const casadi
     for (j = 0; j < NPANEL && s_breaks[j] < phi_end; ++j) {
         b1 = s_breaks[j + 1] < phi_end ? s_breaks[j + 1] : phi_end;
         n = 2 * s_counts[leaf][j];
-        if (rk8_steps(leaf, x, s_breaks[j], (b1 - s_breaks[j]) / n, n, ab, k, gamma, jj)) return 1;
+        if (rk8x_steps(leaf, x, s_breaks[j], (b1 - s_breaks[j]) / n, n, ab, k, gamma, jj)) return 1;
     }
     return 0;
 }

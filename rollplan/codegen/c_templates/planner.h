@@ -29,8 +29,11 @@
  *   @PREFIX@_rhs0(phi, x[3], p[2], k, gamma) -> xdot[3], @PREFIX@_rhs1(...)
  *       the curve ODE (28)-(30) along the first (+y) and the second (-y) leaf of the figure
  *       eight with radii p = (a, b) rotated by gamma, x = (u_a, v_a, psi).
- *   @PREFIX@_rk8_0(x[3], t, h, p[2], k, gamma) -> x_next[3], @PREFIX@_rk8_1(...)
- *       one step of the eighth-order Runge-Kutta formula of Dormand and Prince of it.
+ *   @PREFIX@_rk8_0(x[3], cos_t[12], sin_t[12], h, p[2], k, cos_gamma, sin_gamma) -> x_next[3], @PREFIX@_rk8_1(...)
+ *       one step from phi = t to t + h of the eighth-order Runge-Kutta formula of Dormand and Prince of it,
+ *       given cos phi and sin phi at its 12 stages t + c_j h (c_j the nodes of DOP853), and cos and sin of gamma.
+ *   @PREFIX@_rates0(cos_phi, sin_phi, p[2], k, cos_gamma, sin_gamma) -> rates[2], @PREFIX@_rates1(...)
+ *       the turn rate psi' of (30) along the leaf at inertia ratio 0 and k (independent of the state).
  *   @PREFIX@_piece0(phi, x[5], p[2], k, gamma, jxx, jzz, jr) -> xdot[5], uv[2], g[2], @PREFIX@_piece1(...)
  *       along a leaf, per unit phi: d/dphi of (u_a, v_a, psi, rotor angles), the contact coordinates (u_o, v_o)
  *       and the rotor rates (11) at psi = x[2]; @PREFIX@_rk8x_0(x[5], t, h, p[2], k, gamma, jxx, jzz, jr), _1:
@@ -103,8 +106,9 @@ typedef struct {
  * h_des = |(u, v)|, then gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift(a, b)); the same algorithm
  * and the same choice as rollplan.planners.geometric (complete enumeration of the roots on each branch as
  * one scalar equation in the smaller leaf radius, the closed-form leaf map, a bounded search over branches
- * in the order of the smallest a + b they can hold). Every root is certified by @PREFIX@_certify before it
- * is taken; a plan that fails is never returned as @PREFIX_UPPER@_OK.
+ * in the order of the smallest a + b they can hold). The shortest root is certified by @PREFIX@_certify before
+ * it is returned (if it fails, the search runs again and certifies every root before it is taken); a plan
+ * that fails is never returned as @PREFIX_UPPER@_OK.
  * Time: the first plan for a new k builds the leaf map's table for k (kept for the last k); then
  * proportional to the branches searched. Deterministic; static memory only; not reentrant.
  * Returns one of the status codes above; `plan` is filled in on @PREFIX_UPPER@_OK (on NOT_CERTIFIED it holds
@@ -119,7 +123,8 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
 /*
  * Certificate of a plan: integrate the n-step motion (figure eight (a, b) rotated by gamma, traced
  * `steps` times from rest at the origin) with the generated RK8 steps, the right side (28)-(30) as
- * it is (independent of the planner's leaf map and its quadrature). Each panel of a leaf of width w
+ * it is (independent of the planner's leaf map and its quadrature), every one of the `steps` traces from the
+ * state the previous one left (not the first trace turned and shifted). Each panel of a leaf of width w
  * gets N = ceil(w (@CERT_BASE@ + max|psi'|) / @CERT_DELTA@) equal steps (psi' sampled at 5 points; it does not
  * depend on the state); the motion is integrated with N and with 2N steps per panel, `bound` is
  * |x_2N - x_N| / @CERT_SAFETY@ (step doubling: the error of x_2N of an order-8 method is about
