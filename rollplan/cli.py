@@ -100,7 +100,9 @@ class _Claims:
 def _check_outputs(json=None, figure=None, inputs=()) -> None:
     """Refuse unwritable output paths, unknown figure formats, outputs that are inputs and two outputs that are
     one file before any computation, and hold the outputs (a second process writing one of them is refused)."""
-    if json is not None and json != "-":
+    if json == "-":   # stdout: no file to check, compare or hold
+        json = None
+    if json is not None:
         check_writable(json, inputs=inputs)
     if figure is not None:
         check_figure_path(figure)

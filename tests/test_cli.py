@@ -380,6 +380,23 @@ def test_json_dash_in_process_keeps_stdout_pure(capsys):
     assert not os.path.exists("-")
 
 
+def test_json_dash_is_not_a_file_named_dash(capsys, tmp_path, monkeypatch):
+    """`--json -` once took a lock on a file named '-' in the current folder: a second `--json -` run there was
+    refused as 'being written by another process'. With another process holding that name, stdout still works."""
+    monkeypatch.chdir(tmp_path)
+    holder = subprocess.Popen([sys.executable, "-c", "import sys, time\nfrom rollplan.outputs import claim\n"
+                               "with claim('-'):\n    print('held', flush=True)\n    time.sleep(60)\n"],
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        code, out, err = run(capsys, "step", "--a", "0.3", "--b", "0.4", "--json", "-")
+    finally:
+        holder.kill()
+        holder.wait()
+    assert code == 0, err
+    assert json.loads(out)["version"]
+
+
 def test_version():
     from importlib.metadata import version
 
