@@ -293,7 +293,7 @@ class CsvTable:
 
 def read_csv(path, what: str = "CSV file", required=(), max_bytes: int = 1 << 28, comments: bool = False) -> CsvTable:
     """Read a CSV file with a header row (see :func:`read_text`); blank lines are skipped, and with
-    ``comments`` also lines whose first field starts with ``#``.
+    ``comments`` also lines that start with ``#`` (after blanks; a quoted ``"#1"`` is a field, not a comment).
 
     The header must name every column of ``required``, and no column twice or
     not at all. A row with more or fewer fields than the header is kept, with
@@ -301,15 +301,24 @@ def read_csv(path, what: str = "CSV file", required=(), max_bytes: int = 1 << 28
     """
     text = read_text(path, what, max_bytes)
     where = f"{what} {show_path(path)}"
-    reader = csv.reader(io.StringIO(text, newline=""))
+    raw_lines = []   # the lines the reader has taken, to see how a record's first line starts
+
+    def taken(source):
+        for line in source:
+            raw_lines.append(line)
+            yield line
+
+    reader = csv.reader(taken(io.StringIO(text, newline="")))
     try:
         header, header_line = None, 1
         rows, lines, problems = [], [], []
+        first = 0
         for fields in reader:
+            record_start, first = raw_lines[first], len(raw_lines)
             if not fields or (len(fields) == 1 and not fields[0].strip()):
                 continue
             fields = [f.strip() for f in fields]
-            if comments and fields[0].startswith("#"):
+            if comments and record_start.lstrip().startswith("#"):
                 continue
             if header is None:
                 header, header_line = _check_header(fields, where, required), reader.line_num

@@ -345,6 +345,19 @@ def test_comments_blank_lines_and_defaults(tmp_path, scipy_trace):
     assert scipy_trace(fe["a"], fe["b"], 2.5, fe["gamma"]) == pytest.approx([0.5, 0.3, 0.0], abs=1e-9)
 
 
+def test_a_quoted_hash_is_a_field_not_a_comment(tmp_path):
+    """A row whose first field is quoted "#1" was dropped as a comment (a row lost with exit 0): only lines that
+    start with # are comments; a quoted field's later line that starts with # belongs to its field."""
+    from rollplan.inputs import read_csv
+
+    path = tmp_path / "q.csv"
+    path.write_text('u_a,v_a\n  # a comment\n"#1",0.1\n0.2,"x\n# still the field"\n#,0.3\n0.4,0.5\n')
+    table = read_csv(path, required=("u_a", "v_a"), comments=True)
+    assert [row["u_a"] for row in table.rows] == ["#1", "0.2", "0.4"]
+    assert table.rows[1]["v_a"] == "x\n# still the field"
+    assert table.lines == [3, 5, 7]
+
+
 def test_lines_carry_version_and_units(tmp_path):
     import rollplan
 
