@@ -26,7 +26,7 @@ from .core.curves import A_MAX
 from .errors import InputError, NoPlanError, SolverError, check_finite, check_whole
 from .inputs import parse_number, parse_whole, show_path
 from .io import check_figure_path, check_writable, composed_to_dict, route_to_dict, save_figure, tagged, write_json
-from .outputs import claim
+from .outputs import WRITE_FAILURES, claim
 from .planners import geometric
 from .planners.geometric import as_composed
 from .problem import DEFAULT_K, K_MAX, MAX_STEPS, STATE_NAMES
@@ -900,6 +900,17 @@ def _cli_syntax(message: str, args) -> str:
     return _API_OPTION.sub(sub, message)
 
 
+def _drop_stdout() -> None:
+    """Point stdout at /dev/null, so that the text left in its buffer is not written again (and fails again,
+    with an 'Exception ignored' message) when Python exits."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):   # stdout without a file descriptor (captured): nothing is flushed at exit
+        pass
+
+
 def main(argv=None) -> int:
     """Run the command in ``argv`` (default ``sys.argv[1:]``) and return its exit status (module docstring)."""
     status = _main(argv)
@@ -931,7 +942,9 @@ def _main(argv) -> int:
             _Claims.stack, _Claims.files = stack, {}
             with contextlib.redirect_stdout(sys.stderr) if to_stdout else contextlib.nullcontext(), \
                     Progress(delay=5.0) as progress, reporting(progress):
-                return args.func(args)
+                status = args.func(args)
+            args.stdout.flush()   # a full disk or a closed pipe behind stdout shows here, inside the handlers
+            return status
     except KeyboardInterrupt:  # Ctrl-C, also inside the solvers (rollplan.interrupts)
         print("\nrollplan: interrupted" if sys.stderr.isatty() else "rollplan: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -950,6 +963,13 @@ def _main(argv) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`
         sys.stderr.close()
         return EXIT_OK
+    except OSError as exc:   # stdout on a full disk (`> /dev/full`), a device error: the user's, one line
+        if exc.errno not in WRITE_FAILURES:
+            raise
+        _drop_stdout()
+        print(f"rollplan: error: the standard output cannot be written: {WRITE_FAILURES[exc.errno]}",
+              file=sys.stderr)
+        return EXIT_INPUT
     finally:
         _Claims.stack = None
 

@@ -42,22 +42,26 @@ from pathlib import Path
 from .errors import InputError, OutputError
 from .inputs import check_path, show_path
 
-__all__ = ["check_writable", "write_atomic", "write_json", "check_figure_path", "save_figure", "claim",
-           "LineWriter", "make_folder"]
+__all__ = ["WRITE_FAILURES", "check_writable", "write_atomic", "write_json", "check_figure_path", "save_figure",
+           "claim", "LineWriter", "make_folder"]
 
 _RANDOM = 8            # characters tempfile adds to a temporary name
 _TMP_SUFFIX = ".tmp"
 _LOCK_SUFFIX = ".lock"
 
 
+#: Why a write failed, by errno, in words (the errors a user's disk or folder causes, not a bug of ours).
+WRITE_FAILURES = {errno.ENOSPC: "the disk is full", errno.EDQUOT: "the disk quota is exhausted",
+                  errno.EFBIG: "the file is larger than this process may write (file size limit)",
+                  errno.EROFS: "the file system is read-only", errno.EACCES: "permission denied",
+                  errno.EPERM: "permission denied", errno.ENAMETOOLONG: "the name is too long for the file system",
+                  errno.ENOENT: "its folder does not exist", errno.ENOTDIR: "a part of the path is not a folder",
+                  errno.EIO: "input/output error of the device"}
+
+
 def _failure(what: str, path, exc: OSError) -> OutputError:
     """One line for an OSError met while writing ``path``."""
-    reasons = {errno.ENOSPC: "the disk is full", errno.EDQUOT: "the disk quota is exhausted",
-               errno.EFBIG: "the file is larger than this process may write (file size limit)",
-               errno.EROFS: "the file system is read-only", errno.EACCES: "permission denied",
-               errno.EPERM: "permission denied", errno.ENAMETOOLONG: "the name is too long for the file system",
-               errno.ENOENT: "its folder does not exist", errno.ENOTDIR: "a part of the path is not a folder"}
-    reason = reasons.get(exc.errno, exc.strerror or str(exc))
+    reason = WRITE_FAILURES.get(exc.errno, exc.strerror or str(exc))
     return OutputError(f"{what} {show_path(path)} cannot be written: {reason}")
 
 

@@ -397,6 +397,19 @@ def test_json_dash_is_not_a_file_named_dash(capsys, tmp_path, monkeypatch):
     assert json.loads(out)["version"]
 
 
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux)")
+@pytest.mark.parametrize("argv", [["step", "--a", "0.3"], ["step", "--a", "0.3", "--json", "-"]])
+def test_stdout_on_a_full_disk_is_one_line_and_exit_2(argv):
+    """`rollplan plan ... > /dev/full` ended in an OSError traceback with exit 1."""
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([sys.executable, "-m", "rollplan.cli", *argv], stdout=full, stderr=subprocess.PIPE,
+                           text=True, timeout=120, check=False)
+    assert r.returncode == 2, r.stderr
+    last = r.stderr.strip().splitlines()[-1]
+    assert last == "rollplan: error: the standard output cannot be written: the disk is full"
+    assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr
+
+
 def test_version():
     from importlib.metadata import version
 
