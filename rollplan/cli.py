@@ -655,10 +655,20 @@ def cmd_codegen(args) -> int:
     return EXIT_OK
 
 
+def _quiet_dask(args) -> None:
+    """Without --verbose, Dask's own log (tracebacks of lost connections, on stderr) is silenced: the command
+    says in one line what failed."""
+    if getattr(args, "scheduler", None) is not None and not args.verbose:
+        import distributed  # noqa: F401  (sets its loggers' levels on import: set ours after it)
+
+        logging.getLogger("distributed").setLevel(logging.CRITICAL)
+
+
 def cmd_batch(args) -> int:
     from .studies.batch import run_batch
     from .studies.executor import ExecutorError, cpu_count
 
+    _quiet_dask(args)
     try:
         jobs = args.jobs if args.jobs is not None else cpu_count()
         r = run_batch(args.targets, args.out, jobs, args.resume, args.overwrite, args.method,
@@ -683,8 +693,9 @@ def cmd_batch(args) -> int:
     return EXIT_OK
 
 
-def _per_k(path, k, several: bool):
-    return path.replace("{k}", f"{k:g}") if several else path
+def _per_k(path, k):
+    """The output path for ``k``: ``{k}`` in it replaced by the value (also for a single --k)."""
+    return path if path is None or path == "-" else path.replace("{k}", f"{k:g}")
 
 
 def cmd_atlas(args) -> int:
@@ -692,6 +703,9 @@ def cmd_atlas(args) -> int:
     from .studies.atlas import atlas_to_dict, compute_atlases
 
     several = len(args.k) > 1
+    repeated = sorted({f"{k:g}" for k in args.k if args.k.count(k) > 1})
+    if repeated:
+        raise InputError(f"--k {' '.join(repeated)} is given more than once: give each value of k once")
     for path in (args.out, args.json):
         if several and path not in (None, "-") and "{k}" not in path:
             raise InputError(f"output path {path!r} is not allowed with several --k values: put {{k}} in it "
@@ -699,12 +713,13 @@ def cmd_atlas(args) -> int:
     if several and args.json == "-":
         raise InputError("--json - is not allowed with several --k values: give a file name with {k}")
     for k in args.k:
-        _check_outputs(json=None if args.json is None else _per_k(args.json, k, several),
-                       figure=_per_k(args.out, k, several))
+        _check_outputs(json=None if args.json is None else _per_k(args.json, k),
+                       figure=_per_k(args.out, k))
     with Progress(unit="blocks", delay=1.0) as progress:
+        _quiet_dask(args)
         atlases = compute_atlases(args.k, args.steps, args.resolution, scheduler=args.scheduler, progress=progress)
     for at in atlases:
-        out = _per_k(args.out, at.k, several)
+        out = _per_k(args.out, at.k)
         save_figure(plot_atlas(at), out)
         print(f"rollplan atlas: k = {_g(at.k)}, steps = {at.steps}, {at.a.size} x {at.b.size} grid on "
               f"(0, {_g(at.a[-1])} R]^2")
@@ -712,7 +727,7 @@ def cmd_atlas(args) -> int:
               f"[{_g(at.eta.min())}, {_g(at.eta.max())}] rad, {at.fold_cells} grid cells on the fold det = 0")
         print(f"wrote {out}")
         if args.json:
-            _emit_json(argparse.Namespace(json=_per_k(args.json, at.k, several), stdout=args.stdout),
+            _emit_json(argparse.Namespace(json=_per_k(args.json, at.k), stdout=args.stdout),
                        atlas_to_dict(at), "R")
     return EXIT_OK
 

@@ -79,6 +79,27 @@ def test_a_lost_task_is_a_failed_row(tmp_path, cluster):
     assert results[1][:2] == ("failed", 2) and results[1][2] == "KilledWorker"
 
 
+def test_a_lost_scheduler_fails_the_run_not_the_rows(tmp_path):
+    """When the scheduler went away mid-run, every pending row was written as failed ('scheduler-connection-lost')
+    and --resume never planned them again; now the run stops with ExecutorError (the CLI: exit 4, finished lines
+    kept for --resume) and no row is recorded as failed."""
+    import time
+
+    import dask
+
+    failed = []
+    with dask.config.set({"distributed.comm.timeouts.connect": "2s"}), \
+            distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+                                     silence_logs=50) as c, \
+            executor.Executor(scheduler=c.scheduler_address) as ex, \
+            pytest.raises(executor.ExecutorError, match="scheduler"):
+        for i, _ in enumerate(ex.map(time.sleep, [0.05] + [2.0] * 5,
+                                     on_error=lambda item, exc: failed.append((item, exc)))):
+            if i == 0:
+                c.sync(c.scheduler.close)   # the scheduler goes away while five rows are pending
+    assert failed == []
+
+
 def _die_on_two(x):
     if x == 2:
         import os

@@ -244,9 +244,14 @@ class Executor:
 
 
 def _is_connection_error(exc) -> bool:
+    """The cluster failed, not the item: a closed connection, or a task cancelled under us (Dask cancels every
+    pending task with reason 'scheduler-connection-lost' when the scheduler goes away; this module cancels
+    none while it still waits for results)."""
+    from concurrent.futures import CancelledError
+
     from distributed.comm.core import CommClosedError
 
-    return isinstance(exc, (CommClosedError, OSError, TimeoutError))
+    return isinstance(exc, (CommClosedError, OSError, TimeoutError, CancelledError))
 
 
 def _connect(address: str):
