@@ -751,6 +751,7 @@ exit status: 0 every row planned, 1 some rows failed, 3 every row failed (each f
 
 def _add_timing_options(parser) -> None:
     """--duration, --timing, --samples and --timing-plot of ``plan`` and ``route``."""
+    from .execution.actuation import MAX_SAMPLES
     from .execution.timing import LAWS
 
     parser.add_argument("--duration", type=_number, default=None, metavar="T",
@@ -763,9 +764,9 @@ def _add_timing_options(parser) -> None:
                              + ". Every law rests at the corners of the contact path (where a roll meets the figure "
                                "eights). Without --duration: the law's shortest duration within the robot's limits")
     parser.add_argument("--samples", type=_whole, default=2000,
-                        help="samples of the trajectory in --json and --plot, in all, in [2, 10^7] (default 2000); "
-                             "with --duration or --timing also the least number of time samples (at least 400 per "
-                             "piece for min-jerk, 3000 for the other laws)")
+                        help=f"samples of the trajectory in --json and --plot, in all, in [2, {MAX_SAMPLES}] "
+                             "(default 2000); with --duration or --timing also the least number of time samples (at "
+                             "least 400 per piece for min-jerk, 3000 for the other laws)")
     parser.add_argument("--timing-plot", metavar="FILE.png",
                         help="with --duration or --timing: rotor rates and torques in time with the robot's limits, "
                              "and the phase plane (s, s') with the maximum velocity curve")
@@ -864,11 +865,22 @@ def build_parser() -> argparse.ArgumentParser:
                    help="C number type: float for single-precision FPUs (plans certified to 1e-4 only)")
     c.set_defaults(func=cmd_codegen)
 
-    b = sub.add_parser("batch", help="plan every target of a CSV file (u_a, v_a, psi, steps, k) in parallel",
-                       epilog=_BATCH_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub.add_parser("batch", help="plan every target of a CSV file (u_a, v_a, psi, steps, k) in parallel",
+                   epilog=_BATCH_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+                   builder=_batch_arguments)
+
+    sub.add_parser("atlas", help="maps of h(a, b) and eta(a, b) with contours and the fold of the step map",
+                   builder=_atlas_arguments)
+    return parser
+
+
+def _batch_arguments(b) -> None:
+    from .studies.executor import MAX_JOBS
+
     b.add_argument("targets", metavar="TARGETS.csv", help="CSV with header u_a, v_a[, psi, steps, k] (see below)")
     b.add_argument("--out", required=True, metavar="PLANS.jsonl", help="output: one JSON line per target, in order")
-    b.add_argument("--jobs", type=_whole, default=None, help="worker processes >= 1 (default: number of cores)")
+    b.add_argument("--jobs", type=_whole, default=None,
+                   help=f"worker processes in [1, {MAX_JOBS}] (default: number of cores)")
     b.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="plan on a Dask distributed cluster instead, e.g. tcp://host:8786 (needs: pip install "
                         "'rollplan[distributed]'; workers: dask worker ADDRESS --nthreads 1)")
@@ -877,10 +889,6 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     b.add_argument("--quiet", action="store_true", help="no progress on stderr")
     b.set_defaults(func=cmd_batch)
-
-    sub.add_parser("atlas", help="maps of h(a, b) and eta(a, b) with contours and the fold of the step map",
-                   builder=_atlas_arguments)
-    return parser
 
 
 def _atlas_arguments(t) -> None:

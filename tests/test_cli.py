@@ -410,6 +410,25 @@ def test_stdout_on_a_full_disk_is_one_line_and_exit_2(argv):
     assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr
 
 
+@pytest.mark.parametrize("command, option, low", [("batch", "--jobs", 1), ("plan", "--samples", 2)])
+def test_help_states_the_limit_the_command_enforces(capsys, tmp_path, command, option, low):
+    """The help said [2, 10^7] for --samples and '>= 1' for --jobs while the commands refused above 10^6 and 1024:
+    the range in --help is the one in the refusal of a value just above it."""
+    import re
+
+    from rollplan import cli
+
+    with pytest.raises(SystemExit):
+        cli.main([command, "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    high = int(re.search(rf"{option} \S+ .*?in \[{low}, (\d+)\]", help_text).group(1))
+    csv_path = tmp_path / "t.csv"
+    csv_path.write_text("u_a,v_a\n0.1,0.2\n")
+    argv = {"batch": ["batch", str(csv_path), "--out", str(tmp_path / "o.jsonl")], "plan": ["plan"]}[command]
+    code, _, err = run(capsys, *argv, option, str(high + 1))
+    assert code == 2 and f"[{low}, {high}]" in err
+
+
 def test_version():
     from importlib.metadata import version
 
@@ -472,7 +491,7 @@ def test_k_defaults_to_the_papers_case(tmp_path, capsys):
     ("atlas", ["[0, 100]", "[2, 1000]", "[1, 1000]", "--scheduler"]),
     ("animate", ["[2, 2000]", "[1, 100]"]),
     ("compare", ["[1, 100000]", "[1, 9]", "(0, pi/2)"]),
-    ("batch", ["--scheduler", ">= 1", "exit status"]),
+    ("batch", ["--scheduler", "in [1, ", "exit status"]),
 ])
 def test_limits_are_in_the_help(capsys, command, needles):
     with pytest.raises(SystemExit):

@@ -57,7 +57,7 @@ from ..outputs import LineWriter, check_writable, claim, write_atomic
 from ..planners.geometric import SOLVERS, default_planner, plan
 from ..problem import DEFAULT_K
 from ..progress import Progress, reporting
-from .executor import Executor
+from .executor import MAX_JOBS, Executor
 
 __all__ = ["COLUMNS", "REQUIRED", "DEFAULTS", "FSYNC_INTERVAL", "MAX_TARGETS_BYTES", "BatchResult", "read_targets",
            "row_key",
@@ -273,7 +273,7 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
     KeyboardInterrupt
         Ctrl-C; the finished lines stay in ``out``.
     """
-    jobs = check_whole("jobs", jobs, 1, 1024)
+    jobs = check_whole("jobs", jobs, 1, MAX_JOBS)
     method = check_choice("method", method, SOLVERS)
     resume, overwrite = check_flag("resume", resume), check_flag("overwrite", overwrite)
     if resume and overwrite:

@@ -54,12 +54,14 @@ from ..progress import silence
 from ..version import __version__
 
 __all__ = ["Executor", "ExecutorError", "map_in_order", "start_method", "chunk_size", "DASK_EXTRA",
-           "CONNECT_TIMEOUT", "WORKERS_TIMEOUT", "CHUNK_SECONDS"]
+           "CONNECT_TIMEOUT", "WORKERS_TIMEOUT", "CHUNK_SECONDS", "MAX_JOBS"]
 
 log = logging.getLogger(__name__)
 
 #: How a user installs the Dask backend.
 DASK_EXTRA = "pip install 'rollplan[distributed]'"
+#: The most worker processes on this machine (``jobs``; ``batch --jobs``).
+MAX_JOBS = 1024
 #: Seconds to wait for a scheduler to answer.
 CONNECT_TIMEOUT = 10.0
 #: Seconds to wait for a scheduler to have at least one worker.
