@@ -4,7 +4,7 @@ import rollplan
 
 p = rollplan.plan(target=(0.0, 1.0, 0.0), steps=1, k=2.5)
 print(p.a, p.b, p.gamma, p.branch)  # 0.300429 R, 0.300429 R, 0.931883 rad, branch m = 0
-print(p.final, p.residual)          # State(u_a, v_a, psi, u_o, v_o) certified by CVODES, ~1e-13
+print(p.final, p.residual)          # State(u_a, v_a, psi, u_o, v_o); residual by an independent RK8 run
 traj = p.sample()                   # Trajectory: s (theta), state (N, 5), segment, contact points
 
 problem = rollplan.Problem(goal=(0.5, 0.3, 0.4), k=2.5)       # one problem, two methods

@@ -668,6 +668,9 @@ def cmd_batch(args) -> int:
     from .studies.batch import run_batch
     from .studies.executor import ExecutorError, cpu_count
 
+    if args.out == "-":
+        raise InputError("batch --out - is not allowed: batch writes its lines to a file that --resume reads back; "
+                         "give --out FILE.jsonl")
     _quiet_dask(args)
     try:
         jobs = args.jobs if args.jobs is not None else cpu_count()

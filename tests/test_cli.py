@@ -429,6 +429,14 @@ def test_help_states_the_limit_the_command_enforces(capsys, tmp_path, command, o
     assert code == 2 and f"[{low}, {high}]" in err
 
 
+def test_batch_out_dash_is_refused_not_a_file_named_dash(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.csv").write_text("u_a,v_a\n0.1,0.2\n")
+    code, _, err = run(capsys, "batch", "t.csv", "--out", "-")
+    assert code == 2 and "--out FILE.jsonl" in err
+    assert not (tmp_path / "-").exists()
+
+
 def test_version():
     from importlib.metadata import version
 
