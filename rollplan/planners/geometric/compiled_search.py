@@ -76,7 +76,10 @@ def _sources() -> list:
 
 def _load(path: str):
     lib = ctypes.CDLL(path)
-    fn = getattr(lib, f"{PREFIX}_plan_with")
+    try:
+        fn = getattr(lib, f"{PREFIX}_plan_with")
+    except AttributeError as exc:   # not the planner's library: rebuilt
+        raise OSError(str(exc)) from exc
     d = ctypes.c_double
     fn.argtypes = [d, d, d, ctypes.c_int, d, ctypes.POINTER(_Options), ctypes.POINTER(_Plan)]
     fn.restype = ctypes.c_int
