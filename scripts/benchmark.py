@@ -212,6 +212,7 @@ def section_plan(ctx):
             base[rtol] = (t_s, c_s, ts_s, verified_residual(verifier, a_s, b_s, K, g_s, steps, target), nfev)
         r_roll = verified_residual(verifier, p.a, p.b, K, p.gamma, steps, target)
         row = {"target (u_a, v_a, psi)": str(tuple(target)), "n": steps, "m": p.branch,
+               "search": p.stats.details["search"],
                "rollplan warm [ms]": t_warm * 1e3, "rollplan warm CPU [ms]": c_warm * 1e3,
                "of which IPOPT polish [ms] (CPU)": f"{t_polish:.2f} ({c_polish:.2f})",
                "of which RK8 certificate [ms] (CPU)": f"{t_cert:.2f} ({c_cert:.2f})",
@@ -235,8 +236,10 @@ def section_plan(ctx):
     notes = [f"k = {K}; warm = median of {ctx['repeats']} calls of rollplan.plan after one warm-up (planner, per-k "
              "tables and compiled functions loaded); scipy = median of "
              f"{ctx['scipy_repeats']} runs. 'of which' columns: the IPOPT polish and the RK8 certificate timed alone "
-             "on the plan's root (median of 21); the rest of a warm plan is the enumeration of the roots "
-             "(planners/geometric/enumerate.py) and Python glue; each phase timed inside the plan: "
+             "on the plan's root (median of 21); the rest of a warm plan is the search of the shortest root (column "
+             "'search': the generated C planner's search through ctypes, planners/geometric/compiled_search.py, "
+             "or the numpy enumeration, planners/geometric/enumerate.py) and Python glue; each phase timed inside "
+             "the plan: "
              "results/plan_profile.md (scripts/profile_plan.py).",
              "Residual (CVODES) = |(u_a, v_a, psi, u_o, v_o) - (target, 0, 0)| after n steps by the same CVODES "
              f"verifier ({ctx['verifier']}) for both plans; 'certified residual + bound' is rollplan's own RK8 "

@@ -4,11 +4,13 @@
 
 Writes ``plan_profile.md`` and ``plan_profile.json``. The targets and k are those of the plan section of
 ``scripts/benchmark.py``. Each phase is timed inside the plan (wall time, mean over the repeats) by
-wrapping the planner's calls: the branch list (:func:`rollplan.planners.geometric.enumerate.branches`),
-the enumeration of the roots (:func:`~rollplan.planners.geometric.enumerate.roots`), the IPOPT polish of the
+wrapping the planner's calls: the compiled C search of the shortest root
+(:func:`rollplan.planners.geometric.compiled_search.shortest_root`; column "search" says which search chose the
+plan), or the numpy search: the branch list (:func:`rollplan.planners.geometric.enumerate.branches`) and
+the enumeration of the roots (:func:`~rollplan.planners.geometric.enumerate.roots`); the IPOPT polish of the
 winning root (``GeometricPhasePlanner._polish``), the step's shift for gamma (the compiled leaf-map step)
 and the RK8 certificate; "rest" is the plan's time minus these (problem checks, gamma, the result objects).
-The fixed costs below them are measured alone: one IPOPT call on a trivial 2 x 2 system (IPOPT's cost
+The fixed costs below them are measured alone: one C search, one IPOPT call on a trivial 2 x 2 system (IPOPT's cost
 without evaluations), the compiled residual of (32)-(33) and its Jacobian (the evaluations of one IPOPT
 call from a root), and one figure eight of the certificate (its coarse and fine RK8 runs).
 """
@@ -32,12 +34,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import rollplan
 from rollplan.io import write_atomic, write_json
 from rollplan.planners.geometric import certify, planner
+from rollplan.planners.geometric.compiled_search import shortest_root
 from rollplan.planners.geometric.leafmap import panels_for
 from rollplan.planners.geometric.refine import leaf_residual
 
 from benchmark import TARGETS, K, git_commit
 
-PHASES = ("branches", "roots", "polish (IPOPT)", "step for gamma", "certificate (RK8)")
+PHASES = ("C search", "branches", "roots", "polish (IPOPT)", "step for gamma", "certificate (RK8)")
 
 
 def _timed(acc: dict, label: str, fn):
@@ -65,7 +68,9 @@ def in_plan(repeats: int) -> list:
     """Per target: median wall and CPU time of a warm plan and the mean time of each phase inside it [ms]."""
     acc = defaultdict(float)
     pl = planner.default_planner("ipopt")
-    saved = (planner.branches, planner.roots, planner.leaf_step, pl._polish, pl.certifier.certify)
+    saved = (planner.branches, planner.roots, planner.leaf_step, planner.shortest_root, pl._polish,
+             pl.certifier.certify)
+    planner.shortest_root = _timed(acc, "C search", planner.shortest_root)
     planner.branches = _timed(acc, "branches", planner.branches)
     planner.roots = _timed(acc, "roots", planner.roots)
     pl._polish = _timed(acc, "polish (IPOPT)", pl._polish)
@@ -90,6 +95,7 @@ def in_plan(repeats: int) -> list:
                 wall.append(time.perf_counter() - t)
             mean = sum(wall) / repeats
             row = {"target (u_a, v_a, psi)": str(tuple(target)), "n": steps, "m": p.branch,
+                   "search": p.stats.details["search"],
                    "warm median [ms]": statistics.median(wall) * 1e3, "warm min [ms]": min(wall) * 1e3,
                    "CPU median [ms]": statistics.median(cpu) * 1e3}
             for name in PHASES:
@@ -98,7 +104,7 @@ def in_plan(repeats: int) -> list:
             row["IPOPT iterations"] = p.stats.iterations
             rows.append(row)
     finally:
-        planner.branches, planner.roots, planner.leaf_step = saved[:3]
+        planner.branches, planner.roots, planner.leaf_step, planner.shortest_root = saved[:4]
         del pl._polish, pl.certifier.certify
     return rows
 
@@ -117,7 +123,10 @@ def alone(repeats: int) -> list:
     eight = certify._eight_pair_function(n, True)
     z = np.zeros(3)
     pa, pb = np.array([p.a, 1.0, K, p.gamma]), np.array([p.b, -1.0, K, p.gamma])
-    cases = [("IPOPT on the trivial system x = 0 (2 x 2), from x = 0", lambda: trivial(x0=[0, 0], lbg=0, ubg=0)),
+    psi = TARGETS[1][0][2]
+    cases = [("C search of the shortest root (compiled_search.shortest_root)",
+              lambda: shortest_root(*TARGETS[1][0][:2], psi, TARGETS[1][1], K)),
+             ("IPOPT on the trivial system x = 0 (2 x 2), from x = 0", lambda: trivial(x0=[0, 0], lbg=0, ubg=0)),
              ("compiled residual of (32)-(33), one evaluation", lambda: f.call([[p.a, p.b], par])),
              ("its Jacobian, one evaluation", lambda: jac.call([[p.a, p.b], par, [0, 0]])),
              (f"one figure eight of the certificate (RK8, {n} and {2 * n} steps per leaf)",

@@ -19,7 +19,6 @@ from rollplan.codegen.c_library import (
     DEFAULT_K_MAX,
     FLOAT_CERT_TOL,
     PSI_MAX,
-    algebraic,
     certificate_functions,
     generated_functions,
     reference_plan,
@@ -27,6 +26,7 @@ from rollplan.codegen.c_library import (
 from rollplan.core import model
 from rollplan.core.curves import A_MAX, figure_eight
 from rollplan.core.integrate import CvodesIntegrator, spectral_step
+from rollplan.core.rewrite import algebraic
 from rollplan.errors import InputError
 
 import references

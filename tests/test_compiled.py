@@ -168,3 +168,24 @@ def test_a_long_compile_shows_progress(cache):
         cmod.compiled(ca.Function("cprogress", [x], [e]))
     assert cmod.last_build()["source"] == "built"
     assert "compiling cprogress (first use; cached after): 0/1" in buf.getvalue()
+
+
+def test_shared_library_is_built_once_then_loaded_and_refused_without_a_compiler(cache, monkeypatch):
+    """A plain C library (the compiled search's way): the command writes the C file, the result is loaded
+    by ctypes and computes; the second call loads the cached file; a failing command or no compiler give None."""
+    import ctypes
+
+    src = cache / "src.txt"
+    src.write_text("v1")
+    write = [sys.executable, "-c", "open('f.c', 'w').write('int f(int x) { return 3 * x + 1; }')"]
+
+    def get(prepare=write):
+        return cmod.shared_library("stest", "d", [src], prepare, ["f.c"], lambda p: ctypes.CDLL(p).f, "python")
+
+    assert get()(4) == 13 and cmod.last_build()["source"] == "built"
+    assert get()(5) == 16 and cmod.last_build()["source"] == "cache"
+    assert len(list(cache.glob("stest-*.so"))) == 1 and not list(cache.glob(".build-*"))
+    src.write_text("v2")
+    assert get([sys.executable, "-c", "raise SystemExit(1)"]) is None and "failed" in cmod.last_build()["reason"]
+    monkeypatch.setenv("ROLLPLAN_NO_COMPILE", "1")
+    assert get() is None and cmod.last_build()["source"] == "vm"

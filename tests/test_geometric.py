@@ -502,3 +502,57 @@ def test_target_shift_inverts_the_n_step_law_33(eta, steps):
     else:
         assert h == pytest.approx(1.3 / references.n_step_gain(eta, steps), rel=1e-12)
         assert np.hypot(*total) == pytest.approx(1.3, rel=1e-12)
+
+
+def _compiled_search_built():
+    from rollplan.planners.geometric import compiled_search
+
+    return compiled_search.library() is not None
+
+
+def test_compiled_search_chooses_the_plan_of_the_numpy_search():
+    """The C search (the generated planner's enumeration, called through ctypes) and the numpy enumeration
+    choose the same plan: branch and (a, b, gamma), by default (the shortest) and with branch=, on random
+    targets; the numpy search is the one checked against brute forces in tests/test_enumerate.py."""
+    from rollplan.planners.geometric import GeometricPhasePlanner
+
+    if not _compiled_search_built():
+        pytest.skip("no C compiler: the compiled search is not built")
+    fast, slow = GeometricPhasePlanner(), GeometricPhasePlanner(compiled_search=False)
+    rng = np.random.default_rng(7)
+    compiled = 0
+    for i in range(12):
+        k, n = float(rng.choice([0.5, 1.5, 2.5, 5.0])), int(rng.integers(1, 5))
+        target = (float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)), float(rng.uniform(-np.pi, np.pi)))
+        branch = int(rng.integers(-1, 2)) if i % 3 == 2 else None
+        got = []
+        for planner in (fast, slow):
+            try:
+                p = planner.solve(Problem(target, k=k, steps=n), branch=branch)
+                got.append((p.branch, p.a, p.b, p.gamma, p.stats.details["search"]))
+            except NoPlanError:
+                got.append(None)
+        assert (got[0] is None) == (got[1] is None), (target, n, k, branch, got)
+        if got[0] is not None:
+            assert got[0][0] == got[1][0] and np.allclose(got[0][1:4], got[1][1:4], rtol=0, atol=1e-9), got
+            assert got[1][4] == "numpy"
+            compiled += got[0][4] == "compiled"
+    assert compiled >= 6
+
+
+def test_planner_works_without_a_compiler(monkeypatch):
+    """With ROLLPLAN_NO_COMPILE the compiled search is not built and the numpy search gives the same plan."""
+    from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search
+
+    target, planner = (0.5, 0.3, 0.4), GeometricPhasePlanner()
+    before = planner.solve(Problem(target, k=2.5, steps=2))
+    monkeypatch.setenv("ROLLPLAN_NO_COMPILE", "1")
+    compiled_search.library.cache_clear()
+    try:
+        assert compiled_search.library() is None
+        p = planner.solve(Problem(target, k=2.5, steps=2))
+    finally:
+        compiled_search.library.cache_clear()
+    assert p.stats.details["search"] == "numpy" and p.certificate.passed
+    assert (p.branch, p.a, p.b) == (before.branch, pytest.approx(before.a, abs=1e-9), pytest.approx(before.b, abs=1e-9))
+    assert reaches(p) < 1e-9

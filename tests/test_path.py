@@ -72,9 +72,12 @@ def test_rates_continuous_and_torque_coefficient_jumps_at_poles(path, asym_plan)
     In the leaf parameter phi the rates per unit phi' jump by b / a: an artefact of that parameter."""
     sj = path.joints
     left, right = path.evaluate(sj, "left"), path.evaluate(sj, "right")
-    assert np.abs(left.W - right.W).max() < 1e-12 * np.abs(left.W).max()
-    assert np.abs(left.G - right.G).max() < 1e-12 * np.abs(left.G).max()
-    assert np.abs(left.A - right.A).max() < 1e-12 * np.abs(left.A).max()
+    # continuous up to rounding, which the joint's place s, divided by the small leaf radius, amplifies
+    # (a jump would be of the order of |b / a - 1| > 0.1, as B's is)
+    tol = 1e-10
+    assert np.abs(left.W - right.W).max() < tol * np.abs(left.W).max()
+    assert np.abs(left.G - right.G).max() < tol * np.abs(left.G).max()
+    assert np.abs(left.A - right.A).max() < tol * np.abs(left.A).max()
     assert np.abs(left.B - right.B).min() > 0.5 * np.abs(left.B).max()
     # both sides against the printed equations (the reference takes the leaf of the side asked)
     for side, ps in (("left", left), ("right", right)):

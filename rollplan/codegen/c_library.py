@@ -77,6 +77,7 @@ from ..core.integrate import (
     rk8_step,
     spectral_leaf,
 )
+from ..core.rewrite import algebraic
 from ..errors import InputError, NoPlanError, OutputError, show_limit
 from ..execution.path import curve_piece_function
 from ..outputs import check_writable, make_folder, write_atomic
@@ -96,7 +97,6 @@ __all__ = [
     "step_functions",
     "certificate_functions",
     "motion_functions",
-    "algebraic",
     "DEFAULT_K_MAX",
     "CERT_TOL",
     "FLOAT_CERT_TOL",
@@ -279,72 +279,6 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
     step_jac = ca.Function(f"{prefix}_step_jac", [ab, k], [x[:2], x[2], direction, ca.vertcat(dx, ddir)],
                            names_in, names_out + ["jac"])
     return step, step_jac
-
-
-def algebraic(f: ca.Function, check: int = 6, angles: tuple = ()) -> ca.Function:
-    """``f`` (an SX Function) with the trigonometric functions of angles that are themselves inverse
-    trigonometric results written algebraically, and common subexpressions shared.
-
-    The contact coordinates of a point on the sphere are ``u_o = atan2(-x, -z)``, ``v_o = asin(y)`` (24)-(25),
-    and the model takes cos, sin and tan of them; the rewrite uses the identities
-    ``cos(atan2(p, q)) = q / sqrt(p^2 + q^2)``, ``sin(atan2(p, q)) = p / sqrt(p^2 + q^2)``,
-    ``tan(atan2(p, q)) = p / q``,
-    ``cos(asin(p)) = sqrt(1 - p^2)``, ``sin(asin(p)) = p``, ``tan(asin(p)) = p / sqrt(1 - p^2)`` on the expression
-    graph (no equation of the model is retyped: the graph is replayed instruction by instruction), then
-    :func:`casadi.cse`. The result is checked against ``f`` at ``check`` random points (relative 1e-12).
-
-    With ``angles`` (indices of scalar inputs), the result takes ``cos t`` and ``sin t`` (inputs ``cos_<name>``,
-    ``sin_<name>``) in place of each such input t: ``cos t``, ``sin t`` and ``tan t`` of the graph become them; a
-    ValueError if the graph uses t otherwise.
-    """
-    ins = f.sx_in()
-    flat_in = [ca.vertsplit(ca.vec(x)) if x.numel() else [] for x in ins]
-    unit = {j: [ca.SX.sym(f"{how}_{f.name_in(j)}") for how in ("cos", "sin")] for j in angles}
-    orig, ins = ins, [x for j, x in enumerate(ins) for x in unit.get(j, [x])]
-    names = [n for j, n in enumerate(f.name_in()) for n in ([u.name() for u in unit[j]] if j in unit else [n])]
-    w, src = [None] * f.sz_w(), [None] * f.sz_w()
-    outs = [[ca.SX(0)] * f.nnz_out(i) for i in range(f.n_out())]
-    trig = (ca.OP_COS, ca.OP_SIN, ca.OP_TAN)
-    for n in range(f.n_instructions()):
-        op, o, i = f.instruction_id(n), f.instruction_output(n), f.instruction_input(n)
-        if op == ca.OP_INPUT:
-            w[o[0]], src[o[0]] = flat_in[i[0]][i[1]], ("angle", i[0], None) if i[0] in unit else None
-        elif op == ca.OP_OUTPUT:
-            outs[o[0]][o[1]] = w[i[0]]
-        elif op == ca.OP_CONST:
-            w[o[0]], src[o[0]] = ca.SX(f.instruction_constant(n)), None
-        else:
-            a, origin, val = w[i[0]], src[i[0]], None
-            if op in trig and origin is not None:
-                p, q = origin[1], origin[2]
-                if origin[0] == "angle":
-                    c, s = unit[p]
-                    val = (c, s, s / c)[trig.index(op)]
-                elif origin[0] == ca.OP_ATAN2:
-                    r = ca.sqrt(p * p + q * q)
-                    val = (q / r, p / r, p / q)[trig.index(op)]
-                else:
-                    c = ca.sqrt(1 - p * p)
-                    val = (c, p, p / c)[trig.index(op)]
-            if val is None:
-                val = ca.SX.unary(op, a) if len(i) < 2 or i[1] < 0 else ca.SX.binary(op, a, w[i[1]])
-            w[o[0]] = val
-            src[o[0]] = (op, a, w[i[1]]) if op == ca.OP_ATAN2 else ((op, a, None) if op == ca.OP_ASIN else None)
-    res = [ca.SX(f.sparsity_out(j), ca.vertcat(*outs[j])) if outs[j] else ca.SX(f.sparsity_out(j))
-           for j in range(f.n_out())]
-    for j in angles:
-        if any(ca.depends_on(r, orig[j]) for r in res):
-            raise ValueError(f"{f.name()} depends on {f.name_in(j)} otherwise than by its cos and sin")
-    g = ca.Function(f.name(), ins, ca.cse(res), names, f.name_out())
-    rng = np.random.default_rng(1)
-    for _ in range(check):
-        args = [rng.uniform(0.05, 0.65, x.numel()) for x in orig]
-        g_args = [v for j, x in enumerate(args) for v in ([np.cos(x), np.sin(x)] if j in unit else [x])]
-        want, got = (np.concatenate([np.array(v).ravel() for v in h.call(a)]) for h, a in ((f, args), (g, g_args)))
-        if not np.allclose(got, want, rtol=1e-12, atol=1e-12 * (1.0 + np.abs(want).max())):
-            raise ValueError(f"the algebraic form of {f.name()} differs from the original")
-    return g
-
 
 
 def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:

@@ -27,6 +27,10 @@ Interrupts
     The compiler runs in its own process group; on Ctrl-C (KeyboardInterrupt) or on timeout the
     whole group (driver, cc1, as, ld) is killed at once, the temporary directory removed, and the
     KeyboardInterrupt propagates (after a timeout the virtual machine is used).
+Plain C libraries
+    :func:`shared_library` builds a shared library from C files that a command writes (e.g. the C
+    planner of :mod:`rollplan.codegen`), with the same key, directory, atomic rename, interrupts and
+    fallback (None instead of a function), and loads it with a given loader (e.g. ``ctypes.CDLL``).
 Fallback
     Without a C compiler, with ``ROLLPLAN_NO_COMPILE=1``, or when a build or a load fails, the
     function itself (CasADi's SX/MX virtual machine) is returned and one warning per reason logged.
@@ -52,7 +56,7 @@ from ..progress import report
 from ..version import __version__
 
 __all__ = ["DEFAULT_FLAGS", "BUILD_TIMEOUT", "cache_dir", "compiler_command", "compiled", "compiled_lazy",
-           "clear_cache", "last_build"]
+           "shared_library", "clear_cache", "last_build"]
 
 log = logging.getLogger(__name__)
 
@@ -155,10 +159,10 @@ def _no_compiler_reason() -> str:
     return "no C compiler found (set CC)"
 
 
-def _fallback(fn: ca.Function, why: str) -> ca.Function:
+def _fallback(fn, why: str, instead: str = "CasADi's virtual machine"):
     if why not in _warned:
         _warned.add(why)
-        log.warning("rollplan: %s; using CasADi's virtual machine (slower)", why)
+        log.warning("rollplan: %s; using %s (slower)", why, instead)
     _last.update(source="vm", reason=why)
     return fn
 
@@ -264,6 +268,77 @@ def _get(name: str, key: str, build, cc: str, flags, timeout: float, jacobian: b
         _last.update(source="built", codegen_s=t2 - t1, compile_s=t3 - t2, load_s=time.perf_counter() - t3,
                      path=str(lib))
         return ext
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def shared_library(name: str, descriptor: str, sources, prepare, c_files, load, instead: str,
+                   flags=DEFAULT_FLAGS + ("-std=c99",), timeout: float = BUILD_TIMEOUT):
+    """A shared library compiled from C sources, cached on disk (module docstring), loaded by ``load``.
+
+    Parameters
+    ----------
+    name, descriptor, sources
+        As in :func:`compiled_lazy`: the key holds ``name``, ``descriptor`` and the bytes of the files
+        ``sources`` (those that define the C code).
+    prepare : sequence of str
+        A command run in an empty build directory that writes the C files there (on a build only).
+    c_files : sequence of str
+        The C files (names in the build directory) compiled into the library.
+    load : callable
+        ``load(path)`` returns the loaded library; an OSError means an unusable file (rebuilt).
+    instead : str
+        What the caller uses without the library (named in the one warning per reason).
+
+    Returns
+    -------
+    The loaded library, or None without a compiler or when the build fails (one warning per reason).
+    """
+    _last.clear()
+    cc = compiler_command()
+    if cc is None:
+        return _fallback(None, _no_compiler_reason(), instead)
+    key = _key((name, descriptor, cc, " ".join(flags)), [Path(s).read_bytes() for s in sources])
+    root = cache_dir()
+    lib = root / f"{name}-{key}{'.dll' if os.name == 'nt' else '.so'}"
+    t0 = time.perf_counter()
+    if lib.exists():
+        try:
+            out = load(str(lib))
+            _last.update(source="cache", load_s=time.perf_counter() - t0, path=str(lib))
+            return out
+        except OSError as exc:
+            log.info("rollplan: rebuilding the unusable %s (%s)", lib, exc)
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=f".build-{name}-", dir=root))
+    except OSError as exc:
+        return _fallback(None, f"cannot write the cache directory {root} ({exc.strerror})", instead)
+    try:
+        log.info("rollplan: building %s (first use; cached in %s)", name, root)
+        t1 = time.perf_counter()
+        out = tmp / lib.name
+        steps = ((list(prepare), f"generating {name} (first use; cached after)"),
+                 (cc.split() + list(flags) + ["-o", str(out), *c_files, "-lm"],
+                  f"compiling {name} (first use; cached after)"))
+        for cmd, label in steps:
+            try:
+                code, output = _run_compiler(cmd, tmp, max(timeout - (time.perf_counter() - t1), 1.0), label)
+            except subprocess.TimeoutExpired:
+                return _fallback(None, f"building {name} took more than {timeout:g} s", instead)
+            except OSError as exc:
+                return _fallback(None, f"cannot run {cmd[0]!r} ({exc.strerror})", instead)
+            if code != 0:
+                log.debug("build output:\n%s", output)
+                return _fallback(None, f"building {name} failed (exit {code} of {Path(cmd[0]).name})", instead)
+        t2 = time.perf_counter()
+        os.replace(out, lib)   # atomic: readers see no file or a complete one
+        try:
+            loaded = load(str(lib))
+        except OSError:
+            return _fallback(None, f"the compiled {name} does not load", instead)
+        _last.update(source="built", compile_s=t2 - t1, load_s=time.perf_counter() - t2, path=str(lib))
+        return loaded
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

@@ -51,6 +51,7 @@ from ...core import curves, integrate, model
 from ...core.compiled import compiled_lazy
 from ...core.curves import circle_point, figure_eight, rotated_point
 from ...core.integrate import CvodesIntegrator, rk8_step
+from ...core.rewrite import algebraic
 from ...errors import check_choice
 from ...problem import State
 
@@ -76,17 +77,29 @@ def grading(r):
 
 def _leaf_rhs() -> ca.Function:
     """``f(tau, x[3], p[4]) -> dx/dtau``: (28)-(30) along one leaf in the graded variable, ``p = (r, side,
-    k, gamma)``: the circle (35) of radius r on the side ``side`` (+1: +y, -1: -y) rotated by gamma (31)."""
-    tau = ca.SX.sym("tau")
+    k, gamma)``: the circle (35) of radius r on the side ``side`` (+1: +y, -1: -y) rotated by gamma (31).
+
+    The model's right side in ``phi`` (:func:`rollplan.core.model.curve_rhs`) is put in
+    :func:`~rollplan.core.rewrite.algebraic` form with ``cos phi`` and ``sin phi`` as inputs (no cos or sin of
+    the contact coordinates' atan2 and asin; checked against the model's graph when built), which are then
+    written in ``tau``: with ``phi = tau + 2 atan(q)``, ``q = beta sin tau / (1 - beta cos tau)``,
+    ``cos 2 atan q = (1 - q^2) / (1 + q^2)`` and ``sin 2 atan q = 2 q / (1 + q^2)``; (28)-(30) are linear in
+    the contact point's velocity, so ``d/dtau = (dphi/dtau) d/dphi`` (dphi/dtau by AD of phi(tau))."""
+    phi, tau = ca.SX.sym("phi"), ca.SX.sym("tau")
     x = ca.SX.sym("x", 3)
     p = ca.SX.sym("p", 4)
     r, side, k, gamma = p[0], p[1], p[2], p[3]
-    beta = grading(r)
-    phi = tau + 2.0 * ca.atan(beta * ca.sin(tau) / (1.0 - beta * ca.cos(tau)))
     point = model.rot_z(gamma) @ circle_point(r, phi, side)
-    rhs, psi = model.curve_rhs(point, tau, k)        # d/dtau by AD through phi(tau)
-    rhs = ca.cse(ca.substitute(rhs, psi, x[2]))      # the composed model repeats its sin/cos
-    return ca.Function("cert_rhs", [tau, x, p], [rhs], ["tau", "x", "p"], ["xdot"])
+    rhs, psi = model.curve_rhs(point, phi, k)
+    in_phi = algebraic(ca.Function("cert_rhs_phi", [phi, x, p], [ca.substitute(rhs, psi, x[2])]), angles=(0,))
+    beta = grading(r)
+    ct, st = ca.cos(tau), ca.sin(tau)
+    num, den = beta * st, 1.0 - beta * ct                   # q = num / den
+    norm = den * den + num * num
+    c2, s2 = (den * den - num * num) / norm, 2.0 * num * den / norm
+    dphi = ca.jacobian(tau + 2.0 * ca.atan(num / den), tau)
+    rate = in_phi(ct * c2 - st * s2, st * c2 + ct * s2, x, p) * dphi
+    return ca.Function("cert_rhs", [tau, x, p], [ca.cse(rate)], ["tau", "x", "p"], ["xdot"])
 
 
 def _eight_pair(steps: int) -> ca.Function:

@@ -70,7 +70,10 @@ plan is its first root, and a root with ``a + b <= L`` has ``w(y) <= w(L)`` and 
 which bounds p before sampling; the active cells of each branch are examined in order until one
 gives a root. On sigma graphs all roots are found and the shortest of each branch kept.
 
-Everything is a pure function of numpy arrays (the C planner ports it).
+Everything is a pure function of numpy arrays (the C planner ports it). The planner runs the
+shortest-plan search in that C port where it applies (:mod:`.compiled_search`): the same algorithm,
+so the argument above holds for it; ``tests/test_codegen.py`` checks that it finds the same branch and
+(a, b, gamma) to 1e-8, ``tests/test_geometric.py`` that the planner chooses the same plan either way.
 """
 
 from __future__ import annotations

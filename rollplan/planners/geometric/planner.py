@@ -34,7 +34,14 @@ closed form, the displacement by a Gauss rule accurate to K_MAX). The shortest
 plan is found by a bounded search: branches are visited in increasing order of
 a lower bound of ``a + b`` on them, the shortest root of each branch is found
 first, and the search stops when no branch left can beat the best certified
-plan. Each root is then polished by the solver of the shooting problem (32)-(33)
+plan. For ``1/2 <= k`` up to the generated C planner's ``k_max`` (:mod:`rollplan.codegen`), the
+shortest (or ``branch=``) plan's search runs compiled (:mod:`.compiled_search`): the C planner runs the
+same enumeration and the same bounded search (ported formula by formula; ``tests/test_codegen.py``
+checks the same branch and (a, b, gamma) to 1e-8, ``tests/test_geometric.py`` the same plan as the
+numpy search on random targets), and its shortest root is polished and certified here like any
+other; if that root fails the certificate, if the C search gives no root, for ``all_solutions``,
+outside that range of k or without a C compiler, the numpy search above runs. Each root is then
+polished by the solver of the shooting problem (32)-(33)
 chosen by name, IPOPT through CasADi by default (:func:`.refine.polisher`:
 compiled residual and Jacobian of the leaf map, started at the enumerated root:
 no iteration when that already solves (32)-(33) to the solver's tolerance, else one or
@@ -75,8 +82,9 @@ from ...problem import Problem, State, arrival_residual, check_k
 from ...progress import report
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
-from .brackets import find_brackets
+from .brackets import find_brackets, target_shift
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
+from .compiled_search import shortest_root
 from .enumerate import branches, roots
 from .leafmap import panels_for, step_values
 from .leaves import LeafTables
@@ -213,11 +221,15 @@ class GeometricPhasePlanner:
     certifier : str
         Certifier from :data:`.certify.CERTIFIERS`: ``"rk8"`` (the default: compiled RK8 with a
         step-doubling error bound) or ``"cvodes"``.
+    compiled_search : bool
+        Search the shortest (or one branch's) root with the compiled C search where it applies (module
+        docstring); False always runs the numpy search.
     """
 
     def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
-                 certifier: str = DEFAULT_CERTIFIER) -> None:
+                 certifier: str = DEFAULT_CERTIFIER, compiled_search: bool = True) -> None:
         self.method = check_choice("method", method, SOLVERS)
+        self.compiled_search = check_flag("compiled_search", compiled_search)
         self.tol = check_range("tol", tol, 0.0, 1e-3, low_open=True)
         self.nodes = check_whole("nodes", nodes, 4, 200)
         self.curve = figure_eight()
@@ -280,6 +292,10 @@ class GeometricPhasePlanner:
             raise NoPlanError(f"no plan for {where}: the target is the start point, and rollplan plans "
                               "motions with a nonzero displacement")
         target = (goal_r.u_a, goal_r.v_a, psi_des)
+        if self.compiled_search and not all_solutions:
+            quick = self._solve_compiled(problem, None if branch is None else branch + turns, target, turns, t_start)
+            if quick is not None:
+                return quick
         return self._solve_enumerated(problem, all_solutions, None if branch is None else branch + turns,
                                       target, turns, t_start)
 
@@ -290,6 +306,25 @@ class GeometricPhasePlanner:
                               f"their certified residual plus error bound (best {min(rejected):.1e}) exceeds "
                               f"{self.tol:.0e}; "
                               "try more steps")
+
+    def _solve_compiled(self, problem, branch, target, turns, t_start) -> Plan | None:
+        """The shortest root (on ``branch`` if given) by the compiled C search, polished and certified here;
+        None when the C search gives none or its root fails the certificate (module docstring)."""
+        k, steps = problem.k, problem.steps
+        found = shortest_root(target[0], target[1], target[2], steps, k, branch)
+        if found is None:
+            return None
+        eta = (target[2] + 2.0 * math.pi * found.m) / steps
+        h = float(target_shift(math.hypot(target[0], target[1]), eta, steps))
+        x, status, iters = self._polish(_Root(found.a, found.b, 0.0, found.m, h, eta), k)
+        cand = self._certified(problem, x, found.m - turns, target, status, iters)
+        if not cand[1].passed:
+            log.info("compiled search: branch m=%d (a=%.6f, b=%.6f) not certified; running the numpy search",
+                     found.m - turns, found.a, found.b)
+            return None
+        details = {"candidates": 1, "solves": 1, "branches": found.branches, "roots": found.roots,
+                   "search": "compiled"}
+        return self._plan(problem, cand, replace(cand[2], time_s=time.perf_counter() - t_start, details=details))
 
     def _solve_enumerated(self, problem, all_solutions, branch, target, turns, t_start) -> Plan:
         """Complete enumeration (every k): every root of every branch (``all_solutions``) or the
@@ -342,7 +377,7 @@ class GeometricPhasePlanner:
             raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R "
                               f"({len(brs)} branches searched completely); try more steps")
         found.sort(key=lambda c: c[0].a + c[0].b)
-        details = {"candidates": tried, "solves": len(found), "branches": visited, "roots": tried}
+        details = {"candidates": tried, "solves": len(found), "branches": visited, "roots": tried, "search": "numpy"}
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
         return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
 
