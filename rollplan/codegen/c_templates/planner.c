@@ -922,6 +922,18 @@ typedef struct {
     @PREFIX@_plan_t *plan;              /* filled in by an accepted root only */
 } search_t;
 
+/* The certificate as the search applies it (@PREFIX@_certify). A test build may define
+ * @PREFIX_UPPER@_TEST_REJECT_BELOW = L: then every plan with a + b < L is rejected (after its certificate ran), which
+ * makes the shortest root fail and exercises the search's fallback (tests/test_codegen.py); no other build defines it. */
+static int search_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps, casadi_real k, casadi_real u,
+                          casadi_real v, casadi_real psi, casadi_real *residual, casadi_real *bound) {
+    int status = @PREFIX@_certify(a, b, gamma, steps, k, u, v, psi, NULL, residual, bound);
+#ifdef @PREFIX_UPPER@_TEST_REJECT_BELOW
+    if (a + b < @PREFIX_UPPER@_TEST_REJECT_BELOW) status = @PREFIX_UPPER@_NOT_CERTIFIED;
+#endif
+    return status;
+}
+
 /* A root x of branch br (from the table): polish, and accept it as the best plan if a + b < best and
  * (with the certificate) it certifies. Returns 1 if accepted, -1 if a + b >= best (the branch is done), 0 if
  * rejected by the certificate. */
@@ -935,7 +947,7 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
     S->roots++;
     gamma = rotation(S->u, S->v, S->psi_w, S->steps, a, b, S->k, &eta, &h, &predicted);
     if (S->certify && !S->defer)
-        status = @PREFIX@_certify(a, b, gamma, S->steps, S->k, S->u, S->v, S->psi_w, NULL, &residual, &bound);
+        status = search_certify(a, b, gamma, S->steps, S->k, S->u, S->v, S->psi_w, &residual, &bound);
     if (status != @PREFIX_UPPER@_OK) {
         if (!S->rejected || residual < S->rej[3]) {   /* the best rejected root, reported if no plan is found */
             S->rej[0] = a;
@@ -1213,7 +1225,7 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
     S.defer = S.certify;
     search(&S, options, h_des);
     if (S.defer && S.best < INFINITY) {
-        if (@PREFIX@_certify(plan->a, plan->b, plan->gamma, steps, k, u, v, S.psi_w, NULL, &residual, &bound)
+        if (search_certify(plan->a, plan->b, plan->gamma, steps, k, u, v, S.psi_w, &residual, &bound)
             == @PREFIX_UPPER@_OK) {
             plan->residual = residual;
             plan->bound = bound;
