@@ -664,6 +664,7 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@MAX_STEPS@": show_limit(MAX_STEPS),
         "@CERT_TOL@": repr(CERT_TOL if real == "double" else FLOAT_CERT_TOL),
         "@REAL_TINY@": "DBL_MIN" if real == "double" else "FLT_MIN",
+        "@REAL_EPS@": "DBL_EPSILON" if real == "double" else "FLT_EPSILON",
         "@REAL_MAX@": "DBL_MAX" if real == "double" else "FLT_MAX",
         "@ACCURACY@": "plans are certified to 1e-9." if real == "double" else
                       f"single precision: plans are certified to {FLOAT_CERT_TOL:g} (R and rad) only.",

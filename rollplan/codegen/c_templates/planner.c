@@ -24,6 +24,7 @@
 #define SZ_IW @SZ_IW@
 #define SZ_W @SZ_W@
 #define REAL_TINY @REAL_TINY@          /* smallest normal casadi_real */
+#define REAL_EPS @REAL_EPS@            /* machine epsilon of casadi_real */
 #define REAL_MAX @REAL_MAX@            /* largest finite casadi_real */
 #define A_MAX @PREFIX_UPPER@_A_MAX
 #define K_MIN @PREFIX_UPPER@_K_MIN
@@ -517,8 +518,9 @@ static void rho_lookup(casadi_real r, casadi_real *rho, casadi_real *drho) {
 }
 
 /* Bounds [lo, hi] of the table's rho (the cubic Hermite rho_lookup evaluates) on the radii [r0, r1] (0 <= r0 <= r1):
- * on a table cell of width w the cubic is a convex combination of its end values plus w (h10 p0 + h11 p1), and
- * 0 <= h10 <= 4/27, -4/27 <= h11 <= 0, so it lies within 4/27 w (|p0| + |p1|) of the range of its end values. The cells are visited RHO_BLOCK at a time through the blocks' bounds (s_blo, s_bhi). */
+ * on a table cell of width w the cubic is a convex combination of its end values plus w (h10 p0 + h11 p1) with
+ * 0 <= h10 <= 4/27 and -4/27 <= h11 <= 0, so it lies within 4/27 w (|p0| + |p1|) of the range of its end values
+ * (cell_range). The cells are bounded a block of RHO_BLOCK at a time through the sparse table (s_blo, s_bhi). */
 static void cell_range(int i, casadi_real *lo, casadi_real *hi) {
     casadi_real m = (4.0 / 27.0) * (s_tr[i + 1] - s_tr[i]) * (fabs(s_tdrho[i]) + fabs(s_tdrho[i + 1]));
     *lo = MIN(s_trho[i], s_trho[i + 1]) - m;
@@ -727,8 +729,9 @@ static casadi_real gval(casadi_real x, const branch_t *br, casadi_real k, casadi
  * convex (|c| <= 1), so on the box of the rho ranges (rho_range) its maximum is at a corner, and it is at least
  * dist(0, range of rho_a + c rho_b)^2 + (1 - c^2) dist(0, range of rho_b)^2 (and the same with a and b swapped).
  * Excluded when g < -margin or g > margin everywhere on the box, margin = floor (the table's error carried into
- * g and rounding, as in search_branch) plus the rounding of the bound itself: the search would find no root there
- * (its roots need a sign change of the computed g, or |g| within the floor at a double root). */
+ * g and rounding, as in search_branch) plus a generous multiple of the rounding of g and of the bound (4096 REAL_EPS
+ * of their size): the search would find no root there (its roots need a sign change of the computed g, or |g|
+ * within the floor at a double root). */
 static int excluded(const branch_t *br, casadi_real x0, casadi_real x1, casadi_real y0, casadi_real y1,
                     casadi_real floor_g) {
     casadi_real la, ha, lb, hb, c = br->c_half, h2 = br->h * br->h, qmax, qmin, s0, s1, d, e, t, margin;
@@ -736,7 +739,7 @@ static int excluded(const branch_t *br, casadi_real x0, casadi_real x1, casadi_r
     rho_range(y0, y1, &lb, &hb);
     qmax = MAX(MAX(la * la + lb * lb + 2.0 * c * la * lb, la * la + hb * hb + 2.0 * c * la * hb),
                 MAX(ha * ha + lb * lb + 2.0 * c * ha * lb, ha * ha + hb * hb + 2.0 * c * ha * hb));
-    margin = floor_g + 1e-12 * (1.0 + h2 + qmax);
+    margin = floor_g + 4096.0 * REAL_EPS * (1.0 + h2 + qmax);
     if (qmax - h2 < -margin) return 1;
     s0 = la + MIN(c * lb, c * hb);                 /* rho_a + c rho_b in [s0, s1] */
     s1 = ha + MAX(c * lb, c * hb);
