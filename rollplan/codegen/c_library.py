@@ -29,7 +29,10 @@ rule's nodes and every constant written from the Python definitions by :func:`ge
 search of :meth:`GeometricPhasePlanner._solve_enumerated <rollplan.planners.geometric.GeometricPhasePlanner>`:
 branches in increasing order of the smallest ``a + b`` they can hold, each branch's roots in increasing x
 (the first root of a branch is its shortest plan), every root polished on the accurate leaf map, until no
-branch can hold a shorter plan; then the shortest root is certified (if it fails, the search is run again
+branch can hold a shorter plan. Intervals of a branch where the tabulated g provably has no root are skipped
+unsampled (g bounded through bounds of the table's cubic rho over the radii of the interval: first the whole
+branch below the best plan so far, then intervals of doubling width), which removes no root, so the choice is
+that of the search without the skip. Then the shortest root is certified (if it fails, the search is run again
 certifying every root, the pruning by certified plans only). So the C planner returns the Python planner's plan
 (same branch, same (a, b, gamma) up to rounding); ``branch=`` restricts to one branch. The enumeration needs
 E strictly decreasing, which holds for ``k >= 1/2`` (:data:`~rollplan.planners.geometric.enumerate.K_MONOTONE`):
@@ -583,6 +586,7 @@ def _enumeration_constants(k_max: float) -> dict:
         "@PHASE_STEP@": repr(enumerate_.PHASE_STEP),
         "@X_STEP@": repr(enumerate_.X_STEP),
         "@HERMITE_REL@": repr(enumerate_.HERMITE_REL),
+        "@POLISH_STEP@": repr(enumerate_.POLISH_STEP),
         "@SAFETY@": repr(enumerate_.SAFETY),
         "@MIN_WIDTH@": repr(enumerate_.MIN_WIDTH),
         "@TABLE_PHASE@": repr(enumerate_.TABLE_PHASE),

@@ -52,6 +52,7 @@
 #define PHASE_STEP @PHASE_STEP@
 #define X_STEP @X_STEP@
 #define HERMITE_REL @HERMITE_REL@
+#define POLISH_STEP @POLISH_STEP@        /* Newton steps of the polish below this are taken without a new evaluation */
 #define SAFETY @SAFETY@
 #define MIN_WIDTH @MIN_WIDTH@
 #define TABLE_PHASE @TABLE_PHASE@
@@ -866,8 +867,9 @@ static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p
     return n;
 }
 
-/* Newton on g of the accurate map from a root of the table (a step that would leave [0, x_end] or does
- * not decrease |g| is not taken; at most 6): the root to rounding (enumerate._polish). */
+/* Newton on g of the accurate map from a root of the table (a step that would leave [0, x_end] is clipped; one
+ * that does not decrease |g| is not taken; at most 6 evaluations after the first); once a step is at most
+ * POLISH_STEP (the quadratic regime) it is taken without a new evaluation: the root to rounding (enumerate._polish). */
 static casadi_real polish(casadi_real x, const branch_t *br, casadi_real k) {
     casadi_real g, dg, g2, dg2, a, b, nxt;
     int it;
@@ -876,6 +878,7 @@ static casadi_real polish(casadi_real x, const branch_t *br, casadi_real k) {
         nxt = x - g / dg;
         nxt = nxt < 0.0 ? 0.0 : (nxt > br->x_end ? br->x_end : nxt);
         if (!isfinite(nxt)) break;
+        if (fabs(nxt - x) <= POLISH_STEP) return nxt;
         branch_values(nxt, br, k, 1, &g2, &dg2, &a, &b);
         if (!(fabs(g2) < fabs(g))) break;
         x = nxt;
@@ -944,7 +947,7 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
     casadi_real g, dg, a, b, gamma, eta, h, predicted, residual = NAN, bound = NAN;
     int status = @PREFIX_UPPER@_OK;
     x = polish(x, br, S->k);
-    branch_values(x, br, S->k, 1, &g, &dg, &a, &b);
+    branch_values(x, br, S->k, 0, &g, &dg, &a, &b);   /* a and b (which do not depend on the table) */
     if (!(a + b < S->best)) return -1;
     if (!(a > 0.0 && b > 0.0)) return 0;
     S->roots++;
