@@ -531,8 +531,8 @@ static void cell_range(int i, casadi_real *lo, casadi_real *hi) {
 static void rho_range(casadi_real r0, casadi_real r1, casadi_real *lo, casadi_real *hi) {
     int i0, i1, j, i, b0, b1, lev;
     casadi_real l = INFINITY, h = -INFINITY;
-    bracket(r0, 0, &i0, &j);
-    bracket(r1, 0, &i1, &j);
+    bracket(r0 < r1 ? r0 : r1, 0, &i0, &j);             /* (the ends in either order) */
+    bracket(r0 < r1 ? r1 : r0, 0, &i1, &j);
     b0 = (i0 + RHO_BLOCK - 1) / RHO_BLOCK;             /* the full blocks inside the cells i0 .. i1 */
     b1 = (i1 + 1) / RHO_BLOCK - 1;
     if (b1 >= s_nblock) b1 = s_nblock - 1;
