@@ -996,11 +996,12 @@ static casadi_real phase_point(int i, int nt, casadi_real t1, casadi_real x_end,
  * min |H| > SAFETY |g(mid) - H(mid)| + floor (module docstring of enumerate.py: the completeness argument).
  * Before that, intervals of x where the tabulated g provably has no root (excluded(): a bound of g from the
  * bounds of the table's rho over the radii of the interval) are skipped: first the whole branch below the best
- * plan, then intervals from the last sample on, their width doubled after a success and halved after a failure
- * down to one cell of the grid, which is then sampled. After a skip to x the grid resumes at its first point
- * beyond x (so a cell may start at a skip's end: it is smaller than a cell of the grid, which the argument
- * allows). Skipping removes no root of the tabulated g, so the roots found, and the plan, are those of the
- * search without it. Returns 1 if a plan was accepted on the branch. */
+ * plan, then intervals from the last point reached, their width doubled after a success and halved after a
+ * failure down to the next cell of the grid, which is then tested alone and sampled if that fails too. After a
+ * skip to x the grid resumes at its first point beyond x (so a cell may start at a skip's end: it is smaller than
+ * a cell of the grid, which the argument allows). Skipping removes no root of the tabulated g (nor a point where
+ * |g| is within the floor), so the roots found, and the plan, are those of the search without it (up to the
+ * rounding of roots located from other cell ends). Returns 1 if a plan was accepted on the branch. */
 static int search_branch(search_t *S, const branch_t *br) {
     const casadi_real k = S->k, floor_g = 1e-13 * (1.0 + br->h * br->h) + s_eps_g;
     casadi_real t1 = turn(br->x_end, k), xp, xl, prev, g = 0.0, p = 0.0, crit[2], hc, low, gm, pm, err, big, xm;
