@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from rollplan import codegen
+from rollplan import Problem, codegen
 from rollplan.cli import main
 from rollplan.codegen.c_library import (
     CERT_TOL,
@@ -28,6 +28,7 @@ from rollplan.core.curves import A_MAX, figure_eight
 from rollplan.core.integrate import CvodesIntegrator, spectral_step
 from rollplan.core.rewrite import algebraic
 from rollplan.errors import InputError
+from rollplan.planners.geometric import GeometricPhasePlanner
 
 import references
 
@@ -278,6 +279,32 @@ def test_random_targets_same_plan_as_python(built):
             plans += 1
             assert _same_plan(_parse(run), q), (u, v, psi, n, k)
     assert plans >= 20
+
+
+def test_search_falls_back_to_certifying_every_root(built, tmp_path):
+    """The search's fallback: when the shortest root fails its certificate, the search runs again certifying every
+    root, so the plan is the shortest certified one. A test build (planner.c with ROLLPLAN_TEST_REJECT_BELOW = L,
+    linked with the fixture's objects) rejects every plan with a + b < L: for L just above the shortest plan it
+    returns the shortest of the Python planner's certified plans with a + b >= L; for L beyond every plan it
+    reports the best rejected root with status NOT_CERTIFIED."""
+    target = (0.0, 1.0, 0.0, 1, 2.5)
+    best = GeometricPhasePlanner().solve(Problem(target[:3], k=target[4], steps=target[3]), all_solutions=True)
+    plans = sorted((best,) + best.alternatives, key=lambda q: q.a + q.b)   # every certified plan of the target
+    assert len(plans) >= 2
+    cut = plans[0].a + plans[0].b + 1e-6
+    out = built.out
+    for limit, exe in ((cut, "fallback"), (100.0, "reject_all")):
+        subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror",
+                        f"-DROLLPLAN_TEST_REJECT_BELOW={limit!r}",
+                        "-I", str(out), "-o", str(tmp_path / exe), str(out / "plan_demo.o"),
+                        str(out / "rollplan_planner.c"), str(out / "rollplan_model.o"), "-lm"], check=True)
+    run = subprocess.run([str(tmp_path / "fallback"), *map(str, target)], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    want = min((q for q in plans if q.a + q.b >= cut), key=lambda q: q.a + q.b)
+    assert _same_plan(_parse(run), want), (run.stdout, want)
+    run = subprocess.run([str(tmp_path / "reject_all"), *map(str, target)], capture_output=True, text=True,
+                         check=False)
+    assert run.returncode == 5 and "not certified" in run.stderr, (run.returncode, run.stderr)
 
 
 def test_plan_demo_reproduces_paper_radius(built):

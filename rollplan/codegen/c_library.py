@@ -29,7 +29,10 @@ rule's nodes and every constant written from the Python definitions by :func:`ge
 search of :meth:`GeometricPhasePlanner._solve_enumerated <rollplan.planners.geometric.GeometricPhasePlanner>`:
 branches in increasing order of the smallest ``a + b`` they can hold, each branch's roots in increasing x
 (the first root of a branch is its shortest plan), every root polished on the accurate leaf map, until no
-branch can hold a shorter plan; then the shortest root is certified (if it fails, the search is run again
+branch can hold a shorter plan. Intervals of a branch where the tabulated g provably has no root are skipped
+unsampled (g bounded through bounds of the table's cubic rho over the radii of the interval: first the whole
+branch below the best plan so far, then intervals of doubling width), which removes no root, so the choice is
+that of the search without the skip. Then the shortest root is certified (if it fails, the search is run again
 certifying every root, the pruning by certified plans only). So the C planner returns the Python planner's plan
 (same branch, same (a, b, gamma) up to rounding); ``branch=`` restricts to one branch. The enumeration needs
 E strictly decreasing, which holds for ``k >= 1/2`` (:data:`~rollplan.planners.geometric.enumerate.K_MONOTONE`):
@@ -517,6 +520,7 @@ def _enumeration_constants(k_max: float) -> dict:
         "@PHASE_STEP@": repr(enumerate_.PHASE_STEP),
         "@X_STEP@": repr(enumerate_.X_STEP),
         "@HERMITE_REL@": repr(enumerate_.HERMITE_REL),
+        "@POLISH_STEP@": repr(enumerate_.POLISH_STEP),
         "@SAFETY@": repr(enumerate_.SAFETY),
         "@MIN_WIDTH@": repr(enumerate_.MIN_WIDTH),
         "@TABLE_PHASE@": repr(enumerate_.TABLE_PHASE),
@@ -598,6 +602,7 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@MAX_STEPS@": show_limit(MAX_STEPS),
         "@CERT_TOL@": repr(CERT_TOL if real == "double" else FLOAT_CERT_TOL),
         "@REAL_TINY@": "DBL_MIN" if real == "double" else "FLT_MIN",
+        "@REAL_EPS@": "DBL_EPSILON" if real == "double" else "FLT_EPSILON",
         "@REAL_MAX@": "DBL_MAX" if real == "double" else "FLT_MAX",
         "@ACCURACY@": "plans are certified to 1e-9." if real == "double" else
                       f"single precision: plans are certified to {FLOAT_CERT_TOL:g} (R and rad) only.",

@@ -24,6 +24,7 @@
 #define SZ_IW @SZ_IW@
 #define SZ_W @SZ_W@
 #define REAL_TINY @REAL_TINY@          /* smallest normal casadi_real */
+#define REAL_EPS @REAL_EPS@            /* machine epsilon of casadi_real */
 #define REAL_MAX @REAL_MAX@            /* largest finite casadi_real */
 #define A_MAX @PREFIX_UPPER@_A_MAX
 #define K_MIN @PREFIX_UPPER@_K_MIN
@@ -51,6 +52,7 @@
 #define PHASE_STEP @PHASE_STEP@
 #define X_STEP @X_STEP@
 #define HERMITE_REL @HERMITE_REL@
+#define POLISH_STEP @POLISH_STEP@        /* Newton steps of the polish below this are taken without a new evaluation */
 #define SAFETY @SAFETY@
 #define MIN_WIDTH @MIN_WIDTH@
 #define TABLE_PHASE @TABLE_PHASE@
@@ -288,6 +290,16 @@ static casadi_real s_tdu[NTABLE];                         /* du/dE at the radii,
 static unsigned short s_rb[NTABLE + 1], s_eb[NTABLE + 1];
 static casadi_real s_rscale, s_escale;                    /* bucket of r: r s_rscale; of a turn E: E s_escale */
 static casadi_real s_eps, s_eps_g;                        /* table error bound; its effect on g */
+/* Bounds of the table's rho on its cells (cell_range) and, for range queries (rho_range), on blocks of RHO_BLOCK
+ * cells: level j of the sparse table bounds the 2^j blocks from each block. */
+#define RHO_BLOCK 16
+#define NBLOCK (NTABLE / RHO_BLOCK + 1)
+#define NLEVEL (NBLOCK < 2 ? 1 : NBLOCK < 4 ? 2 : NBLOCK < 8 ? 3 : NBLOCK < 16 ? 4 : NBLOCK < 32 ? 5 : NBLOCK < 64 ? 6 \
+                : NBLOCK < 128 ? 7 : NBLOCK < 256 ? 8 : NBLOCK < 512 ? 9 : NBLOCK < 1024 ? 10 : 11)
+static casadi_real s_rlo[NTABLE], s_rhi[NTABLE], s_blo[NLEVEL][NBLOCK], s_bhi[NLEVEL][NBLOCK];
+static int s_nblock;                                      /* full blocks of the table */
+#define MIN(x, y) ((x) < (y) ? (x) : (y))
+#define MAX(x, y) ((x) > (y) ? (x) : (y))
 
 /* (c, s, rho) of radius r: c = sqrt(1 - r^2), s = sqrt(1 - 2 r^2), rho = r^2 / (c^2 + s) (leafmap._consts). */
 static void consts(casadi_real r, casadi_real *c, casadi_real *s, casadi_real *rho) {
@@ -506,6 +518,45 @@ static void rho_lookup(casadi_real r, casadi_real *rho, casadi_real *drho) {
         *drho = ((6 * t2 - 6 * t) * g0 + (-6 * t2 + 6 * t) * g1) / w + (3 * t2 - 4 * t + 1) * p0 + (3 * t2 - 2 * t) * p1;
 }
 
+/* Bounds [lo, hi] of the table's rho (the cubic Hermite rho_lookup evaluates) on the radii [r0, r1] (0 <= r0 <= r1):
+ * on a table cell of width w the cubic is a convex combination of its end values plus w (h10 p0 + h11 p1) with
+ * 0 <= h10 <= 4/27 and -4/27 <= h11 <= 0, so it lies within 4/27 w (|p0| + |p1|) of the range of its end values
+ * (cell_range). The cells are bounded a block of RHO_BLOCK at a time through the sparse table (s_blo, s_bhi). */
+static void cell_range(int i, casadi_real *lo, casadi_real *hi) {
+    casadi_real m = (4.0 / 27.0) * (s_tr[i + 1] - s_tr[i]) * (fabs(s_tdrho[i]) + fabs(s_tdrho[i + 1]));
+    *lo = MIN(s_trho[i], s_trho[i + 1]) - m;
+    *hi = MAX(s_trho[i], s_trho[i + 1]) + m;
+}
+
+static void rho_range(casadi_real r0, casadi_real r1, casadi_real *lo, casadi_real *hi) {
+    int i0, i1, j, i, b0, b1, lev;
+    casadi_real l = INFINITY, h = -INFINITY;
+    bracket(r0 < r1 ? r0 : r1, 0, &i0, &j);             /* (the ends in either order) */
+    bracket(r0 < r1 ? r1 : r0, 0, &i1, &j);
+    b0 = (i0 + RHO_BLOCK - 1) / RHO_BLOCK;             /* the full blocks inside the cells i0 .. i1 */
+    b1 = (i1 + 1) / RHO_BLOCK - 1;
+    if (b1 >= s_nblock) b1 = s_nblock - 1;
+    if (b0 > b1) {
+        b0 = b1 + 1;
+        j = i1 + 1;
+    } else {
+        j = b0 * RHO_BLOCK;
+        for (lev = 0; (2 << lev) <= b1 - b0 + 1; ++lev) {}
+        l = MIN(s_blo[lev][b0], s_blo[lev][b1 - (1 << lev) + 1]);
+        h = MAX(s_bhi[lev][b0], s_bhi[lev][b1 - (1 << lev) + 1]);
+    }
+    for (i = i0; i < j; ++i) {
+        l = MIN(l, s_rlo[i]);
+        h = MAX(h, s_rhi[i]);
+    }
+    for (i = (b1 + 1) * RHO_BLOCK > j ? (b1 + 1) * RHO_BLOCK : j; i <= i1; ++i) {
+        l = MIN(l, s_rlo[i]);
+        h = MAX(h, s_rhi[i]);
+    }
+    *lo = l;
+    *hi = h;
+}
+
 /* Rule, E(A_MAX) and the rho table for k (kept for the last k). The radii are uniform in E (steps
  * TABLE_PHASE) and in r (TABLE_STEP); eps is SAFETY times the largest error at the midpoints against the
  * accurate map, plus rounding (enumerate._build_rho_table). Returns 0 on success. */
@@ -574,6 +625,22 @@ static int prepare(casadi_real k) {
         s_eb[j] = (unsigned short)i;
     }
     s_nt = n;
+    for (i = 0; i + 1 < n; ++i) cell_range(i, &s_rlo[i], &s_rhi[i]);
+    s_nblock = (n - 1) / RHO_BLOCK;                        /* block b: the cells b RHO_BLOCK .. (b + 1) RHO_BLOCK - 1 */
+    for (i = 0; i < s_nblock; ++i) {
+        s_blo[0][i] = INFINITY;
+        s_bhi[0][i] = -INFINITY;
+        for (j = i * RHO_BLOCK; j < (i + 1) * RHO_BLOCK; ++j) {
+            s_blo[0][i] = MIN(s_blo[0][i], s_rlo[j]);
+            s_bhi[0][i] = MAX(s_bhi[0][i], s_rhi[j]);
+        }
+    }
+    for (j = 1; j < NLEVEL; ++j) {
+        for (i = 0; i + (1 << j) <= s_nblock; ++i) {
+            s_blo[j][i] = MIN(s_blo[j - 1][i], s_blo[j - 1][i + (1 << (j - 1))]);
+            s_bhi[j][i] = MAX(s_bhi[j - 1][i], s_bhi[j - 1][i + (1 << (j - 1))]);
+        }
+    }
     err = 0.0;
     big = 0.0;
     for (i = 0; i + 1 < n; ++i) {
@@ -658,13 +725,35 @@ static casadi_real gval(casadi_real x, const branch_t *br, casadi_real k, casadi
     return g;
 }
 
-/* gval and the larger radius y(x) (other()) that it computed. */
-static casadi_real gvaly(casadi_real x, const branch_t *br, casadi_real k, casadi_real *dg, casadi_real *y) {
-    casadi_real g, d, a, b;
-    branch_values(x, br, k, 0, &g, &d, &a, &b);
-    if (dg) *dg = d;
-    *y = br->eta >= 0.0 ? b : a;
-    return g;
+/* 1 if no root of the tabulated g of branch br can lie where the two radii are in [x0, x1] and [y0, y1]:
+ * g + h^2 = q(rho_a, rho_b) = rho_a^2 + rho_b^2 + 2 c rho_a rho_b (c = cos(eta / 2), symmetric in a and b) is
+ * convex (|c| <= 1), so on the box of the rho ranges (rho_range) its maximum is at a corner, and it is at least
+ * dist(0, range of rho_a + c rho_b)^2 + (1 - c^2) dist(0, range of rho_b)^2 (and the same with a and b swapped).
+ * Excluded when g < -margin or g > margin everywhere on the box, margin = floor (the table's error carried into
+ * g and rounding, as in search_branch) plus a generous multiple of the rounding of g and of the bound (4096 REAL_EPS
+ * of their size): the search would find no root there (its roots need a sign change of the computed g, or |g|
+ * within the floor at a double root). */
+static int excluded(const branch_t *br, casadi_real x0, casadi_real x1, casadi_real y0, casadi_real y1,
+                    casadi_real floor_g) {
+    casadi_real la, ha, lb, hb, c = br->c_half, h2 = br->h * br->h, qmax, qmin, s0, s1, d, e, t, margin;
+    rho_range(x0, x1, &la, &ha);
+    rho_range(y0, y1, &lb, &hb);
+    qmax = MAX(MAX(la * la + lb * lb + 2.0 * c * la * lb, la * la + hb * hb + 2.0 * c * la * hb),
+                MAX(ha * ha + lb * lb + 2.0 * c * ha * lb, ha * ha + hb * hb + 2.0 * c * ha * hb));
+    margin = floor_g + 4096.0 * REAL_EPS * (1.0 + h2 + qmax);
+    if (qmax - h2 < -margin) return 1;
+    s0 = la + MIN(c * lb, c * hb);                 /* rho_a + c rho_b in [s0, s1] */
+    s1 = ha + MAX(c * lb, c * hb);
+    d = s0 > 0.0 ? s0 : (s1 < 0.0 ? -s1 : 0.0);
+    e = lb > 0.0 ? lb : (hb < 0.0 ? -hb : 0.0);
+    qmin = d * d + (1.0 - c * c) * e * e;
+    s0 = lb + MIN(c * la, c * ha);
+    s1 = hb + MAX(c * la, c * ha);
+    d = s0 > 0.0 ? s0 : (s1 < 0.0 ? -s1 : 0.0);
+    e = la > 0.0 ? la : (ha < 0.0 ? -ha : 0.0);
+    t = d * d + (1.0 - c * c) * e * e;
+    qmin = MAX(qmin, t);
+    return qmin - h2 > margin;
 }
 
 static int sgn(casadi_real x) { return (x > 0.0) - (x < 0.0); }
@@ -778,8 +867,9 @@ static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p
     return n;
 }
 
-/* Newton on g of the accurate map from a root of the table (a step that would leave [0, x_end] or does
- * not decrease |g| is not taken; at most 6): the root to rounding (enumerate._polish). */
+/* Newton on g of the accurate map from a root of the table (a step that would leave [0, x_end] is clipped; one
+ * that does not decrease |g| is not taken; at most 6 evaluations after the first); once a step is at most
+ * POLISH_STEP (the quadratic regime) it is taken without a new evaluation: the root to rounding (enumerate._polish). */
 static casadi_real polish(casadi_real x, const branch_t *br, casadi_real k) {
     casadi_real g, dg, g2, dg2, a, b, nxt;
     int it;
@@ -788,6 +878,7 @@ static casadi_real polish(casadi_real x, const branch_t *br, casadi_real k) {
         nxt = x - g / dg;
         nxt = nxt < 0.0 ? 0.0 : (nxt > br->x_end ? br->x_end : nxt);
         if (!isfinite(nxt)) break;
+        if (fabs(nxt - x) <= POLISH_STEP) return nxt;
         branch_values(nxt, br, k, 1, &g2, &dg2, &a, &b);
         if (!(fabs(g2) < fabs(g))) break;
         x = nxt;
@@ -837,6 +928,18 @@ typedef struct {
     @PREFIX@_plan_t *plan;              /* filled in by an accepted root only */
 } search_t;
 
+/* The certificate as the search applies it (@PREFIX@_certify). A test build may define
+ * @PREFIX_UPPER@_TEST_REJECT_BELOW = L: then every plan with a + b < L is rejected (after its certificate ran), which
+ * makes the shortest root fail and exercises the search's fallback (tests/test_codegen.py); no other build defines it. */
+static int search_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps, casadi_real k, casadi_real u,
+                          casadi_real v, casadi_real psi, casadi_real *residual, casadi_real *bound) {
+    int status = @PREFIX@_certify(a, b, gamma, steps, k, u, v, psi, NULL, residual, bound);
+#ifdef @PREFIX_UPPER@_TEST_REJECT_BELOW
+    if (a + b < @PREFIX_UPPER@_TEST_REJECT_BELOW) status = @PREFIX_UPPER@_NOT_CERTIFIED;
+#endif
+    return status;
+}
+
 /* A root x of branch br (from the table): polish, and accept it as the best plan if a + b < best and
  * (with the certificate) it certifies. Returns 1 if accepted, -1 if a + b >= best (the branch is done), 0 if
  * rejected by the certificate. */
@@ -844,13 +947,13 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
     casadi_real g, dg, a, b, gamma, eta, h, predicted, residual = NAN, bound = NAN;
     int status = @PREFIX_UPPER@_OK;
     x = polish(x, br, S->k);
-    branch_values(x, br, S->k, 1, &g, &dg, &a, &b);
+    branch_values(x, br, S->k, 0, &g, &dg, &a, &b);   /* a and b (which do not depend on the table) */
     if (!(a + b < S->best)) return -1;
     if (!(a > 0.0 && b > 0.0)) return 0;
     S->roots++;
     gamma = rotation(S->u, S->v, S->psi_w, S->steps, a, b, S->k, &eta, &h, &predicted);
     if (S->certify && !S->defer)
-        status = @PREFIX@_certify(a, b, gamma, S->steps, S->k, S->u, S->v, S->psi_w, NULL, &residual, &bound);
+        status = search_certify(a, b, gamma, S->steps, S->k, S->u, S->v, S->psi_w, &residual, &bound);
     if (status != @PREFIX_UPPER@_OK) {
         if (!S->rejected || residual < S->rej[3]) {   /* the best rejected root, reported if no plan is found */
             S->rej[0] = a;
@@ -879,20 +982,33 @@ typedef struct {
     casadi_real x0, x1, g0, p0, g1, p1;
 } cell_t;
 
+/* Phase point i (0 < i < nt) of a branch's grid: the x with E(x) = t1 i / (nt - 1), x_end at i = nt - 1. */
+static casadi_real phase_point(int i, int nt, casadi_real t1, casadi_real x_end, casadi_real k) {
+    casadi_real x = i == nt - 1 ? x_end : turn_inverse(t1 * i / (nt - 1), k);
+    return isnan(x) ? x_end : x;
+}
+
 /* The roots of branch br in increasing x until one is accepted or a + b reaches S->best (enumerate.roots
  * with first_only, then the next roots of the branch if the first is rejected). The branch is sampled on a
  * grid uniform in the phase E(x) (PHASE_STEP) and in x (X_STEP); each cell is split at its midpoint while
  * the Hermite interpolant of (g, g') at its ends misses g there by more than HERMITE_REL of the cell's
  * largest |g| and more than rounding (down to MIN_WIDTH); a resolved cell is examined unless
  * min |H| > SAFETY |g(mid) - H(mid)| + floor (module docstring of enumerate.py: the completeness argument).
- * Returns 1 if a plan was accepted on the branch. */
+ * Before that, intervals of x where the tabulated g provably has no root (excluded(): a bound of g from the
+ * bounds of the table's rho over the radii of the interval) are skipped: first the whole branch below the best
+ * plan, then intervals from the last point reached, their width doubled after a success and halved after a
+ * failure down to the next cell of the grid, which is then tested alone and sampled if that fails too. After a
+ * skip to x the grid resumes at its first point beyond x (so a cell may start at a skip's end: it is smaller than
+ * a cell of the grid, which the argument allows). Skipping removes no root of the tabulated g (nor a point where
+ * |g| is within the floor), so the roots found, and the plan, are those of the search without it (up to the
+ * rounding of roots located from other cell ends). Returns 1 if a plan was accepted on the branch. */
 static int search_branch(search_t *S, const branch_t *br) {
     const casadi_real k = S->k, floor_g = 1e-13 * (1.0 + br->h * br->h) + s_eps_g;
-    casadi_real t1 = turn(br->x_end, k), xp, xl, prev, g, p, crit[2], hc, low, gm, pm, err, big, xm, xs[MAX_CELL_ROOTS];
-    casadi_real last_root = -1.0, hv, t, y_prev;
+    casadi_real t1 = turn(br->x_end, k), xp, xl, prev, g = 0.0, p = 0.0, crit[2], hc, low, gm, pm, err, big, xm;
+    casadi_real xs[MAX_CELL_ROOTS], last_root = -1.0, hv, t, y_prev, y_t, x_lim, xj, wide;
     static cell_t stack[STACK_CELLS];   /* static: the planner is not reentrant anyway, and the stack stays small */
     cell_t c;
-    int nt, nx, ip = 1, ix = 1, top, nroot, i, j, crosses, status;
+    int nt, nx, ip = 1, ix = 1, top, nroot, i, j, crosses, status, have_g = 0;
     long cells = 0;
     nt = (int)ceil(fabs(t1) / PHASE_STEP) + 1;
     nx = (int)ceil(br->x_end / X_STEP) + 1;
@@ -900,34 +1016,79 @@ static int search_branch(search_t *S, const branch_t *br) {
     if (nx < 2) nx = 2;
     if (!(br->x_end > 0.0)) return 0;
     prev = 0.0;
-    g = gval(prev, br, k, &p);
     y_prev = other(prev, br->e, k);
+    /* a root with a + b < best has x <= y (E decreasing, e >= 0), so x < best / 2 and x < best - y0; y grows with x:
+     * if the table's g has no root on the box [0, x_lim] x [y0, y(x_lim)], the branch has none below the best plan.
+     * A skip never goes beyond x_lim, where x + y(x) >= best ends the branch. */
+    x_lim = br->x_end;
+    if (S->best < INFINITY) x_lim = fmin(x_lim, fmin(0.5 * S->best, S->best - br->y0));
+    if (!(x_lim > 0.0) || excluded(br, 0.0, x_lim, y_prev, other(x_lim, br->e, k), floor_g)) return 0;
+    wide = 0.0;                         /* width of the next skip tried (0: one cell of the grid) */
     xp = -1.0;                          /* the next phase point, computed when ip moves on */
     while (prev < br->x_end) {
+        /* nothing on or after this cell can be shorter than the best plan: a + b = x + y(x) grows with x */
+        if (prev + y_prev >= S->best) return 0;
         /* next grid point: the smaller of the next phase point and the next uniform point */
-        if (xp < 0.0) {
-            xp = ip < nt ? (ip == nt - 1 ? br->x_end : turn_inverse(t1 * ip / (nt - 1), k)) : INFINITY;
-            if (isnan(xp)) xp = br->x_end;
-        }
+        if (xp < 0.0) xp = ip < nt ? phase_point(ip, nt, t1, br->x_end, k) : INFINITY;
         xl = ix < nx ? (ix == nx - 1 ? br->x_end : br->x_end * ix / (nx - 1)) : INFINITY;
         t = xp <= xl ? xp : xl;
+        if (!(t > prev)) {              /* a grid point at or before prev (after a skip): the next one */
+            if (xp <= xl) {
+                ++ip;
+                xp = -1.0;
+            } else {
+                ++ix;
+            }
+            continue;
+        }
+        if (t > br->x_end) t = br->x_end;
+        if (wide > t - prev) {          /* try to skip [prev, prev + wide] */
+            xj = prev + wide < x_lim ? prev + wide : x_lim;
+            y_t = other(xj, br->e, k);
+            if (xj > prev && excluded(br, prev, xj, y_prev, y_t, floor_g)) {
+                prev = xj;
+                y_prev = y_t;
+                have_g = 0;
+                wide *= 2.0;
+                /* the grid's first points beyond xj: phase index i > E(xj) (nt - 1) / t1, uniform index
+                 * j > xj (nx - 1) / x_end (a point equal to xj up to rounding is passed over above) */
+                hv = floor(turn(xj, k) / t1 * (nt - 1)) + 1.0;
+                if (hv > (casadi_real)ip) {
+                    ip = hv < (casadi_real)nt ? (int)hv : nt;
+                    xp = -1.0;
+                }
+                hv = floor(xj / br->x_end * (nx - 1)) + 1.0;
+                if (hv > (casadi_real)ix) ix = hv < (casadi_real)nx ? (int)hv : nx;
+            } else {
+                wide *= 0.5;
+            }
+            continue;
+        }
         if (xp <= xl) {
             ++ip;
             xp = -1.0;
         } else {
             ++ix;
         }
-        if (!(t > prev)) continue;
-        if (t > br->x_end) t = br->x_end;
-        /* nothing on or after this cell can be shorter than the best plan: a + b = x + y(x) grows with x */
-        if (prev + y_prev >= S->best) return 0;
+        y_t = other(t, br->e, k);
+        if (excluded(br, prev, t, y_prev, y_t, floor_g)) {
+            wide = 2.0 * (t - prev);
+            prev = t;
+            y_prev = y_t;
+            have_g = 0;
+            continue;
+        }
+        wide = 0.0;
+        if (!have_g) g = gval(prev, br, k, &p);
+        have_g = 1;
         stack[0].x0 = prev;
         stack[0].x1 = t;
         stack[0].g0 = g;
         stack[0].p0 = p;
-        stack[0].g1 = g = gvaly(t, br, k, &p, &y_prev);
+        stack[0].g1 = g = gval(t, br, k, &p);
         stack[0].p1 = p;
         prev = t;
+        y_prev = y_t;
         top = 1;
         while (top) {
             c = stack[--top];
@@ -1071,7 +1232,7 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
     S.defer = S.certify;
     search(&S, options, h_des);
     if (S.defer && S.best < INFINITY) {
-        if (@PREFIX@_certify(plan->a, plan->b, plan->gamma, steps, k, u, v, S.psi_w, NULL, &residual, &bound)
+        if (search_certify(plan->a, plan->b, plan->gamma, steps, k, u, v, S.psi_w, &residual, &bound)
             == @PREFIX_UPPER@_OK) {
             plan->residual = residual;
             plan->bound = bound;
