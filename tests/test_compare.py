@@ -20,7 +20,7 @@ from rollplan.execution.optimal_timing import optimal_timing, timed_samples, tim
 from rollplan.execution.path import ContactPath
 from rollplan.measures import TimedMotion, integrate_samples, measure
 from rollplan.planners.collocation.costs import N_PAR
-from rollplan.planners.collocation.rest import RestToRestPlanner, certify, rest_parameters
+from rollplan.planners.collocation.rest import MIN_INTERVALS, RestToRestPlanner, certify, rest_parameters
 from rollplan.studies.comparison import SIDE_KEYS, TRAJECTORY_KEYS, compare, leaf_radius_bound, robot_for_k
 
 import references
@@ -64,7 +64,7 @@ def test_transcription_converges_at_its_order_to_the_printed_equations(degree, o
     Runge-Kutta method: its end state converges to DOP853 on (15), (16), (20) at order 2d."""
     acc = np.array([1.3, -0.8])
     T = 1.0
-    planner = RestToRestPlanner(intervals=2, degree=degree)
+    planner = RestToRestPlanner(intervals=MIN_INTERVALS, degree=degree)
 
     def path(t):   # u_o, v_o, rates: +acc up to T/2, -acc after
         if t <= T / 2:

@@ -32,7 +32,8 @@ from ...errors import InputError, check_choice, check_whole
 from ...problem import Problem
 from ...result import CertifiedMotion
 
-__all__ = ["SCHEMES", "Guess", "Transcription", "CollocationRun", "ipopt_options", "check_contact_bound"]
+__all__ = ["SCHEMES", "Guess", "Transcription", "CollocationRun", "ipopt_options", "check_contact_bound",
+           "sensitivity_step", "gauss_newton"]
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
 SCHEMES = ("legendre", "radau")
@@ -42,6 +43,56 @@ def ipopt_options(tol: float, max_iter: int) -> dict:
     """The options of every collocation NLP: IPOPT silent, tolerance ``tol`` (also on the constraints)."""
     return {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
             "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter, "ipopt.mu_strategy": "adaptive"}
+
+
+def sensitivity_step(name: str, x, w, par, xdot, quad) -> ca.Function:
+    """CVODES over one interval of normalized length ``h`` of ``x' = h xdot(x, w, par)`` (SX expressions) with
+    the quadrature ``h quad`` and the sensitivities of the end state:
+    ``(x0, p = (w, par, h)) -> (xf, qf, jac_xf_x0, jac_xf_p)``."""
+    h = ca.SX.sym("h")
+    opts = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 100000}
+    F = ca.integrator(name, "cvodes", {"x": x, "p": ca.vertcat(w, par, h), "ode": h * xdot, "quad": h * quad},
+                      0.0, 1.0, opts)
+    return F.factory(name + "_step", ["x0", "p"], ["xf", "qf", "jac:xf:x0", "jac:xf:p"])
+
+
+def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float = 1e-12, max_steps: int = 8):
+    """Minimum-norm Gauss-Newton correction of piecewise-constant controls so that the integrated motion ends
+    at ``final``.
+
+    ``step`` is a :func:`sensitivity_step`; the motion runs from ``start`` through the N intervals of length
+    ``1 / N`` with ``controls`` (N, nu) and parameters ``par``. Each step solves ``J d = -(x(1) - final)`` for the
+    least-norm ``d`` (J the nx x (N nu) Jacobian of the end state, chained from the intervals' sensitivities) and
+    sets ``controls += d``, until the largest end error is at most ``goal_tol``, stops decreasing, or after
+    ``max_steps`` steps. Returns ``(controls, quadrature, end error)`` of the best controls met and the end
+    error of the given controls.
+    """
+    a = np.array(controls, float)
+    N, nu = a.shape
+    final = np.asarray(final, float)
+    nx = final.size
+    best, first = (math.inf, a, 0.0), None
+    for it in range(max_steps + 1):
+        x, q, A, B = np.asarray(start, float), 0.0, [], []
+        for ai in a:
+            out = interrupts.call(step, x0=x, p=np.concatenate([ai, par, [1.0 / N]]))
+            x = np.array(out["xf"]).ravel()
+            q += float(out["qf"])
+            A.append(np.array(out["jac_xf_x0"]))
+            B.append(np.array(out["jac_xf_p"])[:, :nu])
+        size = float(np.abs(x - final).max())
+        first = size if first is None else first
+        if size >= best[0]:
+            break
+        best = (size, a, q)
+        if size <= goal_tol or it == max_steps:
+            break
+        J, M = np.zeros((nx, nu * N)), np.eye(nx)
+        for i in range(N - 1, -1, -1):
+            J[:, nu * i: nu * (i + 1)] = M @ B[i]
+            M = M @ A[i]
+        a = a + np.linalg.lstsq(J, final - x, rcond=None)[0].reshape(N, nu)
+    return best[1], best[2], best[0], first
 
 
 def check_contact_bound(problem, contact_bound: float) -> None:
