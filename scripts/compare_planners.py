@@ -238,8 +238,9 @@ def min_time_section(quick, data):
                        r["ocp_costs"]["peak_rotor_rate"] / robot.max_rotor_rate) for r in rows)
         lines = [f"- Minimum-time ratio collocation/GP median {statistics.median(ratios):.3f} "
                  f"(range {min(ratios):.3f}-{max(ratios):.3f}) on {len(rows)} targets.",
-                 f"- The collocation holds the limits at its collocation points; on the certified samples its largest "
-                 f"use of a limit is {over:.5f} of it" + (" (above 1 between the collocation points)." if over > 1
+                 f"- The collocation's NLP holds the limits at its collocation points; where the certified samples "
+                 f"exceeded them it was solved again with the limits backed off. On the certified samples its largest "
+                 f"use of a limit is {over:.5f} of it" + (" (ABOVE 1 between the collocation points)." if over > 1
                                                            else ".")]
     return [f"## Minimum time under the rotor limits (default robot, max_rotor_rate = {robot.max_rotor_rate:g} rad/s, "
             f"max_rotor_torque = {robot.max_rotor_torque:g} N m; collocation N = 60)", "", *lines, "", *table, ""]

@@ -42,13 +42,14 @@ import numpy as np
 
 from .. import interrupts
 from ..core import model
-from ..errors import InputError, SolverError, check_range, check_whole
+from ..errors import InputError, SolverError, check_whole
 from ..measures import measure
 from ..planners.collocation.rest import (
     REST_COSTS,
     TOLERANCE,
     RestToRestPlanner,
     certify,
+    check_horizon,
     correct,
     motion_function,
     naive_guess,
@@ -130,7 +131,7 @@ def rockit_solve(planner: RestToRestPlanner, problem: Problem, guess: Guess, hor
     tr = planner.transcription
     guess = tr.check_guess(guess)
     repeats = check_whole("repeats", repeats, 0, 1000)
-    horizon = check_range("horizon", horizon, 0.0, 1e6, low_open=True)
+    horizon = check_horizon(horizon)
     robot = robot if robot is not None else problem.robot
     if planner.cost == "rotor_energy" and robot is None:
         raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot")

@@ -26,8 +26,9 @@ omega and the rotor rates scale as ``1 / T``, the accelerations and torques as
 ``1 / T^2``. The NLP is therefore solved in normalized time (T = 1) and the result
 scaled exactly: ``J(T) = J(1) T^p`` with ``p = -1`` for ``path_length`` and
 ``angular_velocity`` and ``p = -3`` for ``rotor_energy`` (:data:`COST_POWERS`).
-Horizons are served in :data:`HORIZON_RANGE`, where every scaled quantity (up to
-``T^-3`` times the normalized cost) stays far from overflow and underflow.
+The scaling is exact for any T; horizons are served in :data:`HORIZON_RANGE`, which
+keeps every reported quantity (costs up to ``T^-3`` times the normalized cost) far
+from overflow and underflow, and are refused outside it with the range named.
 
 End conditions and N. Seven end conditions (the five states and the two rates at
 ``t = T``; the start is fixed) are met by 2N controls, so at least
@@ -232,6 +233,10 @@ class RestToRestPlanner:
               robot: Robot | None = None) -> RestResult:
         """Solve from ``guess`` (see :func:`guess_from_samples`, :func:`naive_guess`).
 
+        ``guess`` is in time over ``horizon`` (rates in rad/s, accelerations in rad/s^2); the NLP is solved in
+        normalized time and the result scaled to ``horizon`` exactly (module docstring), the controls corrected
+        (:func:`correct`) and certified (:func:`certify`).
+
         ``robot`` gives the inertias of the rotor rates and torques when the problem has none
         (default: the problem's robot; without either they are computed with unit inertias).
 
@@ -240,8 +245,9 @@ class RestToRestPlanner:
         InputError
             Bad input.
         SolverError
-            IPOPT failed (``.status`` is its status) or the certified residual exceeds :data:`TOLERANCE`
-            (status ``"Verification_Failed"``).
+            IPOPT failed (``.status`` is its status), the Newton correction did not meet the end conditions
+            (``"Correction_Failed"``), the samples left the contact bound after :data:`BACKOFF_TRIES` solves
+            (``"Bound_Violated"``) or the certified residual exceeds :data:`TOLERANCE` (``"Verification_Failed"``).
         """
         start, final = self.boundary(problem, turns)
         if self.cost == "rotor_energy" and robot is None and problem.robot is None:
