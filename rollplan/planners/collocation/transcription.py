@@ -63,36 +63,49 @@ def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float
     ``step`` is a :func:`sensitivity_step`; the motion runs from ``start`` through the N intervals of length
     ``1 / N`` with ``controls`` (N, nu) and parameters ``par``. Each step solves ``J d = -(x(1) - final)`` for the
     least-norm ``d`` (J the nx x (N nu) Jacobian of the end state, chained from the intervals' sensitivities) and
-    sets ``controls += d``, until the largest end error is at most ``goal_tol``, stops decreasing, or after
-    ``max_steps`` steps. Returns ``(controls, quadrature, end error)`` of the best controls met and the end
-    error of the given controls.
+    sets ``controls += lambda d`` with the first of ``lambda = 1, 1/2, ..., 1/8`` that lowers the largest end
+    error (a step whose integration fails counts as not lowering it), until that error is at most ``goal_tol``,
+    no step lowers it, or after ``max_steps`` steps. Returns ``(controls, quadrature, end error)`` of the last
+    (best) controls and the end error of the given controls (``inf`` where an integration failed).
     """
     a = np.array(controls, float)
     N, nu = a.shape
     final = np.asarray(final, float)
     nx = final.size
-    best, first = (math.inf, a, 0.0), None
-    for it in range(max_steps + 1):
+
+    def run(c):
         x, q, A, B = np.asarray(start, float), 0.0, [], []
-        for ai in a:
-            out = interrupts.call(step, x0=x, p=np.concatenate([ai, par, [1.0 / N]]))
-            x = np.array(out["xf"]).ravel()
-            q += float(out["qf"])
-            A.append(np.array(out["jac_xf_x0"]))
-            B.append(np.array(out["jac_xf_p"])[:, :nu])
+        try:
+            for ci in c:
+                out = interrupts.call(step, x0=x, p=np.concatenate([ci, par, [1.0 / N]]))
+                x = np.array(out["xf"]).ravel()
+                q += float(out["qf"])
+                A.append(np.array(out["jac_xf_x0"]))
+                B.append(np.array(out["jac_xf_p"])[:, :nu])
+        except RuntimeError:      # CVODES failed (e.g. the contact point driven to the equator)
+            return math.inf, x, q, A, B
         size = float(np.abs(x - final).max())
-        first = size if first is None else first
-        if size >= best[0]:
-            break
-        best = (size, a, q)
-        if size <= goal_tol or it == max_steps:
+        return (size if math.isfinite(size) else math.inf), x, q, A, B
+
+    size, x, q, A, B = run(a)
+    first = size
+    for _ in range(max_steps):
+        if size <= goal_tol or not math.isfinite(size):
             break
         J, M = np.zeros((nx, nu * N)), np.eye(nx)
         for i in range(N - 1, -1, -1):
             J[:, nu * i: nu * (i + 1)] = M @ B[i]
             M = M @ A[i]
-        a = a + np.linalg.lstsq(J, final - x, rcond=None)[0].reshape(N, nu)
-    return best[1], best[2], best[0], first
+        d = np.linalg.lstsq(J, final - x, rcond=None)[0].reshape(N, nu)
+        for lam in (1.0, 0.5, 0.25, 0.125):
+            trial = run(a + lam * d)
+            if trial[0] < size:
+                a = a + lam * d
+                size, x, q, A, B = trial
+                break
+        else:
+            break
+    return a, q, size, first
 
 
 def check_contact_bound(problem, contact_bound: float) -> None:
