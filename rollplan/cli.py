@@ -593,7 +593,7 @@ _STEPS = "in [1, %d]" % MAX_STEPS
 _JSON_HELP = "write {} as JSON to FILE (- for stdout; the summary then goes to stderr)"
 
 
-def _add_target_options(parser, to_default, steps_help) -> None:
+def _add_target_options(parser, to_default, steps_help, k_help=_K_HELP) -> None:
     """--to, --psi, --steps, --k | --robot, --radius: the target and the robot, as in ``plan``."""
     if to_default is None:
         parser.add_argument("--to", nargs=2, type=_number, metavar=("U", "V"), required=True,
@@ -603,13 +603,13 @@ def _add_target_options(parser, to_default, steps_help) -> None:
                             help="target contact point (u_a, v_a) on the plane (default %g %g)" % tuple(to_default))
     parser.add_argument("--psi", type=_number, default=0.0, help="target contact angle [rad] (default 0)")
     parser.add_argument("--steps", type=_whole, default=1, help=steps_help)
-    _add_robot_options(parser)
+    _add_robot_options(parser, k_help)
 
 
-def _add_robot_options(parser) -> None:
+def _add_robot_options(parser, k_help=_K_HELP) -> None:
     """--k | --robot, --radius: the robot, as in ``plan``."""
     g = parser.add_mutually_exclusive_group()
-    g.add_argument("--k", type=_number, default=None, help=_K_HELP)
+    g.add_argument("--k", type=_number, default=None, help=k_help)
     g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
     parser.add_argument("--radius", type=_number, default=None,
                         help="sphere radius R > 0 [m]; lengths are then in metres (default: lengths in units of R, "
@@ -623,14 +623,20 @@ def _add_compare_parser(sub) -> None:
 
 def _compare_arguments(c) -> None:
     from .planners import collocation
+    from .planners.collocation.rest import HORIZON_RANGE, MIN_INTERVALS
     from .studies.comparison import COMPARED_COSTS, CONTACT_BOUND
 
-    _add_target_options(c, to_default=None, steps_help=f"figure eights n {_STEPS} of the geometric plan (default 1)")
+    k_help = ("inertia ratio k in (1, %g] (default %g; without --robot the torques are those of a robot with this k, "
+              "and every robot has k > 1 by eq. 14)" % (K_MAX, DEFAULT_K))
+    _add_target_options(c, to_default=None, steps_help=f"figure eights n {_STEPS} of the geometric plan (default 1)",
+                        k_help=k_help)
     c.add_argument("--cost", choices=COMPARED_COSTS, default="angular_velocity",
                    help="the cost compared, minimised by both (default angular_velocity; rotor_energy needs --robot)")
-    c.add_argument("--horizon", type=_number, default=1.0, help="time horizon T > 0 [s] of both motions (default 1)")
+    c.add_argument("--horizon", type=_number, default=1.0,
+                   help="time horizon T [s] of both motions in [%g, %g] (default 1)" % HORIZON_RANGE)
     c.add_argument("--intervals", type=_whole, default=100,
-                   help="intervals N of both motions in [1, 100000] (default 100)")
+                   help=f"intervals N of both motions in [{MIN_INTERVALS}, 100000] (default 100; 2N controls for "
+                        "the 7 end conditions)")
     c.add_argument("--degree", type=_whole, default=3, help="collocation degree d in [1, 9] (default 3)")
     c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
     c.add_argument("--branches", type=_whole, default=2,

@@ -517,6 +517,29 @@ def integrate_contact_path(path, x0, t_span, k, t_eval=None, rtol=1e-13, atol=1e
     return sol
 
 
+def rest_path_final(acc, T, k):
+    """End point (u_a, v_a, psi) and end rates (u_o', v_o') of the contact path of piecewise-constant
+    accelerations ``acc`` (N, 2) on N equal intervals of [0, T] from rest at the origin: positions and rates
+    in closed form, (15), (16), (20) by :func:`integrate_contact_path` interval by interval."""
+    acc = np.asarray(acc, float)
+    N = acc.shape[0]
+    h = T / N
+    pos, vel = np.zeros((N + 1, 2)), np.zeros((N + 1, 2))
+    for j in range(N):
+        pos[j + 1] = pos[j] + vel[j] * h + acc[j] * h ** 2 / 2
+        vel[j + 1] = vel[j] + acc[j] * h
+
+    def path(t):
+        i = min(int(t / h), N - 1)
+        s = t - i * h
+        return (*(pos[i] + vel[i] * s + acc[i] * s ** 2 / 2), *(vel[i] + acc[i] * s))
+
+    y = np.zeros(3)
+    for i in range(N):
+        y = integrate_contact_path(path, y, (i * h, (i + 1) * h), k).y[:, -1]
+    return y, vel[-1]
+
+
 def great_circle_path(beta, sigma_0, sigma_1):
     """The great circle through the south pole in the direction beta, polar angle from sigma_0 to sigma_1
     as t runs over [0, 1]: a contact path for :func:`integrate_contact_path`."""

@@ -24,29 +24,17 @@ K = 2.5
 @pytest.mark.parametrize("scheme, degree", [("legendre", 3), ("radau", 4)])
 def test_rockit_and_rollplan_have_the_same_optimum(scheme, degree):
     """Same OCP, same transcription class, same guess: the optima agree to 1e-6 (relative), the controls too,
-    and rockit's controls, integrated by scipy's DOP853 on the printed (15), (16), (20), reach the goal."""
+    and rockit's controls (Newton-corrected), integrated by scipy's DOP853 on the printed (15), (16), (20),
+    reach the goal at rest."""
     problem = Problem((-0.4, 0.4, 1.0), k=K)
     c = peer_rest_to_rest(problem, "naive", intervals=16, degree=degree, scheme=scheme, repeats=0)
     assert c.relative_difference < 1e-6
     assert c.control_difference < 1e-4
-    assert c.peer.residual < 1e-6 and c.residual < 1e-6
-    # the peer's optimum is its own: its contact path, integrated independently, ends at the goal
-    acc = c.peer.controls
-    T, N = 1.0, acc.shape[0]
-    h = T / N
-
-    def path(t):   # u_o, v_o and rates of the piecewise-constant accelerations, from rest at the origin
-        i = min(int(t / h), N - 1)
-        pos, vel = np.zeros(2), np.zeros(2)
-        for j in range(i):
-            pos, vel = pos + vel * h + acc[j] * h ** 2 / 2, vel + acc[j] * h
-        s = t - i * h
-        return (*(pos + vel * s + acc[i] * s ** 2 / 2), *(vel + acc[i] * s))
-
-    y = np.zeros(3)
-    for i in range(N):
-        y = references.integrate_contact_path(path, y, (i * h, (i + 1) * h), K).y[:, -1]
-    assert np.abs(y - np.array([-0.4, 0.4, 1.0])).max() < 1e-5
+    # the peer's controls, Newton-corrected, are its own certified plan: integrated by DOP853 on the printed
+    # equations they end at the goal, at rest, within the project's tolerance
+    assert c.peer.residual < 1e-9 and c.residual < 1e-9
+    y, rates = references.rest_path_final(c.peer.controls, 1.0, K)
+    assert np.abs(y - np.array([-0.4, 0.4, 1.0])).max() < 1e-9 and np.abs(rates).max() < 1e-9
 
 
 def test_peer_bad_input_and_missing_rockit(monkeypatch):

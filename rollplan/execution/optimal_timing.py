@@ -22,6 +22,10 @@ not at rest at the ends; :func:`timing_bound` computes it (Simpson per piece). F
 ``int s'^2 dt`` the bound is ``L^2 / T``. The rest-to-rest optimum exceeds the bound by the cost
 of starting and stopping, which vanishes as N grows.
 
+Time scaling. Every cost is homogeneous in T (``s(t) = s_1(t / T)`` scales the first two by
+``1 / T``, the torque energy by ``1 / T^3``), so the timing is found for T = 1 and scaled exactly
+(the NLP's tolerances then mean the same for every T).
+
 Paths with corners (where every motion must rest) are refused: the comparison times one leg of
 figure eights, whose joints are smooth.
 """
@@ -100,7 +104,8 @@ def optimal_timing(path: ContactPath, horizon: float, cost: str, intervals: int 
     SolverError
         IPOPT failed.
     """
-    horizon = _check(path, horizon, cost)
+    T = _check(path, horizon, cost)
+    horizon = 1.0    # solved in normalized time t / T, scaled exactly at the end (module docstring)
     N = check_whole("intervals", intervals, 2, 100000)
     s_tab, _, ps = _table(path, check_whole("nodes", nodes, 4, 10**7))
     L, h = path.length, horizon / N
@@ -153,8 +158,8 @@ def optimal_timing(path: ContactPath, horizon: float, cost: str, intervals: int 
                           str(st["return_status"]))
     x = np.array(sol["x"]).ravel()
     S_, V_, A_ = x[: N + 1], x[N + 1: 2 * N + 2], x[2 * N + 2:]
-    coeffs = np.column_stack([S_[:-1], V_[:-1], A_ / 2])
-    return TimeProfile(np.arange(N + 1) * h, coeffs, f"optimal-{cost}", L)
+    coeffs = np.column_stack([S_[:-1], V_[:-1] / T, A_ / (2 * T ** 2)])
+    return TimeProfile(np.arange(N + 1) * h * T, coeffs, f"optimal-{cost}", L)
 
 
 @lru_cache(maxsize=1)

@@ -44,13 +44,14 @@ from ..planners.collocation.rest import (
     MinimumTimePlanner,
     RestResult,
     RestToRestPlanner,
+    check_horizon,
     guess_from_samples,
     naive_guess,
 )
 from ..planners.collocation.transcription import Guess
 from ..planners.geometric import Plan
 from ..planners.geometric import plan as gp_plan
-from ..problem import Problem
+from ..problem import K_MAX, Problem
 from ..robot import Robot
 
 __all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side", "Comparison",
@@ -75,8 +76,11 @@ def leaf_radius_bound(contact_bound: float) -> float:
 
 def robot_for_k(k: float) -> Robot:
     """A robot of radius 1 with inertia ratio ``k`` (14) and ``J_zz = 1``: what the GP timing needs when only k
-    is given (its omega does not depend on the inertias; its rotor rates and torques are in units of J_zz)."""
-    k = check_range("k", k, 1.0, None, low_open=True)
+    is given (its omega does not depend on the inertias; its rotor rates and torques are in units of J_zz).
+
+    k must lie in (1, :data:`~rollplan.problem.K_MAX`]: by (14) ``k = J_xx / J_zz = 1 + M R^2 / J_zz`` exceeds 1
+    for every robot with mass, so no robot has ``k <= 1``."""
+    k = check_range("k", k, 1.0, K_MAX, low_open=True)
     shell = min(0.5 * (k - 1.0), 0.75)          # m_o <= M = k - 1
     rotor = (1.0 - 2.0 / 3.0 * shell) / 3.0     # J_r = J_p: 2/3 m_o + 2 J_p + J_r = 1
     return Robot(radius=1.0, mass_total=k - 1.0, mass_shell=shell, rotor_inertia_axial=rotor,
@@ -277,11 +281,12 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     k, robot, radius
         As in :class:`~rollplan.problem.Problem`; without a robot k > 1 is needed (:func:`robot_for_k`).
     horizon : float
-        T [s] of both motions.
+        T [s] of both motions, in :data:`~rollplan.planners.collocation.rest.HORIZON_RANGE`.
     cost : str
         In :data:`COMPARED_COSTS`; ``"rotor_energy"`` needs a robot.
     intervals, degree, scheme
-        N (of both the collocation and the GP timing), d and points of the collocation.
+        N (of both the collocation and the GP timing) in [:data:`~rollplan.planners.collocation.rest.MIN_INTERVALS`,
+        100000], d and points of the collocation.
     contact_bound : float
         Of both planners [rad], in (0, pi/2).
     branches : int
@@ -298,11 +303,13 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
         raise InputError(f"cost = {cost!r:.40} is not allowed: choose one of {', '.join(COMPARED_COSTS)}")
     if cost == "rotor_energy" and robot is None:
         raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot")
+    if robot is None and k is not None:
+        robot_for_k(k)                      # k in (1, K_MAX]: refused before any work
     problem = Problem(tuple(target), k=None if robot is not None else k, robot=robot, radius=radius, steps=steps)
     if not problem.start.at_pole or not problem.goal.at_pole or tuple(problem.start) != (0.0,) * 5:
         raise InputError("the comparison starts at rest at the origin and ends at the pole")
     contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
-    horizon = check_range("horizon", horizon, 0.0, 1e6, low_open=True)
+    horizon = check_horizon(horizon)
     branches = check_whole("branches", branches, 1, 100)
     rob = _robot(problem, robot)
     planner = _planner(intervals, degree, scheme, cost, contact_bound)   # checks N, d, scheme, bound

@@ -24,8 +24,10 @@ to it is the one of :mod:`rollplan.planners.collocation.rest`, term by term:
 Both NLPs are then the same finite-dimensional problem written by two independent codes (ordering,
 scaling and the form of the boundary conditions differ: rockit imposes them as constraints, rollplan
 as variable bounds), so their optima must agree to the solvers' tolerance; :func:`peer_rest_to_rest`
-measures by how much, and the solve times of both, side by side. The peer's controls are certified
-by the same CVODES integration as rollplan's (:func:`rollplan.planners.collocation.rest.certify`).
+measures by how much, and the solve times of both, side by side (the optima compared are the NLPs'
+values, before rollplan's Newton correction). The peer's controls are then corrected by the same
+Newton steps (:func:`rollplan.planners.collocation.rest.correct`) and certified by the same CVODES
+integration as rollplan's (:func:`rollplan.planners.collocation.rest.certify`).
 """
 
 from __future__ import annotations
@@ -40,13 +42,15 @@ import numpy as np
 
 from .. import interrupts
 from ..core import model
-from ..errors import InputError, SolverError, check_range, check_whole
+from ..errors import InputError, SolverError, check_whole
 from ..measures import measure
 from ..planners.collocation.rest import (
     REST_COSTS,
     TOLERANCE,
     RestToRestPlanner,
     certify,
+    check_horizon,
+    correct,
     motion_function,
     naive_guess,
     rest_parameters,
@@ -76,7 +80,7 @@ class PeerResult:
     objective : float
         The optimal value of rockit's NLP (units of R; ``rotor_energy`` divided by J_r^2, as rollplan's).
     controls : ndarray, shape (N, 2)
-        Contact accelerations on each interval [rad/s^2].
+        Contact accelerations on each interval [rad/s^2], after the Newton correction.
     iterations : int
         IPOPT iterations.
     first_s : float
@@ -119,15 +123,15 @@ def rockit_solve(planner: RestToRestPlanner, problem: Problem, guess: Guess, hor
     InputError
         Bad input, or rockit is not installed.
     SolverError
-        IPOPT failed inside rockit, or the CVODES integration of its controls misses the goal by more than
-        :data:`rollplan.planners.collocation.rest.TOLERANCE`.
+        IPOPT failed inside rockit, or the CVODES integration of its controls, after the Newton correction,
+        misses the goal by more than :data:`rollplan.planners.collocation.rest.TOLERANCE`.
     """
     rockit = _rockit()
     start, final = planner.boundary(problem, turns)
     tr = planner.transcription
     guess = tr.check_guess(guess)
     repeats = check_whole("repeats", repeats, 0, 1000)
-    horizon = check_range("horizon", horizon, 0.0, 1e6, low_open=True)
+    horizon = check_horizon(horizon)
     robot = robot if robot is not None else problem.robot
     if planner.cost == "rotor_energy" and robot is None:
         raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot")
@@ -164,6 +168,8 @@ def rockit_solve(planner: RestToRestPlanner, problem: Problem, guess: Guess, hor
     sol, first = solve()
     times = [solve()[1] for _ in range(repeats)]
     controls = np.asarray(sol.sample(a, grid="control")[1], float)[:-1].reshape(tr.intervals, 2)
+    controls = correct(controls * horizon ** 2, start, final, rest_parameters(problem.k, 1.0, robot), planner.cost,
+                       "rockit's")[0] / horizon ** 2
     motion = certify(controls, start, problem, horizon, planner.samples_per_interval, robot)
     residual = problem.residual(State(*motion.state[-1]))
     if residual > TOLERANCE:
@@ -184,11 +190,11 @@ class PeerComparison:
     guess : str
         Name of the common guess.
     objective, peer_objective : float
-        The NLP optima of rollplan and of rockit.
+        The NLP optima of rollplan and of rockit (before the Newton correction).
     relative_difference : float
         ``|peer - ours| / |ours|``.
     control_difference : float
-        Largest difference of the accelerations on an interval [rad/s^2].
+        Largest difference of the (corrected) accelerations on an interval [rad/s^2].
     iterations, peer_iterations : int
     build_s : float
         rollplan's NLP and solver construction [s].
@@ -252,7 +258,8 @@ def peer_rest_to_rest(problem: Problem, guess: Guess | str = "naive", horizon: f
                                                                                             1000) + 1)]
     peer = rockit_solve(planner, problem, guess, horizon, turns, robot, repeats)
     r = ours[0]
+    nlp = r.stats.details["nlp_objective"]
     return PeerComparison(tuple(problem.goal)[:3], planner.transcription.intervals, planner.transcription.degree,
-                          guess.name, r.objective, peer.objective, abs(peer.objective - r.objective) / abs(r.objective),
+                          guess.name, nlp, peer.objective, abs(peer.objective - nlp) / abs(nlp),
                           float(np.abs(peer.controls - r.controls).max()), r.stats.iterations, peer.iterations, build,
                           [o.stats.time_s for o in ours], peer, r.residual)

@@ -34,12 +34,21 @@ speed), ``"path_length_smooth"`` (``int sqrt(eps + |v|^2) dt``),
 ``"angular_velocity"`` (``int |omega|^2 dt``) and ``"rotor_effort"``
 (``int |phi_dot|^2 dt`` with the rotor rates of (11); needs a robot).
 
-Certification. Every solution is integrated again, with the optimized
+Correction. The transcription meets the goal only up to its discretisation
+error; the optimized controls are corrected by minimum-norm Gauss-Newton steps
+through a CVODES integration with sensitivities
+(:func:`.transcription.gauss_newton`) until the integrated motion ends on the
+goal to :data:`CORRECTION_TOL`; ``objective`` is the cost of the corrected
+controls (CVODES quadrature). Five end conditions need ``2N >= 5`` controls:
+N >= :data:`MIN_INTERVALS`.
+
+Certification. Every solution is integrated again, with the corrected
 piecewise-constant controls, by CVODES at tight tolerances (independent of the
 transcription); its end point gives the certified residual to the goal, and
 CVODES quadratures give the path length and efforts that are reported. A
-solution whose residual exceeds ``verify_tol`` is never returned: SolverError
-with status ``"Verification_Failed"``.
+solution whose residual exceeds ``verify_tol`` (:data:`TOLERANCE`, as for the
+geometric planner) is never returned: SolverError with status
+``"Verification_Failed"``.
 """
 
 from __future__ import annotations
@@ -62,7 +71,16 @@ from ...result import Certificate, Measures, SolverStats, Trajectory
 from ...robot import Robot
 from ..geometric.composed import as_composed, default_composed_planner
 from .costs import COSTS, N_PAR, Cost
-from .transcription import SCHEMES, CollocationRun, Guess, Transcription, check_contact_bound, ipopt_options
+from .transcription import (
+    SCHEMES,
+    CollocationRun,
+    Guess,
+    Transcription,
+    check_contact_bound,
+    gauss_newton,
+    ipopt_options,
+    sensitivity_step,
+)
 
 __all__ = ["SCHEMES", "COSTS", "GUESSES", "CONTACT_BOUND", "SMOOTHING", "TOLERANCE", "Guess", "Certifier",
            "CollocationSolution", "CollocationResult", "CollocationPlanner", "collocate"]
@@ -75,8 +93,12 @@ log = logging.getLogger(__name__)
 CONTACT_BOUND = math.radians(75.0)
 #: Default smoothing eps of the path-length integrand [(R/s)^2].
 SMOOTHING = 1e-4
-#: Default largest certified residual of a returned solution.
-TOLERANCE = 1e-6
+#: Default largest certified residual of a returned solution (units of R, rad), as for the geometric planner.
+TOLERANCE = 1e-9
+#: Target of the Gauss-Newton correction of the controls: largest end-state error.
+CORRECTION_TOL = 1e-12
+#: Least number of intervals: 2N contact rates for the 5 end conditions.
+MIN_INTERVALS = 3
 
 _HINTS = {
     "Maximum_Iterations_Exceeded": "raise max_iter, or warm-start from the geometric-phase plan (guess='warm')",
@@ -104,9 +126,9 @@ class CollocationSolution:
     states_colloc : ndarray, shape (N * d, 5)
         States at ``t_colloc``.
     controls : ndarray, shape (N, 2)
-        (u_o_dot, v_o_dot), constant on each interval [rad/s].
+        (u_o_dot, v_o_dot), constant on each interval [rad/s], after the Newton correction.
     objective : float
-        Optimal value of the cost as transcribed [cost unit; lengths in R].
+        The cost of ``controls`` (CVODES quadrature) [cost unit; lengths in R].
     max_defect : float
         Largest violation of the NLP's constraints at the solution [units of R, rad].
     """
@@ -134,7 +156,8 @@ class CollocationResult(CollocationRun):
         CVODES integration with the optimized controls from the start state.
     stats : SolverStats
         IPOPT's status and iterations; ``time_s`` is the IPOPT call, ``details``
-        the guess and certification times.
+        the guess and certification times and ``uncorrected_error``, the largest end-state error of IPOPT's
+        controls integrated by CVODES before the Newton correction (the transcription's error).
     trajectory : Trajectory
         The certified motion on a uniform time grid (``parameter == "t"``;
         ``segment`` is the collocation interval).
@@ -243,7 +266,8 @@ class CollocationPlanner:
     Parameters
     ----------
     intervals, degree, scheme
-        The :class:`Transcription`: N >= 1, d in 1..9, ``"legendre"`` or ``"radau"``.
+        The :class:`Transcription`: N in [:data:`MIN_INTERVALS`, 100000], d in 1..9, ``"legendre"`` or
+        ``"radau"``.
     cost : str
         Name in :data:`COSTS`.
     contact_bound : float
@@ -271,6 +295,7 @@ class CollocationPlanner:
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre", cost: str = "path_length",
                  contact_bound: float = CONTACT_BOUND, tol: float = 1e-10, max_iter: int = 500,
                  verify_samples: int = 1000, verify_tol: float | None = TOLERANCE) -> None:
+        check_whole("intervals", intervals, MIN_INTERVALS, 100000)
         self.transcription = Transcription(intervals, degree, scheme)
         check_choice("cost", cost, COSTS)
         self.cost = COSTS[cost]
@@ -353,6 +378,8 @@ class CollocationPlanner:
                               f"iterations; hint: {hint}", status)
         states, colloc, controls = tr.unpack(np.array(sol["x"]).ravel())
         t0 = time.perf_counter()
+        controls, objective, miss, uncorrected = gauss_newton(_newton_step(self.cost), controls, start, final, par,
+                                                 CORRECTION_TOL)
         ver = self.verify(controls, problem.k, horizon, problem.robot, start)
         verify_time = time.perf_counter() - t0
         R = problem.radius
@@ -363,18 +390,20 @@ class CollocationPlanner:
         cert = Certificate("cvodes", fin, residual, 0.0, tol)
         if not cert.passed:
             raise SolverError(f"the collocation solution ({where}) misses the goal by {residual:.2e} > {tol:.0e} "
-                              f"when integrated by CVODES (IPOPT: {status}, {iters} iterations); hint: raise N or d, "
+                              f"when integrated by CVODES (IPOPT: {status}, {iters} iterations; Newton correction to "
+                              f"{miss:.1e}); hint: raise N or d, "
                               f"or lower contact_bound (now {self.contact_bound:.3g} rad)", "Verification_Failed")
         gval = np.array(sol["g"]).ravel()
         max_defect = float(np.max(np.maximum(lbg - gval, 0.0) + np.maximum(gval - ubg, 0.0)))
         _, tc = tr.grid()
         solution = CollocationSolution(np.arange(tr.intervals + 1) / tr.intervals * horizon, states * scale,
                                        tc.ravel() * horizon, colloc.reshape(-1, 5) * scale, controls,
-                                       float(sol["f"]), max_defect)
+                                       objective, max_defect)
         measures = Measures(ver["length"] * R, ver["effort"], ver["rotor"], ver["peak"])
         traj = Trajectory(ver["t"], ver["x"] * scale, ver["segment"], R, "t")
         stats = SolverStats("ipopt", status, iters, solve_time,
-                            {"guess_time_s": guess_time, "verify_time_s": verify_time})
+                            {"guess_time_s": guess_time, "verify_time_s": verify_time,
+                             "uncorrected_error": uncorrected})
         return CollocationResult(problem=problem, cost=self.cost.name, transcription=tr, horizon=horizon,
                                  turns=int(turns), guess=g.name, contact_bound=self.contact_bound, solution=solution,
                                  measures=measures, certificate=cert, stats=stats, trajectory=traj, omega=ver["omega"])
@@ -393,6 +422,14 @@ class CollocationPlanner:
     def simulate(self, controls, k: float, horizon: float = 1.0, x0=None) -> np.ndarray:
         """The transcription as an implicit Runge-Kutta method with fixed controls (:meth:`Transcription.simulate`)."""
         return self.transcription.simulate(self.point, N_PAR, controls, _parameters(k, horizon, 0.0, None), x0)
+
+
+@lru_cache(maxsize=8)
+def _newton_step(cost: Cost) -> ca.Function:
+    """:func:`.transcription.sensitivity_step` of ``x' = T f(x, w)`` (normalized time), the quadrature ``T L``."""
+    x, w, par = ca.SX.sym("x", 5), ca.SX.sym("w", 2), ca.SX.sym("par", N_PAR)
+    xdot, L, _ = _point_function(cost)(x, w, par)
+    return sensitivity_step("collocation_newton", x, w, par, par[1] * xdot, par[1] * L)
 
 
 def _parameters(k, horizon, smoothing, robot) -> np.ndarray:

@@ -15,7 +15,25 @@ several m and keeps the best, :mod:`rollplan.studies.comparison`). The contact
 rates, omega and the rotor rates are then continuous and zero at both ends, and
 the motor torques ``tau_i = J_r d/dt (n_i . omega + phi_i_dot)`` are finite
 (they step where the acceleration steps). The contact point stays within the
-polar angle ``contact_bound`` of the south pole at every collocation point.
+polar angle ``contact_bound`` of the south pole at every sample of the returned
+(certified) motion: the NLP bounds it at the collocation points only, so when the
+certified samples exceed the bound the NLP is solved again, warm-started, with the
+bound backed off by :data:`BACKOFF_FACTOR` times the excess, until they do not (:data:`BACKOFF_TRIES`).
+
+Time scaling. The problem is homogeneous in T: with ``tau = t / T`` the states
+``(u_a, v_a, psi, u_o, v_o)`` are the same functions of tau for every T, the rates,
+omega and the rotor rates scale as ``1 / T``, the accelerations and torques as
+``1 / T^2``. The NLP is therefore solved in normalized time (T = 1) and the result
+scaled exactly: ``J(T) = J(1) T^p`` with ``p = -1`` for ``path_length`` and
+``angular_velocity`` and ``p = -3`` for ``rotor_energy`` (:data:`COST_POWERS`).
+The scaling is exact for any T; horizons are served in :data:`HORIZON_RANGE`, which
+keeps every reported quantity (costs up to ``T^-3`` times the normalized cost) far
+from overflow and underflow, and are refused outside it with the range named.
+
+End conditions and N. Seven end conditions (the five states and the two rates at
+``t = T``; the start is fixed) are met by 2N controls, so at least
+``N = 4`` = :data:`MIN_INTERVALS` intervals are needed (``2N >= 7``); with fewer
+the NLP is overconstrained in general.
 
 Costs by name (:data:`REST_COSTS`): ``"path_length"`` (``int |v|^2 dt``, the
 energy form of the contact path length), ``"angular_velocity"``
@@ -23,11 +41,18 @@ energy form of the contact path length), ``"angular_velocity"``
 ``int |tau / J_r|^2 dt``, the same minimizer; needs a robot).
 
 Transcription: :class:`.transcription.Transcription` with ``nx = 7, nu = 2``
-(Gauss-Legendre or Radau collocation of degree d). Certification: CVODES
-integrates the 7-state ODE again with the optimized accelerations, interval by
-interval; its samples (both sides of every interval boundary) are the
-:class:`rollplan.measures.TimedMotion` of the result, whose costs
-:func:`rollplan.measures.measure` computes like those of any other motion.
+(Gauss-Legendre or Radau collocation of degree d). Correction: the transcription
+meets the end conditions only up to its discretisation error, so the optimized
+accelerations are corrected by minimum-norm Gauss-Newton steps
+(:func:`correct`) through a CVODES integration of the 7-state ODE with its
+sensitivities, until the integrated motion meets the goal and rest to
+:data:`CORRECTION_TOL`; the cost reported (``objective``) is that of the corrected
+controls, by a CVODES quadrature. Certification: CVODES integrates the 7-state ODE
+again with the corrected accelerations, interval by interval (:func:`certify`); a
+result whose goal residual, or final rates, exceed :data:`TOLERANCE` (as for the
+geometric planner) is never returned. Its samples (both sides of every interval
+boundary) are the :class:`rollplan.measures.TimedMotion` of the result, whose
+costs :func:`rollplan.measures.measure` computes like those of any other motion.
 """
 
 from __future__ import annotations
@@ -48,10 +73,19 @@ from ...problem import Problem, State
 from ...result import Certificate, SolverStats, Trajectory
 from ...robot import Robot
 from .costs import N_PAR
-from .transcription import CollocationRun, Guess, Transcription, check_contact_bound, ipopt_options
+from .transcription import (
+    CollocationRun,
+    Guess,
+    Transcription,
+    check_contact_bound,
+    gauss_newton,
+    ipopt_options,
+    sensitivity_step,
+)
 
 __all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "MinimumTimePlanner", "certify", "rest_parameters",
-           "motion_function", "naive_guess", "guess_from_samples"]
+           "motion_function", "naive_guess", "guess_from_samples", "correct", "check_horizon",
+           "polar_angles", "TOLERANCE", "MIN_INTERVALS", "HORIZON_RANGE", "COST_POWERS"]
 
 #: Running costs of the rest-to-rest problem, by name: ``L(xdot, omega, torque, par)``.
 REST_COSTS = {
@@ -60,8 +94,26 @@ REST_COSTS = {
     "rotor_energy": lambda xdot, omega, torque, par: ca.sumsqr(torque / par[5]),
 }
 
-#: Largest certified residual (units of R, rad) of a returned solution.
-TOLERANCE = 1e-6
+#: Largest certified residual (units of R, rad; the final rates in rad per horizon) of a returned solution.
+TOLERANCE = 1e-9
+#: Target of the Gauss-Newton correction: largest end-condition error of the corrected controls.
+CORRECTION_TOL = 1e-12
+#: Least number of intervals: 2N controls for the 7 end conditions (module docstring).
+MIN_INTERVALS = 4
+#: Horizons T [s] served (module docstring, time scaling).
+HORIZON_RANGE = (1e-6, 1e6)
+#: Power p of the scaling law ``J(T) = J(1) T^p`` of each cost.
+COST_POWERS = {"path_length": -1, "angular_velocity": -1, "rotor_energy": -3}
+#: Most NLP solves with a backed-off bound (or backed-off limits) before giving up.
+BACKOFF_TRIES = 4
+#: Safety factor of a backoff: the bound (or limit) is lowered by this times the excess measured on the samples.
+BACKOFF_FACTOR = 1.25
+_NEWTON_STEPS = 8
+
+
+def check_horizon(horizon) -> float:
+    """``horizon`` [s] if in :data:`HORIZON_RANGE`; InputError naming the range otherwise."""
+    return check_range("horizon", horizon, *HORIZON_RANGE)
 
 
 def rest_parameters(k, horizon, robot=None) -> np.ndarray:
@@ -98,9 +150,11 @@ class RestResult(CollocationRun):
     problem, cost, transcription, horizon, turns, guess, contact_bound
         As in :class:`.transcription.CollocationRun` (``cost`` a name in :data:`REST_COSTS`).
     controls : ndarray, shape (N, 2)
-        Contact accelerations on each interval [rad/s^2].
+        Contact accelerations on each interval [rad/s^2], after the Newton correction (:func:`correct`).
     objective : float
-        The NLP's optimal value (lengths in R; ``rotor_energy`` divided by J_r^2).
+        The cost of ``controls`` (CVODES quadrature; lengths in R; ``rotor_energy`` divided by J_r^2); the
+        NLP's optimal value is ``stats.details["nlp_objective"]``, the contact bound the last NLP solved with
+        ``stats.details["backed_off_bound"]``.
     motion : TimedMotion
         The certified motion (CVODES samples) [length unit].
     certificate : Certificate
@@ -128,7 +182,8 @@ class RestToRestPlanner:
     Parameters
     ----------
     intervals, degree, scheme
-        The :class:`Transcription`: N >= 1, d in 1..9, ``"legendre"`` or ``"radau"``.
+        The :class:`Transcription`: N in [:data:`MIN_INTERVALS`, 100000], d in 1..9, ``"legendre"`` or
+        ``"radau"``.
     cost : str
         Name in :data:`REST_COSTS`.
     contact_bound : float
@@ -144,6 +199,7 @@ class RestToRestPlanner:
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre",
                  cost: str = "angular_velocity", contact_bound: float = math.radians(80.0), tol: float = 1e-9,
                  max_iter: int = 150, samples_per_interval: int = 8) -> None:
+        check_whole("intervals", intervals, MIN_INTERVALS, 100000)
         self.transcription = Transcription(intervals, degree, scheme, nx=7, nu=2)
         if not isinstance(cost, str) or cost not in REST_COSTS:
             raise InputError(f"cost = {cost!r} is not allowed: choose one of {', '.join(REST_COSTS)}")
@@ -177,6 +233,10 @@ class RestToRestPlanner:
               robot: Robot | None = None) -> RestResult:
         """Solve from ``guess`` (see :func:`guess_from_samples`, :func:`naive_guess`).
 
+        ``guess`` is in time over ``horizon`` (rates in rad/s, accelerations in rad/s^2); the NLP is solved in
+        normalized time and the result scaled to ``horizon`` exactly (module docstring), the controls corrected
+        (:func:`correct`) and certified (:func:`certify`).
+
         ``robot`` gives the inertias of the rotor rates and torques when the problem has none
         (default: the problem's robot; without either they are computed with unit inertias).
 
@@ -185,41 +245,124 @@ class RestToRestPlanner:
         InputError
             Bad input.
         SolverError
-            IPOPT failed (``.status`` is its status) or the certified residual exceeds :data:`TOLERANCE`
-            (status ``"Verification_Failed"``).
+            IPOPT failed (``.status`` is its status), the Newton correction did not meet the end conditions
+            (``"Correction_Failed"``), the samples left the contact bound after :data:`BACKOFF_TRIES` solves
+            (``"Bound_Violated"``) or the certified residual exceeds :data:`TOLERANCE` (``"Verification_Failed"``).
         """
         start, final = self.boundary(problem, turns)
         if self.cost == "rotor_energy" and robot is None and problem.robot is None:
             raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot")
-        horizon = check_range("horizon", horizon, 0.0, 1e6, low_open=True)
+        horizon = check_horizon(horizon)
         tr = self.transcription
-        guess = tr.check_guess(guess)
+        guess = normalized_guess(tr.check_guess(guess), horizon)
         robot = robot if robot is not None else problem.robot
         if robot is not None and not math.isclose(robot.k, problem.k, rel_tol=1e-12):
             raise InputError(f"robot has k = {robot.k:.12g}, the problem k = {problem.k:.12g}")
-        par = rest_parameters(problem.k, horizon, robot)
+        par = rest_parameters(problem.k, 1.0, robot)      # normalized time (module docstring)
         c = self.contact_bound
-        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, c, self.path_rows)
-        t0 = time.perf_counter()
-        sol = interrupts.call(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
-        solve_time = time.perf_counter() - t0
-        st = self.solver.stats()
-        status, iters = str(st["return_status"]), int(st["iter_count"])
         where = f"rest-to-rest N = {tr.intervals}, d = {tr.degree}, cost {self.cost}, {guess.name} guess, m = {turns}"
-        if not st["success"]:
-            raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {status} after {iters} "
-                              "iterations; hint: warm-start from a geometric-phase plan", status)
-        _, _, controls = tr.unpack(np.array(sol["x"]).ravel())
-        motion = certify(controls, start, problem, horizon, self.samples_per_interval, robot)
-        fin = State(*motion.state[-1])
-        residual = problem.residual(fin)   # psi compared as an angle
-        cert = Certificate("cvodes", fin, residual, 0.0, TOLERANCE)
-        if not cert.passed:
-            raise SolverError(f"the collocation solution ({where}) misses the goal by {residual:.2e} > "
-                              f"{TOLERANCE:.0e} when integrated by CVODES; hint: raise N or d", "Verification_Failed")
-        stats = SolverStats("ipopt", status, iters, solve_time, {"build_time_s": self.build_time_s})
-        return RestResult(problem, self.cost, tr, float(horizon), int(turns), guess.name, c, controls,
-                          float(sol["f"]), motion, cert, stats)
+        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, c, self.path_rows)
+        bound, solve_time, iters = c, 0.0, 0
+        for _ in range(BACKOFF_TRIES):
+            t0 = time.perf_counter()
+            sol = interrupts.call(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
+            solve_time += time.perf_counter() - t0
+            st = self.solver.stats()
+            status = str(st["return_status"])
+            iters += int(st["iter_count"])
+            if not st["success"]:
+                raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {status} after {iters} "
+                                  "iterations; hint: warm-start from a geometric-phase plan", status)
+            v = np.array(sol["x"]).ravel()
+            controls, objective = correct(tr.unpack(v)[2], start, final, par, self.cost, where)
+            motion, end_rates = certify(controls, start, problem, 1.0, self.samples_per_interval, robot, True)
+            excess = polar_angles(motion).max() - c
+            if excess <= 0.0:
+                break
+            # the bound holds at the collocation points only: back it off (warm-started)
+            bound -= BACKOFF_FACTOR * excess
+            _, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, bound, self.path_rows)
+            x0 = np.clip(v, lbx, ubx)
+        else:
+            raise SolverError(f"the collocation solution ({where}) leaves the contact bound {c:.6g} rad between "
+                              f"collocation points by {excess:.2e} rad after {BACKOFF_TRIES} backed-off solves; "
+                              "hint: raise N", "Bound_Violated")
+        motion = scaled_motion(motion, horizon)
+        cert = _certificate(problem, State(*motion.state[-1]), end_rates, where)
+        scale = horizon ** COST_POWERS[self.cost]
+        stats = SolverStats("ipopt", status, iters, solve_time, {"build_time_s": self.build_time_s,
+                                                                 "backed_off_bound": bound,
+                                                                 "nlp_objective": float(sol["f"]) * scale})
+        return RestResult(problem, self.cost, tr, float(horizon), int(turns), guess.name, c,
+                          controls / horizon ** 2, objective * scale, motion, cert, stats)
+
+
+def _certificate(problem: Problem, fin: State, end_rates, where: str) -> Certificate:
+    """The CVODES certificate of a rest-to-rest motion; SolverError ``"Verification_Failed"`` when its goal
+    residual or its final rates ``end_rates`` (rad per horizon) exceed :data:`TOLERANCE`."""
+    residual = problem.residual(fin)   # psi compared as an angle
+    rest = float(np.abs(end_rates).max())
+    cert = Certificate("cvodes", fin, max(residual, rest), 0.0, TOLERANCE)
+    if not cert.passed:
+        raise SolverError(f"the collocation solution ({where}) misses the goal by {residual:.2e} and rest by "
+                          f"{rest:.2e} > {TOLERANCE:.0e} when integrated by CVODES after the Newton correction; "
+                          "hint: raise N or d", "Verification_Failed")
+    return cert
+
+
+def scaled_motion(motion: TimedMotion, horizon: float) -> TimedMotion:
+    """A motion of normalized time (T = 1) on the horizon ``horizon`` [s] (module docstring, time scaling):
+    times times T, velocities, omega and rotor rates divided by T, torques by T^2; the states unchanged."""
+    T = float(horizon)
+    return TimedMotion(motion.t * T, motion.state, motion.velocity / T, motion.omega / T, motion.rotor_rates / T,
+                       motion.rotor_torques / T ** 2, motion.radius)
+
+
+def normalized_guess(g: Guess, horizon: float) -> Guess:
+    """``g`` (rates in rad/s, accelerations in rad/s^2 over ``horizon``) in normalized time ``tau = t / T``."""
+    s = np.array([1.0] * 5 + [horizon] * 2)
+    return Guess(np.asarray(g.states, float) * s, np.asarray(g.colloc, float) * s,
+                 np.asarray(g.controls, float) * horizon ** 2, g.name)
+
+
+def polar_angles(motion: TimedMotion) -> np.ndarray:
+    """Polar angle of the contact point from the south pole at every sample of ``motion`` [rad]: from (1),
+    ``acos(cos u_o cos v_o)``."""
+    return np.arccos(np.clip(np.cos(motion.state[:, 3]) * np.cos(motion.state[:, 4]), -1.0, 1.0))
+
+
+@lru_cache(maxsize=4)
+def _newton_step(cost: str) -> ca.Function:
+    """:func:`.transcription.sensitivity_step` of the 7-state ODE, the quadrature the cost ``cost`` (0 for a
+    name not in :data:`REST_COSTS`, e.g. minimum time)."""
+    x, acc, par = ca.SX.sym("x", 7), ca.SX.sym("a", 2), ca.SX.sym("par", N_PAR)
+    xdot, omega, _, torque = motion_function()(x, acc, par)
+    quad = REST_COSTS[cost](xdot, omega, torque, par) if cost in REST_COSTS else ca.SX(0.0)
+    return sensitivity_step("rest_newton", x, acc, par, xdot, quad)
+
+
+def correct(controls, start, final, par, cost: str = "path_length", where: str = "rest-to-rest"):
+    """Minimum-norm Gauss-Newton correction (:func:`.transcription.gauss_newton`) of piecewise-constant
+    accelerations in normalized time (T = 1), through CVODES with sensitivities, until the motion from ``start``
+    (7,) ends at ``final`` (7,: the goal at rest) to :data:`CORRECTION_TOL`. ``par`` are :func:`rest_parameters`
+    with T = 1.
+
+    Returns
+    -------
+    (controls, cost)
+        The corrected controls (N, 2) and the integral of ``REST_COSTS[cost]`` along them (T = 1; 0 for a cost
+        not in :data:`REST_COSTS`, e.g. minimum time).
+
+    Raises
+    ------
+    SolverError
+        ``"Correction_Failed"``: the end conditions are not met to :data:`TOLERANCE` after the steps.
+    """
+    a, q, size, _ = gauss_newton(_newton_step(cost), controls, start, final, par, CORRECTION_TOL, _NEWTON_STEPS)
+    if not size <= TOLERANCE:
+        raise SolverError(f"the Newton correction of the collocation solution ({where}) leaves an end-condition "
+                          f"error of {size:.2e} > {TOLERANCE:.0e}; hint: raise N or d", "Correction_Failed")
+    return a, q
 
 
 @lru_cache(maxsize=8)
@@ -233,31 +376,38 @@ def _interval_integrator(per: int) -> ca.Function:
                          0.0, grid, opts)
 
 
-def certify(controls, start, problem: Problem, horizon: float, per: int = 8, robot: Robot | None = None) -> TimedMotion:
-    """CVODES integration of the 7-state ODE with piecewise-constant accelerations ``controls`` (N, 2)
-    from ``start`` (7,) (units of R): the samples of every interval, both ends included, as a
-    :class:`~rollplan.measures.TimedMotion` in the problem's length unit."""
-    controls = np.asarray(controls, float)
+def certify(controls, start, problem: Problem, horizon: float, per: int = 8, robot: Robot | None = None,
+            end_rates: bool = False):
+    """CVODES integration of the 7-state ODE with piecewise-constant accelerations ``controls`` (N, 2) [rad/s^2]
+    from ``start`` (7,) (units of R, rates in rad/s): the samples of every interval, both ends included, as a
+    :class:`~rollplan.measures.TimedMotion` in the problem's length unit.
+
+    The integration runs in normalized time ``tau = t / T`` (accelerations times T^2) and the motion is
+    scaled to T exactly (:func:`scaled_motion`). With ``end_rates`` also returns the final contact rates in
+    rad per horizon (``T`` times rad/s).
+    """
+    controls = np.asarray(controls, float) * horizon ** 2
     N = controls.shape[0]
-    par = rest_parameters(problem.k, horizon, robot if robot is not None else problem.robot)
-    h = horizon / N
+    par = rest_parameters(problem.k, 1.0, robot if robot is not None else problem.robot)
+    h = 1.0 / N
     integ, f = _interval_integrator(per), motion_function()
-    x = np.asarray(start, float)
+    x = np.asarray(start, float) * np.array([1.0] * 5 + [horizon] * 2)
     ts, xs, accs = [], [], []
     for i, a in enumerate(controls):
-        out = np.array(integ(x0=x, p=np.concatenate([a, par, [h]]))["xf"])
+        out = np.array(interrupts.call(integ, x0=x, p=np.concatenate([a, par, [h]]))["xf"])
         block = np.hstack([x[:, None], out])
         ts.append(np.linspace(i * h, (i + 1) * h, per + 1))
         xs.append(block)
         accs.append(np.repeat(a[:, None], per + 1, axis=1))
         x = out[:, -1]
     t = np.concatenate(ts)
-    t[-1] = horizon
+    t[-1] = 1.0
     X, A = np.hstack(xs), np.hstack(accs)
     xdot, omega, rates, torque = (np.array(v).T for v in f.map(X.shape[1])(X, A, par))
     R = problem.radius
     state = X[:5].T * np.array([R, R, 1.0, 1.0, 1.0])
-    return TimedMotion(t, state, xdot[:, :2] * R, omega, rates, torque, R)
+    motion = scaled_motion(TimedMotion(t, state, xdot[:, :2] * R, omega, rates, torque, R), horizon)
+    return (motion, X[5:7, -1].copy()) if end_rates else motion
 
 
 def naive_guess(tr: Transcription, start, final) -> Guess:
@@ -284,7 +434,11 @@ def guess_from_samples(tr: Transcription, t, x7, name: str) -> Guess:
 class MinimumTimePlanner:
     """The rest-to-rest problem of :class:`RestToRestPlanner` with free final time: minimise T subject to
     ``|phi_i_dot| <= max_rotor_rate`` and ``|tau_i| <= max_rotor_torque`` (the robot's limits, at every
-    collocation point and at both ends of every interval, with the interval's acceleration).
+    collocation point and at both ends of every interval, with the interval's acceleration). The returned
+    motion (corrected by :func:`correct` at its duration, certified like :meth:`RestToRestPlanner.solve`)
+    respects the limits and the contact bound at every sample: when its samples exceed them the NLP is solved
+    again with limits and bound backed off by :data:`BACKOFF_FACTOR` times the excess, warm-started
+    (:data:`BACKOFF_TRIES`).
 
     Parameters
     ----------
@@ -337,28 +491,47 @@ class MinimumTimePlanner:
         start, final = base.boundary(problem, turns)
         tr = base.transcription
         c = base.contact_bound
-        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(tr.check_guess(guess), start, final, c, self.path_rows)
+        guess = tr.check_guess(guess)
+        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, c, self.path_rows)
         x0 = np.append(x0, check_range("duration_guess", duration_guess, 0.0, 1e6, low_open=True))
         lbg, ubg = np.concatenate([lbg, -np.ones(self.n_lim)]), np.concatenate([ubg, np.ones(self.n_lim)])
-        par = np.concatenate([rest_parameters(problem.k, 1.0, robot), [robot.max_rotor_rate, robot.max_rotor_torque]])
-        t0 = time.perf_counter()
-        sol = interrupts.call(self.solver, x0=x0, lbx=np.append(lbx, 1e-6), ubx=np.append(ubx, 1e6), lbg=lbg, ubg=ubg,
-                              p=par)
-        solve_time = time.perf_counter() - t0
-        st = self.solver.stats()
-        status, iters = str(st["return_status"]), int(st["iter_count"])
-        if not st["success"]:
-            raise SolverError(f"IPOPT did not solve the minimum-time problem: {status} after {iters} iterations",
-                              status)
-        v = np.array(sol["x"]).ravel()
-        T = float(v[-1])
-        _, _, controls = tr.unpack(v[:-1])
-        motion = certify(controls, start, problem, T, base.samples_per_interval, robot)
-        fin = State(*motion.state[-1])
-        cert = Certificate("cvodes", fin, problem.residual(fin), 0.0, TOLERANCE)
-        if not cert.passed:
-            raise SolverError(f"the minimum-time solution misses the goal by {cert.residual:.2e} when integrated by "
-                              "CVODES; hint: raise N", "Verification_Failed")
-        stats = SolverStats("ipopt", status, iters, solve_time, {})
+        limits = np.array([robot.max_rotor_rate, robot.max_rotor_torque])
+        backed, bound, solve_time, iters = limits.copy(), c, 0.0, 0
+        par1 = rest_parameters(problem.k, 1.0, robot)
+        where = f"minimum time N = {tr.intervals}, d = {tr.degree}, {guess.name} guess, m = {turns}"
+        for _ in range(BACKOFF_TRIES):
+            t0 = time.perf_counter()
+            sol = interrupts.call(self.solver, x0=x0, lbx=np.append(lbx, 1e-6), ubx=np.append(ubx, 1e6), lbg=lbg,
+                                  ubg=ubg, p=np.concatenate([par1, backed]))
+            solve_time += time.perf_counter() - t0
+            st = self.solver.stats()
+            status = str(st["return_status"])
+            iters += int(st["iter_count"])
+            if not st["success"]:
+                raise SolverError(f"IPOPT did not solve the minimum-time problem: {status} after {iters} iterations",
+                                  status)
+            v = np.array(sol["x"]).ravel()
+            T = float(v[-1])
+            controls = correct(tr.unpack(v[:-1])[2] * T ** 2, start, final, par1, "minimum_time", where)[0] / T ** 2
+            motion, end_rates = certify(controls, start, problem, T, base.samples_per_interval, robot, True)
+            peaks = np.array([np.abs(motion.rotor_rates).max(), np.abs(motion.rotor_torques).max()])
+            excess, polar = peaks - limits, polar_angles(motion).max() - c
+            if np.all(excess <= 0.0) and polar <= 0.0:
+                break
+            # limits and bound hold at the collocation points only: back them off (warm-started)
+            backed = backed - BACKOFF_FACTOR * np.maximum(excess, 0.0)
+            if polar > 0.0:
+                bound -= BACKOFF_FACTOR * polar
+                _, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, bound, self.path_rows)
+                lbg, ubg = np.concatenate([lbg, -np.ones(self.n_lim)]), np.concatenate([ubg, np.ones(self.n_lim)])
+            x0 = np.append(np.clip(v[:-1], lbx, ubx), T)
+        else:
+            raise SolverError(f"the minimum-time solution ({where}) exceeds the rotor limits by "
+                              f"{max(np.max(excess / limits), 0.0):.2e} (relative) or the contact bound by "
+                              f"{max(polar, 0.0):.2e} rad between collocation points after {BACKOFF_TRIES} backed-off "
+                              "solves; hint: raise N", "Limits_Violated")
+        cert = _certificate(problem, State(*motion.state[-1]), end_rates, where)
+        stats = SolverStats("ipopt", status, iters, solve_time, {"backed_off_limits": tuple(backed),
+                                                                 "backed_off_bound": bound})
         return T, RestResult(problem, "minimum_time", tr, T, int(turns), guess.name, c, controls, T, motion, cert,
                              stats)

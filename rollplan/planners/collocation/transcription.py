@@ -32,7 +32,8 @@ from ...errors import InputError, check_choice, check_whole
 from ...problem import Problem
 from ...result import CertifiedMotion
 
-__all__ = ["SCHEMES", "Guess", "Transcription", "CollocationRun", "ipopt_options", "check_contact_bound"]
+__all__ = ["SCHEMES", "Guess", "Transcription", "CollocationRun", "ipopt_options", "check_contact_bound",
+           "sensitivity_step", "gauss_newton"]
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
 SCHEMES = ("legendre", "radau")
@@ -42,6 +43,69 @@ def ipopt_options(tol: float, max_iter: int) -> dict:
     """The options of every collocation NLP: IPOPT silent, tolerance ``tol`` (also on the constraints)."""
     return {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
             "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter, "ipopt.mu_strategy": "adaptive"}
+
+
+def sensitivity_step(name: str, x, w, par, xdot, quad) -> ca.Function:
+    """CVODES over one interval of normalized length ``h`` of ``x' = h xdot(x, w, par)`` (SX expressions) with
+    the quadrature ``h quad`` and the sensitivities of the end state:
+    ``(x0, p = (w, par, h)) -> (xf, qf, jac_xf_x0, jac_xf_p)``."""
+    h = ca.SX.sym("h")
+    opts = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 100000}
+    F = ca.integrator(name, "cvodes", {"x": x, "p": ca.vertcat(w, par, h), "ode": h * xdot, "quad": h * quad},
+                      0.0, 1.0, opts)
+    return F.factory(name + "_step", ["x0", "p"], ["xf", "qf", "jac:xf:x0", "jac:xf:p"])
+
+
+def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float = 1e-12, max_steps: int = 8):
+    """Minimum-norm Gauss-Newton correction of piecewise-constant controls so that the integrated motion ends
+    at ``final``.
+
+    ``step`` is a :func:`sensitivity_step`; the motion runs from ``start`` through the N intervals of length
+    ``1 / N`` with ``controls`` (N, nu) and parameters ``par``. Each step solves ``J d = -(x(1) - final)`` for the
+    least-norm ``d`` (J the nx x (N nu) Jacobian of the end state, chained from the intervals' sensitivities) and
+    sets ``controls += lambda d`` with the first of ``lambda = 1, 1/2, ..., 1/8`` that lowers the largest end
+    error (a step whose integration fails counts as not lowering it), until that error is at most ``goal_tol``,
+    no step lowers it, or after ``max_steps`` steps. Returns ``(controls, quadrature, end error)`` of the last
+    (best) controls and the end error of the given controls (``inf`` where an integration failed).
+    """
+    a = np.array(controls, float)
+    N, nu = a.shape
+    final = np.asarray(final, float)
+    nx = final.size
+
+    def run(c):
+        x, q, A, B = np.asarray(start, float), 0.0, [], []
+        try:
+            for ci in c:
+                out = interrupts.call(step, x0=x, p=np.concatenate([ci, par, [1.0 / N]]))
+                x = np.array(out["xf"]).ravel()
+                q += float(out["qf"])
+                A.append(np.array(out["jac_xf_x0"]))
+                B.append(np.array(out["jac_xf_p"])[:, :nu])
+        except RuntimeError:      # CVODES failed (e.g. the contact point driven to the equator)
+            return math.inf, x, q, A, B
+        size = float(np.abs(x - final).max())
+        return (size if math.isfinite(size) else math.inf), x, q, A, B
+
+    size, x, q, A, B = run(a)
+    first = size
+    for _ in range(max_steps):
+        if size <= goal_tol or not math.isfinite(size):
+            break
+        J, M = np.zeros((nx, nu * N)), np.eye(nx)
+        for i in range(N - 1, -1, -1):
+            J[:, nu * i: nu * (i + 1)] = M @ B[i]
+            M = M @ A[i]
+        d = np.linalg.lstsq(J, final - x, rcond=None)[0].reshape(N, nu)
+        for lam in (1.0, 0.5, 0.25, 0.125):
+            trial = run(a + lam * d)
+            if trial[0] < size:
+                a = a + lam * d
+                size, x, q, A, B = trial
+                break
+        else:
+            break
+    return a, q, size, first
 
 
 def check_contact_bound(problem, contact_bound: float) -> None:
