@@ -566,13 +566,17 @@ def cmd_compare(args) -> int:
     wins = sum(s.status == "ok" for s in c.starts)
     print(f"  collocation: contact accelerations, {tr.scheme} d = {tr.degree}, N = {tr.intervals}, best of "
           f"{len(c.starts)} starts ({wins} converged): {r.guess}, psi turns m = {r.turns}")
+    compared = {"path_length": "path length", "angular_velocity": "int|omega|^2 dt",
+                "rotor_energy": "int|tau|^2 dt"}
+    print(f"  compared cost: {compared.get(c.cost, c.cost)}")
     print(f"  {'':<32s} {'geometric phase':>20s} {'collocation':>20s}")
     gc, oc = c.gp.costs, c.collocation.costs
+    torque = "N m" if robot is not None else "J_zz rad/s^2"   # without a robot: J_zz = 1 (printed below)
     print(_fmt_row(f"contact path length [{unit}]", gc["path_length"], oc["path_length"], ".6g"))
-    print(_fmt_row("effort int|omega|^2 dt [rad^2/s]", gc["angular_velocity"], oc["angular_velocity"], ".6g"))
-    print(_fmt_row("torque energy int|tau|^2 dt", gc["rotor_energy"], oc["rotor_energy"], ".6g"))
+    print(_fmt_row("int|omega|^2 dt [rad^2/s]", gc["angular_velocity"], oc["angular_velocity"], ".6g"))
+    print(_fmt_row(f"int|tau|^2 dt [({torque})^2 s]", gc["rotor_energy"], oc["rotor_energy"], ".6g"))
     print(_fmt_row("peak rotor rate [rad/s]", gc["peak_rotor_rate"], oc["peak_rotor_rate"], ".6g"))
-    print(_fmt_row("peak rotor torque [N m]", gc["peak_rotor_torque"], oc["peak_rotor_torque"], ".6g"))
+    print(_fmt_row(f"peak rotor torque [{torque}]", gc["peak_rotor_torque"], oc["peak_rotor_torque"], ".6g"))
     print(_fmt_row("final residual (CVODES)", c.gp.residual, c.collocation.residual, ".2e"))
     print(f"  (residuals: {NORM})")
     print(_fmt_row("solve time [s]", c.gp.solve_time_s, c.collocation.solve_time_s, ".3f"))

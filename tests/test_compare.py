@@ -219,6 +219,8 @@ def test_cli_compare_json_has_the_issues_keys(tmp_path, capsys):
     rc = main(["compare", "--to", "0.5", "0.3", "--psi", "0.4", "--k", "2.5", "--intervals", "20",
                "--branches", "1", "--json", str(js), "--plot", str(png)])
     assert rc == 0, capsys.readouterr().err
+    out = capsys.readouterr().out   # the summary names the compared cost and, without a robot, the torque unit
+    assert "compared cost: int|omega|^2 dt" in out and "peak rotor torque [J_zz rad/s^2]" in out and "N m" not in out
     d = json.loads(js.read_text())
     for side in ("geometric_phase", "collocation"):
         s = d[side]
@@ -235,7 +237,8 @@ def test_cli_compare_json_has_the_issues_keys(tmp_path, capsys):
 @pytest.mark.parametrize("argv, msg", [
     (["compare", "--to", "0.5", "0.3", "--k", "-1"], "k = -1"),
     (["compare", "--to", "0.5", "0.3", "--k", "0.5"], "k = 0.5"),
-    (["compare", "--to", "0.5", "0.3", "--cost", "rotor_energy"], "needs robot"),
+    (["compare", "--to", "0.5", "0.3", "--cost", "rotor_energy"], "needs robot parameters: give a robot (the robot "
+                                                                   "argument; --robot FILE.toml on the command line)"),
     (["compare", "--to", "0.5", "0.3", "--intervals", "0"], "intervals"),
     (["compare", "--to", "0.5", "0.3", "--contact-bound", "2"], "contact_bound"),
     (["compare", "--to", "0.5", "0.3", "--horizon", "-1"], "horizon"),

@@ -302,7 +302,8 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     if not isinstance(cost, str) or cost not in COMPARED_COSTS:
         raise InputError(f"cost = {cost!r:.40} is not allowed: choose one of {', '.join(COMPARED_COSTS)}")
     if cost == "rotor_energy" and robot is None:
-        raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot")
+        raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot "
+                         "(the robot argument; --robot FILE.toml on the command line)")
     if robot is None and k is not None:
         robot_for_k(k)                      # k in (1, K_MAX]: refused before any work
     problem = Problem(tuple(target), k=None if robot is not None else k, robot=robot, radius=radius, steps=steps)

@@ -134,7 +134,8 @@ def rockit_solve(planner: RestToRestPlanner, problem: Problem, guess: Guess, hor
     horizon = check_horizon(horizon)
     robot = robot if robot is not None else problem.robot
     if planner.cost == "rotor_energy" and robot is None:
-        raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot")
+        raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot "
+                         "(the robot argument; --robot FILE.toml on the command line)")
     par = rest_parameters(problem.k, horizon, robot)
     bound = planner.contact_bound
 

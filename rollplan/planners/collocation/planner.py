@@ -343,7 +343,8 @@ class CollocationPlanner:
         if not isinstance(problem, Problem):
             raise InputError(f"problem = {problem!r} is not allowed: give a rollplan.Problem")
         if self.cost.needs_robot and problem.robot is None:
-            raise InputError(f"cost = {self.cost.name!r} needs robot parameters: give a robot")
+            raise InputError(f"cost = {self.cost.name!r} needs robot parameters: give a robot "
+                             "(the robot argument; --robot FILE.toml on the command line)")
         turns = check_whole("turns", turns)
         check_contact_bound(problem, self.contact_bound)
         start = problem.scaled(problem.start).array()

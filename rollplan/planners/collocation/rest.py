@@ -251,7 +251,8 @@ class RestToRestPlanner:
         """
         start, final = self.boundary(problem, turns)
         if self.cost == "rotor_energy" and robot is None and problem.robot is None:
-            raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot")
+            raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot "
+                             "(the robot argument; --robot FILE.toml on the command line)")
         horizon = check_horizon(horizon)
         tr = self.transcription
         guess = normalized_guess(tr.check_guess(guess), horizon)
