@@ -11,8 +11,8 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from .colors import OMEGA, OMEGA_LABELS, PLANNER, PLANNER_LABELS, ROTOR, ROTOR_LABELS
-from .common import plane_axes, sphere_axes
+from .colors import MARK, OMEGA, OMEGA_LABELS, PLANNER, PLANNER_LABELS, ROTOR, ROTOR_LABELS
+from .common import bottom_view_axes, draw_bottom_view, plane_axes
 
 __all__ = ["plot_comparison"]
 
@@ -36,23 +36,24 @@ def _time_axes(ax, t, ylabel, title):
 
 
 def plot_comparison(c, unit: str = "R") -> Figure:
-    """A :class:`~rollplan.studies.comparison.Comparison`: both contact paths (on the sphere, body frame, and on
-    the plane) and |omega| of both in the planners' colours; then for each planner a row of omega's components
-    (18), (19), (13), its rotor rates (11) and its motor torques, in the colours of the components and rotors."""
+    """A :class:`~rollplan.studies.comparison.Comparison`: both contact paths (on the sphere in a close-up seen
+    from below, with the contact bound, and on the plane) and |omega| of both in the planners' colours; then for
+    each planner a row of omega's components (18), (19), (13), its rotor rates (11) and its motor torques, in the
+    colours of the components and rotors."""
     fig = Figure(figsize=(14, 11), layout="constrained")
-    ax_sphere = fig.add_subplot(3, 3, 1, projection="3d")
+    ax_sphere = fig.add_subplot(3, 3, 1)
     ax_plane = fig.add_subplot(3, 3, 2)
     ax_speed = fig.add_subplot(3, 3, 3)
     rows = {name: [fig.add_subplot(3, 3, 4 + 3 * i + j) for j in range(3)] for i, name in enumerate(SIDES)}
     sides = {"geometric_phase": c.gp, "collocation": c.collocation}
-    handles = []
+    handles, reach = [], 0.0
     torque_unit = "N m" if c.problem.robot is not None else "units of $J_{zz}$ rad/s$^2$"
     for name in SIDES:
         side, color, who = sides[name], PLANNER[name], PLANNER_LABELS[name]
         m = side.motion
         traj = m.trajectory()
-        contact = traj.contact
-        ax_sphere.plot(contact[:, 0], contact[:, 1], contact[:, 2], color=color, linewidth=1.5)
+        draw_bottom_view(ax_sphere, traj, c.problem.radius, unit, color=color, label=who, axes=False)
+        reach = max(reach, float(np.abs(traj.contact[:, :2]).max()))
         ax_plane.plot(traj.u_a, traj.v_a, color=color, linewidth=1.4)
         handles.append(Line2D([], [], color=color, linewidth=1.5, label=f"{who}: length "
                               f"{side.costs['path_length']:.4g} {unit}, {c.cost} {side.costs[c.cost]:.4g}"))
@@ -67,9 +68,15 @@ def plot_comparison(c, unit: str = "R") -> Figure:
                                                          enumerate(ROTOR_LABELS)], f"motor torque [{torque_unit}]",
                 f"{who}: motor torques")
     p, g = c.problem, c.problem.goal
-    sphere_axes(ax_sphere, p.radius, unit, "contact paths on the sphere (body frame)")
-    ax_sphere.legend(handles=[Line2D([], [], color=PLANNER[n], label=PLANNER_LABELS[n]) for n in SIDES],
-                     loc="upper left", fontsize=7)
+    bound = p.radius * np.sin(min(c.contact_bound, np.pi / 2))   # the bound's circle as seen from below
+    s = np.linspace(0.0, 2.0 * np.pi, 241)
+    ax_sphere.plot(bound * np.cos(s), bound * np.sin(s), color=MARK, linestyle="--", linewidth=0.9)
+    bottom_view_axes(ax_sphere, 1.12 * max(reach, bound), p.radius, unit,
+                     "contact paths on the sphere, seen from below")
+    ax_sphere.legend(handles=[Line2D([], [], color=PLANNER[n], label=PLANNER_LABELS[n]) for n in SIDES]
+                     + [Line2D([], [], color=MARK, linestyle="--", label=f"contact bound {c.contact_bound:.4g} rad"),
+                        Line2D([], [], color=MARK, marker="+", linestyle="", label="south pole")],
+                     loc="upper right", fontsize=7)
     plane_axes(ax_plane, g[:2], unit, "contact paths on the plane", handles=handles)
     _time_axes(ax_speed, c.gp.motion.t, "|omega| [rad/s]", "|omega| of both motions")
     tr = c.result.transcription
