@@ -153,6 +153,9 @@ def test_comparison_figure_follows_the_colour_convention(comp):
         assert rgba(by_title[f"{who}: motor torques"]) == [to_rgba(c) for c in ROTOR]
         assert rgba(by_title[f"{who}: omega (plane frame)"]) == [to_rgba(c) for c in OMEGA]
     assert all(any(lab in text for text in legends) for lab in (*ROTOR_LABELS, *OMEGA_LABELS, "start", "target"))
+    below = by_title["contact paths on the sphere, seen from below"]   # the close-up, as in plan.png
+    assert [c for c in rgba(below) if c in planners] == planners and below.get_aspect() == 1.0
+    assert any(text.startswith("contact bound") for text in legends)
 
 
 def test_corrected_controls_reach_the_goal_at_rest_by_the_printed_equations(comp):
