@@ -170,6 +170,42 @@ def test_a_long_compile_shows_progress(cache):
     assert "compiling cprogress (first use; cached after): 0/1" in buf.getvalue()
 
 
+_DAMAGE_SCRIPT = """
+import ctypes, sys
+from rollplan.core import compiled
+src = sys.argv[1]
+write = [sys.executable, "-c", "open('f.c', 'w').write('int f(int x) { return 3 * x + 1; }')"]
+f = compiled.shared_library("dtest", "d", [src], write, ["f.c"], lambda p: ctypes.CDLL(p).f, "python")
+print(f(4), compiled.last_build()["source"])
+"""
+
+
+def test_a_damaged_cached_library_is_rebuilt_not_loaded(cache):
+    """A cached search library truncated to 1000 bytes killed `rollplan plan` with SIGBUS inside ctypes (no
+    exception to catch): the library's bytes are checked against the digest written beside it before loading,
+    and a damaged one (truncated, or one byte changed) or one without its digest is rebuilt. Each load runs in
+    a fresh process (a process that has the library mapped must not see its file change under it)."""
+    src = cache / "src.txt"
+    src.write_text("v1")
+
+    def run():
+        r = subprocess.run([sys.executable, "-c", _DAMAGE_SCRIPT, str(src)], capture_output=True, text=True,
+                           timeout=120, check=False, env={**os.environ, "ROLLPLAN_CACHE_DIR": str(cache)})
+        assert r.returncode == 0, (r.returncode, r.stderr[-2000:])
+        return r.stdout.split()
+
+    assert run() == ["13", "built"]
+    assert run() == ["13", "cache"]
+    (lib,) = cache.glob("dtest-*.so")
+    good = lib.read_bytes()
+    for damaged in (good[:1000], good[:-1] + bytes([good[-1] ^ 1])):
+        lib.write_bytes(damaged)
+        assert run() == ["13", "built"]
+    (cache / (lib.name + ".sha256")).unlink()
+    assert run() == ["13", "built"]
+    assert run() == ["13", "cache"]
+
+
 def test_shared_library_is_built_once_then_loaded_and_refused_without_a_compiler(cache, monkeypatch):
     """A plain C library (the compiled search's way): the command writes the C file, the result is loaded
     by ctypes and computes; the second call loads the cached file; a failing command or no compiler give None."""

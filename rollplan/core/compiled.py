@@ -18,6 +18,11 @@ Key
     source files that define it (:func:`compiled_lazy`). A change of any of them gives another
     file name, so a stale library is never loaded; a library that does not load, or whose
     signature differs from the function's, is rebuilt.
+Integrity
+    Beside every library a ``.sha256`` file holds the digest of its bytes, written before the library
+    is moved into place; a library is loaded only if its bytes match it. A damaged file (truncated or
+    overwritten by another process or a full disk) is rebuilt instead of loaded: loading a truncated
+    shared object can kill the process with SIGBUS, which no exception handler sees.
 Concurrency
     Every build writes into its own temporary directory inside the cache directory and moves the
     finished library into place with ``os.replace`` (atomic on one file system): a reader sees no
@@ -220,12 +225,35 @@ def _run_compiler(cmd, cwd: Path, timeout: float, label: str):
     return code, log_path.read_text(errors="replace")
 
 
+def _digest_path(lib: Path) -> Path:
+    return lib.with_name(lib.name + ".sha256")
+
+
+def _intact(lib: Path) -> bool:
+    """True if ``lib`` exists and its bytes match the digest written beside it (module docstring)."""
+    try:
+        return _digest_path(lib).read_text().strip() == hashlib.sha256(lib.read_bytes()).hexdigest()
+    except (OSError, UnicodeDecodeError):
+        return False
+
+
+def _seal(out: Path, lib: Path) -> None:
+    """Write the digest of the built ``out`` beside ``lib``, then move ``out`` to ``lib`` (both atomic: a reader
+    sees no file or a complete one; a digest and a library of two concurrent builders that differ make the
+    library count as damaged, which is rebuilt, never loaded)."""
+    digest = _digest_path(lib)
+    tmp = out.with_name(out.name + ".sha256")
+    tmp.write_text(hashlib.sha256(out.read_bytes()).hexdigest() + "\n")
+    os.replace(tmp, digest)
+    os.replace(out, lib)
+
+
 def _get(name: str, key: str, build, cc: str, flags, timeout: float, jacobian: bool) -> ca.Function:
     """Load ``name-key`` from the cache, or build, compile and cache it."""
     root = cache_dir()
     lib = root / f"{name}-{key}{'.dll' if os.name == 'nt' else '.so'}"
     t0 = time.perf_counter()
-    if lib.exists():
+    if _intact(lib):
         ext = _load(name, lib, None)
         if ext is not None:
             _last.update(source="cache", load_s=time.perf_counter() - t0, path=str(lib))
@@ -261,7 +289,7 @@ def _get(name: str, key: str, build, cc: str, flags, timeout: float, jacobian: b
             log.debug("compiler output:\n%s", output)
             return _fallback(fn, f"the C compiler failed on {name} (exit {code})")
         t3 = time.perf_counter()
-        os.replace(out, lib)   # atomic: readers see no file or a complete one
+        _seal(out, lib)
         ext = _load(name, lib, fn)
         if ext is None:
             return _fallback(fn, f"the compiled {name} does not load")
@@ -302,7 +330,7 @@ def shared_library(name: str, descriptor: str, sources, prepare, c_files, load, 
     root = cache_dir()
     lib = root / f"{name}-{key}{'.dll' if os.name == 'nt' else '.so'}"
     t0 = time.perf_counter()
-    if lib.exists():
+    if _intact(lib):
         try:
             out = load(str(lib))
             _last.update(source="cache", load_s=time.perf_counter() - t0, path=str(lib))
@@ -332,7 +360,7 @@ def shared_library(name: str, descriptor: str, sources, prepare, c_files, load, 
                 log.debug("build output:\n%s", output)
                 return _fallback(None, f"building {name} failed (exit {code} of {Path(cmd[0]).name})", instead)
         t2 = time.perf_counter()
-        os.replace(out, lib)   # atomic: readers see no file or a complete one
+        _seal(out, lib)
         try:
             loaded = load(str(lib))
         except OSError:
@@ -352,6 +380,7 @@ def clear_cache() -> int:
         for p in root.iterdir():
             if p.suffix in (".so", ".dll"):
                 p.unlink(missing_ok=True)
+                _digest_path(p).unlink(missing_ok=True)
                 n += 1
             elif p.name.startswith(".build-") and p.is_dir():
                 shutil.rmtree(p, ignore_errors=True)
