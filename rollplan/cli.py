@@ -950,6 +950,7 @@ def _drop_stdout() -> None:
 def main(argv=None) -> int:
     """Run the command in ``argv`` (default ``sys.argv[1:]``) and return its exit status (module docstring)."""
     status = _main(argv)
+    interrupts.settle()   # decided: a late Ctrl-C (Python's shutdown) no longer turns it into death by SIGINT
     if status == EXIT_INTERRUPTED:
         interrupts.forget_unhandled()
     return status

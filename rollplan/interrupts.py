@@ -31,6 +31,11 @@ modules load) as *unhandled*, keeps the mark although the command catches the in
 exit of ``python -m rollplan.cli`` kills the process with SIGINT instead of returning the command's status.
 :func:`forget_unhandled` clears the mark (every string ``exec`` resets it first); :func:`rollplan.cli.main`
 calls it when it returns 130.
+
+After the command's status is decided: Python's shutdown gives SIGINT back to the system's default action
+(``_PySignal_Fini``), so a Ctrl-C that arrives while the finished command exits kills it (exit -2) instead of
+letting it return its status. :func:`settle`, called by :func:`rollplan.cli.main` on its way out when the
+program is the command, ignores SIGINT from then on (an ignored signal is left ignored by the shutdown).
 """
 
 from __future__ import annotations
@@ -40,7 +45,7 @@ import signal
 import sys
 import threading
 
-__all__ = ["call", "guard_start_up", "cli_follows", "end_start_up", "forget_unhandled"]
+__all__ = ["call", "guard_start_up", "cli_follows", "end_start_up", "forget_unhandled", "settle"]
 
 class _State:
     pending = False   # SIGINT arrived during the outermost call
@@ -113,3 +118,10 @@ def forget_unhandled() -> None:
     """Clear CPython's record of a KeyboardInterrupt that left an ``exec`` of a string (module docstring), so
     that a command which handled the interrupt exits with its own status."""
     exec("")
+
+
+def settle() -> None:
+    """The command's exit status is decided: ignore SIGINT from now on (module docstring), when this program is
+    the ``rollplan`` command (nothing changes in a program that calls :func:`rollplan.cli.main`)."""
+    if cli_follows() and threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)

@@ -221,3 +221,19 @@ def test_cli_main_exits_130_when_the_interrupt_left_an_exec(tmp_path):
         "sys.exit(cli.main(['plan', '--to', '0', '1']))\n"))
     assert proc.returncode == 130, (proc.returncode, proc.stderr)
     assert proc.stderr.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+def test_a_ctrl_c_after_the_command_finished_keeps_its_exit_status(tmp_path):
+    """A batch that had finished (its summary printed, exit status 1 decided) was killed by a Ctrl-C during
+    Python's shutdown (exit -2), which gives SIGINT back to the system's default: cli.main now ignores SIGINT
+    once the status is decided, when the program is the command. Here the SIGINT comes right after main."""
+    proc = run_as_module(tmp_path, (
+        "import os, signal, sys, time\n"
+        "sys.argv[0] = 'rollplan'   # as the console script\n"
+        "from rollplan import cli\n"
+        "status = cli.main(['step', '--a', '0.3'])\n"
+        "os.kill(os.getpid(), signal.SIGINT)\n"
+        "time.sleep(0.2)\n"
+        "sys.exit(status)\n"))
+    assert proc.returncode == 0, (proc.returncode, proc.stderr)
+    assert "Traceback" not in proc.stderr
