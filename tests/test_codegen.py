@@ -215,8 +215,11 @@ def _parse(run):
 
 
 def _same_plan(c, q):
-    """C plan (a, b, gamma, ..., m) and Python plan q: the same branch and (a, b, gamma) to 1e-8."""
-    gap = max(abs(q.a - c[0]), abs(q.b - c[1]), abs(float(references.wrap(q.gamma - c[2]))))
+    """C plan (a, b, gamma, ..., m) and Python plan q: the same branch and (a, b, gamma) to 1e-8. gamma turns the
+    n-step shift onto the target, so for a target closer than 1 R it is compared by the arrival it sets,
+    |target| |d gamma| (for a target at 1e-7 R, radii equal to 1e-15 give gammas 4e-8 apart, both exact)."""
+    turn = abs(float(references.wrap(q.gamma - c[2]))) * min(1.0, float(np.hypot(q.problem.goal.u_a, q.problem.goal.v_a)))
+    gap = max(abs(q.a - c[0]), abs(q.b - c[1]), turn)
     return c[5] == q.branch and gap < 1e-8
 
 
@@ -254,6 +257,35 @@ def test_plan_demo_matches_python_plan_more(built, planner, target):
                                             ((0.3, 0.2, 20.0, 2, 3.0), -5)])
 def test_plan_demo_on_a_branch_matches_python(built, planner, target, branch):
     _check_plan(built, planner, target, branch)
+
+
+# found by an independent review: small shifts, roots near A_MAX, tangencies of the C table that are no roots
+REVIEW_PLANS = [((0.0009285391486776204, -0.0006994135967995514, -0.04186188760954446, 3, 0.7736122083112522), None),
+                ((0.0, 1e-7, 0.0, 1, 2.5), -1), ((0.0, 1e-7, 0.0, 1, 2.5), -3), ((0.0, 1e-7, 0.0, 1, 2.5), -5)]
+REVIEW_NO_PLANS = [(-0.00018479813435709692, 0.0006503651028485891, 0.09195336625285222, 1, 0.7426881607174539),
+                   (-1.5656e-08, 2.8743e-08, -0.79272, 3, 2.2974)]
+
+
+@pytest.mark.parametrize("target, branch", REVIEW_PLANS)
+def test_plan_demo_small_shifts_near_a_max_match_python(built, planner, target, branch):
+    """A shift of 1e-3 R or 1e-7 R with roots near A_MAX: the C polish (Newton on |S| - h, not on g = |S|^2 - h^2,
+    whose root error grows like 1 / h) gives the exact root, certified, and Python's choice."""
+    _check_plan(built, planner, target, branch)
+
+
+@pytest.mark.parametrize("target", REVIEW_NO_PLANS)
+def test_plan_demo_tangency_of_the_table_is_no_plan(built, target):
+    """Targets without a plan (Python's numpy search finds no root) where the C table's g has tangencies within its
+    error: no plan (exit 3), not a failed certificate (exit 5); uncertified, the C search returns no root either."""
+    run = demo(built, *map(repr, target))
+    assert run.returncode == 3 and run.stdout == "" and "no plan" in run.stderr, (run.returncode, run.stderr)
+    assert reference_plan(target[:3], target[3], target[4]) is None
+    clib = ctypes.CDLL(str(built.out / "librollplan.so"))
+    plan = _Plan()
+    options = _Options(0, 0, 0)
+    status = clib.rollplan_plan_with(*(ctypes.c_double(x) for x in target[:3]), ctypes.c_int(target[3]),
+                                     ctypes.c_double(target[4]), ctypes.byref(options), ctypes.byref(plan))
+    assert status == 3
 
 
 @pytest.mark.parametrize("target, branch", [((0.1, -0.3, 3.0, 2, 5.0), 0), ((0.3, 0.2, 20.0, 2, 3.0), -6)])
@@ -528,6 +560,10 @@ def test_float_build_has_no_double_and_certifies_to_its_tolerance(built_float, b
 
 
 # ----------------------------------------------------------------------------- the time law in C
+
+class _Options(ctypes.Structure):
+    _fields_ = [("use_branch", ctypes.c_int), ("branch", ctypes.c_long), ("certify", ctypes.c_int)]
+
 
 class _Plan(ctypes.Structure):
     _fields_ = [("a", ctypes.c_double), ("b", ctypes.c_double), ("gamma", ctypes.c_double), ("eta", ctypes.c_double),

@@ -20,6 +20,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.optimize import brentq, minimize_scalar
 
 import rollplan
@@ -194,6 +196,46 @@ def _same_sets(brute, enum, tol=1e-7):
 def _certified_by_dop853(target, steps, k, p):
     x = references.trace(p.a, p.b, k, p.gamma, steps)
     return max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2])))
+
+
+@settings(max_examples=200, deadline=None)
+@given(h=st.floats(1e-9, 1.0), slope=st.floats(0.1, 1e3), off=st.floats(-0.5, 0.5), curve=st.floats(-10.0, 10.0))
+def test_newton_step_is_newton_on_the_shift(h, slope, off, curve):
+    """newton_step is Newton's step on f = |S| - h: on a shift S(x) = slope x + curve x^2 (|S| = S for x > 0,
+    g = S^2 - h^2) it equals f / f' by the closed form, and for a linear shift it lands on the root x* = h / slope
+    in one step from anywhere in (0, 2 x*], which Newton on g misses by (x - x*)^2 / (2 x) (g'' / (2 g'))."""
+    x = h / slope * (1.0 + off)
+    s, ds = slope * x + curve * x * x, slope + 2.0 * curve * x
+    if s <= 0.0:
+        return
+    g, dg = s * s - h * h, 2.0 * s * ds
+    step, miss = en.newton_step(np.array([g]), np.array([dg]), np.array([h * h]))
+    assert miss[0] == pytest.approx(abs(s - h), rel=1e-9, abs=1e-15 * s)
+    assert step[0] == pytest.approx((s - h) / ds, rel=1e-9, abs=1e-15 * x)
+    step, _ = en.newton_step(np.array([(slope * x) ** 2 - h * h]), np.array([2.0 * slope * slope * x]),
+                             np.array([h * h]))
+    root = h / slope
+    assert abs(x - step[0] - root) <= 1e-12 * root
+    if abs(off) > 0.1:   # where Newton on g is off by more than rounding
+        assert abs(x - ((slope * x) ** 2 - h * h) / (2.0 * slope * slope * x) - root) > 1e-6 * root
+
+
+def test_close_pair_hidden_by_the_table_is_found_on_the_accurate_map():
+    """k = 5, one step, eta = 0.3 (branch 0): h just above a local minimum of |S| on the branch,
+    h = sqrt(q_min) (1 + 1e-8), makes two roots about 3e-8 apart that the table (its error in rho ~1e-7) shows
+    as one tangency; the accurate map splits it (enumerate._tangencies). Reference: scipy's bounded minimiser and
+    brentq on the complex step map of the brute force."""
+    k, eta = 5.0, 0.3
+    res = minimize_scalar(lambda a: _g(a, eta, 0.0, k), bounds=(0.5716, 0.5816), method="bounded",
+                          options={"xatol": 1e-14})
+    h = math.sqrt(res.fun) * (1.0 + 1e-8)
+    assert _g(res.x, eta, h, k) < 0.0
+    lo, hi = res.x - 1e-6, res.x + 1e-6
+    assert _g(lo, eta, h, k) > 0.0 and _g(hi, eta, h, k) > 0.0
+    brute = [brentq(_g, a0, a1, args=(eta, h, k), xtol=1e-16, rtol=1e-15) for a0, a1 in ((lo, res.x), (res.x, hi))]
+    got = sorted(r.a for r in en.roots(en.branches(k, eta, 1, h, 0), k) if abs(r.a - res.x) < 1e-3)
+    assert len(got) == 2 and got[1] - got[0] > 1e-8
+    np.testing.assert_allclose(got, brute, rtol=0, atol=1e-10)
 
 
 # the issue's three failures

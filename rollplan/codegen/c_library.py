@@ -414,11 +414,12 @@ def reference_plan(target, steps: int, k: float, near=None, branch: int | None =
 
     :class:`rollplan.planners.geometric.GeometricPhasePlanner` on ``Problem(target, k, steps)``: the shortest
     plan over all branches (the C planner's default), or on ``branch`` only; with ``near = (a, b)`` the plan
-    of all certified ones closest to it. None if there is none.
+    of all certified ones closest to it. None if there is none. The planner runs its numpy search, not the
+    compiled C search it would otherwise call: the comparison is between two implementations.
     """
     problem = Problem(tuple(float(x) for x in target), k=k, steps=steps)
     try:
-        best = GeometricPhasePlanner().solve(problem, all_solutions=near is not None, branch=branch)
+        best = GeometricPhasePlanner(compiled_search=False).solve(problem, all_solutions=near is not None, branch=branch)
     except NoPlanError:
         return None
     if near is None:
@@ -505,8 +506,10 @@ def _enumeration_constants(k_max: float) -> dict:
     x, w = np.polynomial.legendre.leggauss(leafmap.ORDER)
     buckets = [(kk, p) for kk, p in leafmap.BUCKETS if kk < k_max] + [next((kk, p) for kk, p in leafmap.BUCKETS
                                                                            if kk >= k_max)]
-    t_end = abs(float(leafmap.turn(A_MAX, k_max)))
-    ntable = math.ceil(t_end / enumerate_.TABLE_PHASE) + 2 + math.ceil(A_MAX / enumerate_.TABLE_STEP) + 1
+    # the table's radii (enumerate.table_radii): their number grows with k for k >= 1/2 (E is monotone, its
+    # steps grow with k); the cell of the last radius is one more
+    ntable = 1 + max(enumerate_.table_radii(kk, enumerate_.TABLE_STEP, enumerate_.TABLE_PHASE,
+                                            enumerate_.TABLE_INV_S).size for kk in (K_MONOTONE, k_max))
     if ntable >= 2 ** 16:
         raise ValueError(f"the rho table at k_max = {k_max:g} needs {ntable} radii: its buckets hold 16-bit indices")
     return {
@@ -521,10 +524,12 @@ def _enumeration_constants(k_max: float) -> dict:
         "@X_STEP@": repr(enumerate_.X_STEP),
         "@HERMITE_REL@": repr(enumerate_.HERMITE_REL),
         "@POLISH_STEP@": repr(enumerate_.POLISH_STEP),
+        "@NOT_A_ROOT@": repr(enumerate_.NOT_A_ROOT),
         "@SAFETY@": repr(enumerate_.SAFETY),
         "@MIN_WIDTH@": repr(enumerate_.MIN_WIDTH),
         "@TABLE_PHASE@": repr(enumerate_.TABLE_PHASE),
         "@TABLE_STEP@": repr(enumerate_.TABLE_STEP),
+        "@TABLE_INV_S@": repr(enumerate_.TABLE_INV_S),
         "@NTABLE@": str(ntable),
     }
 

@@ -36,6 +36,7 @@
 #define CERT_BASE @CERT_BASE@
 #define CERT_SAFETY @CERT_SAFETY@
 #define NPANEL @NPANEL@                /* panels of each leaf (the curve's) */
+#define NOT_A_ROOT (@NOT_A_ROOT@ * CERT_TOL)  /* a polished root the leaf map misses by more is none (enumerate.NOT_A_ROOT) */
 #define CERT_REFINE 3                  /* at most 3 more doublings when only the bound is too large */
 #define CERT_MAX_PANEL_STEPS 2048      /* bounds the certificate's time; k <= K_MAX needs far fewer */
 #define PI 3.14159265358979323846
@@ -57,6 +58,7 @@
 #define MIN_WIDTH @MIN_WIDTH@
 #define TABLE_PHASE @TABLE_PHASE@
 #define TABLE_STEP @TABLE_STEP@
+#define TABLE_INV_S @TABLE_INV_S@
 #define NTABLE @NTABLE@                /* most radii of the rho table (at K_MAX) */
 #define STACK_CELLS 96                 /* pending cells of a branch's splitting (depth <= log2(X_STEP / MIN_WIDTH)) */
 #define MAX_CELLS_PER_BRANCH 1000000L  /* bounds the time of one branch; beyond it the search is incomplete */
@@ -557,12 +559,12 @@ static void rho_range(casadi_real r0, casadi_real r1, casadi_real *lo, casadi_re
     *hi = h;
 }
 
-/* Rule, E(A_MAX) and the rho table for k (kept for the last k). The radii are uniform in E (steps
- * TABLE_PHASE) and in r (TABLE_STEP); eps is SAFETY times the largest error at the midpoints against the
- * accurate map, plus rounding (enumerate._build_rho_table). Returns 0 on success. */
+/* Rule, E(A_MAX) and the rho table for k (kept for the last k). The radii are those of enumerate.table_radii; eps
+ * is SAFETY times the largest error at the midpoints against the accurate map, plus rounding
+ * (enumerate._build_rho_table). Returns 0 on success. */
 static int prepare(casadi_real k) {
-    int panels = s_bucket_p[NBUCKET - 1], i, j, ne, nr, n;
-    casadi_real h, t_end, re, rr, x, rho, err, big;
+    int panels = s_bucket_p[NBUCKET - 1], i, j, parts, nr, n;
+    casadi_real h, re, rr, x, rho, err, big, e0, e1, is0, is1;
     if (s_ready && s_k == k) return 0;
     s_ready = 0;
     for (i = 0; i < NBUCKET; ++i) {
@@ -589,23 +591,25 @@ static int prepare(casadi_real k) {
     if (2 * s_nodes != ORDER * panels) return 1;
     s_e_min = turn(A_MAX, k);
     s_nt = 0;
-    t_end = s_e_min;
-    ne = (int)ceil(fabs(t_end) / TABLE_PHASE) + 2;
+    /* radii uniform in r with TABLE_STEP, each cell split evenly so that E changes by at most TABLE_PHASE and
+     * 1 / s = (1 - 2 r^2)^(-1/2) by at most TABLE_INV_S (enumerate.table_radii: the same radii) */
     nr = (int)ceil(A_MAX / TABLE_STEP) + 1;
-    if (ne + nr > NTABLE) return 1;
-    /* merge the two increasing sequences of radii, dropping repeats */
-    for (i = 0, j = 0, n = 0; i < ne || j < nr;) {
-        re = i < ne ? (i == ne - 1 ? A_MAX : turn_inverse(t_end * i / (ne - 1), k)) : INFINITY;
-        rr = j < nr ? A_MAX * j / (nr - 1) : INFINITY;
-        if (isnan(re)) re = A_MAX;
-        if (re == rr) ++j;
-        x = re <= rr ? re : rr;
-        if (re <= rr) ++i; else ++j;
-        if (!isfinite(x)) continue;
-        x = x < 0.0 ? 0.0 : (x > A_MAX ? A_MAX : x);
-        if (n && x <= s_tr[n - 1] + 1e-12) continue;
-        s_tr[n++] = x;
+    h = A_MAX / (nr - 1);
+    n = 0;
+    e0 = 0.0;                                              /* E and 1 / s at the cell's left end */
+    is0 = 1.0;
+    for (j = 0; j + 1 < nr; ++j) {
+        x = j + 2 == nr ? A_MAX : (j + 1) * h;             /* the cell's right end */
+        e1 = turn(x, k);
+        is1 = 1.0 / sqrt(1.0 - 2.0 * x * x);
+        big = fmax(ceil(fabs(e1 - e0) / TABLE_PHASE), ceil((is1 - is0) / TABLE_INV_S));
+        parts = big > 1.0 ? (int)big : 1;
+        if (n + parts + 1 > NTABLE) return 1;
+        for (i = 0; i < parts; ++i) s_tr[n++] = j * h + (casadi_real)i / parts * (x - j * h);
+        e0 = e1;
+        is0 = is1;
     }
+    s_tr[n++] = A_MAX;
     for (i = 0; i < n; ++i) {
         signed_length(s_tr[i], k, &s_trho[i], &s_tdrho[i]);
         s_te[i] = turn(s_tr[i], k);
@@ -799,12 +803,14 @@ static casadi_real hermite(casadi_real g0, casadi_real p0, casadi_real g1, casad
 }
 
 /* A root in [lo, hi] of g (which = 0) or g' (1) with a sign change there: Newton on g (the secant on g')
- * kept inside the shrinking bracket, bisection otherwise (enumerate._bracketed). */
-static casadi_real bracketed(casadi_real lo, casadi_real hi, casadi_real glo, const branch_t *br, casadi_real k, int which) {
+ * kept inside the shrinking bracket, bisection otherwise (enumerate._bracketed); g of the table (accurate = 0)
+ * or of the accurate map (1). */
+static casadi_real bracketed(casadi_real lo, casadi_real hi, casadi_real glo, const branch_t *br, casadi_real k, int which,
+                             int accurate) {
     int slo = sgn(glo), it;
-    casadi_real x = 0.5 * (lo + hi), prev_x = lo, prev_f = glo, f, dg, nxt;
+    casadi_real x = 0.5 * (lo + hi), prev_x = lo, prev_f = glo, f, dg, nxt, a, b;
     for (it = 0; it < 100; ++it) {
-        f = gval(x, br, k, &dg);
+        branch_values(x, br, k, accurate, &f, &dg, &a, &b);
         if (which) f = dg;
         if (sgn(f) == slo) lo = x; else hi = x;
         nxt = which ? x - f * (x - prev_x) / (f - prev_f) : x - f / dg;
@@ -820,10 +826,26 @@ static casadi_real bracketed(casadi_real lo, casadi_real hi, casadi_real glo, co
     return x;
 }
 
+/* A tangency of the tabulated g at xc (|g| within the floor there, one sign on [sl, sh]), decided on the accurate map
+ * (enumerate._tangencies): a sign change of the accurate g between sl and xc or between xc and sh is a root there (a
+ * close pair the table's error hid), bracketed on the accurate map; with none, xc is a double root (polished, and no
+ * root if the accurate map misses there by more than NOT_A_ROOT: candidate()). Returns the roots written to xs. */
+static int tangency(casadi_real sl, casadi_real xc, casadi_real sh, const branch_t *br, casadi_real k, casadi_real *xs) {
+    casadi_real gl, gc, gh, d, a, b;
+    int n = 0;
+    branch_values(sl, br, k, 1, &gl, &d, &a, &b);
+    branch_values(xc, br, k, 1, &gc, &d, &a, &b);
+    branch_values(sh, br, k, 1, &gh, &d, &a, &b);
+    if (gl * gc < 0) xs[n++] = bracketed(sl, xc, gl, br, k, 0, 1);
+    if (gc * gh < 0) xs[n++] = bracketed(xc, sh, gc, br, k, 0, 1);
+    if (!n) xs[n++] = xc;
+    return n;
+}
+
 /* Roots in one resolved cell [x0, x1] (enumerate._examine): sign changes of g between the ends and the
  * critical points of the Hermite cubic H (simple roots), and where g keeps its sign around a point where
- * g' changes sign, the critical point of g: two roots if g changes sign there, a double root if |g| is
- * within the floor. Returns the number of roots written to xs (unsorted). */
+ * g' changes sign, the critical point of g: two roots if g changes sign there, a tangency if |g| is
+ * within the floor (decided on the accurate map: tangency()). Returns the number of roots written to xs (unsorted). */
 static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p0, casadi_real g1, casadi_real p1,
                    const casadi_real crit[2], const branch_t *br, casadi_real k, casadi_real *xs) {
     casadi_real w = x1 - x0, pts[4], vals[4], dv[4], lo, mid, hi, sl, sh, dl, dh, xc, gc, gl;
@@ -839,7 +861,7 @@ static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p
         vals[j + 1] = gval(pts[j + 1], br, k, &dv[j + 1]);
     }
     for (j = 0; j < 3; ++j) {
-        if (pts[j + 1] > pts[j] && vals[j] * vals[j + 1] < 0) xs[n++] = bracketed(pts[j], pts[j + 1], vals[j], br, k, 0);
+        if (pts[j + 1] > pts[j] && vals[j] * vals[j + 1] < 0) xs[n++] = bracketed(pts[j], pts[j + 1], vals[j], br, k, 0, 0);
         if (vals[j + 1] == 0.0 && pts[j + 1] > 0) xs[n++] = pts[j + 1];
     }
     for (j = 1; j <= 2; ++j) {
@@ -853,37 +875,52 @@ static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p
             dl = dv[j - 1 + half];
             dh = dv[j + half];
             if (!(sh > sl && dl * dh < 0)) continue;
-            xc = bracketed(sl, sh, dl, br, k, 1);
+            xc = bracketed(sl, sh, dl, br, k, 1, 0);
             gc = gval(xc, br, k, NULL);
             if (gc * vals[j] < 0) {
                 gl = gval(sl, br, k, NULL);
-                xs[n++] = bracketed(sl, xc, gl, br, k, 0);
-                xs[n++] = bracketed(xc, sh, gc, br, k, 0);
+                xs[n++] = bracketed(sl, xc, gl, br, k, 0, 0);
+                xs[n++] = bracketed(xc, sh, gc, br, k, 0, 0);
             } else if (fabs(gc) <= 1e-13 * (1.0 + br->h * br->h) + s_eps_g) {
-                xs[n++] = xc;
+                n += tangency(sl, xc, sh, br, k, xs + n);
             }
         }
     }
     return n;
 }
 
-/* Newton on g of the accurate map from a root of the table (a step that would leave [0, x_end] is clipped; one
- * that does not decrease |g| is not taken; at most 6 evaluations after the first); once a step is at most
- * POLISH_STEP (the quadratic regime) it is taken without a new evaluation: the root to rounding (enumerate._polish). */
-static casadi_real polish(casadi_real x, const branch_t *br, casadi_real k) {
-    casadi_real g, dg, g2, dg2, a, b, nxt;
+/* Newton step for g at x (g and dg = g' there) taken on f = sqrt(q) - h instead, q = g + h^2 = |S|^2 (the step's
+ * shift |S| = |rho_a + exp(i eta / 2) rho_b|): f = g / (sqrt(q) + h), f' = g' / (2 sqrt(q)). g = f (|S| + h) is as
+ * smooth as f but its curvature relative to g' grows like 1 / h (g'' ~ 2 |S|'^2 where g' ~ 2 h |S|'), so for a small
+ * shift Newton on g leaves a root error ~ step^2 / h while on f it is ~ step^2 |S|'' / |S|' (enumerate.newton_step).
+ * Returns the step (x - step is the next point) and |f| in *miss. */
+static casadi_real newton_step(casadi_real g, casadi_real dg, casadi_real h, casadi_real *miss) {
+    casadi_real q = g + h * h, sq = q > 0.0 ? sqrt(q) : 0.0, f = sq + h > 0.0 ? g / (sq + h) : 0.0;
+    *miss = fabs(f);
+    return sq > 0.0 ? 2.0 * sq * f / dg : g / dg;
+}
+
+/* Newton (newton_step) on the accurate map from a root of the table (a step that would leave [0, x_end] is
+ * clipped; one that does not decrease |f| is not taken; at most 6 evaluations after the first); with quick = 1,
+ * once a step is at most POLISH_STEP (the quadratic regime) it is taken without a new evaluation (enumerate._polish);
+ * with quick = 0 the steps go on until one is at the rounding level of x: the fallback of a root whose quick polish
+ * failed the certificate. */
+static casadi_real polish(casadi_real x, const branch_t *br, casadi_real k, int quick) {
+    casadi_real g, dg, f, f2, a, b, nxt, after;
     int it;
     branch_values(x, br, k, 1, &g, &dg, &a, &b);
-    for (it = 0; it < 6; ++it) {
-        nxt = x - g / dg;
+    nxt = x - newton_step(g, dg, br->h, &f);
+    for (it = 0; it < (quick ? 6 : 12); ++it) {
         nxt = nxt < 0.0 ? 0.0 : (nxt > br->x_end ? br->x_end : nxt);
         if (!isfinite(nxt)) break;
-        if (fabs(nxt - x) <= POLISH_STEP) return nxt;
-        branch_values(nxt, br, k, 1, &g2, &dg2, &a, &b);
-        if (!(fabs(g2) < fabs(g))) break;
+        if (quick ? fabs(nxt - x) <= POLISH_STEP : fabs(nxt - x) <= 4.0 * REAL_EPS * x) return nxt;
+        branch_values(nxt, br, k, 1, &g, &dg, &a, &b);
+        if (!(nxt != x)) break;
+        after = nxt - newton_step(g, dg, br->h, &f2);
+        if (!(f2 < f)) break;
         x = nxt;
-        g = g2;
-        dg = dg2;
+        f = f2;
+        nxt = after;
     }
     return x;
 }
@@ -942,16 +979,18 @@ static int search_certify(casadi_real a, casadi_real b, casadi_real gamma, int s
 
 /* A root x of branch br (from the table): polish, and accept it as the best plan if a + b < best and
  * (with the certificate) it certifies. Returns 1 if accepted, -1 if a + b >= best (the branch is done), 0 if
- * rejected by the certificate. */
+ * rejected by the certificate or if the leaf map misses the target there by more than NOT_A_ROOT (then it is no root
+ * of the accurate map, only a tangency of the table within its error, and is not counted). */
 static int candidate(search_t *S, const branch_t *br, casadi_real x) {
     casadi_real g, dg, a, b, gamma, eta, h, predicted, residual = NAN, bound = NAN;
     int status = @PREFIX_UPPER@_OK;
-    x = polish(x, br, S->k);
+    x = polish(x, br, S->k, S->defer || !S->certify);
     branch_values(x, br, S->k, 0, &g, &dg, &a, &b);   /* a and b (which do not depend on the table) */
     if (!(a + b < S->best)) return -1;
     if (!(a > 0.0 && b > 0.0)) return 0;
-    S->roots++;
     gamma = rotation(S->u, S->v, S->psi_w, S->steps, a, b, S->k, &eta, &h, &predicted);
+    if (!(predicted <= NOT_A_ROOT)) return 0;   /* no root of the accurate map: a tangency of the table only */
+    S->roots++;
     if (S->certify && !S->defer)
         status = search_certify(a, b, gamma, S->steps, S->k, S->u, S->v, S->psi_w, &residual, &bound);
     if (status != @PREFIX_UPPER@_OK) {

@@ -96,7 +96,8 @@ from .brackets import target_shift
 from .leafmap import radius_of_root_phase, root_phase, signed_length, turn, turn_dr, turn_inverse, turn_pieces
 
 __all__ = ["K_MONOTONE", "K_ENUMERATED", "K_FAST", "PHASE_STEP", "X_STEP", "SIGMA_STEP", "HERMITE_REL", "SAFETY",
-           "MIN_WIDTH", "Branch", "Root", "branches", "roots", "cache_dir", "rho_table", "RhoTable", "rho_lookup"]
+           "MIN_WIDTH", "TABLE_PHASE", "TABLE_STEP", "TABLE_INV_S", "POLISH_STEP", "NOT_A_ROOT", "Branch", "Root", "branches", "roots",
+           "cache_dir", "rho_table", "table_radii", "RhoTable", "rho_lookup", "newton_step"]
 
 #: Smallest k for which E is strictly decreasing on (0, A_MAX].
 K_MONOTONE = 0.5
@@ -121,6 +122,9 @@ _TABLE_CHUNK = 512
 #: Newton steps on the accurate map below this are taken without a new evaluation (see :func:`_polish`).
 POLISH_STEP = 1e-8
 _POLISH_CHUNK = 2048
+#: A polished root whose leaf-map miss exceeds this times the certificate's tolerance is no root: the leaf map
+#: is within 1e-10 of the motion, so the certificate could never accept it (a tangency of the table only).
+NOT_A_ROOT = 1000.0
 #: Table-level roots are located to this (absolute, in the graph's parameter) before the polish.
 ROOT_TOL = 1e-10
 #: Smallest cell width (in the graph's parameter).
@@ -219,7 +223,7 @@ def rho_table(k: float) -> RhoTable:
     return t
 
 
-def _table_radii(k: float, step: float, phase: float, inv_s: float = math.inf) -> np.ndarray:
+def table_radii(k: float, step: float, phase: float, inv_s: float = math.inf) -> np.ndarray:
     """Radii uniform in r with ``step``, each cell split evenly so that E changes by at most ``phase`` and
     ``1 / s = (1 - 2 r^2)^(-1/2)`` (whose powers make the leaf map steep near A_MAX) by at most ``inv_s``."""
     base = np.linspace(0.0, A_MAX, math.ceil(A_MAX / step) + 1)
@@ -242,10 +246,10 @@ def _accurate_rho(r, k: float, label: str):
 
 
 def _build_rho_table(k: float) -> RhoTable:
-    """Table of rho for inertia ratio k on :func:`_table_radii` (steps :data:`TABLE_STEP`, :data:`TABLE_PHASE`);
+    """Table of rho for inertia ratio k on :func:`table_radii` (steps :data:`TABLE_STEP`, :data:`TABLE_PHASE`);
     ``eps`` is SAFETY times the largest error at the midpoints of the interpolation variable (where the
     error factor of cubic Hermite interpolation peaks) against the accurate map, plus rounding."""
-    r = _table_radii(k, TABLE_STEP, TABLE_PHASE, TABLE_INV_S)
+    r = table_radii(k, TABLE_STEP, TABLE_PHASE, TABLE_INV_S)
     n = r.size
     label = f"leaf table (k = {k:g})"
     if k >= K_FAST:
@@ -305,7 +309,7 @@ def _w_lookup(w, wt: _WTable):
 @lru_cache(maxsize=8)
 def _w_nodes(k: float) -> np.ndarray:
     """Initial sampling nodes in w of the w graphs (module docstring)."""
-    return np.unique(root_phase(_table_radii(k, X_STEP, PHASE_STEP), k)[0])
+    return np.unique(root_phase(table_radii(k, X_STEP, PHASE_STEP), k)[0])
 
 
 # ----------------------------------------------------------------------------- branches
@@ -644,9 +648,12 @@ def _cells(gr, p, gi):
     return dict(zip(("own", "x0", "x1", "g0", "p0", "g1", "p1", "gm", "err", "s0", "s1"), (c[order] for c in cols)))
 
 
-def _bracketed(gr, lo, hi, glo, own, which: int = 0, iters: int = 100, x=None, tol: float = 0.0):
+def _bracketed(gr, lo, hi, glo, own, which: int = 0, iters: int = 100, x=None, tol: float = 0.0,
+               accurate: bool = False):
     """Roots in [lo, hi] of g (``which`` 0) or g' (1) of graphs ``own`` with a sign change there, all at
-    once: Newton on g (or the secant on g') kept inside the shrinking bracket, bisection otherwise."""
+    once: Newton on g (or the secant on g') kept inside the shrinking bracket, bisection otherwise; g of
+    the table, or of the accurate map with ``accurate``."""
+    values = gr.accurate if accurate else gr.values
     lo, hi = lo.copy(), hi.copy()
     slo = np.sign(glo)
     x = 0.5 * (lo + hi) if x is None else x.copy()
@@ -656,7 +663,7 @@ def _bracketed(gr, lo, hi, glo, own, which: int = 0, iters: int = 100, x=None, t
         if active.size == 0:
             break
         xa = x[active]
-        out = gr.values(xa, own[active])
+        out = values(xa, own[active])
         f = out[which]
         same = np.sign(f) == slo[active]
         lo[active] = np.where(same, xa, lo[active])
@@ -753,12 +760,31 @@ def _examine(gr, act, c, crit, eps_g):
                 found_o.append(own2)
                 found_kind.append(np.ones(own2.size, int))
             tang = ~pair & (np.abs(gc) <= 1e-13 * (1.0 + gr.h2[o[cand]]) + eps_g)
-            found_x.append(xc[tang])
-            found_o.append(o[cand][tang])
-            found_kind.append(np.full(int(tang.sum()), 2))
+            if tang.any():
+                for part in _tangencies(gr, side_lo[cand][tang], xc[tang], side_hi[cand][tang], o[cand][tang]):
+                    found_x.append(part[0])
+                    found_o.append(part[1])
+                    found_kind.append(part[2])
     if not found_x:
         return np.zeros(0), np.zeros(0, int), np.zeros(0, int)
     return np.concatenate(found_x), np.concatenate(found_o), np.concatenate(found_kind)
+
+
+def _tangencies(gr, lo, xc, hi, own):
+    """Tangencies of the tabulated g at ``xc`` (``|g|`` within the floor, one sign on [lo, hi]) decided on the
+    accurate map: a sign change of the accurate g between lo and xc or between xc and hi is a root there (a
+    close pair the table's error hid; kind 1), bracketed on the accurate map; with none, xc is a double root
+    (kind 2; polished, and no root if the leaf map misses there by more than :data:`NOT_A_ROOT` times the
+    certificate's tolerance). Returns (parameter, graph, kind) arrays, two parts."""
+    gl, gc, gh = (gr.accurate(p, own)[0] for p in (lo, xc, hi))
+    left, right = gl * gc < 0, gc * gh < 0
+    lo2 = np.concatenate([lo[left], xc[right]])
+    hi2 = np.concatenate([xc[left], hi[right]])
+    own2 = np.concatenate([own[left], own[right]])
+    g_lo = np.concatenate([gl[left], gc[right]])
+    pairs = _bracketed(gr, lo2, hi2, g_lo, own2, tol=ROOT_TOL, accurate=True) if own2.size else np.zeros(0)
+    single = ~(left | right)
+    return ((pairs, own2, np.ones(own2.size, int)), (xc[single], own[single], np.full(int(single.sum()), 2)))
 
 
 def _accurate(gr, x, own):
@@ -772,21 +798,38 @@ def _accurate(gr, x, own):
     return tuple(np.concatenate(c) for c in zip(*parts))
 
 
+def newton_step(g, dg, h2):
+    """Newton step for a root of ``g = q - h^2`` (``q = |S|^2``, S the shift of a step, ``h2 = h^2``) taken on
+    ``f = sqrt(q) - h = g / (sqrt(q) + h)`` instead, ``f' = g' / (2 sqrt(q))``: ``(step, |f|)``, the next
+    point being ``x - step``.
+
+    g is f (|S| + h): near a root, ``g'' ~ 2 |S|'^2`` while ``g' ~ 2 h |S|'``, so Newton on g leaves an error
+    ~ step^2 / h, large for a small shift h; on f it is ~ step^2 |S|'' / |S|', whatever h. Where q is
+    not positive (S = 0 up to rounding) it is Newton's step on g.
+    """
+    q = g + h2
+    sq = np.sqrt(np.maximum(q, 0.0))
+    den = sq + np.sqrt(h2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = np.where(den > 0.0, g / np.where(den > 0.0, den, 1.0), 0.0)
+        step = np.where(sq > 0.0, 2.0 * sq * f / dg, g / dg)
+    return step, np.abs(f)
+
+
 def _polish(gr, x, own, iters: int = 6):
-    """Newton on g of the accurate map from the table's roots, root by root: once a step is below
-    :data:`POLISH_STEP` (the quadratic regime) it is taken without a new evaluation; a step that grows
-    |g| ends the root's polish at its best point. Returns (x, a, b): the roots to rounding on the
+    """Newton (:func:`newton_step`) on the accurate map from the table's roots, root by root: once a step
+    is below :data:`POLISH_STEP` (the quadratic regime) it is taken without a new evaluation; a step that
+    grows |f| ends the root's polish at its best point. Returns (x, a, b): the roots to rounding on the
     accurate map (a and b moved with the last step by their derivatives)."""
     x, a, b = x.copy(), np.empty(x.size), np.empty(x.size)
     best = np.full(x.size, np.inf)
     todo, xt = np.arange(x.size), x
     for i in range(iters + 1):
         g, dg, a_, b_, da, db = _accurate(gr, xt, own[todo])
-        better = np.abs(g) < best[todo]
+        step, miss = newton_step(g, dg, gr.h2[own[todo]])
+        better = miss < best[todo]
         upd = todo[better]
-        x[upd], a[upd], b[upd], best[upd] = xt[better], a_[better], b_[better], np.abs(g[better])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = g / dg
+        x[upd], a[upd], b[upd], best[upd] = xt[better], a_[better], b_[better], miss[better]
         step = np.where(np.isfinite(step), step, 0.0)
         nxt = _clip(xt - step, gr.lo[own[todo]], gr.hi[own[todo]])
         step = xt - nxt

@@ -85,7 +85,7 @@ from ...robot import Robot
 from .brackets import find_brackets, target_shift
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
 from .compiled_search import shortest_root
-from .enumerate import branches, roots
+from .enumerate import NOT_A_ROOT, branches, roots
 from .leafmap import panels_for, step_values
 from .leaves import LeafTables
 from .refine import SOLVERS, leaf_step, polisher, step_residual
@@ -104,7 +104,8 @@ _POLISH_MOVE = 1e-6
 
 
 class _Root(NamedTuple):
-    """A root of (32)-(33) in units of R: leaf radii, rotation, branch, shift and turn of one step."""
+    """A root of (32)-(33) in units of R: leaf radii, rotation, branch, shift and turn of one step, and the
+    leaf map's miss of the target there (``nan``: not yet evaluated)."""
 
     a: float
     b: float
@@ -112,6 +113,7 @@ class _Root(NamedTuple):
     m: int
     h: float
     eta: float
+    miss: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -365,9 +367,13 @@ class GeometricPhasePlanner:
                         if not all_solutions:
                             best = min(best, q.a + q.b)
                         break
-                    log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual + bound %.2e > %.0e",
-                                q.m - turns, q.a, q.b, cand[1].residual + cand[1].error_bound, self.tol)
-                    rejected.append(cand[1].residual + cand[1].error_bound)
+                    if cand[0].miss > NOT_A_ROOT * self.tol:   # a tangency of the table only (enumerate)
+                        log.info("branch m=%d (a=%.6f, b=%.6f): no root, the leaf map misses by %.2e",
+                                 q.m - turns, q.a, q.b, cand[0].miss)
+                    else:
+                        log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual + bound %.2e > %.0e",
+                                    q.m - turns, q.a, q.b, cand[1].residual + cand[1].error_bound, self.tol)
+                        rejected.append(cand[1].residual + cand[1].error_bound)
                     if not all_solutions and q is r:
                         queue = roots([next(b_ for b_ in chunk if b_.m == r.m)], k)[1:]
             report(label, visited, len(brs))
@@ -398,12 +404,14 @@ class GeometricPhasePlanner:
         shift = complex(u, v)
         total = shift * n_step_sum(eta, problem.steps)
         gamma = float(wrap(math.atan2(target_r[1], target_r[0]) - math.atan2(total.imag, total.real)))
+        miss = math.hypot(abs(total) - math.hypot(target_r[0], target_r[1]),
+                          float(wrap(problem.steps * eta - target_r[2])))
         final_r, bound, _ = self.certifier.certify(a, b, problem.k, gamma, problem.steps, self.tol)
         goal_r = problem.scaled(problem.goal)
         residual = arrival_residual(final_r, State(goal_r.u_a, goal_r.v_a, target_r[2]))
         cert = Certificate(self.certifier.name, final_r.scaled(problem.radius), residual, bound, self.tol)
         stats = SolverStats(method or self.method, status, iters, 0.0)
-        return _Root(a, b, gamma, m, abs(shift), eta), cert, stats
+        return _Root(a, b, gamma, m, abs(shift), eta, miss), cert, stats
 
     def _plan(self, problem, cand, stats) -> Plan:
         root, cert = cand[0], cand[1]
