@@ -218,7 +218,8 @@ def _same_plan(c, q):
     """C plan (a, b, gamma, ..., m) and Python plan q: the same branch and (a, b, gamma) to 1e-8. gamma turns the
     n-step shift onto the target, so for a target closer than 1 R it is compared by the arrival it sets,
     |target| |d gamma| (for a target at 1e-7 R, radii equal to 1e-15 give gammas 4e-8 apart, both exact)."""
-    turn = abs(float(references.wrap(q.gamma - c[2]))) * min(1.0, float(np.hypot(q.problem.goal.u_a, q.problem.goal.v_a)))
+    scale = min(1.0, float(np.hypot(q.problem.goal.u_a, q.problem.goal.v_a)))
+    turn = abs(float(references.wrap(q.gamma - c[2]))) * scale
     gap = max(abs(q.a - c[0]), abs(q.b - c[1]), turn)
     return c[5] == q.branch and gap < 1e-8
 

@@ -419,7 +419,8 @@ def reference_plan(target, steps: int, k: float, near=None, branch: int | None =
     """
     problem = Problem(tuple(float(x) for x in target), k=k, steps=steps)
     try:
-        best = GeometricPhasePlanner(compiled_search=False).solve(problem, all_solutions=near is not None, branch=branch)
+        best = GeometricPhasePlanner(compiled_search=False).solve(problem, all_solutions=near is not None,
+                                                                  branch=branch)
     except NoPlanError:
         return None
     if near is None:

@@ -56,13 +56,16 @@ cubic Hermite interpolation peaks), i.e. as long as the cell resolves g's fourth
 the splitting enforces; and the true g differs from the tabulated one by less than the floor.
 Every other cell is examined: each sign change of g between the ends and the critical points of H
 is a root (bracketed Newton); where g keeps its sign but H has an extremum, the critical point of g
-is located (bracketed secant on g') and gives two roots (a close pair) or a double root (a
-tangency) if ``|g|`` is within the floor there. The roots are then polished by Newton on g of the
-accurate map. So every root of (32)-(33) with ``0 < a, b <= A_MAX``, on every branch, is found:
-simple roots, close pairs down to what the floor separates, and tangencies; the certificate
-(:mod:`.certify`) then accepts or rejects each plan. The argument is not interval arithmetic: it
-rests on the midpoint error estimating the Hermite error within SAFETY in resolved cells (and
-likewise for the table); ``tests/test_enumerate.py`` checks the result against independent dense
+is located (bracketed secant on g') and gives two roots (a close pair) or, if ``|g|`` is within the
+floor there, a tangency of the table, which the accurate map decides (:func:`_tangencies`): a sign change
+of the accurate g on either side of it is a root there (a close pair the table's error hid), otherwise it
+is a double root. The roots are then polished by Newton on ``|S| - h`` of the accurate map
+(:func:`newton_step`), and a root the leaf map still misses by more than :data:`NOT_A_ROOT` times the
+certificate's tolerance is none (a tangency of the table only). So every root of (32)-(33) with
+``0 < a, b <= A_MAX``, on every branch, is found: simple roots, close pairs down to what the accurate map
+separates, and tangencies; the certificate (:mod:`.certify`) then accepts or rejects each plan.
+The argument is not interval arithmetic: it rests on the midpoint error estimating the Hermite error
+within SAFETY in resolved cells (and likewise for the table); ``tests/test_enumerate.py`` checks the result against independent dense
 brute forces, for k from 0 to 20.
 
 The shortest plan (``first_only``): on a w graph ``a + b`` grows with p, so a branch's shortest
@@ -96,8 +99,8 @@ from .brackets import target_shift
 from .leafmap import radius_of_root_phase, root_phase, signed_length, turn, turn_dr, turn_inverse, turn_pieces
 
 __all__ = ["K_MONOTONE", "K_ENUMERATED", "K_FAST", "PHASE_STEP", "X_STEP", "SIGMA_STEP", "HERMITE_REL", "SAFETY",
-           "MIN_WIDTH", "TABLE_PHASE", "TABLE_STEP", "TABLE_INV_S", "POLISH_STEP", "NOT_A_ROOT", "Branch", "Root", "branches", "roots",
-           "cache_dir", "rho_table", "table_radii", "RhoTable", "rho_lookup", "newton_step"]
+           "MIN_WIDTH", "TABLE_PHASE", "TABLE_STEP", "TABLE_INV_S", "POLISH_STEP", "NOT_A_ROOT", "Branch", "Root",
+           "branches", "roots", "cache_dir", "rho_table", "table_radii", "RhoTable", "rho_lookup", "newton_step"]
 
 #: Smallest k for which E is strictly decreasing on (0, A_MAX].
 K_MONOTONE = 0.5
