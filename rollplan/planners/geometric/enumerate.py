@@ -65,8 +65,8 @@ certificate's tolerance is none (a tangency of the table only). So every root of
 ``0 < a, b <= A_MAX``, on every branch, is found: simple roots, close pairs down to what the accurate map
 separates, and tangencies; the certificate (:mod:`.certify`) then accepts or rejects each plan.
 The argument is not interval arithmetic: it rests on the midpoint error estimating the Hermite error
-within SAFETY in resolved cells (and likewise for the table); ``tests/test_enumerate.py`` checks the result against independent dense
-brute forces, for k from 0 to 20.
+within SAFETY in resolved cells (and likewise for the table); ``tests/test_enumerate.py`` checks the
+result against independent dense brute forces, for k from 0 to 20.
 
 The shortest plan (``first_only``): on a w graph ``a + b`` grows with p, so a branch's shortest
 plan is its first root, and a root with ``a + b <= L`` has ``w(y) <= w(L)`` and ``x <= L - y0``,
