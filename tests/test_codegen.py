@@ -4,6 +4,7 @@ independent references."""
 from __future__ import annotations
 
 import ctypes
+import math
 import re
 import shutil
 import subprocess
@@ -11,6 +12,8 @@ import subprocess
 import casadi as ca
 import numpy as np
 import pytest
+from scipy.optimize import brentq, minimize_scalar
+from test_enumerate import _b_of, _g
 
 from rollplan import Problem, codegen
 from rollplan.cli import main
@@ -338,6 +341,30 @@ def test_search_falls_back_to_certifying_every_root(built, tmp_path):
     run = subprocess.run([str(tmp_path / "reject_all"), *map(str, target)], capture_output=True, text=True,
                          check=False)
     assert run.returncode == 5 and "not certified" in run.stderr, (run.returncode, run.stderr)
+
+
+def test_close_pair_hidden_by_the_table_is_split_in_c(built, tmp_path):
+    """The close pair of tests/test_enumerate.py that the table shows as one tangency (k = 5, one step, eta = 0.3,
+    h = sqrt(q_min) (1 + 1e-8), two roots 2.4e-8 apart): a test build that rejects every plan shorter than the pair
+    makes the C search return the pair's first root, which is brentq's root on the complex step map to 1e-10 (before
+    tangency() decided on the accurate map, the C search returned a point between the two, 1.2e-8 away)."""
+    k, eta = 5.0, 0.3
+    res = minimize_scalar(lambda a: _g(a, eta, 0.0, k), bounds=(0.5716, 0.5816), method="bounded",
+                          options={"xatol": 1e-14})
+    h = math.sqrt(res.fun) * (1.0 + 1e-8)
+    first = brentq(_g, res.x - 1e-6, res.x, args=(eta, h, k), xtol=1e-16, rtol=1e-15)
+    out = built.out
+    limit = first + float(_b_of(np.array([first]), eta, k)[0]) - 1e-6
+    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", f"-DROLLPLAN_TEST_REJECT_BELOW={limit!r}",
+                    "-I", str(out), "-o", str(tmp_path / "pair"), str(out / "plan_demo.o"),
+                    str(out / "rollplan_planner.c"), str(out / "rollplan_model.o"), "-lm"], check=True)
+    run = subprocess.run([str(tmp_path / "pair"), repr(h), "0", repr(eta), "1", repr(k), "0"], capture_output=True,
+                         text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    a, b, gamma, residual, bound, m = _parse(run)
+    assert m == 0 and abs(a - first) < 1e-10, (a, first)
+    x = references.trace(a, b, k, gamma, 1)
+    assert np.linalg.norm([x[0] - h, x[1], references.wrap(x[2] - eta)]) < 1e-9
 
 
 def test_plan_demo_reproduces_paper_radius(built):
