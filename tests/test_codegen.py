@@ -265,7 +265,9 @@ def test_plan_demo_on_a_branch_matches_python(built, planner, target, branch):
 
 # found by an independent review: small shifts, roots near A_MAX, tangencies of the C table that are no roots
 REVIEW_PLANS = [((0.0009285391486776204, -0.0006994135967995514, -0.04186188760954446, 3, 0.7736122083112522), None),
-                ((0.0, 1e-7, 0.0, 1, 2.5), -1), ((0.0, 1e-7, 0.0, 1, 2.5), -3), ((0.0, 1e-7, 0.0, 1, 2.5), -5)]
+                ((0.0, 1e-7, 0.0, 1, 2.5), -1), ((0.0, 1e-7, 0.0, 1, 2.5), -3), ((0.0, 1e-7, 0.0, 1, 2.5), -5),
+                # the shortest plan at a = b = 0.0166 (Python's numpy search once lost it: a table tangency at a = 0)
+                ((0.0009695511170914938, -0.0006893752926909919, 1.0268242372426444e-06, 5, 3.111167772746886), None)]
 REVIEW_NO_PLANS = [(-0.00018479813435709692, 0.0006503651028485891, 0.09195336625285222, 1, 0.7426881607174539),
                    (-1.5656e-08, 2.8743e-08, -0.79272, 3, 2.2974)]
 

@@ -238,6 +238,18 @@ def test_close_pair_hidden_by_the_table_is_found_on_the_accurate_map():
     np.testing.assert_allclose(got, brute, rtol=0, atol=1e-10)
 
 
+def test_first_root_behind_a_tangency_at_the_end_of_the_graph():
+    """A shift of 1.2e-3 R in 5 steps, eta ~ 2e-7, k = 3.11: at a = 0, g = -h^2 is within the table's floor and flat,
+    a tangency of the table that the polish moves onto a = 0 (no root). The branch's first root, at a = b = 0.0166,
+    is still the shortest one returned (it was lost), the same as the brute force's first root."""
+    u, v, psi, n, k = 0.0009695511170914938, -0.0006893752926909919, 1.0268242372426444e-06, 5, 3.111167772746886
+    brs = en.branches(k, psi, n, math.hypot(u, v), 0)
+    first = en.roots(brs, k, first_only=True)
+    brute = _brute_branch(brs[0].eta, brs[0].h, k, 40, 4000)
+    assert len(first) == 1 and min(brute) < 0.02
+    assert first[0].a == pytest.approx(min(brute), abs=1e-12)
+
+
 # the issue's three failures
 def test_named_failure_shortest_on_branch_minus_5():
     """(0.0621, 0.0847, 2.4915), n = 5, k = 2.5: the shortest plan is L = 35.723 on m = -5 (a close

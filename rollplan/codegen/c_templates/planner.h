@@ -53,7 +53,9 @@ extern "C" {
                                    (or, with options.certify = 0, an uncertified root of the leaf map) */
 #define @PREFIX_UPPER@_BAD_INPUT 2      /* non-finite input, |psi| > PSI_MAX, steps outside [1, MAX_STEPS],
                                    k outside [K_MIN, K_MAX] (the range this code was generated for), zero shift */
-#define @PREFIX_UPPER@_NO_PLAN 3        /* no branch of (32)-(33) has a root with 0 < a, b <= A_MAX */
+#define @PREFIX_UPPER@_NO_PLAN 3        /* no branch of (32)-(33) has a root with 0 < a, b <= A_MAX (a point the leaf
+                                   map misses by more than enumerate.NOT_A_ROOT x CERT_TOL is none: the
+                                   certificate could never accept it) */
 #define @PREFIX_UPPER@_NO_CONVERGENCE 4 /* the search could not be completed (a branch needed more than
                                    its bounded number of cells, or the leaf table is not finite) */
 #define @PREFIX_UPPER@_NOT_CERTIFIED 5  /* roots were found, but none passed the certificate */

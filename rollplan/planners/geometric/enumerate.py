@@ -125,9 +125,10 @@ _TABLE_CHUNK = 512
 #: Newton steps on the accurate map below this are taken without a new evaluation (see :func:`_polish`).
 POLISH_STEP = 1e-8
 _POLISH_CHUNK = 2048
-#: A polished root whose leaf-map miss exceeds this times the certificate's tolerance is no root: the leaf map
-#: is within 1e-10 of the motion, so the certificate could never accept it (a tangency of the table only).
-NOT_A_ROOT = 1000.0
+#: A polished root whose leaf-map miss exceeds this times the certificate's tolerance is no root (a tangency
+#: of the table only): the leaf map errs by less than 1e-13 per leaf (:mod:`.leafmap`), 2e-10 over the most
+#: steps, so the certificate could never accept it.
+NOT_A_ROOT = 10.0
 #: Table-level roots are located to this (absolute, in the graph's parameter) before the polish.
 ROOT_TOL = 1e-10
 #: Smallest cell width (in the graph's parameter).
@@ -915,7 +916,11 @@ def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)
         _, _, a, b = gr.values(xr, orr)
     bi = gr.br[orr]
     length = a + b
-    ok = (a > 0.0) & (b > 0.0) & (length >= lengths[0] - 1e-12) & (length <= lengths[1] + 1e-12)
+    inside = (a > 0.0) & (b > 0.0)
+    ok = inside & (length >= lengths[0] - 1e-12) & (length <= lengths[1] + 1e-12)
+    # first_only: a branch whose every candidate was polished onto a = 0 or b = 0 (a tangency of the table at the
+    # end of the graph, no root) has not given its first root yet: its roots are searched again, all of them
+    lost = np.setdiff1d(bi[~inside], bi[ok]).tolist() if first_only else []
     a, b, bi, kinds, length = a[ok], b[ok], bi[ok], kinds[ok], length[ok]
     order = np.lexsort((length, bi))
     a, b, bi, kinds, length = a[order], b[order], bi[order], kinds[order], length[order]
@@ -929,4 +934,6 @@ def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)
     names = ("", "simple", "double")
     out = [Root(brs[j].m, brs[j].eta, brs[j].h, ai, bi_, min(ai, bi_), names[kd])
            for j, ai, bi_, kd in zip(bi.tolist(), a.tolist(), b.tolist(), kinds.tolist())]
+    for j in lost:
+        out += roots([brs[j]], k, lengths=lengths, polish=polish)[:1]
     return sorted(out, key=lambda r: r.a + r.b)
