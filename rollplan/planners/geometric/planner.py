@@ -374,8 +374,9 @@ class GeometricPhasePlanner:
                         log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual + bound %.2e > %.0e",
                                     q.m - turns, q.a, q.b, cand[1].residual + cand[1].error_bound, self.tol)
                         rejected.append(cand[1].residual + cand[1].error_bound)
-                    if not all_solutions and q is r:
-                        queue = roots([next(b_ for b_ in chunk if b_.m == r.m)], k)[1:]
+                    if not all_solutions and q is r:   # the branch's other roots, shortest first
+                        queue = [q2 for q2 in roots([next(b_ for b_ in chunk if b_.m == r.m)], k)
+                                 if abs(q2.a - r.a) > 1e-12 or abs(q2.b - r.b) > 1e-12]
             report(label, visited, len(brs))
         elapsed = time.perf_counter() - t_start
         if not found:
