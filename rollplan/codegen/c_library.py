@@ -525,6 +525,7 @@ def _enumeration_constants(k_max: float) -> dict:
         "@X_STEP@": repr(enumerate_.X_STEP),
         "@HERMITE_REL@": repr(enumerate_.HERMITE_REL),
         "@POLISH_STEP@": repr(enumerate_.POLISH_STEP),
+        "@POLISH_BRACKET@": repr(enumerate_.POLISH_BRACKET),
         "@NOT_A_ROOT@": repr(enumerate_.NOT_A_ROOT),
         "@SAFETY@": repr(enumerate_.SAFETY),
         "@MIN_WIDTH@": repr(enumerate_.MIN_WIDTH),

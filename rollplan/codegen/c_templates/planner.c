@@ -53,6 +53,7 @@
 #define PHASE_STEP @PHASE_STEP@
 #define X_STEP @X_STEP@
 #define HERMITE_REL @HERMITE_REL@
+#define POLISH_BRACKET @POLISH_BRACKET@  /* a polish step across the root at most this long brackets it */
 #define POLISH_STEP @POLISH_STEP@        /* Newton steps of the polish below this are taken without a new evaluation */
 #define SAFETY @SAFETY@
 #define MIN_WIDTH @MIN_WIDTH@
@@ -62,7 +63,7 @@
 #define NTABLE @NTABLE@                /* most radii of the rho table (at K_MAX) */
 #define STACK_CELLS 96                 /* pending cells of a branch's splitting (depth <= log2(X_STEP / MIN_WIDTH)) */
 #define MAX_CELLS_PER_BRANCH 1000000L  /* bounds the time of one branch; beyond it the search is incomplete */
-#define MAX_CELL_ROOTS 16
+#define MAX_CELL_ROOTS 32              /* 3 sign changes, 3 zeros, 4 tangencies of 4 roots at most */
 
 /* Static work area shared by all calls (no malloc; not reentrant). */
 static const casadi_real *s_arg[SZ_ARG];
@@ -826,18 +827,48 @@ static casadi_real bracketed(casadi_real lo, casadi_real hi, casadi_real glo, co
     return x;
 }
 
-/* A tangency of the tabulated g at xc (|g| within the floor there, one sign on [sl, sh]), decided on the accurate map
- * (enumerate._tangencies): a sign change of the accurate g between sl and xc or between xc and sh is a root there (a
- * close pair the table's error hid), bracketed on the accurate map; with none, xc is a double root (polished, and no
+/* Outward from x (dir = +1: to the right, -1: to the left) on the accurate map, where g (gx at x) has the sign
+ * opposite to ref, the table's: steps doubling from w until g has ref's sign (a root between the last two points,
+ * bracketed) or the end of the branch. Each step checks that g still moves toward ref's sign (dir g' of ref's sign:
+ * g monotone that way, so one root at most between two points); if not, it stops (enumerate._outward). Returns the
+ * roots written to xs (0 or 1). */
+static int outward(casadi_real x, casadi_real gx, casadi_real w, int dir, int ref, const branch_t *br, casadi_real k,
+                   casadi_real *xs) {
+    casadi_real lim = dir > 0 ? br->x_end : 0.0, nxt, gn, dg, a, b;
+    int it;
+    for (it = 0; it < 64; ++it) {
+        nxt = x + dir * w;
+        if (dir > 0 ? !(nxt < lim) : !(nxt > lim)) nxt = lim;
+        if (!(nxt != x)) return 0;
+        branch_values(nxt, br, k, 1, &gn, &dg, &a, &b);
+        if (sgn(gn) == ref || gn == 0.0) {
+            xs[0] = dir > 0 ? bracketed(x, nxt, gx, br, k, 0, 1) : bracketed(nxt, x, gn, br, k, 0, 1);
+            return 1;
+        }
+        if (sgn(dg) * dir != ref) return 0;
+        x = nxt;
+        gx = gn;
+        w *= 2.0;
+    }
+    return 0;
+}
+
+/* A tangency of the tabulated g at xc (|g| within the floor there, of sign ref on [sl, sh]), decided on the accurate
+ * map (enumerate._tangencies): a sign change of the accurate g between sl and xc or between xc and sh is a root there
+ * (a close pair the table's error hid), bracketed on the accurate map; where the accurate g at sl (sh) has the sign
+ * opposite to the table's, the root is beyond it, found outward(). With none, xc is a double root (polished, and no
  * root if the accurate map misses there by more than NOT_A_ROOT: candidate()). Returns the roots written to xs. */
-static int tangency(casadi_real sl, casadi_real xc, casadi_real sh, const branch_t *br, casadi_real k, casadi_real *xs) {
-    casadi_real gl, gc, gh, d, a, b;
+static int tangency(casadi_real sl, casadi_real xc, casadi_real sh, int ref, const branch_t *br, casadi_real k,
+                    casadi_real *xs) {
+    casadi_real gl, gc, gh, d, a, b, w = sh - sl;
     int n = 0;
     branch_values(sl, br, k, 1, &gl, &d, &a, &b);
     branch_values(xc, br, k, 1, &gc, &d, &a, &b);
     branch_values(sh, br, k, 1, &gh, &d, &a, &b);
+    if (sgn(gl) == -ref) n += outward(sl, gl, w, -1, ref, br, k, xs + n);
     if (gl * gc < 0) xs[n++] = bracketed(sl, xc, gl, br, k, 0, 1);
     if (gc * gh < 0) xs[n++] = bracketed(xc, sh, gc, br, k, 0, 1);
+    if (sgn(gh) == -ref) n += outward(sh, gh, w, 1, ref, br, k, xs + n);
     if (!n) xs[n++] = xc;
     return n;
 }
@@ -882,7 +913,7 @@ static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p
                 xs[n++] = bracketed(sl, xc, gl, br, k, 0, 0);
                 xs[n++] = bracketed(xc, sh, gc, br, k, 0, 0);
             } else if (fabs(gc) <= 1e-13 * (1.0 + br->h * br->h) + s_eps_g) {
-                n += tangency(sl, xc, sh, br, k, xs + n);
+                n += tangency(sl, xc, sh, sgn(vals[j]), br, k, xs + n);
             }
         }
     }
@@ -901,24 +932,31 @@ static casadi_real newton_step(casadi_real g, casadi_real dg, casadi_real h, cas
 }
 
 /* Newton (newton_step) on the accurate map from a root of the table (a step that would leave [0, x_end] is
- * clipped; one that does not decrease |f| is not taken; at most 6 evaluations after the first); with quick = 1,
- * once a step is at most POLISH_STEP (the quadratic regime) it is taken without a new evaluation (enumerate._polish);
+ * clipped; one that does not decrease |f| is not taken, but if g changed sign over it and it is at most
+ * POLISH_BRACKET, the root is bracketed there on the accurate map; at most 6 evaluations after the first); with
+ * quick = 1, once a step is at most POLISH_STEP (the quadratic regime) it is taken without a new evaluation
+ * (enumerate._polish);
  * with quick = 0 the steps go on until one is at the rounding level of x: the fallback of a root whose quick polish
  * failed the certificate. */
 static casadi_real polish(casadi_real x, const branch_t *br, casadi_real k, int quick) {
-    casadi_real g, dg, f, f2, a, b, nxt, after;
+    casadi_real gx, g, dg, f, f2, a, b, nxt, after;
     int it;
-    branch_values(x, br, k, 1, &g, &dg, &a, &b);
-    nxt = x - newton_step(g, dg, br->h, &f);
+    branch_values(x, br, k, 1, &gx, &dg, &a, &b);
+    nxt = x - newton_step(gx, dg, br->h, &f);
     for (it = 0; it < (quick ? 6 : 12); ++it) {
         nxt = nxt < 0.0 ? 0.0 : (nxt > br->x_end ? br->x_end : nxt);
         if (!isfinite(nxt)) break;
         if (quick ? fabs(nxt - x) <= POLISH_STEP : fabs(nxt - x) <= 4.0 * REAL_EPS * x) return nxt;
-        branch_values(nxt, br, k, 1, &g, &dg, &a, &b);
         if (!(nxt != x)) break;
+        branch_values(nxt, br, k, 1, &g, &dg, &a, &b);
         after = nxt - newton_step(g, dg, br->h, &f2);
-        if (!(f2 < f)) break;
+        if (!(f2 < f)) {   /* no better: a step across the root brackets it (on the accurate map) */
+            if (gx * g < 0.0 && fabs(nxt - x) <= POLISH_BRACKET)
+                return nxt > x ? bracketed(x, nxt, gx, br, k, 0, 1) : bracketed(nxt, x, g, br, k, 0, 1);
+            break;
+        }
         x = nxt;
+        gx = g;
         f = f2;
         nxt = after;
     }

@@ -57,13 +57,15 @@ the splitting enforces; and the true g differs from the tabulated one by less th
 Every other cell is examined: each sign change of g between the ends and the critical points of H
 is a root (bracketed Newton); where g keeps its sign but H has an extremum, the critical point of g
 is located (bracketed secant on g') and gives two roots (a close pair) or, if ``|g|`` is within the
-floor there, a tangency of the table, which the accurate map decides (:func:`_tangencies`): a sign change
-of the accurate g on either side of it is a root there (a close pair the table's error hid), otherwise it
-is a double root. The roots are then polished by Newton on ``|S| - h`` of the accurate map
-(:func:`newton_step`), and a root the leaf map still misses by more than :data:`NOT_A_ROOT` times the
-certificate's tolerance is none (a tangency of the table only). So every root of (32)-(33) with
-``0 < a, b <= A_MAX``, on every branch, is found: simple roots, close pairs down to what the accurate map
-separates, and tangencies; the certificate (:mod:`.certify`) then accepts or rejects each plan.
+floor there, a tangency of the table, which the accurate map decides (:func:`_tangencies`): a sign change of
+the accurate g on either side of it is a root there (a close pair the table's error hid), and where the
+accurate g already has the other sign at the sub-cell's end, the root beyond it is found outward (doubling
+steps while g keeps moving toward the table's sign); otherwise it is a double root. The roots are then
+polished by Newton on ``|S| - h`` of the accurate map (:func:`newton_step`), and a root the leaf map still
+misses by more than :data:`NOT_A_ROOT` times the certificate's tolerance is none (a tangency of the table
+only). So every root of (32)-(33) with ``0 < a, b <= A_MAX``, on every branch, is found: simple roots, close
+pairs down to what the accurate map separates, and tangencies; the certificate (:mod:`.certify`) then accepts
+or rejects each plan.
 The argument is not interval arithmetic: it rests on the midpoint error estimating the Hermite error
 within SAFETY in resolved cells (and likewise for the table); ``tests/test_enumerate.py`` checks the
 result against independent dense brute forces, for k from 0 to 20.
@@ -99,8 +101,9 @@ from .brackets import target_shift
 from .leafmap import radius_of_root_phase, root_phase, signed_length, turn, turn_dr, turn_inverse, turn_pieces
 
 __all__ = ["K_MONOTONE", "K_ENUMERATED", "K_FAST", "PHASE_STEP", "X_STEP", "SIGMA_STEP", "HERMITE_REL", "SAFETY",
-           "MIN_WIDTH", "TABLE_PHASE", "TABLE_STEP", "TABLE_INV_S", "POLISH_STEP", "NOT_A_ROOT", "Branch", "Root",
-           "branches", "roots", "cache_dir", "rho_table", "table_radii", "RhoTable", "rho_lookup", "newton_step"]
+           "MIN_WIDTH", "TABLE_PHASE", "TABLE_STEP", "TABLE_INV_S", "POLISH_STEP", "POLISH_BRACKET", "NOT_A_ROOT",
+           "Branch", "Root", "branches", "roots", "cache_dir", "rho_table", "table_radii", "RhoTable", "rho_lookup",
+           "newton_step"]
 
 #: Smallest k for which E is strictly decreasing on (0, A_MAX].
 K_MONOTONE = 0.5
@@ -124,6 +127,9 @@ TABLE_INV_S = 0.005
 _TABLE_CHUNK = 512
 #: Newton steps on the accurate map below this are taken without a new evaluation (see :func:`_polish`).
 POLISH_STEP = 1e-8
+#: A polish step across the root brackets it on the accurate map if it is at most this long (in the graph's
+#: parameter; a longer one leaves the neighbourhood of the table's root, where other roots may lie).
+POLISH_BRACKET = 1e-3
 _POLISH_CHUNK = 2048
 #: A polished root whose leaf-map miss exceeds this times the certificate's tolerance is no root (a tangency
 #: of the table only): the leaf map errs by less than 1e-13 per leaf (:mod:`.leafmap`), 2e-10 over the most
@@ -765,7 +771,8 @@ def _examine(gr, act, c, crit, eps_g):
                 found_kind.append(np.ones(own2.size, int))
             tang = ~pair & (np.abs(gc) <= 1e-13 * (1.0 + gr.h2[o[cand]]) + eps_g)
             if tang.any():
-                for part in _tangencies(gr, side_lo[cand][tang], xc[tang], side_hi[cand][tang], o[cand][tang]):
+                for part in _tangencies(gr, side_lo[cand][tang], xc[tang], side_hi[cand][tang], o[cand][tang],
+                                        np.sign(ref[tang])):
                     found_x.append(part[0])
                     found_o.append(part[1])
                     found_kind.append(part[2])
@@ -774,12 +781,36 @@ def _examine(gr, act, c, crit, eps_g):
     return np.concatenate(found_x), np.concatenate(found_o), np.concatenate(found_kind)
 
 
-def _tangencies(gr, lo, xc, hi, own):
-    """Tangencies of the tabulated g at ``xc`` (``|g|`` within the floor, one sign on [lo, hi]) decided on the
-    accurate map: a sign change of the accurate g between lo and xc or between xc and hi is a root there (a
-    close pair the table's error hid; kind 1), bracketed on the accurate map; with none, xc is a double root
-    (kind 2; polished, and no root if the leaf map misses there by more than :data:`NOT_A_ROOT` times the
-    certificate's tolerance). Returns (parameter, graph, kind) arrays, two parts."""
+def _outward(gr, x, gx, w, direction, ref, own):
+    """A root beyond ``x`` (``direction`` +1: to the right, -1: to the left) of graph ``own`` where the accurate g
+    (``gx`` at x) has the sign opposite to ``ref``, the table's: steps doubling from ``w`` until g has ref's sign
+    (the root between the last two points, bracketed on the accurate map) or the graph's end. Each step checks
+    that g still moves toward ref's sign (``direction g'`` of ref's sign: g monotone that way, so one root at
+    most between two points); if not, it stops. The root, or None."""
+    lim = float(gr.hi[own] if direction > 0 else gr.lo[own])
+    o = np.array([own])
+    for _ in range(64):
+        nxt = min(x + w, lim) if direction > 0 else max(x - w, lim)
+        if nxt == x or math.isnan(nxt):
+            return None
+        g, dg = (float(v[0]) for v in gr.accurate(np.array([nxt]), o)[:2])
+        if np.sign(g) == ref or g == 0.0:
+            lo, hi, glo = (x, nxt, gx) if direction > 0 else (nxt, x, g)
+            return float(_bracketed(gr, np.array([lo]), np.array([hi]), np.array([glo]), o, tol=ROOT_TOL,
+                                    accurate=True)[0])
+        if np.sign(dg) * direction != ref:
+            return None
+        x, gx, w = nxt, g, 2.0 * w
+    return None
+
+
+def _tangencies(gr, lo, xc, hi, own, ref):
+    """Tangencies of the tabulated g at ``xc`` (``|g|`` within the floor, of sign ``ref`` on [lo, hi]) decided on
+    the accurate map: a sign change of the accurate g between lo and xc or between xc and hi is a root there (a
+    close pair the table's error hid; kind 1), bracketed on the accurate map; where the accurate g at lo (hi) has
+    the sign opposite to the table's, the root is beyond it (:func:`_outward`; kind 1). With none, xc is a double
+    root (kind 2; polished, and no root if the leaf map misses there by more than :data:`NOT_A_ROOT` times the
+    certificate's tolerance). Returns (parameter, graph, kind) arrays, three parts."""
     gl, gc, gh = (gr.accurate(p, own)[0] for p in (lo, xc, hi))
     left, right = gl * gc < 0, gc * gh < 0
     lo2 = np.concatenate([lo[left], xc[right]])
@@ -787,8 +818,20 @@ def _tangencies(gr, lo, xc, hi, own):
     own2 = np.concatenate([own[left], own[right]])
     g_lo = np.concatenate([gl[left], gc[right]])
     pairs = _bracketed(gr, lo2, hi2, g_lo, own2, tol=ROOT_TOL, accurate=True) if own2.size else np.zeros(0)
-    single = ~(left | right)
-    return ((pairs, own2, np.ones(own2.size, int)), (xc[single], own[single], np.full(int(single.sum()), 2)))
+    beyond_x, beyond_o, found = [], [], left | right
+    for i in np.nonzero((np.sign(gl) == -ref) | (np.sign(gh) == -ref))[0].tolist():   # rare: one at a time
+        w = float(hi[i] - lo[i])
+        for x, g, direction in ((lo[i], gl[i], -1), (hi[i], gh[i], 1)):
+            if np.sign(g) == -ref[i]:
+                root = _outward(gr, float(x), float(g), w, direction, ref[i], int(own[i]))
+                if root is not None:
+                    beyond_x.append(root)
+                    beyond_o.append(int(own[i]))
+                    found[i] = True
+    single = ~found
+    return ((pairs, own2, np.ones(own2.size, int)),
+            (np.array(beyond_x, float), np.array(beyond_o, int), np.ones(len(beyond_x), int)),
+            (xc[single], own[single], np.full(int(single.sum()), 2)))
 
 
 def _accurate(gr, x, own):
@@ -823,17 +866,25 @@ def newton_step(g, dg, h2):
 def _polish(gr, x, own, iters: int = 6):
     """Newton (:func:`newton_step`) on the accurate map from the table's roots, root by root: once a step
     is below :data:`POLISH_STEP` (the quadratic regime) it is taken without a new evaluation; a step that
-    grows |f| ends the root's polish at its best point. Returns (x, a, b): the roots to rounding on the
-    accurate map (a and b moved with the last step by their derivatives)."""
+    does not decrease |f| ends the root's polish at its best point, unless g changed sign over it (a step of at
+    most :data:`POLISH_BRACKET`): then the root is bracketed there on the accurate map. Returns (x, a, b): the
+    roots to rounding on the accurate map (a and b moved with the last step by their derivatives)."""
     x, a, b = x.copy(), np.empty(x.size), np.empty(x.size)
-    best = np.full(x.size, np.inf)
+    best, g_best = np.full(x.size, np.inf), np.zeros(x.size)
     todo, xt = np.arange(x.size), x
     for i in range(iters + 1):
         g, dg, a_, b_, da, db = _accurate(gr, xt, own[todo])
         step, miss = newton_step(g, dg, gr.h2[own[todo]])
         better = miss < best[todo]
+        across = ~better & (g * g_best[todo] < 0.0) & (np.abs(xt - x[todo]) <= POLISH_BRACKET)   # bracket it
+        if across.any():
+            idx = todo[across]
+            lo, hi = np.minimum(x[idx], xt[across]), np.maximum(x[idx], xt[across])
+            g_lo = np.where(x[idx] < xt[across], g_best[idx], g[across])
+            x[idx] = _bracketed(gr, lo, hi, g_lo, own[idx], accurate=True)
+            a[idx], b[idx] = gr.accurate(x[idx], own[idx])[2:4]
         upd = todo[better]
-        x[upd], a[upd], b[upd], best[upd] = xt[better], a_[better], b_[better], miss[better]
+        x[upd], a[upd], b[upd], best[upd], g_best[upd] = xt[better], a_[better], b_[better], miss[better], g[better]
         step = np.where(np.isfinite(step), step, 0.0)
         nxt = _clip(xt - step, gr.lo[own[todo]], gr.hi[own[todo]])
         step = xt - nxt
