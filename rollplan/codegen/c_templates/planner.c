@@ -874,12 +874,13 @@ static int tangency(casadi_real sl, casadi_real xc, casadi_real sh, int ref, con
 }
 
 /* Roots in one resolved cell [x0, x1] (enumerate._examine): sign changes of g between the ends and the
- * critical points of the Hermite cubic H (simple roots), and where g keeps its sign around a point where
- * g' changes sign, the critical point of g: two roots if g changes sign there, a tangency if |g| is
- * within the floor (decided on the accurate map: tangency()). Returns the number of roots written to xs (unsorted). */
+ * critical points of the Hermite cubic H (simple roots; between points where |g| is within the floor floor_g, the
+ * signs of the accurate map), and where g keeps its sign around a point where g' changes sign, the critical point
+ * of g: two roots if g changes sign there, a tangency if |g| is within the floor (decided on the accurate map:
+ * tangency()). Returns the number of roots written to xs (unsorted). */
 static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p0, casadi_real g1, casadi_real p1,
-                   const casadi_real crit[2], const branch_t *br, casadi_real k, casadi_real *xs) {
-    casadi_real w = x1 - x0, pts[4], vals[4], dv[4], lo, mid, hi, sl, sh, dl, dh, xc, gc, gl;
+                   const casadi_real crit[2], const branch_t *br, casadi_real k, casadi_real floor_g, casadi_real *xs) {
+    casadi_real w = x1 - x0, pts[4], vals[4], dv[4], lo, mid, hi, sl, sh, dl, dh, xc, gc, gl, ga, gb, d, a, b;
     int n = 0, j, half;
     pts[0] = x0;
     pts[3] = x1;
@@ -892,7 +893,17 @@ static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p
         vals[j + 1] = gval(pts[j + 1], br, k, &dv[j + 1]);
     }
     for (j = 0; j < 3; ++j) {
-        if (pts[j + 1] > pts[j] && vals[j] * vals[j + 1] < 0) xs[n++] = bracketed(pts[j], pts[j + 1], vals[j], br, k, 0, 0);
+        if (pts[j + 1] > pts[j] && vals[j] * vals[j + 1] < 0) {
+            xs[n++] = bracketed(pts[j], pts[j + 1], vals[j], br, k, 0, 0);
+        } else if (pts[j + 1] > pts[j] && (fabs(vals[j]) <= floor_g || fabs(vals[j + 1]) <= floor_g)) {
+            /* an end whose sign the table cannot tell (|g| within its floor): the accurate map's signs decide
+             * (H is monotone between the points, so one root at most) */
+            ga = vals[j];
+            gb = vals[j + 1];
+            if (fabs(ga) <= floor_g) branch_values(pts[j], br, k, 1, &ga, &d, &a, &b);
+            if (fabs(gb) <= floor_g) branch_values(pts[j + 1], br, k, 1, &gb, &d, &a, &b);
+            if (ga * gb < 0) xs[n++] = bracketed(pts[j], pts[j + 1], ga, br, k, 0, 1);
+        }
         if (vals[j + 1] == 0.0 && pts[j + 1] > 0) xs[n++] = pts[j + 1];
     }
     for (j = 1; j <= 2; ++j) {
@@ -1210,7 +1221,7 @@ static int search_branch(search_t *S, const branch_t *br) {
             }
             if (!(sgn(c.g0) != sgn(c.g1) || sgn(c.g0) != sgn(gm) || crosses || low <= SAFETY * err + floor_g))
                 continue;
-            nroot = examine(c.x0, c.x1, c.g0, c.p0, c.g1, c.p1, crit, br, k, xs);
+            nroot = examine(c.x0, c.x1, c.g0, c.p0, c.g1, c.p1, crit, br, k, floor_g, xs);
             for (i = 1; i < nroot; ++i) {           /* sort (few) */
                 for (j = i; j > 0 && xs[j - 1] > xs[j]; --j) {
                     hv = xs[j];

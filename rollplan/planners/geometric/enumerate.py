@@ -55,7 +55,8 @@ anywhere in the cell is at most SAFETY times its value at the midpoint (where th
 cubic Hermite interpolation peaks), i.e. as long as the cell resolves g's fourth derivative, which
 the splitting enforces; and the true g differs from the tabulated one by less than the floor.
 Every other cell is examined: each sign change of g between the ends and the critical points of H
-is a root (bracketed Newton); where g keeps its sign but H has an extremum, the critical point of g
+is a root (bracketed Newton; between points where ``|g|`` is within the floor, where the table cannot tell
+its sign, the signs of the accurate map decide); where g keeps its sign but H has an extremum, the critical point of g
 is located (bracketed secant on g') and gives two roots (a close pair) or, if ``|g|`` is within the
 floor there, a tangency of the table, which the accurate map decides (:func:`_tangencies`): a sign change of
 the accurate g on either side of it is a root there (a close pair the table's error hid), and where the
@@ -742,6 +743,26 @@ def _examine(gr, act, c, crit, eps_g):
         found_x.append(_bracketed(gr, lo, hi, vals[rows, j], o[rows], x=_clip(start, lo, hi), tol=ROOT_TOL))
         found_o.append(o[rows])
         found_kind.append(np.ones(rows.size, int))
+    # an end whose sign the table cannot tell (|g| within the floor): the accurate map's signs decide (H is
+    # monotone between the points, so one root at most)
+    floor_g = (1e-13 * (1.0 + gr.h2[o]) + eps_g)[:, None]
+    unt = (pts[:, 1:] > pts[:, :3]) & ~sc & ((np.abs(vals[:, :3]) <= floor_g) | (np.abs(vals[:, 1:]) <= floor_g))
+    rows, j = np.nonzero(unt)
+    if rows.size:
+        ends = np.concatenate([j, j + 1])
+        r2 = np.concatenate([rows, rows])
+        g_end = vals[r2, ends].copy()
+        doubt = np.abs(g_end) <= floor_g[r2, 0]
+        if doubt.any():
+            g_end[doubt] = gr.accurate(pts[r2[doubt], ends[doubt]], o[r2[doubt]])[0]
+        ga, gb = g_end[:rows.size], g_end[rows.size:]
+        cross = ga * gb < 0
+        if cross.any():
+            rc, jc = rows[cross], j[cross]
+            found_x.append(_bracketed(gr, pts[rc, jc], pts[rc, jc + 1], ga[cross], o[rc], tol=ROOT_TOL,
+                                      accurate=True))
+            found_o.append(o[rc])
+            found_kind.append(np.ones(rc.size, int))
     rows, j = np.nonzero(vals == 0.0)           # exact zeros at the points
     if rows.size:
         found_x.append(pts[rows, j])
