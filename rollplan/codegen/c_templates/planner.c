@@ -923,7 +923,7 @@ static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p
                 gl = gval(sl, br, k, NULL);
                 xs[n++] = bracketed(sl, xc, gl, br, k, 0, 0);
                 xs[n++] = bracketed(xc, sh, gc, br, k, 0, 0);
-            } else if (fabs(gc) <= 1e-13 * (1.0 + br->h * br->h) + s_eps_g) {
+            } else if (fabs(gc) <= floor_g) {
                 n += tangency(sl, xc, sh, sgn(vals[j]), br, k, xs + n);
             }
         }

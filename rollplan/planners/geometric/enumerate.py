@@ -745,14 +745,15 @@ def _examine(gr, act, c, crit, eps_g):
         found_kind.append(np.ones(rows.size, int))
     # an end whose sign the table cannot tell (|g| within the floor): the accurate map's signs decide (H is
     # monotone between the points, so one root at most)
-    floor_g = (1e-13 * (1.0 + gr.h2[o]) + eps_g)[:, None]
-    unt = (pts[:, 1:] > pts[:, :3]) & ~sc & ((np.abs(vals[:, :3]) <= floor_g) | (np.abs(vals[:, 1:]) <= floor_g))
+    floor_g = 1e-13 * (1.0 + gr.h2[o]) + eps_g
+    unt = (pts[:, 1:] > pts[:, :3]) & ~sc & ((np.abs(vals[:, :3]) <= floor_g[:, None])
+                                              | (np.abs(vals[:, 1:]) <= floor_g[:, None]))
     rows, j = np.nonzero(unt)
     if rows.size:
         ends = np.concatenate([j, j + 1])
         r2 = np.concatenate([rows, rows])
         g_end = vals[r2, ends].copy()
-        doubt = np.abs(g_end) <= floor_g[r2, 0]
+        doubt = np.abs(g_end) <= floor_g[r2]
         if doubt.any():
             g_end[doubt] = gr.accurate(pts[r2[doubt], ends[doubt]], o[r2[doubt]])[0]
         ga, gb = g_end[:rows.size], g_end[rows.size:]
@@ -790,7 +791,7 @@ def _examine(gr, act, c, crit, eps_g):
                 found_x.append(_bracketed(gr, lo2, hi2, g_lo, own2, tol=ROOT_TOL))
                 found_o.append(own2)
                 found_kind.append(np.ones(own2.size, int))
-            tang = ~pair & (np.abs(gc) <= 1e-13 * (1.0 + gr.h2[o[cand]]) + eps_g)
+            tang = ~pair & (np.abs(gc) <= floor_g[cand])
             if tang.any():
                 for part in _tangencies(gr, side_lo[cand][tang], xc[tang], side_hi[cand][tang], o[cand][tang],
                                         np.sign(ref[tang])):
