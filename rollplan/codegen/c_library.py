@@ -88,6 +88,7 @@ from ..planners.geometric import GeometricPhasePlanner, leafmap
 from ..planners.geometric import enumerate as enumerate_
 from ..planners.geometric.enumerate import K_MONOTONE
 from ..problem import K_MAX, MAX_STEPS, Problem
+from ..result import CERTIFICATE_TOLERANCE
 
 __all__ = [
     "DEFAULT_STEPS_PER_LEAF",
@@ -119,7 +120,7 @@ DEFAULT_K_MAX = 5.0
 #: Accuracy the step map must have on ``0 < a, b <= A_MAX``, ``k <= k_max`` for :func:`generate` to accept k_max.
 STEP_MAP_TOL = 1e-10
 #: Tolerance of the on-board certificate: residual + error bound [R and rad] (the project's tolerance).
-CERT_TOL = 1e-9
+CERT_TOL = CERTIFICATE_TOLERANCE
 #: Steps of the RK8 certificate: a panel of width w gets ceil(w (CERT_BASE + max |psi'|) / CERT_DELTA) of them.
 CERT_DELTA = 1.0
 CERT_BASE = 2.0
@@ -611,7 +612,7 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@REAL_TINY@": "DBL_MIN" if real == "double" else "FLT_MIN",
         "@REAL_EPS@": "DBL_EPSILON" if real == "double" else "FLT_EPSILON",
         "@REAL_MAX@": "DBL_MAX" if real == "double" else "FLT_MAX",
-        "@ACCURACY@": "plans are certified to 1e-9." if real == "double" else
+        "@ACCURACY@": f"plans are certified to {CERT_TOL:g}." if real == "double" else
                       f"single precision: plans are certified to {FLOAT_CERT_TOL:g} (R and rad) only.",
         "@CERT_DELTA@": repr(CERT_DELTA),
         "@CERT_BASE@": repr(CERT_BASE),

@@ -67,7 +67,7 @@ from ...core import model
 from ...core.plane import wrap_exact
 from ...errors import InputError, SolverError, check_choice, check_range, check_whole
 from ...problem import Problem, State
-from ...result import Certificate, Measures, SolverStats, Trajectory
+from ...result import CERTIFICATE_TOLERANCE, Certificate, Measures, SolverStats, Trajectory
 from ...robot import Robot
 from ..geometric.composed import as_composed, default_composed_planner
 from .costs import COSTS, N_PAR, Cost
@@ -94,7 +94,7 @@ CONTACT_BOUND = math.radians(75.0)
 #: Default smoothing eps of the path-length integrand [(R/s)^2].
 SMOOTHING = 1e-4
 #: Default largest certified residual of a returned solution (units of R, rad), as for the geometric planner.
-TOLERANCE = 1e-9
+TOLERANCE = CERTIFICATE_TOLERANCE
 #: Target of the Gauss-Newton correction of the controls: largest end-state error.
 CORRECTION_TOL = 1e-12
 #: Least number of intervals: 2N contact rates for the 5 end conditions.

@@ -70,7 +70,7 @@ from ...core import model
 from ...errors import InputError, SolverError, check_range, check_whole
 from ...measures import TimedMotion, measure
 from ...problem import Problem, State
-from ...result import Certificate, SolverStats, Trajectory
+from ...result import CERTIFICATE_TOLERANCE, Certificate, SolverStats, Trajectory
 from ...robot import Robot
 from .costs import N_PAR
 from .transcription import (
@@ -95,7 +95,7 @@ REST_COSTS = {
 }
 
 #: Largest certified residual (units of R, rad; the final rates in rad per horizon) of a returned solution.
-TOLERANCE = 1e-9
+TOLERANCE = CERTIFICATE_TOLERANCE
 #: Target of the Gauss-Newton correction: largest end-condition error of the corrected controls.
 CORRECTION_TOL = 1e-12
 #: Least number of intervals: 2N controls for the 7 end conditions (module docstring).

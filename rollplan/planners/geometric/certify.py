@@ -54,6 +54,7 @@ from ...core.integrate import CvodesIntegrator, rk8_step
 from ...core.rewrite import algebraic
 from ...errors import check_choice
 from ...problem import State
+from ...result import CERTIFICATE_TOLERANCE
 
 __all__ = ["CERTIFIERS", "DEFAULT_CERTIFIER", "MAX_STEPS_PER_LEAF", "REFINE_BELOW", "ROUNDING_FACTOR", "grading",
            "initial_steps", "rounding_allowance", "RK8Certifier", "CvodesCertifier", "certifier"]
@@ -134,7 +135,7 @@ def _eight_pair_function(steps: int, compile: bool) -> ca.Function:
     return compiled_lazy(f"cert_eight_{steps}", lambda: _eight_pair(steps), f"steps={steps}", _SOURCES)
 
 
-def initial_steps(a: float, b: float, k: float, steps: int = 1, tol: float = 1e-9) -> int:
+def initial_steps(a: float, b: float, k: float, steps: int = 1, tol: float = CERTIFICATE_TOLERANCE) -> int:
     """RK steps per leaf to start with: a power of two, at least 16 (doubled on demand).
 
     A speed heuristic only (the estimate decides acceptance): ``max(10 + 14.5 r / s^1.5, 1.45 k r c /
@@ -180,7 +181,7 @@ class RK8Certifier:
     def __init__(self, compile: bool = True) -> None:
         self.compile = bool(compile)
 
-    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = 1e-9,
+    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = CERTIFICATE_TOLERANCE,
                 start: int | None = None):
         """``(final State, estimate, steps per leaf)``: the finer run's final state (u_o, v_o of the end
         point), the bound of its error [R, rad] and its RK steps per leaf; ``start`` overrides the
@@ -231,7 +232,7 @@ class CvodesCertifier:
         u_o, v_o = (float(c) for c in model.contact_coordinates(end))
         return State(*(float(v) for v in xs[-1]), u_o, v_o)
 
-    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = 1e-9):
+    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = CERTIFICATE_TOLERANCE):
         """``(final State, 0.0, 0)``: CVODES gives no error estimate (module docstring)."""
         return self.final(a, b, k, gamma, steps), 0.0, 0
 

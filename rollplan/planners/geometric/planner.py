@@ -80,7 +80,7 @@ from ...errors import (
 )
 from ...problem import Problem, State, arrival_residual, check_k
 from ...progress import report
-from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
+from ...result import CERTIFICATE_TOLERANCE, Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from .brackets import find_brackets, target_shift
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
@@ -95,7 +95,7 @@ __all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_
 log = logging.getLogger(__name__)
 
 #: Default tolerance of the certified residual (units of R and rad).
-TOLERANCE = 1e-9
+TOLERANCE = CERTIFICATE_TOLERANCE
 #: Largest number of branches enumerated together.
 _CHUNK = 64
 #: A polished root farther than this from the enumerated one (in a or b [R]) is not taken (the solver
