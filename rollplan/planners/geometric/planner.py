@@ -129,7 +129,8 @@ class Plan(CertifiedMotion):
     certificate : Certificate
         Independent integration of all n steps (:mod:`.certify`) and its residual.
     stats : SolverStats
-        ``details`` holds ``candidates`` (brackets) and ``solves``.
+        ``details`` holds ``candidates`` (roots polished and certified), ``solves`` (plans certified),
+        ``branches`` (branches searched), ``roots`` and ``search`` (``"compiled"`` or ``"numpy"``).
     alternatives : tuple of Plan
         The other certified solution branches, shortest first (``all_solutions`` only).
     """
