@@ -296,15 +296,16 @@ def _check_samples(args, pieces: int) -> None:
                          f"end of each: give --samples >= {pieces + 1}, or leave it out")
 
 
-def _plan_inputs(args, inputs=(), pieces=None):
+def _plan_inputs(args, inputs=(), samples=True):
     """The checks of ``plan`` and ``route`` before any work: outputs (never one of ``inputs`` or the robot
-    file), samples (for a motion of at most ``pieces`` pieces; default: a plan's), the robot and the timing
-    law's needs; returns ``(k, robot)``."""
+    file), steps, samples (those of a plan; ``route`` checks them once it knows its legs), the robot and the
+    timing law's needs; returns ``(k, robot)``."""
     inputs = [*inputs, args.robot]
     _check_outputs(json=args.json, figure=args.plot, inputs=inputs)
     _check_timing_outputs(args, inputs)
     check_steps(args.steps)
-    _check_samples(args, _most_pieces(args.legs, args.steps) if pieces is None else pieces)
+    if samples:
+        _check_samples(args, _most_pieces(args.legs, args.steps))
     k, robot = _k_or_robot(args)
     return k, _robot_for_duration(args, k, robot)
 
@@ -323,11 +324,11 @@ def _radius_in_use(args, robot) -> float:
 
 def _check_target(args, robot, start=(0.0,) * 5, contact=(0.0, 0.0)) -> None:
     """--to (within reach of the start), --from and --contact before any work, each named in its message."""
-    check_contact(start[3], start[4], "--from")
-    check_contact(contact[0], contact[1], "--contact")
+    check_contact(start[3], start[4], "argument --from: start")
+    check_contact(contact[0], contact[1], "argument --contact: goal")
     radius = _radius_in_use(args, robot)
-    origin = "the start (--from)" if any(start) else "the start"
-    check_reach(State(*start), State(*args.to), radius, "--to", origin)
+    check_reach(State(*start), State(*args.to), radius, "argument --to: goal",
+                "the start (--from)" if any(start) else "the start")
 
 
 def cmd_plan(args) -> int:
@@ -401,9 +402,9 @@ def _write_results(args, p, robot, unit, to_dict, command) -> None:
 
 
 def cmd_route(args) -> int:
+    k, robot = _plan_inputs(args, inputs=[args.waypoints], samples=False)
     waypoints = read_waypoints(args.waypoints)
-    pieces = sum(_most_pieces(args.legs, w.steps or args.steps) for w in waypoints[1:])
-    k, robot = _plan_inputs(args, inputs=[args.waypoints], pieces=pieces)
+    _check_samples(args, sum(_most_pieces(args.legs, w.steps or args.steps) for w in waypoints[1:]))
     radius = _radius_in_use(args, robot)
     geometric.route.check_legs(waypoints, radius, f"waypoints file {show_path(args.waypoints)}: ")
     print(f"rollplan route: {len(waypoints)} waypoints from {args.waypoints}")
