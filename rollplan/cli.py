@@ -854,8 +854,9 @@ def _add_timing_options(parser) -> None:
                                "eights). Without --duration: the law's shortest duration within the robot's limits")
     parser.add_argument("--samples", type=_whole, default=None,
                         help=f"samples of the trajectory in --json and --plot, in all, in [2, {MAX_SAMPLES}], "
-                             "more than the pieces of the motion (default 2000, or 4 n + 3 for n figure eights per "
-                             "leg when more); with --duration or --timing also the least number of time samples (at "
+                             "more than the pieces the motion may have (4 n + 2 for n figure eights per leg, a "
+                             "route the sum over its legs); default 2000, or that + 1 when more; with --duration "
+                             "or --timing also the least number of time samples (at "
                              "least 400 per piece for min-jerk, 3000 for the other laws)")
     parser.add_argument("--timing-plot", metavar="FILE.png",
                         help="with --duration or --timing: rotor rates and torques in time with the robot's limits, "
