@@ -10,6 +10,7 @@ subprocess.
 
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -19,6 +20,8 @@ from conftest import one_line, run
 
 from rollplan.cli import build_parser
 from rollplan.errors import SHOW_WIDTH
+
+import references
 
 ROBOT = ("radius = 0.1\nmass_total = 1.2\nmass_shell = 0.4\nrotor_inertia_axial = 2e-4\n"
          "rotor_inertia_transverse = 1.2e-4\n")
@@ -372,3 +375,35 @@ def test_a_plan_file_duration_is_named_as_the_file_says(tmp_path, capsys):
     code, _, err = cli(tmp_path, "simulate", "bad.json", "--closed-loop")
     assert code == 2 and one_line(err) and "'bad.json'" in err and "duration = -10.0" in err, err
     assert "piece_duration" not in err
+
+
+def test_the_reach_limit_is_refused_in_the_api_before_any_leg():
+    """rollplan.plan and plan_route refuse a goal beyond MAX_DISTANCE with InputError naming it; a route's far
+    leg is refused before its first leg is planned."""
+    import rollplan
+    from rollplan.planners.geometric import plan_route
+    from rollplan.problem import MAX_DISTANCE
+
+    with pytest.raises(rollplan.InputError, match=f"at most {MAX_DISTANCE} R"):
+        rollplan.plan((1e200, 0.0, 0.0), k=2.5)
+    with pytest.raises(rollplan.InputError, match=f"at most {MAX_DISTANCE} R"):
+        rollplan.plan((0.0, 1.0, 0.0), k=2.5, radius=5e-324)
+    calls = []
+    with pytest.raises(rollplan.InputError, match="waypoint 3"):
+        plan_route([(0, 0, 0), (0.5, 0.3, 0.4), (0.5 + MAX_DISTANCE * 1.01, 0.3, 0.4)], k=2.5,
+                   progress=lambda done, total: calls.append(done))
+    assert calls == []
+
+
+@pytest.mark.parametrize("k", [0.0, 2.5, 10.0])
+def test_the_reach_limit_bounds_what_a_figure_eight_does(k):
+    """MAX_DISTANCE rests on: one figure eight moves the contact point on the plane by at most its length
+    4 pi A_MAX (two circles of radius <= A_MAX). Checked on the largest leaves by DOP853 on the printed
+    equations (references.trace); and the limit is 2 MAX_STEPS 4 pi A_MAX + pi, rounded up."""
+    from rollplan.core.curves import A_MAX
+    from rollplan.problem import MAX_DISTANCE, MAX_STEPS
+
+    for a, b in ((A_MAX, A_MAX), (A_MAX, 0.05), (0.3, A_MAX)):
+        x = references.trace(a, b, k)   # gamma turns the shift, not its length
+        assert math.hypot(x[0], x[1]) <= 2 * math.pi * (a + b)
+    assert math.ceil(2 * MAX_STEPS * 4 * math.pi * A_MAX + math.pi) == MAX_DISTANCE
