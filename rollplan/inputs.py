@@ -242,7 +242,7 @@ def _json_int(text: str) -> int:
 def _json_float(text: str) -> float:
     x = float(text)
     if not math.isfinite(x):
-        raise InputError(f"the number {show(text, 30)} is too large for a double")
+        raise InputError(f"the number {show(text)} is too large for a double")
     return x
 
 
@@ -351,7 +351,7 @@ def _check_header(fields, where: str, required) -> list:
         if not name:
             raise InputError(f"{where}: column {i + 1} of the header has no name")
         if name in fields[:i]:
-            raise InputError(f"{where}: column {name!r} appears twice in the header "
+            raise InputError(f"{where}: column {show(name)} appears twice in the header "
                              f"(columns {fields.index(name) + 1} and {i + 1})")
     missing = [c for c in required if c not in fields]
     if missing:

@@ -148,6 +148,7 @@ FILE_CASES = {
         ("w8.csv", "u_a,u_a,psi\n0,0,0\n", "twice"),
         ("w9.csv", "", "empty"),
         ("w10.csv", "u_a,v_a,psi\n0,0,0\n1,0,0,\"x\"y\n", "line 3"),
+        ("w11.csv", f"u_a,v_a,psi,{'c' * 300}\n0,0,0,1\n1,0,0,1\n", "'" + "c" * (SHOW_WIDTH - 4) + "..."),
         ("missing.csv", None, "does not exist"),
     ],
     ("batch", "targets"): [
@@ -156,6 +157,7 @@ FILE_CASES = {
         ("t3.csv", "u_a,v_a,v_a\n0,1,2\n", "twice"),
         ("t4.csv", "", "empty"),
         ("t5.csv", b"u_a,v_a\n0,\xff\n", "UTF-8"),
+        ("t6.csv", f"u_a,v_a,{'c' * 300},{'c' * 300}\n0,1,2,3\n", "'" + "c" * (SHOW_WIDTH - 4) + "..."),
         ("missing.csv", None, "does not exist"),
     ],
     ("plan", "--robot"): [
@@ -167,6 +169,7 @@ FILE_CASES = {
         ("r6.toml", ROBOT.replace("radius = 0.1", "radius = 1e-320"), "radius"),
         ("r7.toml", ROBOT.replace("mass_shell = 0.4", "mass_shell = 2.0"), "mass_shell"),
         ("r8.toml", ROBOT + "max_rotor_rate = nan\n", "max_rotor_rate"),
+        ("r9.toml", ROBOT + f"{'c' * 300} = 1\n", "'" + "c" * (SHOW_WIDTH - 4) + "..."),
     ],
     ("simulate", "plan_file"): [
         ("p1.json", "{", "not valid JSON"),
@@ -275,7 +278,8 @@ def test_a_bad_input_file_is_refused_in_one_line(capsys, folder, command, dest, 
         argv += [dest, name]
     else:
         argv[1] = name
-    _refused(capsys, folder, argv, {needle, name})
+    err = _refused(capsys, folder, argv, {needle, name})
+    assert "c" * SHOW_WIDTH not in err
 
 
 def test_long_values_are_shortened_in_every_message(capsys, folder):
