@@ -23,24 +23,41 @@ from . import (
     threads,  # noqa: F401  (before anything that loads numpy: one BLAS thread per process)
 )
 from .core.curves import A_MAX
-from .errors import InputError, NoPlanError, SolverError, check_finite, check_whole
+from .errors import (
+    SHOW_WIDTH,
+    InputError,
+    NoPlanError,
+    SolverError,
+    check_finite,
+    check_range,
+    check_whole,
+    show,
+    show_limit,
+)
 from .inputs import parse_number, parse_whole, show_path
 from .io import check_figure_path, check_writable, composed_to_dict, route_to_dict, save_figure, tagged, write_json
-from .outputs import WRITE_FAILURES, claim
+from .outputs import WRITE_FAILURES, claim, make_folder
 from .planners import geometric
 from .planners.geometric import as_composed
-from .problem import DEFAULT_K, K_MAX, MAX_STEPS, STATE_NAMES
+from .problem import DEFAULT_K, K_MAX, MAX_STEPS, STATE_NAMES, State, check_contact, check_reach, check_steps
 from .progress import Progress, report, reporting
-from .robot import default_robot, load_robot
+from .robot import ROBOT_KEYS, default_robot, load_robot
 from .version import __version__
 from .waypoints import read_waypoints
 
+#: The limits of ``--radius``: those of a robot file's radius.
+_RADIUS = next(key for key in ROBOT_KEYS if key.name == "radius")
 EXIT_OK, EXIT_SOME_FAILED, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
 #: What a residual is (printed next to every residual and arrival error).
 NORM = "Euclidean norm; lengths in R, angles in rad"
 #: Numbers as argparse should see them: also in exponent form (-1e-3) and -inf/-nan (refused later by the
 #: number check, with a clear message, instead of being taken for an option).
 _NEGATIVE_NUMBER = re.compile(r"^-([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
+
+#: A value argparse echoes in a message, quoted or not, longer than a message shows (:func:`rollplan.errors.show`).
+_QUOTED_LONG = re.compile(r"'([^'\s]{%d,})'" % SHOW_WIDTH)
+_BARE_LONG = re.compile(r"(?<![\S])[^\s']{%d,}" % (SHOW_WIDTH + 1))
 
 
 class _Parser(argparse.ArgumentParser):
@@ -73,6 +90,8 @@ class _Parser(argparse.ArgumentParser):
         return super().format_usage()
 
     def error(self, message):
+        message = _QUOTED_LONG.sub(lambda m: show(m.group(1)), message)   # argparse echoes values in full
+        message = _BARE_LONG.sub(lambda m: m.group(0)[:SHOW_WIDTH - 3] + "...", message)
         self.exit(EXIT_INPUT, f"{self.prog}: error: {message} (see: {self.prog} --help)\n")
 
 
@@ -81,6 +100,14 @@ def _number(text: str) -> float:
         return parse_number(text, "value")
     except InputError as exc:
         raise argparse.ArgumentTypeError(str(exc).removeprefix("value = ")) from None
+
+
+def _radius(text: str) -> float:
+    """``--radius``: a number within the limits of a robot file's ``radius`` (:data:`rollplan.robot.ROBOT_KEYS`)."""
+    try:
+        return parse_number(text, "radius", _RADIUS.low, _RADIUS.high)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(f"{exc} {_RADIUS.unit}") from None
 
 
 def _whole(text: str) -> int:
@@ -244,15 +271,41 @@ def _robot_for_duration(args, k, robot):
     return robot
 
 
-def _plan_inputs(args, inputs=()):
-    """The checks of ``plan`` and ``route`` before any work: outputs (never one of ``inputs`` or the robot
-    file), samples, the robot and the timing law's needs; returns ``(k, robot)``."""
-    from .execution.actuation import MAX_SAMPLES
+def _most_pieces(legs: str, steps: int) -> int:
+    """The most pieces of a plan of ``steps`` figure eights per leg: two legs of two leaves per figure eight
+    (one leg with ``--legs one``), and the rolls to and from the pole."""
+    return (2 if legs == "one" else 4) * steps + 2
 
+
+def _check_samples(args, pieces: int) -> None:
+    """``--samples`` before any work: within [2, MAX_SAMPLES] and, with --json or --plot (the path sampled at
+    the end of each piece), more than the ``pieces`` the plan may have; by default 2000, or pieces + 1."""
+    from .execution.actuation import DEFAULT_SAMPLES, MAX_SAMPLES
+
+    sampled = bool(args.json or args.plot)
+    if args.samples is None:
+        args.samples = max(DEFAULT_SAMPLES, pieces + 1) if sampled else DEFAULT_SAMPLES
+        if args.samples > MAX_SAMPLES:
+            raise InputError(f"--json and --plot sample the end of each of the up to {pieces} pieces of this "
+                             f"motion: more than the {MAX_SAMPLES} samples allowed; plan fewer steps or legs")
+        return
+    check_whole("samples", args.samples, 2, MAX_SAMPLES)
+    if sampled and args.samples < pieces + 1:
+        raise InputError(f"--samples {args.samples} is not allowed with --steps {args.steps}: the motion may have "
+                         f"up to {pieces} pieces (figure-eight leaves and rolls), and --json and --plot sample the "
+                         f"end of each: give --samples >= {pieces + 1}, or leave it out")
+
+
+def _plan_inputs(args, inputs=(), samples=True):
+    """The checks of ``plan`` and ``route`` before any work: outputs (never one of ``inputs`` or the robot
+    file), steps, samples (those of a plan; ``route`` checks them once it knows its legs), the robot and the
+    timing law's needs; returns ``(k, robot)``."""
     inputs = [*inputs, args.robot]
     _check_outputs(json=args.json, figure=args.plot, inputs=inputs)
     _check_timing_outputs(args, inputs)
-    check_whole("samples", args.samples, 2, MAX_SAMPLES)
+    check_steps(args.steps)
+    if samples:
+        _check_samples(args, _most_pieces(args.legs, args.steps))
     k, robot = _k_or_robot(args)
     return k, _robot_for_duration(args, k, robot)
 
@@ -264,8 +317,23 @@ def _stage(args, command: str, name: str) -> None:
     report(command, stages.index(name), len(stages) - 1, stage=name)
 
 
+def _radius_in_use(args, robot) -> float:
+    """The sphere's radius in the length unit of the command: --radius, else the robot's, else 1 (R)."""
+    return args.radius if args.radius is not None else (robot.radius if robot is not None else 1.0)
+
+
+def _check_target(args, robot, start=(0.0,) * 5, contact=(0.0, 0.0)) -> None:
+    """--to (within reach of the start), --from and --contact before any work, each named in its message."""
+    check_contact(start[3], start[4], "argument --from: start")
+    check_contact(contact[0], contact[1], "argument --contact: goal")
+    radius = _radius_in_use(args, robot)
+    check_reach(State(*start), State(*args.to), radius, "argument --to: goal",
+                "the start (--from)" if any(start) else "the start")
+
+
 def cmd_plan(args) -> int:
     k, robot = _plan_inputs(args)
+    _check_target(args, robot, args.start, args.contact)
     goal = (args.to[0], args.to[1], args.psi, args.contact[0], args.contact[1])
     _stage(args, "plan", "planning")
     p = geometric.plan(goal, args.steps, k, robot, args.radius, args.all, args.method, branch=args.branch,
@@ -334,8 +402,11 @@ def _write_results(args, p, robot, unit, to_dict, command) -> None:
 
 
 def cmd_route(args) -> int:
-    k, robot = _plan_inputs(args, inputs=[args.waypoints])
+    k, robot = _plan_inputs(args, inputs=[args.waypoints], samples=False)
     waypoints = read_waypoints(args.waypoints)
+    _check_samples(args, sum(_most_pieces(args.legs, w.steps or args.steps) for w in waypoints[1:]))
+    radius = _radius_in_use(args, robot)
+    geometric.route.check_legs(waypoints, radius, f"waypoints file {show_path(args.waypoints)}: ")
     print(f"rollplan route: {len(waypoints)} waypoints from {args.waypoints}")
     r = geometric.plan_route(waypoints, args.steps, k, robot, args.radius, args.legs, args.method,
                              progress=lambda done, total: report("route", done, total, stage="legs"))
@@ -408,6 +479,7 @@ def cmd_reproduce(args) -> int:
     from .studies.paper import reproduce
 
     t0 = time.perf_counter()
+    make_folder(args.out, parents=True)   # a folder that cannot be made is refused before the first line
     print(f"rollplan reproduce: Section III.C of the paper into {args.out}", file=sys.stderr)
     with Progress() as progress:
         result = reproduce(args.out, progress=progress)
@@ -427,10 +499,10 @@ def _file_plan(rp, name):
         raise InputError("closed-loop execution of a route is not supported: give a plan file of 'rollplan plan'")
     try:
         steps = check_whole("steps", data.get("steps"), 1)
-        duration = check_finite("duration", data.get("duration"))
+        duration = check_range("duration", data.get("duration"), 0.0, None, low_open=True)
     except InputError as exc:
-        raise InputError(f"plan file {str(name)!r}: {exc} (make it with: rollplan plan ... --duration T --json FILE)") \
-            from None
+        raise InputError(f"plan file {show_path(name)}: {exc} (make it with: rollplan plan ... --duration T "
+                         "--json FILE)") from None
     p = geometric.plan(rp.goal, steps, robot=rp.robot, start=rp.start)
     return p, duration / len(as_composed(p).pieces)
 
@@ -441,7 +513,7 @@ def _noise(args):
     sigma = check_finite("--noise", args.noise)
     if sigma < 0 or sigma > 0.1:
         raise InputError(f"--noise {args.noise!r} is not allowed: it must lie in [0, 0.1] (R and rad per sample)")
-    seed = check_whole("--seed", args.seed, 0, 2**63 - 1)
+    seed = check_whole("seed", args.seed, 0, 2**63 - 1)
     return (disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=seed),) if sigma > 0 else ()
 
 
@@ -490,8 +562,10 @@ def cmd_simulate(args) -> int:
     from .io import load_rotor_plan
 
     _check_outputs(json=args.json, figure=args.plot, inputs=[args.plan_file, args.robot])
+    _noise(args)   # the options before the files
+    other = load_robot(args.robot) if args.robot else None
     rp = load_rotor_plan(args.plan_file)
-    robot = load_robot(args.robot) if args.robot else rp.robot
+    robot = other or rp.robot
     if args.closed_loop or args.plant != "rates" or args.noise:
         return _simulate_executed(args, rp, robot)
     sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
@@ -552,6 +626,7 @@ def cmd_compare(args) -> int:
 
     _check_outputs(json=args.json, figure=args.plot, inputs=[args.robot])
     k, robot = _k_or_robot(args)
+    _check_target(args, robot)
     c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
                            args.cost, args.intervals, args.degree, args.scheme, args.contact_bound, args.branches)
     p, r, prob = c.plan, c.result, c.problem
@@ -615,9 +690,10 @@ def _add_robot_options(parser, k_help=_K_HELP) -> None:
     g = parser.add_mutually_exclusive_group()
     g.add_argument("--k", type=_number, default=None, help=k_help)
     g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
-    parser.add_argument("--radius", type=_number, default=None,
-                        help="sphere radius R > 0 [m]; lengths are then in metres (default: lengths in units of R, "
-                             "or the robot's radius)")
+    parser.add_argument("--radius", type=_radius, default=None,
+                        help=f"sphere radius R [m] in [{show_limit(_RADIUS.low)}, {show_limit(_RADIUS.high)}] (as "
+                             "in a robot file); lengths are then in metres (default: lengths in units of R, or the "
+                             "robot's radius)")
 
 
 def _add_compare_parser(sub) -> None:
@@ -776,9 +852,11 @@ def _add_timing_options(parser) -> None:
                         help="timing law: " + "; ".join(f"{n}: {law.summary}" for n, law in LAWS.items())
                              + ". Every law rests at the corners of the contact path (where a roll meets the figure "
                                "eights). Without --duration: the law's shortest duration within the robot's limits")
-    parser.add_argument("--samples", type=_whole, default=2000,
-                        help=f"samples of the trajectory in --json and --plot, in all, in [2, {MAX_SAMPLES}] "
-                             "(default 2000); with --duration or --timing also the least number of time samples (at "
+    parser.add_argument("--samples", type=_whole, default=None,
+                        help=f"samples of the trajectory in --json and --plot, in all, in [2, {MAX_SAMPLES}], "
+                             "more than the pieces the motion may have (4 n + 2 for n figure eights per leg, a "
+                             "route the sum over its legs); default 2000, or that + 1 when more; with --duration "
+                             "or --timing also the least number of time samples (at "
                              "least 400 per piece for min-jerk, 3000 for the other laws)")
     parser.add_argument("--timing-plot", metavar="FILE.png",
                         help="with --duration or --timing: rotor rates and torques in time with the robot's limits, "
@@ -805,7 +883,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="figure eights: one leg, with a turn in place or two legs only where one leg has no plan "
                         "(fallback, default); also search two legs and keep the shorter (shortest); one; two")
     p.add_argument("--all", action="store_true", help="also list every other verified solution branch (one leg)")
-    p.add_argument("--branch", type=int, default=None, metavar="M",
+    p.add_argument("--branch", type=_whole, default=None, metavar="M",
                    help="only branch M of n eta = psi + 2 pi M (one leg of figure eights)")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     p.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the plan"))
@@ -924,6 +1002,12 @@ def _atlas_arguments(t) -> None:
 _API_OPTION = re.compile(r"\b([a-z][a-z_]*)=(?:'([^']*)'|True\b)")
 
 
+#: ``name = value`` at the start of a message of the API: the value of the option --name (``steps per leaf``
+#: for --steps-per-leaf), when the command has that option and it was given: the message names the option.
+_API_NAME = re.compile(r"^([a-z](?:[a-z_ ]*[a-z])?) = ")
+_NOT_OPTIONS = ("command", "func", "stdout", "waypoints", "targets", "plan_file")
+
+
 def _cli_syntax(message: str, args) -> str:
     """A message of the API with its option hints in command-line syntax (``guess='warm'`` -> ``--guess warm``),
     for the options the command has."""
@@ -933,7 +1017,13 @@ def _cli_syntax(message: str, args) -> str:
         flag = "--" + m.group(1).replace("_", "-")
         return flag if m.group(2) is None else f"{flag} {m.group(2)}"
 
-    return _API_OPTION.sub(sub, message)
+    def option(m):   # "k = 200.0 is not allowed" -> "argument --k: k = 200.0 is not allowed" (as argparse says it)
+        dest = m.group(1).replace(" ", "_")
+        if dest in _NOT_OPTIONS or getattr(args, dest, None) is None:
+            return m.group(0)
+        return f"argument --{dest.replace('_', '-')}: {m.group(0)}"
+
+    return _API_OPTION.sub(sub, _API_NAME.sub(option, message, count=1))
 
 
 def _drop_stdout() -> None:
