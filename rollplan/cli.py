@@ -445,17 +445,19 @@ def _noise(args):
     return (disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=seed),) if sigma > 0 else ()
 
 
-def _simulate_executed(args, rp, robot) -> int:
-    """``rollplan simulate --closed-loop`` and ``--plant torques``: open and closed loop on the chosen plant."""
+def _simulate_executed(args, rp, robot, plant=None, **engine) -> int:
+    """``rollplan simulate --closed-loop`` and ``--plant torques``: open and closed loop on the chosen plant
+    (``plant``, default ``--plant``; ``engine``: more arguments of the execution, e.g. the MuJoCo model)."""
     from .execution.feedback import execute
 
+    plant = plant or args.plant
     dist = _noise(args)
     plan, piece = _file_plan(rp, args.plan_file)
-    runs = [execute(plan, rp.robot, robot, piece, plant=args.plant, closed_loop=closed, disturbances=dist,
-                    progress=report) for closed in (False, True)[:1 + bool(args.closed_loop)]]
+    runs = [execute(plan, rp.robot, robot, piece, plant=plant, closed_loop=closed, disturbances=dist,
+                    progress=report, **engine) for closed in (False, True)[:1 + bool(args.closed_loop)]]
     opened, run = runs[0], runs[-1]
     f, g, e = run.final, rp.goal, run.error
-    print(f"rollplan simulate: {args.plant} plant, {'closed' if args.closed_loop else 'open'} loop, "
+    print(f"rollplan simulate: {plant} plant, {'closed' if args.closed_loop else 'open'} loop, "
           f"{plan.steps} figure eights of {_g(2 * piece)} s (min-jerk per piece), robot k = {_g(robot.k)} "
           f"(planned k = {_g(rp.robot.k)}){', measurement noise ' + _g(args.noise) if dist else ''}")
     print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
@@ -535,9 +537,6 @@ def _simulate_mujoco(args, rp, robot) -> int:
     from .execution import mujoco_engine as engine
     from .inputs import read_text
 
-    if args.closed_loop or args.noise:
-        raise InputError("--closed-loop and --noise are not available with --engine mujoco (it replays the plan's "
-                         "torques open loop)")
     gain = 0.0 if args.servo is None else check_finite("--servo", args.servo)
     if not 0.0 <= gain <= 1e3:
         raise InputError(f"--servo {args.servo!r} is not allowed: the rate loop's gain must lie in [0, 1000] N m s/rad")
@@ -550,6 +549,8 @@ def _simulate_mujoco(args, rp, robot) -> int:
                              f"{robot.radius:g} m (the plan's lengths are on that sphere)")
     else:
         model = engine.compile_model(engine.mjcf(robot))
+    if args.closed_loop or args.noise:
+        return _simulate_executed(args, rp, robot, "mujoco", mujoco_model=model, servo_gain=gain)
     where = f"plan file {show_path(args.plan_file)}"
     if "rotor_torques" not in rp.data:
         raise InputError(f"{where} has no key 'rotor_torques' (make it with: rollplan plan ... --duration T --json "
@@ -960,7 +961,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "maybe edited) instead of the robot's own with the default settings")
     m.add_argument("--servo", type=_number, default=None, metavar="GAIN",
                    help="with --engine mujoco: add a rotor-rate loop around the planned rates, gain in [0, 1000] "
-                        "N m s/rad (default none: torques alone)")
+                        "N m s/rad (default none: torques alone); --closed-loop and --noise also work with "
+                        "--engine mujoco (the state measured from MuJoCo's pose)")
     m.set_defaults(func=cmd_simulate)
 
     j = sub.add_parser("mjcf", help="write the robot's MuJoCo model (MJCF): shell, two rotors, torque motors, floor")

@@ -288,7 +288,7 @@ def test_simulate_engine_mujoco_reports_arrival_slip_penetration(plans, capsys):
 
 @needs_mujoco
 @pytest.mark.parametrize("argv, needle", [
-    (["--engine", "mujoco", "--closed-loop"], "--closed-loop"),
+    (["--engine", "mujoco", "--closed-loop", "--noise", "1"], "--noise"),
     (["--engine", "mujoco", "--servo", "-1"], "--servo"),
     (["--servo", "1"], "--engine mujoco"),
 ])
@@ -306,3 +306,27 @@ def test_simulate_mujoco_refuses_a_model_file_without_the_rotors(plans, tmp_path
                    "</body></worldbody></mujoco>")
     code, _, err = run(capsys, "simulate", str(plan_file("min-jerk")), "--engine", "mujoco", "--mjcf", str(bad))
     assert code == 2 and one_line(err) and "rotor1" in err, err
+
+
+@needs_mujoco
+@pytest.mark.slow
+def test_closed_loop_on_mujoco_estimates_the_real_robot_and_arrives(tmp_path, capsys):
+    real = {"radius": 0.1, "mass_total": 1.266, "mass_shell": 0.4, "rotor_inertia_axial": 2.15e-4,
+            "rotor_inertia_transverse": 1.29e-4}
+    (tmp_path / "real.toml").write_text("".join(f"{k} = {v!r}\n" for k, v in real.items()))
+    plan, out = tmp_path / "plan.json", tmp_path / "out.json"
+    code, _, err = run(capsys, "plan", "--to", "0.02", "0.025", "--psi", "0.8", "--steps", "2", "--duration", "10",
+                       "--json", str(plan))
+    assert code == 0, err
+    code, text, err = run(capsys, "simulate", str(plan), "--robot", str(tmp_path / "real.toml"), "--engine", "mujoco",
+                          "--closed-loop", "--json", str(out))
+    assert code == 0, err
+    res = json.loads(out.read_text())
+    k_real = references.inertia_ratio(*(real[k] for k in ("radius", "mass_total", "mass_shell",
+                                                          "rotor_inertia_axial", "rotor_inertia_transverse")))
+    assert res["plant"] == "mujoco" and res["estimates"][-1]["k"] == pytest.approx(k_real, rel=1e-4)
+    goal = json.loads(plan.read_text())["goal"]
+    final = res["final"]
+    names = ("u_a", "v_a", "psi", "u_o", "v_o")
+    assert distance([final[k] for k in names], [goal[k] for k in names], 0.1) == pytest.approx(res["arrival_error"])
+    assert res["arrival_error"] < 1e-3 and res["open_loop_arrival_error"] > 1e-2

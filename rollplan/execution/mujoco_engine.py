@@ -34,7 +34,7 @@ from ..robot import Robot
 from .poses import pose_of_state, rotation_from_quaternion, state_from_pose
 
 __all__ = ["INSTALL_HINT", "require", "Settings", "DEFAULT_SETTINGS", "mjcf", "compile_model", "radius_of",
-           "composite_inertia", "step_means", "Replay", "replay", "torque_samples", "SETTLE_TIME"]
+           "composite_inertia", "step_means", "Replay", "Session", "replay", "torque_samples", "SETTLE_TIME"]
 
 #: What to do when MuJoCo is missing.
 INSTALL_HINT = "MuJoCo is not installed: install rollplan[mujoco] (pip install 'rollplan[mujoco]')"
@@ -285,8 +285,7 @@ class Replay:
         Distance slid at the contact [m]: the integral of the horizontal speed of the shell's material point at
         the contact.
     max_penetration : float
-        Largest depth of the sphere in the floor, R minus the centre's height [m] (after settling, which is
-        included).
+        Largest depth of the sphere in the floor, R minus the centre's height [m] (settling included).
     final_rotor_rates : (2,) [rad/s]; final_speed : float, the centre's speed at the end [m/s]
     steps : int; timestep : float [s]
     """
@@ -315,6 +314,104 @@ class Replay:
                 "steps": self.steps, "timestep": self.timestep}
 
 
+class Session:
+    """A MuJoCo model run piece after piece: the state carries over from one :meth:`advance` to the next.
+
+    Created at rest in ``start`` (default zero state), settled on the floor for ``settle`` s with the motors off.
+    ``slip`` [m] and ``max_penetration`` [m] accumulate over everything run (:class:`Replay`).
+    """
+
+    def __init__(self, model, start=None, settle: float = SETTLE_TIME):
+        self.mujoco = require()
+        self.model = model
+        self.radius = radius_of(model)
+        self.step_max = float(model.opt.timestep)
+        self.start = State.of(np.zeros(5) if start is None else start, "start").array()
+        self.data = self.mujoco.MjData(model)
+        xy, rot = pose_of_state(self.start)
+        quat = np.zeros(4)
+        self.mujoco.mju_mat2Quat(quat, rot[0].ravel())
+        self.data.qpos[0:3] = [xy[0, 0], xy[0, 1], self.radius]
+        self.data.qpos[3:7] = quat
+        self.max_penetration, self.slip, self.steps = 0.0, 0.0, 0
+        for _ in range(int(math.ceil(settle / self.step_max))):
+            self.mujoco.mj_step(model, self.data)
+            self.max_penetration = max(self.max_penetration, self.radius - float(self.data.qpos[2]))
+        self.psi = float(self.start[2])   # psi continues from the start's turn (unwrapped)
+
+    def advance(self, time, torques, rates=None, servo_gain: float = 0.0, noise=None) -> dict:
+        """Apply the torque samples over ``[time[0], time[-1]]`` (:func:`replay`); the steps' records.
+
+        ``noise`` (N, 2) [N m], optional: added to the torque samples. Returns a dict of arrays at the step
+        edges: ``t`` (S + 1,), ``state`` (S + 1, 5) (psi unwrapped), ``omega`` (plane frame), ``rotor_rates``,
+        ``rotor_angles``, and ``torque`` (S, 2), the torque applied during each step.
+        """
+        mujoco, model, data = self.mujoco, self.model, self.data
+        t, tau = torque_samples(time, torques, "torque samples")
+        if noise is not None:
+            tau = tau + np.asarray(noise, float)
+        servo_gain = check_range("servo gain", servo_gain, 0.0, 1e6)
+        if servo_gain > 0 and rates is None:
+            raise InputError("a servo gain > 0 needs the planned rotor rates")
+        span = float(t[-1] - t[0])
+        n = max(1, int(math.ceil(span / self.step_max - 1e-9)))
+        model.opt.timestep = span / n
+        edges = t[0] + span * np.arange(n + 1) / n
+        edges[-1] = t[-1]
+        ctrl = step_means(t, tau, edges)
+        ref = step_means(t, np.asarray(rates, float), edges) if servo_gain > 0 else None
+        applied = np.empty((n, 2))
+        qpos, qvel = np.empty((n + 1, 9)), np.empty((n + 1, 8))
+        qpos[0], qvel[0] = data.qpos[:9], data.qvel[:8]
+        every = max(1, n // 100)
+        for i in range(n):
+            applied[i] = ctrl[i] if ref is None else ctrl[i] + servo_gain * (ref[i] - data.qvel[6:8])
+            data.ctrl[:2] = applied[i]
+            mujoco.mj_step(model, data)
+            qpos[i + 1], qvel[i + 1] = data.qpos[:9], data.qvel[:8]
+            if (i + 1) % every == 0:
+                report("MuJoCo replay", i + 1, n)
+        model.opt.timestep = self.step_max
+        rotation = rotation_from_quaternion(qpos[:, 3:7])
+        states = state_from_pose(qpos[:, 0:2], rotation)
+        states[:, 2] = np.unwrap(states[:, 2])
+        states[:, 2] += 2 * np.pi * np.round((self.psi - states[0, 2]) / (2 * np.pi))
+        self.psi = float(states[-1, 2])
+        omega = np.einsum("nij,nj->ni", rotation, qvel[:, 3:6])          # the free joint's angular velocity is local
+        z = qpos[:, 2]
+        slip_speed = np.hypot(qvel[:, 0] - omega[:, 1] * z, qvel[:, 1] + omega[:, 0] * z)
+        self.slip += float(np.sum(0.5 * (slip_speed[1:] + slip_speed[:-1]) * np.diff(edges)))
+        self.max_penetration = max(self.max_penetration, float(np.max(self.radius - z)))
+        self.steps += n
+        return {"t": edges, "state": states, "omega": omega, "rotor_rates": qvel[:, 6:8], "rotor_angles": qpos[:, 7:9],
+                "torque": applied, "speed": float(np.linalg.norm(qvel[-1, 0:3])), "timestep": span / n}
+
+    def run(self, robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0), disturbances=(),
+            segment: int = 0, breaks=(), commanded_p0=None, servo_gain: float = 0.0, reference_rates=None):
+        """:func:`rollplan.execution.plants.run_torques` on MuJoCo (the closed loop's plant ``"mujoco"``).
+
+        The state continues from the previous run (``x0``, ``p0``, ``phi0`` are the controller's record of it);
+        ``robot`` is the real robot of the model (for the rotors' momenta). ``breaks`` are not needed: the
+        samples are interpolated linearly. Disturbances: ``measurement``, ``torque_noise``.
+        """
+        from .plants import PlantRun, by_name, measure, rotor_momenta
+
+        d = by_name(disturbances, "mujoco")
+        t = np.asarray(t, float)
+        noise = d["torque_noise"].draw(t.size, segment) if "torque_noise" in d else None
+        rec = self.advance(t, torques, reference_rates, servo_gain, noise)
+        at = lambda a: np.column_stack([np.interp(t, rec["t"], a[:, j]) for j in range(a.shape[1])])  # noqa: E731
+        state, omega, rates = at(rec["state"]), at(rec["omega"]), at(rec["rotor_rates"])
+        angles = np.asarray(phi0, float) + at(rec["rotor_angles"] - rec["rotor_angles"][0])
+        momenta = rotor_momenta(robot, state, omega, rates)
+        commanded = at(np.vstack([rec["torque"], rec["torque"][-1:]]))   # the step-held torques at the samples
+        impulse = np.vstack([np.zeros((1, 2)), np.cumsum(rec["torque"] * np.diff(rec["t"])[:, None], axis=0)])
+        start_p = np.asarray(p0 if commanded_p0 is None else commanded_p0, float)
+        cmd_p = start_p + at(impulse)
+        return PlantRun("mujoco", t, state, measure(state, d, robot.radius, segment), omega, rates, angles, momenta,
+                        commanded, cmd_p)
+
+
 def replay(model, time, torques, start=None, goal=None, rates=None, servo_gain: float = 0.0,
            settle: float = SETTLE_TIME) -> Replay:
     """Drive the compiled ``model`` (:func:`compile_model`) by the torque samples ``(time, torques)``.
@@ -322,8 +419,7 @@ def replay(model, time, torques, start=None, goal=None, rates=None, servo_gain: 
     Parameters
     ----------
     model : mujoco.MjModel
-        Its timestep is the largest step; it is shortened so that whole steps span ``time`` (the model's
-        option is changed).
+        Its timestep is the largest step; the replay shortens it so that whole steps span ``time``.
     time, torques : (N,), (N, 2)
         Motor torque samples [s, N m] (:func:`torque_samples`), interpolated linearly; each step applies the
         interpolant's mean over the step.
@@ -336,52 +432,16 @@ def replay(model, time, torques, start=None, goal=None, rates=None, servo_gain: 
     servo_gain : float
         Gain K >= 0 [N m s/rad]: each step adds ``K (rate reference - hinge rate)`` to the torque.
     """
-    mujoco = require()
-    t, tau = torque_samples(time, torques, "torque samples")
-    servo_gain = check_range("servo gain", servo_gain, 0.0, 1e6)
-    if servo_gain > 0 and rates is None:
-        raise InputError("a servo gain > 0 needs the planned rotor rates")
-    R = radius_of(model)
-    x0 = State.of(np.zeros(5) if start is None else start, "start").array()
-    data = mujoco.MjData(model)
-    xy, rot = pose_of_state(x0)
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, rot[0].ravel())
-    data.qpos[0:3] = [xy[0, 0], xy[0, 1], R]
-    data.qpos[3:7] = quat
-    step_max = float(model.opt.timestep)
-    for _ in range(int(math.ceil(settle / step_max))):
-        mujoco.mj_step(model, data)
-    span = float(t[-1] - t[0])
-    n = max(1, int(math.ceil(span / step_max - 1e-9)))
-    model.opt.timestep = span / n
-    edges = t[0] + span * np.arange(n + 1) / n
-    edges[-1] = t[-1]
-    ctrl = step_means(t, tau, edges)
-    ref = step_means(t, np.asarray(rates, float), edges) if servo_gain > 0 else None
-    qpos, qvel = np.empty((n + 1, 9)), np.empty((n + 1, 8))
-    qpos[0], qvel[0] = data.qpos[:9], data.qvel[:8]
-    every = max(1, n // 100)
-    for i in range(n):
-        data.ctrl[:2] = ctrl[i] if ref is None else ctrl[i] + servo_gain * (ref[i] - data.qvel[6:8])
-        mujoco.mj_step(model, data)
-        qpos[i + 1], qvel[i + 1] = data.qpos[:9], data.qvel[:8]
-        if (i + 1) % every == 0:
-            report("MuJoCo replay", i + 1, n)
-    rotation = rotation_from_quaternion(qpos[:, 3:7])
-    states = state_from_pose(qpos[:, 0:2], rotation)
-    states[:, 2] = np.unwrap(states[:, 2])
-    states[:, 2] += 2 * np.pi * np.round((x0[2] - states[0, 2]) / (2 * np.pi))   # psi continues from the start's
-    omega = np.einsum("nij,nj->ni", rotation, qvel[:, 3:6])          # the free joint's angular velocity is local
-    z = qpos[:, 2]
-    slip_speed = np.hypot(qvel[:, 0] - omega[:, 1] * z, qvel[:, 1] + omega[:, 0] * z)
-    slip = float(np.sum(0.5 * (slip_speed[1:] + slip_speed[:-1]) * np.diff(edges)))
-    out = np.column_stack([np.interp(t, edges, states[:, j]) for j in range(5)])
-    out_rates = np.column_stack([np.interp(t, edges, qvel[:, 6 + j]) for j in range(2)])
-    final = State(*(float(v) for v in states[-1]))
+    t, _ = torque_samples(time, torques, "torque samples")
+    session = Session(model, start, settle)
+    rec = session.advance(t, torques, rates, servo_gain)
+    R = session.radius
+    at = lambda a: np.column_stack([np.interp(t, rec["t"], a[:, j]) for j in range(a.shape[1])])  # noqa: E731
+    final = State(*(float(v) for v in rec["state"][-1]))
     err = arr = pos = None
     if goal is not None:
         err = arrival_error(final, State.of(goal, "goal"), R)
         arr, pos = float(np.linalg.norm(err)), float(np.hypot(err[0], err[1]))
-    return Replay(t, out, out_rates, final, err, arr, pos, slip, float(np.max(R - z)), qvel[-1, 6:8].copy(),
-                  float(np.linalg.norm(qvel[-1, 0:3])), n, span / n)
+    return Replay(t, at(rec["state"]), at(rec["rotor_rates"]), final, err, arr, pos, session.slip,
+                  session.max_penetration, rec["rotor_rates"][-1].copy(), rec["speed"], session.steps,
+                  rec["timestep"])
