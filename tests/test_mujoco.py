@@ -330,3 +330,13 @@ def test_closed_loop_on_mujoco_estimates_the_real_robot_and_arrives(tmp_path, ca
     names = ("u_a", "v_a", "psi", "u_o", "v_o")
     assert distance([final[k] for k in names], [goal[k] for k in names], 0.1) == pytest.approx(res["arrival_error"])
     assert res["arrival_error"] < 1e-3 and res["open_loop_arrival_error"] > 1e-2
+
+
+@needs_mujoco
+def test_simulate_mujoco_refuses_a_replay_longer_than_max_steps(tmp_path, capsys):
+    plan = tmp_path / "long.json"
+    code, _, err = run(capsys, "plan", "--to", "0", "0.1", "--duration", str(1.5e-4 * engine.MAX_STEPS), "--json",
+                       str(plan))
+    assert code == 0, err
+    code, _, err = run(capsys, "simulate", str(plan), "--engine", "mujoco")
+    assert code == 2 and one_line(err) and "--timestep" in err and str(engine.MAX_STEPS) in err, err

@@ -34,12 +34,15 @@ from ..robot import Robot
 from .poses import pose_of_state, rotation_from_quaternion, state_from_pose
 
 __all__ = ["INSTALL_HINT", "require", "Settings", "DEFAULT_SETTINGS", "mjcf", "compile_model", "radius_of",
-           "composite_inertia", "step_means", "Replay", "Session", "replay", "torque_samples", "SETTLE_TIME"]
+           "composite_inertia", "step_means", "Replay", "Session", "replay", "torque_samples", "SETTLE_TIME",
+           "MAX_STEPS"]
 
 #: What to do when MuJoCo is missing.
 INSTALL_HINT = "MuJoCo is not installed: install rollplan[mujoco] (pip install 'rollplan[mujoco]')"
 #: Seconds the model settles on the floor at rest, motors off, before the replay starts.
 SETTLE_TIME = 0.05
+#: Most MuJoCo steps of one replay (each step's state is kept: 136 bytes a step).
+MAX_STEPS = 2_000_000
 #: Names the replay needs in a model: the shell body (free joint, sphere geom), the rotor hinges, the motors.
 SHELL, ROTORS, MOTORS = "shell", ("rotor1", "rotor2"), ("motor1", "motor2")
 
@@ -355,6 +358,9 @@ class Session:
             raise InputError("a servo gain > 0 needs the planned rotor rates")
         span = float(t[-1] - t[0])
         n = max(1, int(math.ceil(span / self.step_max - 1e-9)))
+        if n > MAX_STEPS:
+            raise InputError(f"the motion's {span:g} s need {n} steps of the model's timestep {self.step_max:g} s, "
+                             f"more than {MAX_STEPS}: give the model a larger timestep (rollplan mjcf --timestep)")
         model.opt.timestep = span / n
         edges = t[0] + span * np.arange(n + 1) / n
         edges[-1] = t[-1]
