@@ -274,8 +274,9 @@ def test_simulate_engine_mujoco_reports_arrival_slip_penetration(plans, capsys):
     d, plan_file = plans
     out = d / "sim.json"
     code, text, err = run(capsys, "simulate", str(plan_file("min-jerk")), "--engine", "mujoco", "--json", str(out),
-                          "--servo", "0.01")
+                          "--servo", "0.01", "--plot", str(d / "sim.png"))
     assert code == 0, err
+    assert (d / "sim.png").stat().st_size > 0
     res = json.loads(out.read_text())
     plan = json.loads(plan_file("min-jerk").read_text())
     goal = [plan["goal"][k] for k in ("u_a", "v_a", "psi", "u_o", "v_o")]

@@ -288,7 +288,7 @@ class Replay:
         Distance slid at the contact [m]: the integral of the horizontal speed of the shell's material point at
         the contact.
     max_penetration : float
-        Largest depth of the sphere in the floor, R minus the centre's height [m] (settling included).
+        Largest depth of the sphere in the floor during the motion, R minus the centre's height [m].
     final_rotor_rates : (2,) [rad/s]; final_speed : float, the centre's speed at the end [m/s]
     steps : int; timestep : float [s]
     """
@@ -321,7 +321,7 @@ class Session:
     """A MuJoCo model run piece after piece: the state carries over from one :meth:`advance` to the next.
 
     Created at rest in ``start`` (default zero state), settled on the floor for ``settle`` s with the motors off.
-    ``slip`` [m] and ``max_penetration`` [m] accumulate over everything run (:class:`Replay`).
+    ``slip`` [m] and ``max_penetration`` [m] accumulate over everything run after settling (:class:`Replay`).
     """
 
     def __init__(self, model, start=None, settle: float = SETTLE_TIME):
@@ -336,10 +336,9 @@ class Session:
         self.mujoco.mju_mat2Quat(quat, rot[0].ravel())
         self.data.qpos[0:3] = [xy[0, 0], xy[0, 1], self.radius]
         self.data.qpos[3:7] = quat
-        self.max_penetration, self.slip, self.steps = 0.0, 0.0, 0
         for _ in range(int(math.ceil(settle / self.step_max))):
             self.mujoco.mj_step(model, self.data)
-            self.max_penetration = max(self.max_penetration, self.radius - float(self.data.qpos[2]))
+        self.max_penetration, self.slip, self.steps = 0.0, 0.0, 0   # of the motion: the settling is left out
         self.psi = float(self.start[2])   # psi continues from the start's turn (unwrapped)
 
     def advance(self, time, torques, rates=None, servo_gain: float = 0.0, noise=None) -> dict:
