@@ -341,3 +341,11 @@ def test_simulate_mujoco_refuses_a_replay_longer_than_max_steps(tmp_path, capsys
     assert code == 0, err
     code, _, err = run(capsys, "simulate", str(plan), "--engine", "mujoco")
     assert code == 2 and one_line(err) and "--timestep" in err and str(engine.MAX_STEPS) in err, err
+
+
+@needs_mujoco
+def test_mjcf_never_overwrites_its_robot_file(tmp_path, capsys):
+    robot = tmp_path / "robot.toml"
+    robot.write_text(LIMITED_TOML)
+    code, _, err = run(capsys, "mjcf", "--robot", str(robot), "--out", str(robot))
+    assert code == 2 and one_line(err) and robot.read_text() == LIMITED_TOML, err
