@@ -517,17 +517,19 @@ def _noise(args):
     return (disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=seed),) if sigma > 0 else ()
 
 
-def _simulate_executed(args, rp, robot) -> int:
-    """``rollplan simulate --closed-loop`` and ``--plant torques``: open and closed loop on the chosen plant."""
+def _simulate_executed(args, rp, robot, plant=None, **engine) -> int:
+    """``rollplan simulate --closed-loop`` and ``--plant torques``: open and closed loop on the chosen plant
+    (``plant``, default ``--plant``; ``engine``: more arguments of the execution, e.g. the MuJoCo model)."""
     from .execution.feedback import execute
 
+    plant = plant or args.plant
     dist = _noise(args)
     plan, piece = _file_plan(rp, args.plan_file)
-    runs = [execute(plan, rp.robot, robot, piece, plant=args.plant, closed_loop=closed, disturbances=dist,
-                    progress=report) for closed in (False, True)[:1 + bool(args.closed_loop)]]
+    runs = [execute(plan, rp.robot, robot, piece, plant=plant, closed_loop=closed, disturbances=dist,
+                    progress=report, **engine) for closed in (False, True)[:1 + bool(args.closed_loop)]]
     opened, run = runs[0], runs[-1]
     f, g, e = run.final, rp.goal, run.error
-    print(f"rollplan simulate: {args.plant} plant, {'closed' if args.closed_loop else 'open'} loop, "
+    print(f"rollplan simulate: {plant} plant, {'closed' if args.closed_loop else 'open'} loop, "
           f"{plan.steps} figure eights of {_g(2 * piece)} s (min-jerk per piece), robot k = {_g(robot.k)} "
           f"(planned k = {_g(rp.robot.k)}){', measurement noise ' + _g(args.noise) if dist else ''}")
     print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
@@ -566,6 +568,10 @@ def cmd_simulate(args) -> int:
     other = load_robot(args.robot) if args.robot else None
     rp = load_rotor_plan(args.plan_file)
     robot = other or rp.robot
+    if args.engine == "mujoco":
+        return _simulate_mujoco(args, rp, robot)
+    if args.servo is not None:
+        raise InputError("--servo applies to --engine mujoco only")
     if args.closed_loop or args.plant != "rates" or args.noise:
         return _simulate_executed(args, rp, robot)
     sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
@@ -593,6 +599,100 @@ def cmd_simulate(args) -> int:
         save_figure(plot_simulation(sim.time, sim.state, rp.rotor_rates, g, _planned_states(rp), robot, title),
                     args.plot)
         print(f"wrote {args.plot}")
+    return EXIT_OK
+
+
+def _simulate_mujoco(args, rp, robot) -> int:
+    """``rollplan simulate --engine mujoco``: the plan's torques replayed on MuJoCo's rigid-body model."""
+    import math
+
+    import numpy as np
+
+    from .execution import mujoco_engine as engine
+    from .inputs import read_text
+
+    gain = 0.0 if args.servo is None else check_finite("--servo", args.servo)
+    if not 0.0 <= gain <= 1e3:
+        raise InputError(f"--servo {args.servo!r} is not allowed: the rate loop's gain must lie in [0, 1000] N m s/rad")
+    mujoco = engine.require()
+    if args.mjcf:
+        where = f"MJCF file {show_path(args.mjcf)}"
+        model = engine.compile_model(read_text(args.mjcf, "MJCF file", 1 << 24), where)
+        if not math.isclose(engine.radius_of(model), robot.radius, rel_tol=1e-9):
+            raise InputError(f"{where}: its sphere's radius {engine.radius_of(model):g} m is not the plan's "
+                             f"{robot.radius:g} m (the plan's lengths are on that sphere)")
+    else:
+        model = engine.compile_model(engine.mjcf(robot))
+    if args.closed_loop or args.noise:
+        return _simulate_executed(args, rp, robot, "mujoco", mujoco_model=model, servo_gain=gain)
+    where = f"plan file {show_path(args.plan_file)}"
+    if "rotor_torques" not in rp.data:
+        raise InputError(f"{where} has no key 'rotor_torques' (make it with: rollplan plan ... --duration T --json "
+                         "FILE)")
+    t, tau = engine.torque_samples(rp.data["time"], rp.data["rotor_torques"], where)
+    rates = np.asarray(rp.data["rotor_rates"], float) if gain > 0 else None
+    if rates is not None and rates.shape != tau.shape:
+        raise InputError(f"{where}: 'rotor_rates' and 'rotor_torques' must have the same shape for --servo")
+    run = engine.replay(model, t, tau, rp.start, rp.goal, rates=rates, servo_gain=gain)
+    e, f, g = run.error, run.final, rp.goal
+    print(f"rollplan simulate: MuJoCo {mujoco.__version__}, {run.steps} RK4 steps of {_g(run.timestep)} s, "
+          f"robot k = {_g(robot.k)}{' (planned k = %s)' % _g(rp.robot.k) if args.robot else ''}, "
+          f"R = {_g(robot.radius)} m{', rate loop gain %s N m s/rad' % _g(gain) if gain else ''}"
+          f"{', model ' + show_path(args.mjcf) if args.mjcf else ''}")
+    print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
+          f"  u_o = {f[3]:.3g} rad  v_o = {f[4]:.3g} rad")
+    print(f"  target        u_a = {_g(g.u_a)} m  v_a = {_g(g.v_a)} m  psi = {_g(g.psi)} rad")
+    print(f"  arrival error {run.arrival_error:.3e} ({NORM}): position {run.position_error * robot.radius:.3e} m, "
+          f"psi {e[2]:.3e} rad, u_o {e[3]:.1e} rad, v_o {e[4]:.1e} rad")
+    print(f"  contact       slip {run.slip:.3e} m, max penetration {run.max_penetration:.3e} m; at the end: rotor "
+          f"rates {run.final_rotor_rates[0]:.2e}, {run.final_rotor_rates[1]:.2e} rad/s, centre speed "
+          f"{run.final_speed:.2e} m/s")
+    if args.json:
+        d = run.summary()
+        d.update({"engine": "mujoco", "mujoco_version": mujoco.__version__,
+                  "final": dict(zip(STATE_NAMES, map(float, f))), "error": dict(zip(STATE_NAMES, map(float, e))),
+                  "position_error_m": run.position_error * robot.radius,
+                  "error_units": "u_a, v_a and position_error in R; psi (wrapped), u_o, v_o in rad; slip, "
+                                 "max_penetration in m",
+                  "servo_gain": gain, "robot": robot.as_dict(),
+                  "mjcf": args.mjcf if args.mjcf else engine.DEFAULT_SETTINGS.as_dict()})
+        _emit_json(args, d, "m")
+    if args.plot:
+        from .plots.motion import plot_simulation
+
+        title = (f"MuJoCo replay of {args.plan_file}: arrival error {run.arrival_error:.2e} ({NORM}),\n"
+                 f"slip {run.slip:.2e} m, max penetration {run.max_penetration:.2e} m")
+        save_figure(plot_simulation(run.time, run.state, run.rotor_rates, g, _planned_states(rp), robot, title),
+                    args.plot)
+        print(f"wrote {args.plot}")
+    return EXIT_OK
+
+
+def cmd_mjcf(args) -> int:
+    from .execution import mujoco_engine as engine
+    from .outputs import write_atomic
+
+    _check_outputs(json=args.out, inputs=[args.robot])
+    robot = load_robot(args.robot) if args.robot else default_robot()
+    d = engine.DEFAULT_SETTINGS
+    step = d.timestep if args.timestep is None else args.timestep
+    solref = (max(d.solref[0], 2.0 * step), d.solref[1]) if args.floor_solref is None else tuple(args.floor_solref)
+    settings = engine.Settings(timestep=step, solref=solref,
+                               solimp=d.solimp, friction=d.friction if args.friction is None else args.friction,
+                               rolling=args.rolling_resistance, com_offset=tuple(args.com_offset))
+    xml = engine.mjcf(robot, settings)
+    model = engine.compile_model(xml)
+    mass, com, inertia = engine.composite_inertia(model)
+    R = robot.radius
+    j_zz = inertia[2, 2]
+    print(f"rollplan mjcf: robot k = {_g(robot.k)} (14), Jzz = {_g(robot.j_zz)} kg m^2, M = {_g(robot.mass_total)} kg")
+    print(f"  MuJoCo        composite about the centre: diag {_g(inertia[0, 0])} {_g(inertia[1, 1])} {_g(j_zz)} "
+          f"kg m^2, M = {_g(mass)} kg, centre of mass {_g(com[0])} {_g(com[1])} {_g(com[2])} m, "
+          f"k = {_g((j_zz + mass * R * R) / j_zz)}")
+    print(f"  contact       solref {_g(settings.solref[0])} s {_g(settings.solref[1])}, friction "
+          f"{_g(settings.friction)}, rolling resistance {_g(settings.rolling)} m; RK4 at {_g(settings.timestep)} s")
+    write_atomic(args.out, xml.encode(), "MJCF model")
+    print(f"wrote {args.out}")
     return EXIT_OK
 
 
@@ -932,7 +1032,32 @@ def build_parser() -> argparse.ArgumentParser:
                    help="measurement noise: standard deviation on u_a, v_a [R] and the angles [rad], "
                         "at most 0.1 (default 0)")
     m.add_argument("--seed", type=_whole, default=0, help="seed of the noise (default 0)")
+    m.add_argument("--engine", choices=("model", "mujoco"), default="model",
+                   help="model: the paper's equations (default); mujoco: the plan's motor torques replayed on "
+                        "MuJoCo's rigid-body model of the robot (pip install 'rollplan[mujoco]')")
+    m.add_argument("--mjcf", metavar="FILE.xml", help="with --engine mujoco: this model (written by rollplan mjcf, "
+                   "maybe edited) instead of the robot's own with the default settings")
+    m.add_argument("--servo", type=_number, default=None, metavar="GAIN",
+                   help="with --engine mujoco: add a rotor-rate loop around the planned rates, gain in [0, 1000] "
+                        "N m s/rad (default none: torques alone); --closed-loop and --noise also work with "
+                        "--engine mujoco (the state measured from MuJoCo's pose)")
     m.set_defaults(func=cmd_simulate)
+
+    j = sub.add_parser("mjcf", help="write the robot's MuJoCo model (MJCF): shell, two rotors, torque motors, floor")
+    j.add_argument("--robot", metavar="FILE.toml", help="robot file (default: the shipped default robot)")
+    j.add_argument("--out", required=True, metavar="FILE.xml", help="output MJCF file")
+    j.add_argument("--com-offset", type=_number, nargs=3, default=[0.0, 0.0, 0.0], metavar=("DX", "DY", "DZ"),
+                   help="centre of mass off the centre, in the shell's frame [m], shorter than R/2 (default 0 0 0)")
+    j.add_argument("--floor-solref", type=_number, nargs=2, default=None, metavar=("TIMECONST", "DAMPRATIO"),
+                   help="the contact's spring-damper: time constant [s], at least 2 timesteps, and damping ratio "
+                        "(default 0.0002 1, stiff: two RK4 steps, or 2 DT with --timestep)")
+    j.add_argument("--rolling-resistance", type=_number, default=0.0, metavar="MU",
+                   help="rolling friction [m] in [0, 1] (default 0: none)")
+    j.add_argument("--friction", type=_number, default=None, metavar="MU",
+                   help="sliding friction coefficient in [0.001, 1000] (default 2)")
+    j.add_argument("--timestep", type=_number, default=None, metavar="DT",
+                   help="RK4 step [s] in [1e-6, 0.01] (default 1e-4)")
+    j.set_defaults(func=cmd_mjcf)
 
     a = sub.add_parser("animate", help="animate the sphere rolling under the plan's rotor rates (GIF)")
     a.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
