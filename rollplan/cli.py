@@ -17,6 +17,7 @@ import os
 import re
 import sys
 from contextlib import ExitStack
+from dataclasses import replace
 
 from . import (
     interrupts,
@@ -565,13 +566,12 @@ def cmd_simulate(args) -> int:
 
     _check_outputs(json=args.json, figure=args.plot, inputs=[args.plan_file, args.robot])
     _noise(args)   # the options before the files
+    gain = _servo_gain(args)
     other = load_robot(args.robot) if args.robot else None
     rp = load_rotor_plan(args.plan_file)
     robot = other or rp.robot
     if args.engine == "mujoco":
-        return _simulate_mujoco(args, rp, robot)
-    if args.servo is not None:
-        raise InputError("--servo applies to --engine mujoco only")
+        return _simulate_mujoco(args, rp, robot, gain)
     if args.closed_loop or args.plant != "rates" or args.noise:
         return _simulate_executed(args, rp, robot)
     sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
@@ -602,8 +602,22 @@ def cmd_simulate(args) -> int:
     return EXIT_OK
 
 
-def _simulate_mujoco(args, rp, robot) -> int:
-    """``rollplan simulate --engine mujoco``: the plan's torques replayed on MuJoCo's rigid-body model."""
+def _servo_gain(args) -> float:
+    """The rate loop's gain of ``--servo`` (0 without it); ``--servo`` and ``--mjcf`` need ``--engine mujoco``."""
+    if args.engine != "mujoco":
+        for flag, value in (("--servo", args.servo), ("--mjcf", args.mjcf)):
+            if value is not None:
+                raise InputError(f"{flag} applies to --engine mujoco only")
+        return 0.0
+    gain = 0.0 if args.servo is None else check_finite("--servo", args.servo)
+    if not 0.0 <= gain <= 1e3:
+        raise InputError(f"--servo {args.servo!r} is not allowed: the rate loop's gain must lie in [0, 1000] N m s/rad")
+    return gain
+
+
+def _simulate_mujoco(args, rp, robot, gain: float) -> int:
+    """``rollplan simulate --engine mujoco``: the plan's torques replayed on MuJoCo's rigid-body model, with a rate
+    loop of gain ``gain`` (:func:`_servo_gain`)."""
     import math
 
     import numpy as np
@@ -611,9 +625,6 @@ def _simulate_mujoco(args, rp, robot) -> int:
     from .execution import mujoco_engine as engine
     from .inputs import read_text
 
-    gain = 0.0 if args.servo is None else check_finite("--servo", args.servo)
-    if not 0.0 <= gain <= 1e3:
-        raise InputError(f"--servo {args.servo!r} is not allowed: the rate loop's gain must lie in [0, 1000] N m s/rad")
     mujoco = engine.require()
     if args.mjcf:
         where = f"MJCF file {show_path(args.mjcf)}"
@@ -674,13 +685,23 @@ def cmd_mjcf(args) -> int:
 
     _check_outputs(json=args.out, inputs=[args.robot])
     robot = load_robot(args.robot) if args.robot else default_robot()
-    d = engine.DEFAULT_SETTINGS
+    settings = d = engine.DEFAULT_SETTINGS
     step = d.timestep if args.timestep is None else args.timestep
     solref = (max(d.solref[0], 2.0 * step), d.solref[1]) if args.floor_solref is None else tuple(args.floor_solref)
-    settings = engine.Settings(timestep=step, solref=solref,
-                               solimp=d.solimp, friction=d.friction if args.friction is None else args.friction,
-                               rolling=args.rolling_resistance, com_offset=tuple(args.com_offset))
-    xml = engine.mjcf(robot, settings)
+    # one option at a time (the time step first: the contact's time constant is bounded by it), so that a
+    # refusal names the option
+    for flag, field, value in (("--timestep", "timestep", step), ("--floor-solref", "solref", solref),
+                               ("--friction", "friction", d.friction if args.friction is None else args.friction),
+                               ("--rolling-resistance", "rolling", args.rolling_resistance),
+                               ("--com-offset", "com_offset", tuple(args.com_offset))):
+        try:
+            settings = replace(settings, **{field: value})
+        except InputError as exc:
+            raise InputError(f"{flag}: {exc}") from None
+    try:
+        xml = engine.mjcf(robot, settings)
+    except InputError as exc:   # the settings hold; the offset is bounded by the robot's radius
+        raise InputError(f"--com-offset: {exc}") from None
     model = engine.compile_model(xml)
     mass, com, inertia = engine.composite_inertia(model)
     R = robot.radius

@@ -40,6 +40,7 @@ BASE = {
     "codegen": ["codegen", "--out", "outdir"],
     "batch": ["batch", "t.csv", "--out", "out.jsonl"],
     "atlas": ["atlas", "--out", "out.png"],
+    "mjcf": ["mjcf", "--out", "out.xml"],
     None: [],   # the options of rollplan itself
 }
 
@@ -68,7 +69,7 @@ def _wholes(command, flag, *extra):
     _cases(command, flag, *[([v], None) for v in W], *extra)
 
 
-for _c in ("plan", "route", "step", "reproduce", "simulate", "animate", "compare", "codegen", "batch", "atlas"):
+for _c in ("plan", "route", "step", "reproduce", "simulate", "animate", "compare", "codegen", "batch", "atlas", "mjcf"):
     _cases(_c, "--help", (["=1"], "--help"))
 for _c in ("plan", "route", "compare"):
     _numbers(_c, "--k", 1, (["200"], None), (["-1"], None))
@@ -105,6 +106,17 @@ _cases("simulate", "--closed-loop", (["=1"], None))
 _cases("simulate", "--plant", (["voltage"], None))
 _numbers("simulate", "--noise", 1, (["5"], None), (["-0.01"], None))
 _wholes("simulate", "--seed", (["-1"], None), (["1" * 30], None))
+_cases("simulate", "--engine", (["bullet"], None))
+_cases("simulate", "--mjcf", (["model.xml"], None))   # without --engine mujoco
+_numbers("simulate", "--servo", 1, (["5"], None), (["-1", "--engine", "mujoco"], None),
+         (["2e3", "--engine", "mujoco"], None))
+_cases("mjcf", "--robot", (["missing.toml"], "robot file"), (["bad.toml"], "robot file"))
+_cases("mjcf", "--out", (["notdir/x.xml"], "notdir"), (["robot.toml", "--robot", "robot.toml"], "robot.toml"))
+_numbers("mjcf", "--com-offset", 3, (["1", "0", "0"], None))
+_numbers("mjcf", "--floor-solref", 2, (["0", "1"], None), (["1e-3", "0"], None))
+_numbers("mjcf", "--rolling-resistance", 1, (["-1"], None), (["2"], None))
+_numbers("mjcf", "--friction", 1, (["0"], None), (["1e9"], None))
+_numbers("mjcf", "--timestep", 1, (["1"], None), (["0"], None))
 _cases("animate", "--out", (["out.png"], None), (["notdir/a.gif"], "notdir"), (["plan.json"], "plan.json"))
 _wholes("animate", "--frames", (["1"], None), (["2001"], None))
 _wholes("animate", "--fps", (["0"], None), (["101"], None))
