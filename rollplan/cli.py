@@ -445,6 +445,11 @@ def _noise(args):
     return (disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=seed),) if sigma > 0 else ()
 
 
+def _position(error_r: float, robot) -> str:
+    """A position error given in units of R, in metres and in R."""
+    return f"{error_r * robot.radius:.3e} m ({error_r:.3e} R)"
+
+
 def _simulate_executed(args, rp, robot) -> int:
     """``rollplan simulate --closed-loop`` and ``--plant torques``: open and closed loop on the chosen plant."""
     from .execution.feedback import execute
@@ -461,8 +466,9 @@ def _simulate_executed(args, rp, robot) -> int:
     print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
           f"  u_o = {_g(f[3])} rad  v_o = {_g(f[4])} rad")
     print(f"  target        u_a = {_g(g.u_a)} m  v_a = {_g(g.v_a)} m  psi = {_g(g.psi)} rad")
-    print(f"  arrival error {run.arrival_error:.3e} ({NORM}; position {run.position_error:.3e} R, psi {e[2]:.3e} rad)"
-          + (f"; open loop {opened.arrival_error:.3e}" if args.closed_loop else ""))
+    print(f"  arrival error {run.arrival_error:.3e} ({NORM}): position {_position(run.position_error, robot)}, "
+          f"psi {e[2]:.3e} rad" + (f"; open loop {opened.arrival_error:.3e}, position "
+                                    f"{_position(opened.position_error, robot)}" if args.closed_loop else ""))
     if args.closed_loop:
         print("  estimated k   " + ", ".join(_g(d["k"]) for d in run.estimates if "k" in d))
     if args.json:
@@ -502,7 +508,7 @@ def cmd_simulate(args) -> int:
     print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
           f"  u_o = {f[3]:.3g} rad  v_o = {f[4]:.3g} rad")
     print(f"  target        u_a = {_g(g.u_a)} m  v_a = {_g(g.v_a)} m  psi = {_g(g.psi)} rad")
-    print(f"  arrival error {sim.arrival_error:.3e} ({NORM}): position {sim.position_error * robot.radius:.3e} m, "
+    print(f"  arrival error {sim.arrival_error:.3e} ({NORM}): position {_position(sim.position_error, robot)}, "
           f"psi {e[2]:.3e} rad, u_o {e[3]:.1e} rad, v_o {e[4]:.1e} rad")
     if args.json:
         _emit_json(args, {"final": dict(zip(STATE_NAMES, map(float, sim.final))),
