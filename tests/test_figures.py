@@ -22,3 +22,64 @@ def test_timing_phase_plane_is_in_metres_for_a_robot():
     # the contact path's length in metres, as the plan states it, and the mean speed of the whole motion
     assert np.max(line.get_xdata()) == pytest.approx(p.path_length, rel=1e-6)
     assert np.trapezoid(line.get_ydata(), m.time) == pytest.approx(p.path_length, rel=1e-3)
+
+
+WAYPOINTS = "u_a,v_a,psi,u_o,v_o,steps,label\n0,0,0,,,,home\n1.0,0.5,0.3,,,1,a\n1.0,0.5,1.3,,,1,turn in place\n" \
+            "1.2,0.4,1.5,0.3,-0.2,2,inspect\n0,0,0,0,0,1,home again\n"
+
+
+def test_route_figure_marks_and_labels_every_waypoint(tmp_path):
+    """route.png neither marked nor labelled the waypoints: each point of the CSV file is marked, and labelled
+    with the numbers and labels of the waypoints there."""
+    from rollplan.plots.composed import plot_composed
+
+    (tmp_path / "w.csv").write_text(WAYPOINTS)
+    r = rollplan.plan_route(rollplan.read_waypoints(tmp_path / "w.csv"), k=2.5)
+    ax = plot_composed(r, r.sample(400)).axes[0]
+    marks = [ln for ln in ax.get_lines() if ln.get_label() == "_waypoint"]
+    points = sorted((float(ln.get_xdata()[0]), float(ln.get_ydata()[0])) for ln in marks)
+    assert np.allclose(points, [(0.0, 0.0), (1.0, 0.5), (1.2, 0.4)], rtol=0, atol=1e-12)   # the file's points
+    texts = sorted(t.get_text() for t in ax.texts)
+    assert texts == ["1 home, 5 home again", "2 a, 3 turn in place", "4 inspect"]
+    for ln in marks:
+        assert ln.get_zorder() > max(other.get_zorder() for other in ax.get_lines() if other.get_label() != "_waypoint")
+
+
+def test_simulation_figure_draws_the_planned_curve_over_the_simulated_one():
+    """In sim.png the planned curve (dashed) was drawn first and hidden under the simulated one."""
+    from rollplan.plots.colors import PLANNED, SIMULATED
+    from rollplan.plots.motion import plot_simulation
+
+    t = np.linspace(0.0, 1.0, 50)
+    states = np.column_stack([t, t ** 2, t, 0 * t, 0 * t])
+    fig = plot_simulation(t, states, np.zeros((50, 2)), states[-1], planned=states)
+    for ax in fig.axes[:2]:
+        planned = [ln for ln in ax.get_lines() if ln.get_color() == PLANNED and ln.get_linestyle() == "--"]
+        simulated = [ln for ln in ax.get_lines() if ln.get_color() == SIMULATED and len(ln.get_xdata()) == 50]
+        assert planned and simulated
+        assert min(ln.get_zorder() for ln in planned) > max(ln.get_zorder() for ln in simulated)
+
+
+@pytest.mark.slow
+def test_the_animation_of_100_frames_stays_under_1_5_mb(tmp_path):
+    """`rollplan animate` wrote 5 MB for 100 frames: one palette and transparent unchanged pixels keep it under
+    1.5 MB; the decoded frames show the motion (the first and the middle frame differ in both panels)."""
+    from PIL import Image
+
+    from rollplan.plots.animation import make_animation
+
+    robot = rollplan.default_robot()
+    p = rollplan.plan((0.0, 0.1, 1.0), robot=robot)
+    m = actuate(p, robot, 10.0)
+    sim = rollplan.simulate_rotors(robot, m.time, m.rotor_rates, p.goal)
+    gif = tmp_path / "roll.gif"
+    make_animation(m.time, sim.state, m.rotor_rates, robot, p.goal, gif, 100, 20)
+    assert gif.stat().st_size < 1.5e6
+    im = Image.open(gif)
+    assert im.n_frames == 100
+    first = np.asarray(im.convert("RGB"), int)
+    im.seek(50)
+    middle = np.asarray(im.convert("RGB"), int)
+    half = first.shape[1] // 2
+    assert np.any(first[:, :half] != middle[:, :half]) and np.any(first[:, half:] != middle[:, half:])
+    assert np.all(first[:5] == 255) == np.all(middle[:5] == 255)   # the static parts are unchanged
