@@ -83,3 +83,45 @@ def test_the_animation_of_100_frames_stays_under_1_5_mb(tmp_path):
     half = first.shape[1] // 2
     assert np.any(first[:, :half] != middle[:, :half]) and np.any(first[:, half:] != middle[:, half:])
     assert np.all(first[:5] == 255) == np.all(middle[:5] == 255)   # the static parts are unchanged
+
+
+def test_spikes_are_clipped_to_a_robust_range_and_marked():
+    """End spikes of +-1000 flattened the compare torque panels: the y-range keeps the bulk of the samples
+    (amplitude 100 here), the spikes are marked by triangles on the edge and their values are written."""
+    from matplotlib.figure import Figure
+
+    from rollplan.plots.common import SPIKE_LABEL, clip_spikes
+
+    t = np.linspace(0.0, 1.0, 501)
+    v = np.column_stack([100 * np.sin(2 * np.pi * t), 80 * np.cos(2 * np.pi * t)])
+    v[0], v[-1] = (1000.0, -900.0), (-1000.0, 950.0)
+    ax = Figure().subplots()
+    ax.plot(t, v)
+    assert clip_spikes(ax, t, v, ("C0", "C1"))
+    low, high = ax.get_ylim()
+    assert -1000 < low < -100 and 100 < high < 950
+    marks = [ln for ln in ax.get_lines() if ln.get_label() == SPIKE_LABEL]
+    assert sorted(float(x) for ln in marks for x in ln.get_xdata()) == [0.0, 0.0, 1.0, 1.0]
+    assert any("-1000" in txt.get_text() and "1000" in txt.get_text() for txt in ax.texts)
+    calm = Figure().subplots()   # nothing far out: the range is matplotlib's own
+    assert not clip_spikes(calm, t, v[1:-1], ("C0", "C1"))
+
+
+@pytest.mark.slow
+def test_compare_torque_panels_exclude_the_end_spikes():
+    """The default compare (N = 100): torques of about +-150 with end spikes of +-1087 (geometric phase) and
+    -816 (collocation), the discrete form of the impulsive start and stop of the |omega|^2 optimum."""
+    from rollplan.plots.compare import plot_comparison
+    from rollplan.studies import comparison
+
+    c = comparison.compare((0.5, 0.3, 0.4), 1, 2.5, None, None, 1.0, "angular_velocity", 100, 3, "legendre",
+                           comparison.CONTACT_BOUND, 1)
+    fig = plot_comparison(c)
+    for side in (c.gp, c.collocation):
+        tau = side.motion.rotor_torques
+        (ax,) = [a for a in fig.axes if a.get_title().endswith("motor torques") and
+                 np.allclose(a.get_lines()[0].get_ydata(), tau[:, 0])]
+        low, high = ax.get_ylim()
+        assert low > tau.min() or high < tau.max()   # the spikes are outside
+        inner = np.quantile(tau, [0.05, 0.95])
+        assert low < inner[0] and inner[1] < high     # the bulk inside
