@@ -125,3 +125,55 @@ def test_compare_torque_panels_exclude_the_end_spikes():
         assert low > tau.min() or high < tau.max()   # the spikes are outside
         inner = np.quantile(tau, [0.05, 0.95])
         assert low < inner[0] and inner[1] < high     # the bulk inside
+
+
+@pytest.fixture(scope="module")
+def atlases():
+    from rollplan.studies.atlas import compute_atlas
+
+    return compute_atlas(2.5, 1, 21), compute_atlas(2.5, 1, 41)
+
+
+def test_atlas_reachable_panel_has_no_sampling_holes(atlases):
+    """The reachability histogram's white holes were gaps between grid points that read as unreachable
+    regions: the images of the grid cells are filled, so the pairs a finer grid reaches (points between the
+    coarse grid's) lie in the filled region, also where the coarse histogram has no point."""
+    from matplotlib.collections import PolyCollection
+
+    from rollplan.core.plane import wrap
+    from rollplan.plots.atlas import plot_atlas
+
+    coarse, fine = atlases
+    (ax,) = [a for a in plot_atlas(coarse).axes if a.get_xlabel().startswith("turn")]
+    paths = [p for c in ax.collections if isinstance(c, PolyCollection) for p in c.get_paths()]
+    assert paths
+    pts = np.column_stack([wrap(fine.turn_total.ravel()), fine.shift_total.ravel()])
+    inside = np.zeros(len(pts), bool)
+    for p in paths:
+        inside |= p.contains_points(pts)
+    hist, xe, ye = np.histogram2d(wrap(coarse.turn_total.ravel()), coarse.shift_total.ravel(), bins=(72, 60),
+                                  range=((-np.pi, np.pi), (0.0, float(coarse.shift_total.max()))))
+    ix = np.clip(np.searchsorted(xe, pts[:, 0]) - 1, 0, 71)
+    iy = np.clip(np.searchsorted(ye, pts[:, 1]) - 1, 0, 59)
+    in_a_hole = (hist[ix, iy] == 0) & (pts[:, 1] < ye[-1])
+    assert in_a_hole.sum() > 100                        # the coarse grid's histogram alone has holes there
+    # the quadrilaterals approximate the curved image of each cell: a few points near the folds fall just outside
+    assert inside[in_a_hole].mean() > 0.9 and inside.mean() > 0.9
+
+
+def test_atlas_contours_leave_the_crowded_corner_to_the_colours(atlases):
+    """An atlas corner (a, b near A_MAX) was a tangle of white contours: none is drawn where a or b exceeds
+    the labelled region."""
+    from rollplan.plots.atlas import plot_atlas
+
+    coarse, _ = atlases
+    fig = plot_atlas(coarse)
+    limit = float(fig.axes[0].get_legend().get_texts()[1].get_text().split("< ")[1].split(" R")[0])
+    step = float(coarse.a[1] - coarse.a[0])
+    for ax in fig.axes[:2]:   # h and eta: the contour lines (not filled, not the fold's single level 0)
+        white = [c for c in ax.collections if hasattr(c, "allsegs") and not c.filled and list(c.levels) != [0.0]]
+        assert len(white) == 1
+        for cs in white:
+            for segs in cs.allsegs:
+                for seg in segs:
+                    assert len(seg) == 0 or np.max(seg) <= limit + step   # b, a of every point of the line
