@@ -289,3 +289,17 @@ def test_a_library_or_directory_others_control_is_refused_by_the_api(cache, dama
     if what == "dir":
         with pytest.raises(UnsafeCacheError):
             cmod.compiled(_fn())
+
+
+def test_a_leaf_table_others_may_write_is_refused(tmp_path, monkeypatch):
+    """The planner's leaf tables live in the same cache directory and are refused on the same terms."""
+    from rollplan import UnsafeCacheError
+    from rollplan.planners.geometric.enumerate import rho_table
+
+    monkeypatch.setenv("ROLLPLAN_CACHE_DIR", str(tmp_path / "cache"))
+    first = rho_table.__wrapped__(3.3)   # built and stored (the cache of this process is bypassed)
+    (table,) = (tmp_path / "cache").glob("rho_table_*.npz")
+    assert rho_table.__wrapped__(3.3).eps == first.eps
+    table.chmod(0o666)
+    with pytest.raises(UnsafeCacheError, match="writable by group or others"):
+        rho_table.__wrapped__(3.3)

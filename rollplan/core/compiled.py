@@ -104,7 +104,7 @@ def check_private(path) -> None:
     if os.name == "nt":
         return
     st = os.stat(path)
-    what = "the cache directory" if Path(path).is_dir() else "the cached library"
+    what = "the cache directory" if Path(path).is_dir() else "the cached file"
     if st.st_uid != os.geteuid():
         why, fix = f"is owned by uid {st.st_uid}, not by this user (uid {os.geteuid()})", ""
     elif st.st_mode & 0o022:
