@@ -371,7 +371,7 @@ def cmd_route(args) -> int:
     for i, (p, w, res) in enumerate(zip(r.plans, r.waypoints[1:], r.waypoint_residuals), 1):
         label = f" {w.label!r}" if w.label else ""
         print(f"  leg {i} to waypoint {i + 1}{label} {_fmt_state(w.state, unit)}: {getattr(p, 'mode', 'one')}, "
-              f"{_g(p.path_length)} {unit}, waypoint residual {res:.2e}")
+              f"{_g(p.path_length)} {unit}, waypoint residual {res:.2e} (R, rad)")
     print(f"  path length   {_g(r.path_length)} {unit} in {len(r.pieces)} pieces")
     print(f"  final         {_fmt_state(r.final, unit, wrapped=True)}")
     print(f"  residual      {r.residual:.2e} ({NORM}; {r.certificate.method}, the whole route from the first "

@@ -9,7 +9,9 @@ Drawn (colours of :mod:`.colors`, all named in legends): the shell (meridians
 and parallels), the body axes n_1 (rotor 1), n_2 (rotor 2) and n_3, the contact
 path on the plane and on the shell so far, the start and the target, the time
 of the frame, and the rotor rates with a moving cursor. Saving reports its
-progress (``progress(label, done, total)``).
+progress (``progress(label, done, total)``). The GIF has one palette for all
+frames and stores, after the first, only the pixels that changed (the others
+transparent): about 1 MB for 100 frames.
 """
 
 from __future__ import annotations
