@@ -30,7 +30,7 @@ from rollplan.core import model
 from rollplan.core.curves import A_MAX, figure_eight
 from rollplan.core.integrate import CvodesIntegrator, spectral_step
 from rollplan.core.rewrite import algebraic
-from rollplan.errors import InputError
+from rollplan.errors import InputError, NoPlanError
 from rollplan.planners.geometric import GeometricPhasePlanner
 
 import references
@@ -333,6 +333,96 @@ def test_random_targets_same_plan_as_python(built):
             plans += 1
             assert _same_plan(_parse(run), q), (u, v, psi, n, k)
     assert plans >= 20
+
+
+def _parse_all(run):
+    """The plans of ``plan_demo --all`` (each as _parse gives it) and the count on its last line."""
+    lines = run.stdout.splitlines()
+    count, word = lines[-1].split()
+    assert word == "plans"
+    return [_parse(subprocess.CompletedProcess((), 0, line)) for line in lines[:-1]], int(count)
+
+
+def _reference_all(target):
+    """Every certified plan of the Python planner's numpy search (``--all``), shortest first; [] if none."""
+    u, v, psi, n, k = target
+    try:
+        best = GeometricPhasePlanner(compiled_search=False).solve(Problem((u, v, psi), k=k, steps=n),
+                                                                  all_solutions=True)
+    except NoPlanError:
+        return []
+    return [best, *best.alternatives]
+
+
+def _check_all(built, target, checked=3):
+    """``plan_demo --all``: as many plans as the numpy search lists, each the same (branch and (a, b, gamma) to
+    1e-8), sorted by a + b; the first ``checked`` and the last integrated by DOP853 on the printed equations."""
+    u, v, psi, n, k = target
+    run = demo(built, "--all", *(repr(float(x)) for x in (u, v, psi)), n, repr(float(k)))
+    want = _reference_all(target)
+    if not want:
+        assert run.returncode == 3 and run.stdout == "" and "no plan" in run.stderr, (target, run.stderr)
+        return 0
+    assert run.returncode == 0, (target, run.stderr)
+    got, count = _parse_all(run)
+    assert count == len(got) == len(want), (target, count, len(want))
+    lengths = [c[0] + c[1] for c in got]
+    assert lengths == sorted(lengths)
+    # paired by branch and radii (plans of nearly equal length may come in either order)
+    for c, q in zip(sorted(got, key=lambda c: (c[5], c[0], c[1])), sorted(want, key=lambda q: (q.branch, q.a, q.b))):
+        assert _same_plan(c, q), (target, c, (q.a, q.b, q.gamma, q.branch))
+    for a, b, gamma, residual, bound, _ in got[:checked] + got[-1:]:
+        assert residual + bound <= CERT_TOL
+        x = references.trace(a, b, k, gamma, n)
+        assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) < 1e-9 + 1e-11 * n
+    return count
+
+
+@pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 2, 1.5), (0.0, 1.0, 0.0, 1, 0.5)])
+def test_plan_demo_all_lists_the_plans_of_python_all(built, target):
+    """plan_demo --all (every root on every branch, certified on board) against the numpy search's --all list; the
+    paper's case k = 2.5, h = 1 R has its smallest solution a = b = 0.300429 R first."""
+    assert _check_all(built, target) >= 3
+    if target == (0.0, 1.0, 0.0, 1, 2.5):
+        first = _parse_all(demo(built, "--all", *target))[0][0]
+        assert abs(first[0] - 0.300429) < 5e-7 and abs(first[1] - 0.300429) < 5e-7
+
+
+@pytest.mark.slow
+def test_plan_demo_all_random_targets_match_python(built):
+    """Random targets, k in [1/2, K_MAX], n in 1..4: the same list of plans as the numpy search."""
+    rng = np.random.default_rng(12)
+    listed = 0
+    for _ in range(8):
+        u, v = rng.uniform(-1.5, 1.5, 2)
+        target = (float(u), float(v), float(rng.uniform(-4, 4)), int(rng.integers(1, 5)),
+                  float(rng.uniform(0.5, DEFAULT_K_MAX)))
+        listed += _check_all(built, target, checked=1) > 0
+    assert listed >= 6
+
+
+def test_plan_all_capacity_and_bad_arguments(built):
+    """rollplan_plan_all into a smaller array: status TOO_MANY (6), the full count, and the shortest plans of the
+    full list; count NULL or a negative capacity are bad input; a target without a plan is NO_PLAN (3)."""
+    clib = ctypes.CDLL(str(built.out / "librollplan.so"))
+    d = ctypes.c_double
+    clib.rollplan_plan_all.argtypes = [d, d, d, ctypes.c_int, d, ctypes.POINTER(_Options), ctypes.POINTER(_Plan),
+                                       ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
+
+    def plan_all(target, capacity, count=True):
+        plans, n = (_Plan * max(capacity, 1))(), ctypes.c_int(-1)
+        status = clib.rollplan_plan_all(*target[:3], target[3], target[4], None, plans, capacity,
+                                        ctypes.byref(n) if count else None)
+        return status, n.value, [(p.a, p.b, p.gamma, p.m) for p in plans[:max(0, min(n.value, capacity))]]
+
+    target = (0.3, -0.2, 0.5, 2, 1.5)
+    status, total, full = plan_all(target, 1000)
+    assert status == 0 and total == len(full) >= 3
+    status, count, part = plan_all(target, 2)
+    assert status == 6 and count == total and part == full[:2]
+    assert plan_all(target, 2, count=False)[0] == 2 and plan_all(target, -1)[0] == 2
+    assert plan_all((0.0, 0.0, 0.5, 1, 2.5), 4)[0] == 2 and plan_all((0.3, 0.2, 0.5, 1, 0.4), 4)[0] == 2
+    assert plan_all((2.0, 2.0, 0.0, 1, 5.0), 4)[:2] == (3, 0)
 
 
 def test_search_falls_back_to_certifying_every_root(built, tmp_path):
