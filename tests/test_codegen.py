@@ -627,7 +627,43 @@ def test_k_max_is_checked_at_generation(tmp_path):
     for bad in (-1, 101, float("nan"), "5", True):
         with pytest.raises(InputError, match="k_max"):
             codegen.generate(tmp_path / "b", k_max=bad)
-    assert main(["codegen", "--out", str(tmp_path / "c"), "--k-max", "30"]) == 2
+    assert main(["codegen", "--out", str(tmp_path / "c"), "--k-max", "30", "--steps-per-leaf", "240"]) == 2
+
+
+@pytest.mark.slow
+def test_codegen_k_max_16_sizes_its_step_map_itself(tmp_path, capsys):
+    """`codegen --k-max 16` without --steps-per-leaf (auto): the smallest size whose step map is accurate to 1e-10 up
+    to k = 16 (400; 320 is refused for it), and its plan_demo plans a k = 16 target as the Python planner does and
+    lands on it when integrated by DOP853 on the printed equations."""
+    out = tmp_path / "k16"
+    assert main(["codegen", "--out", str(out), "--k-max", "16"]) == 0
+    assert "400 steps per leaf" in capsys.readouterr().out
+    assert main(["codegen", "--out", str(tmp_path / "small"), "--k-max", "16", "--steps-per-leaf", "320"]) == 2
+    assert "320 steps per leaf" in capsys.readouterr().err
+    run = subprocess.run(["make", "-C", str(out), "plan_demo"], check=False, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    for u, v, psi, n in ((0.5, -0.3, 1.0, 2), (0.0, 1.0, 0.0, 1)):
+        run = subprocess.run([str(out / "plan_demo"), *map(str, (u, v, psi, n, 16))], check=False,
+                             capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        c = _parse(run)
+        q = reference_plan((u, v, psi), n, 16.0)
+        assert q is not None and _same_plan(c, q), (c, q and (q.a, q.b, q.gamma, q.branch))
+        x = references.trace(c[0], c[1], 16.0, c[2], n)
+        assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) <= CERT_TOL
+
+
+def test_codegen_refuses_k_max_beyond_the_largest_automatic_size(tmp_path, capsys, monkeypatch):
+    """With the automatic sizes capped at 240 steps per leaf, k_max = 10 (which needs 320) is refused in one line
+    naming the cap, exit 2, before anything is written; a bad --steps-per-leaf names auto."""
+    monkeypatch.setattr(codegen.c_library, "AUTO_STEPS_PER_LEAF", (240,))
+    assert main(["codegen", "--out", str(tmp_path / "c"), "--k-max", "10"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "k_max = 10 is not allowed" in err and "240 steps per leaf" in err
+    assert not (tmp_path / "c").exists()
+    with pytest.raises(SystemExit, match="2"):
+        main(["codegen", "--out", str(tmp_path / "c"), "--steps-per-leaf", "many"])
+    assert "auto" in capsys.readouterr().err
 
 
 def _fuzz_inputs(rng, count, many_steps):
