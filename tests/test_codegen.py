@@ -487,7 +487,8 @@ def test_plan_demo_reproduces_paper_radius(built):
     ((0, 0, 0, 1, 2.5), 2), ((0, 1, 0, 1), 2), ((0, 1, "nan", 1, 2.5), 2),
     ((0, 2, 0, 1, 50), 2), ((0, 1, 0, 1, 5.000001), 2), ((0, 1, 0, 1001, 2.5), 2), ((0, 1, 0, 1, "inf"), 2),
     ((0, 1, 0, 1, 0.49), 2),        # below K_MIN = 1/2: the complete enumeration does not apply
-    ((0, 1, 1e7, 1, 2.5), 2), ((0, 1, 0, 1, 2.5, 0.5), 2),
+    ((0, 1, 1e7, 1, 2.5), 2), ((0, 1, 0, 1, 2.5, 0.5), 2), (("--all", 0, 1, 0, 1), 2), (("--all", 0, 0, 0, 1, 2.5), 2),
+    (("--all", 2, 2, 0, 1, 5), 3),
     ((30, 0, 0, 1, 2.5), 3),        # farther than any figure eight reaches in one step
     ((0, 1, 6.2, 2, 2.5, 0), 3),    # sin(psi/2) small: branch m = 0 needs h = 24 R
 ])

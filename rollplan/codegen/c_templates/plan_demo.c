@@ -12,6 +12,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "@PREFIX@.h"
 
@@ -52,8 +53,7 @@ int main(int argc, char **argv) {
     double u, v, psi, steps_d, k, branch = 0.0;
     @PREFIX@_plan_t plan;
     @PREFIX@_options_t options = {0, 0, 1};
-    int status, all = argc > 1 && argv[1][0] == '-' && argv[1][1] == '-' && argv[1][2] == 'a' && argv[1][3] == 'l'
-                      && argv[1][4] == 'l' && argv[1][5] == '\0', count = 0, i;
+    int status, all = argc > 1 && strcmp(argv[1], "--all") == 0, count = 0, i;
     const char *self = argv[0];
     if (all) {   /* the same arguments after --all */
         argv[1] = argv[0];
