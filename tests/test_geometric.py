@@ -575,6 +575,21 @@ def test_compiled_search_lists_the_plans_of_the_numpy_search():
     assert compiled >= 3
 
 
+def test_compiled_all_solutions_report_progress():
+    """all_solutions by the C search reports its polish and certificate root by root, ending at the count."""
+    from rollplan.planners.geometric import GeometricPhasePlanner
+    from rollplan.progress import reporting
+
+    if not _compiled_search_built():
+        pytest.skip("no C compiler: the compiled search is not built")
+    calls = []
+    with reporting(lambda label, done, total, **_: calls.append((label, done, total))):
+        p = GeometricPhasePlanner().solve(Problem((0.3, -0.2, 0.5), k=1.5, steps=2), all_solutions=True)
+    assert p.stats.details["search"] == "compiled"
+    mine = [c for c in calls if c[0].startswith("certify")]
+    assert mine[0][1] == 0 and mine[-1][1] == mine[-1][2] == p.stats.details["roots"] == len(mine) - 1
+
+
 def _cli_all(extra_env, *argv):
     import os
     import subprocess

@@ -299,7 +299,9 @@ class GeometricPhasePlanner:
         if not listed:
             return None
         found = []
-        for r in listed:
+        label = f"certify (k = {k:g}, {len(listed)} roots)"
+        for i, r in enumerate(listed):
+            report(label, i, len(listed))
             eta = (target[2] + 2.0 * math.pi * r.m) / steps
             q = _Root(r.a, r.b, 0.0, r.m, float(target_shift(math.hypot(target[0], target[1]), eta, steps)), eta)
             x, status, iters = self._polish(q, k)
@@ -308,6 +310,7 @@ class GeometricPhasePlanner:
                 found.append(cand)
             else:
                 self._log_rejected(q, cand, turns)
+        report(label, len(listed), len(listed))
         if not found:
             return None
         found.sort(key=lambda c: c[0].a + c[0].b)
