@@ -30,7 +30,7 @@ PREFIX = "rollplan"
 #: Status codes of the generated planner (``<prefix>.h``).
 OK, BAD_INPUT, NO_PLAN, NO_CONVERGENCE, NOT_CERTIFIED, TOO_MANY = 0, 2, 3, 4, 5, 6
 #: Roots asked of ``<prefix>_plan_all`` at first (asked again with room for all if there are more).
-_FIRST_CAPACITY = 256
+_FIRST_CAPACITY = 4096
 
 _PACKAGE = Path(__file__).resolve().parents[2]
 _lock = threading.Lock()
