@@ -118,6 +118,17 @@ def _whole(text: str) -> int:
         raise argparse.ArgumentTypeError(str(exc).removeprefix("value = ")) from None
 
 
+def _steps_per_leaf(text: str):
+    """``--steps-per-leaf``: ``auto`` or a whole number."""
+    if text.strip() == "auto":
+        return "auto"
+    try:
+        return parse_whole(text, "value")
+    except InputError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not allowed: it must be auto or a whole number (a multiple "
+                                         "of 10 in [20, 2000])") from None
+
+
 class _Claims:
     """The outputs the running command holds (:func:`rollplan.outputs.claim`), released when it ends."""
 
@@ -1126,13 +1137,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("codegen", help="write a self-contained C99 planner (CasADi code generation)")
     c.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
-    c.add_argument("--steps-per-leaf", type=_whole, default=240,
-                   help="node intervals per leaf of the step map, a multiple of 10 (default 240)")
+    c.add_argument("--steps-per-leaf", type=_steps_per_leaf, default="auto",
+                   help="node intervals per leaf of the step map, a multiple of 10, or auto (the default): the "
+                        "smallest of 240, 320, 400, ... 2000 whose step map is accurate to 1e-10 up to --k-max")
     c.add_argument("--prefix", default="rollplan", help="prefix of the C symbols and files, a C identifier "
                    "(default rollplan)")
     c.add_argument("--k-max", type=_number, default=5.0,
-                   help="largest k the C planner accepts (the smallest is 0.5); refused unless its step map is "
-                        "accurate to 1e-10 up to it (default 5; e.g. 10 with --steps-per-leaf 320)")
+                   help="largest k the C planner accepts (the smallest is 0.5), at most %g; refused unless its step "
+                        "map is accurate to 1e-10 up to it (default 5)" % K_MAX)
     c.add_argument("--real", choices=("double", "float"), default="double",
                    help="C number type: float for single-precision FPUs (plans certified to 1e-4 only)")
     c.set_defaults(func=cmd_codegen)
