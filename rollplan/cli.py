@@ -26,7 +26,7 @@ from .core.curves import A_MAX
 from .errors import InputError, NoPlanError, SolverError, check_finite, check_whole
 from .inputs import parse_number, parse_whole, show_path
 from .io import check_figure_path, check_writable, composed_to_dict, route_to_dict, save_figure, tagged, write_json
-from .outputs import WRITE_FAILURES, claim
+from .outputs import WRITE_FAILURES, claim, write_all
 from .planners import geometric
 from .planners.geometric import as_composed
 from .problem import DEFAULT_K, K_MAX, MAX_STEPS, STATE_NAMES
@@ -123,8 +123,15 @@ def _emit_json(args, obj, unit: str) -> None:
     """Write ``obj`` (with ``version`` and ``units``) to ``--json FILE``, or to stdout for ``--json -``."""
     doc = tagged(obj, unit)
     if args.json == "-":
-        args.stdout.write(json.dumps(doc, indent=1, allow_nan=False) + "\n")
+        text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
         args.stdout.flush()
+        try:
+            fd = args.stdout.fileno()
+        except (AttributeError, OSError, ValueError):   # a stream without a file descriptor (captured)
+            args.stdout.write(text)
+            args.stdout.flush()
+        else:   # not through the stream: Python's buffered writer drops the rest of a short write into a pipe
+            write_all(fd, text.encode())
     else:
         write_json(args.json, doc)
         print(f"wrote {args.json}")
@@ -936,12 +943,12 @@ def _cli_syntax(message: str, args) -> str:
     return _API_OPTION.sub(sub, message)
 
 
-def _drop_stdout() -> None:
-    """Point stdout at /dev/null, so that the text left in its buffer is not written again (and fails again,
-    with an 'Exception ignored' message) when Python exits."""
+def _drop_stdout(stream=None) -> None:
+    """Point stdout (or ``stream``) at /dev/null, so that the text left in its buffer is not written again (and
+    fails again, with an 'Exception ignored' message) when Python exits."""
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        os.dup2(devnull, (stream or sys.stdout).fileno())
         os.close(devnull)
     except (OSError, ValueError):   # stdout without a file descriptor (captured): nothing is flushed at exit
         pass
@@ -997,15 +1004,15 @@ def _main(argv) -> int:
     except SolverError as exc:
         print(f"rollplan: solver failed ({exc.status}): {_cli_syntax(str(exc), args)}", file=sys.stderr)
         return EXIT_SOLVER
-    except BrokenPipeError:  # output piped into e.g. `head`
-        sys.stderr.close()
-        return EXIT_OK
-    except OSError as exc:   # stdout on a full disk (`> /dev/full`), a device error: the user's, one line
+    except OSError as exc:   # stdout on a full disk (`> /dev/full`), into a closed pipe (`| head -c1`): one line
         if exc.errno not in WRITE_FAILURES:
             raise
         _drop_stdout()
-        print(f"rollplan: error: the standard output cannot be written: {WRITE_FAILURES[exc.errno]}",
-              file=sys.stderr)
+        try:
+            print(f"rollplan: error: the standard output cannot be written: {WRITE_FAILURES[exc.errno]}",
+                  file=sys.stderr)
+        except OSError:   # stderr is gone too (`2>&1 | head`): the exit status says it
+            _drop_stdout(sys.stderr)
         return EXIT_INPUT
     finally:
         _Claims.stack = None

@@ -42,8 +42,8 @@ from pathlib import Path
 from .errors import InputError, OutputError
 from .inputs import check_path, show_path
 
-__all__ = ["WRITE_FAILURES", "check_writable", "write_atomic", "write_json", "check_figure_path", "save_figure",
-           "claim", "LineWriter", "make_folder"]
+__all__ = ["WRITE_FAILURES", "write_all", "check_writable", "write_atomic", "write_json", "check_figure_path",
+           "save_figure", "claim", "LineWriter", "make_folder"]
 
 _RANDOM = 8            # characters tempfile adds to a temporary name
 _TMP_SUFFIX = ".tmp"
@@ -56,7 +56,15 @@ WRITE_FAILURES = {errno.ENOSPC: "the disk is full", errno.EDQUOT: "the disk quot
                   errno.EROFS: "the file system is read-only", errno.EACCES: "permission denied",
                   errno.EPERM: "permission denied", errno.ENAMETOOLONG: "the name is too long for the file system",
                   errno.ENOENT: "its folder does not exist", errno.ENOTDIR: "a part of the path is not a folder",
-                  errno.EIO: "input/output error of the device"}
+                  errno.EIO: "input/output error of the device", errno.EPIPE: "the reader closed the pipe"}
+
+
+def write_all(fd: int, data: bytes) -> None:
+    """Write all of ``data`` to the file descriptor ``fd`` (OSError if it cannot: a short write is followed by
+    another, which reports the reason, e.g. EPIPE when a pipe's reader has gone)."""
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
 
 
 def _failure(what: str, path, exc: OSError) -> OutputError:
@@ -285,9 +293,7 @@ def write_atomic(path, data: bytes, what: str = "output") -> None:
         try:
             fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=_sibling_stem(target), suffix=_TMP_SUFFIX)
             os.fchmod(fd, _new_mode(target))
-            view = memoryview(data)
-            while view:
-                view = view[os.write(fd, view):]
+            write_all(fd, data)
             os.fsync(fd)
             os.close(fd)
             fd = -1
@@ -351,10 +357,8 @@ class LineWriter:
             raise _failure(what, path, exc) from None
 
     def write(self, line: str) -> None:
-        view = memoryview(line.encode())
         try:
-            while view:
-                view = view[os.write(self._fd, view):]
+            write_all(self._fd, line.encode())
             self._unsynced += 1
             if self._unsynced >= self.sync_every or time.monotonic() - self._synced_at >= self.sync_seconds:
                 self.sync()

@@ -410,6 +410,35 @@ def test_stdout_on_a_full_disk_is_one_line_and_exit_2(argv):
     assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr
 
 
+CLOSED_PIPE = "rollplan: error: the standard output cannot be written: the reader closed the pipe"
+
+
+@pytest.mark.parametrize("argv", [["plan", "--to", "0.5", "0.3", "--json", "-"], ["step", "--a", "0.3"]])
+def test_stdout_into_a_closed_pipe_is_a_failure(argv):
+    """`plan --to 0.5 0.3 --json - | head -c1` exited 0 although the JSON was not delivered: stdout is a pipe whose
+    reader has gone (closed before the command writes), and the command exits 2 with one line."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        r = subprocess.run([sys.executable, "-m", "rollplan.cli", *argv], stdout=write_end, stderr=subprocess.PIPE,
+                           text=True, timeout=300, check=False)
+    finally:
+        os.close(write_end)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.strip().splitlines()[-1] == CLOSED_PIPE
+    assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr
+
+
+def test_json_dash_into_head_is_a_failure(tmp_path):
+    """The reported pipeline itself: the JSON (300 kB, more than a pipe holds) into `head -c1`; the shell's
+    pipefail reports the command's status."""
+    cmd = f"set -o pipefail; {sys.executable} -m rollplan.cli plan --to 0.5 0.3 --json - 2>err.txt | head -c1"
+    r = subprocess.run(["bash", "-c", cmd], cwd=tmp_path, capture_output=True, text=True, timeout=300, check=False)
+    err = (tmp_path / "err.txt").read_text()
+    assert r.stdout == "{" and r.returncode == 2, err
+    assert err.strip().splitlines()[-1] == CLOSED_PIPE and "Traceback" not in err
+
+
 @pytest.mark.parametrize("command, option, low", [("batch", "--jobs", 1), ("plan", "--samples", 2)])
 def test_help_states_the_limit_the_command_enforces(capsys, tmp_path, command, option, low):
     """The help said [2, 10^7] for --samples and '>= 1' for --jobs while the commands refused above 10^6 and 1024:
