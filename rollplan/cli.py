@@ -1,8 +1,8 @@
 """The rollplan command: exact motion planning for a spherical robot driven by two internal rotors.
 
-Exit codes: 0 success, 2 bad input, 3 no plan, 4 solver failure, 130 interrupted (Ctrl-C); batch: 1 when
-some rows failed, 3 when every row failed. `--json -` writes the JSON document to stdout and the summary to
-stderr.
+Exit codes: 0 success, 2 bad input, 3 no plan, 4 solver failure, 130 interrupted (Ctrl-C), 143 terminated
+(SIGTERM, stopped as for Ctrl-C); batch: 1 when some rows failed, 3 when every row failed. `--json -` writes
+the JSON document to stdout and the summary to stderr.
 Lengths are printed in the unit in use (R, or m with --robot or --radius), summaries with 6
 significant digits (JSON files in full precision); long work shows its progress on stderr.
 """
@@ -36,6 +36,7 @@ from .version import __version__
 from .waypoints import read_waypoints
 
 EXIT_OK, EXIT_SOME_FAILED, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
+EXIT_TERMINATED = 143   # SIGTERM: stopped as for Ctrl-C (128 + 15, the shell's status of a terminated command)
 #: What a residual is (printed next to every residual and arrival error).
 NORM = "Euclidean norm; lengths in R, angles in rad"
 #: Numbers as argparse should see them: also in exponent form (-1e-3) and -inf/-nan (refused later by the
@@ -693,6 +694,9 @@ def cmd_batch(args) -> int:
         jobs = args.jobs if args.jobs is not None else cpu_count()
         r = run_batch(args.targets, args.out, jobs, args.resume, args.overwrite, args.method,
                       progress=not args.quiet, scheduler=args.scheduler)
+    except interrupts.Terminated:
+        print(f"rollplan: terminated; finished lines are kept in {args.out}: rerun with --resume", file=sys.stderr)
+        return EXIT_TERMINATED
     except KeyboardInterrupt:
         print(f"\nrollplan: interrupted; finished lines are kept in {args.out}: rerun with --resume",
               file=sys.stderr)
@@ -765,7 +769,7 @@ the output; blank lines and lines starting with # are skipped. Example:
 
 exit status: 0 every row planned, 1 some rows failed, 3 every row failed (each failed row has
 "status": "failed" and a "reason" in the output), 2 bad input, 4 the cluster failed, 130 interrupted
-(finished lines are kept: rerun with --resume).
+(Ctrl-C) or 143 terminated (SIGTERM) (finished lines are kept: rerun with --resume).
 """
 
 
@@ -956,9 +960,10 @@ def _drop_stdout(stream=None) -> None:
 
 def main(argv=None) -> int:
     """Run the command in ``argv`` (default ``sys.argv[1:]``) and return its exit status (module docstring)."""
-    status = _main(argv)
+    with interrupts.terminate_as_interrupt():   # SIGTERM stops the command as Ctrl-C does (exit 143)
+        status = _main(argv)
     interrupts.settle()   # decided: a late Ctrl-C (Python's shutdown) no longer turns it into death by SIGINT
-    if status == EXIT_INTERRUPTED:
+    if status in (EXIT_INTERRUPTED, EXIT_TERMINATED):
         interrupts.forget_unhandled()
     return status
 
@@ -989,6 +994,9 @@ def _main(argv) -> int:
                 status = args.func(args)
             args.stdout.flush()   # a full disk or a closed pipe behind stdout shows here, inside the handlers
             return status
+    except interrupts.Terminated:   # SIGTERM, also inside the solvers
+        print("rollplan: terminated", file=sys.stderr)
+        return EXIT_TERMINATED
     except KeyboardInterrupt:  # Ctrl-C, also inside the solvers (rollplan.interrupts)
         print("\nrollplan: interrupted" if sys.stderr.isatty() else "rollplan: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

@@ -19,6 +19,10 @@ the handler only in the main thread and only while Python's default handler is
 installed (a program with its own SIGINT handler, or a worker process that
 ignores SIGINT, is left alone).
 
+SIGTERM: while :func:`terminate_as_interrupt` holds (the command, :func:`rollplan.cli.main`), SIGTERM raises
+:class:`Terminated`, a KeyboardInterrupt: the command stops as for Ctrl-C (workers stopped, finished work kept,
+outputs left whole) and exits 143; :func:`call` records it like SIGINT.
+
 Start-up: :func:`guard_start_up` (called first thing by ``rollplan/__init__.py``)
 makes a Ctrl-C while the modules load exit 130 with one line when the program
 is the ``rollplan`` command or ``python -m rollplan.cli``; :func:`end_start_up`
@@ -44,17 +48,29 @@ import os
 import signal
 import sys
 import threading
+from contextlib import contextmanager
 
-__all__ = ["call", "guard_start_up", "cli_follows", "end_start_up", "forget_unhandled", "settle"]
+__all__ = ["call", "Terminated", "terminate_as_interrupt", "guard_start_up", "cli_follows", "end_start_up",
+           "forget_unhandled", "settle"]
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, while :func:`terminate_as_interrupt` holds: the program stops as for Ctrl-C (exit 143)."""
+
 
 class _State:
-    pending = False   # SIGINT arrived during the outermost call
+    pending = None    # the exception of a signal that arrived during the outermost call
     depth = 0         # nesting of calls
 
 
 def _record(signum, frame):
-    _State.pending = True
+    _State.pending = KeyboardInterrupt
     raise KeyboardInterrupt
+
+
+def _terminate(signum, frame):
+    _State.pending = Terminated
+    raise Terminated
 
 
 def call(function, *args, **kwargs):
@@ -63,7 +79,7 @@ def call(function, *args, **kwargs):
                and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
     previous = None
     if _State.depth == 0:
-        _State.pending = False
+        _State.pending = None
     if install:
         previous = signal.signal(signal.SIGINT, _record)
     _State.depth += 1
@@ -71,15 +87,31 @@ def call(function, *args, **kwargs):
         result = function(*args, **kwargs)
     except Exception:
         if _State.pending:
-            raise KeyboardInterrupt from None
+            raise _State.pending from None
         raise
     finally:
         _State.depth -= 1
         if install:
             signal.signal(signal.SIGINT, previous)
     if _State.pending:
-        raise KeyboardInterrupt
+        raise _State.pending
     return result
+
+
+@contextmanager
+def terminate_as_interrupt():
+    """For the ``with`` block, SIGTERM raises :class:`Terminated` (a KeyboardInterrupt: the program stops as for
+    Ctrl-C, also inside the solvers, see :func:`call`); only in the main thread and when SIGTERM has its
+    default action (a program with its own handler is left alone). The action is restored after the block."""
+    install = (threading.current_thread() is threading.main_thread()
+               and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL)
+    if install:
+        signal.signal(signal.SIGTERM, _terminate)
+    try:
+        yield
+    finally:
+        if install:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _interrupted_at_start(signum, frame):

@@ -111,9 +111,9 @@ def fresh_cache_env(folder):
     return {**os.environ, "ROLLPLAN_CACHE_DIR": str(folder)}
 
 
-def run_and_interrupt(argv, delay, wait_for=None, env=None):
-    """Run the command; ``delay`` seconds after its stderr shows ``wait_for`` (or after the start), SIGINT.
-    Returns (exit code, seconds from the signal to the exit, stdout, stderr)."""
+def run_and_interrupt(argv, delay, wait_for=None, env=None, sig=signal.SIGINT):
+    """Run the command; ``delay`` seconds after its stderr shows ``wait_for`` (or after the start), SIGINT (or
+    ``sig``). Returns (exit code, seconds from the signal to the exit, stdout, stderr)."""
     proc = subprocess.Popen([sys.executable, "-m", "rollplan.cli", *argv], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env)
     lines = []
@@ -131,7 +131,7 @@ def run_and_interrupt(argv, delay, wait_for=None, env=None):
     reader.start()
     assert seen.wait(120), "".join(lines)
     time.sleep(delay)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     t0 = time.perf_counter()
     out = proc.stdout.read()
     proc.wait(timeout=60)
@@ -151,6 +151,31 @@ def test_ctrl_c_stops_the_solver_loop_with_exit_130(delay, tmp_path):
     assert code == 130, err
     assert elapsed < 2.0
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
+def test_sigterm_stops_the_solver_loop_with_exit_143(tmp_path):
+    """SIGTERM killed the command at once, leaving its workers and temporaries; now, once the command runs (here:
+    while it builds its leaf table), it stops as for Ctrl-C, also inside the solvers (recorded like SIGINT, see
+    test_ctrl_c_stops_the_solver_loop_with_exit_130): exit 143, one line."""
+    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99"], 0.5, wait_for="leaf table",
+                                              env=fresh_cache_env(tmp_path / "cache"), sig=signal.SIGTERM)
+    assert code == 143, err
+    assert elapsed < 2.0
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: terminated"
+
+
+def test_interrupts_call_raises_terminated_for_sigterm():
+    """A SIGTERM that a solver swallowed is raised after it as Terminated (a KeyboardInterrupt)."""
+    function, args = endless_ipopt()
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGTERM))
+    with interrupts.terminate_as_interrupt():
+        timer.start()
+        t0 = time.perf_counter()
+        with pytest.raises(interrupts.Terminated):
+            interrupts.call(function, **args)
+        assert time.perf_counter() - t0 < 1.5
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL   # restored
 
 
 @pytest.mark.slow
