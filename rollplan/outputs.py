@@ -342,7 +342,8 @@ class LineWriter:
 
     Each :meth:`write` is one ``write`` call on a file opened for appending, so
     a killed process keeps every finished line (at most the line being written
-    is torn). ``fsync`` runs every ``sync_every`` lines or ``sync_seconds``
+    is torn); a line that cannot be written whole (disk full) is cut off again,
+    leaving the finished lines. ``fsync`` runs every ``sync_every`` lines or ``sync_seconds``
     seconds and at :meth:`close`, which bounds what a power loss can take.
     Hold the output's :func:`claim` while writing.
     """
@@ -353,13 +354,21 @@ class LineWriter:
         self._unsynced, self._synced_at = 0, time.monotonic()
         try:
             self._fd = os.open(path, os.O_WRONLY | os.O_APPEND | getattr(os, "O_CLOEXEC", 0))
+            self._size = os.fstat(self._fd).st_size
         except OSError as exc:
             raise _failure(what, path, exc) from None
 
     def write(self, line: str) -> None:
+        data = line.encode()
         try:
-            write_all(self._fd, line.encode())
-            self._unsynced += 1
+            write_all(self._fd, data)
+        except OSError as exc:
+            with suppress(OSError):
+                os.ftruncate(self._fd, self._size)   # no torn line (shrinking needs no space)
+            raise _failure(self.what, self.path, exc) from None
+        self._size += len(data)
+        self._unsynced += 1
+        try:
             if self._unsynced >= self.sync_every or time.monotonic() - self._synced_at >= self.sync_seconds:
                 self.sync()
         except OSError as exc:

@@ -455,8 +455,9 @@ def test_fsync_is_batched(tmp_path, monkeypatch):
     monkeypatch.setattr(outputs.os, "fsync", lambda fd: (calls.append(fd), real(fd)))
     sizes = []
 
-    def watch(done, total, failed):
-        sizes.append((tmp_path / "p.jsonl").stat().st_size)
+    def watch(done, total, failed):   # the output is made with its first line (0 bytes before)
+        out = tmp_path / "p.jsonl"
+        sizes.append(out.stat().st_size if out.exists() else 0)
 
     r = run_batch(write_csv(tmp_path / "t.csv"), tmp_path / "p.jsonl", progress=watch)
     assert len(calls) <= 3 + r.time_s / batch.FSYNC_INTERVAL
