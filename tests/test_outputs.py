@@ -143,6 +143,24 @@ def test_batch_on_a_full_disk_leaves_no_output(full_disk, tmp_path, capsys):
 
 
 @pytest.mark.slow
+def test_codegen_on_a_full_disk_leaves_nothing(full_disk, capsys):
+    """`codegen` onto a full disk left a half-written folder. Now a new folder appears whole or not at all, and
+    a folder written before is left as it was (and no temporary folder remains)."""
+    from rollplan import codegen
+
+    (full_disk / "filler").unlink()
+    codegen.generate(full_disk / "old")   # 0.4 MB of the 1 MiB disk
+    before = {p.name: p.read_bytes() for p in (full_disk / "old").iterdir()}
+    fill(full_disk / "filler")
+    code, _, err = run(capsys, "codegen", "--out", str(full_disk / "c"))
+    assert code == 2 and "disk is full" in err and one_line(err), err
+    code, _, err = run(capsys, "codegen", "--out", str(full_disk / "old"), "--real", "float")
+    assert code == 2 and "disk is full" in err and one_line(err), err
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler", "old"]
+    assert {p.name: p.read_bytes() for p in (full_disk / "old").iterdir()} == before
+
+
+@pytest.mark.slow
 def test_batch_that_fills_the_disk_keeps_whole_lines(tmp_path):
     """A batch whose output reaches the limit after its first line (a file size limit: EFBIG, as a full disk):
     exit 2, one line that says the finished lines are kept, and the output holds whole lines only, which
