@@ -970,6 +970,11 @@ def main(argv=None) -> int:
     interrupts.settle()   # decided: a late Ctrl-C (Python's shutdown) no longer turns it into death by SIGINT
     if status in (EXIT_INTERRUPTED, EXIT_TERMINATED):
         interrupts.forget_unhandled()
+        if interrupts.abandoned() and interrupts.cli_follows():   # a solver still being built in a thread
+            for stream in (sys.stdout, sys.stderr):
+                with contextlib.suppress(OSError, ValueError):
+                    stream.flush()
+            os._exit(status)
     return status
 
 

@@ -19,6 +19,10 @@ the handler only in the main thread and only while Python's default handler is
 installed (a program with its own SIGINT handler, or a worker process that
 ignores SIGINT, is left alone).
 
+Long calls into C++ that never return to Python (CasADi's construction of a large solver, minutes) run in a
+helper thread by :func:`call_in_thread`, so that the main thread can act on Ctrl-C at once; an interrupted
+command that left such a thread running ends by ``os._exit`` (:func:`rollplan.cli.main`).
+
 SIGTERM: while :func:`terminate_as_interrupt` holds (the command, :func:`rollplan.cli.main`), SIGTERM raises
 :class:`Terminated`, a KeyboardInterrupt: the command stops as for Ctrl-C (workers stopped, finished work kept,
 outputs left whole) and exits 143; :func:`call` records it like SIGINT.
@@ -50,8 +54,8 @@ import sys
 import threading
 from contextlib import contextmanager
 
-__all__ = ["call", "Terminated", "terminate_as_interrupt", "guard_start_up", "cli_follows", "end_start_up",
-           "forget_unhandled", "settle"]
+__all__ = ["call", "call_in_thread", "abandoned", "Terminated", "terminate_as_interrupt", "guard_start_up",
+           "cli_follows", "end_start_up", "forget_unhandled", "settle"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -61,6 +65,7 @@ class Terminated(KeyboardInterrupt):
 class _State:
     pending = None    # the exception of a signal that arrived during the outermost call
     depth = 0         # nesting of calls
+    abandoned = False  # a call_in_thread was interrupted: its thread still runs
 
 
 def _record(signum, frame):
@@ -96,6 +101,41 @@ def call(function, *args, **kwargs):
     if _State.pending:
         raise _State.pending
     return result
+
+
+def call_in_thread(function, *args, **kwargs):
+    """``function(*args, **kwargs)`` run by a helper thread while this (the main) thread waits for it: for long
+    calls into C++ that release the GIL but never return to Python, during which Python cannot run its signal
+    handlers (CasADi's construction of a solver: minutes for a large NLP). Ctrl-C (and SIGTERM) then act at
+    once: the KeyboardInterrupt is raised here, the helper thread is left running (a daemon) and
+    :func:`abandoned` is True. In another thread the call is made directly."""
+    if threading.current_thread() is not threading.main_thread():
+        return function(*args, **kwargs)
+    box = {}
+
+    def run():
+        try:
+            box["result"] = function(*args, **kwargs)
+        except BaseException as exc:  # noqa: BLE001 -- passed to the waiting thread
+            box["error"] = exc
+
+    helper = threading.Thread(target=run, name="rollplan-build", daemon=True)
+    helper.start()
+    try:
+        while helper.is_alive():
+            helper.join(0.2)
+    except KeyboardInterrupt:
+        _State.abandoned = True
+        raise
+    if "error" in box:
+        raise box["error"]
+    return box["result"]
+
+
+def abandoned() -> bool:
+    """True if an interrupted :func:`call_in_thread` left its helper thread running: the program should end by
+    ``os._exit`` (the C++ work in that thread must not meet the interpreter's shutdown)."""
+    return _State.abandoned
 
 
 @contextmanager

@@ -3,6 +3,7 @@
 with one line, never a traceback, a failed row or another plan."""
 
 import os
+import random
 import signal
 import subprocess
 import sys
@@ -150,6 +151,20 @@ def test_ctrl_c_stops_the_solver_loop_with_exit_130(delay, tmp_path):
                                               env=fresh_cache_env(tmp_path / "cache"))
     assert code == 130, err
     assert elapsed < 2.0
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay", [random.Random(5).uniform(0.3, 3.0) for _ in range(2)])
+def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(delay):
+    """Ctrl-C in `compare --intervals 2000` took 24-30 s to act: CasADi's construction of the collocation solver
+    (minutes for a large N, one call into C++ that never returns to Python) held it. SIGINT at a random moment
+    of that construction (N = 600: seconds) now exits 130 within a second or two (the machine may be loaded),
+    one line, no traceback."""
+    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3", "--intervals", "600"], delay,
+                                              wait_for="building the collocation NLP")
+    assert code == 130, err
+    assert elapsed < 3.0, (elapsed, err)
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
 
 

@@ -57,6 +57,7 @@ costs :func:`rollplan.measures.measure` computes like those of any other motion.
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass
@@ -86,6 +87,8 @@ from .transcription import (
 __all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "MinimumTimePlanner", "certify", "rest_parameters",
            "motion_function", "naive_guess", "guess_from_samples", "correct", "check_horizon",
            "polar_angles", "TOLERANCE", "MIN_INTERVALS", "HORIZON_RANGE", "COST_POWERS"]
+
+log = logging.getLogger(__name__)
 
 #: Running costs of the rest-to-rest problem, by name: ``L(xdot, omega, torque, par)``.
 REST_COSTS = {
@@ -214,8 +217,10 @@ class RestToRestPlanner:
         xdot, omega, _, torque = f(x, w, par)
         self.point = ca.Function("point", [x, w, par], [xdot, REST_COSTS[cost](xdot, omega, torque, par), omega])
         t0 = time.perf_counter()
+        log.info("building the collocation NLP: N = %d, d = %d, cost %s", intervals, degree, cost)
         nlp, self.path_rows = self.transcription.contact_nlp(self.point, N_PAR)
-        self.solver = ca.nlpsol("rest", "ipopt", nlp, ipopt_options(self.tol, self.max_iter))
+        # minutes for a large N, in C++ that never returns to Python: built in a thread, so Ctrl-C acts at once
+        self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, ipopt_options(self.tol, self.max_iter))
         self.build_time_s = time.perf_counter() - t0
 
     def boundary(self, problem: Problem, turns: int) -> tuple[np.ndarray, np.ndarray]:
@@ -474,9 +479,9 @@ class MinimumTimePlanner:
                 lim += [rates / limits[0], torque / limits[1]]
         g_lim = ca.vertcat(*lim)
         self.n_dyn, self.n_lim, self.path_rows = g_dyn.numel(), g_lim.numel(), rows
-        self.solver = ca.nlpsol("min_time", "ipopt", {"x": ca.vertcat(V, T), "p": ca.vertcat(fixed, limits),
-                                                      "f": T, "g": ca.vertcat(g_dyn, g_lim)},
-                                ipopt_options(tol, max_iter))
+        self.solver = interrupts.call_in_thread(ca.nlpsol, "min_time", "ipopt",
+                                                {"x": ca.vertcat(V, T), "p": ca.vertcat(fixed, limits), "f": T,
+                                                 "g": ca.vertcat(g_dyn, g_lim)}, ipopt_options(tol, max_iter))
 
     def solve(self, problem: Problem, guess: Guess, duration_guess: float, robot: Robot, turns: int = 0):
         """Minimum-time rest-to-rest motion within ``robot``'s limits (both must be set), from ``guess``
