@@ -635,7 +635,7 @@ def _add_compare_parser(sub) -> None:
 
 def _compare_arguments(c) -> None:
     from .planners import collocation
-    from .planners.collocation.rest import HORIZON_RANGE, MIN_INTERVALS
+    from .planners.collocation.rest import HORIZON_RANGE, MAX_INTERVALS, MEMORY_GB, MIN_INTERVALS
     from .studies.comparison import COMPARED_COSTS, CONTACT_BOUND
 
     k_help = ("inertia ratio k in (1, %g] (default %g; without --robot the torques are those of a robot with this k, "
@@ -647,8 +647,9 @@ def _compare_arguments(c) -> None:
     c.add_argument("--horizon", type=_number, default=1.0,
                    help="time horizon T [s] of both motions in [%g, %g] (default 1)" % HORIZON_RANGE)
     c.add_argument("--intervals", type=_whole, default=100,
-                   help=f"intervals N of both motions in [{MIN_INTERVALS}, 100000] (default 100; 2N controls for "
-                        "the 7 end conditions)")
+                   help=f"intervals N of both motions in [{MIN_INTERVALS}, {MAX_INTERVALS}] (default 100; 2N "
+                        f"controls for the 7 end conditions; N = {MAX_INTERVALS} needs about {MEMORY_GB} GB of memory "
+                        "and tens of minutes)")
     c.add_argument("--degree", type=_whole, default=3, help="collocation degree d in [1, 9] (default 3)")
     c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
     c.add_argument("--branches", type=_whole, default=2,

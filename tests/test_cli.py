@@ -439,7 +439,8 @@ def test_json_dash_into_head_is_a_failure(tmp_path):
     assert err.strip().splitlines()[-1] == CLOSED_PIPE and "Traceback" not in err
 
 
-@pytest.mark.parametrize("command, option, low", [("batch", "--jobs", 1), ("plan", "--samples", 2)])
+@pytest.mark.parametrize("command, option, low", [("batch", "--jobs", 1), ("plan", "--samples", 2),
+                                                  ("compare", "--intervals", 4)])
 def test_help_states_the_limit_the_command_enforces(capsys, tmp_path, command, option, low):
     """The help said [2, 10^7] for --samples and '>= 1' for --jobs while the commands refused above 10^6 and 1024:
     the range in --help is the one in the refusal of a value just above it."""
@@ -453,7 +454,8 @@ def test_help_states_the_limit_the_command_enforces(capsys, tmp_path, command, o
     high = int(re.search(rf"{option} \S+ .*?in \[{low}, (\d+)\]", help_text).group(1))
     csv_path = tmp_path / "t.csv"
     csv_path.write_text("u_a,v_a\n0.1,0.2\n")
-    argv = {"batch": ["batch", str(csv_path), "--out", str(tmp_path / "o.jsonl")], "plan": ["plan"]}[command]
+    argv = {"batch": ["batch", str(csv_path), "--out", str(tmp_path / "o.jsonl")], "plan": ["plan"],
+            "compare": ["compare", "--to", "0.5", "0.3"]}[command]
     code, _, err = run(capsys, *argv, option, str(high + 1))
     assert code == 2 and f"[{low}, {high}]" in err
 

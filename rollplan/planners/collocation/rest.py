@@ -86,7 +86,8 @@ from .transcription import (
 
 __all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "MinimumTimePlanner", "certify", "rest_parameters",
            "motion_function", "naive_guess", "guess_from_samples", "correct", "check_horizon",
-           "polar_angles", "TOLERANCE", "MIN_INTERVALS", "HORIZON_RANGE", "COST_POWERS"]
+           "polar_angles", "check_intervals", "TOLERANCE", "MIN_INTERVALS", "MAX_INTERVALS", "MEMORY_GB",
+           "HORIZON_RANGE", "COST_POWERS"]
 
 log = logging.getLogger(__name__)
 
@@ -103,6 +104,11 @@ TOLERANCE = 1e-9
 CORRECTION_TOL = 1e-12
 #: Least number of intervals: 2N controls for the 7 end conditions (module docstring).
 MIN_INTERVALS = 4
+#: Most intervals: the NLP is built symbolically and its memory (construction, IPOPT) grows with N; up to this
+#: N a solve stays within about :data:`MEMORY_GB` GB.
+MAX_INTERVALS = 2000
+#: Memory [GB] that :data:`MAX_INTERVALS` keeps a solve within (named when a larger N is refused).
+MEMORY_GB = 2
 #: Horizons T [s] served (module docstring, time scaling).
 HORIZON_RANGE = (1e-6, 1e6)
 #: Power p of the scaling law ``J(T) = J(1) T^p`` of each cost.
@@ -112,6 +118,17 @@ BACKOFF_TRIES = 4
 #: Safety factor of a backoff: the bound (or limit) is lowered by this times the excess measured on the samples.
 BACKOFF_FACTOR = 1.25
 _NEWTON_STEPS = 8
+
+
+def check_intervals(intervals) -> int:
+    """``intervals`` if a whole number in [:data:`MIN_INTERVALS`, :data:`MAX_INTERVALS`]; InputError naming the
+    range (and, above it, the memory it keeps to) otherwise."""
+    n = check_whole("intervals", intervals)
+    if n > MAX_INTERVALS:
+        raise InputError(f"intervals = {n} is not allowed: it must be a whole number in [{MIN_INTERVALS}, "
+                         f"{MAX_INTERVALS}] (the collocation NLP of more intervals needs more than about {MEMORY_GB} "
+                         "GB of memory)")
+    return check_whole("intervals", n, MIN_INTERVALS, MAX_INTERVALS)
 
 
 def check_horizon(horizon) -> float:
@@ -185,7 +202,7 @@ class RestToRestPlanner:
     Parameters
     ----------
     intervals, degree, scheme
-        The :class:`Transcription`: N in [:data:`MIN_INTERVALS`, 100000], d in 1..9, ``"legendre"`` or
+        The :class:`Transcription`: N in [:data:`MIN_INTERVALS`, :data:`MAX_INTERVALS`], d in 1..9, ``"legendre"`` or
         ``"radau"``.
     cost : str
         Name in :data:`REST_COSTS`.
@@ -202,7 +219,7 @@ class RestToRestPlanner:
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre",
                  cost: str = "angular_velocity", contact_bound: float = math.radians(80.0), tol: float = 1e-9,
                  max_iter: int = 150, samples_per_interval: int = 8) -> None:
-        check_whole("intervals", intervals, MIN_INTERVALS, 100000)
+        check_intervals(intervals)
         self.transcription = Transcription(intervals, degree, scheme, nx=7, nu=2)
         if not isinstance(cost, str) or cost not in REST_COSTS:
             raise InputError(f"cost = {cost!r} is not allowed: choose one of {', '.join(REST_COSTS)}")
