@@ -5,8 +5,8 @@ while a solver runs, CasADi polls Python for pending signals (once per IPOPT
 iteration, once per right-hand-side evaluation of CVODES). When Python's
 handler raises KeyboardInterrupt, CasADi aborts the solver, but it does not
 pass the KeyboardInterrupt on: IPOPT returns with status
-``NonIpopt_Exception_Thrown`` and a warning on stderr, CVODES raises a
-RuntimeError (``CV_RHSFUNC_FAIL``). A caller would take either for a failed
+``NonIpopt_Exception_Thrown`` and a warning on stderr (which :func:`call` drops), CVODES
+raises a RuntimeError (``CV_RHSFUNC_FAIL``). A caller would take either for a failed
 solve: the geometric planner would try the next branch (and return a longer
 plan, or go on for minutes), a batch would record the row in flight as
 failed. Evaluations of plain CasADi Functions (``map``) do not poll; Python
@@ -78,15 +78,60 @@ def _terminate(signum, frame):
     raise Terminated
 
 
+#: What CasADi writes (through ``sys.stderr``) when it swallows the KeyboardInterrupt raised in IPOPT's callback.
+_SWALLOWED = 'WARNING("KeyboardInterruptException")'
+
+
+class _QuietInterrupts:
+    """``sys.stderr`` during a solver call: text passes on at once, except that a line of CasADi's is held to its
+    end and dropped if it is the warning about the interrupt it swallowed (the command says it was interrupted,
+    in one line)."""
+
+    def __init__(self, stream) -> None:
+        self.stream, self._held = stream, ""
+
+    def write(self, text: str) -> int:
+        self._held += text
+        out = []
+        while self._held:
+            end = self._held.find("\n") + 1
+            if self._held.startswith("CasADi") or "CasADi".startswith(self._held):
+                if not end:
+                    break
+                line, self._held = self._held[:end], self._held[end:]
+                if _SWALLOWED not in line:
+                    out.append(line)
+            else:
+                end = end or len(self._held)
+                out.append(self._held[:end])
+                self._held = self._held[end:]
+        if out:
+            self.stream.write("".join(out))
+        return len(text)
+
+    def release(self) -> None:
+        """Pass on what is held (unless it is the warning)."""
+        held, self._held = self._held, ""
+        if held and _SWALLOWED not in held:
+            self.stream.write(held)
+
+    def flush(self) -> None:
+        self.stream.flush()
+
+    def __getattr__(self, name):
+        return getattr(self.stream, name)
+
+
 def call(function, *args, **kwargs):
     """``function(*args, **kwargs)``, raising KeyboardInterrupt if SIGINT arrived during it (module docstring)."""
     install = (_State.depth == 0 and threading.current_thread() is threading.main_thread()
                and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
-    previous = None
+    previous = quiet = None
     if _State.depth == 0:
         _State.pending = None
     if install:
         previous = signal.signal(signal.SIGINT, _record)
+        quiet = sys.stderr = _QuietInterrupts(sys.stderr)
     _State.depth += 1
     try:
         result = function(*args, **kwargs)
@@ -98,6 +143,9 @@ def call(function, *args, **kwargs):
         _State.depth -= 1
         if install:
             signal.signal(signal.SIGINT, previous)
+            quiet.release()
+            if sys.stderr is quiet:
+                sys.stderr = quiet.stream
     if _State.pending:
         raise _State.pending
     return result

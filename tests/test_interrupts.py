@@ -77,6 +77,20 @@ def test_interrupts_call_raises_keyboard_interrupt_within_a_second(make):
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored
 
 
+def test_interrupts_call_drops_casadis_warning_about_the_swallowed_interrupt(capsys):
+    """Ctrl-C inside IPOPT printed CasADi's 'WARNING("KeyboardInterruptException")' line before the command's own
+    'rollplan: interrupted': two lines. interrupts.call drops that warning and passes all other text on."""
+    import sys
+
+    function, args = endless_ipopt()
+    interrupt_after(0.5)
+    with pytest.raises(KeyboardInterrupt):
+        interrupts.call(lambda: (print("before", file=sys.stderr), function(**args)))
+    err = capsys.readouterr().err
+    assert err == "before\n", err
+    assert not isinstance(sys.stderr, type(None)) and "Quiet" not in type(sys.stderr).__name__   # restored
+
+
 def test_interrupts_call_passes_results_and_errors_through():
     assert interrupts.call(lambda a, b=0: a + b, 1, b=2) == 3
     with pytest.raises(ZeroDivisionError):
@@ -166,6 +180,20 @@ def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(delay):
     assert code == 130, err
     assert elapsed < 3.0, (elapsed, err)
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay", [random.Random(7).uniform(0.0, 90.0) for _ in range(3)])
+def test_ctrl_c_at_any_moment_of_compare_acts_at_once(delay):
+    """SIGINT at a random moment of a whole `compare` (construction, GP timing, IPOPT, Gauss-Newton, CVODES
+    certification of each start): exit 130 within a few seconds on a loaded machine, or the finished run's 0."""
+    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3", "--intervals", "300"], delay,
+                                              wait_for="building the collocation NLP")
+    assert code in (0, 130), err
+    assert elapsed < 3.0, (delay, elapsed, err)
+    assert "Traceback" not in err and "KeyboardInterruptException" not in err   # one line of ours, no warning
+    if code == 130:
+        assert err.strip().splitlines()[-1] == "rollplan: interrupted"
 
 
 @pytest.mark.slow
