@@ -988,9 +988,10 @@ def _main(argv) -> int:
             parser.print_help(sys.stderr)
             return EXIT_INPUT
         args = parser.parse_args(argv)
-    except KeyboardInterrupt:
-        print("rollplan: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:
+        terminated = isinstance(exc, interrupts.Terminated)
+        print(f"rollplan: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
+        return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED
     logging.basicConfig(level=logging.INFO if args.verbose else logging.ERROR, format="%(name)s: %(message)s")
     if (getattr(args, "command", None) in ("plan", "compare", "route") and args.k is None and args.robot is None
             and getattr(args, "duration", None) is None and getattr(args, "timing", None) is None):

@@ -37,7 +37,10 @@ the same lines as a run never stopped (up to the solvers' wall-clock times,
 Safety (:mod:`rollplan.outputs`): the output is locked for the whole run (a
 second batch on the same output is refused), it may not be the targets file,
 an existing output needs ``resume`` or ``overwrite`` (not both), and
-``resume`` refuses a file that is not a batch output.
+``resume`` refuses a file that is not a batch output. The output is made
+(atomically) with its first new line, so a run that cannot write that (disk
+full) leaves no file and an existing output as it was; a later line that
+cannot be written whole is cut off again, leaving the finished lines.
 """
 
 from __future__ import annotations
