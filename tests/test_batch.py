@@ -361,15 +361,17 @@ def test_workers_die_with_the_parent(tmp_path, sig):
     SIGTERM stops the run as Ctrl-C does: exit 143, one line, the finished lines kept (whole lines only)."""
     csv_path, out = write_csv(tmp_path / "t.csv", SLOW_ROWS), tmp_path / "out.jsonl"
     err_path = tmp_path / "err.txt"
+    cache = tmp_path / "cache"   # no leaf table on disk: every row (a new k) takes seconds
+    cache.mkdir()
     with open(err_path, "w") as err_file:
         proc = subprocess.Popen([sys.executable, "-m", "rollplan.cli", "batch", str(csv_path), "--out", str(out),
                                  "--quiet", "--jobs", "2"], stdout=subprocess.DEVNULL, stderr=err_file,
-                                start_new_session=True)
+                                start_new_session=True, env={**os.environ, "ROLLPLAN_CACHE_DIR": str(cache)})
     try:
         t0 = time.perf_counter()
         while len(_live_children(proc.pid)) < 2 and time.perf_counter() - t0 < 300:
             time.sleep(0.05)
-        time.sleep(random.Random(sig).uniform(0.2, 1.5))   # the workers busy with their rows
+        time.sleep(random.Random(sig).uniform(0.2, 1.0))   # the workers busy with their rows
         workers = _live_children(proc.pid)
         assert len(workers) == 2, err_path.read_text()
         os.kill(proc.pid, sig)
