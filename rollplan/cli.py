@@ -648,8 +648,8 @@ def _compare_arguments(c) -> None:
                    help="time horizon T [s] of both motions in [%g, %g] (default 1)" % HORIZON_RANGE)
     c.add_argument("--intervals", type=_whole, default=100,
                    help=f"intervals N of both motions in [{MIN_INTERVALS}, {MAX_INTERVALS}] (default 100; 2N "
-                        f"controls for the 7 end conditions; N = {MAX_INTERVALS} needs about {MEMORY_GB} GB of memory "
-                        "and tens of minutes)")
+                        f"controls for the 7 end conditions; N = {MAX_INTERVALS} stays within about {MEMORY_GB} GB of "
+                        "memory and takes 10 minutes or more)")
     c.add_argument("--degree", type=_whole, default=3, help="collocation degree d in [1, 9] (default 3)")
     c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
     c.add_argument("--branches", type=_whole, default=2,

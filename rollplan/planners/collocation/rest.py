@@ -126,8 +126,7 @@ def check_intervals(intervals) -> int:
     n = check_whole("intervals", intervals)
     if n > MAX_INTERVALS:
         raise InputError(f"intervals = {n} is not allowed: it must be a whole number in [{MIN_INTERVALS}, "
-                         f"{MAX_INTERVALS}] (the collocation NLP of more intervals needs more than about {MEMORY_GB} "
-                         "GB of memory)")
+                         f"{MAX_INTERVALS}] (the limit keeps a solve within about {MEMORY_GB} GB of memory)")
     return check_whole("intervals", n, MIN_INTERVALS, MAX_INTERVALS)
 
 
