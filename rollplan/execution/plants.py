@@ -459,7 +459,11 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
     integ = ca.integrator("torque_plant", "cvodes", {"t": time, "x": z, "ode": ode}, float(t[0]), list(t[1:]), opts)
     z0 = np.concatenate([x0, p0, phi0, p0 if commanded_p0 is None else commanded_p0]).astype(float)
-    zs = np.hstack([z0[:, None], np.array(integ(x0=z0)["xf"])]).T
+    try:
+        zs = np.hstack([z0[:, None], np.array(interrupts.call(integ, x0=z0)["xf"])]).T
+    except RuntimeError as exc:
+        raise SolverError(f"CVODES could not integrate the torque-driven motion: {str(exc).splitlines()[-1][:120]}",
+                          "CVODES_failed") from None
     om, pd, cm = (np.array(v).T for v in ca.Function("out", [time, z], [omega, phi_dot, cmd]).map(t.size)(t[None, :],
                                                                                                          zs.T))
     state = zs[:, 0:5]
