@@ -394,7 +394,16 @@ def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Functio
     """
     t, y = np.asarray(t, float), np.asarray(y, float)
     if interpolation == "linear":
-        return ca.interpolant("input", "linear", [t], y.ravel(order="C"))
+        # a time given twice is a step: linear pieces between the repeated times, the right value from there on
+        cuts = [0, *(np.nonzero(np.diff(t) == 0)[0] + 1).tolist(), t.size]
+        tt, expr = ca.MX.sym("t"), None
+        for e0, e1 in reversed(list(zip(cuts, cuts[1:]))):
+            tp, yp = t[e0:e1], y[e0:e1]
+            if tp.size == 1:   # a lone sample between two steps: constant there
+                tp, yp = np.array([tp[0], tp[0] + 1.0]), np.vstack([yp, yp])
+            piece = ca.interpolant("input", "linear", [tp], yp.ravel(order="C"))(tt)
+            expr = piece if expr is None else ca.if_else(tt < t[e1], piece, expr)
+        return ca.Function("input", [tt], [expr])
     if interpolation != "spline":
         raise InputError(f"interpolation {interpolation!r} is not known: choose spline or linear")
     cuts = sorted({int(b) for b in breaks if 0 < int(b) < t.size - 1})
@@ -420,6 +429,8 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     robot : Robot
         The real robot (Jxx, Jzz, J_r, R).
     t : (N,) sample times [s]; torques : (N, 2) commanded motor torques [N m]
+        With ``interpolation="linear"`` a time may be given twice: the torque steps there from the first
+        row's value to the second's (the replay rule of plan files); the run's rows are the distinct times.
     x0 : (5,) start state (default zero)
     p0 : (2,) the rotors' axial momenta at ``t[0]`` [N m s] (zero at rest)
     phi0 : (2,) rotor angles at ``t[0]`` [rad]
@@ -439,11 +450,22 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
         ``commanded`` holds the commanded torques (with the servo's share).
     """
     d = by_name(disturbances, "torques")
-    t, torques = check_samples(t, torques)
+    t_in, torques_in = np.asarray(t, float), np.asarray(torques, float)
+    keep = np.ones(t_in.shape[0] if t_in.ndim == 1 else 0, bool)
+    if keep.size > 1:   # times given twice (steps of the torques) only with linear interpolation
+        keep[1:] = np.diff(t_in) != 0
+    if not keep.all() and interpolation != "linear":
+        raise InputError("times given twice (steps of the torques) need interpolation 'linear'")
+    if torques_in.shape != (keep.size, 2):
+        check_samples(t_in, torques_in)   # names what is wrong
+    t, _ = check_samples(t_in[keep], torques_in[keep])
+    if not np.all(np.isfinite(torques_in)):
+        raise InputError("t and rates must be finite numbers")
+    t_all, torques = t_in, torques_in
     x0 = np.zeros(5) if x0 is None else np.asarray(x0, float)
     c = np.array(d["friction"].c if "friction" in d else (0.0, 0.0))
     noise = d["torque_noise"].draw(t.size, segment) if "torque_noise" in d else np.zeros((t.size, 2))
-    tau = input_function(t, torques, breaks, interpolation)
+    tau = input_function(t_all, torques, breaks, interpolation)
     tau_noise = input_function(t, noise, (), "linear")
     servo_gain = _nonnegative("servo_gain", servo_gain)
     if servo_gain > 0 and reference_rates is None:
@@ -453,7 +475,7 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     omega, phi_dot = model.omega_from_momenta(p, x[3], x[4], x[2], robot.j_xx, robot.j_zz, robot.rotor_inertia_axial)
     cmd = tau(time)
     if servo_gain > 0:
-        cmd = cmd + servo_gain * (input_function(t, reference_rates, breaks, interpolation)(time) - phi_dot)
+        cmd = cmd + servo_gain * (input_function(t_all, reference_rates, breaks, interpolation)(time) - phi_dot)
     ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], robot.radius), cmd + tau_noise(time) - c * phi_dot,
                      phi_dot, cmd)
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
