@@ -156,18 +156,26 @@ def motion_to_dict(motion) -> dict:
     ``state`` rows are in :class:`~rollplan.problem.State` order (u_a, v_a, psi, u_o, v_o);
     ``segment`` numbers the half-step of each sample; ``timing`` is the law's name and
     ``minimum_duration`` its shortest duration within the robot's limits (null without limits).
+    ``torque_breaks`` lists the times at which the torques step; each is given twice in ``time``, the
+    first row with the limit from the left, the second with the limit from the right
+    (:func:`rollplan.execution.actuation.motion_samples`): replayed linearly between rows, with the
+    step at a repeated time, the torques are the law's profile.
     """
+    from .execution.actuation import motion_samples
+
+    m = motion_samples(motion)
     return {
         "timing": motion.timing,
         "duration": motion.duration,
         "minimum_duration": motion.minimum_duration,
-        "time": _f(motion.time),
-        "omega": _rows(motion.omega),
-        "rotor_rates": _rows(motion.rotor_rates),
-        "rotor_angles": _rows(motion.rotor_angles),
-        "rotor_torques": _rows(motion.rotor_torques),
-        "state": _rows(motion.state),
-        "segment": [int(v) for v in motion.segment],
+        "time": _f(m["time"]),
+        "omega": _rows(m["omega"]),
+        "rotor_rates": _rows(m["rotor_rates"]),
+        "rotor_angles": _rows(m["rotor_angles"]),
+        "rotor_torques": _rows(m["rotor_torques"]),
+        "state": _rows(m["state"]),
+        "segment": [int(v) for v in m["segment"]],
+        "torque_breaks": _f(m["torque_breaks"]),
         "robot": motion.robot.as_dict(),
     }
 

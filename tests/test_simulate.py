@@ -218,3 +218,122 @@ def test_closed_loop_executes_turns_in_place_and_routes(files, tmp_path):
     for path in (turn, route):
         d = _sim_json(files, path, "--robot", files / "real.toml", "--closed-loop")
         assert d["open_loop_arrival_error"] > 1e-2 and d["arrival_error"] < 1e-3, path
+
+
+# ----------------------------------------------------------------------------- torque breaks in plan files
+
+def _replay_torques(d, robot):
+    """The replay rule of plan files in numpy: torques linear between rows, a step at a time given twice;
+    DOP853 on the printed torque-driven equations (references), restarted at every step. The final state."""
+    t, tq = np.array(d["time"]), np.array(d["rotor_torques"])
+    cuts = [0, *(np.nonzero(np.diff(t) == 0)[0] + 1).tolist(), t.size]
+    z = np.r_[[d["start"][n] for n in STATE_NAMES], 0.0, 0.0]
+    for a, b in zip(cuts, cuts[1:]):
+        tp, qp = t[a:b], tq[a:b]
+        f, _ = references.torque_driven_rhs(robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, robot.radius,
+                                            lambda s, tp=tp, qp=qp: [np.interp(s, tp, qp[:, 0]),
+                                                                     np.interp(s, tp, qp[:, 1])])
+        if tp[-1] > tp[0]:
+            z = solve_ivp(f, (tp[0], tp[-1]), z, method="DOP853", rtol=1e-11, atol=1e-14,
+                          max_step=20 * (tp[1] - tp[0])).y[:, -1]
+    return z[:5]
+
+
+def _quintic_times(fractions, duration):
+    """Times at which s = L (10 tau^3 - 15 tau^4 + 6 tau^5), tau = t / T, passes the given fractions of L."""
+    from scipy.optimize import brentq
+
+    return np.array([duration * brentq(lambda u, f=f: 10 * u**3 - 15 * u**4 + 6 * u**5 - f, 0.0, 1.0, xtol=1e-15)
+                     for f in fractions])
+
+
+@pytest.fixture(scope="module")
+def nonstop(files):
+    """A plan of 2 figure eights timed by nonstop-min-jerk over 10 s (no stop at the 3 poles inside)."""
+    path = files / "nonstop.json"
+    code, _, err = command("plan", "--robot", files / "model.toml", "--to", "0.1", "0.12", "--psi", "0.4", "--steps",
+                           "2", "--timing", "nonstop-min-jerk", "--duration", "10", "--json", path)
+    assert code == 0, err
+    return json.loads(path.read_text()), path
+
+
+@pytest.mark.slow
+def test_torque_breaks_are_where_the_nonstop_law_passes_the_poles(nonstop):
+    """The torque of a non-stop law steps where the path's curvature term B jumps: at the poles between the
+    leaves. Their times, independently: s(t) = L F(t/T) with the quintic F and the leaves' lengths from the
+    plan's segments. Each break is in `time` twice, left and right values; rates and state agree."""
+    d, _ = nonstop
+    lengths = np.array([s["length"] for s in d["segments"]])
+    expected = _quintic_times(np.cumsum(lengths)[:-1] / lengths.sum(), d["duration"])
+    breaks = np.array(d["torque_breaks"])
+    assert breaks.shape == (3,) and np.abs(breaks - expected).max() < 1e-9 * d["duration"]
+    t, tq, rates = np.array(d["time"]), np.array(d["rotor_torques"]), np.array(d["rotor_rates"])
+    i = np.nonzero(np.diff(t) == 0)[0]
+    assert np.array_equal(t[i], breaks)
+    assert np.all(np.abs(tq[i + 1] - tq[i]).max(axis=1) > 1e-2 * np.abs(tq).max())   # a real step
+    assert np.array_equal(rates[i], rates[i + 1])
+    assert np.array_equal(np.array(d["segment"])[i] + 1, np.array(d["segment"])[i + 1])
+
+
+@pytest.mark.slow
+def test_time_optimal_breaks_against_a_brute_force_scan():
+    """The time-optimal law's torques are bang-bang: every jump found by scanning uniform torque samples
+    (an interval whose change is far above its neighbours') holds a listed break, and every listed break of a
+    large step lies in such an interval."""
+    from dataclasses import replace
+
+    import rollplan
+    from rollplan.execution.actuation import actuate, torque_breaks
+
+    robot = replace(rollplan.default_robot(), max_rotor_rate=300.0, max_rotor_torque=0.05)
+    m = actuate(rollplan.plan((0.0, 0.1, 0.0), robot=robot), robot, None, timing="time-optimal")
+    tb, left, right = torque_breaks(m)
+    dq = np.abs(np.diff(m.rotor_torques, axis=0)).max(axis=1)
+    flagged = np.nonzero((dq > 20 * np.median(dq)) & (dq > 1e-2 * np.abs(m.rotor_torques).max()))[0]
+    assert flagged.size >= 2
+    for i in flagged:
+        assert np.any((tb >= m.time[i]) & (tb <= m.time[i + 1])), m.time[i]
+    big = tb[np.abs(right - left).max(axis=1) > 0.05 * np.abs(m.rotor_torques).max()]
+    assert big.size >= 2
+    for b in big:
+        i = np.searchsorted(m.time, b) - 1
+        assert i in flagged or i + 1 in flagged or i - 1 in flagged, b
+
+
+@pytest.mark.slow
+def test_linear_replay_of_the_files_torques_reaches_the_goal(files, nonstop):
+    """The JSON's torques replayed by the stated rule (linear between rows, a step at a repeated time) drive
+    the torque-driven robot, integrated by scipy on the printed equations, onto the goal; `simulate --plant
+    torques` (the file's torques on its own time grid) arrives at the same state."""
+    d, path = nonstop
+    final = _replay_torques(d, MODEL)
+    goal = State.of(d["goal"])
+    assert float(np.linalg.norm(arrival_error(State(*final), goal, MODEL.radius))) < 1e-5
+    sim = _sim_json(files, path, "--plant", "torques")
+    assert np.abs(np.array([sim["final"][n] for n in STATE_NAMES]) - final).max() < 1e-6
+
+
+# ----------------------------------------------------------------------------- default sample counts
+
+@pytest.mark.slow
+@pytest.mark.parametrize("law", ["min-jerk", "nonstop-min-jerk", "smooth-cruise", "time-optimal"])
+def test_default_samples_pass_the_certificate_with_a_margin(law):
+    """nonstop-min-jerk failed its own rotor-only check on the README's example at the default sample count
+    (1.27e-6 > 1e-6, exit 3). Every law's default now passes with at least a factor 10 to spare, on the
+    README's example (the default robot with max_rotor_rate 300 rad/s, max_rotor_torque 0.05 N m, to (0, 0.1))
+    and on random plans, the limits active or not."""
+    from dataclasses import replace
+
+    import rollplan
+    from rollplan.execution.actuation import MOTION_TOLERANCE, actuate, certify_motion
+
+    base = rollplan.default_robot()
+    rng = np.random.default_rng(11)
+    cases = [(replace(base, max_rotor_rate=300.0, max_rotor_torque=0.05), (0.0, 0.1, 0.0), 1)]
+    for rate, torque, steps in ((60.0, 0.05, 2), (100.0, 0.2, 1)):
+        d, a, psi = rng.uniform(0.03, 0.25), rng.uniform(-np.pi, np.pi), rng.uniform(-1, 1)
+        cases.append((replace(base, max_rotor_rate=rate, max_rotor_torque=torque),
+                      (d * np.cos(a), d * np.sin(a), psi), steps))
+    for robot, goal, steps in cases:
+        m = actuate(rollplan.plan(goal, steps, robot=robot), robot, None, timing=law)
+        assert certify_motion(m).arrival_error <= MOTION_TOLERANCE / 10, (law, goal)
