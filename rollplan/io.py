@@ -26,9 +26,9 @@ __all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", 
 
 #: Largest plan file read back (a plan of 1000 steps timed with 10^6 samples fits).
 MAX_PLAN_BYTES = 1 << 30
-#: Most samples of a plan file read back: what ``rollplan plan --samples`` writes at most, and the repeated
-#: times of the torques' steps.
-MAX_PLAN_SAMPLES = 2_000_000
+#: Most samples (rows of ``time``) of a plan file read back: the most ``rollplan plan`` writes (its
+#: MAX_SAMPLES, 10^6) and room for the repeated times of the torques' steps.
+MAX_PLAN_SAMPLES = 1_100_000
 
 
 #: Units of every JSON output except the length (``tagged`` adds it): SI, angles in radians.

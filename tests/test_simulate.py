@@ -337,3 +337,41 @@ def test_default_samples_pass_the_certificate_with_a_margin(law):
     for robot, goal, steps in cases:
         m = actuate(rollplan.plan(goal, steps, robot=robot), robot, None, timing=law)
         assert certify_motion(m).arrival_error <= MOTION_TOLERANCE / 10, (law, goal)
+
+
+# ----------------------------------------------------------------------------- large plan files
+
+def test_a_long_series_is_simulated_in_chunks_with_progress():
+    """A long rate series runs in chunks with its progress reported; the chunks' splines (with their overlap)
+    give the whole series' result: against scipy's not-a-knot spline and DOP853 on the printed equations."""
+    from rollplan.execution.plants import CHUNK, simulate_rotors
+    from rollplan.progress import reporting
+
+    t = np.linspace(0.0, 4.0, 2 * CHUNK + 7)
+    rates = np.column_stack([30 * np.sin(np.pi * t / 2) ** 2, 20 * np.sin(np.pi * t) * np.sin(np.pi * t / 4)])
+    seen = []
+    with reporting(lambda label, done, total, **_: seen.append((done, total))):
+        sim = simulate_rotors(MODEL, t, rates)
+    assert len(seen) == 3 and seen[-1] == (t.size - 1, t.size - 1)
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen)
+    f = references.rotor_driven_rhs(MODEL.j_xx, MODEL.j_zz, MODEL.rotor_inertia_axial, MODEL.radius,
+                                    CubicSpline(t, rates, axis=0))
+    ref = solve_ivp(f, (t[0], t[-1]), np.zeros(5), method="DOP853", rtol=1e-12, atol=1e-15).y[:, -1]
+    assert np.abs(sim.state[-1] - ref).max() < 1e-9
+
+
+@pytest.mark.slow
+def test_a_plan_file_over_the_sample_limit_is_refused_naming_it(tmp_path):
+    """A 2,000,000-sample plan file ran past 180 s with no progress: files of more samples than any plan has
+    (MAX_PLAN_SAMPLES) are refused in one line naming the limit."""
+    from rollplan.io import MAX_PLAN_SAMPLES
+
+    n = MAX_PLAN_SAMPLES + 1
+    path = tmp_path / "huge.json"
+    head = json.dumps({"version": "0.1.0", "robot": {"radius": 0.1, "mass_total": 0.957, "mass_shell": 0.4,
+                                                     "rotor_inertia_axial": 1.4e-4, "rotor_inertia_transverse": 8.7e-5},
+                       "target": {"u_a": 0.0, "v_a": 0.0, "psi": 0.0}})[:-1]
+    path.write_text(head + ', "time": [' + ",".join(map(str, range(n))) + '], "rotor_rates": ['
+                    + ",".join(["[0, 0]"] * n) + "]}")
+    code, _, err = command("simulate", path)
+    assert code == 2 and one_line(err) and str(MAX_PLAN_SAMPLES) in err and "huge.json" in err, err

@@ -59,12 +59,18 @@ from ..core.plane import wrap_exact
 from ..core.spline import CubicSpline
 from ..errors import InputError, SolverError, check_finite
 from ..problem import State, arrival_error
+from ..progress import report
 from ..robot import Robot
 
 __all__ = ["Simulation", "rate_spline", "check_samples", "simulate_rotors", "MAX_TURN", "Friction", "MeasurementNoise",
            "TorqueNoise", "RateNoise", "DISTURBANCES", "disturbance", "PlantRun", "input_function", "run_rates",
            "run_torques", "PLANTS", "PLANT_NAMES", "by_name", "measure", "rotor_momenta"]
 
+#: Sample intervals per chunk of :func:`simulate_rotors` (a longer series runs in chunks, with progress: the
+#: cost of one spline grows faster than its length).
+CHUNK = 10_000
+#: Samples on either side of a chunk that its spline also passes through.
+OVERLAP = 40
 #: Largest rotation of the sphere [rad] that sampled rotor rates may ask for (bounded from the rates by
 #: (11)); a real plan turns the sphere by a few rad per figure eight.
 MAX_TURN = 1e6
@@ -170,20 +176,33 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
     if not np.all(np.isfinite(turns)) or mean * jr / jzz > MAX_TURN:
         raise InputError(f"the rotor rates are not allowed: they would turn the sphere by about "
                          f"{mean * jr / jzz:.3g} rad, more than {MAX_TURN:g} rad (not the rates of a plan)")
-    spline = rate_spline(tau, turns)
     x = ca.MX.sym("x", 5)
     time = ca.MX.sym("tau")
-    omega = model.omega_from_rotor_rates(spline(time), x[3], x[4], x[2], jxx, jzz, jr)
-    ode = model.montana(omega, x[3], x[4], x[2], R)
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
-    integ = ca.integrator("rotor_sim", "cvodes", {"t": time, "x": x, "ode": ode}, 0.0, list(tau[1:]), opts)
+    n = tau.size
+    xs, omegas, xk = np.empty((n, 5)), np.empty((n, 3)), x0
+    xs[0] = x0
     try:
-        xs = np.hstack([x0[:, None], np.array(interrupts.call(integ, x0=x0)["xf"])]).T
+        # a long series in chunks of CHUNK sample intervals, each with the spline through its samples and
+        # OVERLAP more on either side (a cubic spline's dependence on far samples decays by 2 - sqrt(3) per
+        # sample: the chunks' splines are the whole series' to rounding), its progress reported between them
+        for a in range(0, n - 1, CHUNK):
+            b = min(a + CHUNK, n - 1)
+            lo, hi = (0, n) if n - 1 <= CHUNK else (max(0, a - OVERLAP), min(n, b + 1 + OVERLAP))
+            spline = rate_spline(tau[lo:hi], turns[lo:hi])
+            omega = model.omega_from_rotor_rates(spline(time), x[3], x[4], x[2], jxx, jzz, jr)
+            ode = model.montana(omega, x[3], x[4], x[2], R)
+            integ = ca.integrator("rotor_sim", "cvodes", {"t": time, "x": x, "ode": ode}, float(tau[a]),
+                                  list(tau[a + 1:b + 1]), opts)
+            xs[a + 1:b + 1] = np.array(interrupts.call(integ, x0=xk)["xf"]).T
+            xk = xs[b]
+            om = ca.Function("omega", [time, x], [omega / span]).map(b + 1 - a)
+            omegas[a:b + 1] = np.array(om(tau[None, a:b + 1], xs[a:b + 1].T)).T
+            if n - 1 > CHUNK:
+                report("rotor-driven simulation, samples", b, n - 1)
     except RuntimeError as exc:
         raise SolverError(f"CVODES could not integrate the rotor-driven motion: {str(exc).splitlines()[-1][:120]}",
                           "CVODES_failed") from None
-    om = ca.Function("omega", [time, x], [omega / span]).map(t.size)
-    omegas = np.array(om(tau[None, :], xs.T)).T
     final = State(*(float(v) for v in xs[-1]))
     err = arr = pos = None
     if goal is not None:
