@@ -575,10 +575,11 @@ def cmd_animate(args) -> int:
     if not 1 <= args.fps <= 100:
         raise InputError(f"--fps {args.fps} is not allowed: it must lie in [1, 100]")
     rp = load_rotor_plan(args.plan_file)
-    sim = simulate_rotors(rp.robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
+    keep = rp.distinct
+    sim = simulate_rotors(rp.robot, rp.time[keep], rp.rotor_rates[keep], rp.goal, x0=rp.start.array())
     with Progress(unit="frames") as progress:
-        make_animation(rp.time, sim.state, rp.rotor_rates, rp.robot, rp.goal, args.out, args.frames, args.fps,
-                       progress=progress)
+        make_animation(rp.time[keep], sim.state, rp.rotor_rates[keep], rp.robot, rp.goal, args.out, args.frames,
+                       args.fps, progress=progress)
     print(f"wrote {args.out}")
     return EXIT_OK
 
