@@ -45,7 +45,7 @@ from ..core.spline import CubicSpline
 from ..errors import InputError, NoPlanError, check_finite, check_whole
 from ..problem import STATE_NAMES, State, arrival_error
 from ..robot import Robot
-from .actuation import actuate
+from .actuation import actuate, motion_samples
 from .estimate import InertiaEstimator, RatioEstimator
 from .limits import Limits
 from .plants import PLANT_NAMES, by_name, measure, run_rates, run_torques
@@ -362,12 +362,21 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     samples_per_piece = check_whole("samples_per_piece", samples_per_piece, 50, 100_000)
     piece_duration = _positive("piece_duration", piece_duration)
     m = _timer(timing, piece_duration, samples_per_piece)(plan, model_robot)
-    first = Samples(m.time, m.rotor_rates, m.rotor_torques, m.segment, tuple(p.kind for p in pieces), "spline")
+    first = _as_samples(m, (p.kind for p in pieces))
     return execute_samples(first, plan.problem.start, plan.goal, plan.steps, model_robot, real_robot, piece_duration,
                            plant=plant, closed_loop=closed_loop, disturbances=disturbances,
                            samples_per_piece=samples_per_piece, window=window, estimate_friction=estimate_friction,
                            rest_readings=rest_readings, servo_gain=servo_gain, progress=progress, timing=timing,
                            tolerance=tolerance, corrections=corrections)
+
+
+def _as_samples(m, kinds) -> Samples:
+    """A timed motion as the controller applies it: min-jerk (continuous torques) as its uniform samples with
+    splines split at the joints; a law whose torques step, with the steps as times given twice, linearly."""
+    ms = motion_samples(m)
+    if ms["torque_breaks"].size == 0:
+        return Samples(m.time, m.rotor_rates, m.rotor_torques, m.segment, tuple(kinds), "spline")
+    return Samples(ms["time"], ms["rotor_rates"], ms["rotor_torques"], ms["segment"], tuple(kinds), "linear")
 
 
 def _positive(name, value) -> float:
@@ -468,9 +477,7 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
         except (NoPlanError, InputError) as exc:
             raise type(exc)(f"re-planning {steps - j} figure eights from the measured state "
                             f"{tuple(round(float(v), 6) for v in measured)} failed: {exc}") from None
-        m = timed(current, robot_est)
-        motion = Samples(m.time, m.rotor_rates, m.rotor_torques, m.segment, tuple(p.kind for p in _pieces(current)),
-                         "spline")
+        motion = _as_samples(timed(current, robot_est), (p.kind for p in _pieces(current)))
         kinds, mode = motion.kinds, getattr(current, "mode", "one")
     stopped = None
     for c in range(corrections + 1 if closed_loop else 0):
@@ -489,7 +496,8 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
             break
         m = timed(current, robot_est)
         estimates.append(_estimate_dict(robot_est, friction))
-        ctl.apply(Samples(m.time, m.rotor_rates, m.rotor_torques, m.segment, (), "spline"), m.time.size - 1,
+        correction = _as_samples(m, ())
+        ctl.apply(correction, correction.time.size - 1,
                   {"figure_eights_left": 0, "mode": "correction", "k": robot_est.k, "applied": "all"})
         if progress:
             progress("closed loop, corrections", c + 1, corrections)

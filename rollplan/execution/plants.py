@@ -413,15 +413,14 @@ def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Functio
     """
     t, y = np.asarray(t, float), np.asarray(y, float)
     if interpolation == "linear":
-        # a time given twice is a step: linear pieces between the repeated times, the right value from there on
-        cuts = [0, *(np.nonzero(np.diff(t) == 0)[0] + 1).tolist(), t.size]
-        tt, expr = ca.MX.sym("t"), None
-        for e0, e1 in reversed(list(zip(cuts, cuts[1:]))):
-            tp, yp = t[e0:e1], y[e0:e1]
-            if tp.size == 1:   # a lone sample between two steps: constant there
-                tp, yp = np.array([tp[0], tp[0] + 1.0]), np.vstack([yp, yp])
-            piece = ca.interpolant("input", "linear", [tp], yp.ravel(order="C"))(tt)
-            expr = piece if expr is None else ca.if_else(tt < t[e1], piece, expr)
+        # one lookup of the sample interval (a time given twice opens no interval: the torque steps there
+        # to the second row's value), then the line through its two ends
+        y2 = y.reshape(t.size, -1)
+        i = np.nonzero(np.diff(t) > 0)[0]
+        slope = (y2[i + 1] - y2[i]) / (t[i + 1] - t[i])[:, None]
+        tt = ca.MX.sym("t")
+        j = ca.low(ca.DM(np.r_[t[i], t[-1]]), tt)
+        expr = ca.MX(ca.DM(y2[i]))[j, :].T + ca.MX(ca.DM(slope))[j, :].T * (tt - ca.MX(ca.DM(t[i]))[j])
         return ca.Function("input", [tt], [expr])
     if interpolation != "spline":
         raise InputError(f"interpolation {interpolation!r} is not known: choose spline or linear")
