@@ -375,3 +375,20 @@ def test_a_plan_file_over_the_sample_limit_is_refused_naming_it(tmp_path):
                     + ",".join(["[0, 0]"] * n) + "]}")
     code, _, err = command("simulate", path)
     assert code == 2 and one_line(err) and str(MAX_PLAN_SAMPLES) in err and "huge.json" in err, err
+
+
+@pytest.mark.slow
+def test_a_time_optimal_plan_runs_on_the_torque_plant_with_its_own_torques(files, tmp_path):
+    """`--plant torques` re-timed the plan with min-jerk, and a time-optimal plan was refused with a min-jerk
+    duration error. Now its bang-bang torques (with their steps) drive the torque plant onto the goal, as
+    scipy's integration of the printed equations under the replay rule does."""
+    path = tmp_path / "to.json"
+    code, _, err = command("plan", "--robot", files / "limited.toml", "--to", "0.1", "0.12", "--psi", "0.4",
+                           "--timing", "time-optimal", "--json", path)
+    assert code == 0, err
+    d = json.loads(path.read_text())
+    assert len(d["torque_breaks"]) > 10
+    sim = _sim_json(files, path, "--plant", "torques")
+    assert sim["arrival_error"] < 1e-5
+    final = _replay_torques(d, MODEL)
+    assert np.abs(np.array([sim["final"][n] for n in STATE_NAMES]) - final).max() < 1e-6
