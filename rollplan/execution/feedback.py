@@ -1,4 +1,4 @@
-"""Closed-loop execution: measure after every figure eight, re-estimate the robot, re-plan the rest.
+"""Closed-loop execution: measure after every figure eight, re-estimate the robot, re-plan the rest, correct.
 
 A plan of n figure eights from a start state to a goal (any two full states, issue 12's
 composed planner) is executed on a real robot that is not exactly the model.
@@ -26,8 +26,14 @@ Closed loop (``closed_loop=True``)
     The controller commands what the plant takes: the rotor rates of the timed re-plan (rate
     plant), or its torques plus the feed-forward ``c_hat phi_dot`` of the estimated friction
     (torque plant). Why figure eights: their ends are rest points near the pole, where a
-    measurement is clean and the remainder is again a whole number of figure eights. After the
-    last figure eight nothing is corrected: with n = 1 the closed loop is the open loop.
+    measurement is clean and the remainder is again a whole number of figure eights.
+
+    After the last figure eight, correcting motions follow: from the measured state (step 1), a
+    composed plan of one figure eight to the goal with the estimated robot (step 2), applied whole,
+    while the measured arrival error exceeds ``tolerance``, at most ``corrections`` of them; so
+    n = 1 gets feedback too. :func:`execute_samples` runs the same loop from a motion given as
+    samples (a plan file's: its own rates or torques first, then re-plans and corrections timed by
+    the file's law); plans that are not figure eights (turns, routes) run whole, then the corrections.
 
 The estimated robot reproduces the real one exactly where the plant can tell: the rate-driven
 motion depends only on ``Jxx/J_r`` and ``Jzz/J_r`` (divide (11) by J_r), so with rates the estimate
@@ -320,7 +326,7 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     real_robot : Robot
         The simulated real robot (same radius: it is measured).
     piece_duration : float
-        Duration of every piece (leaf, roll) [s]; each is timed rest to rest by the min-jerk law.
+        Duration of every piece (leaf, roll) [s]; each is timed by ``timing`` (min-jerk: rest to rest).
     plant : str
         ``"rates"`` or ``"torques"`` (:data:`rollplan.execution.plants.PLANTS`).
     closed_loop : bool
@@ -338,7 +344,7 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     servo_gain : float
         Torque plant: gain K >= 0 [N m s/rad] of a proportional rotor-rate loop around the planned rates.
     progress : callable(label, done, total), optional
-        Called after each applied figure eight (open loop: once).
+        Called after each applied figure eight and correction.
     timing : str
         The timing law of the plan and of every re-plan and correction.
     tolerance, corrections : float, int
