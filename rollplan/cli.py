@@ -881,7 +881,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="folder for fig06.png..fig12.png, reproduction.json, REPRODUCTION.md (created if missing)")
     r.set_defaults(func=cmd_reproduce)
 
-    m = sub.add_parser("simulate", help="drive the robot by the plan's rotor rates alone and report the arrival error")
+    m = sub.add_parser("simulate", help="drive the robot by the plan file's own motion (its rotor rates, or its "
+                       "torques) and report the arrival error; optionally in closed loop")
     m.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
     m.add_argument("--robot", metavar="FILE.toml", help="simulate this (real) robot instead of the planned one")
     m.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the simulated final state and errors"))
