@@ -33,6 +33,7 @@ from rollplan.core.curves import A_MAX, figure_eight
 from rollplan.core.integrate import CvodesIntegrator, spectral_step
 from rollplan.core.rewrite import algebraic
 from rollplan.errors import InputError, NoPlanError
+from rollplan.inputs import show_path
 from rollplan.planners.geometric import GeometricPhasePlanner
 
 import references
@@ -566,7 +567,7 @@ def test_codegen_never_overwrites_files_it_did_not_write(tmp_path):
     before = _contents(user)
     r = _codegen("--out", str(user))
     assert r.returncode == 2 and one_line(r.stderr), r.stderr
-    assert str(user) in r.stderr and "--overwrite" in r.stderr and "Makefile" in r.stderr
+    assert show_path(user) in r.stderr and "--overwrite" in r.stderr and "Makefile" in r.stderr
     assert _contents(user) == before
     (user / "notes.txt").write_text("keep me\n")
     r = _codegen("--out", str(user), "--overwrite")

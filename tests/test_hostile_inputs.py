@@ -107,6 +107,9 @@ _cases("simulate", "--plant", (["voltage"], None))
 _numbers("simulate", "--noise", 1, (["5"], None), (["-0.01"], None))
 _wholes("simulate", "--seed", (["-1"], None), (["1" * 30], None))
 _cases("simulate", "--engine", (["bullet"], None))
+_wholes("simulate", "--average", (["0"], None), (["1" * 30], None))
+_numbers("simulate", "--tolerance", 1, (["0"], None), (["2"], None), (["-1e-6"], None))
+_wholes("simulate", "--corrections", (["-1"], None), (["101"], None))
 _cases("simulate", "--mjcf", (["model.xml"], None))   # without --engine mujoco
 _numbers("simulate", "--servo", 1, (["5"], None), (["-1", "--engine", "mujoco"], None),
          (["2e3", "--engine", "mujoco"], None))
@@ -390,7 +393,7 @@ def test_a_plan_file_duration_is_named_as_the_file_says(tmp_path, capsys):
     d["duration"] = -10.0
     (tmp_path / "bad.json").write_text(json.dumps(d))
     code, _, err = cli(tmp_path, "simulate", "bad.json", "--closed-loop")
-    assert code == 2 and one_line(err) and "'bad.json'" in err and "duration = -10.0" in err, err
+    assert code == 2 and one_line(err) and "'bad.json'" in err and "'duration' = -10.0" in err, err
     assert "piece_duration" not in err
 
 

@@ -92,9 +92,10 @@ def _load(path: str):
 def library():
     """``<prefix>_plan_with`` and ``<prefix>_plan_all`` of the compiled C planner (ctypes), built on first use;
     None without it."""
-    # the generator runs in a subprocess (and imports this rollplan, not another one on the path)
+    # the generator runs in a subprocess (and imports this rollplan, not another one on the path), in the build's
+    # own new folder, which holds the build's log too
     script = (f"import sys; sys.path.insert(0, {str(_PACKAGE.parent)!r}); "
-              "from rollplan.codegen import generate; generate('.')")
+              "from rollplan.codegen import generate; generate('.', overwrite=True)")
     return shared_library("c_planner_search", f"prefix={PREFIX}", _sources(), [sys.executable, "-c", script],
                           [f"{PREFIX}_model.c", f"{PREFIX}_planner.c"], _load, "the numpy search")
 
