@@ -119,3 +119,22 @@ def test_a_failing_command_fails_its_block(tmp_path):
     with pytest.raises(pytest.fail.Exception, match="exited 0, the docs say 2"):
         run_block([("python -c 'pass'   # exit 2", 2)], tmp_path)
     run_block([("python -c 'import sys; sys.exit(2)'   # exit 2", 2), ("python -c 'pass'", 0)], tmp_path)
+
+
+def slug(heading):
+    """GitHub's anchor of a Markdown heading: lower case, punctuation dropped, spaces to hyphens."""
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def test_links_between_pages_resolve():
+    """Every relative link of README.md and docs/*.md names a file that exists, and an anchor a heading of it."""
+    for page in PAGES:
+        for target in re.findall(r"\]\(([^)\s]+)\)", page.read_text()):
+            if "://" in target:
+                continue
+            path, _, anchor = target.partition("#")
+            linked = (page.parent / path).resolve() if path else page
+            assert linked.exists(), f"{page.relative_to(ROOT)}: {target}"
+            if anchor:
+                headings = re.findall(r"^#+ (.+)$", linked.read_text(), flags=re.MULTILINE)
+                assert anchor in {slug(h) for h in headings}, f"{page.relative_to(ROOT)}: {target}"
