@@ -1,4 +1,4 @@
-"""Every shell command of the documentation runs: each fenced ``sh`` block of README.md and docs/*.md, its
+"""Every shell command of the documentation runs: each fenced ``sh`` block of README.md and docs/**/*.md, its
 ``rollplan ...`` and ``python ...`` lines in order, in a temporary folder holding a fresh copy of examples/.
 
 A line must exit 0, or the status its trailing comment states (``# exit 2``). Lines that need a Dask cluster
@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
 RUN = ("rollplan", "python")                 # the commands run; anything else is left to the reader
 EXIT = re.compile(r"\s#\s*exit (\d+)\b")     # the documented exit status of a line, when not 0
 
