@@ -17,7 +17,12 @@ import numpy as np
 from .core import model
 from .problem import STATE_NAMES, Problem, State
 
-__all__ = ["Certificate", "SolverStats", "Trajectory", "Measures", "CertifiedMotion", "PlanResult"]
+__all__ = ["CERTIFICATE_TOLERANCE", "Certificate", "SolverStats", "Trajectory", "Measures", "CertifiedMotion",
+           "PlanResult"]
+
+#: Largest accepted ``residual + error_bound`` of a plan's certificate, lengths in units of R and angles in
+#: rad (:func:`rollplan.problem.arrival_residual`): every planner's default, the generated C planner's too.
+CERTIFICATE_TOLERANCE = 1e-9
 
 
 @dataclass(frozen=True)

@@ -8,8 +8,11 @@ That rollplan's symbolic model agrees with the printed equations is tested on it
 """
 
 import contextlib
+import os
+import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -20,6 +23,26 @@ import rollplan  # noqa: E402
 from rollplan.planners.geometric import GeometricPhasePlanner  # noqa: E402
 
 import references  # noqa: E402
+
+
+def pytest_configure(config):
+    """The test run gets its own cache directory (compiled functions, leaf tables), new and empty, so that
+    the code path of a run does not depend on what the user's cache holds. Made once by the controlling
+    process; pytest-xdist's workers and every subprocess of a test inherit it through the environment."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        return
+    folder = tempfile.mkdtemp(prefix="rollplan-test-cache-")
+    config.stash[_CACHE] = folder
+    os.environ["ROLLPLAN_CACHE_DIR"] = folder
+
+
+def pytest_unconfigure(config):
+    folder = config.stash.get(_CACHE, None)
+    if folder:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+_CACHE = pytest.StashKey[str]()
 
 
 @pytest.fixture(scope="session")

@@ -1,9 +1,12 @@
 """The default certificate (compiled RK8 with step doubling) against scipy's DOP853 on the printed equations."""
 
+import inspect
+
 import numpy as np
 import pytest
 import scipy.integrate._ivp.dop853_coefficients as dop
 
+import rollplan
 from rollplan.core import integrate
 from rollplan.planners.geometric import GeometricPhasePlanner
 from rollplan.planners.geometric.certify import CERTIFIERS, RK8Certifier
@@ -85,3 +88,21 @@ def test_compiled_and_virtual_machine_agree():
     f2, e2, n2 = RK8Certifier(compile=False).certify(a, b, k, g, 2)
     assert n1 == n2 and np.allclose(np.array(f1), np.array(f2), rtol=0, atol=1e-13)
     assert e1 == pytest.approx(e2, rel=1e-3, abs=1e-14)
+
+
+def test_one_certificate_tolerance(generated_c):
+    """Every planner's default tolerance and the generated C planner's are the one CERTIFICATE_TOLERANCE."""
+    from rollplan.codegen import c_library
+    from rollplan.planners.collocation import planner as colloc
+    from rollplan.planners.collocation import rest
+    from rollplan.planners.geometric import certify
+    from rollplan.planners.geometric import planner as geometric
+
+    tol = rollplan.CERTIFICATE_TOLERANCE
+    assert tol == 1e-9   # the project's stated tolerance (README: residuals in R and rad)
+    assert geometric.TOLERANCE is tol and colloc.TOLERANCE is tol and rest.TOLERANCE is tol
+    assert c_library.CERT_TOL is tol
+    assert geometric.GeometricPhasePlanner().tol == tol
+    assert inspect.signature(certify.initial_steps).parameters["tol"].default is tol
+    header = (generated_c.out / f"{generated_c.prefix}.h").read_text()
+    assert f"_CERT_TOL {tol!r}" in header and f"plans are certified to {tol:g}." in header

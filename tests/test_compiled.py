@@ -225,3 +225,13 @@ def test_shared_library_is_built_once_then_loaded_and_refused_without_a_compiler
     assert get([sys.executable, "-c", "raise SystemExit(1)"]) is None and "failed" in cmod.last_build()["reason"]
     monkeypatch.setenv("ROLLPLAN_NO_COMPILE", "1")
     assert get() is None and cmod.last_build()["source"] == "vm"
+
+
+def test_the_test_run_has_its_own_cache_directory():
+    """conftest gives the run a new cache folder: not the user's, and the same in every worker and subprocess."""
+    folder = cmod.cache_dir()
+    assert folder.name.startswith("rollplan-test-cache-")
+    assert folder != Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rollplan"
+    run = subprocess.run([sys.executable, "-c", "from rollplan.core.compiled import cache_dir; print(cache_dir())"],
+                         capture_output=True, text=True, check=True, timeout=120)
+    assert run.stdout.strip() == str(folder)

@@ -1,6 +1,6 @@
-"""The package reads top-down: no import cycles between rollplan's modules, and no module imports
-another module's private names. Checked on the source (ast), and by importing every module in a
-fresh interpreter in dependency order."""
+"""The package reads top-down: its layers import downwards only (README, "Layout"), there are no
+import cycles between rollplan's modules, and no module imports another module's private names.
+Checked on the source (ast), and by importing every module in a fresh interpreter in dependency order."""
 
 import ast
 import subprocess
@@ -28,7 +28,13 @@ def _imports(name: str):
     depth (imports inside functions count too), relative imports resolved."""
     path = MODULES[name]
     package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+    yield from _imports_of(ast.parse(path.read_text(encoding="utf-8"), str(path)), package)
+
+
+def _imports_of(tree, package):
+    """``(target module, imported name or None, line)`` of every import statement of a syntax tree, relative
+    imports resolved against ``package`` (a list of name parts)."""
+    for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             for alias in node.names:
                 yield alias.name, None, node.lineno
@@ -69,6 +75,67 @@ def test_no_module_imports_another_modules_private_names():
            if item is not None and item.startswith("_") and not item.startswith("__")
            and target != name and (target in MODULES or target.startswith("rollplan."))]
     assert not bad, "private names imported across modules:\n" + "\n".join(bad)
+
+
+#: The layers of the package, bottom first (README, "Layout"): a module imports modules of its own layer
+#: or of a lower one only. Keys are the first component under ``rollplan`` (``""`` is the package itself).
+LAYERS = (
+    {"", "version", "errors", "interrupts", "progress", "threads", "inputs", "outputs"},  # foundations
+    {"core"},  # the model, curves, integrators, compiled functions
+    {"robot", "problem", "result", "measures", "waypoints"},  # the problem statement and the result types
+    {"planners"},
+    {"execution"},  # timing, actuation, plants, feedback
+    {"codegen", "io"},  # generated C; JSON forms of results and plan files
+    {"plots"},  # figures of results
+    {"studies"},  # paper reproduction, atlas, batch, comparison
+    {"cli"},
+)
+
+
+def _layer(module: str) -> int:
+    parts = module.split(".")
+    key = parts[1] if len(parts) > 1 else ""
+    ranks = [i for i, layer in enumerate(LAYERS) if key in layer]
+    assert len(ranks) == 1, f"{module}: in no layer or in several of tests/test_layout.py's LAYERS"
+    return ranks[0]
+
+
+def test_layers_import_downwards_only():
+    upward = [f"{MODULES[name].relative_to(PACKAGE.parent)} imports {dep}"
+              for name, deps in _graph().items() for dep in sorted(deps) if _layer(dep) > _layer(name)]
+    assert not upward, "imports from a higher layer:\n" + "\n".join(upward)
+
+
+#: Modules that run code of a higher layer in a subprocess (invisible to the import graph), each with the
+#: module it runs. The geometric planner builds its C search by running the code generator.
+SUBPROCESS_IMPORTS = {("rollplan.planners.geometric.compiled_search", "rollplan.codegen")}
+
+
+def _string(node):
+    """The text of a string literal; an f-string's replacement fields read as a name."""
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return node.value
+    if isinstance(node, ast.JoinedStr):
+        return "".join(part.value if isinstance(part, ast.Constant) else "_" for part in node.values)
+    return None
+
+
+def test_no_hidden_upward_dependency_through_code_in_strings():
+    """Code written into a string and run elsewhere (``python -c``) imports too: an upward import there is
+    listed in SUBPROCESS_IMPORTS, or it is an error."""
+    found = set()
+    for name, path in MODULES.items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+            text = _string(node)
+            if text is not None and "import" in text:
+                try:
+                    tree = ast.parse(text)
+                except SyntaxError:
+                    continue
+                for target, _, _ in _imports_of(tree, name.split(".")):
+                    if target and target.startswith("rollplan") and _layer(target) > _layer(name):
+                        found.add((name, target))
+    assert found == SUBPROCESS_IMPORTS
 
 
 def test_import_graph_has_no_cycles():

@@ -1,59 +1,13 @@
 """C code generation: a self-contained C99 planner for the robot's microcontroller.
 
-Everything that is a model equation comes from the symbolic model through CasADi's
-:class:`~casadi.CodeGenerator`; no equation is typed twice:
+Every model equation comes from the symbolic model through CasADi's :class:`~casadi.CodeGenerator` (the spin
+of (13), the rotor rates (11), Montana's (6)-(10), the curve ODE (28)-(30) and its RK8 step for the on-board
+certificate, the time law, the spectral step map of (31), (35)); the planner (``c_templates/planner.c``)
+solves (32)-(33) like :mod:`rollplan.planners.geometric`, with its own complete enumeration on a graph over the
+smaller leaf radius (the numpy search uses w or sigma graphs), for ``1/2 <= k <= k_max``, and certifies every
+plan on board by RK8 with step doubling. :func:`generate` writes the library, a demo and a Makefile.
 
-* the realizability condition (13) solved for the spin ``omega_z``
-  (:func:`rollplan.core.model.omega_z_realizable`);
-* the rotor-rate map (11) (:func:`rollplan.core.model.rotor_rates`);
-* Montana's contact kinematics (6)-(10) (:func:`rollplan.core.model.montana`);
-* the curve ODE (28)-(30) along each leaf and one RK8 step of it, for the on-board certificate
-  (:func:`certificate_functions`);
-* the per-phi functions of the time law along each leaf and one RK8 step of them
-  (:func:`motion_functions`, from :func:`rollplan.execution.path.curve_piece_function`);
-* the step map ``(a, b, k) -> (shift, eta, direction)`` of one trace of the figure eight (31), (35) and its
-  Jacobian, by the Chebyshev spectral quadrature of :mod:`rollplan.core.integrate`
-  (:func:`~rollplan.core.integrate.spectral_leaf`, written with loops over 10 graded panels of ``degree + 1``
-  nodes; ``steps_per_leaf`` = panels x degree), for ``<prefix>_step_eval``; :func:`_check_k_max` refuses a
-  ``k_max`` it is not accurate to ``STEP_MAP_TOL`` up to (``results/codegen_accuracy.json``).
-
-The certificate's and the time law's functions are written in :func:`algebraic` form (no cos, sin or tan of an
-atan2 or asin result), checked against the original graph when generated.
-
-The planner (``c_templates/planner.c``) is :mod:`rollplan.planners.geometric` in C, with the same algorithm
-and the same choice: the closed-form turn ``E(r, k)``, its inverse, and the leaf's displacement by the Gauss
-rule in chi of :mod:`rollplan.planners.geometric.leafmap`; the branches of (32), the scalar equation g(x) of
-(33) on each, the rho table per k and the complete enumeration of the roots with its argument, of
-:mod:`rollplan.planners.geometric.enumerate` (every formula ported once, citing the Python function; the
-rule's nodes and every constant written from the Python definitions by :func:`generate`); and the bounded
-search of :meth:`GeometricPhasePlanner._solve_enumerated <rollplan.planners.geometric.GeometricPhasePlanner>`:
-branches in increasing order of the smallest ``a + b`` they can hold, each branch's roots in increasing x
-(the first root of a branch is its shortest plan), every root polished on the accurate leaf map, until no
-branch can hold a shorter plan. Intervals of a branch where the tabulated g provably has no root are skipped
-unsampled (g bounded through bounds of the table's cubic rho over the radii of the interval: first the whole
-branch below the best plan so far, then intervals of doubling width), which removes no root, so the choice is
-that of the search without the skip. Then the shortest root is certified (if it fails, the search is run again
-certifying every root, the pruning by certified plans only). So the C planner returns the Python planner's plan
-(same branch, same (a, b, gamma) up to rounding); ``branch=`` restricts to one branch. The enumeration needs
-E strictly decreasing, which holds for ``k >= 1/2`` (:data:`~rollplan.planners.geometric.enumerate.K_MONOTONE`):
-the generated code accepts ``1/2 <= k <= k_max`` and refuses the rest with status 2 (the Python planner falls
-back to bracketing below 1/2, without the completeness guarantee). The rho table depends on k only and is kept
-for the last k.
-
-Every plan is certified on board before it is returned (``<prefix>_certify``): the whole n-step motion is
-integrated from rest by fixed-step RK8 (:func:`rollplan.core.integrate.rk8_formula` of the state-dependent
-right side (28)-(30); the step takes cos and sin of phi at its stages, which the C code gets by rotating a
-per-panel table, and of gamma), every one of the n steps from the state the previous one left. The motion is
-periodic only up to a rigid motion of the plane: psi' does not depend on the state, so every step turns psi by
-the same eta and its displacement is the first step's turned by the heading it starts with (what the planner's
-(33) uses); the certificate does not use that and integrates all n steps. It runs N and 2N RK8 steps per
-panel, with N from the turn rate psi' on the panel, so from k and the radius (doubled again, up to 3 times,
-while the outcome is undecided); the error bound is the
-step-doubling difference over ``CERT_SAFETY`` (Richardson's 255 would be the asymptotic value; tests check
-that the bound exceeds the true error against DOP853); a plan is returned only if residual + bound <=
-``CERT_TOL``. This shares neither the heading structure nor the quadrature of the leaf map, so a leaf map
-that is wrong cannot certify its own plan. Static memory only, bounded time, and a status code (0 certified
-plan, 2 bad input, 3 no plan, 4 search incomplete, 5 not certified).
+What is generated, the planner, its k range and the certificate: docs/design/c-planner.md.
 """
 
 from __future__ import annotations
@@ -88,6 +42,7 @@ from ..planners.geometric import GeometricPhasePlanner, leafmap
 from ..planners.geometric import enumerate as enumerate_
 from ..planners.geometric.enumerate import K_MONOTONE
 from ..problem import K_MAX, MAX_STEPS, Problem
+from ..result import CERTIFICATE_TOLERANCE
 
 __all__ = [
     "DEFAULT_STEPS_PER_LEAF",
@@ -119,7 +74,7 @@ DEFAULT_K_MAX = 5.0
 #: Accuracy the step map must have on ``0 < a, b <= A_MAX``, ``k <= k_max`` for :func:`generate` to accept k_max.
 STEP_MAP_TOL = 1e-10
 #: Tolerance of the on-board certificate: residual + error bound [R and rad] (the project's tolerance).
-CERT_TOL = 1e-9
+CERT_TOL = CERTIFICATE_TOLERANCE
 #: Steps of the RK8 certificate: a panel of width w gets ceil(w (CERT_BASE + max |psi'|) / CERT_DELTA) of them.
 CERT_DELTA = 1.0
 CERT_BASE = 2.0
@@ -611,7 +566,7 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@REAL_TINY@": "DBL_MIN" if real == "double" else "FLT_MIN",
         "@REAL_EPS@": "DBL_EPSILON" if real == "double" else "FLT_EPSILON",
         "@REAL_MAX@": "DBL_MAX" if real == "double" else "FLT_MAX",
-        "@ACCURACY@": "plans are certified to 1e-9." if real == "double" else
+        "@ACCURACY@": f"plans are certified to {CERT_TOL:g}." if real == "double" else
                       f"single precision: plans are certified to {FLOAT_CERT_TOL:g} (R and rad) only.",
         "@CERT_DELTA@": repr(CERT_DELTA),
         "@CERT_BASE@": repr(CERT_BASE),

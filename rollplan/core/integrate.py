@@ -1,25 +1,13 @@
 """Integrators of the curve ODE (28)-(30) over the pieces of a closed curve.
 
-Two integrators:
+``"spectral"`` (:func:`spectral_leaf`, :func:`spectral_step`): psi' does not depend on the state and the
+rates of (u_a, v_a) are those at psi = 0 turned by -psi, so psi and then (u_a, v_a) are quadratures, taken by
+Chebyshev spectral integration on panels (a CasADi function, exactly differentiable; the structure is checked
+by :func:`check_heading_structure`). ``"cvodes"`` (:class:`CvodesIntegrator`): the independent, adaptive
+integrator that verifies plans. :func:`rk8_formula`, :func:`rk8_step`: the fixed-step order-8 formula of
+DOP853 used by the certificates. The state is ``x = (u_a, v_a, psi)`` in units of R and rad.
 
-``"spectral"`` (the planner's)
-    Along a curve, psi' in (30) does not depend on the state, and (28)-(29)
-    depend on the state only through psi: the rates of (u_a, v_a) are their
-    values at psi = 0 turned by -psi. So psi is a quadrature, and then
-    (u_a, v_a) are quadratures. Each piece is split into panels; on each panel
-    the integrals are taken by Chebyshev (Clenshaw-Curtis) spectral
-    integration on ``nodes + 1`` points, which converges exponentially for the
-    analytic integrands (:func:`spectral_leaf`). The result is a CasADi
-    function: exactly differentiable and code-generatable (the C planner of
-    :mod:`rollplan.codegen` uses the same quadrature). The structural
-    assumption is checked when the function is built
-    (:func:`check_heading_structure`).
-
-``"cvodes"``
-    CasADi's CVODES (SUNDIALS' variable-order Adams method by default) at
-    tight tolerances: the independent, adaptive integrator that verifies plans.
-
-The state is ``x = (u_a, v_a, psi)`` in units of R and rad.
+Derivation and who uses which: docs/design/integration.md.
 """
 
 from __future__ import annotations

@@ -1,50 +1,12 @@
-"""Rigid motions of the contact plane: angles, rotations and the n-step law.
+"""Rigid motions of the contact plane: angles, rotations, the n-step law and the composition law.
 
-The small formulas every planner and study shares, each written once:
+:func:`wrap` and :func:`wrap_exact` reduce angles, :func:`rotate` turns a plane vector; n identical steps of
+shift ``h`` and turn ``eta`` reach ``H_n = h |sin(n eta / 2) / sin(eta / 2)|`` (the paper's (33) the right way
+up, (34) in the limit; :func:`n_step_sum`, :func:`n_step_gain`). Along any contact path, from
+``(p0, psi0)``: ``p = p0 + Rot(-psi0) p_c``, ``psi = psi0 + Psi`` (C), so plane states compose as
+``g * h = (p_g + Rot(-psi_g) p_h, psi_g + psi_h)`` (:func:`compose`, :func:`inverse`, :func:`relative`).
 
-* :func:`wrap` -- an angle reduced to (-pi, pi]; :func:`wrap_exact` the same
-  for one user-given angle of any size, reduced exactly (the float ``2 pi`` is
-  off by 2.4e-16, which a large angle multiplies);
-* :func:`rotate` -- a plane vector turned by an angle;
-* :func:`n_step_sum` and :func:`n_step_gain` -- how the shifts of ``n``
-  identical steps add up (Section III.B of the paper).
-
-The n-step law. Along a figure eight psi' does not depend on the state and the
-plane rates are those at psi = 0 turned by ``-psi`` ((28)-(30)), so a step
-started at heading ``psi0`` makes the shift ``D`` of a step from zero turned by
-``-psi0`` and turns psi by ``eta``. After ``n`` steps the displacement is
-``D sum_{j<n} exp(-i j eta)`` and psi has turned by ``n eta``; its length is
-
-    H_n = h |sin(n eta / 2) / sin(eta / 2)|,   h = |D|,
-
-which is the paper's (33) read the right way up (the printed first fraction is
-upside down), with the limit ``H_n = n h`` where ``sin(eta / 2) = 0`` (34).
-
-The composition law (:func:`compose`, :func:`inverse`, :func:`relative`). The
-n-step law is a case of a rule that holds along *any* contact path, on or off
-the south pole. Write ``p = (u_a, v_a)`` (units of R) and
-``w(t) = (-cos(v_o) u_o', v_o')``; then (15)-(16) read ``p' = Rot(-psi) w(t)``,
-and the right side of (20) has neither ``p`` nor ``psi``. Let ``(p_c, Psi)`` be
-the motion along a contact path ``c`` from the zero plane state ``p = 0,
-psi = 0`` (the contact point at the path's own start). From ``(p0, psi0)`` the
-motion along the same path is
-
-    p(t) = p0 + Rot(-psi0) p_c(t),     psi(t) = psi0 + Psi(t):             (C)
-
-both sides agree at t = 0, and the right side solves (15), (16), (20), since
-``Rot(-psi0) Rot(-Psi) w = Rot(-psi) w``; the solution is unique. So a plane
-state ``g = (p, psi)`` acts on zero-start motions by
-
-    g * h = (p_g + Rot(-psi_g) p_h,  psi_g + psi_h),
-
-the product of the group SE(2) for the pose ``(p, -psi)`` (at the pole the
-orientation (2) is ``Rz(-psi)``, so ``(p, -psi)`` is the planar pose of the
-ball). Consequences: the end state of a path made of consecutive pieces is the
-product of the pieces' zero-start end states; a path traced backwards from its
-end state returns to zero, so its element is the inverse (the right side of
-(15), (16), (20) is linear in the contact rates); the contact coordinates
-``(u_o, v_o)`` are not acted on, they are the path. ``tests/test_plane.py``
-checks (C) against a direct integration of the printed equations.
+Derivation of both laws: docs/design/composition.md.
 """
 
 from __future__ import annotations
@@ -128,7 +90,7 @@ def n_step_gain(eta, steps: int, eps: float = 1e-12):
 
 
 def compose(g, h) -> np.ndarray:
-    """``g * h`` of the composition law (C) (module docstring): the plane state reached by the motion
+    """``g * h`` of the composition law (C) (docs/design/composition.md): the plane state reached by the motion
     ``h`` (its end state from zero) started from the plane state ``g``.
 
     Parameters

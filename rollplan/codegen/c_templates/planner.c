@@ -1,15 +1,21 @@
 /* @PREFIX@_planner.c -- the planner of rollplan.planners.geometric in C (hand-written glue).
  *
- * The ODE of the certificate is in @PREFIX@_model.c, generated from rollplan's symbolic model. The
- * planner follows rollplan.planners.geometric line by line; each formula is written once, here, with
- * the Python function it ports:
+ * The ODE of the certificate is in @PREFIX@_model.c, generated from rollplan's symbolic model. The planner
+ * solves the problem of rollplan.planners.geometric and makes the same choice (the shortest certified plan),
+ * but its enumeration is its own: one graph per branch over the smaller leaf radius x, with the rho table
+ * interpolated in r, for 1/2 <= k <= K_MAX; the numpy search (enumerate.py) uses sigma graphs for k < 0.6 and
+ * root-phase (w) graphs above (docs/design/c-planner.md, docs/design/enumeration.md). Each formula is written
+ * once, here, with the Python function it ports where there is one:
  *   leafmap.turn / turn_dr / turn_inverse   closed-form turn E(r, k) of a leaf and its inverse
  *   leafmap.displacement / signed_length    the leaf's displacement d(r, k) by the Gauss rule in chi (the
  *                                           nodes chi < pi; the others by the symmetry chi -> 2 pi - chi),
  *                                           and rho = Re(exp(i E / 2) d)
- *   enumerate.branches / branch_values      branches m of (32), the scalar equation g(x) of (33)
- *   enumerate.rho_table / rho_lookup        rho tabulated once per k (cubic Hermite)
- *   enumerate.roots (_cells, _critical, _examine, _bracketed, _polish)   every root on a branch
+ *   enumerate.branches                      branches m of (32) (make_branch)
+ *   (no Python counterpart)                 the graph over x: y(x) = E^-1(E(x) - e) (other) and the scalar
+ *                                           equation g(x) of (33) on it (branch_values)
+ *   enumerate.rho_table / rho_lookup        rho tabulated once per k (cubic Hermite in r)
+ *   enumerate.roots (_cells, _critical, _examine, _bracketed, _tangencies, _outward, _polish)
+ *                                           every root on a branch (search_branch and the functions it calls)
  *   planner._solve_enumerated               the bounded search for the shortest certified plan
  *   planner._certified                      gamma from the geometry
  * Static memory only; not reentrant (one static work area and the table of the last k). */
@@ -679,7 +685,8 @@ typedef struct {
     casadi_real c_half;  /* cos(eta / 2) */
 } branch_t;
 
-/* Larger radius y(x) = E^-1(E(x) - e) of the branch at the smaller radius x (enumerate._other). */
+/* Larger radius y(x) = E^-1(E(x) - e) of the branch at the smaller radius x (the graph over x; no Python
+ * counterpart since enumerate.py moved to w and sigma graphs). */
 static casadi_real other(casadi_real x, casadi_real e, casadi_real k) {
     casadi_real y;
     if (e == 0.0) return x;
@@ -687,7 +694,8 @@ static casadi_real other(casadi_real x, casadi_real e, casadi_real k) {
     return isnan(y) ? A_MAX : y;
 }
 
-/* (g, g', a, b) at x on branch br (enumerate.branch_values): with (a, b) = (x, y) if eta >= 0 else (y, x),
+/* (g, g', a, b) at x on branch br (the graph over x; the w and sigma graphs of enumerate.py compute the same g
+ * in their own parameter): with (a, b) = (x, y) if eta >= 0 else (y, x),
  *   g = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta / 2) - h^2,  dy/dx = E'(x) / E'(y);
  * rho from the table (accurate = 0) or from the accurate map (accurate = 1). */
 static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int accurate, casadi_real *g,
@@ -1081,7 +1089,8 @@ static casadi_real phase_point(int i, int nt, casadi_real t1, casadi_real x_end,
  * grid uniform in the phase E(x) (PHASE_STEP) and in x (X_STEP); each cell is split at its midpoint while
  * the Hermite interpolant of (g, g') at its ends misses g there by more than HERMITE_REL of the cell's
  * largest |g| and more than rounding (down to MIN_WIDTH); a resolved cell is examined unless
- * min |H| > SAFETY |g(mid) - H(mid)| + floor (module docstring of enumerate.py: the completeness argument).
+ * min |H| > SAFETY |g(mid) - H(mid)| + floor (docs/design/enumeration.md: the completeness argument, which
+ * holds on this graph with the parameter x).
  * Before that, intervals of x where the tabulated g provably has no root (excluded(): a bound of g from the
  * bounds of the table's rho over the radii of the interval) are skipped: first the whole branch below the best
  * plan, then intervals from the last point reached, their width doubled after a success and halved after a

@@ -63,8 +63,8 @@ extern "C" {
 /* Largest admissible leaf radius [R] (the equator of the body frame is singular). */
 #define @PREFIX_UPPER@_A_MAX @A_MAX@
 /* Smallest inertia ratio k accepted: the turn E(r, k) of a leaf is strictly decreasing in r for k >= 1/2,
- * which the complete enumeration relies on (rollplan.planners.geometric.enumerate; the Python planner
- * falls back to bracketing below it, without the guarantee; this code refuses). */
+ * which this code's enumeration (one graph per branch over the smaller leaf radius) relies on; below it this
+ * code refuses (rollplan's Python planner enumerates every k, on graphs over the monotone pieces of E). */
 #define @PREFIX_UPPER@_K_MIN @K_MIN@
 /* Largest inertia ratio k accepted (`rollplan codegen --k-max`): the leaf map's Gauss rule is accurate up to
  * rollplan's K_MAX, the step map @PREFIX@_step_jac to 1e-10 up to this k, and the rho table is sized for it. */
@@ -105,12 +105,12 @@ typedef struct {
  * Plan a motion from rest at the origin to (u_a, v_a, psi) = (u, v, psi) in `steps` traces of the figure
  * eight for inertia ratio k (eq. 14): the shortest certified plan over all branches m of (32)-(33),
  *   n eta = psi + 2 pi m,  h(a, b) = h_des |sin(eta/2) / sin(n eta/2)|  (h_des / n where sin(eta/2) = 0),
- * h_des = |(u, v)|, then gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift(a, b)); the same algorithm
- * and the same choice as rollplan.planners.geometric (complete enumeration of the roots on each branch as
- * one scalar equation in the smaller leaf radius, the closed-form leaf map, a bounded search over branches
- * in the order of the smallest a + b they can hold). The shortest root is certified by @PREFIX@_certify before
- * it is returned (if it fails, the search runs again and certifies every root before it is taken); a plan
- * that fails is never returned as @PREFIX_UPPER@_OK.
+ * h_des = |(u, v)|, then gamma = atan2(v, u) - arg(sum_{j<n} exp(-i j eta) shift(a, b)); the same choice as
+ * rollplan.planners.geometric (complete enumeration of the roots on each branch as one scalar equation in the
+ * smaller leaf radius, where rollplan's numpy search uses other graphs of the same level set; the closed-form
+ * leaf map; a bounded search over branches in the order of the smallest a + b they can hold). The shortest
+ * root is certified by @PREFIX@_certify before it is returned (if it fails, the search runs again and
+ * certifies every root before it is taken); a plan that fails is never returned as @PREFIX_UPPER@_OK.
  * Time: the first plan for a new k builds the leaf map's table for k (kept for the last k); then
  * proportional to the branches searched. Deterministic; static memory only; not reentrant.
  * Returns one of the status codes above; `plan` is filled in on @PREFIX_UPPER@_OK (on NOT_CERTIFIED it holds

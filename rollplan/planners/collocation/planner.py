@@ -1,54 +1,13 @@
 """Direct-collocation optimal-control planner on the same symbolic model.
 
-Problem. On a fixed horizon ``t in [0, T]`` find contact rates
-``w(t) = (u_o_dot, v_o_dot)`` that minimize
+On a fixed horizon find contact rates ``w(t) = (u_o_dot, v_o_dot)`` minimizing ``J = int_0^T L(x, w) dt``
+subject to the realizable contact kinematics ``x_dot = f(x, w; k)`` (Montana's (6)-(10) with (18)-(19) and the
+spin from (13), :func:`rollplan.core.model.contact_rhs`), ``x(0) = start``,
+``x(T) = goal + (0, 0, 2 pi m, 0, 0)``, the contact point within ``contact_bound`` of the south pole. The NLP
+(:mod:`.transcription`, costs by name in :data:`.costs.COSTS`) is solved by IPOPT; the controls are corrected
+by Gauss-Newton through CVODES and every solution is certified by an independent CVODES integration.
 
-    J = int_0^T L(x, w) dt
-
-subject to the realizable contact kinematics ``x_dot = f(x, w; k)`` of
-:func:`rollplan.core.model.contact_rhs`, i.e. Montana's (6)-(10) with the
-rolling components (18)-(19) and the spin ``omega_z`` from the realizability
-condition (13), so that (13) holds by construction. The state is
-``x = (u_a, v_a, psi, u_o, v_o)``; the boundary conditions are the
-problem's start and goal states,
-
-    x(0) = start,   x(T) = goal + (0, 0, 2 pi m, 0, 0),
-
-with ``m`` (``turns``) the number of whole turns of psi, 0 by default and those
-of the geometric-phase plan for the warm start (same final orientation). Start
-and goal are any states of the :class:`~rollplan.problem.Problem` within the
-contact bound; the warm start is then a composed geometric plan (approach and
-departure rolls around the figure eights, :mod:`rollplan.planners.geometric.composed`).
-The contact point stays within a polar angle ``contact_bound`` of the south
-pole (75 deg by default): (8) and the spin (13) are singular on the equator.
-
-Transcription: :mod:`.transcription` (separate from the NLP solve here). The
-NLP is built once (SX, exact Hessian) per (N, d, scheme, cost, contact bound);
-k, T and the robot inertias are NLP parameters and the boundary values are
-variable bounds, so repeated solves reuse it. IPOPT solves it.
-
-Costs, by name in :data:`.costs.COSTS` (lengths in units of R inside the NLP):
-``"path_length"`` (the energy form ``int |v|^2 dt`` of the contact path length;
-on a fixed horizon its minimizers are the shortest paths traced at constant
-speed), ``"path_length_smooth"`` (``int sqrt(eps + |v|^2) dt``),
-``"angular_velocity"`` (``int |omega|^2 dt``) and ``"rotor_effort"``
-(``int |phi_dot|^2 dt`` with the rotor rates of (11); needs a robot).
-
-Correction. The transcription meets the goal only up to its discretisation
-error; the optimized controls are corrected by minimum-norm Gauss-Newton steps
-through a CVODES integration with sensitivities
-(:func:`.transcription.gauss_newton`) until the integrated motion ends on the
-goal to :data:`CORRECTION_TOL`; ``objective`` is the cost of the corrected
-controls (CVODES quadrature). Five end conditions need ``2N >= 5`` controls:
-N >= :data:`MIN_INTERVALS`.
-
-Certification. Every solution is integrated again, with the corrected
-piecewise-constant controls, by CVODES at tight tolerances (independent of the
-transcription); its end point gives the certified residual to the goal, and
-CVODES quadratures give the path length and efforts that are reported. A
-solution whose residual exceeds ``verify_tol`` (:data:`TOLERANCE`, as for the
-geometric planner) is never returned: SolverError with status
-``"Verification_Failed"``.
+Problem, costs, correction and certification: docs/design/collocation.md.
 """
 
 from __future__ import annotations
@@ -67,7 +26,7 @@ from ...core import model
 from ...core.plane import wrap_exact
 from ...errors import InputError, SolverError, check_choice, check_range, check_whole
 from ...problem import Problem, State
-from ...result import Certificate, Measures, SolverStats, Trajectory
+from ...result import CERTIFICATE_TOLERANCE, Certificate, Measures, SolverStats, Trajectory
 from ...robot import Robot
 from ..geometric.composed import as_composed, default_composed_planner
 from .costs import COSTS, N_PAR, Cost
@@ -94,7 +53,7 @@ CONTACT_BOUND = math.radians(75.0)
 #: Default smoothing eps of the path-length integrand [(R/s)^2].
 SMOOTHING = 1e-4
 #: Default largest certified residual of a returned solution (units of R, rad), as for the geometric planner.
-TOLERANCE = 1e-9
+TOLERANCE = CERTIFICATE_TOLERANCE
 #: Target of the Gauss-Newton correction of the controls: largest end-state error.
 CORRECTION_TOL = 1e-12
 #: Least number of intervals: 2N contact rates for the 5 end conditions.

@@ -1,58 +1,13 @@
 """Rest-to-rest direct collocation: the contact accelerations are the controls.
 
-Problem. On a fixed horizon ``t in [0, T]`` find contact accelerations
-``a(t) = (u_o'', v_o'')``, constant on each of N equal intervals, that minimize
-``J = int_0^T L dt`` subject to the realizable contact kinematics
-(:func:`rollplan.core.model.contact_rhs`: (6)-(10) with (18), (19) and the spin
-from (13)) and ``(u_o', v_o')' = a``. The state is
-``x = (u_a, v_a, psi, u_o, v_o, u_o', v_o')``; the boundary conditions are the
-problem's start and goal at rest,
+On a fixed horizon find piecewise-constant contact accelerations ``a(t) = (u_o'', v_o'')`` minimizing
+``J = int_0^T L dt`` subject to the realizable contact kinematics and ``(u_o', v_o')' = a``, with the state
+``x = (u_a, v_a, psi, u_o, v_o, u_o', v_o')`` at rest at both ends: ``x(0) = (start, 0, 0)``,
+``x(T) = (goal + (0, 0, 2 pi m, 0, 0), 0, 0)``. Solved in normalized time (T = 1) and scaled exactly
+(``J(T) = J(1) T^p``, :data:`COST_POWERS`); 7 end conditions need :data:`MIN_INTERVALS` = 4 intervals. The
+controls are corrected by Gauss-Newton (:func:`correct`) and certified by CVODES (:func:`certify`).
 
-    x(0) = (start, 0, 0),   x(T) = (goal + (0, 0, 2 pi m, 0, 0), 0, 0),
-
-with ``m`` (``turns``) the whole turns of psi (psi is an angle: the caller solves
-several m and keeps the best, :mod:`rollplan.studies.comparison`). The contact
-rates, omega and the rotor rates are then continuous and zero at both ends, and
-the motor torques ``tau_i = J_r d/dt (n_i . omega + phi_i_dot)`` are finite
-(they step where the acceleration steps). The contact point stays within the
-polar angle ``contact_bound`` of the south pole at every sample of the returned
-(certified) motion: the NLP bounds it at the collocation points only, so when the
-certified samples exceed the bound the NLP is solved again, warm-started, with the
-bound backed off by :data:`BACKOFF_FACTOR` times the excess, until they do not (:data:`BACKOFF_TRIES`).
-
-Time scaling. The problem is homogeneous in T: with ``tau = t / T`` the states
-``(u_a, v_a, psi, u_o, v_o)`` are the same functions of tau for every T, the rates,
-omega and the rotor rates scale as ``1 / T``, the accelerations and torques as
-``1 / T^2``. The NLP is therefore solved in normalized time (T = 1) and the result
-scaled exactly: ``J(T) = J(1) T^p`` with ``p = -1`` for ``path_length`` and
-``angular_velocity`` and ``p = -3`` for ``rotor_energy`` (:data:`COST_POWERS`).
-The scaling is exact for any T; horizons are served in :data:`HORIZON_RANGE`, which
-keeps every reported quantity (costs up to ``T^-3`` times the normalized cost) far
-from overflow and underflow, and are refused outside it with the range named.
-
-End conditions and N. Seven end conditions (the five states and the two rates at
-``t = T``; the start is fixed) are met by 2N controls, so at least
-``N = 4`` = :data:`MIN_INTERVALS` intervals are needed (``2N >= 7``); with fewer
-the NLP is overconstrained in general.
-
-Costs by name (:data:`REST_COSTS`): ``"path_length"`` (``int |v|^2 dt``, the
-energy form of the contact path length), ``"angular_velocity"``
-(``int |omega|^2 dt``) and ``"rotor_energy"`` (``int |tau|^2 dt``, optimized as
-``int |tau / J_r|^2 dt``, the same minimizer; needs a robot).
-
-Transcription: :class:`.transcription.Transcription` with ``nx = 7, nu = 2``
-(Gauss-Legendre or Radau collocation of degree d). Correction: the transcription
-meets the end conditions only up to its discretisation error, so the optimized
-accelerations are corrected by minimum-norm Gauss-Newton steps
-(:func:`correct`) through a CVODES integration of the 7-state ODE with its
-sensitivities, until the integrated motion meets the goal and rest to
-:data:`CORRECTION_TOL`; the cost reported (``objective``) is that of the corrected
-controls, by a CVODES quadrature. Certification: CVODES integrates the 7-state ODE
-again with the corrected accelerations, interval by interval (:func:`certify`); a
-result whose goal residual, or final rates, exceed :data:`TOLERANCE` (as for the
-geometric planner) is never returned. Its samples (both sides of every interval
-boundary) are the :class:`rollplan.measures.TimedMotion` of the result, whose
-costs :func:`rollplan.measures.measure` computes like those of any other motion.
+Problem, time scaling, costs, correction and certification: docs/design/collocation.md.
 """
 
 from __future__ import annotations
@@ -70,7 +25,7 @@ from ...core import model
 from ...errors import InputError, SolverError, check_range, check_whole
 from ...measures import TimedMotion, measure
 from ...problem import Problem, State
-from ...result import Certificate, SolverStats, Trajectory
+from ...result import CERTIFICATE_TOLERANCE, Certificate, SolverStats, Trajectory
 from ...robot import Robot
 from .costs import N_PAR
 from .transcription import (
@@ -95,12 +50,12 @@ REST_COSTS = {
 }
 
 #: Largest certified residual (units of R, rad; the final rates in rad per horizon) of a returned solution.
-TOLERANCE = 1e-9
+TOLERANCE = CERTIFICATE_TOLERANCE
 #: Target of the Gauss-Newton correction: largest end-condition error of the corrected controls.
 CORRECTION_TOL = 1e-12
-#: Least number of intervals: 2N controls for the 7 end conditions (module docstring).
+#: Least number of intervals: 2N controls for the 7 end conditions (docs/design/collocation.md).
 MIN_INTERVALS = 4
-#: Horizons T [s] served (module docstring, time scaling).
+#: Horizons T [s] served (docs/design/collocation.md, time scaling).
 HORIZON_RANGE = (1e-6, 1e6)
 #: Power p of the scaling law ``J(T) = J(1) T^p`` of each cost.
 COST_POWERS = {"path_length": -1, "angular_velocity": -1, "rotor_energy": -3}
@@ -177,7 +132,7 @@ class RestResult(CollocationRun):
 
 
 class RestToRestPlanner:
-    """The rest-to-rest collocation NLP (module docstring), built once; IPOPT solves it.
+    """The rest-to-rest collocation NLP (docs/design/collocation.md), built once; IPOPT solves it.
 
     Parameters
     ----------
@@ -234,8 +189,8 @@ class RestToRestPlanner:
         """Solve from ``guess`` (see :func:`guess_from_samples`, :func:`naive_guess`).
 
         ``guess`` is in time over ``horizon`` (rates in rad/s, accelerations in rad/s^2); the NLP is solved in
-        normalized time and the result scaled to ``horizon`` exactly (module docstring), the controls corrected
-        (:func:`correct`) and certified (:func:`certify`).
+        normalized time and the result scaled to ``horizon`` exactly (docs/design/collocation.md), the controls
+        corrected (:func:`correct`) and certified (:func:`certify`).
 
         ``robot`` gives the inertias of the rotor rates and torques when the problem has none
         (default: the problem's robot; without either they are computed with unit inertias).
@@ -259,7 +214,7 @@ class RestToRestPlanner:
         robot = robot if robot is not None else problem.robot
         if robot is not None and not math.isclose(robot.k, problem.k, rel_tol=1e-12):
             raise InputError(f"robot has k = {robot.k:.12g}, the problem k = {problem.k:.12g}")
-        par = rest_parameters(problem.k, 1.0, robot)      # normalized time (module docstring)
+        par = rest_parameters(problem.k, 1.0, robot)      # normalized time (docs/design/collocation.md)
         c = self.contact_bound
         where = f"rest-to-rest N = {tr.intervals}, d = {tr.degree}, cost {self.cost}, {guess.name} guess, m = {turns}"
         x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, c, self.path_rows)
@@ -312,7 +267,7 @@ def _certificate(problem: Problem, fin: State, end_rates, where: str) -> Certifi
 
 
 def scaled_motion(motion: TimedMotion, horizon: float) -> TimedMotion:
-    """A motion of normalized time (T = 1) on the horizon ``horizon`` [s] (module docstring, time scaling):
+    """A motion of normalized time (T = 1) on the horizon ``horizon`` [s] (docs/design/collocation.md, time scaling):
     times times T, velocities, omega and rotor rates divided by T, torques by T^2; the states unchanged."""
     T = float(horizon)
     return TimedMotion(motion.t * T, motion.state, motion.velocity / T, motion.omega / T, motion.rotor_rates / T,

@@ -1,21 +1,13 @@
 """Direct collocation of the realizable contact kinematics: the transcription, separate from the NLP solve.
 
-``N`` intervals of equal length in normalized time ``tau = t / T``; on each,
-the state is a polynomial of degree ``d`` through the interval's start and
-``d`` Legendre or Radau points (:func:`casadi.collocation_points`), and the
-control (the contact rates) is constant. The collocation equations on each
-interval are those of the ``d``-stage Gauss-Legendre (order ``2d``) or Radau
-IIA (order ``2d - 1``) implicit Runge-Kutta method, with the coefficients of
-:func:`casadi.collocation_coeff`; with the control held fixed the
-end-of-interval states converge at that order as ``N`` grows
-(:meth:`Transcription.simulate`, checked in the tests). The cost is integrated
-by the same quadrature.
+``N`` equal intervals in normalized time ``tau = t / T``; on each, the state is a polynomial of degree ``d``
+through the interval's start and ``d`` Legendre or Radau points, the control is constant, and the
+collocation equations are those of the ``d``-stage Gauss-Legendre (order ``2d``) or Radau IIA (order
+``2d - 1``) method (:func:`casadi.collocation_coeff`). Decision variables, in order: ``X_0``, then per interval
+its collocation states (nx x d), its control (nu) and ``X_{i+1}``; ``nx = 5``, ``nu = 2`` by default
+(``nx = 7`` for rest to rest).
 
-Decision variables, in order: ``X_0``, then per interval its collocation
-states (nx x d, column by column), its control (nu) and ``X_{i+1}``. The state
-has ``nx = 5`` entries (u_a, v_a, psi, u_o, v_o) and the control ``nu = 2`` (the
-contact rates) by default; the rest-to-rest planner appends the contact rates to
-the state and controls the contact accelerations (``nx = 7``).
+Details: docs/design/collocation.md (the transcription).
 """
 
 from __future__ import annotations
@@ -153,7 +145,7 @@ class Transcription:
     scheme : str
         ``"legendre"`` (Gauss points, order 2d) or ``"radau"`` (order 2d - 1).
     nx, nu : int
-        Sizes of the state and of the control (module docstring).
+        Sizes of the state and of the control (docs/design/collocation.md).
     """
 
     intervals: int = 100

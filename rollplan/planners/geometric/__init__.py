@@ -1,16 +1,14 @@
 """The geometric-phase planner: figure eights traced n times (Section III.B of the paper), and its
 extension to any start and goal state.
 
-Pieces: :mod:`.leafmap` (the accurate leaf map: closed-form turn, Gauss-rule
-displacement, up to K_MAX), :mod:`.enumerate` (complete enumeration of the roots
-of (32)-(33), one scalar equation per branch, for k >= 1/2), :mod:`.leaves`
-(tables of the two leaves per k) and :mod:`.brackets` (cells bracketing roots of
-(32)-(33)) with :mod:`.refine` (root solvers by name) for k < 1/2,
-:mod:`.certify` (independent integration of the whole motion), :mod:`.planner`
-(the pole-to-pole problem class :class:`GeometricPhasePlanner`); full
-reconfiguration: :mod:`.maneuvers` (approach and departure rolls), :mod:`.turn`
-(turning in place), :mod:`.legs` (two legs), :mod:`.composed`
-(:class:`ComposedPlanner` and :func:`plan`, for any start and goal), :mod:`.route`.
+Pieces: :mod:`.leafmap` (the accurate leaf map: closed-form turn, Gauss-rule displacement, up to K_MAX),
+:mod:`.enumerate` (complete enumeration of the roots of (32)-(33) for every k), :mod:`.compiled_search` (the
+generated C planner's search, for ``1/2 <= k <= k_max``), :mod:`.refine` (the polish: root solvers by name),
+:mod:`.certify` (independent integration of the whole motion), :mod:`.planner` (the pole-to-pole problem class
+:class:`GeometricPhasePlanner`); :mod:`.leaves` and :mod:`.brackets` (the bracketing of leaf-table cells, no
+longer reached by the planner); full reconfiguration: :mod:`.maneuvers` (approach and departure rolls),
+:mod:`.turn` (turning in place), :mod:`.legs` (two legs), :mod:`.composed` (:class:`ComposedPlanner` and
+:func:`plan`, for any start and goal), :mod:`.route`. Design: docs/design/geometric-planner.md.
 """
 
 from .composed import LEGS, ComposedPlan, ComposedPlanner, as_composed, plan

@@ -1,11 +1,12 @@
-"""Bracketing the roots of (32)-(33) on the cells of the leaf tables.
+"""Bracketing the roots of (32)-(33) on the cells of the leaf tables, and the target shift of (33).
 
-For a branch ``m`` the step must turn psi by ``eta_m = (psi + 2 pi m) / n``
-(32) and shift by ``h_m`` of (33) (:func:`target_shift`). A cell of the (a, b)
-grid of :class:`~.leaves.LeafTables` *brackets* branch m when ``eta_m`` lies
-between its corners' smallest and largest eta and ``h_m`` between their
-smallest and largest h. Each bracket carries a start for the root solver
-(:func:`cell_start`).
+:func:`target_shift` gives ``h_m`` of (33) for a branch m (``eta_m = (psi + 2 pi m) / n``, (32)); the
+enumeration uses it. A cell of the (a, b) grid of :class:`~.leaves.LeafTables` *brackets* branch m when
+``eta_m`` lies between its corners' smallest and largest eta and ``h_m`` between their smallest and largest
+h; each bracket carries a start for a root solver (:func:`cell_start`). The planner's ``solve`` no longer
+uses the brackets (the enumeration serves every k); they remain for the benchmarks.
+
+See docs/design/geometric-planner.md (the bracketing).
 """
 
 from __future__ import annotations

@@ -1,40 +1,12 @@
 """Certification of a geometric-phase plan: an independent integration of all n steps.
 
-Two certifiers, chosen by name (:data:`CERTIFIERS`); both integrate the model's curve ODE
-(28)-(30) along the rotated figure eight ``Rz(gamma) c(a, b, theta)`` (31), leaf after leaf, for
-all ``n`` steps, from zero, and give the final state and a bound of its integration error:
+Two certifiers by name (:data:`CERTIFIERS`) integrate the model's curve ODE (28)-(30) along the rotated
+figure eight (31), leaf after leaf, for all ``n`` steps from zero, and give the final state and a bound of
+its error: ``"rk8"`` (the default, :class:`RK8Certifier`: compiled fixed-step RK8 in a graded variable, run
+with N and 2N steps per leaf, the difference plus a rounding allowance as the bound) and ``"cvodes"``
+(:class:`CvodesCertifier`). Neither shares the leaf map's closed forms, mirror or n-step law.
 
-``"rk8"`` (the default, :class:`RK8Certifier`)
-    Fixed-step explicit Runge-Kutta of order 8 (the 12-stage order-8 formula of DOP853,
-    :func:`rollplan.core.integrate.rk8_step`), compiled to C (:mod:`rollplan.core.compiled`). The
-    whole motion is integrated twice, with ``N`` and with ``2N`` steps per leaf, and
-
-        estimate = |x_2N - x_N| + ROUNDING_FACTOR eps (1 + max |psi|) sqrt(2 n 2N)
-
-    bounds the error of ``x_2N`` (u_a, v_a, psi; Euclidean norm). For an order-8 method in its
-    asymptotic range the error of ``x_2N`` is about ``|x_2N - x_N| / 255``: counting the whole
-    difference also covers the pre-asymptotic range; the second term bounds the rounding errors,
-    which the difference of two runs does not show (they add like a random walk over the steps
-    and reach (u_a, v_a) through psi). While the estimate exceeds ``tol / 4`` the step count is
-    doubled (up to :data:`MAX_STEPS_PER_LEAF`), so acceptance never rests on the starting count
-    (:func:`initial_steps`, a speed heuristic). The steps are equal in a graded variable ``tau``,
-    ``phi = tau + 2 atan(beta sin tau / (1 - beta cos tau))`` with ``beta(r) = r^2 / (1 - r^2 +
-    sqrt(1 - 2 r^2))`` (:func:`grading`): short steps near ``phi = pi``, where the leaf comes
-    closest to the body equator (the singularity of (30)) and psi turns fastest.
-``"cvodes"`` (:class:`CvodesCertifier`)
-    CasADi's CVODES (Adams, relative tolerance 3e-15) on the same equations in ``phi``; it gives
-    no error estimate (0), its tolerance lies far below the certificate's.
-
-Why the certificate is independent of the planner's step map. The planner solves (32)-(33) on
-the closed-form leaf map (:mod:`.leafmap`): the turn ``E(r, k)`` in closed form and the
-displacement as a Gauss-Legendre quadrature in the variable ``chi`` of a reduced integral,
-composed into n steps by the rotation and mirror rules of (28)-(30). The certificate shares
-only the model (:mod:`rollplan.core.model`, the single source of truth) and the plan's
-parameters: it integrates the model's full right side (28)-(30) (through the (u_o, v_o) chart,
-(18)-(19), (13) and Montana's (6), (7), (10)) in time-like ``tau``, by Runge-Kutta time stepping
-whose errors propagate through psi into (u_a, v_a); the -y leaf is integrated on its own curve,
-not mirrored; gamma enters through the curve, not by rotating a result; the n steps are
-composed by integrating on from the previous end state, never by the n-step law.
+Error bound and why the certificate is independent: docs/design/geometric-planner.md (the certificate).
 """
 
 from __future__ import annotations
@@ -54,6 +26,7 @@ from ...core.integrate import CvodesIntegrator, rk8_step
 from ...core.rewrite import algebraic
 from ...errors import check_choice
 from ...problem import State
+from ...result import CERTIFICATE_TOLERANCE
 
 __all__ = ["CERTIFIERS", "DEFAULT_CERTIFIER", "MAX_STEPS_PER_LEAF", "REFINE_BELOW", "ROUNDING_FACTOR", "grading",
            "initial_steps", "rounding_allowance", "RK8Certifier", "CvodesCertifier", "certifier"]
@@ -134,7 +107,7 @@ def _eight_pair_function(steps: int, compile: bool) -> ca.Function:
     return compiled_lazy(f"cert_eight_{steps}", lambda: _eight_pair(steps), f"steps={steps}", _SOURCES)
 
 
-def initial_steps(a: float, b: float, k: float, steps: int = 1, tol: float = 1e-9) -> int:
+def initial_steps(a: float, b: float, k: float, steps: int = 1, tol: float = CERTIFICATE_TOLERANCE) -> int:
     """RK steps per leaf to start with: a power of two, at least 16 (doubled on demand).
 
     A speed heuristic only (the estimate decides acceptance): ``max(10 + 14.5 r / s^1.5, 1.45 k r c /
@@ -151,7 +124,7 @@ def initial_steps(a: float, b: float, k: float, steps: int = 1, tol: float = 1e-
 
 
 def rounding_allowance(psi_scale: float, steps: int, steps_per_leaf: int) -> float:
-    """Bound of the rounding error of the finer run (module docstring):
+    """Bound of the rounding error of the finer run (docs/design/geometric-planner.md):
     ``ROUNDING_FACTOR eps (1 + psi_scale) sqrt(2 n N_fine)``."""
     return ROUNDING_FACTOR * float(np.finfo(float).eps) * (1.0 + psi_scale) * math.sqrt(2.0 * steps * steps_per_leaf)
 
@@ -166,7 +139,7 @@ def _end_contact() -> ca.Function:
 
 class RK8Certifier:
     """Final state of n traces of the figure eight (a, b) rotated by gamma, with an error bound, by the
-    compiled fixed-step RK8 integration with step doubling (module docstring); units of R.
+    compiled fixed-step RK8 integration with step doubling (docs/design/geometric-planner.md); units of R.
 
     Parameters
     ----------
@@ -180,7 +153,7 @@ class RK8Certifier:
     def __init__(self, compile: bool = True) -> None:
         self.compile = bool(compile)
 
-    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = 1e-9,
+    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = CERTIFICATE_TOLERANCE,
                 start: int | None = None):
         """``(final State, estimate, steps per leaf)``: the finer run's final state (u_o, v_o of the end
         point), the bound of its error [R, rad] and its RK steps per leaf; ``start`` overrides the
@@ -231,8 +204,8 @@ class CvodesCertifier:
         u_o, v_o = (float(c) for c in model.contact_coordinates(end))
         return State(*(float(v) for v in xs[-1]), u_o, v_o)
 
-    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = 1e-9):
-        """``(final State, 0.0, 0)``: CVODES gives no error estimate (module docstring)."""
+    def certify(self, a: float, b: float, k: float, gamma: float, steps: int, tol: float = CERTIFICATE_TOLERANCE):
+        """``(final State, 0.0, 0)``: CVODES gives no error estimate (docs/design/geometric-planner.md)."""
         return self.final(a, b, k, gamma, steps), 0.0, 0
 
 

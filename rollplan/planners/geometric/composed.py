@@ -1,54 +1,14 @@
 """Full reconfiguration: plans between any two states ``(u_a, v_a, psi, u_o, v_o)``.
 
-The paper plans from rest at the origin to a goal at the south pole. A start
-or goal with its contact point off the pole is served by a composed motion:
+A start or goal off the south pole is served by a composed motion: an approach roll to the pole
+(:mod:`.maneuvers`), figure eights pole to pole (one leg, :class:`.planner.GeometricPhasePlanner`; or a turn in
+place, :mod:`.turn`; or two legs, :mod:`.legs`), and a departure roll. By the composition law (C) of
+:mod:`rollplan.core.plane` the figure eights must realize, from zero, ``g_F = g_A^-1 * start^-1 * goal * g_B^-1``
+(F), with ``g_A``, ``g_B`` the rolls' closed-form elements; the whole motion is then certified by one CVODES
+integration from the start state (:func:`certify_path`). ``legs=`` (:data:`LEGS`) chooses between one and two
+legs: ``"fallback"`` (default), ``"shortest"``, ``"one"``, ``"two"``.
 
-1. an approach roll from the start contact point to the pole (:mod:`.maneuvers`);
-2. figure eights, pole to pole: one leg of ``n`` identical figure eights
-   (:class:`.planner.GeometricPhasePlanner`), or, where none exists, a turn in
-   place by pairs of circles (:mod:`.turn`) or two legs through an
-   intermediate pole state (:mod:`.legs`);
-3. a departure roll from the pole to the goal contact point.
-
-The rolls move ``(u_a, v_a, psi)`` too. Along any contact path the plane part
-composes as a rigid motion of the plane (the law (C) of
-:mod:`rollplan.core.plane`), so with the rolls' elements ``g_A``, ``g_B`` (closed
-form) the figure eights must realize, from zero,
-
-    g_F = g_A^-1 * start^-1 * goal * g_B^-1,                              (F)
-
-and they are solved for that target. Every plan is then certified by one
-CVODES integration of the whole composed motion from the start state
-(:class:`rollplan.core.paths.PathIntegrator`), which uses neither (F) nor the
-closed forms; none is returned above the tolerance.
-
-Keeping the path short and clear of the singular set: the rolls are geodesics
-(the shortest contact paths between their ends), along which ``n3z``, the
-divisor of (13), is monotone, so they never come closer to the singular set
-``n3z = 0`` than the start or goal contact point (held at ``n3z >= 0.05`` by
-:func:`rollplan.problem.check_contact`); the figure eights are the shortest
-one-leg plan for (F) (leaf radii ``<= A_MAX``, ``n3z >= 0.048``).
-
-Choice of the legs (``legs=``):
-
-``"fallback"`` (default)
-    One leg of figure eights; a turn in place (``p_F = 0``) by the circle
-    pairs; two legs only when one leg has no plan. A problem the paper's planner
-    can serve (start at rest at the origin, goal at the pole) gets exactly its
-    plan, at its speed.
-``"shortest"``
-    Also search two legs when one leg exists, and keep the shorter.
-``"one"``, ``"two"``
-    Force one leg (no fallback) or two legs.
-
-Why ``"fallback"`` is the default rather than always searching both: the
-two-leg search is a grid envelope with a local polish (no global guarantee),
-costs seconds, and its shortest plans are degenerate (one leaf per leg shrinks
-to a tiny loop); one leg is the planner's complete, shortest-by-default answer
-and is fast. ``"shortest"`` is there when path length matters more than time.
-
-Special cases: start equal to goal (psi as an angle): the empty motion;
-``g_F`` = identity: the two rolls alone.
+Derivation, the singular set, the choice of the legs: docs/design/composition.md.
 """
 
 from __future__ import annotations
@@ -76,7 +36,7 @@ from .turn import CircleTurn, turn_in_place
 __all__ = ["LEGS", "IDENTITY_TOL", "ComposedPlan", "ComposedPlanner", "default_composed_planner", "as_composed",
            "certify_path", "sample_path", "plan"]
 
-#: Policies for the legs of figure eights (module docstring).
+#: Policies for the legs of figure eights (docs/design/composition.md).
 LEGS = ("fallback", "shortest", "one", "two")
 #: A figure-eight target this close to zero (units of R and rad) is no motion at all.
 IDENTITY_TOL = 1e-12
@@ -223,7 +183,7 @@ def as_composed(result) -> ComposedPlan:
 
 
 class ComposedPlanner:
-    """Planner for any start and goal state (module docstring); the method ``"geometric"`` of
+    """Planner for any start and goal state (docs/design/composition.md); the method ``"geometric"`` of
     :data:`rollplan.planners.METHODS`.
 
     Parameters
@@ -429,7 +389,7 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     planner (:meth:`GeometricPhasePlanner.solve`): ``steps`` traces of a figure
     eight. Otherwise (a start or goal off the pole, a turn in place, a target
     one leg cannot reach) a composed motion: approach roll, figure eights for
-    the target (F), departure roll (module docstring).
+    the target (F), departure roll (docs/design/composition.md).
 
     Parameters
     ----------
@@ -453,7 +413,7 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     start : State or sequence, optional
         Start state (default zero: at rest at the origin, contact at the pole).
     legs : str
-        ``"fallback"`` (default), ``"shortest"``, ``"one"`` or ``"two"`` (module docstring).
+        ``"fallback"`` (default), ``"shortest"``, ``"one"`` or ``"two"`` (docs/design/composition.md).
 
     Returns
     -------

@@ -1,85 +1,13 @@
 """Complete enumeration of the roots of (32)-(33): one scalar equation per graph of each branch.
 
-Reduction (:mod:`.leafmap` gives the structure used here). One step turns psi by ``eta(a, b) =
-E(a) - E(b)`` and shifts by ``h(a, b) = |F|``, ``F = exp(i E(a)) d(a) + conj(d(b))``, with the turn
-E in closed form. On branch m of ``n eta = psi + 2 pi m`` (32) fixes ``eta_m`` and (33) the shift
-``h_m`` (:func:`.brackets.target_shift`). With the leaf's symmetry (``d = rho exp(-i E/2)``, real
-rho; :mod:`.leafmap`, items 3-4), ``h^2 = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta_m / 2)``
-with ``eta_m`` fixed on the branch, so on the level set ``E(a) - E(b) = eta_m`` (33) is
+On branch m of ``n eta = psi + 2 pi m`` (32) fixes ``eta_m`` and (33) becomes, on the level set
+``E(a) - E(b) = eta_m``, ``g = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta_m / 2) - h_m^2 = 0`` (rho from a
+per-k table, :func:`rho_table`). The level set is covered by graphs: over the root phase ``w = sqrt(-E)`` for
+``k >= K_FAST`` (:class:`_WGraphs`), over ``sigma = a +- b`` on the monotone pieces of E below
+(:class:`_SigmaGraphs`); every root on them is found by Hermite cells (:func:`roots`). The C planner's search
+(:mod:`.compiled_search`) uses another graph, over the smaller radius, for ``1/2 <= k <= k_max``.
 
-    g = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta_m / 2) - h_m^2 = 0.
-
-The level set is covered by *graphs*: smooth curves parametrised by one variable p on an interval,
-along which a and b move with bounded slopes, so that g(p) is smooth with ``g'`` from the chain
-rule. Two parametrisations are used.
-
-* ``k >= K_FAST`` (every physical robot): E is strictly decreasing (:func:`.leafmap.turn_pieces`)
-  and the root phase ``w(r) = sqrt(-E(r))`` is a smooth increasing coordinate on ``[0, A_MAX]``
-  (:func:`.leafmap.root_phase`). With ``e = |eta_m|``, the smaller radius x and the larger y,
-  ``w(y)^2 = w(x)^2 + e``: the branch is one graph over ``p = w(x) in [0, sqrt(w(A_MAX)^2 - e)]``
-  with ``dw(y)/dp = p / w(y) in [0, 1]``, ``(a, b) = (x, y)`` if ``eta_m >= 0`` else ``(y, x)``.
-  rho is tabulated in w (:func:`rho_table`), so g needs no inversion of E: two table look-ups.
-  ``a + b`` grows with p, and its smallest value ``y0 = r(sqrt(e))`` grows with e.
-* every k (used for ``k < K_FAST``): split ``(0, A_MAX]`` into the monotone pieces of E
-  (:func:`.leafmap.turn_pieces`: one, or two around the maximum at r* for ``1/Q < k < 1/2``). In
-  the rectangle of pieces (i, j) (a on piece i, b on piece j, signs ``s_i``, ``s_j`` of E') the level
-  set is, by monotonicity, one curve that is a graph over a and over b; its tangent is
-  ``(E'(b), E'(a))``, so ``sigma = a + kappa b`` with ``kappa = s_i s_j`` is strictly increasing along
-  it, with ``da/dsigma = E'(b) / (E'(b) + kappa E'(a))`` and ``db/dsigma = E'(a) / (E'(b) + kappa
-  E'(a))``, both of modulus at most 1 (1/2 where both E' vanish, at a corner of the rectangle). The
-  graph over sigma runs between the ends of the curve (where a or b reaches an end of its piece),
-  and ``a(sigma)`` solves the strictly monotone ``E(a) - E(kappa (sigma - a)) = eta_m`` (bracketed
-  Newton on the closed form). ``eta_m = 0`` needs nothing special: in a diagonal rectangle the
-  curve is the diagonal ``a = b`` (E is one-to-one on a piece), off the diagonal it is the family
-  ``a != b`` with ``E(a) = E(b)`` through the corner ``(r*, r*)``; a root on a corner shared by two
-  graphs is reported once.
-
-rho is tabulated once per k (:func:`rho_table`: cubic Hermite on radii uniform in r and refined
-so that E changes by at most :data:`TABLE_PHASE` between nodes, in w for ``k >= K_FAST`` and in r
-otherwise; its interpolation error is bounded by ``eps``, SAFETY times the largest error at the
-midpoints against the accurate map) and cached on disk and in memory.
-
-Completeness argument. Every graph of every branch is sampled at once (flat arrays over all the
-graphs of a chunk of branches) on a grid in p (for w: the root phases of radii uniform in r with
-steps of :data:`X_STEP`, refined so that E changes by at most :data:`PHASE_STEP` between them; for
-sigma: steps of :data:`SIGMA_STEP`), and g is also evaluated at every cell's midpoint. A cell is
-split at its midpoint while the cubic Hermite interpolant H of (g, g') at its ends misses g at the
-midpoint by more than :data:`HERMITE_REL` of the cell's largest |g| and more than rounding (down to
-:data:`MIN_WIDTH`). A cell is *excluded* only if ``min |H| > SAFETY * |g(mid) - H(mid)| + floor``
-over the cell, with ``floor`` covering rounding and the table's error carried into g (a cell whose
-ends have one sign is excluded at once when ``min(|g0|, |g1|) - max(|w g0' - dg|, |w g1' - dg|) / 4``,
-``dg = g1 - g0``, a lower bound of min |H| since H minus its chord is ``s (1 - s) ((1 - s) (w g0' -
-dg) - s (w g1' - dg))``, exceeds the same threshold; else H's critical points decide). g has no
-zero there as long as the Hermite error
-anywhere in the cell is at most SAFETY times its value at the midpoint (where the error factor of
-cubic Hermite interpolation peaks), i.e. as long as the cell resolves g's fourth derivative, which
-the splitting enforces; and the true g differs from the tabulated one by less than the floor.
-Every other cell is examined: each sign change of g between the ends and the critical points of H
-is a root (bracketed Newton; between points where ``|g|`` is within the floor, where the table cannot tell
-its sign, the signs of the accurate map decide); where g keeps its sign but H has an extremum, the critical point of g
-is located (bracketed secant on g') and gives two roots (a close pair) or, if ``|g|`` is within the
-floor there, a tangency of the table, which the accurate map decides (:func:`_tangencies`): a sign change of
-the accurate g on either side of it is a root there (a close pair the table's error hid), and where the
-accurate g already has the other sign at the sub-cell's end, the root beyond it is found outward (doubling
-steps while g keeps moving toward the table's sign); otherwise it is a double root. The roots are then
-polished by Newton on ``|S| - h`` of the accurate map (:func:`newton_step`), and a root the leaf map still
-misses by more than :data:`NOT_A_ROOT` times the certificate's tolerance is none (a tangency of the table
-only). So every root of (32)-(33) with ``0 < a, b <= A_MAX``, on every branch, is found: simple roots, close
-pairs down to what the accurate map separates, and tangencies; the certificate (:mod:`.certify`) then accepts
-or rejects each plan.
-The argument is not interval arithmetic: it rests on the midpoint error estimating the Hermite error
-within SAFETY in resolved cells (and likewise for the table); ``tests/test_enumerate.py`` checks the
-result against independent dense brute forces, for k from 0 to 20.
-
-The shortest plan (``first_only``): on a w graph ``a + b`` grows with p, so a branch's shortest
-plan is its first root, and a root with ``a + b <= L`` has ``w(y) <= w(L)`` and ``x <= L - y0``,
-which bounds p before sampling; the active cells of each branch are examined in order until one
-gives a root. On sigma graphs all roots are found and the shortest of each branch kept.
-
-Everything is a pure function of numpy arrays (the C planner ports it). The planner runs the
-shortest-plan search in that C port where it applies (:mod:`.compiled_search`): the same algorithm,
-so the argument above holds for it; ``tests/test_codegen.py`` checks that it finds the same branch and
-(a, b, gamma) to 1e-8, ``tests/test_geometric.py`` that the planner chooses the same plan either way.
+Derivation and completeness argument: docs/design/enumeration.md.
 """
 
 from __future__ import annotations
@@ -319,7 +247,7 @@ def _w_lookup(w, wt: _WTable):
 
 @lru_cache(maxsize=8)
 def _w_nodes(k: float) -> np.ndarray:
-    """Initial sampling nodes in w of the w graphs (module docstring)."""
+    """Initial sampling nodes in w of the w graphs (docs/design/enumeration.md)."""
     return np.unique(root_phase(table_radii(k, X_STEP, PHASE_STEP), k)[0])
 
 
@@ -376,7 +304,7 @@ def _turn_range(k: float) -> tuple:
 
 
 class _WGraphs:
-    """The w graphs of branches (``k >= K_FAST``, module docstring): one per branch."""
+    """The w graphs of branches (``k >= K_FAST``, docs/design/enumeration.md): one per branch."""
 
     def __init__(self, k: float, eta, h, lengths, y0):
         self.k = k
@@ -460,7 +388,7 @@ def _inverse_on(t, k: float, lo, hi, sign):
 
 
 class _SigmaGraphs:
-    """The sigma graphs of branches (every k, module docstring): one per branch and rectangle of pieces."""
+    """The sigma graphs of branches (every k, docs/design/enumeration.md): one per branch and rectangle of pieces."""
 
     def __init__(self, k: float, eta, h, lengths=(0.0, math.inf)):
         self.k = k
@@ -621,7 +549,7 @@ def _critical(g0, p0, g1, p1, w):
 
 def _cells(gr, p, gi):
     """Resolved cells of the graphs from samples (p, gi) sorted by graph then p: dict of arrays ``own``
-    (graph index), x0, x1, g0, p0, g1, p1, gm, err, s0, s1 (a + b at the ends) (module docstring)."""
+    (graph index), x0, x1, g0, p0, g1, p1, gm, err, s0, s1 (a + b at the ends) (docs/design/enumeration.md)."""
     same = (gi[:-1] == gi[1:]) & (p[1:] > p[:-1])
     o, x0, x1 = gi[:-1][same], p[:-1][same], p[1:][same]
     xm = 0.5 * (x0 + x1)
@@ -713,7 +641,7 @@ def _cubic_root(g0, p0, g1, p1, w, lo, hi):
 
 
 def _examine(gr, act, c, crit, eps_g):
-    """Roots in the active cells ``act`` of :func:`_cells` output ``c`` (module docstring): arrays of
+    """Roots in the active cells ``act`` of :func:`_cells` output ``c`` (docs/design/enumeration.md): arrays of
     parameter, graph index and kind (1 simple, 2 double)."""
     o, x0, x1, g0, p0, g1, p1 = (c[n][act] for n in ("own", "x0", "x1", "g0", "p0", "g1", "p1"))
     n = act.size
@@ -923,7 +851,7 @@ def _polish(gr, x, own, iters: int = 6):
 def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf), polish: bool = True) -> list:
     """Every root of g on the branches ``brs`` with ``lengths[0] <= a + b <= lengths[1]`` (:class:`Root`,
     sorted by ``a + b``); with ``first_only`` only the shortest root of each branch. ``polish``: Newton
-    on the accurate map (else the table's roots). See the module docstring for why none is missed."""
+    on the accurate map (else the table's roots). Why none is missed: docs/design/enumeration.md."""
     brs = [br for br in brs if br.x_end > 0.0]
     if not brs:
         return []

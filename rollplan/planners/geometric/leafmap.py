@@ -1,63 +1,13 @@
 """Accurate leaf map: turn and displacement of one leaf of the figure eight, over the whole domain.
 
-One leaf of the figure eight (31), (35) is the spherical circle of radius ``r`` (units of R)
-through the south pole, traced once, ``phi in [0, 2 pi]``. Traced from zero state it moves the
-contact point by the displacement ``d(r, k) = (u_a + i v_a)(2 pi)`` and turns psi by
-``E(r, k) = psi(2 pi)``. Notation: ``c = sqrt(1 - r^2)``, ``s = sqrt(1 - 2 r^2)``,
-``rho = r^2 / (c^2 + s)`` (``0 <= rho < 1`` for ``r < 1/sqrt(2)``).
+One leaf (31), (35) is the circle of radius ``r`` through the south pole; traced from zero it turns psi by
+``E(r, k) = 2 pi (1 - c) + 2 pi k c (1 - 1/s)`` (closed form of (30), :func:`turn`) and moves the contact
+point by ``d(r, k) = rho(r) exp(-i E / 2)`` (real rho, :func:`signed_length`), integrated by a composite
+Gauss-Legendre rule in chi (:func:`displacement`, accurate to 1e-13 up to ``(A_MAX, K_MAX)``). One figure
+eight from zero turns by ``eta = E(a) - E(b)`` and shifts by ``h = |d(a) + exp(-i E(a)) conj(d(b))|``
+(:func:`step_values`). ``c = sqrt(1 - r^2)``, ``s = sqrt(1 - 2 r^2)``; plain numpy on arrays of radii.
 
-Structure of (28)-(30) (each item is checked in ``tests/test_leafmap.py``):
-
-1. (30) holds the curve only, not the state, so psi' depends on phi alone; (28)-(29) are the
-   rates at psi = 0 turned by ``-psi``. A leaf started at heading ``psi0`` turns psi by ``E``
-   and moves by ``Rot(-psi0) d``.
-2. Mirror: the -y leaf is the +y leaf with ``y -> -y``; it turns psi by ``-E(r)`` and moves by
-   ``conj(d(r))``.
-3. Symmetry: the leaf is symmetric under the reflection in the plane through the pole and its
-   centre (x -> -x, traced backwards), which makes ``exp(i E / 2) d`` real: ``d = rho(r)
-   exp(-i E / 2)`` with a real, signed ``rho`` (:func:`signed_length`).
-4. Hence one figure eight (+y leaf ``a``, then -y leaf ``b``) from zero turns psi by
-   ``eta(a, b) = E(a) - E(b)`` and moves by ``S = d(a) + exp(-i E(a)) conj(d(b))``; the step's
-   shift is ``h = |S| = |exp(i E(a)) d(a) + conj(d(b))|``. Rotating the curve by gamma about OZ
-   turns the displacement by ``+gamma``. With item 3,
-   ``h^2 = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta / 2)``: on a branch of (32), where eta is
-   fixed, h depends on the two leaves only through rho.
-
-Closed form of the turn. (30) is ``psi' = sin(v_o) u_o' + k w`` with ``w = (x y' - y x') / z`` on
-the sphere; on the circle ``w = c - c / (c^2 + r^2 cos phi)``, whose integral is
-``Phi = c phi - (c / s) chi(phi)``, ``chi(phi) = phi - 2 atan(rho sin phi / (1 + rho cos phi))``.
-The rolling part is pure rolling of a small circle (its development is a circle: the heading of
-the contact path turns at rate ``c`` and ``|(u_a', v_a')| = r``), so
-
-    E(r, k) = 2 pi (1 - c) + 2 pi k c (1 - 1/s),                     dE/dr = (2 pi r / c) (1 - k (1 + s^-3)),
-    u_a' + i v_a' = r exp(i theta(phi)),   theta = (1 - k) c phi + (k c / s) chi(phi).
-
-The sign of dE/dr is that of ``1 - k (1 + s^-3)``, and ``1 + s^-3`` increases with r from 2 to
-``Q = 1 + s(A_MAX)^-3``: E is strictly decreasing on (0, A_MAX] for every ``k >= 1/2``, strictly
-increasing for ``k <= 1/Q``, and for ``1/Q < k < 1/2`` increasing up to its only interior maximum
-``r* = sqrt((1 - s*^2) / 2)``, ``s* = (1/k - 1)^(-1/3)``, then decreasing (:func:`turn_pieces`; the
-complete enumeration, :mod:`.enumerate`, works on these monotone pieces). For ``k > 1/2`` the
-*root phase* ``w = sqrt(-E)`` is ``r sqrt(phi(r^2))`` with ``phi(u) = -E / u > 0`` smooth
-(``phi(0) = pi (2 k - 1)``), so w is a smooth increasing coordinate on (0, A_MAX]
-(:func:`root_phase`).
-
-The displacement, in the variable ``chi`` (the argument of a Blaschke factor, inverse
-``phi(chi) = chi + 2 atan(rho sin chi / (1 - rho cos chi))``,
-``phi'(chi) = (1 - rho^2) / (1 - 2 rho cos chi + rho^2)``), is
-
-    d(r, k) = r int_0^{2 pi} phi'(chi) exp(i [(1 - k) c phi(chi) + (k c / s) chi]) d chi,
-
-an integrand analytic in the strip ``|Im chi| < ln(1/rho)`` (>= 0.44 up to A_MAX) whose fast
-phase is linear in chi. It is integrated by the composite Gauss-Legendre rule of :data:`ORDER`
-nodes on equal panels of ``[0, 2 pi]``, the number of panels per range of k (:data:`BUCKETS`)
-chosen from the a-priori bound of the Gauss rule for analytic integrands on Bernstein ellipses
-(Trefethen, SIAM Review 50 (2008), Thm 4.5) so that the value errs by less than 1e-13 and its
-r-derivative by less than 1e-9 on ``(0, A_MAX] x [0, K_MAX]``; ``tests/test_leafmap.py`` checks
-the map against scipy's DOP853 on the printed equations over that domain. The nodes do not depend
-on ``(r, k)``, so ``dd/dr`` is the same rule applied to the r-derivative of the integrand.
-
-Everything here is plain numpy on arrays of radii (pure functions), so that the C planner can
-follow it line by line.
+Derivation and structure (items 1-4, the turn, the Gauss rule): docs/design/leaf-map.md.
 """
 
 from __future__ import annotations
@@ -77,7 +27,7 @@ __all__ = ["ORDER", "BUCKETS", "panels_for", "gauss_nodes", "turn", "turn_dr", "
 #: Gauss-Legendre nodes per panel.
 ORDER = 48
 #: ``(k_upper, panels)``: for ``k <= k_upper`` (and above the previous bucket) the rule uses
-#: ``panels`` equal panels of :data:`ORDER` nodes in chi (see the module docstring).
+#: ``panels`` equal panels of :data:`ORDER` nodes in chi (docs/design/leaf-map.md).
 BUCKETS = ((5.0, 2), (10.0, 3), (20.0, 4), (30.0, 6), (40.0, 7), (50.0, 9), (75.0, 13), (100.0, 18))
 assert BUCKETS[-1][0] >= K_MAX
 
@@ -136,7 +86,7 @@ def _turn_u(u, k: float):
 
 def turn_pieces(k: float) -> tuple:
     """The monotone pieces of E(., k) on [0, A_MAX]: ``((r_lo, r_hi, sign), ...)`` with ``sign`` that of
-    dE/dr inside (module docstring)."""
+    dE/dr inside (docs/design/leaf-map.md)."""
     q = 1.0 + (1.0 - 2.0 * A_MAX * A_MAX) ** -1.5
     if k >= 0.5:
         return ((0.0, A_MAX, -1),)
@@ -148,8 +98,8 @@ def turn_pieces(k: float) -> tuple:
 
 
 def root_phase(r, k: float):
-    """``(w, dw/dr)`` with ``w = sqrt(-E(r, k))`` for ``k > 1/2`` (module docstring), without cancellation:
-    ``w = r sqrt(phi)``, ``dw/dr = (pi / c) (k (1 + s^-3) - 1) / sqrt(phi)``."""
+    """``(w, dw/dr)`` with ``w = sqrt(-E(r, k))`` for ``k > 1/2`` (docs/design/leaf-map.md), without
+    cancellation: ``w = r sqrt(phi)``, ``dw/dr = (pi / c) (k (1 + s^-3) - 1) / sqrt(phi)``."""
     r = np.asarray(r, float)
     c, s, _ = _consts(r)
     sq = np.sqrt(4.0 * math.pi * k * c / (s * (1.0 + s)) - _TWO_PI / (1.0 + c))
@@ -230,7 +180,7 @@ def turn_inverse(e, k: float):
 def displacement(r, k: float, derivative: bool = False, chunk: int = 2048):
     """Displacement ``d(r, k)`` (complex, ``u_a + i v_a``) of the +y leaf from zero, for an array of
     radii in ``[0, A_MAX]``; with ``derivative`` also ``dd/dr`` (the rule applied to the
-    r-derivative of the integrand). Gauss-Legendre rule of the module docstring."""
+    r-derivative of the integrand). Gauss-Legendre rule of docs/design/leaf-map.md."""
     r = np.atleast_1d(np.asarray(r, float))
     chi, w = gauss_nodes(panels_for(k))
     cchi, schi = np.cos(chi), np.sin(chi)
@@ -262,7 +212,7 @@ def displacement(r, k: float, derivative: bool = False, chunk: int = 2048):
 
 def signed_length(r, k: float, derivative: bool = False):
     """``rho(r, k) = Re(exp(i E / 2) d)``: the displacement of the +y leaf is ``d = rho exp(-i E / 2)``
-    (real ``rho``, item 3 of the module docstring); with ``derivative`` also ``d rho / dr``."""
+    (real ``rho``, item 3 of docs/design/leaf-map.md); with ``derivative`` also ``d rho / dr``."""
     r = np.atleast_1d(np.asarray(r, float))
     half = np.exp(0.5j * turn(r, k))
     if not derivative:
@@ -277,8 +227,8 @@ def leaf_values(r, k: float):
 
 
 def step_values(a, b, k: float, gamma: float = 0.0):
-    """One figure eight (+y leaf a, then -y leaf b) rotated by gamma, from zero (item 4 of the
-    module docstring): ``(u_a + i v_a, eta)`` as arrays, ``eta = E(a) - E(b)``,
+    """One figure eight (+y leaf a, then -y leaf b) rotated by gamma, from zero (item 4 of
+    docs/design/leaf-map.md): ``(u_a + i v_a, eta)`` as arrays, ``eta = E(a) - E(b)``,
     ``u_a + i v_a = exp(i gamma) (d(a) + exp(-i E(a)) conj(d(b)))``."""
     a, b = np.atleast_1d(np.asarray(a, float)), np.atleast_1d(np.asarray(b, float))
     da, ea = leaf_values(a, k)

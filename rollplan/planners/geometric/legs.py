@@ -1,45 +1,13 @@
 """Two legs of figure eights through an intermediate pole state: targets one leg cannot reach.
 
-One leg of ``n`` identical figure eights ``(a, b)`` rotated by gamma reaches,
-from zero, the plane states with ``psi = n eta(a, b)`` and
-``|p| = h(a, b) |sin(n eta / 2) / sin(eta / 2)|`` (gamma only turns ``p``;
-:mod:`rollplan.core.plane`). Targets outside that set (a small shift with a
-turn; a far target for few steps) are reached by two legs: first to an
-intermediate pole state ``w = (q, chi)`` (leg 1, from zero), then on to the
-target ``f`` (leg 2, from zero to ``w^-1 * f``, the composition law). The
-contact path is ``L(|q|, chi) + L(|f_p - q|, psi_f - chi)``, where ``L(r, chi)``
-is the length of a one-leg plan to a plane state at distance ``r`` with heading
-``chi`` (independent of the direction of ``p``). So the search runs over
-``r1 = |q|``, ``r2 = |f_p - q|`` and ``chi``, with ``r1, r2`` sides of a
-triangle on ``h_f = |f_p|``: ``|r1 - r2| <= h_f <= r1 + r2`` (``r1 = r2`` for a
-turn in place); the direction of ``q`` follows (of the two mirror choices of
-equal length, the one left of ``f_p``; ``q = (r1, 0)`` when ``h_f = 0``).
+Leg 1 goes from zero to an intermediate pole state ``w = (q, chi)``, leg 2 from zero to ``w^-1 * f`` (the
+composition law); the length is ``L(|q|, chi) + L(|f_p - q|, psi_f - chi)`` with ``|q|``, ``|f_p - q|`` sides
+of a triangle on ``|f_p|``. The search bins one-leg plans of a grid of leaf pairs in ``(r, chi)`` (a sampled
+lower envelope), minimises over pairs of bins, polishes the best by IPOPT, and leaves each leg to the
+geometric-phase planner. It guarantees a certified local minimum near the best bins, not a global one; the
+optimum is degenerate (one leaf of each leg at :data:`LEAF_FLOOR`).
 
-The search, in leaf space:
-
-1. Every leaf pair ``(a_i, b_j)`` of a grid of radii in ``(0, A_MAX]`` (denser
-   near ``A_MAX``, where eta is steep) is a one-leg plan to ``(r_ij, chi_ij)``
-   of length ``2 pi n (a_i + b_j)``, computed from the two leaf maps by the
-   composition law. The grid points are binned in ``(r, chi)`` and the
-   shortest length per bin kept: a sampled lower envelope of the reachable set.
-2. The two-leg length is minimised over pairs of bins ``(r1, chi)``,
-   ``(r2, psi_f - chi)`` that satisfy the triangle condition (one bin of slack):
-   exhaustive over the binned grid.
-3. The best few bin pairs (apart in chi) are polished by IPOPT on the spectral
-   step map: minimise ``a1 + b1 + a2 + b2`` subject to
-   ``n (eta1 + eta2) = psi_f + 2 pi m`` and the triangle condition on the exact
-   ``r1, r2``, with an iteration cap; an unpolished grid pair is kept when the
-   cap runs out.
-4. Each leg is then solved exactly by the geometric-phase planner for its
-   target, on the branch the candidate lies on (``branch=``), and the composed
-   motion is certified as a whole by the caller.
-
-What it guarantees: an exact, certified plan whose length is a local minimum of
-two-leg plans near the best bins of the grid; not a proven global minimum (the
-grid is finite and the envelope sampled). The optimum is degenerate: one leaf
-of each leg shrinks to :data:`LEAF_FLOOR` (each leg is essentially one
-circle), and for a turn in place it tends to the circle pair of :mod:`.turn`
-plus two vanishing leaves; that is why a pure turn is served by :mod:`.turn`.
+The search and what it guarantees: docs/design/composition.md (two legs).
 """
 
 from __future__ import annotations
@@ -64,7 +32,7 @@ TWO_PI = 2.0 * math.pi
 A_MIN = 0.005
 #: Bins of the (r, chi) envelope.
 R_BINS, CHI_BINS = 90, 120
-#: Smallest leaf radius of a polished candidate [R] (the optimum rests on it; module docstring).
+#: Smallest leaf radius of a polished candidate [R] (the optimum rests on it; docs/design/composition.md).
 LEAF_FLOOR = 1e-3
 #: Iteration cap of one IPOPT polish; the unpolished grid pair is used
 #: when it runs out. An iteration cap, not a time cap, so that the result does not depend on the machine's load.
@@ -216,7 +184,7 @@ def _polisher(steps: int, turn_in_place: bool):
 
 
 def two_leg_candidates(target, k: float, steps: int, count: int = 4) -> list:
-    """Two-leg candidates for the plane state ``target`` (units of R), shortest first (module docstring)."""
+    """Two-leg candidates for the plane state ``target`` (units of R), shortest first (docs/design/composition.md)."""
     target = np.asarray(target, float)
     h_f, psi_f = float(np.hypot(target[0], target[1])), float(target[2])
     tip = h_f == 0.0

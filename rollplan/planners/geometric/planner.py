@@ -1,56 +1,13 @@
-"""Geometric-phase planner: exact, dynamically realizable plans by figure eights.
+"""Geometric-phase planner: exact, dynamically realizable plans by figure eights (Section III.B).
 
-Problem (Section III.B of the paper). Trace the spherical figure eight
-``c(theta) = Rz(gamma) c_bar(a, b, theta)`` (31) ``n`` times so that the
-contact coordinates go from zero to ``(u_a, v_a, psi) = target``, with
-``u_o = v_o = 0`` at the end.
+Trace the figure eight (31) rotated by gamma ``n`` times from rest at the origin to ``(u_a, v_a, psi)`` at the
+pole: on each branch m solve ``eta(a, b) = (psi + 2 pi m) / n`` (32) and
+``h(a, b) = h_des |sin(eta / 2) / sin(n eta / 2)|`` (33) ((34) where ``sin(eta / 2) = 0``), then gamma from
+the geometry. The roots are enumerated completely (:mod:`.enumerate`; for the shortest plan with
+``1/2 <= k <= k_max`` first by the C search, :mod:`.compiled_search`), polished by a solver chosen by name
+(:mod:`.refine`) and certified by an independent integration (:mod:`.certify`).
 
-Geometry, derived from (28)-(30) (and checked in ``tests/test_geometric.py``):
-
-* (28)-(29) are ``[u_a', v_a'] = Rot(-psi) M0 [p, q]`` and psi' does not
-  depend on the state, so a step that starts at heading ``psi0`` produces the
-  shift of a step from zero, ``D_bar(a, b)``, turned by ``-psi0``; it turns psi
-  by ``eta(a, b)``.
-* Rotating the curve by gamma about OZ conjugates the whole motion by that
-  rotation: the displacement turns by ``+gamma``, psi is unchanged.
-* Hence after ``n`` steps ``psi = n eta`` and the displacement is
-  ``Rot(gamma) sum_{j<n} Rot(-j eta) D_bar``, of length
-  ``h |sin(n eta / 2) / sin(eta / 2)|``.
-
-So, for a branch ``m`` (psi is an angle: ``n eta = psi + 2 pi m``), solve
-
-    eta(a, b) = (psi_des + 2 pi m) / n                                  (32)
-    h(a, b)   = h_des |sin(eta / 2) / sin(n eta / 2)|                   (33)
-
-(the paper's (33) has the fraction upside down in its first form; with
-``sin(eta/2) = 0`` the limit is ``h_des / n``, (34); see :mod:`rollplan.core.plane`),
-then ``gamma = arg(target) - arg(sum_j Rot(-j eta) D_bar)``.
-
-The pieces. For every k the roots of (32)-(33) are enumerated completely,
-branch by branch, as the roots of one scalar function along graphs that cover
-the level set of (32) (:mod:`.enumerate`, whose docstring holds the
-completeness argument) on the accurate leaf map (:mod:`.leafmap`: the turn in
-closed form, the displacement by a Gauss rule accurate to K_MAX). The shortest
-plan is found by a bounded search: branches are visited in increasing order of
-a lower bound of ``a + b`` on them, the shortest root of each branch is found
-first, and the search stops when no branch left can beat the best certified
-plan. For ``1/2 <= k`` up to the generated C planner's ``k_max`` (:mod:`rollplan.codegen`), the
-shortest (or ``branch=``) plan's search runs compiled (:mod:`.compiled_search`): the C planner runs the
-same enumeration and the same bounded search (ported formula by formula; ``tests/test_codegen.py``
-checks the same branch and (a, b, gamma) to 1e-8, ``tests/test_geometric.py`` the same plan as the
-numpy search on random targets), and its shortest root is polished and certified here like any
-other; if that root fails the certificate, if the C search gives no root, for ``all_solutions``,
-outside that range of k or without a C compiler, the numpy search above runs. Each root is then
-polished by the solver of the shooting problem (32)-(33)
-chosen by name, IPOPT through CasADi by default (:func:`.refine.polisher`:
-compiled residual and Jacobian of the leaf map, started at the enumerated root:
-no iteration when that already solves (32)-(33) to the solver's tolerance, else one or
-two). (The bracketing of the leaf tables, :mod:`.leaves`, :mod:`.brackets`, remains for
-the atlas and the benchmarks.) Every plan is
-certified by an independent integration of all ``n`` steps (:mod:`.certify`:
-compiled RK8 with a step-doubling error bound by default, CVODES by name); a
-plan whose certified residual plus error bound exceeds the tolerance is never
-returned.
+Derivation, the search, the polish and the certificate: docs/design/geometric-planner.md.
 """
 
 from __future__ import annotations
@@ -80,7 +37,7 @@ from ...errors import (
 )
 from ...problem import Problem, State, arrival_residual, check_k
 from ...progress import report
-from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
+from ...result import CERTIFICATE_TOLERANCE, Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from .brackets import find_brackets, target_shift
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
@@ -95,7 +52,7 @@ __all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_
 log = logging.getLogger(__name__)
 
 #: Default tolerance of the certified residual (units of R and rad).
-TOLERANCE = 1e-9
+TOLERANCE = CERTIFICATE_TOLERANCE
 #: Largest number of branches enumerated together.
 _CHUNK = 64
 #: A polished root farther than this from the enumerated one (in a or b [R]) is not taken (the solver
@@ -172,7 +129,8 @@ class Plan(CertifiedMotion):
     certificate : Certificate
         Independent integration of all n steps (:mod:`.certify`) and its residual.
     stats : SolverStats
-        ``details`` holds ``candidates`` (brackets) and ``solves``.
+        ``details`` holds ``candidates`` (roots polished and certified), ``solves`` (plans certified),
+        ``branches`` (branches searched), ``roots`` and ``search`` (``"compiled"`` or ``"numpy"``).
     alternatives : tuple of Plan
         The other certified solution branches, shortest first (``all_solutions`` only).
     """
@@ -207,8 +165,9 @@ class GeometricPhasePlanner:
     Builds nothing a plan does not use: the leaf map is plain numpy with per-k tables
     (:func:`.enumerate.rho_table`); the compiled shooting residual and its solver
     (:func:`.refine.polisher`, per panel count of the leaf map), the certifier's compiled
-    integration, and the spectral step map, root solver and leaf tables of the bracketing path
-    (``k < 1/2``) are built or loaded from the disk cache on first use.
+    integration and the C search (:mod:`.compiled_search`) are built or loaded from the disk cache
+    on first use. The spectral step map, its residual and the leaf tables of the bracketing
+    (:meth:`brackets`) are not used by :meth:`solve`; they serve the atlas and the benchmarks.
 
     Parameters
     ----------
@@ -224,8 +183,8 @@ class GeometricPhasePlanner:
         Certifier from :data:`.certify.CERTIFIERS`: ``"rk8"`` (the default: compiled RK8 with a
         step-doubling error bound) or ``"cvodes"``.
     compiled_search : bool
-        Search the shortest (or one branch's) root with the compiled C search where it applies (module
-        docstring); False always runs the numpy search.
+        Search the shortest (or one branch's) root with the compiled C search where it applies
+        (``1/2 <= k <= k_max``, docs/design/geometric-planner.md); False always runs the numpy search.
     """
 
     def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
@@ -242,10 +201,10 @@ class GeometricPhasePlanner:
         """The CVODES integration that samples plans (:meth:`sample`)."""
         return self.certifier if isinstance(self.certifier, CvodesCertifier) else CvodesCertifier()
 
-    # -- the bracketing path (k < 1/2), built on first use ------------------------------
+    # -- the spectral step map and the bracketing (atlas, benchmarks; not used by solve) ----
     @cached_property
     def step_map(self) -> ca.Function:
-        """The spectral step map of :mod:`rollplan.core.integrate` (the bracketing path and the atlas)."""
+        """The spectral step map of :mod:`rollplan.core.integrate` (the atlas and the bracketing)."""
         return spectral_step(self.curve, self.nodes)
 
     @cached_property
@@ -311,7 +270,8 @@ class GeometricPhasePlanner:
 
     def _solve_compiled(self, problem, branch, target, turns, t_start) -> Plan | None:
         """The shortest root (on ``branch`` if given) by the compiled C search, polished and certified here;
-        None when the C search gives none or its root fails the certificate (module docstring)."""
+        None when the C search gives none or its root fails the certificate
+        (docs/design/geometric-planner.md)."""
         k, steps = problem.k, problem.steps
         found = shortest_root(target[0], target[1], target[2], steps, k, branch)
         if found is None:
@@ -330,7 +290,7 @@ class GeometricPhasePlanner:
 
     def _solve_enumerated(self, problem, all_solutions, branch, target, turns, t_start) -> Plan:
         """Complete enumeration (every k): every root of every branch (``all_solutions``) or the
-        bounded search for the shortest certified plan (module docstring; :mod:`.enumerate`)."""
+        bounded search for the shortest certified plan (docs/design/geometric-planner.md)."""
         k, steps = problem.k, problem.steps
         h_des = math.hypot(target[0], target[1])
         brs = branches(k, target[2], steps, h_des, branch)
@@ -399,7 +359,8 @@ class GeometricPhasePlanner:
         return (q.a, q.b), f"enumerated:{status}", iters
 
     def _certified(self, problem, x, m, target_r, status, iters, method=None):
-        """Gamma from the geometry (module docstring), then the certificate: a tuple for :meth:`_plan`."""
+        """Gamma from the geometry (docs/design/geometric-planner.md), then the certificate: a tuple for
+        :meth:`_plan`."""
         a, b = float(x[0]), float(x[1])
         u, v, eta = leaf_step(panels_for(problem.k)).call([[a, b], problem.k])[0].nonzeros()
         shift = complex(u, v)

@@ -1,37 +1,12 @@
 """Root solvers of (32)-(33) chosen by name, and the shooting residual they solve.
 
-The residual. One figure eight (+y leaf a, then -y leaf b) from zero turns psi by ``eta(a, b) =
-E(a) - E(b)`` and shifts by ``h(a, b) = |d(a) + exp(-i E(a)) conj(d(b))|`` (:mod:`.leafmap`,
-item 4), so on branch m (32)-(33) read ``F(ab, par) = (eta(a, b) - eta_m, h(a, b) - h_m) = 0`` with
-``par = (k, eta_m, h_m)``. :func:`leaf_residual` builds F in CasADi from the leaf map's formulas: the
-closed-form turn E and the Gauss-Legendre displacement d on the nodes of
-:func:`.leafmap.gauss_nodes` with the panel count of :func:`.leafmap.panels_for` (one function per
-panel count, valid for the k of its bucket), as a kernel mapped over the nodes so that it compiles
-in well under a second; ``tests/test_refine.py`` checks it against the numpy leaf map. Its value
-and Jacobian are compiled to C and cached on disk (:mod:`rollplan.core.compiled`).
+On branch m, (32)-(33) read ``F(ab, par) = (eta(a, b) - eta_m, h(a, b) - h_m) = 0`` with
+``par = (k, eta_m, h_m)``; :func:`leaf_residual` builds F in CasADi from the leaf map's closed-form turn and
+Gauss-rule displacement (compiled with its Jacobian, one function per panel count). :data:`SOLVERS` holds
+the solvers by name, ``"ipopt"`` (the default) and ``"newton"``; :func:`polisher` gives one on the compiled
+residual of k: the planner's last step before the certificate, started at an enumerated root.
 
-The solvers. Every entry of :data:`SOLVERS` follows one contract: ``SOLVERS[name](residual,
-near_root=False)`` takes a residual ``F(ab[2], par[3]) -> (2,)`` as above (``near_root``: every start
-will lie next to a root, so the solver may use options for that case) and returns ``solve(x0, par, lbx, ubx) -> (x,
-status, iterations, ok)``: the end point, the solver's status string, its iterations, and whether
-the end point is a candidate root inside the box ``[lbx, ubx]`` (the certificate decides). A solve
-that does not converge says only that its start holds no root; the statuses in
-:data:`SOLVER_ERROR_STATUSES` mean the solver itself broke down.
-
-``"ipopt"`` (the default)
-    IPOPT through CasADi's ``nlpsol`` on the feasibility problem ``min 0 s.t. F = 0, lbx <= ab <=
-    ubx`` (the shooting problem of the design), quiet, with a limited-memory Hessian (the objective
-    is zero; the constraints' curvature is not needed to converge from a start near the root); near a
-    root (``near_root``) without problem scaling, with a small monotone barrier parameter, and without
-    the box: the square system ``F = 0`` has no inequality whose barrier would move a start that
-    already solves it, so IPOPT accepts a start that satisfies its tolerance at iteration 0 and
-    otherwise takes Newton-like steps; the end point counts only inside ``[lbx, ubx]``.
-    Started at the enumerated root (:mod:`.enumerate`) it needs zero to two iterations.
-``"newton"``
-    CasADi's ``rootfinder`` (plain Newton on F, exact Jacobian).
-
-:func:`polisher` gives the solver of a name on the compiled leaf-map residual of the panel count
-of k: the planner's last step before the certificate.
+The residual, the solvers' contract and options: docs/design/geometric-planner.md (the polish).
 """
 
 from __future__ import annotations
@@ -65,7 +40,7 @@ _TWO_PI = 2.0 * math.pi
 
 def step_residual(step_map: ca.Function) -> ca.Function:
     """``F(ab[2], par[3]) -> (eta - eta_m, h - h_m)`` of one step from zero by a step map
-    ``(x0, ab, k, gamma) -> x_end`` (the spectral map of the bracketing path), ``par = (k, eta_m, h_m)``."""
+    ``(x0, ab, k, gamma) -> x_end`` (the spectral map, for the bracketing), ``par = (k, eta_m, h_m)``."""
     ab = ca.SX.sym("ab", 2)
     par = ca.SX.sym("par", 3)
     xf = step_map(ca.DM.zeros(3), ab, par[0], 0)
@@ -86,7 +61,7 @@ def leaf_turn(r, k):
 
 def _node_kernel() -> ca.Function:
     """``(chi, cos chi, sin chi, w, rho, A, B) -> w phi'(chi) (cos, sin)(theta)``: one node of the displacement
-    integral of :func:`.leafmap.displacement` (its module docstring), with ``theta = A phi(chi) + B chi``,
+    integral of :func:`.leafmap.displacement` (docs/design/leaf-map.md), with ``theta = A phi(chi) + B chi``,
     ``A = (1 - k) c`` and ``B = k c / s``; the leaf's constants and the nodes' cos and sin are computed once
     outside the kernel, as in :func:`.leafmap.displacement`."""
     chi, cchi, schi, w, rho, A, B = (ca.SX.sym(n) for n in ("chi", "cchi", "schi", "w", "rho", "A", "B"))
@@ -111,7 +86,7 @@ def leaf_displacement(r, k, panels: int):
 
 
 def _step_expressions(ab, k, panels: int):
-    """``(Re S, Im S, eta)`` of one figure eight from zero (MX expressions; module docstring)."""
+    """``(Re S, Im S, eta)`` of one figure eight from zero (MX expressions; docs/design/leaf-map.md, item 4)."""
     a, b = ab[0], ab[1]
     ea, eb = leaf_turn(a, k), leaf_turn(b, k)
     ua, va = leaf_displacement(a, k, panels)
@@ -142,7 +117,7 @@ _SOURCES = (Path(__file__), Path(leafmap.__file__), Path(_compiled_mod.__file__)
 @lru_cache(maxsize=16)
 def leaf_residual(panels: int, compile: bool = True) -> ca.Function:
     """``F(ab[2], par[3]) -> (eta(a, b) - eta_m, h(a, b) - h_m)`` on the leaf map with ``panels`` Gauss
-    panels (module docstring), compiled with its Jacobian (unless ``compile`` is false)."""
+    panels (docs/design/geometric-planner.md), compiled with its Jacobian (unless ``compile`` is false)."""
     if not compile:
         return _leaf_residual(panels)
     return compiled_lazy(f"gp_residual_{panels}", lambda: _leaf_residual(panels), f"panels={panels}", _SOURCES,
@@ -211,7 +186,10 @@ def _newton_solver(residual: ca.Function, near_root: bool = False):
     return solve
 
 
-#: Root solvers for (32)-(33), by name (see the module docstring for the contract).
+#: Root solvers for (32)-(33), by name. Contract: ``SOLVERS[name](residual, near_root=False)`` takes a residual
+#: ``F(ab[2], par[3]) -> (2,)`` (``near_root``: every start lies next to a root) and returns
+#: ``solve(x0, par, lbx, ubx) -> (x, status, iterations, ok)``, ``ok`` when x is a candidate root inside
+#: ``[lbx, ubx]`` (the certificate decides); docs/design/geometric-planner.md.
 SOLVERS = {"ipopt": _ipopt_solver, "newton": _newton_solver}
 
 

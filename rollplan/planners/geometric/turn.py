@@ -1,39 +1,12 @@
 """Turning in place: pairs of equal circles through the pole whose shifts cancel.
 
-Why n identical figure eights cannot do it: they reach, from zero, the plane
-states with ``psi = n eta(a, b)`` and a displacement of length
-``h(a, b) |sin(n eta / 2) / sin(eta / 2)|``; a pure turn ``(0, 0, psi)`` with
-``psi != 0 (mod 2 pi)`` needs the shift vector to vanish and ``n eta = psi``
-(mod 2 pi): three equations for two unknowns, solvable for isolated psi only.
+n identical figure eights cannot turn in place (three equations for two unknowns). A circle (35) of radius
+``b`` rotated by ``gamma_1``, then by ``gamma_2 = gamma_1 + eta + pi``, cancels its own shift exactly and turns
+by ``2 eta_s(b)``; a turn by psi with ``n`` pairs solves ``eta_s(b) = (psi + 2 pi m) / (2 n)``, one equation in
+one unknown, and the smallest root ``b`` gives the shortest turn (contact path ``4 pi n b``). The search
+tabulates ``eta_1`` (refined to :data:`ETA_STEP`) and refines the first crossing by Brent's method.
 
-Construction. Let ``D_s(b)``, ``eta_s(b)`` be the shift and holonomy of one
-circle (35) of radius ``b`` through the pole, from zero, on side ``s`` (0: the
-+y circle, the first leaf of the figure eight; 1: the -y circle). Rotating a
-pole-to-pole curve by gamma turns its shift by ``+gamma`` and leaves its
-holonomy, and a curve started at heading ``psi0`` makes its zero-start shift
-turned by ``-psi0`` (the composition law of :mod:`rollplan.core.plane`). Trace
-the circle rotated by ``gamma_1``, then the same circle rotated by ``gamma_2``:
-
-    p = Rot(gamma_1) D + Rot(gamma_2 - eta) D,      psi = 2 eta.
-
-With ``gamma_2 = gamma_1 + eta + pi`` the two shifts cancel exactly, for
-every ``b``: the pair turns the robot in place by ``2 eta_s(b)``. A turn by
-psi with ``n`` pairs is then one equation in one unknown,
-
-    eta_s(b) = (psi + 2 pi m) / (2 n)     for a side s and an integer m,
-
-and its contact path is ``4 pi n b``: the shortest turn of this family has the
-smallest root ``b``. The mirror symmetry of the two circles gives
-``eta_0(b) = -eta_1(b)`` (checked when a table is built), so both sides are
-covered by the roots of ``eta_1(b) = +-(psi + 2 pi m) / (2 n)``.
-
-Search. ``eta_1`` is tabulated on a grid of ``b`` in ``(0, A_MAX]``, refined
-until neighbouring values differ by less than :data:`ETA_STEP` below the first
-crossing of an admissible level; every crossing in the first crossing cell is
-refined by Brent's method on the spectral map of the circle, and the smallest
-root wins. A level crossed twice inside one cell (eta_1 turning back by more
-than the cell's change) would be missed; the tests compare the choice with a
-dense brute force for several k, including k = 0, where eta_1 is not monotone.
+Construction and search: docs/design/composition.md (turning in place).
 """
 
 from __future__ import annotations
@@ -75,7 +48,7 @@ def circle_steps(side: int, b, k: float) -> np.ndarray:
 
 
 def _table(k: float, b_max: float):
-    """``(b, eta_1(b))`` on the grid of ``k``, refined below ``b_max`` (kept per k; module docstring)."""
+    """``(b, eta_1(b))`` on the grid of ``k``, refined below ``b_max`` (kept per k; docs/design/composition.md)."""
     if k not in _TABLES:
         b = np.linspace(B_MIN, A_MAX, 400)
         eta = circle_steps(1, b, k)[2]
@@ -152,7 +125,7 @@ class CircleTurn:
 
 
 def turn_in_place(psi: float, k: float, steps: int = 1) -> CircleTurn:
-    """The shortest turn in place by ``psi`` [rad] with ``steps`` pairs of equal circles (module docstring).
+    """The shortest turn in place by ``psi`` [rad] with ``steps`` pairs of equal circles (docs/design/composition.md).
 
     Raises
     ------
