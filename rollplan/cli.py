@@ -17,30 +17,48 @@ import os
 import re
 import sys
 from contextlib import ExitStack
+from dataclasses import replace
 
 from . import (
     interrupts,
     threads,  # noqa: F401  (before anything that loads numpy: one BLAS thread per process)
 )
 from .core.curves import A_MAX
-from .errors import InputError, NoPlanError, SolverError, check_finite, check_whole
+from .errors import (
+    SHOW_WIDTH,
+    InputError,
+    NoPlanError,
+    SolverError,
+    check_finite,
+    check_range,
+    check_whole,
+    show,
+    show_limit,
+)
 from .inputs import parse_number, parse_whole, show_path
 from .io import check_figure_path, check_writable, composed_to_dict, route_to_dict, save_figure, tagged, write_json
-from .outputs import WRITE_FAILURES, claim
+from .outputs import WRITE_FAILURES, claim, make_folder
 from .planners import geometric
 from .planners.geometric import as_composed
-from .problem import DEFAULT_K, K_MAX, MAX_STEPS, STATE_NAMES
+from .problem import DEFAULT_K, K_MAX, MAX_STEPS, STATE_NAMES, State, check_contact, check_reach, check_steps
 from .progress import Progress, report, reporting
-from .robot import default_robot, load_robot
+from .robot import ROBOT_KEYS, default_robot, load_robot
 from .version import __version__
 from .waypoints import read_waypoints
 
+#: The limits of ``--radius``: those of a robot file's radius.
+_RADIUS = next(key for key in ROBOT_KEYS if key.name == "radius")
 EXIT_OK, EXIT_SOME_FAILED, EXIT_INPUT, EXIT_NOPLAN, EXIT_SOLVER, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
 #: What a residual is (printed next to every residual and arrival error).
 NORM = "Euclidean norm; lengths in R, angles in rad"
 #: Numbers as argparse should see them: also in exponent form (-1e-3) and -inf/-nan (refused later by the
 #: number check, with a clear message, instead of being taken for an option).
 _NEGATIVE_NUMBER = re.compile(r"^-([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
+
+#: A value argparse echoes in a message, quoted or not, longer than a message shows (:func:`rollplan.errors.show`).
+_QUOTED_LONG = re.compile(r"'([^'\s]{%d,})'" % SHOW_WIDTH)
+_BARE_LONG = re.compile(r"(?<![\S])[^\s']{%d,}" % (SHOW_WIDTH + 1))
 
 
 class _Parser(argparse.ArgumentParser):
@@ -73,6 +91,8 @@ class _Parser(argparse.ArgumentParser):
         return super().format_usage()
 
     def error(self, message):
+        message = _QUOTED_LONG.sub(lambda m: show(m.group(1)), message)   # argparse echoes values in full
+        message = _BARE_LONG.sub(lambda m: m.group(0)[:SHOW_WIDTH - 3] + "...", message)
         self.exit(EXIT_INPUT, f"{self.prog}: error: {message} (see: {self.prog} --help)\n")
 
 
@@ -81,6 +101,14 @@ def _number(text: str) -> float:
         return parse_number(text, "value")
     except InputError as exc:
         raise argparse.ArgumentTypeError(str(exc).removeprefix("value = ")) from None
+
+
+def _radius(text: str) -> float:
+    """``--radius``: a number within the limits of a robot file's ``radius`` (:data:`rollplan.robot.ROBOT_KEYS`)."""
+    try:
+        return parse_number(text, "radius", _RADIUS.low, _RADIUS.high)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(f"{exc} {_RADIUS.unit}") from None
 
 
 def _whole(text: str) -> int:
@@ -244,15 +272,41 @@ def _robot_for_duration(args, k, robot):
     return robot
 
 
-def _plan_inputs(args, inputs=()):
-    """The checks of ``plan`` and ``route`` before any work: outputs (never one of ``inputs`` or the robot
-    file), samples, the robot and the timing law's needs; returns ``(k, robot)``."""
-    from .execution.actuation import MAX_SAMPLES
+def _most_pieces(legs: str, steps: int) -> int:
+    """The most pieces of a plan of ``steps`` figure eights per leg: two legs of two leaves per figure eight
+    (one leg with ``--legs one``), and the rolls to and from the pole."""
+    return (2 if legs == "one" else 4) * steps + 2
 
+
+def _check_samples(args, pieces: int) -> None:
+    """``--samples`` before any work: within [2, MAX_SAMPLES] and, with --json or --plot (the path sampled at
+    the end of each piece), more than the ``pieces`` the plan may have; by default 2000, or pieces + 1."""
+    from .execution.actuation import DEFAULT_SAMPLES, MAX_SAMPLES
+
+    sampled = bool(args.json or args.plot)
+    if args.samples is None:
+        args.samples = max(DEFAULT_SAMPLES, pieces + 1) if sampled else DEFAULT_SAMPLES
+        if args.samples > MAX_SAMPLES:
+            raise InputError(f"--json and --plot sample the end of each of the up to {pieces} pieces of this "
+                             f"motion: more than the {MAX_SAMPLES} samples allowed; plan fewer steps or legs")
+        return
+    check_whole("samples", args.samples, 2, MAX_SAMPLES)
+    if sampled and args.samples < pieces + 1:
+        raise InputError(f"--samples {args.samples} is not allowed with --steps {args.steps}: the motion may have "
+                         f"up to {pieces} pieces (figure-eight leaves and rolls), and --json and --plot sample the "
+                         f"end of each: give --samples >= {pieces + 1}, or leave it out")
+
+
+def _plan_inputs(args, inputs=(), samples=True):
+    """The checks of ``plan`` and ``route`` before any work: outputs (never one of ``inputs`` or the robot
+    file), steps, samples (those of a plan; ``route`` checks them once it knows its legs), the robot and the
+    timing law's needs; returns ``(k, robot)``."""
     inputs = [*inputs, args.robot]
     _check_outputs(json=args.json, figure=args.plot, inputs=inputs)
     _check_timing_outputs(args, inputs)
-    check_whole("samples", args.samples, 2, MAX_SAMPLES)
+    check_steps(args.steps)
+    if samples:
+        _check_samples(args, _most_pieces(args.legs, args.steps))
     k, robot = _k_or_robot(args)
     return k, _robot_for_duration(args, k, robot)
 
@@ -264,8 +318,23 @@ def _stage(args, command: str, name: str) -> None:
     report(command, stages.index(name), len(stages) - 1, stage=name)
 
 
+def _radius_in_use(args, robot) -> float:
+    """The sphere's radius in the length unit of the command: --radius, else the robot's, else 1 (R)."""
+    return args.radius if args.radius is not None else (robot.radius if robot is not None else 1.0)
+
+
+def _check_target(args, robot, start=(0.0,) * 5, contact=(0.0, 0.0)) -> None:
+    """--to (within reach of the start), --from and --contact before any work, each named in its message."""
+    check_contact(start[3], start[4], "argument --from: start")
+    check_contact(contact[0], contact[1], "argument --contact: goal")
+    radius = _radius_in_use(args, robot)
+    check_reach(State(*start), State(*args.to), radius, "argument --to: goal",
+                "the start (--from)" if any(start) else "the start")
+
+
 def cmd_plan(args) -> int:
     k, robot = _plan_inputs(args)
+    _check_target(args, robot, args.start, args.contact)
     goal = (args.to[0], args.to[1], args.psi, args.contact[0], args.contact[1])
     _stage(args, "plan", "planning")
     p = geometric.plan(goal, args.steps, k, robot, args.radius, args.all, args.method, branch=args.branch,
@@ -334,8 +403,11 @@ def _write_results(args, p, robot, unit, to_dict, command) -> None:
 
 
 def cmd_route(args) -> int:
-    k, robot = _plan_inputs(args, inputs=[args.waypoints])
+    k, robot = _plan_inputs(args, inputs=[args.waypoints], samples=False)
     waypoints = read_waypoints(args.waypoints)
+    _check_samples(args, sum(_most_pieces(args.legs, w.steps or args.steps) for w in waypoints[1:]))
+    radius = _radius_in_use(args, robot)
+    geometric.route.check_legs(waypoints, radius, f"waypoints file {show_path(args.waypoints)}: ")
     print(f"rollplan route: {len(waypoints)} waypoints from {args.waypoints}")
     r = geometric.plan_route(waypoints, args.steps, k, robot, args.radius, args.legs, args.method,
                              progress=lambda done, total: report("route", done, total, stage="legs"))
@@ -408,6 +480,7 @@ def cmd_reproduce(args) -> int:
     from .studies.paper import reproduce
 
     t0 = time.perf_counter()
+    make_folder(args.out, parents=True)   # a folder that cannot be made is refused before the first line
     print(f"rollplan reproduce: Section III.C of the paper into {args.out}", file=sys.stderr)
     with Progress() as progress:
         result = reproduce(args.out, progress=progress)
@@ -427,10 +500,10 @@ def _file_plan(rp, name):
         raise InputError("closed-loop execution of a route is not supported: give a plan file of 'rollplan plan'")
     try:
         steps = check_whole("steps", data.get("steps"), 1)
-        duration = check_finite("duration", data.get("duration"))
+        duration = check_range("duration", data.get("duration"), 0.0, None, low_open=True)
     except InputError as exc:
-        raise InputError(f"plan file {str(name)!r}: {exc} (make it with: rollplan plan ... --duration T --json FILE)") \
-            from None
+        raise InputError(f"plan file {show_path(name)}: {exc} (make it with: rollplan plan ... --duration T "
+                         "--json FILE)") from None
     p = geometric.plan(rp.goal, steps, robot=rp.robot, start=rp.start)
     return p, duration / len(as_composed(p).pieces)
 
@@ -441,21 +514,23 @@ def _noise(args):
     sigma = check_finite("--noise", args.noise)
     if sigma < 0 or sigma > 0.1:
         raise InputError(f"--noise {args.noise!r} is not allowed: it must lie in [0, 0.1] (R and rad per sample)")
-    seed = check_whole("--seed", args.seed, 0, 2**63 - 1)
+    seed = check_whole("seed", args.seed, 0, 2**63 - 1)
     return (disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=seed),) if sigma > 0 else ()
 
 
-def _simulate_executed(args, rp, robot) -> int:
-    """``rollplan simulate --closed-loop`` and ``--plant torques``: open and closed loop on the chosen plant."""
+def _simulate_executed(args, rp, robot, plant=None, **engine) -> int:
+    """``rollplan simulate --closed-loop`` and ``--plant torques``: open and closed loop on the chosen plant
+    (``plant``, default ``--plant``; ``engine``: more arguments of the execution, e.g. the MuJoCo model)."""
     from .execution.feedback import execute
 
+    plant = plant or args.plant
     dist = _noise(args)
     plan, piece = _file_plan(rp, args.plan_file)
-    runs = [execute(plan, rp.robot, robot, piece, plant=args.plant, closed_loop=closed, disturbances=dist,
-                    progress=report) for closed in (False, True)[:1 + bool(args.closed_loop)]]
+    runs = [execute(plan, rp.robot, robot, piece, plant=plant, closed_loop=closed, disturbances=dist,
+                    progress=report, **engine) for closed in (False, True)[:1 + bool(args.closed_loop)]]
     opened, run = runs[0], runs[-1]
     f, g, e = run.final, rp.goal, run.error
-    print(f"rollplan simulate: {args.plant} plant, {'closed' if args.closed_loop else 'open'} loop, "
+    print(f"rollplan simulate: {plant} plant, {'closed' if args.closed_loop else 'open'} loop, "
           f"{plan.steps} figure eights of {_g(2 * piece)} s (min-jerk per piece), robot k = {_g(robot.k)} "
           f"(planned k = {_g(rp.robot.k)}){', measurement noise ' + _g(args.noise) if dist else ''}")
     print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
@@ -490,8 +565,13 @@ def cmd_simulate(args) -> int:
     from .io import load_rotor_plan
 
     _check_outputs(json=args.json, figure=args.plot, inputs=[args.plan_file, args.robot])
+    _noise(args)   # the options before the files
+    gain = _servo_gain(args)
+    other = load_robot(args.robot) if args.robot else None
     rp = load_rotor_plan(args.plan_file)
-    robot = load_robot(args.robot) if args.robot else rp.robot
+    robot = other or rp.robot
+    if args.engine == "mujoco":
+        return _simulate_mujoco(args, rp, robot, gain)
     if args.closed_loop or args.plant != "rates" or args.noise:
         return _simulate_executed(args, rp, robot)
     sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
@@ -519,6 +599,121 @@ def cmd_simulate(args) -> int:
         save_figure(plot_simulation(sim.time, sim.state, rp.rotor_rates, g, _planned_states(rp), robot, title),
                     args.plot)
         print(f"wrote {args.plot}")
+    return EXIT_OK
+
+
+def _servo_gain(args) -> float:
+    """The rate loop's gain of ``--servo`` (0 without it); ``--servo`` and ``--mjcf`` need ``--engine mujoco``."""
+    if args.engine != "mujoco":
+        for flag, value in (("--servo", args.servo), ("--mjcf", args.mjcf)):
+            if value is not None:
+                raise InputError(f"{flag} applies to --engine mujoco only")
+        return 0.0
+    gain = 0.0 if args.servo is None else check_finite("--servo", args.servo)
+    if not 0.0 <= gain <= 1e3:
+        raise InputError(f"--servo {args.servo!r} is not allowed: the rate loop's gain must lie in [0, 1000] N m s/rad")
+    return gain
+
+
+def _simulate_mujoco(args, rp, robot, gain: float) -> int:
+    """``rollplan simulate --engine mujoco``: the plan's torques replayed on MuJoCo's rigid-body model, with a rate
+    loop of gain ``gain`` (:func:`_servo_gain`)."""
+    import math
+
+    import numpy as np
+
+    from .execution import mujoco_engine as engine
+    from .inputs import read_text
+
+    mujoco = engine.require()
+    if args.mjcf:
+        where = f"MJCF file {show_path(args.mjcf)}"
+        model = engine.compile_model(read_text(args.mjcf, "MJCF file", 1 << 24), where)
+        if not math.isclose(engine.radius_of(model), robot.radius, rel_tol=1e-9):
+            raise InputError(f"{where}: its sphere's radius {engine.radius_of(model):g} m is not the plan's "
+                             f"{robot.radius:g} m (the plan's lengths are on that sphere)")
+    else:
+        model = engine.compile_model(engine.mjcf(robot))
+    if args.closed_loop or args.noise:
+        return _simulate_executed(args, rp, robot, "mujoco", mujoco_model=model, servo_gain=gain)
+    where = f"plan file {show_path(args.plan_file)}"
+    if "rotor_torques" not in rp.data:
+        raise InputError(f"{where} has no key 'rotor_torques' (make it with: rollplan plan ... --duration T --json "
+                         "FILE)")
+    t, tau = engine.torque_samples(rp.data["time"], rp.data["rotor_torques"], where)
+    rates = np.asarray(rp.data["rotor_rates"], float) if gain > 0 else None
+    if rates is not None and rates.shape != tau.shape:
+        raise InputError(f"{where}: 'rotor_rates' and 'rotor_torques' must have the same shape for --servo")
+    run = engine.replay(model, t, tau, rp.start, rp.goal, rates=rates, servo_gain=gain)
+    e, f, g = run.error, run.final, rp.goal
+    print(f"rollplan simulate: MuJoCo {mujoco.__version__}, {run.steps} RK4 steps of {_g(run.timestep)} s, "
+          f"robot k = {_g(robot.k)}{' (planned k = %s)' % _g(rp.robot.k) if args.robot else ''}, "
+          f"R = {_g(robot.radius)} m{', rate loop gain %s N m s/rad' % _g(gain) if gain else ''}"
+          f"{', model ' + show_path(args.mjcf) if args.mjcf else ''}")
+    print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
+          f"  u_o = {f[3]:.3g} rad  v_o = {f[4]:.3g} rad")
+    print(f"  target        u_a = {_g(g.u_a)} m  v_a = {_g(g.v_a)} m  psi = {_g(g.psi)} rad")
+    print(f"  arrival error {run.arrival_error:.3e} ({NORM}): position {run.position_error * robot.radius:.3e} m, "
+          f"psi {e[2]:.3e} rad, u_o {e[3]:.1e} rad, v_o {e[4]:.1e} rad")
+    print(f"  contact       slip {run.slip:.3e} m, max penetration {run.max_penetration:.3e} m; at the end: rotor "
+          f"rates {run.final_rotor_rates[0]:.2e}, {run.final_rotor_rates[1]:.2e} rad/s, centre speed "
+          f"{run.final_speed:.2e} m/s")
+    if args.json:
+        d = run.summary()
+        d.update({"engine": "mujoco", "mujoco_version": mujoco.__version__,
+                  "final": dict(zip(STATE_NAMES, map(float, f))), "error": dict(zip(STATE_NAMES, map(float, e))),
+                  "position_error_m": run.position_error * robot.radius,
+                  "error_units": "u_a, v_a and position_error in R; psi (wrapped), u_o, v_o in rad; slip, "
+                                 "max_penetration in m",
+                  "servo_gain": gain, "robot": robot.as_dict(),
+                  "mjcf": args.mjcf if args.mjcf else engine.DEFAULT_SETTINGS.as_dict()})
+        _emit_json(args, d, "m")
+    if args.plot:
+        from .plots.motion import plot_simulation
+
+        title = (f"MuJoCo replay of {args.plan_file}: arrival error {run.arrival_error:.2e} ({NORM}),\n"
+                 f"slip {run.slip:.2e} m, max penetration {run.max_penetration:.2e} m")
+        save_figure(plot_simulation(run.time, run.state, run.rotor_rates, g, _planned_states(rp), robot, title),
+                    args.plot)
+        print(f"wrote {args.plot}")
+    return EXIT_OK
+
+
+def cmd_mjcf(args) -> int:
+    from .execution import mujoco_engine as engine
+    from .outputs import write_atomic
+
+    _check_outputs(json=args.out, inputs=[args.robot])
+    robot = load_robot(args.robot) if args.robot else default_robot()
+    settings = d = engine.DEFAULT_SETTINGS
+    step = d.timestep if args.timestep is None else args.timestep
+    solref = (max(d.solref[0], 2.0 * step), d.solref[1]) if args.floor_solref is None else tuple(args.floor_solref)
+    # one option at a time (the time step first: the contact's time constant is bounded by it), so that a
+    # refusal names the option
+    for flag, field, value in (("--timestep", "timestep", step), ("--floor-solref", "solref", solref),
+                               ("--friction", "friction", d.friction if args.friction is None else args.friction),
+                               ("--rolling-resistance", "rolling", args.rolling_resistance),
+                               ("--com-offset", "com_offset", tuple(args.com_offset))):
+        try:
+            settings = replace(settings, **{field: value})
+        except InputError as exc:
+            raise InputError(f"{flag}: {exc}") from None
+    try:
+        xml = engine.mjcf(robot, settings)
+    except InputError as exc:   # the settings hold; the offset is bounded by the robot's radius
+        raise InputError(f"--com-offset: {exc}") from None
+    model = engine.compile_model(xml)
+    mass, com, inertia = engine.composite_inertia(model)
+    R = robot.radius
+    j_zz = inertia[2, 2]
+    print(f"rollplan mjcf: robot k = {_g(robot.k)} (14), Jzz = {_g(robot.j_zz)} kg m^2, M = {_g(robot.mass_total)} kg")
+    print(f"  MuJoCo        composite about the centre: diag {_g(inertia[0, 0])} {_g(inertia[1, 1])} {_g(j_zz)} "
+          f"kg m^2, M = {_g(mass)} kg, centre of mass {_g(com[0])} {_g(com[1])} {_g(com[2])} m, "
+          f"k = {_g((j_zz + mass * R * R) / j_zz)}")
+    print(f"  contact       solref {_g(settings.solref[0])} s {_g(settings.solref[1])}, friction "
+          f"{_g(settings.friction)}, rolling resistance {_g(settings.rolling)} m; RK4 at {_g(settings.timestep)} s")
+    write_atomic(args.out, xml.encode(), "MJCF model")
+    print(f"wrote {args.out}")
     return EXIT_OK
 
 
@@ -552,6 +747,7 @@ def cmd_compare(args) -> int:
 
     _check_outputs(json=args.json, figure=args.plot, inputs=[args.robot])
     k, robot = _k_or_robot(args)
+    _check_target(args, robot)
     c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
                            args.cost, args.intervals, args.degree, args.scheme, args.contact_bound, args.branches)
     p, r, prob = c.plan, c.result, c.problem
@@ -615,9 +811,10 @@ def _add_robot_options(parser, k_help=_K_HELP) -> None:
     g = parser.add_mutually_exclusive_group()
     g.add_argument("--k", type=_number, default=None, help=k_help)
     g.add_argument("--robot", metavar="FILE.toml", help="robot parameters (k from eq. 14; lengths in metres)")
-    parser.add_argument("--radius", type=_number, default=None,
-                        help="sphere radius R > 0 [m]; lengths are then in metres (default: lengths in units of R, "
-                             "or the robot's radius)")
+    parser.add_argument("--radius", type=_radius, default=None,
+                        help=f"sphere radius R [m] in [{show_limit(_RADIUS.low)}, {show_limit(_RADIUS.high)}] (as "
+                             "in a robot file); lengths are then in metres (default: lengths in units of R, or the "
+                             "robot's radius)")
 
 
 def _add_compare_parser(sub) -> None:
@@ -776,9 +973,11 @@ def _add_timing_options(parser) -> None:
                         help="timing law: " + "; ".join(f"{n}: {law.summary}" for n, law in LAWS.items())
                              + ". Every law rests at the corners of the contact path (where a roll meets the figure "
                                "eights). Without --duration: the law's shortest duration within the robot's limits")
-    parser.add_argument("--samples", type=_whole, default=2000,
-                        help=f"samples of the trajectory in --json and --plot, in all, in [2, {MAX_SAMPLES}] "
-                             "(default 2000); with --duration or --timing also the least number of time samples (at "
+    parser.add_argument("--samples", type=_whole, default=None,
+                        help=f"samples of the trajectory in --json and --plot, in all, in [2, {MAX_SAMPLES}], "
+                             "more than the pieces the motion may have (4 n + 2 for n figure eights per leg, a "
+                             "route the sum over its legs); default 2000, or that + 1 when more; with --duration "
+                             "or --timing also the least number of time samples (at "
                              "least 400 per piece for min-jerk, 3000 for the other laws)")
     parser.add_argument("--timing-plot", metavar="FILE.png",
                         help="with --duration or --timing: rotor rates and torques in time with the robot's limits, "
@@ -805,7 +1004,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="figure eights: one leg, with a turn in place or two legs only where one leg has no plan "
                         "(fallback, default); also search two legs and keep the shorter (shortest); one; two")
     p.add_argument("--all", action="store_true", help="also list every other verified solution branch (one leg)")
-    p.add_argument("--branch", type=int, default=None, metavar="M",
+    p.add_argument("--branch", type=_whole, default=None, metavar="M",
                    help="only branch M of n eta = psi + 2 pi M (one leg of figure eights)")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     p.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the plan"))
@@ -854,7 +1053,32 @@ def build_parser() -> argparse.ArgumentParser:
                    help="measurement noise: standard deviation on u_a, v_a [R] and the angles [rad], "
                         "at most 0.1 (default 0)")
     m.add_argument("--seed", type=_whole, default=0, help="seed of the noise (default 0)")
+    m.add_argument("--engine", choices=("model", "mujoco"), default="model",
+                   help="model: the paper's equations (default); mujoco: the plan's motor torques replayed on "
+                        "MuJoCo's rigid-body model of the robot (pip install 'rollplan[mujoco]')")
+    m.add_argument("--mjcf", metavar="FILE.xml", help="with --engine mujoco: this model (written by rollplan mjcf, "
+                   "maybe edited) instead of the robot's own with the default settings")
+    m.add_argument("--servo", type=_number, default=None, metavar="GAIN",
+                   help="with --engine mujoco: add a rotor-rate loop around the planned rates, gain in [0, 1000] "
+                        "N m s/rad (default none: torques alone); --closed-loop and --noise also work with "
+                        "--engine mujoco (the state measured from MuJoCo's pose)")
     m.set_defaults(func=cmd_simulate)
+
+    j = sub.add_parser("mjcf", help="write the robot's MuJoCo model (MJCF): shell, two rotors, torque motors, floor")
+    j.add_argument("--robot", metavar="FILE.toml", help="robot file (default: the shipped default robot)")
+    j.add_argument("--out", required=True, metavar="FILE.xml", help="output MJCF file")
+    j.add_argument("--com-offset", type=_number, nargs=3, default=[0.0, 0.0, 0.0], metavar=("DX", "DY", "DZ"),
+                   help="centre of mass off the centre, in the shell's frame [m], shorter than R/2 (default 0 0 0)")
+    j.add_argument("--floor-solref", type=_number, nargs=2, default=None, metavar=("TIMECONST", "DAMPRATIO"),
+                   help="the contact's spring-damper: time constant [s], at least 2 timesteps, and damping ratio "
+                        "(default 0.0002 1, stiff: two RK4 steps, or 2 DT with --timestep)")
+    j.add_argument("--rolling-resistance", type=_number, default=0.0, metavar="MU",
+                   help="rolling friction [m] in [0, 1] (default 0: none)")
+    j.add_argument("--friction", type=_number, default=None, metavar="MU",
+                   help="sliding friction coefficient in [0.001, 1000] (default 2)")
+    j.add_argument("--timestep", type=_number, default=None, metavar="DT",
+                   help="RK4 step [s] in [1e-6, 0.01] (default 1e-4)")
+    j.set_defaults(func=cmd_mjcf)
 
     a = sub.add_parser("animate", help="animate the sphere rolling under the plan's rotor rates (GIF)")
     a.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
@@ -924,6 +1148,12 @@ def _atlas_arguments(t) -> None:
 _API_OPTION = re.compile(r"\b([a-z][a-z_]*)=(?:'([^']*)'|True\b)")
 
 
+#: ``name = value`` at the start of a message of the API: the value of the option --name (``steps per leaf``
+#: for --steps-per-leaf), when the command has that option and it was given: the message names the option.
+_API_NAME = re.compile(r"^([a-z](?:[a-z_ ]*[a-z])?) = ")
+_NOT_OPTIONS = ("command", "func", "stdout", "waypoints", "targets", "plan_file")
+
+
 def _cli_syntax(message: str, args) -> str:
     """A message of the API with its option hints in command-line syntax (``guess='warm'`` -> ``--guess warm``),
     for the options the command has."""
@@ -933,7 +1163,13 @@ def _cli_syntax(message: str, args) -> str:
         flag = "--" + m.group(1).replace("_", "-")
         return flag if m.group(2) is None else f"{flag} {m.group(2)}"
 
-    return _API_OPTION.sub(sub, message)
+    def option(m):   # "k = 200.0 is not allowed" -> "argument --k: k = 200.0 is not allowed" (as argparse says it)
+        dest = m.group(1).replace(" ", "_")
+        if dest in _NOT_OPTIONS or getattr(args, dest, None) is None:
+            return m.group(0)
+        return f"argument --{dest.replace('_', '-')}: {m.group(0)}"
+
+    return _API_OPTION.sub(sub, _API_NAME.sub(option, message, count=1))
 
 
 def _drop_stdout() -> None:

@@ -8,8 +8,8 @@ from numbers import Integral, Real
 
 import numpy as np
 
-__all__ = ["InputError", "OutputError", "NoPlanError", "SolverError", "show", "show_limit", "check_finite",
-           "check_range", "check_whole", "check_choice", "check_flag"]
+__all__ = ["InputError", "OutputError", "NoPlanError", "SolverError", "SHOW_WIDTH", "show", "show_limit",
+           "check_finite", "check_range", "check_whole", "check_choice", "check_flag"]
 
 
 class InputError(ValueError):
@@ -36,8 +36,13 @@ class SolverError(RuntimeError):
         self.status = status
 
 
-def show(value, width: int = 40) -> str:
-    """``repr(value)``, shortened to ``width`` characters for a one-line message."""
+#: Longest value shown in a message (:func:`show`): longer ones are cut, with an ellipsis.
+SHOW_WIDTH = 24
+
+
+def show(value, width: int = SHOW_WIDTH) -> str:
+    """``repr(value)``, shortened to ``width`` characters (an ellipsis at the cut) for a one-line message:
+    every message shows a user's value through it."""
     text = repr(value)
     return text if len(text) <= width else text[: width - 3] + "..."
 
@@ -86,7 +91,7 @@ def check_range(name: str, value, low=None, high=None, low_open=False, high_open
         lo = "-inf" if low is None else show_limit(low)
         hi = "inf" if high is None else show_limit(high)
         span = ("(" if low_open or low is None else "[") + f"{lo}, {hi}" + (")" if high_open or high is None else "]")
-        raise InputError(f"{name} = {x!r} is not allowed: it must lie in {span}")
+        raise InputError(f"{name} = {show(x)} is not allowed: it must lie in {span}")
     return x
 
 

@@ -23,7 +23,9 @@ UTF-32 text and NUL bytes are refused with a message that says so).
 (:data:`MAX_DEPTH`) and refuse what cannot be a finite number (JSON ``NaN``,
 ``Infinity``, ``1e400``, integers of more than :data:`MAX_INT_DIGITS` digits).
 :func:`read_csv` reads a CSV file with a header: duplicated or unnamed columns
-are refused, fields are capped, and every row keeps its line number.
+are refused, fields are capped, a quote left open is refused with the line
+it opens on (never read on to the end of the file, swallowing the rows after
+it), and every row keeps its line number.
 
 Every refusal is an :class:`~rollplan.errors.InputError` with one line that
 names the file (or the value) and what is allowed.
@@ -240,7 +242,7 @@ def _json_int(text: str) -> int:
 def _json_float(text: str) -> float:
     x = float(text)
     if not math.isfinite(x):
-        raise InputError(f"the number {show(text, 30)} is too large for a double")
+        raise InputError(f"the number {show(text)} is too large for a double")
     return x
 
 
@@ -296,8 +298,10 @@ def read_csv(path, what: str = "CSV file", required=(), max_bytes: int = 1 << 28
     ``comments`` also lines that start with ``#`` (after blanks; a quoted ``"#1"`` is a field, not a comment).
 
     The header must name every column of ``required``, and no column twice or
-    not at all. A row with more or fewer fields than the header is kept, with
-    its problem noted (a batch records it as a failed row, never drops it).
+    not at all. The reading is strict: a quote left open to the end of the file, or
+    text after a closing quote, is refused with the line of the record. A row
+    with more or fewer fields than the header is kept, with its problem noted (a
+    batch records it as a failed row, never drops it).
     """
     text = read_text(path, what, max_bytes)
     where = f"{what} {show_path(path)}"
@@ -308,7 +312,7 @@ def read_csv(path, what: str = "CSV file", required=(), max_bytes: int = 1 << 28
             raw_lines.append(line)
             yield line
 
-    reader = csv.reader(taken(io.StringIO(text, newline="")))
+    reader = csv.reader(taken(io.StringIO(text, newline="")), strict=True)
     try:
         header, header_line = None, 1
         rows, lines, problems = [], [], []
@@ -333,6 +337,9 @@ def read_csv(path, what: str = "CSV file", required=(), max_bytes: int = 1 << 28
         if "field limit" in str(exc):  # the csv module caps fields (131072 characters by default)
             raise InputError(f"{where}, line {reader.line_num}: a field is longer than {csv.field_size_limit()} "
                              "characters") from None
+        if "end of data" in str(exc):   # the file ends inside a quoted field: name the line the record starts on
+            raise InputError(f"{where}, line {first + 1}: a quote is opened and never closed (the file ends "
+                             "inside the quoted field)") from None
         raise InputError(f"{where}, line {reader.line_num}: not valid CSV: {exc}") from None
     if header is None:
         raise InputError(f"{where} is empty: it needs a header naming the columns {', '.join(required)}")
@@ -344,7 +351,7 @@ def _check_header(fields, where: str, required) -> list:
         if not name:
             raise InputError(f"{where}: column {i + 1} of the header has no name")
         if name in fields[:i]:
-            raise InputError(f"{where}: column {name!r} appears twice in the header "
+            raise InputError(f"{where}: column {show(name)} appears twice in the header "
                              f"(columns {fields.index(name) + 1} and {i + 1})")
     missing = [c for c in required if c not in fields]
     if missing:

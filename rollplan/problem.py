@@ -21,12 +21,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .core.curves import A_MAX
 from .core.plane import wrap, wrap_exact
 from .errors import InputError, check_finite, check_range, check_whole
 from .robot import Robot
 
 __all__ = ["STATE_NAMES", "State", "Problem", "K_MAX", "MAX_STEPS", "DEFAULT_K", "N3Z_MIN", "check_k", "check_steps",
-           "check_contact", "arrival_error", "arrival_residual"]
+           "check_contact", "check_reach", "MAX_DISTANCE", "arrival_error", "arrival_residual"]
 
 #: Names of the state's entries, in the one order used everywhere (arrays, JSON, CSV).
 STATE_NAMES = ("u_a", "v_a", "psi", "u_o", "v_o")
@@ -34,6 +35,10 @@ STATE_NAMES = ("u_a", "v_a", "psi", "u_o", "v_o")
 K_MAX = 100.0
 #: Largest number of figure-eight steps a plan may have.
 MAX_STEPS = 1000
+#: Farthest goal from its start [R] a plan can reach: two legs of MAX_STEPS figure eights, each at most
+#: 4 pi A_MAX long (two circles of radius <= A_MAX R; a contact path is as long on the plane as on the sphere),
+#: and the rolls to and from the pole (each shorter than pi/2), rounded up. Farther goals are refused.
+MAX_DISTANCE = math.ceil(2 * MAX_STEPS * 4.0 * math.pi * A_MAX + math.pi)
 #: k when none is given on the command line or in a batch row: the paper's case study (Section III.C).
 DEFAULT_K = 2.5
 
@@ -151,6 +156,18 @@ def check_contact(u_o, v_o, name: str = "contact") -> tuple[float, float]:
                          f"below {N3Z_MIN:g}; the contact point must lie within "
                          f"{math.degrees(math.acos(N3Z_MIN)):.2f} deg of the south pole")
     return u, v
+
+
+def check_reach(start, goal, radius: float = 1.0, name: str = "goal", origin: str = "the start") -> float:
+    """The distance [R] on the plane from ``start`` to ``goal`` (States, lengths in units of ``radius``);
+    InputError naming :data:`MAX_DISTANCE` when it is farther than any plan reaches."""
+    d = math.hypot(goal.u_a - start.u_a, goal.v_a - start.v_a)
+    if not d <= MAX_DISTANCE * radius:
+        far = d / radius if math.isfinite(d / radius) else math.inf
+        raise InputError(f"{name} (u_a, v_a) = ({goal.u_a:.6g}, {goal.v_a:.6g}) is {far:.6g} R from {origin}: at "
+                         f"most {MAX_DISTANCE} R is allowed (no plan reaches farther: two legs of {MAX_STEPS} "
+                         f"figure eights of leaves <= {A_MAX:g} R and the rolls to and from the pole)")
+    return d / radius
 
 
 def check_steps(steps) -> int:

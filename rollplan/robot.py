@@ -177,7 +177,7 @@ def robot_from_mapping(data, where: str = "robot", derived=()) -> Robot:
     allowed = [k.name for k in ROBOT_KEYS]
     unknown = sorted(str(n) for n in set(data) - set(allowed) - set(derived))
     if unknown:
-        raise InputError(f"{where}: unknown key {unknown[0]!r}; allowed: {', '.join(allowed)}")
+        raise InputError(f"{where}: unknown key {show(unknown[0])}; allowed: {', '.join(allowed)}")
     given = {k.name: data[k.name] for k in ROBOT_KEYS
              if k.name in data and not (data[k.name] is None and not k.required)}  # None: an optional key unset
     missing = [k.name for k in ROBOT_KEYS if k.required and k.name not in given]

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .errors import InputError
+from .errors import InputError, show
 from .inputs import parse_number, parse_whole, read_csv, show_path
 from .problem import STATE_NAMES, State, check_contact, check_steps
 
@@ -85,7 +85,7 @@ def read_waypoints(path) -> list:
     table = read_csv(path, "waypoints file", _REQUIRED, MAX_WAYPOINTS_BYTES, comments=True)
     unknown = [c for c in table.header if c not in COLUMNS]
     if unknown:
-        raise InputError(f"{where}, line {table.header_line}: unknown column {unknown[0]!r}; allowed: "
+        raise InputError(f"{where}, line {table.header_line}: unknown column {show(unknown[0])}; allowed: "
                          f"{', '.join(COLUMNS)}")
     if len(table.rows) > MAX_WAYPOINTS:
         raise InputError(f"{where} has {len(table.rows)} waypoints: at most {MAX_WAYPOINTS} are allowed")

@@ -35,7 +35,7 @@ from ..core.integrate import (
     spectral_leaf,
 )
 from ..core.rewrite import algebraic
-from ..errors import InputError, NoPlanError, OutputError, show_limit
+from ..errors import InputError, NoPlanError, OutputError, show, show_limit
 from ..execution.path import curve_piece_function
 from ..outputs import check_writable, make_folder, write_atomic
 from ..planners.geometric import GeometricPhasePlanner, leafmap
@@ -426,7 +426,7 @@ def _check_real(real) -> str:
 def _check_prefix(prefix) -> str:
     if not isinstance(prefix, str) or not prefix.isidentifier() or not prefix.isascii() or prefix.startswith("_") \
             or len(prefix) > MAX_PREFIX_CHARS:
-        raise InputError(f"prefix = {prefix!r:.60} is not allowed: it must be a C identifier (letters, digits, _) "
+        raise InputError(f"prefix = {show(prefix)} is not allowed: it must be a C identifier (letters, digits, _) "
                          f"of at most {MAX_PREFIX_CHARS} characters")
     return prefix
 

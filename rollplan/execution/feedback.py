@@ -162,8 +162,9 @@ class _Controller:
     """Runs the plant piece after piece, keeping the true state, the records and the estimators."""
 
     def __init__(self, real: Robot, plant: str, disturbances, closed_loop: bool, window: int, estimate_friction: bool,
-                 x0, servo_gain: float = 0.0):
+                 x0, servo_gain: float = 0.0, session=None):
         self.servo_gain = servo_gain
+        self.session = session     # the MuJoCo plant (rollplan.execution.mujoco_engine.Session)
         self.real, self.plant, self.dist, self.closed_loop = real, plant, tuple(disturbances), closed_loop
         self.by_name = by_name(self.dist, plant)
         self.x = np.asarray(x0, float)
@@ -187,7 +188,8 @@ class _Controller:
             torques = _piecewise_derivative(t, run.momenta, breaks)
         else:
             torques = motion.rotor_torques[sl] + self.friction_hat * rates
-            run = run_torques(self.real, t, torques, self.x, self.p, self.phi, self.dist, n, breaks,
+            runner = run_torques if self.session is None else self.session.run
+            run = runner(self.real, t, torques, self.x, self.p, self.phi, self.dist, n, breaks,
                               commanded_p0=self.P, servo_gain=self.servo_gain,
                               reference_rates=rates if self.servo_gain > 0 else None)
             self.P = run.commanded_momenta[-1]
@@ -255,7 +257,7 @@ def _pieces(plan):
 def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, *, plant: str = "rates",
             closed_loop: bool = True, disturbances=(), samples_per_piece: int = DEFAULT_SAMPLES_PER_PIECE,
             window: int = DEFAULT_WINDOW, estimate_friction: bool = True, rest_readings: int = 0,
-            servo_gain: float = 0.0, progress=None) -> Execution:
+            servo_gain: float = 0.0, mujoco_model=None, progress=None) -> Execution:
     """Execute a geometric-phase plan on ``real_robot``, open or closed loop (module docstring).
 
     Parameters
@@ -270,7 +272,9 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     piece_duration : float
         Duration of every piece (leaf, roll) [s]; each is timed rest to rest by the min-jerk law.
     plant : str
-        ``"rates"`` or ``"torques"`` (:data:`rollplan.execution.plants.PLANTS`).
+        ``"rates"`` or ``"torques"`` (:data:`rollplan.execution.plants.PLANTS`), or ``"mujoco"``: the
+        torques applied to MuJoCo's model of the real robot (:mod:`rollplan.execution.mujoco_engine`,
+        ``mujoco_model`` or the model of ``real_robot``), the state measured from its pose.
     closed_loop : bool
     disturbances : iterable
         Disturbances of :mod:`rollplan.execution.plants`, with their seeds.
@@ -285,6 +289,8 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
         rest point (0: the last sample of the run, as measured).
     servo_gain : float
         Torque plant: gain K >= 0 [N m s/rad] of a proportional rotor-rate loop around the planned rates.
+    mujoco_model : mujoco.MjModel, optional
+        Plant ``"mujoco"``: the compiled model (:func:`~rollplan.execution.mujoco_engine.compile_model`).
     progress : callable(label, done, total), optional
         Called after each applied figure eight (open loop: once).
 
@@ -299,8 +305,8 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     """
     from ..planners.geometric import plan as make_plan
 
-    if plant not in PLANT_NAMES:
-        raise InputError(f"plant {plant!r} is not known: choose one of {', '.join(PLANT_NAMES)}")
+    if plant not in (*PLANT_NAMES, "mujoco"):
+        raise InputError(f"plant {plant!r} is not known: choose one of {', '.join(PLANT_NAMES)}, mujoco")
     for name, rob in (("model_robot", model_robot), ("real_robot", real_robot)):
         if not isinstance(rob, Robot):
             raise InputError(f"{name} = {rob!r:.60} is not allowed: give a rollplan.Robot")
@@ -323,8 +329,17 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     servo_gain = check_finite("servo_gain", servo_gain)
     if servo_gain < 0:
         raise InputError(f"servo_gain = {servo_gain!r} is not allowed: it must be >= 0")
+    session = None
+    if plant == "mujoco":
+        from . import mujoco_engine
+
+        model = mujoco_engine.compile_model(mujoco_engine.mjcf(real_robot)) if mujoco_model is None else mujoco_model
+        if not math.isclose(mujoco_engine.radius_of(model), R, rel_tol=1e-9):
+            raise InputError(f"the MuJoCo model's radius {mujoco_engine.radius_of(model):g} m is not the real "
+                             f"robot's {R:g} m")
+        session = mujoco_engine.Session(model, start)
     ctl = _Controller(real_robot, plant, disturbances, closed_loop, window, estimate_friction, start.array(),
-                      servo_gain)
+                      servo_gain, session)
 
     def timed(p, robot):
         n = len(_pieces(p))

@@ -265,7 +265,8 @@ class RateNoise(TorqueNoise):
 #: Disturbances by name.
 DISTURBANCES = {"friction": Friction, "measurement": MeasurementNoise, "torque_noise": TorqueNoise,
                 "rate_noise": RateNoise}
-_NOT_FOR = {"rates": ("friction", "torque_noise"), "torques": ("rate_noise",)}
+_NOT_FOR = {"rates": ("friction", "torque_noise"), "torques": ("rate_noise",),
+            "mujoco": ("friction", "rate_noise")}   # MuJoCo (rollplan.execution.mujoco_engine), torque-driven
 
 
 def disturbance(name: str, **params):
@@ -280,8 +281,8 @@ def disturbance(name: str, **params):
 
 def by_name(disturbances, plant: str) -> dict:
     """``{name: disturbance}``; InputError for a name given twice or one that does not apply to ``plant``."""
-    if plant not in PLANT_NAMES:
-        raise InputError(f"plant {plant!r} is not known: choose one of {', '.join(PLANT_NAMES)}")
+    if plant not in _NOT_FOR:
+        raise InputError(f"plant {plant!r} is not known: choose one of {', '.join(_NOT_FOR)}")
     out = {}
     for d in disturbances:
         if d.name in out:

@@ -24,7 +24,7 @@ from ...core.integrate import DEFAULT_NODES
 from ...core.paths import PathIntegrator, allocate_samples, figure_eight_pieces
 from ...core.plane import compose, inverse, relative, wrap, wrap_exact
 from ...errors import InputError, NoPlanError, check_whole
-from ...problem import Problem, State, arrival_residual
+from ...problem import Problem, State, arrival_residual, check_reach
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from .legs import intermediate_state, second_leg, two_leg_candidates
@@ -223,6 +223,7 @@ class ComposedPlanner:
         t0 = time.perf_counter()
         if not isinstance(problem, Problem):
             raise InputError(f"problem = {problem!r} is not allowed: give a rollplan.Problem")
+        check_reach(problem.start, problem.goal, problem.radius)
         if branch is not None:
             branch = check_whole("branch", branch)
             if self.legs == "two":

@@ -35,7 +35,7 @@ from ...errors import (
     check_range,
     check_whole,
 )
-from ...problem import Problem, State, arrival_residual, check_k
+from ...problem import Problem, State, arrival_residual, check_k, check_reach
 from ...progress import report
 from ...result import CERTIFICATE_TOLERANCE, Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
@@ -239,6 +239,7 @@ class GeometricPhasePlanner:
         t_start = time.perf_counter()
         if not isinstance(problem, Problem):
             raise InputError(f"problem = {problem!r} is not allowed: give a rollplan.Problem")
+        check_reach(problem.start, problem.goal, problem.radius)
         if tuple(problem.start) != tuple(State()) or not problem.goal.at_pole:
             raise InputError("the geometric-phase planner plans from rest at the origin (start = 0) to a goal "
                              "with the contact point at the south pole (u_o = v_o = 0)")

@@ -21,14 +21,14 @@ import numpy as np
 
 from ...core.plane import wrap_exact
 from ...errors import InputError, NoPlanError, show
-from ...problem import Problem, State, arrival_residual
+from ...problem import Problem, State, arrival_residual, check_reach
 from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from ...waypoints import Waypoint
 from .composed import DEFAULT_SAMPLES, LEGS, as_composed, certify_path, default_composed_planner, sample_path
 from .refine import SOLVERS
 
-__all__ = ["Route", "plan_route"]
+__all__ = ["Route", "plan_route", "check_legs"]
 
 
 @dataclass(frozen=True)
@@ -76,6 +76,13 @@ class Route(CertifiedMotion):
         return sample_path(self.problem, self.pieces, samples)
 
 
+def check_legs(waypoints, radius: float, where: str = "") -> None:
+    """InputError unless every leg of ``waypoints`` (Waypoint, lengths in units of ``radius``) is within reach
+    (:func:`rollplan.problem.check_reach`); ``where`` (e.g. the file) starts the message."""
+    for i, (a, b) in enumerate(zip(waypoints, waypoints[1:])):
+        check_reach(a.state, b.state, radius, f"{where}waypoint {i + 2}", f"waypoint {i + 1}")
+
+
 def plan_route(waypoints, steps: int = 1, k: float | None = None, robot: Robot | None = None,
                radius: float | None = None, legs: str = "fallback", method: str = "ipopt",
                progress: Callable | None = None) -> Route:
@@ -119,6 +126,7 @@ def _plan_route(waypoints, steps, k, robot, radius, legs, method, progress) -> R
     if len(wps) < 2:
         raise InputError(f"a route needs at least two waypoints (the first is the start), not {len(wps)}")
     whole = Problem(wps[-1].state, start=wps[0].state, k=k, robot=robot, radius=radius, steps=steps)
+    check_legs(wps, whole.radius)
     planner = default_composed_planner(method, legs)
     plans, pieces, owner = [], [], []
     here = whole.start
