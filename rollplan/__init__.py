@@ -22,7 +22,7 @@ _GUARDED = _interrupts.guard_start_up()
 _LAZY = {
     "A_MAX": "core.curves", "Curve": "core.curves", "Piece": "core.curves", "circle_point": "core.curves",
     "figure_eight": "core.curves",
-    "InputError": "errors", "NoPlanError": "errors", "SolverError": "errors",
+    "InputError": "errors", "NoPlanError": "errors", "SolverError": "errors", "UnsafeCacheError": "errors",
     "Motion": "execution.actuation", "actuate": "execution.actuation",
     "Simulation": "execution.plants", "simulate_rotors": "execution.plants",
     "METHODS": "planners", "solve": "planners",
@@ -60,7 +60,7 @@ if _GUARDED and not _interrupts.cli_follows():   # python -m rollplan.<another m
 __all__ = [
     "__version__",
     "A_MAX", "Curve", "Piece", "circle_point", "figure_eight",
-    "InputError", "NoPlanError", "SolverError",
+    "InputError", "NoPlanError", "SolverError", "UnsafeCacheError",
     "STATE_NAMES", "N3Z_MIN", "State", "Problem",
     "CERTIFICATE_TOLERANCE", "Certificate", "Measures", "PlanResult", "SolverStats", "Trajectory",
     "METHODS", "solve",

@@ -118,6 +118,17 @@ def _whole(text: str) -> int:
         raise argparse.ArgumentTypeError(str(exc).removeprefix("value = ")) from None
 
 
+def _steps_per_leaf(text: str):
+    """``--steps-per-leaf``: ``auto`` or a whole number."""
+    if text.strip() == "auto":
+        return "auto"
+    try:
+        return parse_whole(text, "value")
+    except InputError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not allowed: it must be auto or a whole number (a multiple "
+                                         "of 10 in [20, 2000])") from None
+
+
 class _Claims:
     """The outputs the running command holds (:func:`rollplan.outputs.claim`), released when it ends."""
 
@@ -177,7 +188,7 @@ def _fmt_plan(p, unit) -> str:
         f"   (branch m = {p.branch})",
         f"  one step      h = {_g(p.h)} {unit}   eta = {_g(p.eta)} rad",
         f"  path length   {_g(p.path_length)} {unit}",
-        f"  final         u_a = {_g(f.u_a)} {unit}  v_a = {_g(f.v_a)} {unit}  psi = {_g(f.psi)} rad"
+        f"  final         u_a = {_g(f.u_a)} {unit}  v_a = {_g(f.v_a)} {unit}  psi = {_fmt_psi(f.psi)}"
         f"  u_o = {f.u_o:.3g} rad  v_o = {f.v_o:.3g} rad",
         f"  residual      {p.residual:.2e} ({NORM}; {p.certificate.method}, independent of the planner"
         f"{f', integration error bound {p.certificate.error_bound:.1e}' if p.certificate.error_bound else ''})",
@@ -200,10 +211,42 @@ def _fmt_all(p, unit) -> str:
     return "\n".join(lines)
 
 
-def _fmt_state(x, unit) -> str:
-    """A state (u_a, v_a, psi, u_o, v_o) with its units: lengths in ``unit``, angles in rad."""
+def _fmt_state(x, unit, wrapped=False) -> str:
+    """A state (u_a, v_a, psi, u_o, v_o) with its units: lengths in ``unit``, angles in rad; with ``wrapped``
+    psi wrapped (:func:`_fmt_psi`), as a final state is printed."""
     units = (unit, unit, "rad", "rad", "rad")
-    return "(" + ", ".join(f"{_g(float(v))} {u}" for v, u in zip(x, units)) + ")"
+    parts = [f"{_g(float(v))} {u}" for v, u in zip(x, units)]
+    if wrapped:
+        parts[2] = _fmt_psi(x[2])
+    return "(" + ", ".join(parts) + ")"
+
+
+def _fmt_psi(psi) -> str:
+    """A reached psi wrapped to [-pi, pi], with the whole turns taken off (if any)."""
+    from .core.plane import wrap_exact
+
+    w, turns = wrap_exact(float(psi))
+    return f"{_g(w)} rad" + (f" (wrapped; unwrapped {_g(float(psi))} rad, {turns:+d} turn{'s' * (abs(turns) != 1)})"
+                             if turns else "")
+
+
+def _fmt_solver(stats) -> str:
+    """How the plan was found, in words (the JSON keeps the solver's own status and iteration count)."""
+    d, n = stats.details, stats.iterations
+    if stats.method == "none":
+        return "none needed: the rolls alone, in closed form"
+    if stats.method == "brentq":
+        return f"circles of the turn by a scalar root (brentq); {stats.time_s * 1e3:.1f} ms"
+    parts = []
+    if "branches" in d:
+        parts.append(f"exact search of (32)-(33): {d['branches']} branch(es) searched, {d['roots']} root(s) "
+                     "certified or rejected")
+    elif "candidates" in d:
+        parts.append(f"{d['candidates']} brackets, {d['solves']} solves")
+    polished = "0 iterations (already at the root)" if n == 0 else f"{n} iteration(s)"
+    ok = stats.status in ("Solve_Succeeded", "success", "ok")
+    parts.append(f"root polished by {stats.method}: {polished}{'' if ok else f' ({stats.status})'}")
+    return "; ".join(parts) + f"; {stats.time_s * 1e3:.1f} ms"
 
 
 def _fmt_composed(p, unit) -> str:
@@ -232,7 +275,7 @@ def _fmt_composed(p, unit) -> str:
         lines.append(f"  departure     roll of {_g(p.departure.sigma * R)} {unit} from the pole along the great "
                      f"circle (direction beta = {_g(p.departure.beta)} rad)")
     lines += [f"  path length   {_g(p.path_length)} {unit} in {len(p.pieces)} pieces",
-              f"  final         {_fmt_state(p.final, unit)}",
+              f"  final         {_fmt_state(p.final, unit, wrapped=True)}",
               f"  residual      {p.residual:.2e} ({NORM}; {p.certificate.method}, the whole motion from the start "
               "state)"]
     return "\n".join(lines)
@@ -350,13 +393,7 @@ def cmd_plan(args) -> int:
         print(f"rollplan: k = {_g(p.k)}, {radius}, steps = {p.steps}, target (u_a, v_a, psi) = "
               f"({_g(g.u_a)} {unit}, {_g(g.v_a)} {unit}, {_g(g.psi)} rad)")
     print(_fmt_composed(p, unit) if composed else _fmt_plan(p, unit))
-    details = p.stats.details
-    if "branches" in details:
-        found = f"{details['branches']} branches searched, {details['roots']} roots certified or rejected, "
-    else:
-        found = (f"{details['candidates']} brackets, {details['solves']} solves, " if "candidates" in details else "")
-    print(f"  solver        {p.stats.method}: {p.stats.status}, {p.stats.iterations} iterations, {found}"
-          f"{p.stats.time_s * 1e3:.1f} ms")
+    print(f"  solver        {_fmt_solver(p.stats)}")
     if args.all:
         print(_fmt_all(p, unit))
     _write_results(args, p, robot, unit, composed_to_dict, "plan")
@@ -417,9 +454,9 @@ def cmd_route(args) -> int:
     for i, (p, w, res) in enumerate(zip(r.plans, r.waypoints[1:], r.waypoint_residuals), 1):
         label = f" {w.label!r}" if w.label else ""
         print(f"  leg {i} to waypoint {i + 1}{label} {_fmt_state(w.state, unit)}: {getattr(p, 'mode', 'one')}, "
-              f"{_g(p.path_length)} {unit}, waypoint residual {res:.2e}")
+              f"{_g(p.path_length)} {unit}, waypoint residual {res:.2e} (R, rad)")
     print(f"  path length   {_g(r.path_length)} {unit} in {len(r.pieces)} pieces")
-    print(f"  final         {_fmt_state(r.final, unit)}")
+    print(f"  final         {_fmt_state(r.final, unit, wrapped=True)}")
     print(f"  residual      {r.residual:.2e} ({NORM}; {r.certificate.method}, the whole route from the first "
           "waypoint)")
     print(f"  time          {r.stats.time_s:.2f} s")
@@ -438,13 +475,16 @@ def _timed(args, p, robot):
     motion = actuate(p, robot, args.duration, args.samples, timing)
     sim = certify_motion(motion)
     lim = motion.limits
-    print(f"  motion        T = {_g(motion.duration)} s, {motion.time.size} samples, timing {timing}"
+    shortest = motion.minimum_duration
+    at_shortest = shortest is not None and motion.duration == shortest
+    print(f"  motion        T = {_g(motion.duration)} s{' (the shortest feasible)' if at_shortest else ''}, "
+          f"{motion.time.size} samples, timing {timing}"
           f"{' (rest-to-rest per piece: leaf, roll)' if timing == 'min-jerk' else ''}")
     if motion.path is None:
         print("  limits        none needed: the plan is the empty motion (at rest)")
-    elif lim.any:
+    elif lim.any:   # the shortest rounded up to 6 digits is the least printed value --duration accepts
         print(f"  limits        {lim.describe()}: the shortest feasible duration with timing {timing} is "
-              f"{_g(round_up(motion.minimum_duration))} s")
+              f"{_g(shortest)} s (as --duration: {_g(round_up(shortest))} s or more)")
     else:
         print("  limits        none in the robot file (add max_rotor_rate [rad/s] and max_rotor_torque [N m] "
               "to keep the motors within them)")
@@ -518,6 +558,11 @@ def _noise(args):
     return (disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=seed),) if sigma > 0 else ()
 
 
+def _position(error_r: float, robot) -> str:
+    """A position error given in units of R, in metres and in R."""
+    return f"{error_r * robot.radius:.3e} m ({error_r:.3e} R)"
+
+
 def _simulate_executed(args, rp, robot, plant=None, **engine) -> int:
     """``rollplan simulate --closed-loop`` and ``--plant torques``: open and closed loop on the chosen plant
     (``plant``, default ``--plant``; ``engine``: more arguments of the execution, e.g. the MuJoCo model)."""
@@ -536,8 +581,9 @@ def _simulate_executed(args, rp, robot, plant=None, **engine) -> int:
     print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
           f"  u_o = {_g(f[3])} rad  v_o = {_g(f[4])} rad")
     print(f"  target        u_a = {_g(g.u_a)} m  v_a = {_g(g.v_a)} m  psi = {_g(g.psi)} rad")
-    print(f"  arrival error {run.arrival_error:.3e} ({NORM}; position {run.position_error:.3e} R, psi {e[2]:.3e} rad)"
-          + (f"; open loop {opened.arrival_error:.3e}" if args.closed_loop else ""))
+    print(f"  arrival error {run.arrival_error:.3e} ({NORM}): position {_position(run.position_error, robot)}, "
+          f"psi {e[2]:.3e} rad" + (f"; open loop {opened.arrival_error:.3e}, position "
+                                    f"{_position(opened.position_error, robot)}" if args.closed_loop else ""))
     if args.closed_loop:
         print("  estimated k   " + ", ".join(_g(d["k"]) for d in run.estimates if "k" in d))
     if args.json:
@@ -582,7 +628,7 @@ def cmd_simulate(args) -> int:
     print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
           f"  u_o = {f[3]:.3g} rad  v_o = {f[4]:.3g} rad")
     print(f"  target        u_a = {_g(g.u_a)} m  v_a = {_g(g.v_a)} m  psi = {_g(g.psi)} rad")
-    print(f"  arrival error {sim.arrival_error:.3e} ({NORM}): position {sim.position_error * robot.radius:.3e} m, "
+    print(f"  arrival error {sim.arrival_error:.3e} ({NORM}): position {_position(sim.position_error, robot)}, "
           f"psi {e[2]:.3e} rad, u_o {e[3]:.1e} rad, v_o {e[4]:.1e} rad")
     if args.json:
         _emit_json(args, {"final": dict(zip(STATE_NAMES, map(float, sim.final))),
@@ -1091,13 +1137,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     c = sub.add_parser("codegen", help="write a self-contained C99 planner (CasADi code generation)")
     c.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
-    c.add_argument("--steps-per-leaf", type=_whole, default=240,
-                   help="node intervals per leaf of the step map, a multiple of 10 (default 240)")
+    c.add_argument("--steps-per-leaf", type=_steps_per_leaf, default="auto",
+                   help="node intervals per leaf of the step map, a multiple of 10, or auto (the default): the "
+                        "smallest of 240, 320, 400, ... 2000 whose step map is accurate to 1e-10 up to --k-max")
     c.add_argument("--prefix", default="rollplan", help="prefix of the C symbols and files, a C identifier "
                    "(default rollplan)")
     c.add_argument("--k-max", type=_number, default=5.0,
-                   help="largest k the C planner accepts (the smallest is 0.5); refused unless its step map is "
-                        "accurate to 1e-10 up to it (default 5; e.g. 10 with --steps-per-leaf 320)")
+                   help="largest k the C planner accepts (the smallest is 0.5), at most %g; refused unless its step "
+                        "map is accurate to 1e-10 up to it (default 5)" % K_MAX)
     c.add_argument("--real", choices=("double", "float"), default="double",
                    help="C number type: float for single-precision FPUs (plans certified to 1e-4 only)")
     c.set_defaults(func=cmd_codegen)

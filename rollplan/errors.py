@@ -8,8 +8,8 @@ from numbers import Integral, Real
 
 import numpy as np
 
-__all__ = ["InputError", "OutputError", "NoPlanError", "SolverError", "SHOW_WIDTH", "show", "show_limit",
-           "check_finite", "check_range", "check_whole", "check_choice", "check_flag"]
+__all__ = ["InputError", "OutputError", "UnsafeCacheError", "NoPlanError", "SolverError", "SHOW_WIDTH", "show",
+           "show_limit", "check_finite", "check_range", "check_whole", "check_choice", "check_flag"]
 
 
 class InputError(ValueError):
@@ -22,6 +22,12 @@ class OutputError(InputError):
     A kind of :class:`InputError` (the command exits 2 with one line): the
     user chose where to write. The message is one line.
     """
+
+
+class UnsafeCacheError(InputError):
+    """The cache directory, or a compiled library in it, is owned by another user or writable by group or
+    others: rollplan refuses to load code from it. A kind of :class:`InputError` (the command exits 2 with
+    one line): the user chose the directory (``ROLLPLAN_CACHE_DIR``)."""
 
 
 class NoPlanError(RuntimeError):

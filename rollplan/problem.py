@@ -249,6 +249,8 @@ class Problem:
         """One line naming the problem, for messages."""
         g, u = self.goal, self.unit
         where = f"(u_a, v_a, psi) = ({g.u_a:g} {u}, {g.v_a:g} {u}, {g.psi:g} rad)"
+        if u != "R":   # lengths in metres: also in radii, the unit the figure eights work in
+            where += f" = ({g.u_a / self.radius:g} R, {g.v_a / self.radius:g} R) with R = {self.radius:g} {u}"
         if not g.at_pole:
             where += f", contact (u_o, v_o) = ({g.u_o:g} rad, {g.v_o:g} rad)"
         if tuple(self.start) != tuple(State()):

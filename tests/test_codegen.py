@@ -30,7 +30,7 @@ from rollplan.core import model
 from rollplan.core.curves import A_MAX, figure_eight
 from rollplan.core.integrate import CvodesIntegrator, spectral_step
 from rollplan.core.rewrite import algebraic
-from rollplan.errors import InputError
+from rollplan.errors import InputError, NoPlanError
 from rollplan.planners.geometric import GeometricPhasePlanner
 
 import references
@@ -335,6 +335,96 @@ def test_random_targets_same_plan_as_python(built):
     assert plans >= 20
 
 
+def _parse_all(run):
+    """The plans of ``plan_demo --all`` (each as _parse gives it) and the count on its last line."""
+    lines = run.stdout.splitlines()
+    count, word = lines[-1].split()
+    assert word == "plans"
+    return [_parse(subprocess.CompletedProcess((), 0, line)) for line in lines[:-1]], int(count)
+
+
+def _reference_all(target):
+    """Every certified plan of the Python planner's numpy search (``--all``), shortest first; [] if none."""
+    u, v, psi, n, k = target
+    try:
+        best = GeometricPhasePlanner(compiled_search=False).solve(Problem((u, v, psi), k=k, steps=n),
+                                                                  all_solutions=True)
+    except NoPlanError:
+        return []
+    return [best, *best.alternatives]
+
+
+def _check_all(built, target, checked=3):
+    """``plan_demo --all``: as many plans as the numpy search lists, each the same (branch and (a, b, gamma) to
+    1e-8), sorted by a + b; the first ``checked`` and the last integrated by DOP853 on the printed equations."""
+    u, v, psi, n, k = target
+    run = demo(built, "--all", *(repr(float(x)) for x in (u, v, psi)), n, repr(float(k)))
+    want = _reference_all(target)
+    if not want:
+        assert run.returncode == 3 and run.stdout == "" and "no plan" in run.stderr, (target, run.stderr)
+        return 0
+    assert run.returncode == 0, (target, run.stderr)
+    got, count = _parse_all(run)
+    assert count == len(got) == len(want), (target, count, len(want))
+    lengths = [c[0] + c[1] for c in got]
+    assert lengths == sorted(lengths)
+    # paired by branch and radii (plans of nearly equal length may come in either order)
+    for c, q in zip(sorted(got, key=lambda c: (c[5], c[0], c[1])), sorted(want, key=lambda q: (q.branch, q.a, q.b))):
+        assert _same_plan(c, q), (target, c, (q.a, q.b, q.gamma, q.branch))
+    for a, b, gamma, residual, bound, _ in got[:checked] + got[-1:]:
+        assert residual + bound <= CERT_TOL
+        x = references.trace(a, b, k, gamma, n)
+        assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) < 1e-9 + 1e-11 * n
+    return count
+
+
+@pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 2, 1.5), (0.0, 1.0, 0.0, 1, 0.5)])
+def test_plan_demo_all_lists_the_plans_of_python_all(built, target):
+    """plan_demo --all (every root on every branch, certified on board) against the numpy search's --all list; the
+    paper's case k = 2.5, h = 1 R has its smallest solution a = b = 0.300429 R first."""
+    assert _check_all(built, target) >= 3
+    if target == (0.0, 1.0, 0.0, 1, 2.5):
+        first = _parse_all(demo(built, "--all", *target))[0][0]
+        assert abs(first[0] - 0.300429) < 5e-7 and abs(first[1] - 0.300429) < 5e-7
+
+
+@pytest.mark.slow
+def test_plan_demo_all_random_targets_match_python(built):
+    """Random targets, k in [1/2, K_MAX], n in 1..4: the same list of plans as the numpy search."""
+    rng = np.random.default_rng(12)
+    listed = 0
+    for _ in range(8):
+        u, v = rng.uniform(-1.5, 1.5, 2)
+        target = (float(u), float(v), float(rng.uniform(-4, 4)), int(rng.integers(1, 5)),
+                  float(rng.uniform(0.5, DEFAULT_K_MAX)))
+        listed += _check_all(built, target, checked=1) > 0
+    assert listed >= 6
+
+
+def test_plan_all_capacity_and_bad_arguments(built):
+    """rollplan_plan_all into a smaller array: status TOO_MANY (6), the full count, and the shortest plans of the
+    full list; count NULL or a negative capacity are bad input; a target without a plan is NO_PLAN (3)."""
+    clib = ctypes.CDLL(str(built.out / "librollplan.so"))
+    d = ctypes.c_double
+    clib.rollplan_plan_all.argtypes = [d, d, d, ctypes.c_int, d, ctypes.POINTER(_Options), ctypes.POINTER(_Plan),
+                                       ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
+
+    def plan_all(target, capacity, count=True):
+        plans, n = (_Plan * max(capacity, 1))(), ctypes.c_int(-1)
+        status = clib.rollplan_plan_all(*target[:3], target[3], target[4], None, plans, capacity,
+                                        ctypes.byref(n) if count else None)
+        return status, n.value, [(p.a, p.b, p.gamma, p.m) for p in plans[:max(0, min(n.value, capacity))]]
+
+    target = (0.3, -0.2, 0.5, 2, 1.5)
+    status, total, full = plan_all(target, 1000)
+    assert status == 0 and total == len(full) >= 3
+    status, count, part = plan_all(target, 2)
+    assert status == 6 and count == total and part == full[:2]
+    assert plan_all(target, 2, count=False)[0] == 2 and plan_all(target, -1)[0] == 2
+    assert plan_all((0.0, 0.0, 0.5, 1, 2.5), 4)[0] == 2 and plan_all((0.3, 0.2, 0.5, 1, 0.4), 4)[0] == 2
+    assert plan_all((2.0, 2.0, 0.0, 1, 5.0), 4)[:2] == (3, 0)
+
+
 def test_search_falls_back_to_certifying_every_root(built, tmp_path):
     """The search's fallback: when the shortest root fails its certificate, the search runs again certifying every
     root, so the plan is the shortest certified one. A test build (planner.c with ROLLPLAN_TEST_REJECT_BELOW = L,
@@ -397,7 +487,8 @@ def test_plan_demo_reproduces_paper_radius(built):
     ((0, 0, 0, 1, 2.5), 2), ((0, 1, 0, 1), 2), ((0, 1, "nan", 1, 2.5), 2),
     ((0, 2, 0, 1, 50), 2), ((0, 1, 0, 1, 5.000001), 2), ((0, 1, 0, 1001, 2.5), 2), ((0, 1, 0, 1, "inf"), 2),
     ((0, 1, 0, 1, 0.49), 2),        # below K_MIN = 1/2: the complete enumeration does not apply
-    ((0, 1, 1e7, 1, 2.5), 2), ((0, 1, 0, 1, 2.5, 0.5), 2),
+    ((0, 1, 1e7, 1, 2.5), 2), ((0, 1, 0, 1, 2.5, 0.5), 2), (("--all", 0, 1, 0, 1), 2), (("--all", 0, 0, 0, 1, 2.5), 2),
+    (("--all", 2, 2, 0, 1, 5), 3),
     ((30, 0, 0, 1, 2.5), 3),        # farther than any figure eight reaches in one step
     ((0, 1, 6.2, 2, 2.5, 0), 3),    # sin(psi/2) small: branch m = 0 needs h = 24 R
 ])
@@ -537,7 +628,43 @@ def test_k_max_is_checked_at_generation(tmp_path):
     for bad in (-1, 101, float("nan"), "5", True):
         with pytest.raises(InputError, match="k_max"):
             codegen.generate(tmp_path / "b", k_max=bad)
-    assert main(["codegen", "--out", str(tmp_path / "c"), "--k-max", "30"]) == 2
+    assert main(["codegen", "--out", str(tmp_path / "c"), "--k-max", "30", "--steps-per-leaf", "240"]) == 2
+
+
+@pytest.mark.slow
+def test_codegen_k_max_16_sizes_its_step_map_itself(tmp_path, capsys):
+    """`codegen --k-max 16` without --steps-per-leaf (auto): the smallest size whose step map is accurate to 1e-10 up
+    to k = 16 (400; 320 is refused for it), and its plan_demo plans a k = 16 target as the Python planner does and
+    lands on it when integrated by DOP853 on the printed equations."""
+    out = tmp_path / "k16"
+    assert main(["codegen", "--out", str(out), "--k-max", "16"]) == 0
+    assert "400 steps per leaf" in capsys.readouterr().out
+    assert main(["codegen", "--out", str(tmp_path / "small"), "--k-max", "16", "--steps-per-leaf", "320"]) == 2
+    assert "320 steps per leaf" in capsys.readouterr().err
+    run = subprocess.run(["make", "-C", str(out), "plan_demo"], check=False, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    for u, v, psi, n in ((0.5, -0.3, 1.0, 2), (0.0, 1.0, 0.0, 1)):
+        run = subprocess.run([str(out / "plan_demo"), *map(str, (u, v, psi, n, 16))], check=False,
+                             capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        c = _parse(run)
+        q = reference_plan((u, v, psi), n, 16.0)
+        assert q is not None and _same_plan(c, q), (c, q and (q.a, q.b, q.gamma, q.branch))
+        x = references.trace(c[0], c[1], 16.0, c[2], n)
+        assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) <= CERT_TOL
+
+
+def test_codegen_refuses_k_max_beyond_the_largest_automatic_size(tmp_path, capsys, monkeypatch):
+    """With the automatic sizes capped at 240 steps per leaf, k_max = 10 (which needs 320) is refused in one line
+    naming the cap, exit 2, before anything is written; a bad --steps-per-leaf names auto."""
+    monkeypatch.setattr(codegen.c_library, "AUTO_STEPS_PER_LEAF", (240,))
+    assert main(["codegen", "--out", str(tmp_path / "c"), "--k-max", "10"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "k_max = 10 is not allowed" in err and "240 steps per leaf" in err
+    assert not (tmp_path / "c").exists()
+    with pytest.raises(SystemExit, match="2"):
+        main(["codegen", "--out", str(tmp_path / "c"), "--steps-per-leaf", "many"])
+    assert "auto" in capsys.readouterr().err
 
 
 def _fuzz_inputs(rng, count, many_steps):

@@ -235,3 +235,81 @@ def test_the_test_run_has_its_own_cache_directory():
     run = subprocess.run([sys.executable, "-c", "from rollplan.core.compiled import cache_dir; print(cache_dir())"],
                          capture_output=True, text=True, check=True, timeout=120)
     assert run.stdout.strip() == str(folder)
+
+
+# ----------------------------------------------------------------------------- a cache other users can write
+
+
+def _stest(src):
+    import ctypes
+
+    write = [sys.executable, "-c", "open('f.c', 'w').write('int f(int x) { return 3 * x + 1; }')"]
+    return cmod.shared_library("stest", "d", [src], write, ["f.c"], lambda p: ctypes.CDLL(p).f, "python")
+
+
+@pytest.mark.parametrize("mode", [0o777, 0o757, 0o1777])
+def test_a_cache_directory_others_can_write_is_refused_by_the_command(tmp_path, mode):
+    """With ROLLPLAN_CACHE_DIR on a folder others may write, another user could plant a library under its
+    predictable name with a matching digest, and the next plan loaded and ran it: one line, exit 2."""
+    folder = tmp_path / "shared"
+    folder.mkdir()
+    folder.chmod(mode)
+    r = subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", "--to", "0", "1", "--k", "2.5"],
+                       capture_output=True, text=True, timeout=300, check=False,
+                       env={**os.environ, "ROLLPLAN_CACHE_DIR": str(folder)})
+    assert r.returncode == 2, (r.returncode, r.stderr[-2000:])
+    assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+    assert str(folder) in r.stderr and "writable by group or others" in r.stderr
+    assert not list(folder.iterdir())   # nothing loaded, built or written there
+
+
+def test_the_cache_directory_is_created_private(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROLLPLAN_CACHE_DIR", str(tmp_path / "new" / "cache"))
+    monkeypatch.delenv("ROLLPLAN_NO_COMPILE", raising=False)
+    src = tmp_path / "src.txt"
+    src.write_text("v1")
+    f = _stest(src)
+    assert (tmp_path / "new" / "cache").stat().st_mode & 0o777 == 0o700
+    if f is not None:   # with a compiler: the library and its digest are writable by this user only
+        for p in (tmp_path / "new" / "cache").iterdir():
+            assert p.stat().st_mode & 0o022 == 0, p
+
+
+@pytest.mark.parametrize("damage", ["dir 0777", "dir 0757", "dir owner", "lib 0666", "lib 0646", "lib owner"])
+def test_a_library_or_directory_others_control_is_refused_by_the_api(cache, damage):
+    """A library another user owns or may write (or one in such a folder) is never loaded:
+    UnsafeCacheError (an InputError), whatever its digest says."""
+    from rollplan import InputError, UnsafeCacheError
+
+    src = cache / "src.txt"
+    src.write_text("v1")
+    assert _stest(src)(4) == 13
+    (lib,) = cache.glob("stest-*.so")
+    what, how = damage.split()
+    target = cache if what == "dir" else lib
+    if how == "owner":
+        if os.geteuid() != 0:
+            pytest.skip("changing a file's owner needs root")
+        os.chown(target, 12345, -1)
+    else:
+        target.chmod(int(how, 8))
+    with pytest.raises(UnsafeCacheError, match="refusing") as err:
+        _stest(src)
+    assert isinstance(err.value, InputError) and str(target) in str(err.value)
+    if what == "dir":
+        with pytest.raises(UnsafeCacheError):
+            cmod.compiled(_fn())
+
+
+def test_a_leaf_table_others_may_write_is_refused(tmp_path, monkeypatch):
+    """The planner's leaf tables live in the same cache directory and are refused on the same terms."""
+    from rollplan import UnsafeCacheError
+    from rollplan.planners.geometric.enumerate import rho_table
+
+    monkeypatch.setenv("ROLLPLAN_CACHE_DIR", str(tmp_path / "cache"))
+    first = rho_table.__wrapped__(3.3)   # built and stored (the cache of this process is bypassed)
+    (table,) = (tmp_path / "cache").glob("rho_table_*.npz")
+    assert rho_table.__wrapped__(3.3).eps == first.eps
+    table.chmod(0o666)
+    with pytest.raises(UnsafeCacheError, match="writable by group or others"):
+        rho_table.__wrapped__(3.3)

@@ -540,6 +540,81 @@ def test_compiled_search_chooses_the_plan_of_the_numpy_search():
     assert compiled >= 6
 
 
+def _all_plans(p):
+    return sorted(((q.branch, q.a, q.b, q.gamma) for q in (p, *p.alternatives)), key=lambda x: (x[0], x[1], x[2]))
+
+
+def test_compiled_search_lists_the_plans_of_the_numpy_search():
+    """all_solutions by the C search (every root of every branch, rollplan_plan_all through ctypes, polished and
+    certified in Python) and by the numpy search: the same plans, branch and (a, b, gamma), on random targets."""
+    from rollplan.planners.geometric import GeometricPhasePlanner
+
+    if not _compiled_search_built():
+        pytest.skip("no C compiler: the compiled search is not built")
+    fast, slow = GeometricPhasePlanner(), GeometricPhasePlanner(compiled_search=False)
+    rng = np.random.default_rng(8)
+    compiled = 0
+    for i in range(4):
+        k, n = float(rng.choice([0.5, 1.5, 2.5, 5.0])), int(rng.integers(1, 3))
+        target = (float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)), float(rng.uniform(-np.pi, np.pi)))
+        branch = int(rng.integers(-1, 2)) if i == 3 else None
+        got = []
+        for planner in (fast, slow):
+            try:
+                p = planner.solve(Problem(target, k=k, steps=n), all_solutions=True, branch=branch)
+                got.append((_all_plans(p), p.stats.details["search"], [q.a + q.b for q in (p, *p.alternatives)]))
+            except NoPlanError:
+                got.append(None)
+        assert (got[0] is None) == (got[1] is None), (target, n, k, branch)
+        if got[0] is not None:
+            assert len(got[0][0]) == len(got[1][0]), (target, n, k, branch)
+            for x, y in zip(got[0][0], got[1][0]):
+                assert x[0] == y[0] and np.allclose(x[1:], y[1:], rtol=0, atol=1e-9), (x, y)
+            assert got[0][2] == sorted(got[0][2]) and got[1][1] == "numpy"
+            compiled += got[0][1] == "compiled"
+    assert compiled >= 3
+
+
+def test_compiled_all_solutions_report_progress():
+    """all_solutions by the C search reports its polish and certificate root by root, ending at the count."""
+    from rollplan.planners.geometric import GeometricPhasePlanner
+    from rollplan.progress import reporting
+
+    if not _compiled_search_built():
+        pytest.skip("no C compiler: the compiled search is not built")
+    calls = []
+    with reporting(lambda label, done, total, **_: calls.append((label, done, total))):
+        p = GeometricPhasePlanner().solve(Problem((0.3, -0.2, 0.5), k=1.5, steps=2), all_solutions=True)
+    assert p.stats.details["search"] == "compiled"
+    mine = [c for c in calls if c[0].startswith("certify")]
+    assert mine[0][1] == 0 and mine[-1][1] == mine[-1][2] == p.stats.details["roots"] == len(mine) - 1
+
+
+def _cli_all(extra_env, *argv):
+    import os
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", *argv, "--all"], check=False,
+                         capture_output=True, text=True, env={**os.environ, **extra_env}, timeout=600)
+    assert run.returncode == 0, run.stderr
+    lines = run.stdout.split("all plans:")[1].splitlines()
+    return int(lines[0].split()[0]), [tuple(float(x) for x in line.split()[:4]) for line in lines[2:]]
+
+
+def test_cli_all_lists_the_same_plans_with_and_without_the_compiled_search():
+    """rollplan plan --all: the same count and plans (m, a, b, gamma as printed) with the compiled C search and
+    without it (ROLLPLAN_NO_COMPILE=1: the numpy search)."""
+    if not _compiled_search_built():
+        pytest.skip("no C compiler: the compiled search is not built")
+    argv = ("--to", "0.3", "-0.2", "--psi", "0.5", "--steps", "2", "--k", "1.5")
+    count, plans = _cli_all({}, *argv)
+    count_numpy, plans_numpy = _cli_all({"ROLLPLAN_NO_COMPILE": "1"}, *argv)
+    assert count == count_numpy == len(plans) == len(plans_numpy) >= 3
+    for x, y in zip(sorted(plans), sorted(plans_numpy)):
+        assert x[0] == y[0] and np.allclose(x[1:], y[1:], rtol=0, atol=2e-9), (x, y)
+
+
 def test_planner_works_without_a_compiler(monkeypatch):
     """With ROLLPLAN_NO_COMPILE the compiled search is not built and the numpy search gives the same plan."""
     from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search

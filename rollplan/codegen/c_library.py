@@ -18,6 +18,7 @@ import os
 import re
 import tempfile
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
@@ -46,6 +47,7 @@ from ..result import CERTIFICATE_TOLERANCE
 
 __all__ = [
     "DEFAULT_STEPS_PER_LEAF",
+    "AUTO_STEPS_PER_LEAF",
     "DEFAULT_PREFIX",
     "MAX_STEPS_PER_LEAF",
     "MAX_PREFIX_CHARS",
@@ -60,6 +62,7 @@ __all__ = [
     "FLOAT_CERT_TOL",
     "generated_functions",
     "generate",
+    "auto_steps_per_leaf",
     "reference_plan",
 ]
 
@@ -68,6 +71,10 @@ log = logging.getLogger(__name__)
 #: Node intervals per leaf of the generated step map (10 graded panels x degree 24): accurate to STEP_MAP_TOL
 #: on the whole admissible box for k <= DEFAULT_K_MAX (results/codegen_accuracy.json).
 DEFAULT_STEPS_PER_LEAF = 240
+#: Node intervals per leaf that ``steps_per_leaf="auto"`` tries, in this order: the first whose step map is accurate to
+#: STEP_MAP_TOL up to k_max is taken. The last is the cap (MAX_STEPS_PER_LEAF), accurate up to K_MAX
+#: (240 serves k_max = 5, 320 k_max = 10, 400 k_max = 16, 480 k_max = 20, 640 k_max = 30, 2000 k_max = 100).
+AUTO_STEPS_PER_LEAF = (240, 320, 400, 480, 560, 640, 800, 1000, 1200, 1600, 2000)
 #: Default largest inertia ratio k the generated planner accepts (``generate(k_max=...)``): the step map at
 #: the default steps per leaf is checked to :data:`STEP_MAP_TOL` up to it when the code is generated.
 DEFAULT_K_MAX = 5.0
@@ -340,28 +347,60 @@ def rk8_trace(ab, k: float, gamma: float = 0.0, delta: float = 0.1, x0=(0.0, 0.0
     return x
 
 
+def _valid_k_max(k_max) -> float:
+    if isinstance(k_max, bool) or not isinstance(k_max, (int, float, np.integer, np.floating)) \
+            or not K_MONOTONE <= float(k_max) <= K_MAX:
+        raise InputError(f"k_max = {k_max!r} is not allowed: it must be a number in [{K_MONOTONE:g}, {K_MAX:g}]")
+    return float(k_max)
+
+
+#: The corners of the admissible box where the step map is checked (its error peaks near A_MAX).
+_CHECK_LEAVES = ((A_MAX, A_MAX), (A_MAX, 0.05), (0.05, A_MAX))
+
+
+@lru_cache(maxsize=32)
+def _fine_trace(ab: tuple, k: float) -> tuple:
+    return tuple(rk8_trace(ab, k))
+
+
+def _step_map_error(k_max: float, step: ca.Function) -> float:
+    """Largest error of the step map ``step`` against fine RK8 traces (:func:`rk8_trace`) at the corners of the
+    admissible box, ``a, b in {0.05, A_MAX}``, for ``k in {0, k_max / 2, k_max}``."""
+    worst = 0.0
+    for k in (0.0, 0.5 * k_max, k_max):
+        for ab in _CHECK_LEAVES:
+            shift, eta, _ = (np.array(v).ravel() for v in step(ab, k))
+            worst = max(worst, float(np.max(np.abs(np.concatenate([shift, eta]) - np.array(_fine_trace(ab, k))))))
+    return worst
+
+
 def _check_k_max(k_max, steps_per_leaf: int, step: ca.Function) -> float:
     """``k_max`` as a float if the step map is accurate to STEP_MAP_TOL up to it; InputError otherwise.
 
     The step map's error grows with k and with the leaf radii (the turn rate psi' peaks as the leaf
-    nears the singular equator); it is measured against fine RK8 traces (:func:`rk8_trace`) at the
-    corners of the admissible box, ``a, b in {0.05, A_MAX}``, for ``k in {0, k_max / 2, k_max}``.
+    nears the singular equator); it is measured by :func:`_step_map_error`.
     """
-    if isinstance(k_max, bool) or not isinstance(k_max, (int, float, np.integer, np.floating)) \
-            or not K_MONOTONE <= float(k_max) <= K_MAX:
-        raise InputError(f"k_max = {k_max!r} is not allowed: it must be a number in [{K_MONOTONE:g}, {K_MAX:g}]")
-    k_max = float(k_max)
-    worst = 0.0
-    for k in (0.0, 0.5 * k_max, k_max):
-        for ab in ((A_MAX, A_MAX), (A_MAX, 0.05), (0.05, A_MAX)):
-            ref = rk8_trace(ab, k)
-            shift, eta, _ = (np.array(v).ravel() for v in step(ab, k))
-            worst = max(worst, float(np.max(np.abs(np.concatenate([shift, eta]) - ref))))
+    k_max = _valid_k_max(k_max)
+    worst = _step_map_error(k_max, step)
     if not worst <= STEP_MAP_TOL:
         raise InputError(f"k_max = {k_max:g} is not allowed with {steps_per_leaf} steps per leaf: the step map "
                          f"is off by {worst:.1e} (more than {STEP_MAP_TOL:g}) near A_MAX; give more steps per leaf "
-                         f"or a smaller k_max")
+                         f"(auto: the smallest that serves it) or a smaller k_max")
     return k_max
+
+
+def auto_steps_per_leaf(k_max) -> int:
+    """The smallest of :data:`AUTO_STEPS_PER_LEAF` whose step map is accurate to STEP_MAP_TOL up to ``k_max`` (the
+    check of :func:`_check_k_max`); InputError naming the cap when none is."""
+    k_max = _valid_k_max(k_max)
+    worst = math.inf
+    for steps_per_leaf in AUTO_STEPS_PER_LEAF:
+        worst = _step_map_error(k_max, step_functions(steps_per_leaf)[0])
+        if worst <= STEP_MAP_TOL:
+            return steps_per_leaf
+    raise InputError(f"k_max = {k_max:g} is not allowed: even the largest automatic size, {AUTO_STEPS_PER_LEAF[-1]} "
+                     f"steps per leaf, leaves the step map off by {worst:.1e} (more than {STEP_MAP_TOL:g}) near "
+                     f"A_MAX; give a smaller k_max")
 
 
 def reference_plan(target, steps: int, k: float, near=None, branch: int | None = None):
@@ -503,8 +542,9 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     ----------
     out : path
         Output folder (created if missing; its parent must exist).
-    steps_per_leaf : int
-        Node intervals per leaf of the step map (a multiple of the 10 panels).
+    steps_per_leaf : int or "auto"
+        Node intervals per leaf of the step map (a multiple of the 10 panels); ``"auto"``: the smallest of
+        :data:`AUTO_STEPS_PER_LEAF` accurate up to ``k_max`` (:func:`auto_steps_per_leaf`).
     prefix : str
         Prefix of the C symbols and file names.
     k_max : float
@@ -520,6 +560,8 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     """
     prefix = _check_prefix(prefix)
     real = _check_real(real)
+    if isinstance(steps_per_leaf, str) and steps_per_leaf == "auto":
+        steps_per_leaf = auto_steps_per_leaf(k_max)                     # refused before anything is written
     _degree(steps_per_leaf, len(figure_eight().pieces[0].breaks) - 1)   # refused before anything is written
     funcs = generated_functions(steps_per_leaf, prefix)
     step = funcs[3]

@@ -18,6 +18,12 @@ Key
     source files that define it (:func:`compiled_lazy`). A change of any of them gives another
     file name, so a stale library is never loaded; a library that does not load, or whose
     signature differs from the function's, is rebuilt.
+Ownership
+    The cache directory is created private (mode 0700). Compiled code is loaded only from a directory and
+    a file that the current user owns and that group and others cannot write: in a shared folder (e.g.
+    ``ROLLPLAN_CACHE_DIR`` on a world-writable ``/tmp``) another user could plant a library under the
+    predictable name, with its digest beside it. Otherwise :class:`~rollplan.errors.UnsafeCacheError` is
+    raised (nothing is loaded, built or written there).
 Integrity
     Beside every library a ``.sha256`` file holds the digest of its bytes, written before the library
     is moved into place; a library is loaded only if its bytes match it. A damaged file (truncated or
@@ -57,10 +63,12 @@ from pathlib import Path
 
 import casadi as ca
 
+from ..errors import UnsafeCacheError
 from ..progress import report
 from ..version import __version__
 
-__all__ = ["DEFAULT_FLAGS", "BUILD_TIMEOUT", "cache_dir", "compiler_command", "compiled", "compiled_lazy",
+__all__ = ["DEFAULT_FLAGS", "BUILD_TIMEOUT", "cache_dir", "private_cache_dir", "check_private", "compiler_command",
+           "compiled", "compiled_lazy",
            "shared_library", "clear_cache", "last_build"]
 
 log = logging.getLogger(__name__)
@@ -79,6 +87,32 @@ def cache_dir() -> Path:
     if os.environ.get("ROLLPLAN_CACHE_DIR"):
         return Path(os.environ["ROLLPLAN_CACHE_DIR"])
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rollplan"
+
+
+def private_cache_dir() -> Path:
+    """The cache directory, created with mode 0700 if missing (OSError when it cannot be), checked with
+    :func:`check_private`."""
+    root = cache_dir()
+    root.mkdir(mode=0o700, parents=True, exist_ok=True)
+    check_private(root)
+    return root
+
+
+def check_private(path) -> None:
+    """Raise :class:`~rollplan.errors.UnsafeCacheError` unless ``path`` (the cache directory or a file in it)
+    is owned by the current user and not writable by group or others (module docstring: Ownership)."""
+    if os.name == "nt":
+        return
+    st = os.stat(path)
+    what = "the cache directory" if Path(path).is_dir() else "the cached file"
+    if st.st_uid != os.geteuid():
+        why, fix = f"is owned by uid {st.st_uid}, not by this user (uid {os.geteuid()})", ""
+    elif st.st_mode & 0o022:
+        why, fix = f"is writable by group or others (mode {st.st_mode & 0o7777:04o})", f"chmod go-w {path}, or "
+    else:
+        return
+    raise UnsafeCacheError(f"{what} {path} {why}: refusing to use it; {fix}set "
+                           "ROLLPLAN_CACHE_DIR to a folder of your own (it is created with mode 0700)")
 
 
 def compiler_command() -> str | None:
@@ -237,6 +271,14 @@ def _intact(lib: Path) -> bool:
         return False
 
 
+def _check_cached(lib: Path) -> None:
+    """Create the cache directory if missing (OSError when it cannot be) and refuse it or ``lib`` (if present)
+    unless private (:func:`check_private`)."""
+    private_cache_dir()
+    if os.path.exists(lib):
+        check_private(lib)
+
+
 def _seal(out: Path, lib: Path) -> None:
     """Write the digest of the built ``out`` beside ``lib``, then move ``out`` to ``lib`` (both atomic: a reader
     sees no file or a complete one; a digest and a library of two concurrent builders that differ make the
@@ -244,6 +286,8 @@ def _seal(out: Path, lib: Path) -> None:
     digest = _digest_path(lib)
     tmp = out.with_name(out.name + ".sha256")
     tmp.write_text(hashlib.sha256(out.read_bytes()).hexdigest() + "\n")
+    for path in (tmp, out):   # whatever the umask: writable by this user only (check_private)
+        os.chmod(path, os.stat(path).st_mode & ~0o022)
     os.replace(tmp, digest)
     os.replace(out, lib)
 
@@ -253,6 +297,10 @@ def _get(name: str, key: str, build, cc: str, flags, timeout: float, jacobian: b
     root = cache_dir()
     lib = root / f"{name}-{key}{'.dll' if os.name == 'nt' else '.so'}"
     t0 = time.perf_counter()
+    try:
+        _check_cached(lib)
+    except OSError as exc:
+        return _fallback(build(), f"cannot write the cache directory {root} ({exc.strerror})")
     if _intact(lib):
         ext = _load(name, lib, None)
         if ext is not None:
@@ -263,7 +311,6 @@ def _get(name: str, key: str, build, cc: str, flags, timeout: float, jacobian: b
     if fn.name() != name:
         raise ValueError(f"the built function is named {fn.name()!r}, expected {name!r}")
     try:
-        root.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".build-{name}-", dir=root))
     except OSError as exc:
         return _fallback(fn, f"cannot write the cache directory {root} ({exc.strerror})")
@@ -330,6 +377,10 @@ def shared_library(name: str, descriptor: str, sources, prepare, c_files, load, 
     root = cache_dir()
     lib = root / f"{name}-{key}{'.dll' if os.name == 'nt' else '.so'}"
     t0 = time.perf_counter()
+    try:
+        _check_cached(lib)
+    except OSError as exc:
+        return _fallback(None, f"cannot write the cache directory {root} ({exc.strerror})", instead)
     if _intact(lib):
         try:
             out = load(str(lib))
@@ -338,7 +389,6 @@ def shared_library(name: str, descriptor: str, sources, prepare, c_files, load, 
         except OSError as exc:
             log.info("rollplan: rebuilding the unusable %s (%s)", lib, exc)
     try:
-        root.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(prefix=f".build-{name}-", dir=root))
     except OSError as exc:
         return _fallback(None, f"cannot write the cache directory {root} ({exc.strerror})", instead)

@@ -4,13 +4,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.plane import wrap
+from ..core.plane import TWO_PI, wrap
 from .colors import MARK
 
 __all__ = ["plot_atlas"]
 
 
-#: Contour labels are kept only where a and b are below this fraction of the largest radius: near
+#: Colour of the region reached between the grid points in the (turn, shift) panel.
+_REACHED = "0.82"
+#: Largest turn [rad] across one grid cell that the grid resolves; the images of wider cells are drawn in
+#: :data:`_COARSE`.
+_CELL_TURN = 0.5
+_COARSE = "0.93"
+
+#: Contour lines and their labels are drawn only where a and b are below this fraction of the largest radius: near
 #: a, b = A_MAX the contours crowd and their labels would cover one another.
 _LABEL_REGION = 0.82
 
@@ -34,16 +41,39 @@ def _sparse_labels(ax, cs, a_max):
         ax.clabel(cs, fontsize=7, fmt="%.3g", inline=True, inline_spacing=2, manual=positions)
 
 
+def _cell_images(turn, shift, resolved: bool) -> np.ndarray:
+    """The quadrilaterals (turn, shift) of the corners of the grid cells whose turn spans at most
+    :data:`_CELL_TURN` (``resolved``) or more (turn continuous within the cell, placed with its first corner
+    wrapped to (-pi, pi], and copied 2 pi apart wherever it crosses a side): the region the grid reaches,
+    without the gaps between scattered grid points."""
+    corners = np.stack([turn[:-1, :-1], turn[:-1, 1:], turn[1:, 1:], turn[1:, :-1]], axis=-1).reshape(-1, 4)
+    heights = np.stack([shift[:-1, :-1], shift[:-1, 1:], shift[1:, 1:], shift[1:, :-1]], axis=-1).reshape(-1, 4)
+    keep = (np.ptp(corners, axis=1) <= _CELL_TURN) == resolved
+    corners, heights = corners[keep], heights[keep]
+    corners = corners + (wrap(corners[:, 0]) - corners[:, 0])[:, None]
+    if not corners.size:
+        return np.zeros((0, 4, 2))
+    lo, hi = corners.min(axis=1), corners.max(axis=1)
+    out = []
+    for m in range(int(np.floor((-np.pi - hi.max()) / TWO_PI)), int(np.ceil((np.pi - lo.min()) / TWO_PI)) + 1):
+        seen = (hi + m * TWO_PI > -np.pi) & (lo + m * TWO_PI < np.pi)
+        out.append(np.stack([corners[seen] + m * TWO_PI, heights[seen]], axis=-1))
+    return np.concatenate(out)
+
+
 def plot_atlas(at):
     """Figure of an :class:`~rollplan.studies.atlas.Atlas` (computes nothing).
 
     h and eta over (a, b) with labelled contours, the fold ``det = 0`` (black) and
     the diagonal ``a = b`` (where eta = 0), and the (turn, shift) pairs n steps
-    reach (turn wrapped to (-pi, pi]).
+    reach (turn wrapped to (-pi, pi]): the image of every grid cell, so that the spacing of the grid points
+    leaves no holes.
     """
+    from matplotlib.collections import PolyCollection
     from matplotlib.colors import LogNorm, SymLogNorm
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
     fig = Figure(figsize=(17, 5.6), layout="constrained")
     axes = fig.subplots(1, 3)
@@ -59,13 +89,14 @@ def plot_atlas(at):
             (axes[1], at.eta, "holonomy of one step eta(a, b) [rad]", "coolwarm", eta_levels,
              SymLogNorm(0.05, vmin=-big, vmax=big), eta_lines, "eta [rad] (symmetric log scale)")):
         cf = ax.contourf(at.b, at.a, z, cmap=cmap, levels=levels, norm=norm)
-        if lines.size:
-            cs = ax.contour(at.b, at.a, z, colors="w", linewidths=0.6, levels=lines)
+        if lines.size:   # not in the crowded band near a or b = A_MAX, where the colours alone show z
+            crowded = np.maximum.outer(at.a, at.b) > _LABEL_REGION * a_max
+            cs = ax.contour(at.b, at.a, np.where(crowded, np.nan, z), colors="w", linewidths=0.6, levels=lines)
             _sparse_labels(ax, cs, a_max)
         if fold:
             ax.contour(at.b, at.a, at.det, levels=[0.0], colors=MARK, linewidths=1.8)
         ax.plot([at.a[0], a_max], [at.a[0], a_max], ls=":", color="0.3", lw=1.0)
-        handles = [Line2D([], [], color="w", lw=0.6, label="contours (labelled below "
+        handles = [Line2D([], [], color="w", lw=0.6, label="contours (where a, b < "
                           f"{_LABEL_REGION * a_max:.2g} R)"),
                    Line2D([], [], color="0.3", ls=":", lw=1.0, label="a = b (eta = 0)")]
         if fold:
@@ -80,15 +111,26 @@ def plot_atlas(at):
         if norm is not None:
             bar.set_ticks([v for v in (-20, -5, -1, -0.2, 0, 0.2, 1, 5, 20) if abs(v) <= big])
     ax = axes[2]
+    for resolved, color in ((False, _COARSE), (True, _REACHED)):
+        ax.add_collection(PolyCollection(_cell_images(at.turn_total, at.shift_total, resolved), facecolors=color,
+                                         edgecolors=color, linewidths=0.3, zorder=1 + resolved,
+                                         label="_cells" if resolved else "_coarse cells"))
     turn = wrap(at.turn_total.ravel())
     shift = at.shift_total.ravel()
     hist, xe, ye = np.histogram2d(turn, shift, bins=(72, 60), range=((-np.pi, np.pi), (0.0, float(shift.max()))))
     hist = np.where(hist > 0, hist, np.nan)
-    mesh = ax.pcolormesh(xe, ye, hist.T, cmap="cividis", norm=LogNorm())
+    mesh = ax.pcolormesh(xe, ye, hist.T, cmap="cividis", norm=LogNorm(), zorder=3)
     fig.colorbar(mesh, ax=ax, shrink=0.85, label="grid points (a, b) landing in the cell")
+    ax.set_xlim(-np.pi, np.pi)
+    ax.set_ylim(0.0, float(shift.max()))
+    ax.legend(handles=[Patch(facecolor=_REACHED, edgecolor="0.5", label="reached between the grid points\n"
+                             "(the images of the grid cells)"),
+                       Patch(facecolor=_COARSE, edgecolor="0.5", label="between grid points of cells the grid\n"
+                             f"does not resolve (turn > {_CELL_TURN:g} rad across)")],
+              loc="upper right", fontsize=7, framealpha=0.9)
     ax.set_xlabel(f"turn psi reached by {at.steps} step(s), n eta wrapped to (-pi, pi] [rad]")
     ax.set_ylabel(f"shift reached by {at.steps} step(s) [R]")
-    ax.set_title("reachable (turn, shift) pairs (white: none on the grid)")
+    ax.set_title("reachable (turn, shift) pairs (white: not reached)")
     fig.suptitle(f"Reachability atlas of the figure eight, k = {at.k:.6g}, n = {at.steps}, "
                  f"{at.a.size} x {at.b.size} grid")
     return fig

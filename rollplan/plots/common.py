@@ -12,7 +12,10 @@ from matplotlib.lines import Line2D
 from .colors import LEAF, LEAF_LABELS, MARK
 
 __all__ = ["LEAF_COLORS", "segments", "by_leaf", "leaf_handles", "sphere_axes", "plane_axes", "draw_sphere_path",
-           "draw_bottom_view", "bottom_view_axes", "draw_plane_path", "draw_psi"]
+           "draw_bottom_view", "bottom_view_axes", "draw_plane_path", "draw_psi", "SPIKE_LABEL", "clip_spikes"]
+
+#: Label (hidden from legends) of the marks of values drawn outside a robust range (:func:`clip_spikes`).
+SPIKE_LABEL = "_clipped"
 
 #: Colours of the first and second half-step (see :mod:`.colors`).
 LEAF_COLORS = LEAF
@@ -176,3 +179,29 @@ def draw_psi(ax, traj, target_psi=None, target_label="target psi"):
     ax.grid(True, alpha=0.3)
     ax.legend(handles=handles, loc="best", fontsize=8)
     ax.set_title("psi along the path")
+
+
+def clip_spikes(ax, t, values, colors, quantile: float = 0.05, margin: float = 0.5, ratio: float = 1.5) -> bool:
+    """Limit the y-range of ``ax`` to a robust range of ``values`` (columns against ``t``, drawn in ``colors``)
+    when a few samples reach far beyond it (e.g. the impulsive start and stop of a rest-to-rest optimum): the
+    range between the ``quantile`` and ``1 - quantile`` quantiles widened by ``margin`` times its width on
+    each side, used when the data reach ``ratio`` times farther; every sample outside is marked by a triangle
+    on the edge and the extremes are written in the panel. Returns whether the range was limited."""
+    v = np.asarray(values, float)
+    lo, hi = np.quantile(v, [quantile, 1.0 - quantile])
+    width = max(hi - lo, 1e-300)
+    low, high = lo - margin * width, hi + margin * width
+    centre = 0.5 * (low + high)
+    if max(v.max() - centre, centre - v.min()) <= ratio * 0.5 * (high - low):
+        return False
+    ax.set_ylim(low, high)
+    t = np.asarray(t, float)
+    for col, color in zip(v.T, colors):
+        for outside, edge, marker in ((col > high, high, "^"), (col < low, low, "v")):
+            if outside.any():
+                ax.plot(t[outside], np.full(outside.sum(), edge), marker, color=color, markersize=5, linestyle="",
+                        clip_on=False, zorder=5, label=SPIKE_LABEL)
+    ax.text(0.01, 0.02, f"range clipped (triangles): values from {v.min():.4g} to {v.max():.4g}",
+            transform=ax.transAxes, fontsize=7, va="bottom",
+            bbox={"boxstyle": "round,pad=0.2", "facecolor": "white", "edgecolor": "0.7", "alpha": 0.9})
+    return True

@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from .colors import MARK, OMEGA, OMEGA_LABELS, PLANNER, PLANNER_LABELS, ROTOR, ROTOR_LABELS
-from .common import bottom_view_axes, draw_bottom_view, plane_axes
+from .common import bottom_view_axes, clip_spikes, draw_bottom_view, plane_axes
 
 __all__ = ["plot_comparison"]
 
@@ -67,6 +67,7 @@ def plot_comparison(c, unit: str = "R") -> Figure:
         _series(torque_ax, m.t, m.rotor_torques, ROTOR, [f"$\\tau_{i + 1}$, {lab}" for i, lab in
                                                          enumerate(ROTOR_LABELS)], f"motor torque [{torque_unit}]",
                 f"{who}: motor torques")
+        clip_spikes(torque_ax, m.t, m.rotor_torques, ROTOR)   # the impulsive start and stop of T, ramped over dt
     p, g = c.problem, c.problem.goal
     bound = p.radius * np.sin(min(c.contact_bound, np.pi / 2))   # the bound's circle as seen from below
     s = np.linspace(0.0, 2.0 * np.pi, 241)
@@ -80,7 +81,8 @@ def plot_comparison(c, unit: str = "R") -> Figure:
     plane_axes(ax_plane, g[:2], unit, "contact paths on the plane", handles=handles)
     _time_axes(ax_speed, c.gp.motion.t, "|omega| [rad/s]", "|omega| of both motions")
     tr = c.result.transcription
-    fig.suptitle(f"k = {p.k:.4g}, target (u_a, v_a, psi) = ({g.u_a:g}, {g.v_a:g}, {g.psi:g}), n = {p.steps}; "
+    fig.suptitle(f"k = {p.k:.4g}, target (u_a, v_a, psi) = ({g.u_a:g} {unit}, {g.v_a:g} {unit}, {g.psi:g} rad), "
+                 f"n = {p.steps}; "
                  f"rest to rest over T = {c.horizon:g} s, cost {c.cost}, N = {tr.intervals}, contact bound "
                  f"{c.contact_bound:.4g} rad")
     return fig

@@ -10,7 +10,7 @@ from matplotlib.lines import Line2D
 from .colors import LEAF, LEAF_LABELS, MARK, PIECE, PIECE_LABELS, REST, TURN, TURN_LABELS
 from .common import bottom_view_axes, plane_axes, segments
 
-__all__ = ["piece_runs", "draw_composed_plane", "plot_composed"]
+__all__ = ["piece_runs", "draw_waypoints", "draw_composed_plane", "plot_composed"]
 
 
 def piece_runs(plan, traj):
@@ -40,13 +40,31 @@ def _handles(runs):
     return out
 
 
+def draw_waypoints(ax, waypoints) -> list:
+    """Each waypoint of a route marked (white circle) and labelled with its number (from 1) and label; the
+    labels of waypoints at one point are joined. Returns the legend handle."""
+    places: dict = {}
+    for i, w in enumerate(waypoints, 1):
+        key = (round(float(w.state[0]), 9), round(float(w.state[1]), 9))
+        places.setdefault(key, []).append(f"{i} {w.label}".strip())
+    for (u, v), names in places.items():
+        ax.plot([u], [v], "o", markerfacecolor="white", markeredgecolor=MARK, markersize=7, zorder=4,
+                label="_waypoint")
+        ax.annotate(", ".join(names), (u, v), xytext=(6, 6), textcoords="offset points", fontsize=8, zorder=5,
+                    bbox={"boxstyle": "round,pad=0.2", "facecolor": "white", "edgecolor": "none", "alpha": 0.8})
+    return [Line2D([], [], color=MARK, marker="o", markerfacecolor="white", linestyle="",
+                   label="waypoint (number, label)")]
+
+
 def draw_composed_plane(ax, plan, traj, unit="R", title=None) -> None:
-    """The contact path of a composed plan or route on the plane, by piece, with start, goal and a legend."""
+    """The contact path of a composed plan or route on the plane, by piece, with start, goal, the waypoints of
+    a route (:func:`draw_waypoints`) and a legend."""
     runs = piece_runs(plan, traj)
     for s, e, color, _ in runs:
         ax.plot(traj.u_a[s:e + 1], traj.v_a[s:e + 1], color=color, linewidth=1.4)
+    marks = draw_waypoints(ax, plan.waypoints) if getattr(plan, "waypoints", None) else []
     plane_axes(ax, (plan.goal.u_a, plan.goal.v_a), unit,
-               title or f"contact path on the plane ({plan.path_length:.6g} {unit})", handles=_handles(runs),
+               title or f"contact path on the plane ({plan.path_length:.6g} {unit})", handles=_handles(runs) + marks,
                start=(traj.u_a[0], traj.v_a[0]))
 
 

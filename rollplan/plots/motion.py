@@ -95,17 +95,17 @@ def plot_simulation(time, simulated, rates, goal, planned=None, robot=None, titl
     fig = Figure(figsize=(12, 8), layout="constrained")
     axes = fig.subplots(2, 2)
     ax = axes[0, 0]
-    handles = []
+    # the simulated curve first, the planned one dashed on top of it (where they agree both stay visible)
+    ax.plot(sim[:, 0], sim[:, 1], color=SIMULATED, linewidth=1.6, zorder=2, label="simulated")
+    handles = [Line2D([], [], color=SIMULATED, linewidth=1.6, label="simulated")]
     if planned is not None:
-        ax.plot(planned[:, 0], planned[:, 1], color=PLANNED, linestyle="--", linewidth=1.4)
-        handles.append(Line2D([], [], color=PLANNED, linestyle="--", label="planned"))
-    ax.plot(sim[:, 0], sim[:, 1], color=SIMULATED, linewidth=1.0)
-    handles.append(Line2D([], [], color=SIMULATED, label="simulated"))
+        ax.plot(planned[:, 0], planned[:, 1], color=PLANNED, linestyle="--", linewidth=1.2, zorder=3, label="planned")
+        handles.append(Line2D([], [], color=PLANNED, linestyle="--", label="planned (on top)"))
     plane_axes(ax, goal[:2], "m", "contact path on the plane", handles=handles)
     ax = axes[0, 1]
+    ax.plot(time, sim[:, 2], color=SIMULATED, linewidth=1.6, zorder=2, label="simulated")
     if planned is not None:
-        ax.plot(time, planned[:, 2], color=PLANNED, linestyle="--", linewidth=1.4, label="planned")
-    ax.plot(time, sim[:, 2], color=SIMULATED, linewidth=1.0, label="simulated")
+        ax.plot(time, planned[:, 2], color=PLANNED, linestyle="--", linewidth=1.2, zorder=3, label="planned (on top)")
     ax.set_xlabel("time t [s]")
     ax.set_ylabel("contact angle psi [rad]")
     ax.set_title("psi in time")

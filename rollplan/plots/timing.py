@@ -45,8 +45,9 @@ def draw_rates_torques(ax_rates, ax_torques, motion, legend=True):
             ax.legend(loc="upper right", fontsize=7)
 
 
-def draw_phase_plane(ax, motions, velocity_limit=None, joints=(), reference=None):
-    """The phase plane (s, s'): each motion's profile, the maximum velocity curve and the joints.
+def draw_phase_plane(ax, motions, velocity_limit=None, joints=(), reference=None, radius=1.0, unit="R"):
+    """The phase plane (s, s'): each motion's profile, the maximum velocity curve and the joints, in ``unit``
+    (the arguments are in R: every arc length is drawn times ``radius``, the radius in ``unit``).
 
     Parameters
     ----------
@@ -56,26 +57,29 @@ def draw_phase_plane(ax, motions, velocity_limit=None, joints=(), reference=None
     joints : sequence of float
         s at the joints between pieces (half-steps, rolls) (dotted verticals) [R].
     reference : (label, s, s'), optional
-        Another profile to draw dashed (e.g. an independent computation).
+        Another profile to draw dashed (e.g. an independent computation) [R, R/s].
+    radius, unit : float, str
+        The radius in the unit of the figure (default: R itself).
     """
     tops = []
     if velocity_limit is not None:
         s, top = velocity_limit
-        top = np.where(np.isfinite(top), top, np.nan)
-        ax.plot(s, top, color=LIMIT, linewidth=1.2, label="maximum velocity curve (limits)")
+        top = np.where(np.isfinite(top), top, np.nan) * radius
+        ax.plot(np.asarray(s) * radius, top, color=LIMIT, linewidth=1.2, label="maximum velocity curve (limits)")
         if np.any(np.isfinite(top)):
             tops.append(np.nanpercentile(top, 50))
     for m in motions:
-        ax.plot(m.s, m.s_dot, linewidth=1.1, label=m.timing, color=LAW.get(m.timing))
-        tops.append(float(m.s_dot.max()))
+        ax.plot(m.s * radius, m.s_dot * radius, linewidth=1.1, label=m.timing, color=LAW.get(m.timing))
+        tops.append(float(m.s_dot.max()) * radius)
     if reference is not None:
         label, s, sd = reference
-        ax.plot(s, sd, color=LIMIT, linestyle=(0, (3, 3)), linewidth=0.9, label=label, zorder=5)  # on top
+        ax.plot(np.asarray(s) * radius, np.asarray(sd) * radius, color=LIMIT, linestyle=(0, (3, 3)), linewidth=0.9,
+                label=label, zorder=5)  # on top
     for sj in joints:
-        ax.axvline(sj, color="0.7", linestyle=":", linewidth=0.8)
+        ax.axvline(sj * radius, color="0.7", linestyle=":", linewidth=0.8)
     ax.set_ylim(0, 1.15 * max(tops) if max(tops) > 0 else 1.0)
-    ax.set_xlabel("contact arc length s [R]   (dotted: joints between pieces)")
-    ax.set_ylabel("s' [R/s]")
+    ax.set_xlabel(f"contact arc length s [{unit}]   (dotted: joints between pieces)")
+    ax.set_ylabel(f"s' [{unit}/s]")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="lower center", fontsize=7, ncol=3, framealpha=0.95)
 
@@ -103,10 +107,10 @@ def plot_timing(motions, velocity_limit=None, title: str = "", reference=None) -
         ax_t = fig.add_subplot(grid[1, col], sharex=ax_r)
         draw_rates_torques(ax_r, ax_t, m, legend=col == 0)
     path = motions[0].path   # None for the empty motion
-    draw_phase_plane(fig.add_subplot(grid[2, :]), motions, velocity_limit, () if path is None else path.joints,
-                     reference)
     m = motions[0]
-    r = m.robot
+    r = m.robot   # a robot's lengths are in metres
+    draw_phase_plane(fig.add_subplot(grid[2, :]), motions, velocity_limit, () if path is None else path.joints,
+                     reference, r.radius, "m")
     fig.suptitle(title or (f"R = {r.radius:.6g} m, k = {r.k:.6g}, {m.limits.describe()}; "
                            f"{int(m.segment.max()) + 1} pieces"), fontsize=10)
     return fig

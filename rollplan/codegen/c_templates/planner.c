@@ -1020,6 +1020,12 @@ typedef struct {
     long turns, roots;
     casadi_real rej[5];                 /* a, b, gamma, residual, bound of the best rejected root */
     @PREFIX@_plan_t *plan;              /* filled in by an accepted root only */
+    /* plan_all: every accepted root goes into list (capacity entries, sorted by a + b, the shortest kept);
+     * count counts them all; (last_m, last_a, last_b) is the last polished root, for duplicates */
+    int all, capacity, count;
+    @PREFIX@_plan_t *list;
+    long last_m;
+    casadi_real last_a, last_b;
 } search_t;
 
 /* The certificate as the search applies it (@PREFIX@_certify). A test build may define
@@ -1034,6 +1040,30 @@ static int search_certify(casadi_real a, casadi_real b, casadi_real gamma, int s
     return status;
 }
 
+/* plan_all: the plan (a, b, gamma, ...) of branch br into S->list, sorted by a + b (after the plans of equal length
+ * found before it); when the list is full, the longest plan drops out. Counts it in S->count. */
+static void keep(search_t *S, const branch_t *br, casadi_real a, casadi_real b, casadi_real gamma, casadi_real eta,
+                 casadi_real h, casadi_real predicted, casadi_real residual, casadi_real bound) {
+    @PREFIX@_plan_t *p;
+    int pos = S->count < S->capacity ? S->count : S->capacity, j;
+    S->count++;
+    while (pos > 0 && S->list[pos - 1].a + S->list[pos - 1].b > a + b) --pos;
+    if (pos >= S->capacity) return;
+    for (j = (S->count <= S->capacity ? S->count : S->capacity) - 1; j > pos; --j) S->list[j] = S->list[j - 1];
+    p = &S->list[pos];
+    p->a = a;
+    p->b = b;
+    p->gamma = gamma;
+    p->eta = eta;
+    p->h = h;
+    p->m = br->m - S->turns;
+    p->residual = residual;
+    p->bound = bound;
+    p->predicted = predicted;
+    p->branches = 0;
+    p->roots = 0;
+}
+
 /* A root x of branch br (from the table): polish, and accept it as the best plan if a + b < best and
  * (with the certificate) it certifies. Returns 1 if accepted, -1 if a + b >= best (the branch is done), 0 if
  * rejected by the certificate or if the leaf map misses the target there by more than NOT_A_ROOT (then it is no root
@@ -1045,6 +1075,12 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
     branch_values(x, br, S->k, 0, &g, &dg, &a, &b);   /* a and b (which do not depend on the table) */
     if (!(a + b < S->best)) return -1;
     if (!(a > 0.0 && b > 0.0)) return 0;
+    if (S->all) {   /* the same root twice (a close pair merged by the polish): once (enumerate.roots) */
+        if (br->m == S->last_m && fabs(a - S->last_a) <= 1e-12 && fabs(b - S->last_b) <= 1e-12) return 0;
+        S->last_m = br->m;
+        S->last_a = a;
+        S->last_b = b;
+    }
     gamma = rotation(S->u, S->v, S->psi_w, S->steps, a, b, S->k, &eta, &h, &predicted);
     if (!(predicted <= NOT_A_ROOT)) return 0;   /* no root of the accurate map: a tangency of the table only */
     S->roots++;
@@ -1059,6 +1095,10 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
             S->rej[4] = bound;
         }
         S->rejected++;
+        return 0;
+    }
+    if (S->all) {
+        keep(S, br, a, b, gamma, eta, h, predicted, residual, bound);
         return 0;
     }
     S->best = a + b;
@@ -1322,6 +1362,7 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
     S.steps = steps;
     S.certify = !options || options->certify;
     S.plan = plan;
+    S.all = 0;
     S.psi_w = wrap_turns(psi, &S.turns);
     /* First the shortest root of all (no certificate during the search), then its certificate: if it holds, that
      * root is the shortest certified plan (every certified plan is a root). If it fails, search again certifying
@@ -1349,6 +1390,47 @@ int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps,
         plan->bound = S.rej[4];
     }
     if (S.incomplete) return @PREFIX_UPPER@_NO_CONVERGENCE;
+    return S.rejected ? @PREFIX_UPPER@_NOT_CERTIFIED : @PREFIX_UPPER@_NO_PLAN;
+}
+
+int @PREFIX@_plan_all(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k,
+                      const @PREFIX@_options_t *options, @PREFIX@_plan_t *plans, int capacity, int *count) {
+    search_t S;
+    @PREFIX@_plan_t scratch;   /* counts the branches searched */
+    casadi_real h_des;
+    int i;
+    if (count == NULL || capacity < 0 || (plans == NULL && capacity > 0)) return @PREFIX_UPPER@_BAD_INPUT;
+    *count = 0;
+    if (!(isfinite(u) && isfinite(v) && isfinite(psi)) || !(fabs(psi) <= PSI_MAX) || !(k >= K_MIN && k <= K_MAX)
+        || steps < 1 || steps > MAX_STEPS)
+        return @PREFIX_UPPER@_BAD_INPUT;
+    h_des = hypot(u, v);
+    if (!(h_des > 0.0)) return @PREFIX_UPPER@_BAD_INPUT;
+    if (prepare(k)) return @PREFIX_UPPER@_NO_CONVERGENCE;
+    s_memo_used = 0;
+    S.u = u;
+    S.v = v;
+    S.k = k;
+    S.steps = steps;
+    S.certify = !options || options->certify;
+    S.defer = 0;                /* every root is certified as it is found (no pruning: best stays infinite) */
+    S.plan = &scratch;
+    S.all = 1;
+    S.list = plans;
+    S.capacity = capacity;
+    S.count = 0;
+    S.last_m = 0;
+    S.last_a = S.last_b = NAN;
+    S.psi_w = wrap_turns(psi, &S.turns);
+    search(&S, options, h_des);
+    *count = S.count;
+    for (i = 0; i < S.count && i < capacity; ++i) {
+        plans[i].branches = scratch.branches;
+        plans[i].roots = scratch.roots;
+    }
+    if (S.incomplete) return @PREFIX_UPPER@_NO_CONVERGENCE;
+    if (S.count > capacity) return @PREFIX_UPPER@_TOO_MANY;
+    if (S.count > 0) return @PREFIX_UPPER@_OK;
     return S.rejected ? @PREFIX_UPPER@_NOT_CERTIFIED : @PREFIX_UPPER@_NO_PLAN;
 }
 

@@ -59,6 +59,8 @@ extern "C" {
 #define @PREFIX_UPPER@_NO_CONVERGENCE 4 /* the search could not be completed (a branch needed more than
                                    its bounded number of cells, or the leaf table is not finite) */
 #define @PREFIX_UPPER@_NOT_CERTIFIED 5  /* roots were found, but none passed the certificate */
+#define @PREFIX_UPPER@_TOO_MANY 6       /* @PREFIX@_plan_all: more plans than the caller's capacity (the shortest
+                                   `capacity` of them are returned, `count` says how many there are) */
 
 /* Largest admissible leaf radius [R] (the equator of the body frame is singular). */
 #define @PREFIX_UPPER@_A_MAX @A_MAX@
@@ -121,6 +123,22 @@ int @PREFIX@_plan(casadi_real u, casadi_real v, casadi_real psi, int steps, casa
 /* The same with options (NULL: the defaults of @PREFIX@_plan): one branch, or no certificate. */
 int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k,
                        const @PREFIX@_options_t *options, @PREFIX@_plan_t *plan);
+
+/*
+ * Every plan: every root of (32)-(33) on every branch (n eta = psi + 2 pi m for every m with |eta_m| at most the
+ * range of E on (0, A_MAX]; or on options->branch only), each polished and certified by @PREFIX@_certify (with
+ * options->certify = 0: every root of the leaf map, uncertified), as rollplan's `plan --all` lists them
+ * (GeometricPhasePlanner.solve(all_solutions=True)). The plans go into plans[0 .. capacity - 1], shortest
+ * (a + b) first; *count receives the number of certified plans found, which may exceed capacity (then the shortest
+ * `capacity` are written and the status is @PREFIX_UPPER@_TOO_MANY). No pruning: time proportional to every branch.
+ * Returns @PREFIX_UPPER@_OK (1 <= *count <= capacity), @PREFIX_UPPER@_TOO_MANY, @PREFIX_UPPER@_BAD_INPUT (also for
+ * count = NULL, capacity < 0, or plans = NULL with capacity > 0), @PREFIX_UPPER@_NO_PLAN (no root),
+ * @PREFIX_UPPER@_NOT_CERTIFIED (roots, none certified), @PREFIX_UPPER@_NO_CONVERGENCE (a branch could not be
+ * searched completely: the plans found are written, but the list may lack some). branches and roots of every plan
+ * written count the whole search. Static memory only; not reentrant.
+ */
+int @PREFIX@_plan_all(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k,
+                      const @PREFIX@_options_t *options, @PREFIX@_plan_t *plans, int capacity, int *count);
 
 /*
  * Certificate of a plan: integrate the n-step motion (figure eight (a, b) rotated by gamma, traced

@@ -4,8 +4,9 @@ The C planner that :mod:`rollplan.codegen` writes (``c_templates/planner.c``, ``
 default) enumerates the roots on one graph per branch over the smaller leaf radius and runs the bounded search
 of :meth:`.GeometricPhasePlanner._solve_enumerated`; the numpy search (:mod:`.enumerate`) uses other graphs, so
 the two are different algorithms, complete by the same argument and checked to choose the same plan.
-:func:`shortest_root` returns its shortest root uncertified, for the Python planner to polish and certify;
-:func:`library` is None without a C compiler (or with ``ROLLPLAN_NO_COMPILE=1``), and the numpy search serves.
+:func:`shortest_root` returns its shortest root uncertified, and :func:`all_roots` every root of every branch
+(``<prefix>_plan_all``), for the Python planner to polish and certify; :func:`library` is None without a C
+compiler (or with ``ROLLPLAN_NO_COMPILE=1``), and the numpy search serves.
 
 How it is built, loaded and called: docs/design/c-planner.md.
 """
@@ -22,12 +23,14 @@ from typing import NamedTuple
 
 from ...core.compiled import shared_library
 
-__all__ = ["PREFIX", "SearchResult", "library", "shortest_root"]
+__all__ = ["PREFIX", "SearchResult", "library", "shortest_root", "all_roots"]
 
 #: Prefix of the generated C symbols (the code generator's default).
 PREFIX = "rollplan"
 #: Status codes of the generated planner (``<prefix>.h``).
-OK, BAD_INPUT, NO_PLAN, NO_CONVERGENCE, NOT_CERTIFIED = 0, 2, 3, 4, 5
+OK, BAD_INPUT, NO_PLAN, NO_CONVERGENCE, NOT_CERTIFIED, TOO_MANY = 0, 2, 3, 4, 5, 6
+#: Roots asked of ``<prefix>_plan_all`` at first (asked again with room for all if there are more).
+_FIRST_CAPACITY = 4096
 
 _PACKAGE = Path(__file__).resolve().parents[2]
 _lock = threading.Lock()
@@ -65,21 +68,30 @@ def _sources() -> list:
     return [f for f in files if f.is_file()]
 
 
+class _Library(NamedTuple):
+    """The entry points of the compiled C planner (ctypes)."""
+
+    plan_with: object
+    plan_all: object
+
+
 def _load(path: str):
     lib = ctypes.CDLL(path)
     try:
-        fn = getattr(lib, f"{PREFIX}_plan_with")
+        plan_with, plan_all = getattr(lib, f"{PREFIX}_plan_with"), getattr(lib, f"{PREFIX}_plan_all")
     except AttributeError as exc:   # not the planner's library: rebuilt
         raise OSError(str(exc)) from exc
-    d = ctypes.c_double
-    fn.argtypes = [d, d, d, ctypes.c_int, d, ctypes.POINTER(_Options), ctypes.POINTER(_Plan)]
-    fn.restype = ctypes.c_int
-    return fn
+    d, opt, plan = ctypes.c_double, ctypes.POINTER(_Options), ctypes.POINTER(_Plan)
+    plan_with.argtypes = [d, d, d, ctypes.c_int, d, opt, plan]
+    plan_all.argtypes = [d, d, d, ctypes.c_int, d, opt, plan, ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
+    plan_with.restype = plan_all.restype = ctypes.c_int
+    return _Library(plan_with, plan_all)
 
 
 @lru_cache(maxsize=1)
 def library():
-    """``<prefix>_plan_with`` of the compiled C planner (ctypes), built on first use; None without it."""
+    """``<prefix>_plan_with`` and ``<prefix>_plan_all`` of the compiled C planner (ctypes), built on first use;
+    None without it."""
     # the generator runs in a subprocess (and imports this rollplan, not another one on the path)
     script = (f"import sys; sys.path.insert(0, {str(_PACKAGE.parent)!r}); "
               "from rollplan.codegen import generate; generate('.')")
@@ -92,13 +104,39 @@ def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: 
     inertia ratio k, over all branches or on ``branch`` only (m relative to psi), by the compiled C search,
     uncertified. None when the library is missing or the C search gives no root (k outside its range, no
     root, search incomplete): the caller then runs the numpy search."""
-    fn = library()
-    if fn is None or (branch is not None and abs(branch) > 2**31 - 1):
+    lib = library()
+    if lib is None or (branch is not None and abs(branch) > 2**31 - 1):
         return None
     options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
     plan = _Plan()
     with _lock:
-        status = fn(float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options), ctypes.byref(plan))
+        status = lib.plan_with(float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options),
+                               ctypes.byref(plan))
     if status != OK or not (math.isfinite(plan.a) and math.isfinite(plan.b)):
         return None
     return SearchResult(plan.a, plan.b, int(plan.m), int(plan.branches), int(plan.roots))
+
+
+def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
+    """Every root of (32)-(33) on every branch (or on ``branch`` only), shortest (a + b) first, by the compiled
+    C search (``<prefix>_plan_all``), uncertified: a list of :class:`SearchResult` (empty when there is no root).
+    None when the library is missing or the C search cannot give the list (k outside its range, search
+    incomplete): the caller then runs the numpy search."""
+    lib = library()
+    if lib is None or (branch is not None and abs(branch) > 2**31 - 1):
+        return None
+    options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
+    capacity, count = _FIRST_CAPACITY, ctypes.c_int(0)
+    while True:
+        plans = (_Plan * capacity)()
+        with _lock:
+            status = lib.plan_all(float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options), plans,
+                                  capacity, ctypes.byref(count))
+        if status != TOO_MANY or count.value <= capacity:
+            break
+        capacity = count.value
+    if status == NO_PLAN:
+        return []
+    if status != OK:
+        return None
+    return [SearchResult(p.a, p.b, int(p.m), int(p.branches), int(p.roots)) for p in plans[:count.value]]

@@ -44,6 +44,25 @@ IDENTITY_TOL = 1e-12
 DEFAULT_SAMPLES = 2000
 
 
+#: Largest shift of the contact point by one figure eight over the admissible leaf radii, about [R]
+#: (under 4 R for every k; 3.8 R at k = 0.5): a target farther than this per step is named as the cause.
+FAR_PER_STEP = 4.0
+
+
+def _far_hint(problem: Problem, target) -> str:
+    """The likely cause of a no-plan for a target many radii away (the unit, if lengths are in metres)."""
+    d = math.hypot(target[0], target[1])
+    if d <= FAR_PER_STEP * problem.steps:
+        return ""
+    hint = (f" (the target is {d:.3g} R away, {d / problem.steps:.3g} R per figure eight; one figure eight shifts "
+            f"the contact point by at most about {FAR_PER_STEP:g} R")
+    if problem.unit != "R":
+        g, r = problem.goal, problem.radius
+        hint += (f"; lengths are in metres here (R = {r:g} m): a target meant in units of R is "
+                 f"(u_a, v_a) = ({g.u_a * r:g} m, {g.v_a * r:g} m)")
+    return hint + ")"
+
+
 @lru_cache(maxsize=1)
 def _integrator() -> PathIntegrator:
     return PathIntegrator()
@@ -269,8 +288,8 @@ class ComposedPlanner:
             mode, legs_found, turn, w = self._eights(problem, target, legs, all_solutions, branch, details)
         except NoPlanError as exc:
             raise NoPlanError(f"no plan for {problem.describe()}: the figure eights must do (u_a, v_a, psi) = "
-                              f"({target[0]:.6g}, {target[1]:.6g}, {target[2]:.6g}) from rest at the pole; {exc}") \
-                from None
+                              f"({target[0]:.6g} R, {target[1]:.6g} R, {target[2]:.6g} rad) from rest at the pole; "
+                              f"{exc}{_far_hint(problem, target)}") from None
         result = self._result(problem, mode, approach, departure, target, legs_found, turn, w, t0, details)
         if all_solutions and mode == "one":
             alts = []

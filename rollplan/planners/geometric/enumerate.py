@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ...core.compiled import cache_dir
+from ...core.compiled import cache_dir, check_private, private_cache_dir
 from ...core.curves import A_MAX
 from ...progress import report
 from . import leafmap
@@ -142,13 +142,18 @@ def rho_table(k: float) -> RhoTable:
     atomically (a cache that cannot be read or written is rebuilt or skipped)."""
     path = _table_file(k)
     try:
+        private_cache_dir()
+        if path.exists():
+            check_private(path)
+    except OSError:   # no cache directory and none can be made: the table is built and not stored
+        pass
+    try:
         with np.load(path) as z:
             return RhoTable(float(k), z["r"], z["rho"], z["drho"], float(z["eps"]), z["w"], z["drdw"])
     except (OSError, KeyError, ValueError):
         pass
     t = _build_rho_table(k)
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".rho_table.", suffix=".tmp")
         try:
             with os.fdopen(fd, "wb") as fh:

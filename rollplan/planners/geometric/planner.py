@@ -3,8 +3,8 @@
 Trace the figure eight (31) rotated by gamma ``n`` times from rest at the origin to ``(u_a, v_a, psi)`` at the
 pole: on each branch m solve ``eta(a, b) = (psi + 2 pi m) / n`` (32) and
 ``h(a, b) = h_des |sin(eta / 2) / sin(n eta / 2)|`` (33) ((34) where ``sin(eta / 2) = 0``), then gamma from
-the geometry. The roots are enumerated completely (:mod:`.enumerate`; for the shortest plan with
-``1/2 <= k <= k_max`` first by the C search, :mod:`.compiled_search`), polished by a solver chosen by name
+the geometry. The roots are enumerated completely (:mod:`.enumerate`; for ``1/2 <= k <= k_max`` first by the C
+search, :mod:`.compiled_search`), polished by a solver chosen by name
 (:mod:`.refine`) and certified by an independent integration (:mod:`.certify`).
 
 Derivation, the search, the polish and the certificate: docs/design/geometric-planner.md.
@@ -41,7 +41,7 @@ from ...result import CERTIFICATE_TOLERANCE, Certificate, CertifiedMotion, Solve
 from ...robot import Robot
 from .brackets import find_brackets, target_shift
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
-from .compiled_search import shortest_root
+from .compiled_search import all_roots, shortest_root
 from .enumerate import NOT_A_ROOT, branches, roots
 from .leafmap import panels_for, step_values
 from .leaves import LeafTables
@@ -183,8 +183,9 @@ class GeometricPhasePlanner:
         Certifier from :data:`.certify.CERTIFIERS`: ``"rk8"`` (the default: compiled RK8 with a
         step-doubling error bound) or ``"cvodes"``.
     compiled_search : bool
-        Search the shortest (or one branch's) root with the compiled C search where it applies
-        (``1/2 <= k <= k_max``, docs/design/geometric-planner.md); False always runs the numpy search.
+        Search the shortest (or one branch's) root, or with ``all_solutions`` every root, with the compiled C
+        search where it applies (``1/2 <= k <= k_max``, docs/design/geometric-planner.md); False always runs the
+        numpy search.
     """
 
     def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
@@ -254,8 +255,9 @@ class GeometricPhasePlanner:
             raise NoPlanError(f"no plan for {where}: the target is the start point, and rollplan plans "
                               "motions with a nonzero displacement")
         target = (goal_r.u_a, goal_r.v_a, psi_des)
-        if self.compiled_search and not all_solutions:
-            quick = self._solve_compiled(problem, None if branch is None else branch + turns, target, turns, t_start)
+        if self.compiled_search:
+            solve_compiled = self._solve_compiled_all if all_solutions else self._solve_compiled
+            quick = solve_compiled(problem, None if branch is None else branch + turns, target, turns, t_start)
             if quick is not None:
                 return quick
         return self._solve_enumerated(problem, all_solutions, None if branch is None else branch + turns,
@@ -288,6 +290,47 @@ class GeometricPhasePlanner:
         details = {"candidates": 1, "solves": 1, "branches": found.branches, "roots": found.roots,
                    "search": "compiled"}
         return self._plan(problem, cand, replace(cand[2], time_s=time.perf_counter() - t_start, details=details))
+
+    def _solve_compiled_all(self, problem, branch, target, turns, t_start) -> Plan | None:
+        """Every root of every branch (of ``branch`` if given) by the compiled C search
+        (:func:`.compiled_search.all_roots`), each polished and certified here as in :meth:`_solve_enumerated`;
+        None when the C search gives no list or no root of it certifies (the numpy search then decides)."""
+        k, steps = problem.k, problem.steps
+        listed = all_roots(target[0], target[1], target[2], steps, k, branch)
+        if not listed:
+            return None
+        found = []
+        label = f"certify (k = {k:g}, {len(listed)} roots)"
+        for i, r in enumerate(listed):
+            report(label, i, len(listed))
+            eta = (target[2] + 2.0 * math.pi * r.m) / steps
+            q = _Root(r.a, r.b, 0.0, r.m, float(target_shift(math.hypot(target[0], target[1]), eta, steps)), eta)
+            x, status, iters = self._polish(q, k)
+            cand = self._certified(problem, x, r.m - turns, target, status, iters)
+            if cand[1].passed:
+                found.append(cand)
+            else:
+                self._log_rejected(q, cand, turns)
+        report(label, len(listed), len(listed))
+        if not found:
+            return None
+        found.sort(key=lambda c: c[0].a + c[0].b)
+        details = {"candidates": len(listed), "solves": len(found), "branches": listed[0].branches,
+                   "roots": len(listed), "search": "compiled"}
+        elapsed = time.perf_counter() - t_start
+        plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
+        return replace(plans[0], alternatives=tuple(plans[1:]))
+
+    def _log_rejected(self, q, cand, turns) -> bool:
+        """Log a root ``q`` whose plan ``cand`` failed the certificate; True if it is a root the certificate
+        rejected, False if the leaf map misses there by more than NOT_A_ROOT (a tangency of the table only)."""
+        if cand[0].miss > NOT_A_ROOT * self.tol:   # a tangency of the table only (enumerate)
+            log.info("branch m=%d (a=%.6f, b=%.6f): no root, the leaf map misses by %.2e",
+                     q.m - turns, q.a, q.b, cand[0].miss)
+            return False
+        log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual + bound %.2e > %.0e",
+                    q.m - turns, q.a, q.b, cand[1].residual + cand[1].error_bound, self.tol)
+        return True
 
     def _solve_enumerated(self, problem, all_solutions, branch, target, turns, t_start) -> Plan:
         """Complete enumeration (every k): every root of every branch (``all_solutions``) or the
@@ -328,12 +371,7 @@ class GeometricPhasePlanner:
                         if not all_solutions:
                             best = min(best, q.a + q.b)
                         break
-                    if cand[0].miss > NOT_A_ROOT * self.tol:   # a tangency of the table only (enumerate)
-                        log.info("branch m=%d (a=%.6f, b=%.6f): no root, the leaf map misses by %.2e",
-                                 q.m - turns, q.a, q.b, cand[0].miss)
-                    else:
-                        log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual + bound %.2e > %.0e",
-                                    q.m - turns, q.a, q.b, cand[1].residual + cand[1].error_bound, self.tol)
+                    if self._log_rejected(q, cand, turns):
                         rejected.append(cand[1].residual + cand[1].error_bound)
                     if not all_solutions and q is r:   # the branch's other roots, shortest first
                         queue = [q2 for q2 in roots([next(b_ for b_ in chunk if b_.m == r.m)], k)
