@@ -5,8 +5,8 @@ while a solver runs, CasADi polls Python for pending signals (once per IPOPT
 iteration, once per right-hand-side evaluation of CVODES). When Python's
 handler raises KeyboardInterrupt, CasADi aborts the solver, but it does not
 pass the KeyboardInterrupt on: IPOPT returns with status
-``NonIpopt_Exception_Thrown`` and a warning on stderr, CVODES raises a
-RuntimeError (``CV_RHSFUNC_FAIL``). A caller would take either for a failed
+``NonIpopt_Exception_Thrown`` and a warning on stderr (which :func:`call` drops), CVODES
+raises a RuntimeError (``CV_RHSFUNC_FAIL``). A caller would take either for a failed
 solve: the geometric planner would try the next branch (and return a longer
 plan, or go on for minutes), a batch would record the row in flight as
 failed. Evaluations of plain CasADi Functions (``map``) do not poll; Python
@@ -18,6 +18,14 @@ call if a signal arrived during it, whatever the solver returned. It changes
 the handler only in the main thread and only while Python's default handler is
 installed (a program with its own SIGINT handler, or a worker process that
 ignores SIGINT, is left alone).
+
+Long calls into C++ that never return to Python (CasADi's construction of a large solver, minutes) run in a
+helper thread by :func:`call_in_thread`, so that the main thread can act on Ctrl-C at once; an interrupted
+command that left such a thread running ends by ``os._exit`` (:func:`rollplan.cli.main`).
+
+SIGTERM: while :func:`terminate_as_interrupt` holds (the command, :func:`rollplan.cli.main`), SIGTERM raises
+:class:`Terminated`, a KeyboardInterrupt: the command stops as for Ctrl-C (workers stopped, finished work kept,
+outputs left whole) and exits 143; :func:`call` records it like SIGINT.
 
 Start-up: :func:`guard_start_up` (called first thing by ``rollplan/__init__.py``)
 makes a Ctrl-C while the modules load exit 130 with one line when the program
@@ -44,42 +52,154 @@ import os
 import signal
 import sys
 import threading
+from contextlib import contextmanager
 
-__all__ = ["call", "guard_start_up", "cli_follows", "end_start_up", "forget_unhandled", "settle"]
+__all__ = ["call", "call_in_thread", "abandoned", "Terminated", "terminate_as_interrupt", "guard_start_up",
+           "cli_follows", "end_start_up", "forget_unhandled", "settle"]
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, while :func:`terminate_as_interrupt` holds: the program stops as for Ctrl-C (exit 143)."""
+
 
 class _State:
-    pending = False   # SIGINT arrived during the outermost call
+    pending = None    # the exception of a signal that arrived during the outermost call
     depth = 0         # nesting of calls
+    abandoned = False  # a call_in_thread was interrupted: its thread still runs
 
 
 def _record(signum, frame):
-    _State.pending = True
+    _State.pending = KeyboardInterrupt
     raise KeyboardInterrupt
+
+
+def _terminate(signum, frame):
+    _State.pending = Terminated
+    raise Terminated
+
+
+#: What CasADi writes (through ``sys.stderr``) when it swallows the KeyboardInterrupt raised in IPOPT's callback.
+_SWALLOWED = 'WARNING("KeyboardInterruptException")'
+
+
+class _QuietInterrupts:
+    """``sys.stderr`` during a solver call: text passes on at once, except that a line of CasADi's is held to its
+    end and dropped if it is the warning about the interrupt it swallowed (the command says it was interrupted,
+    in one line)."""
+
+    def __init__(self, stream) -> None:
+        self.stream, self._held = stream, ""
+
+    def write(self, text: str) -> int:
+        self._held += text
+        out = []
+        while self._held:
+            end = self._held.find("\n") + 1
+            if self._held.startswith("CasADi") or "CasADi".startswith(self._held):
+                if not end:
+                    break
+                line, self._held = self._held[:end], self._held[end:]
+                if _SWALLOWED not in line:
+                    out.append(line)
+            else:
+                end = end or len(self._held)
+                out.append(self._held[:end])
+                self._held = self._held[end:]
+        if out:
+            self.stream.write("".join(out))
+        return len(text)
+
+    def release(self) -> None:
+        """Pass on what is held (unless it is the warning)."""
+        held, self._held = self._held, ""
+        if held and _SWALLOWED not in held:
+            self.stream.write(held)
+
+    def flush(self) -> None:
+        self.stream.flush()
+
+    def __getattr__(self, name):
+        return getattr(self.stream, name)
 
 
 def call(function, *args, **kwargs):
     """``function(*args, **kwargs)``, raising KeyboardInterrupt if SIGINT arrived during it (module docstring)."""
     install = (_State.depth == 0 and threading.current_thread() is threading.main_thread()
                and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
-    previous = None
+    previous = quiet = None
     if _State.depth == 0:
-        _State.pending = False
+        _State.pending = None
     if install:
         previous = signal.signal(signal.SIGINT, _record)
+        quiet = sys.stderr = _QuietInterrupts(sys.stderr)
     _State.depth += 1
     try:
         result = function(*args, **kwargs)
     except Exception:
         if _State.pending:
-            raise KeyboardInterrupt from None
+            raise _State.pending from None
         raise
     finally:
         _State.depth -= 1
         if install:
             signal.signal(signal.SIGINT, previous)
+            quiet.release()
+            if sys.stderr is quiet:
+                sys.stderr = quiet.stream
     if _State.pending:
-        raise KeyboardInterrupt
+        raise _State.pending
     return result
+
+
+def call_in_thread(function, *args, **kwargs):
+    """``function(*args, **kwargs)`` run by a helper thread while this (the main) thread waits for it: for long
+    calls into C++ that release the GIL but never return to Python, during which Python cannot run its signal
+    handlers (CasADi's construction of a solver: minutes for a large NLP). Ctrl-C (and SIGTERM) then act at
+    once: the KeyboardInterrupt is raised here, the helper thread is left running (a daemon) and
+    :func:`abandoned` is True. In another thread the call is made directly."""
+    if threading.current_thread() is not threading.main_thread():
+        return function(*args, **kwargs)
+    box = {}
+
+    def run():
+        try:
+            box["result"] = function(*args, **kwargs)
+        except BaseException as exc:  # noqa: BLE001 -- passed to the waiting thread
+            box["error"] = exc
+
+    helper = threading.Thread(target=run, name="rollplan-build", daemon=True)
+    helper.start()
+    try:
+        while helper.is_alive():
+            helper.join(0.2)
+    except KeyboardInterrupt:
+        _State.abandoned = True
+        raise
+    if "error" in box:
+        raise box["error"]
+    return box["result"]
+
+
+def abandoned() -> bool:
+    """True if an interrupted :func:`call_in_thread` left its helper thread running: the program should end by
+    ``os._exit`` (the C++ work in that thread must not meet the interpreter's shutdown)."""
+    return _State.abandoned
+
+
+@contextmanager
+def terminate_as_interrupt():
+    """For the ``with`` block, SIGTERM raises :class:`Terminated` (a KeyboardInterrupt: the program stops as for
+    Ctrl-C, also inside the solvers, see :func:`call`); only in the main thread and when SIGTERM has its
+    default action (a program with its own handler is left alone). The action is restored after the block."""
+    install = (threading.current_thread() is threading.main_thread()
+               and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL)
+    if install:
+        signal.signal(signal.SIGTERM, _terminate)
+    try:
+        yield
+    finally:
+        if install:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _interrupted_at_start(signum, frame):

@@ -16,6 +16,10 @@
   file at once (a killed process keeps every finished line); ``fsync`` in
   batches.
 * :func:`make_folder` -- an output folder, created if missing.
+* :func:`check_folder`, :func:`write_folder` -- a folder of files written as one output (``codegen``): the
+  files are written into a temporary folder next to it and moved into place (a new folder appears whole by
+  one rename); a folder that holds files rollplan did not write (or wrote and were changed since, by its
+  list :data:`MANIFEST`) is refused unless ``overwrite``, which replaces the files of the same names only.
 
 Every failure of the file system (disk full, file size limit, read-only file
 system, a name too long, permissions) is an :class:`~rollplan.errors.OutputError`
@@ -32,6 +36,7 @@ import hashlib
 import json
 import os
 import re
+import shutil
 import stat
 import tempfile
 import threading
@@ -42,8 +47,8 @@ from pathlib import Path
 from .errors import InputError, OutputError
 from .inputs import check_path, show_path
 
-__all__ = ["WRITE_FAILURES", "check_writable", "write_atomic", "write_json", "check_figure_path", "save_figure",
-           "claim", "LineWriter", "make_folder"]
+__all__ = ["WRITE_FAILURES", "write_all", "check_writable", "write_atomic", "write_json", "check_figure_path",
+           "save_figure", "claim", "LineWriter", "make_folder", "MANIFEST", "check_folder", "write_folder"]
 
 _RANDOM = 8            # characters tempfile adds to a temporary name
 _TMP_SUFFIX = ".tmp"
@@ -56,7 +61,15 @@ WRITE_FAILURES = {errno.ENOSPC: "the disk is full", errno.EDQUOT: "the disk quot
                   errno.EROFS: "the file system is read-only", errno.EACCES: "permission denied",
                   errno.EPERM: "permission denied", errno.ENAMETOOLONG: "the name is too long for the file system",
                   errno.ENOENT: "its folder does not exist", errno.ENOTDIR: "a part of the path is not a folder",
-                  errno.EIO: "input/output error of the device"}
+                  errno.EIO: "input/output error of the device", errno.EPIPE: "the reader closed the pipe"}
+
+
+def write_all(fd: int, data: bytes) -> None:
+    """Write all of ``data`` to the file descriptor ``fd`` (OSError if it cannot: a short write is followed by
+    another, which reports the reason, e.g. EPIPE when a pipe's reader has gone)."""
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
 
 
 def _failure(what: str, path, exc: OSError) -> OutputError:
@@ -251,13 +264,17 @@ def claim(*paths, what: str = "output"):
 # ----------------------------------------------------------------------------- writing
 
 
+def _umask() -> int:
+    umask = os.umask(0)
+    os.umask(umask)
+    return umask
+
+
 def _new_mode(target: Path) -> int:
     try:
         return stat.S_IMODE(os.stat(target).st_mode)
     except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
+        return 0o666 & ~_umask()
 
 
 def _sync_folder(folder: Path) -> None:
@@ -285,9 +302,7 @@ def write_atomic(path, data: bytes, what: str = "output") -> None:
         try:
             fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=_sibling_stem(target), suffix=_TMP_SUFFIX)
             os.fchmod(fd, _new_mode(target))
-            view = memoryview(data)
-            while view:
-                view = view[os.write(fd, view):]
+            write_all(fd, data)
             os.fsync(fd)
             os.close(fd)
             fd = -1
@@ -336,7 +351,8 @@ class LineWriter:
 
     Each :meth:`write` is one ``write`` call on a file opened for appending, so
     a killed process keeps every finished line (at most the line being written
-    is torn). ``fsync`` runs every ``sync_every`` lines or ``sync_seconds``
+    is torn); a line that cannot be written whole (disk full) is cut off again,
+    leaving the finished lines. ``fsync`` runs every ``sync_every`` lines or ``sync_seconds``
     seconds and at :meth:`close`, which bounds what a power loss can take.
     Hold the output's :func:`claim` while writing.
     """
@@ -347,15 +363,21 @@ class LineWriter:
         self._unsynced, self._synced_at = 0, time.monotonic()
         try:
             self._fd = os.open(path, os.O_WRONLY | os.O_APPEND | getattr(os, "O_CLOEXEC", 0))
+            self._size = os.fstat(self._fd).st_size
         except OSError as exc:
             raise _failure(what, path, exc) from None
 
     def write(self, line: str) -> None:
-        view = memoryview(line.encode())
+        data = line.encode()
         try:
-            while view:
-                view = view[os.write(self._fd, view):]
-            self._unsynced += 1
+            write_all(self._fd, data)
+        except OSError as exc:
+            with suppress(OSError):
+                os.ftruncate(self._fd, self._size)   # no torn line (shrinking needs no space)
+            raise _failure(self.what, self.path, exc) from None
+        self._size += len(data)
+        self._unsynced += 1
+        try:
             if self._unsynced >= self.sync_every or time.monotonic() - self._synced_at >= self.sync_seconds:
                 self.sync()
         except OSError as exc:
@@ -409,4 +431,134 @@ def make_folder(path, what: str = "output folder", parents: bool = False) -> Pat
         raise _failure(what, text, exc) from None
     if _read_only(st, p):
         raise OutputError(f"{what} {show_path(text)} cannot be written: no permission to write in it")
+    return p
+
+
+# ----------------------------------------------------------------------------- folders
+
+#: The list of the files that :func:`write_folder` wrote into a folder (name -> SHA-256), and of the names the
+#: folder's own build makes (``products``), kept in the folder.
+MANIFEST = ".rollplan-files.json"
+_STAGING = ".rollplan-new."
+
+
+def _digest(path: Path) -> str | None:
+    try:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return None
+
+
+def _manifest(folder: Path) -> dict:
+    """The folder's :data:`MANIFEST` as ``{"files": {name: sha256}, "products": [names]}`` (empty if none)."""
+    try:
+        data = json.loads((folder / MANIFEST).read_text())
+        files = {str(k): str(v) for k, v in dict(data.get("files", {})).items()}
+        products = [str(n) for n in data.get("products", [])]
+    except (OSError, ValueError, TypeError, AttributeError):
+        return {"files": {}, "products": []}
+    return {"files": files, "products": products}
+
+
+def _not_ours(folder: Path) -> list:
+    """Names in ``folder`` that :func:`write_folder` did not write: not in its manifest with the content it wrote
+    (``NAME (changed)`` for those changed since), nor a product of its build, nor a temporary folder of ours."""
+    listed = _manifest(folder)
+    foreign = []
+    for name in sorted(os.listdir(folder)):
+        if name == MANIFEST or name in listed["products"] or name.startswith(_STAGING):
+            continue
+        if name not in listed["files"]:
+            foreign.append(name)
+        elif _digest(folder / name) != listed["files"][name]:
+            foreign.append(f"{name} (changed)")
+    return foreign
+
+
+def check_folder(path, what: str = "output folder", overwrite: bool = False) -> Path:
+    """The output folder ``path`` if :func:`write_folder` may write it, else OutputError (one line): an existing
+    writable folder that holds only files rollplan wrote there (any with ``overwrite``), or a name in an
+    existing writable folder. Nothing is created."""
+    text = check_path(path, what)
+    p = Path(text)
+    if p.exists():
+        if not p.is_dir():
+            raise OutputError(f"{what} {show_path(text)} is a file: give a folder")
+        try:
+            st = os.stat(p)
+            foreign = [] if overwrite else _not_ours(p)
+        except OSError as exc:
+            raise _failure(what, text, exc) from None
+        if _read_only(st, p):
+            raise OutputError(f"{what} {show_path(text)} cannot be written: no permission to write in it")
+        if foreign:
+            shown = ", ".join(foreign[:4]) + (f" and {len(foreign) - 4} more" if len(foreign) > 4 else "")
+            raise OutputError(f"{what} {show_path(text)} holds files that rollplan did not write ({shown}): "
+                              "choose a new or empty folder, or give overwrite=True to replace the files of the "
+                              "same names in it")
+        return p
+    parent = p.absolute().parent
+    if not parent.is_dir():
+        raise OutputError(f"{what} {show_path(text)} cannot be created: folder {show_path(p.parent)} does not exist")
+    if _read_only(os.stat(parent), parent):
+        raise OutputError(f"{what} {show_path(text)} cannot be created: no permission to write in folder "
+                          f"{show_path(p.parent)}")
+    size, limit = len(p.name.encode(errors="surrogateescape")), _name_max(parent)
+    if size > limit:
+        raise OutputError(f"{what} {show_path(text)} cannot be created: its name has {size} bytes, the file system "
+                          f"allows {limit}")
+    return p
+
+
+def write_folder(path, files: dict, what: str = "output folder", overwrite: bool = False, products=()) -> Path:
+    """Write ``files`` (name -> bytes) into the folder ``path`` as one output (:func:`check_folder` first).
+
+    The files, each synced, and the folder's :data:`MANIFEST` go into a temporary folder next to the output
+    (inside it if it exists); a new folder is then renamed into place (it appears whole), in an existing one
+    each file replaces its namesake by one rename (the other files stay). ``products`` are the names the
+    folder's own build makes (they do not make the folder someone else's). Raises OutputError (one line) if
+    the folder cannot be written (disk full...); the temporary folder is then removed and the output left as
+    it was.
+    """
+    p = check_folder(path, what, overwrite)
+    existing = p.exists()
+    where = p if existing else p.absolute().parent
+    staging = None
+    try:
+        staging = Path(tempfile.mkdtemp(dir=where, prefix=_STAGING if existing else _sibling_stem(p),
+                                        suffix=_TMP_SUFFIX))
+        listed = _manifest(p) if existing else {"files": {}, "products": []}
+        kept = {n: h for n, h in listed["files"].items() if n not in files and _digest(p / n) == h}
+        digests = {}
+        for name, data in [*files.items(), (MANIFEST, None)]:
+            if name == MANIFEST:
+                data = (json.dumps({"files": {**kept, **digests}, "products": sorted({*listed["products"],
+                                                                                     *products})},
+                                   indent=1, sort_keys=True) + "\n").encode()
+            fd = os.open(staging / name, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0),
+                         _new_mode(p / name))
+            try:
+                write_all(fd, data)
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+            if name != MANIFEST:
+                digests[name] = hashlib.sha256(data).hexdigest()
+        _sync_folder(staging)
+        if not existing:
+            os.chmod(staging, 0o777 & ~_umask())
+            os.rename(staging, p)
+            staging = None
+            _sync_folder(where)
+        else:
+            for name in [*files, MANIFEST]:
+                os.replace(staging / name, p / name)
+            os.rmdir(staging)
+            staging = None
+            _sync_folder(p)
+    except OSError as exc:
+        raise _failure(what, path, exc) from None
+    finally:
+        if staging is not None:
+            shutil.rmtree(staging, ignore_errors=True)
     return p

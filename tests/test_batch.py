@@ -326,6 +326,76 @@ def test_second_batch_on_the_same_output_is_refused(tmp_path, capsys):
     assert first.returncode == SLOW_EXIT, err
     assert [d["index"] for d in read_lines(out)] == list(range(len(SLOW_ROWS)))
 
+def _live_children(pid):
+    """Pids of the live processes (not zombies) whose parent is ``pid`` (Linux /proc)."""
+    found = []
+    for name in os.listdir("/proc"):
+        if not name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{name}/stat") as fh:
+                stat = fh.read()
+        except OSError:
+            continue
+        state, ppid = stat[stat.rfind(")") + 2:].split()[:2]
+        if int(ppid) == pid and state != "Z":
+            found.append(int(name))
+    return found
+
+
+def _alive(pid):
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            stat = fh.read()
+    except OSError:
+        return False
+    return stat[stat.rfind(")") + 2:].split()[0] != "Z"
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs /proc (Linux)")
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+def test_workers_die_with_the_parent(tmp_path, sig):
+    """SIGKILL or SIGTERM of `batch --jobs 2` (the parent only) left its forked workers alive, later printing
+    BrokenPipeError tracebacks. Now no worker outlives the parent by more than a few seconds and none prints;
+    SIGTERM stops the run as Ctrl-C does: exit 143, one line, the finished lines kept (whole lines only)."""
+    csv_path, out = write_csv(tmp_path / "t.csv", SLOW_ROWS), tmp_path / "out.jsonl"
+    err_path = tmp_path / "err.txt"
+    cache = tmp_path / "cache"   # no leaf table on disk: every row (a new k) takes seconds
+    cache.mkdir()
+    with open(err_path, "w") as err_file:
+        proc = subprocess.Popen([sys.executable, "-m", "rollplan.cli", "batch", str(csv_path), "--out", str(out),
+                                 "--quiet", "--jobs", "2"], stdout=subprocess.DEVNULL, stderr=err_file,
+                                start_new_session=True, env={**os.environ, "ROLLPLAN_CACHE_DIR": str(cache)})
+    try:
+        t0 = time.perf_counter()
+        while len(_live_children(proc.pid)) < 2 and time.perf_counter() - t0 < 300:
+            time.sleep(0.05)
+        time.sleep(random.Random(sig).uniform(0.2, 1.0))   # the workers busy with their rows
+        workers = _live_children(proc.pid)
+        assert len(workers) == 2, err_path.read_text()
+        os.kill(proc.pid, sig)
+        code = proc.wait(timeout=60)
+        t0 = time.perf_counter()
+        while any(map(_alive, workers)) and time.perf_counter() - t0 < 5.0:
+            time.sleep(0.05)
+        assert not any(map(_alive, workers)), f"workers {workers} outlived their parent (exit {code})"
+        time.sleep(2.0)   # a worker that lived on would print when its row ended
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+    err = err_path.read_text()
+    assert "Traceback" not in err and "Error" not in err, err
+    if sig == signal.SIGKILL:
+        assert code == -signal.SIGKILL and err == ""
+    else:
+        assert code == 143, err
+        assert err.strip().splitlines() == [f"rollplan: terminated; finished lines are kept in {out}: rerun with "
+                                            "--resume"]
+    if out.exists():
+        assert out.read_bytes().count(b"\n") == len(read_output(out))   # no torn or foreign line
+
+
 def test_comments_blank_lines_and_defaults(tmp_path, scipy_trace):
     """# lines and blank lines are not rows; missing psi/steps/k columns and empty cells take 0, 1 and 2.5.
     The defaulted plan equals the explicit one and is checked by DOP853 on the printed (28)-(30)."""
@@ -387,8 +457,9 @@ def test_fsync_is_batched(tmp_path, monkeypatch):
     monkeypatch.setattr(outputs.os, "fsync", lambda fd: (calls.append(fd), real(fd)))
     sizes = []
 
-    def watch(done, total, failed):
-        sizes.append((tmp_path / "p.jsonl").stat().st_size)
+    def watch(done, total, failed):   # the output is made with its first line (0 bytes before)
+        out = tmp_path / "p.jsonl"
+        sizes.append(out.stat().st_size if out.exists() else 0)
 
     r = run_batch(write_csv(tmp_path / "t.csv"), tmp_path / "p.jsonl", progress=watch)
     assert len(calls) <= 3 + r.time_s / batch.FSYNC_INTERVAL

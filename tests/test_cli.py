@@ -410,7 +410,37 @@ def test_stdout_on_a_full_disk_is_one_line_and_exit_2(argv):
     assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr
 
 
-@pytest.mark.parametrize("command, option, low", [("batch", "--jobs", 1), ("plan", "--samples", 2)])
+CLOSED_PIPE = "rollplan: error: the standard output cannot be written: the reader closed the pipe"
+
+
+@pytest.mark.parametrize("argv", [["plan", "--to", "0.5", "0.3", "--json", "-"], ["step", "--a", "0.3"]])
+def test_stdout_into_a_closed_pipe_is_a_failure(argv):
+    """`plan --to 0.5 0.3 --json - | head -c1` exited 0 although the JSON was not delivered: stdout is a pipe whose
+    reader has gone (closed before the command writes), and the command exits 2 with one line."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        r = subprocess.run([sys.executable, "-m", "rollplan.cli", *argv], stdout=write_end, stderr=subprocess.PIPE,
+                           text=True, timeout=300, check=False)
+    finally:
+        os.close(write_end)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.strip().splitlines()[-1] == CLOSED_PIPE
+    assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr
+
+
+def test_json_dash_into_head_is_a_failure(tmp_path):
+    """The reported pipeline itself: the JSON (300 kB, more than a pipe holds) into `head -c1`; the shell's
+    pipefail reports the command's status."""
+    cmd = f"set -o pipefail; {sys.executable} -m rollplan.cli plan --to 0.5 0.3 --json - 2>err.txt | head -c1"
+    r = subprocess.run(["bash", "-c", cmd], cwd=tmp_path, capture_output=True, text=True, timeout=300, check=False)
+    err = (tmp_path / "err.txt").read_text()
+    assert r.stdout == "{" and r.returncode == 2, err
+    assert err.strip().splitlines()[-1] == CLOSED_PIPE and "Traceback" not in err
+
+
+@pytest.mark.parametrize("command, option, low", [("batch", "--jobs", 1), ("plan", "--samples", 2),
+                                                  ("compare", "--intervals", 4)])
 def test_help_states_the_limit_the_command_enforces(capsys, tmp_path, command, option, low):
     """The help said [2, 10^7] for --samples and '>= 1' for --jobs while the commands refused above 10^6 and 1024:
     the range in --help is the one in the refusal of a value just above it."""
@@ -424,7 +454,8 @@ def test_help_states_the_limit_the_command_enforces(capsys, tmp_path, command, o
     high = int(re.search(rf"{option} \S+ .*?in \[{low}, (\d+)\]", help_text).group(1))
     csv_path = tmp_path / "t.csv"
     csv_path.write_text("u_a,v_a\n0.1,0.2\n")
-    argv = {"batch": ["batch", str(csv_path), "--out", str(tmp_path / "o.jsonl")], "plan": ["plan"]}[command]
+    argv = {"batch": ["batch", str(csv_path), "--out", str(tmp_path / "o.jsonl")], "plan": ["plan"],
+            "compare": ["compare", "--to", "0.5", "0.3"]}[command]
     code, _, err = run(capsys, *argv, option, str(high + 1))
     assert code == 2 and f"[{low}, {high}]" in err
 
@@ -498,7 +529,7 @@ def test_k_defaults_to_the_papers_case(tmp_path, capsys):
     ("step", ["0 < a <= 0.69", "0 < b <= 0.69", "[0, 100]"]),
     ("atlas", ["[0, 100]", "[2, 1000]", "[1, 1000]", "--scheduler"]),
     ("animate", ["[2, 2000]", "[1, 100]"]),
-    ("compare", ["[4, 100000]", "[1, 9]", "(0, pi/2)", "k in (1, 100]", "[1e-06, 1e+06]"]),
+    ("compare", ["[4, 2000]", "[1, 9]", "(0, pi/2)", "k in (1, 100]", "[1e-06, 1e+06]"]),
     ("batch", ["--scheduler", "in [1, ", "exit status"]),
 ])
 def test_limits_are_in_the_help(capsys, command, needles):

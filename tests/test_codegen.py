@@ -8,10 +8,12 @@ import math
 import re
 import shutil
 import subprocess
+import sys
 
 import casadi as ca
 import numpy as np
 import pytest
+from conftest import one_line
 from scipy.optimize import brentq, minimize_scalar
 from test_enumerate import _b_of, _g
 
@@ -540,6 +542,49 @@ def test_cli_codegen(tmp_path, capsys):
     assert not (tmp_path / "d").exists()   # a refused run leaves no empty folder behind
     assert main(["codegen", "--out", str(tmp_path / "no" / "such")]) == 2
     assert "not allowed" in capsys.readouterr().err
+
+
+def _codegen(*argv):
+    return subprocess.run([sys.executable, "-m", "rollplan.cli", "codegen", *argv], capture_output=True, text=True,
+                          timeout=600, check=False)
+
+
+def _contents(folder):
+    return {p.relative_to(folder).as_posix(): (p.read_bytes() if p.is_file() else None) for p in folder.rglob("*")}
+
+
+@pytest.mark.slow
+def test_codegen_never_overwrites_files_it_did_not_write(tmp_path):
+    """`codegen --out DIR` replaced the user's Makefile and plan_demo.c in DIR without asking. Now a folder that
+    holds files codegen did not write (or wrote and were changed since) is refused in one line naming it and
+    --overwrite; with --overwrite the files of codegen's names are replaced and the others kept. A folder codegen
+    wrote, with the products of its Makefile in it, is generated again without asking."""
+    user = tmp_path / "project"
+    user.mkdir()
+    (user / "Makefile").write_text("all:\n\techo mine\n")
+    (user / "plan_demo.c").write_text("int main(void) { return 0; }\n")
+    before = _contents(user)
+    r = _codegen("--out", str(user))
+    assert r.returncode == 2 and one_line(r.stderr), r.stderr
+    assert str(user) in r.stderr and "--overwrite" in r.stderr and "Makefile" in r.stderr
+    assert _contents(user) == before
+    (user / "notes.txt").write_text("keep me\n")
+    r = _codegen("--out", str(user), "--overwrite")
+    assert r.returncode == 0, r.stderr
+    assert "Builds the generated C99 planner" in (user / "Makefile").read_text()
+    assert (user / "notes.txt").read_text() == "keep me\n" and (user / "rollplan_model.c").exists()
+
+    fresh = tmp_path / "fresh"
+    assert _codegen("--out", str(fresh)).returncode == 0
+    (fresh / "plan_demo").write_bytes(b"\x7fELF")            # what `make` leaves
+    (fresh / "build" / "arm-m7").mkdir(parents=True)
+    r = _codegen("--out", str(fresh), "--real", "float")
+    assert r.returncode == 0, r.stderr
+    assert "#define casadi_real float" in (fresh / "rollplan_model.h").read_text()   # generated again
+    (fresh / "plan_demo.c").write_text("/* edited */\n")
+    r = _codegen("--out", str(fresh))
+    assert r.returncode == 2 and one_line(r.stderr) and "plan_demo.c" in r.stderr, r.stderr
+    assert (fresh / "plan_demo.c").read_text() == "/* edited */\n"
 
 
 def test_plan_demo_no_plan_agrees_with_python(built):

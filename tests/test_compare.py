@@ -20,7 +20,14 @@ from rollplan.execution.optimal_timing import optimal_timing, timed_samples, tim
 from rollplan.execution.path import ContactPath
 from rollplan.measures import TimedMotion, integrate_samples, measure
 from rollplan.planners.collocation.costs import N_PAR
-from rollplan.planners.collocation.rest import MIN_INTERVALS, RestToRestPlanner, certify, rest_parameters
+from rollplan.planners.collocation.rest import (
+    MAX_INTERVALS,
+    MEMORY_GB,
+    MIN_INTERVALS,
+    RestToRestPlanner,
+    certify,
+    rest_parameters,
+)
 from rollplan.studies.comparison import SIDE_KEYS, TRAJECTORY_KEYS, compare, leaf_radius_bound, robot_for_k
 
 import references
@@ -246,7 +253,7 @@ def test_cli_compare_json_has_the_issues_keys(tmp_path, capsys):
     (["compare", "--to", "0.5", "0.3", "--contact-bound", "2"], "contact_bound"),
     (["compare", "--to", "0.5", "0.3", "--horizon", "-1"], "horizon"),
     (["compare", "--to", "0.5", "0.3", "--horizon", "1e-300"], "[1e-06, 1000000]"),
-    (["compare", "--to", "0.5", "0.3", "--intervals", "3"], "in [4, 100000]"),
+    (["compare", "--to", "0.5", "0.3", "--intervals", "3"], f"in [4, {MAX_INTERVALS}]"),
     (["compare", "--to", "0.5", "0.3", "--k", "1"], "(1, 100]"),
     (["compare", "--to", "0.5", "0.3", "--json", "/nonexistent/dir/x.json"], "not writable"),
 ])
@@ -254,6 +261,38 @@ def test_cli_compare_bad_input(argv, msg, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert msg in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("intervals", ["100000", str(MAX_INTERVALS + 1)])
+def test_intervals_beyond_what_memory_serves_are_refused_at_once(intervals):
+    """`compare --intervals 100000`, inside the range the help advertised, grew past 4.6 GB and was killed.
+    Sizes above MAX_INTERVALS (whose NLP keeps within about 2 GB) are refused at once, in one line naming the
+    limit and the memory."""
+    import subprocess
+    import sys
+    import time
+
+    t0 = time.perf_counter()
+    r = subprocess.run([sys.executable, "-m", "rollplan.cli", "compare", "--to", "0.5", "0.3", "--intervals",
+                        intervals], capture_output=True, text=True, timeout=120, check=False)
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert f"in [{MIN_INTERVALS}, {MAX_INTERVALS}]" in r.stderr and f"{MEMORY_GB} GB" in r.stderr
+    assert "--intervals" in r.stderr or "intervals" in r.stderr
+    assert time.perf_counter() - t0 < 60   # before any work (start-up of a loaded machine included)
+
+
+def test_compare_shows_its_progress():
+    """Long comparisons were silent: compare reports its stages (the NLP, the GP timing, each collocation start)."""
+    from rollplan.progress import reporting
+
+    seen = []
+    with reporting(lambda label, done, total, **kw: seen.append((label, done, total, kw.get("stage")))):
+        compare((0.5, 0.3, 0.4), 1, k=K, intervals=8, branches=1, naive=True)
+    mine = [s for s in seen if s[0] == "compare"]
+    stages = [s[3] for s in mine]
+    assert stages[:2] == ["building the collocation NLP", "timing the geometric-phase branches"]
+    assert any(s.startswith("collocation from gp0:") for s in stages) and "collocation from naive:0" in stages
+    assert mine[-1][1] == mine[-1][2] and stages[-1] == "done"
 
 
 @pytest.mark.parametrize("psi", ["0", "1"])

@@ -3,6 +3,7 @@
 with one line, never a traceback, a failed row or another plan."""
 
 import os
+import random
 import signal
 import subprocess
 import sys
@@ -76,6 +77,20 @@ def test_interrupts_call_raises_keyboard_interrupt_within_a_second(make):
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored
 
 
+def test_interrupts_call_drops_casadis_warning_about_the_swallowed_interrupt(capsys):
+    """Ctrl-C inside IPOPT printed CasADi's 'WARNING("KeyboardInterruptException")' line before the command's own
+    'rollplan: interrupted': two lines. interrupts.call drops that warning and passes all other text on."""
+    import sys
+
+    function, args = endless_ipopt()
+    interrupt_after(0.5)
+    with pytest.raises(KeyboardInterrupt):
+        interrupts.call(lambda: (print("before", file=sys.stderr), function(**args)))
+    err = capsys.readouterr().err
+    assert err == "before\n", err
+    assert not isinstance(sys.stderr, type(None)) and "Quiet" not in type(sys.stderr).__name__   # restored
+
+
 def test_interrupts_call_passes_results_and_errors_through():
     assert interrupts.call(lambda a, b=0: a + b, 1, b=2) == 3
     with pytest.raises(ZeroDivisionError):
@@ -111,9 +126,9 @@ def fresh_cache_env(folder):
     return {**os.environ, "ROLLPLAN_CACHE_DIR": str(folder)}
 
 
-def run_and_interrupt(argv, delay, wait_for=None, env=None):
-    """Run the command; ``delay`` seconds after its stderr shows ``wait_for`` (or after the start), SIGINT.
-    Returns (exit code, seconds from the signal to the exit, stdout, stderr)."""
+def run_and_interrupt(argv, delay, wait_for=None, env=None, sig=signal.SIGINT):
+    """Run the command; ``delay`` seconds after its stderr shows ``wait_for`` (or after the start), SIGINT (or
+    ``sig``). Returns (exit code, seconds from the signal to the exit, stdout, stderr)."""
     proc = subprocess.Popen([sys.executable, "-m", "rollplan.cli", *argv], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=env)
     lines = []
@@ -131,7 +146,7 @@ def run_and_interrupt(argv, delay, wait_for=None, env=None):
     reader.start()
     assert seen.wait(120), "".join(lines)
     time.sleep(delay)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     t0 = time.perf_counter()
     out = proc.stdout.read()
     proc.wait(timeout=60)
@@ -151,6 +166,59 @@ def test_ctrl_c_stops_the_solver_loop_with_exit_130(delay, tmp_path):
     assert code == 130, err
     assert elapsed < 2.0
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay", [random.Random(5).uniform(0.3, 3.0) for _ in range(2)])
+def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(delay):
+    """Ctrl-C in `compare --intervals 2000` took 24-30 s to act: CasADi's construction of the collocation solver
+    (minutes for a large N, one call into C++ that never returns to Python) held it. SIGINT at a random moment
+    of that construction (N = 600: seconds) now exits 130 within a second or two (the machine may be loaded),
+    one line, no traceback."""
+    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3", "--intervals", "600"], delay,
+                                              wait_for="building the collocation NLP")
+    assert code == 130, err
+    assert elapsed < 3.0, (elapsed, err)
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("delay", [random.Random(7).uniform(0.0, 90.0) for _ in range(3)])
+def test_ctrl_c_at_any_moment_of_compare_acts_at_once(delay):
+    """SIGINT at a random moment of a whole `compare` (construction, GP timing, IPOPT, Gauss-Newton, CVODES
+    certification of each start): exit 130 within a few seconds on a loaded machine, or the finished run's 0."""
+    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3", "--intervals", "300"], delay,
+                                              wait_for="building the collocation NLP")
+    assert code in (0, 130), err
+    assert elapsed < 3.0, (delay, elapsed, err)
+    assert "Traceback" not in err and "KeyboardInterruptException" not in err   # one line of ours, no warning
+    if code == 130:
+        assert err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
+def test_sigterm_stops_the_solver_loop_with_exit_143(tmp_path):
+    """SIGTERM killed the command at once, leaving its workers and temporaries; now, once the command runs (here:
+    while it builds its leaf table), it stops as for Ctrl-C, also inside the solvers (recorded like SIGINT, see
+    test_ctrl_c_stops_the_solver_loop_with_exit_130): exit 143, one line."""
+    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99"], 0.5, wait_for="leaf table",
+                                              env=fresh_cache_env(tmp_path / "cache"), sig=signal.SIGTERM)
+    assert code == 143, err
+    assert elapsed < 2.0
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: terminated"
+
+
+def test_interrupts_call_raises_terminated_for_sigterm():
+    """A SIGTERM that a solver swallowed is raised after it as Terminated (a KeyboardInterrupt)."""
+    function, args = endless_ipopt()
+    timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGTERM))
+    with interrupts.terminate_as_interrupt():
+        timer.start()
+        t0 = time.perf_counter()
+        with pytest.raises(interrupts.Terminated):
+            interrupts.call(function, **args)
+        assert time.perf_counter() - t0 < 1.5
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL   # restored
 
 
 @pytest.mark.slow

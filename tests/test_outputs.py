@@ -119,6 +119,72 @@ def test_disk_full_is_one_line_and_leaves_nothing(full_disk, tmp_path, capsys):
     assert leftovers == []
 
 
+TWO_TARGETS = "u_a,v_a,psi,steps,k\n0,1,0,1,2.5\n0.5,0.3,0.4,1,2.5\n"
+
+
+@pytest.mark.slow
+def test_batch_on_a_full_disk_leaves_no_output(full_disk, tmp_path, capsys):
+    """`batch` onto a full disk left an empty output file (its start wrote the empty file, which needs no
+    space). Now nothing is created; an existing output given with --overwrite is replaced by the first line
+    with the old file's (atomic, as every output), so when even that does not fit it is left as it was."""
+    targets = tmp_path / "t.csv"
+    targets.write_text(TWO_TARGETS)
+    old = full_disk / "old.jsonl"
+    (full_disk / "filler").unlink()
+    old.write_text("old\n")
+    fill(full_disk / "filler")
+    code, _, err = run(capsys, "batch", str(targets), "--out", str(full_disk / "b.jsonl"), "--jobs", "1", "--quiet")
+    assert code == 2 and "disk is full" in err and one_line(err), err
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler", "old.jsonl"]
+    code, _, err = run(capsys, "batch", str(targets), "--out", str(old), "--jobs", "1", "--quiet", "--overwrite")
+    assert code == 2 and "disk is full" in err and one_line(err), err
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler", "old.jsonl"]
+    assert old.read_text() == "old\n"
+
+
+@pytest.mark.slow
+def test_codegen_on_a_full_disk_leaves_nothing(full_disk, capsys):
+    """`codegen` onto a full disk left a half-written folder. Now a new folder appears whole or not at all, and
+    a folder written before is left as it was (and no temporary folder remains)."""
+    from rollplan import codegen
+
+    (full_disk / "filler").unlink()
+    codegen.generate(full_disk / "old")   # 0.4 MB of the 1 MiB disk
+    before = {p.name: p.read_bytes() for p in (full_disk / "old").iterdir()}
+    fill(full_disk / "filler")
+    code, _, err = run(capsys, "codegen", "--out", str(full_disk / "c"))
+    assert code == 2 and "disk is full" in err and one_line(err), err
+    code, _, err = run(capsys, "codegen", "--out", str(full_disk / "old"), "--real", "float")
+    assert code == 2 and "disk is full" in err and one_line(err), err
+    assert sorted(p.name for p in full_disk.iterdir()) == ["filler", "old"]
+    assert {p.name: p.read_bytes() for p in (full_disk / "old").iterdir()} == before
+
+
+@pytest.mark.slow
+def test_batch_that_fills_the_disk_keeps_whole_lines(tmp_path):
+    """A batch whose output reaches the limit after its first line (a file size limit: EFBIG, as a full disk):
+    exit 2, one line that says the finished lines are kept, and the output holds whole lines only, which
+    --resume continues."""
+    targets = tmp_path / "t.csv"
+    targets.write_text(TWO_TARGETS)
+    out = tmp_path / "p.jsonl"
+    code = ("import resource, sys\nresource.setrlimit(resource.RLIMIT_FSIZE, (int(sys.argv[1]),) * 2)\n"
+            "from rollplan.cli import main\nsys.exit(main(sys.argv[2:]))\n")
+    argv = ["batch", str(targets), "--out", str(out), "--jobs", "1", "--quiet"]
+    whole = subprocess.run([sys.executable, "-c", code, str(1 << 30), *argv], capture_output=True, text=True,
+                           timeout=600, check=False)
+    assert whole.returncode == 0, whole.stderr
+    first = out.read_text().splitlines(keepends=True)[0]   # the size of one line (times differ between runs)
+    out.unlink()
+    r = subprocess.run([sys.executable, "-c", code, str(len(first) + 100), *argv], capture_output=True, text=True,
+                       timeout=600, check=False)
+    assert r.returncode == 2 and one_line(r.stderr), r.stderr
+    assert "file size limit" in r.stderr and "1 finished lines are kept" in r.stderr and "--resume" in r.stderr
+    text = out.read_text()
+    assert text.count("\n") == 1 and text.endswith("\n") and json.loads(text)["index"] == 0   # no torn line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.jsonl", "t.csv"]
+
+
 @pytest.mark.slow
 def test_file_size_limit_is_one_line(tmp_path):
     """The same in a process with a file size limit (EFBIG; works without root)."""

@@ -36,9 +36,9 @@ from ..core.integrate import (
     spectral_leaf,
 )
 from ..core.rewrite import algebraic
-from ..errors import InputError, NoPlanError, OutputError, show, show_limit
+from ..errors import InputError, NoPlanError, OutputError, check_flag, show, show_limit
 from ..execution.path import curve_piece_function
-from ..outputs import check_writable, make_folder, write_atomic
+from ..outputs import check_folder, write_folder
 from ..planners.geometric import GeometricPhasePlanner, leafmap
 from ..planners.geometric import enumerate as enumerate_
 from ..planners.geometric.enumerate import K_MONOTONE
@@ -471,6 +471,9 @@ def _check_prefix(prefix) -> str:
 
 
 #: Files for the microcontroller builds (QEMU's mps2-an500 and mps2-an386 boards), copied into the output.
+#: What the generated Makefile builds in its folder (its ``clean`` target removes them).
+_BUILD_PRODUCTS = ("plan_demo", "plan_demo.o", "@PREFIX@_planner.o", "@PREFIX@_model.o", "lib@PREFIX@.a",
+                   "lib@PREFIX@.so", "build")
 _EMBEDDED = ("startup.c", "mps2-common.ld", "mps2-an500.ld", "mps2-an386.ld", "planner_only.c", "stack_bound.py")
 
 
@@ -535,13 +538,15 @@ def _template(name: str) -> str:
 
 
 def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX,
-             k_max: float = DEFAULT_K_MAX, real: str = "double") -> GeneratedCode:
+             k_max: float = DEFAULT_K_MAX, real: str = "double", overwrite: bool = False) -> GeneratedCode:
     """Write the C99 library, ``plan_demo.c`` and a ``Makefile`` into folder ``out``.
 
     Parameters
     ----------
     out : path
-        Output folder (created if missing; its parent must exist).
+        Output folder (created if missing; its parent must exist). It appears whole or not at all; an
+        existing folder must hold only files that ``generate`` wrote there (and the products of their
+        Makefile), else it is refused unless ``overwrite`` (:func:`rollplan.outputs.write_folder`).
     steps_per_leaf : int or "auto"
         Node intervals per leaf of the step map (a multiple of the 10 panels); ``"auto"``: the smallest of
         :data:`AUTO_STEPS_PER_LEAF` accurate up to ``k_max`` (:func:`auto_steps_per_leaf`).
@@ -553,6 +558,9 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     real : {"double", "float"}
         C type of every number (``casadi_real``). ``"float"`` is for single-precision FPUs (Cortex-M4F):
         no double operation is left, and plans are certified to FLOAT_CERT_TOL, not CERT_TOL.
+    overwrite : bool
+        Write into an existing folder that holds other files too, replacing those of the names written
+        (the others are kept).
 
     Returns
     -------
@@ -560,6 +568,7 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     """
     prefix = _check_prefix(prefix)
     real = _check_real(real)
+    out = check_folder(out, overwrite=check_flag("overwrite", overwrite))   # refused before any work
     if isinstance(steps_per_leaf, str) and steps_per_leaf == "auto":
         steps_per_leaf = auto_steps_per_leaf(k_max)                     # refused before anything is written
     _degree(steps_per_leaf, len(figure_eight().pieces[0].breaks) - 1)   # refused before anything is written
@@ -571,10 +580,6 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     if any(tuple(piece.breaks) != tuple(breaks) for piece in curve.pieces):
         raise ValueError("the C certificate assumes the leaves share their panels")
     lib = f"{prefix}_model"
-    names = (f"{lib}.c", f"{lib}.h", f"{prefix}.h", f"{prefix}_planner.c", "plan_demo.c", "Makefile", *_EMBEDDED)
-    out = make_folder(out)
-    for name in names:
-        check_writable(out / name)
     cg = ca.CodeGenerator(f"{lib}.c", {"with_header": True, "casadi_real": real})
     for f in funcs:
         cg.add(f)
@@ -640,10 +645,9 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "Makefile": fill(_template("Makefile")),
         **{name: fill(_template(name)) for name in _EMBEDDED},
     }
-    written = []
-    for name, text in files.items():
-        write_atomic(out / name, text.encode())
-        written.append(out / name)
+    products = [name.replace("@PREFIX@", prefix) for name in _BUILD_PRODUCTS]
+    write_folder(out, {name: text.encode() for name, text in files.items()}, overwrite=overwrite, products=products)
+    written = [out / name for name in files]
     code_bytes = sum(len(t.encode()) for n, t in files.items() if n.endswith((".c", ".h")))
     work = sizes["sz_w"]
     log.info("wrote %s: %d bytes of C, %d doubles of work memory", out, code_bytes, work)

@@ -140,7 +140,7 @@ def optimal_timing(path: ContactPath, horizon: float, cost: str, intervals: int 
     nlp = {"x": ca.vertcat(S, V, A), "f": f, "g": g}
     opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
             "ipopt.max_iter": 3000}
-    solver = ca.nlpsol("optimal_timing", "ipopt", nlp, opts)
+    solver = interrupts.call_in_thread(ca.nlpsol, "optimal_timing", "ipopt", nlp, opts)
     tt = np.linspace(0.0, 1.0, N + 1)
     s0 = L * (10 * tt ** 3 - 15 * tt ** 4 + 6 * tt ** 5)
     v0 = L * (30 * tt ** 2 - 60 * tt ** 3 + 30 * tt ** 4) / horizon

@@ -37,11 +37,15 @@ the same lines as a run never stopped (up to the solvers' wall-clock times,
 Safety (:mod:`rollplan.outputs`): the output is locked for the whole run (a
 second batch on the same output is refused), it may not be the targets file,
 an existing output needs ``resume`` or ``overwrite`` (not both), and
-``resume`` refuses a file that is not a batch output.
+``resume`` refuses a file that is not a batch output. The output is made
+(atomically) with its first new line, so a run that cannot write that (disk
+full) leaves no file and an existing output as it was; a later line that
+cannot be written whole is cut off again, leaving the finished lines.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import logging
@@ -50,7 +54,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import InputError, NoPlanError, SolverError, check_choice, check_flag, check_whole
+from ..errors import InputError, NoPlanError, OutputError, SolverError, check_choice, check_flag, check_whole
 from ..inputs import parse_number, parse_whole, read_csv, show_path
 from ..io import plan_to_dict, tagged
 from ..outputs import LineWriter, check_writable, claim, write_atomic
@@ -307,21 +311,36 @@ def _run(table, out: Path, executor, resume, overwrite, method, progress) -> Bat
     report = ((lambda d, total, f: shown("batch", d, total, failed=f)) if shown is not None else (progress or None))
     start = time.perf_counter()
     failed, count = 0, len(kept)
+    head = "".join(_dump(lines[i]) for i in kept)
+    writer = None
     try:
         with executor:   # connects to a scheduler (and checks its workers) before the output is touched
-            write_atomic(out, "".join(_dump(lines[i]) for i in kept).encode(), "output file")
-            with LineWriter(out, "output file", sync_every=1 << 30, sync_seconds=FSYNC_INTERVAL) as writer:
-                results = executor.map(_plan_job, todo, on_error=_lost_row)   # yields in input order
+            results = executor.map(_plan_job, todo, on_error=_lost_row)   # yields in input order
+            if report:
+                report(count, len(rows), failed)
+            for d in results:
+                if writer is None:   # the output is replaced when its first new line is ready, not before
+                    write_atomic(out, (head + _dump(d)).encode(), "output file")
+                    writer = LineWriter(out, "output file", sync_every=1 << 30, sync_seconds=FSYNC_INTERVAL)
+                else:
+                    try:
+                        writer.write(_dump(d))
+                    except OutputError as exc:
+                        raise OutputError(f"{exc}; its {count} finished lines are kept: make room and rerun "
+                                          "with resume=True") from None
+                lines[d["index"]] = d
+                count += 1
+                failed += d["status"] != "ok"
                 if report:
                     report(count, len(rows), failed)
-                for d in results:
-                    writer.write(_dump(d))
-                    lines[d["index"]] = d
-                    count += 1
-                    failed += d["status"] != "ok"
-                    if report:
-                        report(count, len(rows), failed)
+            if writer is None:
+                write_atomic(out, head.encode(), "output file")
+            else:
+                writer.close()
     finally:
+        if writer is not None:
+            with contextlib.suppress(OSError, InputError):
+                writer.close()
         if shown is not None:
             shown.close()
     if kept and todo and kept[-1] > todo[0][0]:   # kept lines came first, out of input order: sort

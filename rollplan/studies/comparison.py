@@ -45,6 +45,7 @@ from ..planners.collocation.rest import (
     RestResult,
     RestToRestPlanner,
     check_horizon,
+    check_intervals,
     guess_from_samples,
     naive_guess,
 )
@@ -52,6 +53,7 @@ from ..planners.collocation.transcription import Guess
 from ..planners.geometric import Plan
 from ..planners.geometric import plan as gp_plan
 from ..problem import K_MAX, Problem
+from ..progress import report
 from ..robot import Robot
 
 __all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side", "Comparison",
@@ -286,7 +288,7 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
         In :data:`COMPARED_COSTS`; ``"rotor_energy"`` needs a robot.
     intervals, degree, scheme
         N (of both the collocation and the GP timing) in [:data:`~rollplan.planners.collocation.rest.MIN_INTERVALS`,
-        100000], d and points of the collocation.
+        :data:`~rollplan.planners.collocation.rest.MAX_INTERVALS`], d and points of the collocation.
     contact_bound : float
         Of both planners [rad], in (0, pi/2).
     branches : int
@@ -313,10 +315,13 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     horizon = check_horizon(horizon)
     branches = check_whole("branches", branches, 1, 100)
     rob = _robot(problem, robot)
+    check_intervals(intervals)
+    report("compare", 0, 3, stage="building the collocation NLP")
     planner = _planner(intervals, degree, scheme, cost, contact_bound)   # checks N, d, scheme, bound
 
     t0 = time.perf_counter()
     timed = []
+    report("compare", 1, 3, stage="timing the geometric-phase branches")
     for p in _branches(problem, rob, contact_bound, branches):
         path, motion = _timed(p, rob, horizon, planner)
         timed.append((p, Side(motion, measure(motion), p.residual, 0.0), path))
@@ -337,15 +342,20 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
         x2[:, 2] += 2 * math.pi * (m2 - m0) * t_best / t_best[-1]
         candidates.append((f"gp{best_gp}:{m0}->{m2}", m2, t_best, x2, None))
     t1 = time.perf_counter()
+    naive_turns = sorted({m0, 0}, key=abs) if naive else []
+    total = 2 + len(candidates) + len(naive_turns)
     for name, m, t, x7, start_cost in candidates:
+        report("compare", 2 + len(starts), total, stage=f"collocation from {name}")
         guess = guess_from_samples(tr, t, x7, name)
         starts.append(_run(planner, problem, rob, guess, horizon, m, start_cost, results))
     if naive:
-        for m in sorted({m0, 0}, key=abs):
+        for m in naive_turns:
+            report("compare", 2 + len(starts), total, stage=f"collocation from naive:{m}")
             start, final = planner.boundary(problem, m)
             starts.append(_run(planner, problem, rob, naive_guess(tr, start, final), horizon, m, None, results,
                                f"naive:{m}"))
     coll_time = time.perf_counter() - t1
+    report("compare", total, total, stage="done")
     if not results:
         worst = starts[0].status
         raise SolverError(f"no start of the collocation converged for {problem.describe()} (first: {worst})", worst)

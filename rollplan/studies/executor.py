@@ -27,7 +27,8 @@ Backends:
     first item's time (one item when an item takes longer than :data:`CHUNK_SECONDS`), so short items
     do not pay a round trip each. Elsewhere, or when this process runs other threads (forking them is
     unsafe), the workers are spawned and run ``warm()`` once each. Ctrl-C in this process stops the
-    workers at once.
+    workers at once; a worker never outlives this process (it is killed when this process ends, even
+    by SIGKILL).
 ``scheduler = "tcp://host:port"``
     The items are tasks on a Dask distributed cluster (optional extra:
     ``pip install 'rollplan[distributed]'``). The workers must have the same version of rollplan
@@ -40,6 +41,7 @@ Backends:
 
 from __future__ import annotations
 
+import ctypes
 import gc
 import logging
 import multiprocessing
@@ -77,15 +79,43 @@ class ExecutorError(RuntimeError):
     """The machinery running the items failed (e.g. the Dask scheduler was lost); the items are not at fault."""
 
 
-def _ignore_sigint() -> None:
-    """Worker initializer: Ctrl-C is handled by the parent, which stops the pool; progress is the parent's to
-    show (a forked worker inherits the parent's reporter)."""
+#: ``prctl`` option: the signal the kernel sends this process when its parent dies (Linux).
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent(parent: int) -> None:
+    """Make this worker end when its parent process ``parent`` ends, however it ends (SIGKILL included): the
+    kernel kills it (Linux, ``PR_SET_PDEATHSIG``); elsewhere a thread checks the parent every second. A
+    worker whose parent is gone already exits at once."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        armed = libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
+    except (OSError, AttributeError):   # no prctl (not Linux)
+        armed = False
+    if os.getppid() != parent:
+        os._exit(1)
+    if not armed:
+        def watch():
+            while os.getppid() == parent:
+                time.sleep(1.0)
+            os._exit(1)
+
+        threading.Thread(target=watch, name="rollplan-parent-watch", daemon=True).start()
+
+
+def _worker_init(parent: int) -> None:
+    """Worker initializer: the worker dies with its parent (:func:`_die_with_parent`); Ctrl-C and SIGTERM are
+    handled by the parent, which stops the pool (a worker ignores SIGINT, and SIGTERM, the parent's way of
+    stopping it, ends it at once); progress is the parent's to show (a forked worker inherits the parent's
+    reporter)."""
+    _die_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     silence()
 
 
-def _spawned_worker_init(warm) -> None:
-    _ignore_sigint()
+def _spawned_worker_init(warm, parent: int) -> None:
+    _worker_init(parent)
     if warm is not None:
         warm()
 
@@ -208,7 +238,7 @@ class Executor:
         ctx = multiprocessing.get_context(method)
         if method != "fork":
             workers = min(self.jobs, len(rest))
-            self._pool = ctx.Pool(workers, initializer=_spawned_worker_init, initargs=(self.warm,))
+            self._pool = ctx.Pool(workers, initializer=_spawned_worker_init, initargs=(self.warm, os.getpid()))
             log.info("%d worker processes (%s)", workers, method)
             yield from self._pool.imap(fn, rest, chunksize=1)   # in input order
             return
@@ -220,7 +250,7 @@ class Executor:
         # so their pages stay shared instead of being copied into every worker.
         gc.freeze()
         try:
-            self._pool = ctx.Pool(workers, initializer=_ignore_sigint)
+            self._pool = ctx.Pool(workers, initializer=_worker_init, initargs=(os.getpid(),))
         finally:
             gc.unfreeze()
         log.info("%d worker processes (fork), %d item(s) per chunk", workers, chunk)

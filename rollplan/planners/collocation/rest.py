@@ -12,6 +12,7 @@ Problem, time scaling, costs, correction and certification: docs/design/collocat
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass
@@ -40,7 +41,10 @@ from .transcription import (
 
 __all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "MinimumTimePlanner", "certify", "rest_parameters",
            "motion_function", "naive_guess", "guess_from_samples", "correct", "check_horizon",
-           "polar_angles", "TOLERANCE", "MIN_INTERVALS", "HORIZON_RANGE", "COST_POWERS"]
+           "polar_angles", "check_intervals", "TOLERANCE", "MIN_INTERVALS", "MAX_INTERVALS", "MEMORY_GB",
+           "HORIZON_RANGE", "COST_POWERS"]
+
+log = logging.getLogger(__name__)
 
 #: Running costs of the rest-to-rest problem, by name: ``L(xdot, omega, torque, par)``.
 REST_COSTS = {
@@ -55,6 +59,11 @@ TOLERANCE = CERTIFICATE_TOLERANCE
 CORRECTION_TOL = 1e-12
 #: Least number of intervals: 2N controls for the 7 end conditions (docs/design/collocation.md).
 MIN_INTERVALS = 4
+#: Most intervals: the NLP is built symbolically and its memory (construction, IPOPT) grows with N; up to this
+#: N a solve stays within about :data:`MEMORY_GB` GB.
+MAX_INTERVALS = 2000
+#: Memory [GB] that :data:`MAX_INTERVALS` keeps a solve within (named when a larger N is refused).
+MEMORY_GB = 2
 #: Horizons T [s] served (docs/design/collocation.md, time scaling).
 HORIZON_RANGE = (1e-6, 1e6)
 #: Power p of the scaling law ``J(T) = J(1) T^p`` of each cost.
@@ -64,6 +73,16 @@ BACKOFF_TRIES = 4
 #: Safety factor of a backoff: the bound (or limit) is lowered by this times the excess measured on the samples.
 BACKOFF_FACTOR = 1.25
 _NEWTON_STEPS = 8
+
+
+def check_intervals(intervals) -> int:
+    """``intervals`` if a whole number in [:data:`MIN_INTERVALS`, :data:`MAX_INTERVALS`]; InputError naming the
+    range (and, above it, the memory it keeps to) otherwise."""
+    n = check_whole("intervals", intervals)
+    if n > MAX_INTERVALS:
+        raise InputError(f"intervals = {n} is not allowed: it must be a whole number in [{MIN_INTERVALS}, "
+                         f"{MAX_INTERVALS}] (the limit keeps a solve within about {MEMORY_GB} GB of memory)")
+    return check_whole("intervals", n, MIN_INTERVALS, MAX_INTERVALS)
 
 
 def check_horizon(horizon) -> float:
@@ -137,7 +156,7 @@ class RestToRestPlanner:
     Parameters
     ----------
     intervals, degree, scheme
-        The :class:`Transcription`: N in [:data:`MIN_INTERVALS`, 100000], d in 1..9, ``"legendre"`` or
+        The :class:`Transcription`: N in [:data:`MIN_INTERVALS`, :data:`MAX_INTERVALS`], d in 1..9, ``"legendre"`` or
         ``"radau"``.
     cost : str
         Name in :data:`REST_COSTS`.
@@ -154,7 +173,7 @@ class RestToRestPlanner:
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre",
                  cost: str = "angular_velocity", contact_bound: float = math.radians(80.0), tol: float = 1e-9,
                  max_iter: int = 150, samples_per_interval: int = 8) -> None:
-        check_whole("intervals", intervals, MIN_INTERVALS, 100000)
+        check_intervals(intervals)
         self.transcription = Transcription(intervals, degree, scheme, nx=7, nu=2)
         if not isinstance(cost, str) or cost not in REST_COSTS:
             raise InputError(f"cost = {cost!r} is not allowed: choose one of {', '.join(REST_COSTS)}")
@@ -169,8 +188,10 @@ class RestToRestPlanner:
         xdot, omega, _, torque = f(x, w, par)
         self.point = ca.Function("point", [x, w, par], [xdot, REST_COSTS[cost](xdot, omega, torque, par), omega])
         t0 = time.perf_counter()
+        log.info("building the collocation NLP: N = %d, d = %d, cost %s", intervals, degree, cost)
         nlp, self.path_rows = self.transcription.contact_nlp(self.point, N_PAR)
-        self.solver = ca.nlpsol("rest", "ipopt", nlp, ipopt_options(self.tol, self.max_iter))
+        # minutes for a large N, in C++ that never returns to Python: built in a thread, so Ctrl-C acts at once
+        self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, ipopt_options(self.tol, self.max_iter))
         self.build_time_s = time.perf_counter() - t0
 
     def boundary(self, problem: Problem, turns: int) -> tuple[np.ndarray, np.ndarray]:
@@ -429,9 +450,9 @@ class MinimumTimePlanner:
                 lim += [rates / limits[0], torque / limits[1]]
         g_lim = ca.vertcat(*lim)
         self.n_dyn, self.n_lim, self.path_rows = g_dyn.numel(), g_lim.numel(), rows
-        self.solver = ca.nlpsol("min_time", "ipopt", {"x": ca.vertcat(V, T), "p": ca.vertcat(fixed, limits),
-                                                      "f": T, "g": ca.vertcat(g_dyn, g_lim)},
-                                ipopt_options(tol, max_iter))
+        self.solver = interrupts.call_in_thread(ca.nlpsol, "min_time", "ipopt",
+                                                {"x": ca.vertcat(V, T), "p": ca.vertcat(fixed, limits), "f": T,
+                                                 "g": ca.vertcat(g_dyn, g_lim)}, ipopt_options(tol, max_iter))
 
     def solve(self, problem: Problem, guess: Guess, duration_guess: float, robot: Robot, turns: int = 0):
         """Minimum-time rest-to-rest motion within ``robot``'s limits (both must be set), from ``guess``
