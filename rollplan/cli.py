@@ -30,7 +30,6 @@ from .errors import (
     NoPlanError,
     SolverError,
     check_finite,
-    check_range,
     check_whole,
     show,
     show_limit,
@@ -541,29 +540,42 @@ def cmd_reproduce(args) -> int:
     return EXIT_OK
 
 
-def _file_plan(rp, name):
-    """The plan of a plan file made again for its own robot (the controller's model), and its duration per piece."""
-    data = rp.data
-    if "waypoints" in data:
-        raise InputError("closed-loop execution of a route is not supported: give a plan file of 'rollplan plan'")
-    try:
-        steps = check_whole("steps", data.get("steps"), 1)
-        duration = check_range("duration", data.get("duration"), 0.0, None, low_open=True)
-    except InputError as exc:
-        raise InputError(f"plan file {show_path(name)}: {exc} (make it with: rollplan plan ... --duration T "
-                         "--json FILE)") from None
-    p = geometric.plan(rp.goal, steps, robot=rp.robot, start=rp.start)
-    return p, duration / len(as_composed(p).pieces)
-
-
 def _noise(args):
     from .execution.plants import disturbance
 
     sigma = check_finite("--noise", args.noise)
     if sigma < 0 or sigma > 0.1:
         raise InputError(f"--noise {args.noise!r} is not allowed: it must lie in [0, 0.1] (R and rad per sample)")
-    seed = check_whole("seed", args.seed, 0, 2**63 - 1)
-    return (disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=seed),) if sigma > 0 else ()
+    return (disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=args.seed),) if sigma > 0 else ()
+
+
+def _check_simulate_options(args) -> None:
+    """simulate's own options, every one whatever the mode (a seed is checked without --noise too)."""
+    check_whole("--seed", args.seed, 0, 2**63 - 1)
+    check_whole("--average", args.average, 1, 1_000_000)
+    check_whole("--corrections", args.corrections, 0, 100)
+    tol = check_finite("--tolerance", args.tolerance)
+    if not 0 < tol <= 1:
+        raise InputError(f"--tolerance {args.tolerance!r} is not allowed: it must lie in (0, 1] (R and rad)")
+
+
+def _file_samples(rp, args, plant):
+    """The plan file's own motion as samples, its piece duration and figure eights (for ``plant``)."""
+    import numpy as np
+
+    from .execution.feedback import Samples
+
+    if plant in ("torques", "mujoco") and rp.rotor_torques is None:
+        raise InputError(f"plan file {str(args.plan_file)!r} has no key 'rotor_torques': the {plant} plant replays "
+                         "the plan's torques (make it with: rollplan plan ... --duration T --json FILE)")
+    if args.closed_loop and rp.steps is None:
+        raise InputError(f"plan file {str(args.plan_file)!r} has no key 'steps': the closed loop re-plans the figure "
+                         "eights left (make it with: rollplan plan ... --duration T --json FILE)")
+    torques = rp.rotor_torques if rp.rotor_torques is not None else np.zeros_like(rp.rotor_rates)
+    segment = rp.segment if rp.segment is not None else np.zeros(rp.time.size, int)
+    pieces = max(len(rp.kinds), int(np.unique(segment).size))
+    samples = Samples(rp.time, rp.rotor_rates, torques, segment, rp.kinds, "linear")
+    return samples, float(rp.time[-1] - rp.time[0]) / pieces, rp.steps or 1
 
 
 def _position(error_r: float, robot) -> str:
@@ -572,20 +584,26 @@ def _position(error_r: float, robot) -> str:
 
 
 def _simulate_executed(args, rp, robot, plant=None, **engine) -> int:
-    """``rollplan simulate --closed-loop`` and ``--plant torques``: open and closed loop on the chosen plant
-    (``plant``, default ``--plant``; ``engine``: more arguments of the execution, e.g. the MuJoCo model)."""
-    from .execution.feedback import execute
+    """``rollplan simulate`` with ``--closed-loop``, ``--plant torques`` or ``--noise``: the file's own motion on
+    the chosen plant (``plant``, default ``--plant``; ``engine``: more arguments of the execution, e.g. the MuJoCo
+    model), open loop, and in closed loop that motion corrected."""
+    from .execution.feedback import execute_samples
 
     plant = plant or args.plant
     dist = _noise(args)
-    plan, piece = _file_plan(rp, args.plan_file)
-    runs = [execute(plan, rp.robot, robot, piece, plant=plant, closed_loop=closed, disturbances=dist,
-                    progress=report, **engine) for closed in (False, True)[:1 + bool(args.closed_loop)]]
+    first, piece, steps = _file_samples(rp, args, plant)
+    timing = rp.timing or "min-jerk"
+    common = {"plant": plant, "disturbances": dist, "timing": timing, "rest_readings": args.average,
+              "tolerance": args.tolerance, "corrections": args.corrections, "progress": report}
+    runs = [execute_samples(first, rp.start, rp.goal, steps, rp.robot, robot, piece, closed_loop=closed, **common,
+                           **engine)
+            for closed in (False, True)[:1 + bool(args.closed_loop)]]
     opened, run = runs[0], runs[-1]
     f, g, e = run.final, rp.goal, run.error
-    print(f"rollplan simulate: {plant} plant, {'closed' if args.closed_loop else 'open'} loop, "
-          f"{plan.steps} figure eights of {_g(2 * piece)} s (min-jerk per piece), robot k = {_g(robot.k)} "
-          f"(planned k = {_g(rp.robot.k)}){', measurement noise ' + _g(args.noise) if dist else ''}")
+    n_corr = sum(s["mode"] == "correction" for s in run.segments)
+    print(f"rollplan simulate: {plant} plant, {'closed' if args.closed_loop else 'open'} loop, the file's motion "
+          f"({first.time.size} samples over {_g(first.time[-1] - first.time[0])} s, timing {timing}), robot k = "
+          f"{_g(robot.k)} (planned k = {_g(rp.robot.k)}){', measurement noise ' + _g(args.noise) if dist else ''}")
     print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
           f"  u_o = {_g(f[3])} rad  v_o = {_g(f[4])} rad")
     print(f"  target        u_a = {_g(g.u_a)} m  v_a = {_g(g.v_a)} m  psi = {_g(g.psi)} rad")
@@ -593,17 +611,29 @@ def _simulate_executed(args, rp, robot, plant=None, **engine) -> int:
           f"psi {e[2]:.3e} rad" + (f"; open loop {opened.arrival_error:.3e}, position "
                                     f"{_position(opened.position_error, robot)}" if args.closed_loop else ""))
     if args.closed_loop:
+        print(f"  corrections   {n_corr} after the plan (tolerance {_g(args.tolerance)}, at most {args.corrections}; "
+              f"re-plans and corrections timed {timing}, {_g(piece)} s a piece or the shortest within the limits; "
+              f"state at rest: mean of {args.average} reading{'s' if args.average > 1 else ''})")
+        if run.stopped:
+            print(f"  stopped       {run.stopped}")
         print("  estimated k   " + ", ".join(_g(d["k"]) for d in run.estimates if "k" in d))
     if args.json:
         d = run.to_dict()
         d.update({"open_loop_arrival_error": opened.arrival_error, "robot": robot.as_dict(),
-                  "model_robot": rp.robot.as_dict(), "noise": args.noise, "seed": args.seed})
+                  "model_robot": rp.robot.as_dict(), "noise": args.noise, "seed": args.seed,
+                  "corrections": n_corr, "tolerance": args.tolerance, "average": args.average})
         _emit_json(args, d, "m")
+    if args.plot:
+        title = (f"{plant} plant, {'closed' if args.closed_loop else 'open'} loop on {args.plan_file}: arrival "
+                 f"error {run.arrival_error:.2e} ({NORM})" + (f", open loop {opened.arrival_error:.2e}"
+                                                            if args.closed_loop else ""))
+        _plot_simulation(args, rp, run.time, run.state, run.rotor_rates, robot, title)
     return EXIT_OK
 
 
-def _planned_states(rp):
-    """The plan file's planned states at its sample times, (N, 5), or None if it has none usable."""
+def _planned_states(rp, time=None):
+    """The plan file's planned states at ``time`` (default: its sample times; after its end, its last state),
+    (N, 5), or None if it has none usable."""
     import numpy as np
 
     try:
@@ -611,7 +641,19 @@ def _planned_states(rp):
     except (TypeError, ValueError):
         return None
     ok = state.shape == (rp.time.size, 5) and np.all(np.isfinite(state))
-    return state if ok else None
+    if not ok:
+        return None
+    if time is None:
+        return state
+    keep = rp.distinct
+    return np.column_stack([np.interp(time, rp.time[keep], state[keep, i]) for i in range(5)])
+
+
+def _plot_simulation(args, rp, time, state, rates, robot, title) -> None:
+    from .plots.motion import plot_simulation
+
+    save_figure(plot_simulation(time, state, rates, rp.goal, _planned_states(rp, time), robot, title), args.plot)
+    print(f"wrote {args.plot}")
 
 
 def cmd_simulate(args) -> int:
@@ -619,6 +661,7 @@ def cmd_simulate(args) -> int:
     from .io import load_rotor_plan
 
     _check_outputs(json=args.json, figure=args.plot, inputs=[args.plan_file, args.robot])
+    _check_simulate_options(args)
     _noise(args)   # the options before the files
     gain = _servo_gain(args)
     other = load_robot(args.robot) if args.robot else None
@@ -628,10 +671,11 @@ def cmd_simulate(args) -> int:
         return _simulate_mujoco(args, rp, robot, gain)
     if args.closed_loop or args.plant != "rates" or args.noise:
         return _simulate_executed(args, rp, robot)
-    sim = simulate_rotors(robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
+    keep = rp.distinct
+    sim = simulate_rotors(robot, rp.time[keep], rp.rotor_rates[keep], rp.goal, x0=rp.start.array())
     e = sim.error
     f, g = sim.final, rp.goal
-    print(f"rollplan simulate: {rp.time.size} samples over {_g(rp.time[-1] - rp.time[0])} s, robot k = {_g(robot.k)}"
+    print(f"rollplan simulate: {keep.size} samples over {_g(rp.time[-1] - rp.time[0])} s, robot k = {_g(robot.k)}"
           f"{' (planned k = %s)' % _g(rp.robot.k) if args.robot else ''}, R = {_g(robot.radius)} m")
     print(f"  final         u_a = {_g(f[0])} m  v_a = {_g(f[1])} m  psi = {_g(f[2])} rad"
           f"  u_o = {f[3]:.3g} rad  v_o = {f[4]:.3g} rad")
@@ -646,13 +690,9 @@ def cmd_simulate(args) -> int:
                           "error_units": "u_a, v_a and position_error in R; psi (wrapped), u_o, v_o in rad",
                           "robot": robot.as_dict()}, "m")
     if args.plot:
-        from .plots.motion import plot_simulation
-
         title = (f"rotor-driven simulation of {args.plan_file}: arrival error {sim.arrival_error:.2e} ({NORM}),\n"
                  f"position error {sim.position_error * robot.radius:.2e} m")
-        save_figure(plot_simulation(sim.time, sim.state, rp.rotor_rates, g, _planned_states(rp), robot, title),
-                    args.plot)
-        print(f"wrote {args.plot}")
+        _plot_simulation(args, rp, sim.time, sim.state, rp.rotor_rates[keep], robot, title)
     return EXIT_OK
 
 
@@ -784,10 +824,11 @@ def cmd_animate(args) -> int:
     if not 1 <= args.fps <= 100:
         raise InputError(f"--fps {args.fps} is not allowed: it must lie in [1, 100]")
     rp = load_rotor_plan(args.plan_file)
-    sim = simulate_rotors(rp.robot, rp.time, rp.rotor_rates, rp.goal, x0=rp.start.array())
+    keep = rp.distinct
+    sim = simulate_rotors(rp.robot, rp.time[keep], rp.rotor_rates[keep], rp.goal, x0=rp.start.array())
     with Progress(unit="frames") as progress:
-        make_animation(rp.time, sim.state, rp.rotor_rates, rp.robot, rp.goal, args.out, args.frames, args.fps,
-                       progress=progress)
+        make_animation(rp.time[keep], sim.state, rp.rotor_rates[keep], rp.robot, rp.goal, args.out, args.frames,
+                       args.fps, progress=progress)
     print(f"wrote {args.out}")
     return EXIT_OK
 
@@ -1097,16 +1138,20 @@ def build_parser() -> argparse.ArgumentParser:
                    help="folder for fig06.png..fig12.png, reproduction.json, REPRODUCTION.md (created if missing)")
     r.set_defaults(func=cmd_reproduce)
 
-    m = sub.add_parser("simulate", help="drive the robot by the plan's rotor rates alone and report the arrival error")
+    m = sub.add_parser("simulate", help="drive the robot by the plan file's own motion (its rotor rates, or its "
+                       "torques) and report the arrival error; optionally in closed loop")
     m.add_argument("plan_file", metavar="PLAN.json", help="made by: rollplan plan ... --duration T --json FILE")
     m.add_argument("--robot", metavar="FILE.toml", help="simulate this (real) robot instead of the planned one")
     m.add_argument("--json", metavar="FILE", help=_JSON_HELP.format("the simulated final state and errors"))
     m.add_argument("--plot", metavar="FILE.png", help="the simulated motion against the plan: paths, psi, deviation "
                    "in time, and the rotor rates that drove it")
     m.add_argument("--closed-loop", action="store_true",
-                   help="measure after each figure eight, estimate the robot, re-plan the rest (re-timed min-jerk)")
+                   help="run the file's motion, measure after each figure eight where it rests, estimate the robot, "
+                        "re-plan the rest (with the file's timing law), then correct from the measured state until "
+                        "--tolerance or --corrections")
     m.add_argument("--plant", choices=("rates", "torques"), default="rates",
-                   help="drive the robot by rotor rates (default) or by motor torques")
+                   help="drive the robot by the file's rotor rates (default) or by its motor torques (linear "
+                        "between samples, a step at a time given twice)")
     m.add_argument("--noise", type=_number, default=0.0, metavar="SIGMA",
                    help="measurement noise: standard deviation on u_a, v_a [R] and the angles [rad], "
                         "at most 0.1 (default 0)")
@@ -1120,6 +1165,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="with --engine mujoco: add a rotor-rate loop around the planned rates, gain in [0, 1000] "
                         "N m s/rad (default none: torques alone); --closed-loop and --noise also work with "
                         "--engine mujoco (the state measured from MuJoCo's pose)")
+    m.add_argument("--average", type=_whole, default=1, metavar="N",
+                   help="closed loop: the state at rest is the mean of N sensor readings (default 1)")
+    m.add_argument("--tolerance", type=_number, default=1e-6, metavar="TOL",
+                   help="closed loop: no correction once the measured arrival error is below TOL (R and rad; "
+                        "default 1e-6)")
+    m.add_argument("--corrections", type=_whole, default=3, metavar="N",
+                   help="closed loop: at most N correcting motions after the plan (default 3)")
     m.set_defaults(func=cmd_simulate)
 
     j = sub.add_parser("mjcf", help="write the robot's MuJoCo model (MJCF): shell, two rotors, torque motors, floor")

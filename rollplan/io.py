@@ -7,11 +7,12 @@ input; its names are re-exported here), reading through :mod:`rollplan.inputs`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, show, show_limit
 from .inputs import load_json, show_path
 from .outputs import check_figure_path, check_writable, save_figure, write_atomic, write_json
 from .planners.geometric.composed import as_composed
@@ -21,10 +22,13 @@ from .version import __version__
 
 __all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict",
            "UNITS", "tagged", "composed_to_dict", "route_to_dict", "motion_to_dict", "RotorPlan", "load_rotor_plan",
-           "MAX_PLAN_BYTES"]
+           "MAX_PLAN_BYTES", "MAX_PLAN_SAMPLES", "PLAN_FILE_VERSIONS", "check_plan_data"]
 
 #: Largest plan file read back (a plan of 1000 steps timed with 10^6 samples fits).
 MAX_PLAN_BYTES = 1 << 30
+#: Most samples (rows of ``time``) of a plan file read back: the most ``rollplan plan`` writes (its
+#: MAX_SAMPLES, 10^6) and room for the repeated times of the torques' steps.
+MAX_PLAN_SAMPLES = 1_100_000
 
 
 #: Units of every JSON output except the length (``tagged`` adds it): SI, angles in radians.
@@ -152,32 +156,40 @@ def motion_to_dict(motion) -> dict:
     ``state`` rows are in :class:`~rollplan.problem.State` order (u_a, v_a, psi, u_o, v_o);
     ``segment`` numbers the half-step of each sample; ``timing`` is the law's name and
     ``minimum_duration`` its shortest duration within the robot's limits (null without limits).
+    ``torque_breaks`` lists the times at which the torques step; each is given twice in ``time``, the
+    first row with the limit from the left, the second with the limit from the right
+    (:func:`rollplan.execution.actuation.motion_samples`): replayed linearly between rows, with the
+    step at a repeated time, the torques are the law's profile.
     """
+    from .execution.actuation import motion_samples
+
+    m = motion_samples(motion)
     return {
         "timing": motion.timing,
         "duration": motion.duration,
         "minimum_duration": motion.minimum_duration,
-        "time": _f(motion.time),
-        "omega": _rows(motion.omega),
-        "rotor_rates": _rows(motion.rotor_rates),
-        "rotor_angles": _rows(motion.rotor_angles),
-        "rotor_torques": _rows(motion.rotor_torques),
-        "state": _rows(motion.state),
-        "segment": [int(v) for v in motion.segment],
+        "time": _f(m["time"]),
+        "omega": _rows(m["omega"]),
+        "rotor_rates": _rows(m["rotor_rates"]),
+        "rotor_angles": _rows(m["rotor_angles"]),
+        "rotor_torques": _rows(m["rotor_torques"]),
+        "state": _rows(m["state"]),
+        "segment": [int(v) for v in m["segment"]],
+        "torque_breaks": _f(m["torque_breaks"]),
         "robot": motion.robot.as_dict(),
     }
 
 
 @dataclass(frozen=True)
 class RotorPlan:
-    """What a rotor-driven simulation needs from a plan file.
+    """What a rotor-driven simulation needs from a plan file (every key checked by :func:`check_plan_data`).
 
     Attributes
     ----------
     robot : Robot
         The robot the plan was made for.
     time : ndarray, shape (N,)
-        Sample times [s].
+        Sample times [s], nondecreasing; a time given twice is a step of the torques (:data:`TORQUE_REPLAY`).
     rotor_rates : ndarray, shape (N, 2)
         Rotor rates [rad/s].
     goal : State
@@ -186,6 +198,20 @@ class RotorPlan:
         The whole JSON object.
     start : State
         Start state [m, rad] (zero when the file has none).
+    steps : int or None
+        Figure eights of the plan (``steps``).
+    duration : float or None
+        ``duration`` [s] (the span of ``time``).
+    rotor_torques : ndarray, shape (N, 2) or None
+        Motor torques [N m].
+    timing : str or None
+        The timing law's name.
+    torque_breaks : ndarray
+        Times at which the torques step (``torque_breaks``) [s]; empty for files without the key.
+    segment : ndarray, shape (N,), int, or None
+        The piece of every sample (``segment``).
+    kinds : tuple of str
+        The kind of every piece (``segments``), () when the file does not give one per piece.
     """
 
     robot: Robot
@@ -194,14 +220,66 @@ class RotorPlan:
     goal: State
     data: dict
     start: State = State()
+    steps: int | None = None
+    duration: float | None = None
+    rotor_torques: np.ndarray | None = None
+    timing: str | None = None
+    torque_breaks: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    segment: np.ndarray | None = None
+    kinds: tuple = ()
+
+    @property
+    def distinct(self) -> np.ndarray:
+        """Indices of the samples at distinct times (the first of a repeated time): where the rates are sampled."""
+        keep = np.ones(self.time.size, bool)
+        keep[1:] = np.diff(self.time) > 0
+        return np.nonzero(keep)[0]
 
 
-def load_rotor_plan(path) -> RotorPlan:
-    """Read a plan written by ``rollplan plan --duration T --json FILE``; InputError (naming the file) if it
-    is not one: not a regular UTF-8 JSON file, or without the motion, or with a robot, target or samples
-    that are not allowed."""
-    where = f"plan file {show_path(path)}"
-    data = load_json(path, "plan file", MAX_PLAN_BYTES)
+#: Oldest and newest ``version`` of a plan file this rollplan reads (the format has not changed since 0.1.0).
+PLAN_FILE_VERSIONS = ("0.1.0", __version__)
+
+
+def _version_tuple(text):
+    parts = text.split(".") if isinstance(text, str) else []
+    if not 1 <= len(parts) <= 4 or not all(p.isascii() and p.isdigit() and len(p) <= 6 for p in parts):
+        return None
+    return tuple(int(p) for p in parts) + (0,) * (4 - len(parts))
+
+
+def _number(where, key, value, low, high, unit, low_open=False):
+    """A JSON number (int or float, not a string or a bool) in the range; InputError naming file, key and value."""
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    ok = ok and (value > low if low_open else value >= low) and value <= high
+    if not ok:
+        span = f"{'(' if low_open else '['}{show_limit(low)}, {show_limit(high)}]"
+        raise InputError(f"{where}: {key!r} = {show(value)} is not allowed: it must be a number in {span}{unit}")
+    return float(value)
+
+
+def _array(where, key, value, columns):
+    try:
+        a = np.asarray(value, float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{where}: {key!r} is not allowed: it must be a list of numbers"
+                         f"{f' (rows of {columns})' if columns else ''}") from None
+    return a
+
+
+def check_plan_data(data, where: str) -> RotorPlan:
+    """Every key of a plan file that ``simulate`` and ``animate`` read, checked once; the :class:`RotorPlan`.
+
+    ``where`` names the file. Each refusal is one InputError naming the file, the key, its value and
+    what is allowed: ``version`` (a rollplan version within :data:`PLAN_FILE_VERSIONS`), ``robot``,
+    ``target`` and ``goal`` (the same arrival when both are given), ``start``, ``steps`` (whole, in
+    [1, MAX_STEPS]), ``time`` (nondecreasing, a time at most twice, at most :data:`MAX_PLAN_SAMPLES`
+    samples), ``duration`` (its span), ``rotor_rates`` and ``rotor_torques`` (one row of two per sample, the
+    rates equal at a repeated time), ``timing`` (a law's name) and ``torque_breaks`` (the repeated times).
+    """
+    from .execution.plants import check_samples  # the execution layer only when a rotor plan is read
+    from .execution.timing import DURATION_RANGE, LAWS
+    from .problem import check_steps
+
     if not isinstance(data, dict):
         raise InputError(f"{where} is not a rollplan plan (a JSON object)")
     for key in ("time", "rotor_rates", "robot", "target"):
@@ -210,26 +288,90 @@ def load_rotor_plan(path) -> RotorPlan:
             raise InputError(f"{where} has no key {key!r}{hint}")
     # plan files written before the motors' limits existed have no such keys: unlimited
     robot = robot_from_mapping(data["robot"], f"{where}: 'robot'", derived=("k",))
+    version = data.get("version")
+    low, high = PLAN_FILE_VERSIONS
+    v = _version_tuple(version)
+    if v is None or not _version_tuple(low) <= v <= _version_tuple(high):
+        raise InputError(f"{where}: 'version' = {show(version)} is not allowed: it must be the version of rollplan "
+                         f"that wrote the file, from {low} to {high} (this one)")
     tg = data["target"]
     if not isinstance(tg, dict):
-        raise InputError(f"{where}: 'target' must be an object with u_a, v_a, psi")
+        raise InputError(f"{where}: 'target' = {show(tg)} is not allowed: it must be an object with u_a, v_a, psi")
     try:
-        goal = State.of({n: tg[n] for n in ("u_a", "v_a", "psi")}, "target")
-        if "goal" in data:
-            goal = State.of(data["goal"], "goal")
+        target = State.of({n: tg.get(n) for n in ("u_a", "v_a", "psi")}, "target")
+        goal = State.of(data["goal"], "goal") if "goal" in data else target
         start = State.of(data["start"], "start") if "start" in data else State()
         for name, state in (("start", start), ("goal", goal)):   # the region plans start and end in
             check_contact(state.u_o, state.v_o, name)
-        t = np.asarray(data["time"], float)
-        rates = np.asarray(data["rotor_rates"], float)
     except InputError as exc:
         raise InputError(f"{where}: {exc}") from None
-    except (TypeError, KeyError, ValueError):
-        raise InputError(f"{where}: 'target', 'start', 'goal', 'time' or 'rotor_rates' is malformed") from None
-    from .execution.plants import check_samples  # the execution layer only when a rotor plan is read
-
+    if not np.allclose(goal.array()[:3], target.array()[:3], rtol=1e-12, atol=1e-12 * robot.radius):
+        raise InputError(f"{where}: 'target' = ({target.u_a!r}, {target.v_a!r}, {target.psi!r}) is not allowed: "
+                         f"it must be the (u_a, v_a, psi) of 'goal' = ({goal.u_a!r}, {goal.v_a!r}, {goal.psi!r})")
+    steps = None
+    if "steps" in data:
+        try:
+            steps = check_steps(data["steps"])
+        except InputError as exc:
+            raise InputError(f"{where}: {exc}") from None
+    t = _array(where, "time", data["time"], None)
+    if t.ndim == 1 and t.size > MAX_PLAN_SAMPLES:
+        raise InputError(f"{where}: 'time' has {t.size} samples: at most {MAX_PLAN_SAMPLES} are allowed (the "
+                         "most 'rollplan plan --samples' writes)")
+    rates = _array(where, "rotor_rates", data["rotor_rates"], 2)
+    torques = None
+    if "rotor_torques" in data:
+        torques = _array(where, "rotor_torques", data["rotor_torques"], 2)
+        if torques.shape != rates.shape:
+            raise InputError(f"{where}: 'rotor_torques' has shape {torques.shape}: it must be that of "
+                             f"'rotor_rates', {rates.shape}")
     try:
-        t, rates = check_samples(t, rates)
+        keep = np.ones(t.size, bool)
+        if t.ndim == 1 and t.size > 1:
+            keep[1:] = np.diff(t) != 0
+        distinct, _ = check_samples(t[keep], rates[keep] if rates.ndim == 2 and rates.shape[0] == t.size else rates)
+        if torques is not None and not np.all(np.isfinite(torques)):
+            raise InputError("rotor_torques must be finite numbers")
     except InputError as exc:
         raise InputError(f"{where}: {exc}") from None
-    return RotorPlan(robot, t, rates, goal, data, start)
+    repeated = np.nonzero(~keep)[0]
+    if repeated.size and (np.any(repeated[1:] - repeated[:-1] < 2) or np.any(rates[repeated] != rates[repeated - 1])):
+        raise InputError(f"{where}: 'time' is not allowed: a time may be given twice only for a step of the torques, "
+                         "with the same rotor rates")
+    breaks = t[repeated]
+    if "torque_breaks" in data:
+        given = _array(where, "torque_breaks", data["torque_breaks"], None)
+        if given.shape != breaks.shape or not np.array_equal(given, breaks):
+            raise InputError(f"{where}: 'torque_breaks' = {show(data['torque_breaks'])} is not allowed: it must list "
+                             "the times given twice in 'time'")
+    duration = None
+    if "duration" in data:
+        lo, hi = DURATION_RANGE
+        duration = _number(where, "duration", data["duration"], lo, hi, " s")
+        span = float(t[-1] - t[0])
+        if not math.isclose(duration, span, rel_tol=1e-9):
+            raise InputError(f"{where}: 'duration' = {show(data['duration'])} is not allowed: it must be the span "
+                             f"of 'time', {span!r} s")
+    timing = data.get("timing")
+    if timing is not None and timing not in LAWS:
+        raise InputError(f"{where}: 'timing' = {show(timing)} is not allowed: choose one of {', '.join(LAWS)}")
+    segment, kinds = None, ()
+    if "segment" in data:
+        seg = data["segment"]
+        ok = isinstance(seg, list) and len(seg) == t.size and all(type(v) is int for v in seg)
+        segment = np.asarray(seg, int) if ok else None
+        if segment is None or np.any(np.diff(segment) < 0) or (segment.size and segment[0] < 0):
+            raise InputError(f"{where}: 'segment' = {show(seg)} is not allowed: it must be one nondecreasing whole "
+                             f"number >= 0 per sample ({t.size})")
+        pieces = data.get("segments")
+        if isinstance(pieces, list) and all(isinstance(p, dict) and isinstance(p.get("kind"), str) for p in pieces) \
+                and len(pieces) == np.unique(segment).size:
+            kinds = tuple(p["kind"] for p in pieces)
+    return RotorPlan(robot, t, rates, goal, data, start, steps, duration, torques, timing, breaks, segment, kinds)
+
+
+def load_rotor_plan(path) -> RotorPlan:
+    """Read a plan written by ``rollplan plan --duration T --json FILE``; InputError (naming the file) if it
+    is not one (:func:`check_plan_data`)."""
+    where = f"plan file {show_path(path)}"
+    return check_plan_data(load_json(path, "plan file", MAX_PLAN_BYTES), where)

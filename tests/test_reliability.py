@@ -358,7 +358,9 @@ def test_timed_route_is_certified_by_its_rotors_and_read_back(tmp_path, capsys):
                           "--json", str(out))
     assert code == 0, err
     d = json.loads(out.read_text())
-    final = references.rotor_drive(d["robot"], np.asarray(d["time"]), np.asarray(d["rotor_rates"]))[-1]
+    t = np.asarray(d["time"])
+    keep = np.r_[True, np.diff(t) > 0]   # a time given twice is a step of the torques: the rates once
+    final = references.rotor_drive(d["robot"], t[keep], np.asarray(d["rotor_rates"])[keep])[-1]
     assert math.hypot(final[0] - 0.05, final[1] - 0.05) / d["radius"] < 1e-6 and angle_gap(final[2], 0.5) < 1e-6
     rates, torques = np.abs(d["rotor_rates"]), np.abs(d["rotor_torques"])
     assert rates.max() <= 300.0 * (1 + 1e-9) and torques.max() <= 0.05 * (1 + 1e-6)

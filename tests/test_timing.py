@@ -223,7 +223,8 @@ def test_actuate_times_a_plan(plan):
     """actuate: the default is min-jerk; with limits and no duration, the law's shortest duration."""
     m = actuate(plan, ROBOT, None, 10, "time-optimal")
     assert m.timing == "time-optimal" and m.duration == m.minimum_duration
-    assert m.time.size == 4 * 3000 + 1 and np.array_equal(m.rest_indices, [0, m.time.size - 1])
+    assert m.time.size == 4 * get_law("time-optimal").samples_per_piece + 1
+    assert np.array_equal(m.rest_indices, [0, m.time.size - 1])
     assert m.segment[0] == 0 and m.segment[-1] == 3 and np.all(np.diff(m.segment) >= 0)
     traj = m.trajectory()
     assert traj.parameter == "t" and np.array_equal(traj.s, m.time) and np.array_equal(traj.segment, m.segment)
@@ -353,7 +354,10 @@ def test_cli_time_optimal_json(robot_file, tmp_path, capsys):
     assert code == 0, err
     data = json.loads(out.read_text())
     t, rates, torques = (np.asarray(data[k]) for k in ("time", "rotor_rates", "rotor_torques"))
-    assert t.size == 20001 and rates.shape == torques.shape == (t.size, 2)
+    uniform = 4 * max(get_law("time-optimal").samples_per_piece, 5000) + 1   # --samples 20000 over 4 pieces
+    breaks = np.asarray(data["torque_breaks"])   # each step of the torques is a time given twice
+    assert t.size == uniform + 2 * breaks.size and np.array_equal(np.unique(t[np.r_[False, np.diff(t) == 0]]), breaks)
+    assert rates.shape == torques.shape == (t.size, 2)
     assert data["duration"] == t[-1] == data["minimum_duration"] and data["timing"] == "time-optimal"
     util = LIMITS.utilisation(rates, torques)
     assert util.max() <= 1 + 1e-6 and np.mean(util > 0.99) > 0.9

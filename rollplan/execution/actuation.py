@@ -95,9 +95,10 @@ from ..robot import Robot
 from .limits import Limits
 from .path import ContactPath, plan_pieces
 from .plants import Simulation, simulate_rotors
-from .timing import TimeLaw, TimeProfile, get_law
+from .timing import TimeLaw, TimeProfile, get_law, joint_times
 
-__all__ = ["Motion", "actuate", "sample_motion", "samples_per_piece", "certify_motion", "DEFAULT_SAMPLES",
+__all__ = ["Motion", "actuate", "sample_motion", "samples_per_piece", "certify_motion", "torque_breaks",
+           "motion_samples", "TORQUE_STEP", "DEFAULT_SAMPLES",
            "MIN_SAMPLES_PER_LEAF", "MAX_SAMPLES", "MOTION_TOLERANCE"]
 
 log = logging.getLogger(__name__)
@@ -251,6 +252,78 @@ def sample_motion(path: ContactPath, profile: TimeProfile, samples: int, goal=No
              "max |torque| = %.3g N m", profile.law, pieces, m, T, np.abs(rates).max(), np.abs(torques).max())
     return Motion(t, s, sd, sdd, ps.segment, state, ps.W * sd[:, None], rates, ps.rotor_angles, torques,
                   path.robot, T, goal, profile.law, profile.minimum_duration, profile, path)
+
+
+#: Smallest step of the torques listed as a break, relative to the motion's largest torque.
+TORQUE_STEP = 1e-9
+
+
+def torque_breaks(motion: Motion) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where a motion's torques step: ``(times, left, right)``, the times in (0, T) and the one-sided torques.
+
+    Candidates are the law's breaks (where s'' may jump: the switches of the time-optimal law, the ends of
+    the non-stop laws' stretches) and the passages of the path's joints (where ``B`` jumps); listed are
+    those where the torque steps by more than :data:`TORQUE_STEP` times the motion's largest torque. The
+    left value is the limit from earlier times (the law's piece that ends there, the path's piece that
+    ends there), the right value the limit from later times.
+    """
+    empty = np.zeros(0), np.zeros((0, 2)), np.zeros((0, 2))
+    if motion.path is None:
+        return empty
+    prof, path, T = motion.profile, motion.path, motion.duration
+    cand = np.concatenate([prof.breaks[1:-1], joint_times(path, prof)])
+    cand = np.unique(cand[(cand > 1e-12 * T) & (cand < T * (1 - 1e-12))])
+    if cand.size == 0:
+        return empty
+    b = prof.breaks
+    values = []
+    for side in ("left", "right"):
+        piece = np.clip(np.searchsorted(b, cand, side=side) - 1, 0, b.size - 2)
+        sv, sd, sdd = prof.evaluate(cand, piece)
+        ps = path.evaluate(np.clip(sv, 0.0, path.length), side)
+        values.append(ps.A * sdd[:, None] + ps.B * sd[:, None] ** 2)
+    left, right = values
+    scale = max(float(np.abs(motion.rotor_torques).max()), 1e-300)
+    jump = np.abs(right - left).max(axis=1) > TORQUE_STEP * scale
+    return cand[jump], left[jump], right[jump]
+
+
+def motion_samples(motion: Motion) -> dict:
+    """The motion's samples with every step of the torques as a time given twice (:func:`torque_breaks`).
+
+    Returns ``time``, ``omega``, ``rotor_rates``, ``rotor_angles``, ``rotor_torques``, ``state``,
+    ``segment`` (arrays with the rows of the breaks inserted) and ``torque_breaks``. At a break the first
+    row holds the torque's limit from the left and the piece that ends there, the second the limit from the
+    right and the piece that starts there; the other quantities are continuous (both rows agree). A uniform
+    sample on a break is replaced by the two rows. Replayed linearly between rows of different times, with
+    the step at a time given twice, the torques are the law's piecewise-smooth profile to second order.
+    """
+    tb, left, right = torque_breaks(motion)
+    arrays = {"omega": motion.omega, "rotor_rates": motion.rotor_rates, "rotor_angles": motion.rotor_angles,
+              "rotor_torques": motion.rotor_torques, "state": motion.state, "segment": motion.segment}
+    if tb.size == 0:
+        return {"time": motion.time, **arrays, "torque_breaks": tb}
+    T, path, prof = motion.duration, motion.path, motion.profile
+    t = motion.time
+    on = np.zeros(t.size, bool)
+    near = np.clip(np.searchsorted(tb, t), 0, tb.size - 1)
+    for cand in (near, np.clip(near - 1, 0, None)):
+        on |= np.abs(t - tb[cand]) <= 1e-12 * T
+    s, sd, _ = prof.evaluate(tb)
+    R = path.robot.radius
+    rows = {}
+    ps = path.evaluate(np.clip(s, 0.0, path.length), "left")   # the continuous quantities: one value for both rows
+    for side, tq in (("left", left), ("right", right)):
+        rows[side] = {"omega": ps.W * sd[:, None], "rotor_rates": ps.G * sd[:, None], "rotor_angles": ps.rotor_angles,
+                      "rotor_torques": tq, "state": ps.state * np.array([R, R, 1.0, 1.0, 1.0]),
+                      "segment": path.segment_of(ps.s, side)}
+    time = np.concatenate([t[~on], tb, tb])
+    order = np.lexsort((np.r_[np.zeros((~on).sum()), np.zeros(tb.size), np.ones(tb.size)], time))
+    out = {"time": time[order]}
+    for key, a in arrays.items():
+        out[key] = np.concatenate([a[~on], rows["left"][key], rows["right"][key]])[order]
+    out["torque_breaks"] = tb
+    return out
 
 
 def actuate(plan, robot: Robot, duration: float | None = None, samples: int = DEFAULT_SAMPLES,

@@ -1,4 +1,4 @@
-"""Closed-loop execution: measure after every figure eight, re-estimate the robot, re-plan the rest.
+"""Closed-loop execution: measure after every figure eight, re-estimate the robot, re-plan the rest, correct.
 
 A plan of n figure eights from a start state to a goal (any two full states, issue 12's
 composed planner) is executed on a real robot that is not exactly the model.
@@ -26,8 +26,14 @@ Closed loop (``closed_loop=True``)
     The controller commands what the plant takes: the rotor rates of the timed re-plan (rate
     plant), or its torques plus the feed-forward ``c_hat phi_dot`` of the estimated friction
     (torque plant). Why figure eights: their ends are rest points near the pole, where a
-    measurement is clean and the remainder is again a whole number of figure eights. After the
-    last figure eight nothing is corrected: with n = 1 the closed loop is the open loop.
+    measurement is clean and the remainder is again a whole number of figure eights.
+
+    After the last figure eight, correcting motions follow: from the measured state (step 1), a
+    composed plan of one figure eight to the goal with the estimated robot (step 2), applied whole,
+    while the measured arrival error exceeds ``tolerance``, at most ``corrections`` of them; so
+    n = 1 gets feedback too. :func:`execute_samples` runs the same loop from a motion given as
+    samples (a plan file's: its own rates or torques first, then re-plans and corrections timed by
+    the file's law); plans that are not figure eights (turns, routes) run whole, then the corrections.
 
 The estimated robot reproduces the real one exactly where the plant can tell: the rate-driven
 motion depends only on ``Jxx/J_r`` and ``Jzz/J_r`` (divide (11) by J_r), so with rates the estimate
@@ -45,11 +51,14 @@ from ..core.spline import CubicSpline
 from ..errors import InputError, NoPlanError, check_finite, check_whole
 from ..problem import STATE_NAMES, State, arrival_error
 from ..robot import Robot
-from .actuation import actuate
+from .actuation import actuate, motion_samples
 from .estimate import InertiaEstimator, RatioEstimator
+from .limits import Limits
 from .plants import PLANT_NAMES, by_name, measure, run_rates, run_torques
+from .timing import get_law
 
-__all__ = ["joints", "robot_from_inertias", "Execution", "execute", "DEFAULT_SAMPLES_PER_PIECE", "DEFAULT_WINDOW"]
+__all__ = ["joints", "robot_from_inertias", "Execution", "execute", "execute_samples", "Samples",
+           "DEFAULT_SAMPLES_PER_PIECE", "DEFAULT_WINDOW", "DEFAULT_TOLERANCE", "DEFAULT_CORRECTIONS"]
 
 #: Time samples per piece (leaf, roll) of the commanded series.
 DEFAULT_SAMPLES_PER_PIECE = 400
@@ -120,6 +129,9 @@ class Execution:
     final : State
     error : (5,) :func:`rollplan.problem.arrival_error` of ``final`` to ``goal``
     arrival_error, position_error : float [R and rad; R]
+    stopped : str or None
+        Closed loop: why the corrections ended before the tolerance was met (no correcting motion from
+        the measured state, or the budget spent); None when they met it or none was asked.
     """
 
     plant: str
@@ -137,6 +149,7 @@ class Execution:
     error: np.ndarray = None
     arrival_error: float = None
     position_error: float = None
+    stopped: str | None = None
 
     def to_dict(self) -> dict:
         """The keys of ``rollplan simulate --closed-loop --json``."""
@@ -146,7 +159,8 @@ class Execution:
                 "rotor_torques": rows(self.rotor_torques), "state": rows(self.state),
                 "segment": [int(v) for v in self.segment], "final": self.final.as_dict(),
                 "error": dict(zip(STATE_NAMES, map(float, self.error))), "arrival_error": self.arrival_error,
-                "position_error": self.position_error, "estimates": self.estimates, "segments": self.segments}
+                "position_error": self.position_error, "estimates": self.estimates, "segments": self.segments,
+                "stopped": self.stopped}
 
 
 def _estimate_dict(robot: Robot, friction=None) -> dict:
@@ -178,20 +192,24 @@ class _Controller:
         self.inertias = InertiaEstimator(real.radius, window, friction=estimate_friction)
 
     def apply(self, motion, end: int, info: dict):
-        """Apply samples ``0..end`` of a timed motion; returns the run."""
+        """Apply samples ``0..end`` of a timed motion (:class:`Samples` or a Motion); returns the run."""
         sl = slice(0, end + 1)
-        t = self.t0 + motion.time[sl]
-        rates, n = motion.rotor_rates[sl], len(self.segments)
+        t_all = motion.time[sl] - motion.time[0] + self.t0
+        rates_all, n = motion.rotor_rates[sl], len(self.segments)
+        keep = np.ones(t_all.size, bool)
+        keep[1:] = np.diff(t_all) > 0
+        t, rates = t_all[keep], rates_all[keep]
+        linear = getattr(motion, "interpolation", "spline") == "linear"
         breaks = [int(i) for i in joints(motion) if 0 < i < end]
         if self.plant == "rates":
             run = run_rates(self.real, t, rates, self.x, self.dist, n, self.phi)
-            torques = _piecewise_derivative(t, run.momenta, breaks)
+            torques = _piecewise_derivative(t, run.momenta, [] if linear else breaks)
         else:
-            torques = motion.rotor_torques[sl] + self.friction_hat * rates
+            torques = motion.rotor_torques[sl] + self.friction_hat * rates_all
             runner = run_torques if self.session is None else self.session.run
-            run = runner(self.real, t, torques, self.x, self.p, self.phi, self.dist, n, breaks,
-                              commanded_p0=self.P, servo_gain=self.servo_gain,
-                              reference_rates=rates if self.servo_gain > 0 else None)
+            run = runner(self.real, t_all, torques, self.x, self.p, self.phi, self.dist, n,
+                         () if linear else breaks, "linear" if linear else "spline", commanded_p0=self.P,
+                         servo_gain=self.servo_gain, reference_rates=rates_all if self.servo_gain > 0 else None)
             self.P = run.commanded_momenta[-1]
             torques = run.commanded
         keep = slice(1, None) if self.parts else slice(None)
@@ -230,6 +248,31 @@ def _piecewise_derivative(t, y, breaks) -> np.ndarray:
     return out
 
 
+@dataclass(frozen=True)
+class Samples:
+    """A timed motion as samples, as a plan file holds it (what :func:`execute_samples` applies first).
+
+    Attributes
+    ----------
+    time : (N,) [s], nondecreasing; a time given twice is a step of the torques
+    rotor_rates, rotor_torques : (N, 2) [rad/s, N m]
+    segment : (N,) int
+        Piece of each sample (a sample at a joint belongs to the piece that ends there).
+    kinds : tuple of str
+        The kind of every piece (``approach``, ``leaf``, ``departure``, ``circle``, ...), in order.
+    interpolation : str
+        How the torques are replayed between samples: ``"linear"`` (plan files: linear between samples,
+        a step at a time given twice) or ``"spline"`` (split at the joints).
+    """
+
+    time: np.ndarray
+    rotor_rates: np.ndarray
+    rotor_torques: np.ndarray
+    segment: np.ndarray
+    kinds: tuple
+    interpolation: str = "linear"
+
+
 def joints(motion) -> np.ndarray:
     """Sample indices of the joints between the pieces of a timed motion (where its ``segment`` changes).
 
@@ -239,13 +282,21 @@ def joints(motion) -> np.ndarray:
     return np.nonzero(np.diff(motion.segment) != 0)[0]
 
 
-def _first_eight_end(motion, pieces) -> int:
-    """Sample index where the first figure eight (after any leading approach roll) of a timed plan ends."""
-    lead = 0
-    while lead < len(pieces) and pieces[lead].kind == "approach":
-        lead += 1
-    ends = [*joints(motion), motion.time.size - 1]
-    return int(ends[min(lead + 1, len(ends) - 1)])
+def _first_eight_end(motion, kinds) -> int | None:
+    """Sample index where the first figure eight of a timed plan ends, if the motion rests there and more
+    follows; None otherwise (the motion is then applied whole)."""
+    ends = joints(motion)
+    if len(ends) != len(kinds) - 1 or any(k not in ("approach", "leaf", "departure") for k in kinds):
+        return None
+    leaves = np.cumsum([k == "leaf" for k in kinds])
+    second = np.nonzero(leaves == 2)[0]
+    if second.size == 0 or second[0] >= len(ends):
+        return None
+    i = int(ends[second[0]])
+    scale = max(float(np.abs(motion.rotor_rates).max()), 1e-300)
+    if kinds[second[0] + 1:].count("leaf") == 0 or np.abs(motion.rotor_rates[i]).max() > 1e-12 * scale:
+        return None
+    return i
 
 
 def _pieces(plan):
@@ -254,10 +305,17 @@ def _pieces(plan):
     return as_composed(plan).pieces
 
 
+#: Closed loop: arrival error [R and rad] of the measured state below which no correction follows.
+DEFAULT_TOLERANCE = 1e-6
+#: Closed loop: most correcting motions after the plan.
+DEFAULT_CORRECTIONS = 3
+
+
 def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, *, plant: str = "rates",
             closed_loop: bool = True, disturbances=(), samples_per_piece: int = DEFAULT_SAMPLES_PER_PIECE,
             window: int = DEFAULT_WINDOW, estimate_friction: bool = True, rest_readings: int = 0,
-            servo_gain: float = 0.0, mujoco_model=None, progress=None) -> Execution:
+            servo_gain: float = 0.0, mujoco_model=None, progress=None, timing: str = "min-jerk",
+            tolerance: float = DEFAULT_TOLERANCE, corrections: int = DEFAULT_CORRECTIONS) -> Execution:
     """Execute a geometric-phase plan on ``real_robot``, open or closed loop (module docstring).
 
     Parameters
@@ -270,7 +328,7 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     real_robot : Robot
         The simulated real robot (same radius: it is measured).
     piece_duration : float
-        Duration of every piece (leaf, roll) [s]; each is timed rest to rest by the min-jerk law.
+        Duration of every piece (leaf, roll) [s]; each is timed by ``timing`` (min-jerk: rest to rest).
     plant : str
         ``"rates"`` or ``"torques"`` (:data:`rollplan.execution.plants.PLANTS`), or ``"mujoco"``: the
         torques applied to MuJoCo's model of the real robot (:mod:`rollplan.execution.mujoco_engine`,
@@ -292,7 +350,12 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     mujoco_model : mujoco.MjModel, optional
         Plant ``"mujoco"``: the compiled model (:func:`~rollplan.execution.mujoco_engine.compile_model`).
     progress : callable(label, done, total), optional
-        Called after each applied figure eight (open loop: once).
+        Called after each applied figure eight and correction.
+    timing : str
+        The timing law of the plan and of every re-plan and correction.
+    tolerance, corrections : float, int
+        Closed loop, after the plan: correcting motions from the measured state while its arrival error
+        exceeds ``tolerance``, at most ``corrections`` of them.
 
     Returns
     -------
@@ -302,6 +365,72 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     ------
     InputError
         Bad input; NoPlanError: a re-plan from a measured state found no plan.
+    """
+    pieces = _pieces(plan)
+    if not pieces:
+        raise InputError("the plan is the empty motion (its start is its goal): nothing to execute")
+    if any(p.kind not in ("approach", "leaf", "departure") for p in pieces):
+        raise InputError("closed-loop execution needs a plan of figure eights (turns in place are not supported)")
+    samples_per_piece = check_whole("samples_per_piece", samples_per_piece, 50, 100_000)
+    piece_duration = _positive("piece_duration", piece_duration)
+    m = _timer(timing, piece_duration, samples_per_piece)(plan, model_robot)
+    first = _as_samples(m, (p.kind for p in pieces))
+    return execute_samples(first, plan.problem.start, plan.goal, plan.steps, model_robot, real_robot, piece_duration,
+                           plant=plant, closed_loop=closed_loop, disturbances=disturbances,
+                           samples_per_piece=samples_per_piece, window=window, estimate_friction=estimate_friction,
+                           rest_readings=rest_readings, servo_gain=servo_gain, mujoco_model=mujoco_model,
+                           progress=progress, timing=timing, tolerance=tolerance, corrections=corrections)
+
+
+def _as_samples(m, kinds) -> Samples:
+    """A timed motion as the controller applies it: min-jerk (continuous torques) as its uniform samples with
+    splines split at the joints; a law whose torques step, with the steps as times given twice, linearly."""
+    ms = motion_samples(m)
+    if ms["torque_breaks"].size == 0:
+        return Samples(m.time, m.rotor_rates, m.rotor_torques, m.segment, tuple(kinds), "spline")
+    return Samples(ms["time"], ms["rotor_rates"], ms["rotor_torques"], ms["segment"], tuple(kinds), "linear")
+
+
+def _positive(name, value) -> float:
+    v = check_finite(name, value)
+    if not v > 0:
+        raise InputError(f"{name} = {value!r} is not allowed: it must be > 0")
+    return v
+
+
+def _timer(timing, piece_duration: float, samples_per_piece: int):
+    """``timed(plan, robot)``: the plan timed by the law, ``piece_duration`` a piece, or the law's shortest
+    duration within the robot's limits when that is longer."""
+    law = get_law(timing)
+
+    def timed(p, robot):
+        n = len(_pieces(p))
+        samples = n * samples_per_piece
+        try:
+            return actuate(p, robot, n * piece_duration, samples, law)
+        except InputError:
+            if not Limits.of(robot).any:
+                raise
+            return actuate(p, robot, None, samples, law)
+    return timed
+
+
+def execute_samples(first: Samples, start: State, goal: State, steps: int, model_robot: Robot, real_robot: Robot,
+                    piece_duration: float, *, plant: str = "rates", closed_loop: bool = True, disturbances=(),
+                    samples_per_piece: int = DEFAULT_SAMPLES_PER_PIECE, window: int = DEFAULT_WINDOW,
+                    estimate_friction: bool = True, rest_readings: int = 0, servo_gain: float = 0.0,
+                    mujoco_model=None, progress=None, timing: str = "min-jerk", tolerance: float = DEFAULT_TOLERANCE,
+                    corrections: int = DEFAULT_CORRECTIONS) -> Execution:
+    """Execute a timed motion given as samples (a plan file's) on ``real_robot``, open or closed loop.
+
+    Open loop: ``first`` is applied whole. Closed loop: ``first`` is applied up to the end of its first
+    figure eight when it rests there and more figure eights follow (else whole); then, after every figure
+    eight, the robot is estimated and the rest re-planned from the measured state (``steps`` figure eights
+    in all); after the last, correcting motions (:func:`rollplan.plan` of one figure eight from the
+    measured state to ``goal``, with the estimated robot) follow while the measured arrival error exceeds
+    ``tolerance``, at most ``corrections``. Every re-plan and correction is timed by ``timing``,
+    ``piece_duration`` a piece (or the law's shortest duration within the limits, if longer). The other
+    parameters are those of :func:`execute`.
     """
     from ..planners.geometric import plan as make_plan
 
@@ -313,18 +442,13 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     if not math.isclose(model_robot.radius, real_robot.radius, rel_tol=1e-12):
         raise InputError(f"the model's radius {model_robot.radius:g} m and the real robot's "
                          f"{real_robot.radius:g} m differ: the radius is measured, give the same")
-    piece_duration = check_finite("piece_duration", piece_duration)
-    if not piece_duration > 0:
-        raise InputError(f"piece_duration = {piece_duration!r} is not allowed: it must be > 0")
+    piece_duration = _positive("piece_duration", piece_duration)
     samples_per_piece = check_whole("samples_per_piece", samples_per_piece, 50, 100_000)
     window = check_whole("window", window, 4, 100_000)
     rest_readings = check_whole("rest_readings", rest_readings, 0, 1_000_000)
-    pieces = _pieces(plan)
-    if not pieces:
-        raise InputError("the plan is the empty motion (its start is its goal): nothing to execute")
-    if any(p.kind not in ("approach", "leaf", "departure") for p in pieces):
-        raise InputError("closed-loop execution needs a plan of figure eights (turns in place are not supported)")
-    start, goal, steps = plan.problem.start, plan.goal, plan.steps
+    corrections = check_whole("corrections", corrections, 0, 100)
+    tolerance = _positive("tolerance", tolerance)
+    steps = check_whole("steps", steps, 1)
     R = real_robot.radius
     servo_gain = check_finite("servo_gain", servo_gain)
     if servo_gain < 0:
@@ -338,40 +462,68 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
             raise InputError(f"the MuJoCo model's radius {mujoco_engine.radius_of(model):g} m is not the real "
                              f"robot's {R:g} m")
         session = mujoco_engine.Session(model, start)
+    timed = _timer(timing, piece_duration, samples_per_piece)
     ctl = _Controller(real_robot, plant, disturbances, closed_loop, window, estimate_friction, start.array(),
                       servo_gain, session)
-
-    def timed(p, robot):
-        n = len(_pieces(p))
-        return actuate(p, robot, n * piece_duration, samples=n * samples_per_piece)
-
     robot_est, friction, estimates = model_robot, None, []
-    current = plan
-    rounds = steps if closed_loop else 1
-    for j in range(rounds):
-        if j > 0:
-            try:
-                robot_est, friction = ctl.estimate(model_robot)
-                if friction is not None:
-                    ctl.friction_hat = friction
-            except InputError as exc:
-                estimates.append({"rejected": str(exc)})
-            measured = measure(ctl.x, ctl.by_name, R, 10**6 + j, rest_readings) if rest_readings else ctl.measured
-            try:
-                current = make_plan(goal, steps - j, robot=robot_est, start=State(*measured))
-            except (NoPlanError, InputError) as exc:
-                raise type(exc)(f"re-planning {steps - j} figure eights from the measured state "
-                                f"{tuple(round(float(v), 6) for v in measured)} failed: {exc}") from None
+
+    def update(j):
+        nonlocal robot_est, friction
+        try:
+            robot_est, friction = ctl.estimate(model_robot)
+            if friction is not None:
+                ctl.friction_hat = friction
+        except InputError as exc:
+            estimates.append({"rejected": str(exc)})
+        if rest_readings:
+            return measure(ctl.x, ctl.by_name, R, 10**6 + j, rest_readings)
+        return ctl.measured
+
+    motion, kinds, j, mode = first, tuple(first.kinds), 0, "file"
+    label = "closed loop, figure eights" if closed_loop else "open loop"
+    while True:
+        cut = _first_eight_end(motion, kinds) if closed_loop and j < steps - 1 else None
+        end = motion.time.size - 1 if cut is None else cut
         estimates.append(_estimate_dict(robot_est, friction))
-        motion = timed(current, robot_est)
-        last = j == rounds - 1
-        end = motion.time.size - 1 if last else _first_eight_end(motion, _pieces(current))
-        ctl.apply(motion, end, {"figure_eights_left": steps - j, "mode": getattr(current, "mode", "one"),
-                                "k": robot_est.k, "applied": "all" if last else "first figure eight"})
+        ctl.apply(motion, end, {"figure_eights_left": steps - j, "mode": mode, "k": robot_est.k,
+                                "applied": "all" if cut is None else "first figure eight"})
         if progress:
-            progress("closed loop, figure eights" if closed_loop else "open loop", j + 1, rounds)
+            progress(label, j + 1 if cut is not None else steps, steps)
+        if cut is None:
+            break
+        j += 1
+        measured = update(j)
+        try:
+            current = make_plan(goal, steps - j, robot=robot_est, start=State(*measured))
+        except (NoPlanError, InputError) as exc:
+            raise type(exc)(f"re-planning {steps - j} figure eights from the measured state "
+                            f"{tuple(round(float(v), 6) for v in measured)} failed: {exc}") from None
+        motion = _as_samples(timed(current, robot_est), (p.kind for p in _pieces(current)))
+        kinds, mode = motion.kinds, getattr(current, "mode", "one")
+    stopped = None
+    for c in range(corrections + 1 if closed_loop else 0):
+        measured = update(steps + c + 1)
+        if float(np.linalg.norm(arrival_error(State(*measured), goal, R))) <= tolerance:
+            break
+        if c == corrections:
+            stopped = f"the budget of {corrections} corrections is spent"
+            break
+        try:
+            current = make_plan(goal, 1, robot=robot_est, start=State(*measured))
+        except (NoPlanError, InputError) as exc:
+            stopped = f"no correcting motion from the measured state: {exc}"
+            break
+        if not _pieces(current):
+            break
+        m = timed(current, robot_est)
+        estimates.append(_estimate_dict(robot_est, friction))
+        correction = _as_samples(m, ())
+        ctl.apply(correction, correction.time.size - 1,
+                  {"figure_eights_left": 0, "mode": "correction", "k": robot_est.k, "applied": "all"})
+        if progress:
+            progress("closed loop, corrections", c + 1, corrections)
     time, state, meas, rates, torques, seg = ctl.arrays()
     final = State(*(float(v) for v in state[-1]))
     err = arrival_error(final, goal, R)
     return Execution(plant, closed_loop, goal, time, state, meas, rates, torques, seg, ctl.segments, estimates,
-                     final, err, float(np.linalg.norm(err)), float(np.hypot(err[0], err[1])))
+                     final, err, float(np.linalg.norm(err)), float(np.hypot(err[0], err[1])), stopped)

@@ -392,12 +392,14 @@ class Session:
                 "torque": applied, "speed": float(np.linalg.norm(qvel[-1, 0:3])), "timestep": span / n}
 
     def run(self, robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0), disturbances=(),
-            segment: int = 0, breaks=(), commanded_p0=None, servo_gain: float = 0.0, reference_rates=None):
+            segment: int = 0, breaks=(), interpolation: str = "linear", commanded_p0=None, servo_gain: float = 0.0,
+            reference_rates=None):
         """:func:`rollplan.execution.plants.run_torques` on MuJoCo (the closed loop's plant ``"mujoco"``).
 
         The state continues from the previous run (``x0``, ``p0``, ``phi0`` are the controller's record of it);
-        ``robot`` is the real robot of the model (for the rotors' momenta). ``breaks`` are not needed: the
-        samples are interpolated linearly. Disturbances: ``measurement``, ``torque_noise``.
+        ``robot`` is the real robot of the model (for the rotors' momenta). ``breaks`` and ``interpolation`` are
+        not needed: the samples are always interpolated linearly, a time given twice being a step. Disturbances:
+        ``measurement``, ``torque_noise``.
         """
         from .plants import PlantRun, by_name, measure, rotor_momenta
 

@@ -59,12 +59,18 @@ from ..core.plane import wrap_exact
 from ..core.spline import CubicSpline
 from ..errors import InputError, SolverError, check_finite
 from ..problem import State, arrival_error
+from ..progress import report
 from ..robot import Robot
 
 __all__ = ["Simulation", "rate_spline", "check_samples", "simulate_rotors", "MAX_TURN", "Friction", "MeasurementNoise",
            "TorqueNoise", "RateNoise", "DISTURBANCES", "disturbance", "PlantRun", "input_function", "run_rates",
            "run_torques", "PLANTS", "PLANT_NAMES", "by_name", "measure", "rotor_momenta"]
 
+#: Sample intervals per chunk of :func:`simulate_rotors` (a longer series runs in chunks, with progress: the
+#: cost of one spline grows faster than its length).
+CHUNK = 10_000
+#: Samples on either side of a chunk that its spline also passes through.
+OVERLAP = 40
 #: Largest rotation of the sphere [rad] that sampled rotor rates may ask for (bounded from the rates by
 #: (11)); a real plan turns the sphere by a few rad per figure eight.
 MAX_TURN = 1e6
@@ -170,20 +176,33 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
     if not np.all(np.isfinite(turns)) or mean * jr / jzz > MAX_TURN:
         raise InputError(f"the rotor rates are not allowed: they would turn the sphere by about "
                          f"{mean * jr / jzz:.3g} rad, more than {MAX_TURN:g} rad (not the rates of a plan)")
-    spline = rate_spline(tau, turns)
     x = ca.MX.sym("x", 5)
     time = ca.MX.sym("tau")
-    omega = model.omega_from_rotor_rates(spline(time), x[3], x[4], x[2], jxx, jzz, jr)
-    ode = model.montana(omega, x[3], x[4], x[2], R)
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
-    integ = ca.integrator("rotor_sim", "cvodes", {"t": time, "x": x, "ode": ode}, 0.0, list(tau[1:]), opts)
+    n = tau.size
+    xs, omegas, xk = np.empty((n, 5)), np.empty((n, 3)), x0
+    xs[0] = x0
     try:
-        xs = np.hstack([x0[:, None], np.array(interrupts.call(integ, x0=x0)["xf"])]).T
+        # a long series in chunks of CHUNK sample intervals, each with the spline through its samples and
+        # OVERLAP more on either side (a cubic spline's dependence on far samples decays by 2 - sqrt(3) per
+        # sample: the chunks' splines are the whole series' to rounding), its progress reported between them
+        for a in range(0, n - 1, CHUNK):
+            b = min(a + CHUNK, n - 1)
+            lo, hi = (0, n) if n - 1 <= CHUNK else (max(0, a - OVERLAP), min(n, b + 1 + OVERLAP))
+            spline = rate_spline(tau[lo:hi], turns[lo:hi])
+            omega = model.omega_from_rotor_rates(spline(time), x[3], x[4], x[2], jxx, jzz, jr)
+            ode = model.montana(omega, x[3], x[4], x[2], R)
+            integ = ca.integrator("rotor_sim", "cvodes", {"t": time, "x": x, "ode": ode}, float(tau[a]),
+                                  list(tau[a + 1:b + 1]), opts)
+            xs[a + 1:b + 1] = np.array(interrupts.call(integ, x0=xk)["xf"]).T
+            xk = xs[b]
+            om = ca.Function("omega", [time, x], [omega / span]).map(b + 1 - a)
+            omegas[a:b + 1] = np.array(om(tau[None, a:b + 1], xs[a:b + 1].T)).T
+            if n - 1 > CHUNK:
+                report("rotor-driven simulation, samples", b, n - 1)
     except RuntimeError as exc:
         raise SolverError(f"CVODES could not integrate the rotor-driven motion: {str(exc).splitlines()[-1][:120]}",
                           "CVODES_failed") from None
-    om = ca.Function("omega", [time, x], [omega / span]).map(t.size)
-    omegas = np.array(om(tau[None, :], xs.T)).T
     final = State(*(float(v) for v in xs[-1]))
     err = arr = pos = None
     if goal is not None:
@@ -395,7 +414,15 @@ def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Functio
     """
     t, y = np.asarray(t, float), np.asarray(y, float)
     if interpolation == "linear":
-        return ca.interpolant("input", "linear", [t], y.ravel(order="C"))
+        # one lookup of the sample interval (a time given twice opens no interval: the torque steps there
+        # to the second row's value), then the line through its two ends
+        y2 = y.reshape(t.size, -1)
+        i = np.nonzero(np.diff(t) > 0)[0]
+        slope = (y2[i + 1] - y2[i]) / (t[i + 1] - t[i])[:, None]
+        tt = ca.MX.sym("t")
+        j = ca.low(ca.DM(np.r_[t[i], t[-1]]), tt)
+        expr = ca.MX(ca.DM(y2[i]))[j, :].T + ca.MX(ca.DM(slope))[j, :].T * (tt - ca.MX(ca.DM(t[i]))[j])
+        return ca.Function("input", [tt], [expr])
     if interpolation != "spline":
         raise InputError(f"interpolation {interpolation!r} is not known: choose spline or linear")
     cuts = sorted({int(b) for b in breaks if 0 < int(b) < t.size - 1})
@@ -421,6 +448,8 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     robot : Robot
         The real robot (Jxx, Jzz, J_r, R).
     t : (N,) sample times [s]; torques : (N, 2) commanded motor torques [N m]
+        With ``interpolation="linear"`` a time may be given twice: the torque steps there from the first
+        row's value to the second's (the replay rule of plan files); the run's rows are the distinct times.
     x0 : (5,) start state (default zero)
     p0 : (2,) the rotors' axial momenta at ``t[0]`` [N m s] (zero at rest)
     phi0 : (2,) rotor angles at ``t[0]`` [rad]
@@ -440,11 +469,22 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
         ``commanded`` holds the commanded torques (with the servo's share).
     """
     d = by_name(disturbances, "torques")
-    t, torques = check_samples(t, torques)
+    t_in, torques_in = np.asarray(t, float), np.asarray(torques, float)
+    keep = np.ones(t_in.shape[0] if t_in.ndim == 1 else 0, bool)
+    if keep.size > 1:   # times given twice (steps of the torques) only with linear interpolation
+        keep[1:] = np.diff(t_in) != 0
+    if not keep.all() and interpolation != "linear":
+        raise InputError("times given twice (steps of the torques) need interpolation 'linear'")
+    if torques_in.shape != (keep.size, 2):
+        check_samples(t_in, torques_in)   # names what is wrong
+    t, _ = check_samples(t_in[keep], torques_in[keep])
+    if not np.all(np.isfinite(torques_in)):
+        raise InputError("t and rates must be finite numbers")
+    t_all, torques = t_in, torques_in
     x0 = np.zeros(5) if x0 is None else np.asarray(x0, float)
     c = np.array(d["friction"].c if "friction" in d else (0.0, 0.0))
     noise = d["torque_noise"].draw(t.size, segment) if "torque_noise" in d else np.zeros((t.size, 2))
-    tau = input_function(t, torques, breaks, interpolation)
+    tau = input_function(t_all, torques, breaks, interpolation)
     tau_noise = input_function(t, noise, (), "linear")
     servo_gain = _nonnegative("servo_gain", servo_gain)
     if servo_gain > 0 and reference_rates is None:
@@ -454,13 +494,17 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     omega, phi_dot = model.omega_from_momenta(p, x[3], x[4], x[2], robot.j_xx, robot.j_zz, robot.rotor_inertia_axial)
     cmd = tau(time)
     if servo_gain > 0:
-        cmd = cmd + servo_gain * (input_function(t, reference_rates, breaks, interpolation)(time) - phi_dot)
+        cmd = cmd + servo_gain * (input_function(t_all, reference_rates, breaks, interpolation)(time) - phi_dot)
     ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], robot.radius), cmd + tau_noise(time) - c * phi_dot,
                      phi_dot, cmd)
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
     integ = ca.integrator("torque_plant", "cvodes", {"t": time, "x": z, "ode": ode}, float(t[0]), list(t[1:]), opts)
     z0 = np.concatenate([x0, p0, phi0, p0 if commanded_p0 is None else commanded_p0]).astype(float)
-    zs = np.hstack([z0[:, None], np.array(integ(x0=z0)["xf"])]).T
+    try:
+        zs = np.hstack([z0[:, None], np.array(interrupts.call(integ, x0=z0)["xf"])]).T
+    except RuntimeError as exc:
+        raise SolverError(f"CVODES could not integrate the torque-driven motion: {str(exc).splitlines()[-1][:120]}",
+                          "CVODES_failed") from None
     om, pd, cm = (np.array(v).T for v in ca.Function("out", [time, z], [omega, phi_dot, cmd]).map(t.size)(t[None, :],
                                                                                                          zs.T))
     state = zs[:, 0:5]
