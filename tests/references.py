@@ -101,7 +101,7 @@ def orientation(u_o, v_o, psi):
 
 
 #: The printed third entry of n_1 in (3), ``cos u_o cos v_o``, is a misprint: it would make n_1
-#: non-unit; the product (2) gives ``sin u_o cos v_o`` (README, list of misprints).
+#: non-unit; the product (2) gives ``sin u_o cos v_o`` (docs/misprints.md).
 def printed_n1z(u_o, v_o):
     """The third entry of n_1 as printed in (3) (a misprint, see :func:`axes`)."""
     return np.cos(u_o) * np.cos(v_o)

@@ -550,7 +550,7 @@ def test_cli_help_documents_exit_codes_and_columns(capsys):
 
 @pytest.mark.slow
 def test_the_shipped_example_runs(tmp_path, capsys):
-    """examples/targets.csv (shown in the README): four plans and two recorded failures, exit 1."""
+    """examples/targets.csv (shown in docs/batches.md): four plans and two recorded failures, exit 1."""
     from pathlib import Path
 
     example = Path(__file__).resolve().parent.parent / "examples" / "targets.csv"

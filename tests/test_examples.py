@@ -1,6 +1,6 @@
-"""The README's examples are the files in examples/ and they run: the Python API from another folder (so
-the installed package is imported, not a source folder in the current directory), the batch CSV in
-``tests/test_batch.py``."""
+"""The documentation's examples are the files in examples/ and they run: the Python API (shown in
+docs/planning.md) from another folder (so the installed package is imported, not a source folder in the
+current directory), the batch CSV (shown in docs/batches.md) in ``tests/test_batch.py``."""
 
 import subprocess
 import sys
@@ -9,13 +9,13 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-README = (ROOT / "README.md").read_text()
+DOCS = ROOT / "docs"
 
 
-def _blocks(lang):
-    """The fenced code blocks of the README in language ``lang`` ("" for none), as text."""
+def _blocks(lang, page):
+    """The fenced code blocks of a documentation page in language ``lang`` ("" for none), as text."""
     blocks, current, kind = [], None, None
-    for line in README.splitlines(keepends=True):
+    for line in page.read_text().splitlines(keepends=True):
         if line.startswith("```"):
             if current is None:
                 current, kind = [], line[3:].strip()
@@ -28,14 +28,25 @@ def _blocks(lang):
     return blocks
 
 
-def test_readme_shows_the_api_example_file():
+def test_docs_show_the_api_example_file():
     code = (ROOT / "examples" / "api.py").read_text()
     body = code.split('"""', 2)[2].lstrip("\n")   # without the module docstring
-    assert body in _blocks("python")
+    assert body in _blocks("python", DOCS / "planning.md")
 
 
-def test_readme_shows_the_example_csv():
-    assert (ROOT / "examples" / "targets.csv").read_text() in _blocks("")
+def test_docs_show_the_example_csv():
+    assert (ROOT / "examples" / "targets.csv").read_text() in _blocks("", DOCS / "batches.md")
+
+
+def test_docs_show_the_example_waypoints():
+    assert (ROOT / "examples" / "waypoints.csv").read_text() in _blocks("", DOCS / "planning.md")
+
+
+def test_readme_points_to_the_example_files():
+    """The README's commands use the shipped example files by their path."""
+    readme = (ROOT / "README.md").read_text()
+    for name in ("robot.toml", "real.toml", "targets.csv", "api.py"):
+        assert f"examples/{name}" in readme
 
 
 @pytest.mark.slow

@@ -316,7 +316,7 @@ def test_batch_files(tmp_path_factory, csv_file):
         assert d["status"] in ("ok", "failed")
         assert d["status"] == "ok" or d["error"] in ("InputError", "NoPlanError"), d
         if d["status"] == "ok":
-            # a missing column or an empty cell takes the documented default (README "Batches")
+            # a missing column or an empty cell takes the documented default (docs/batches.md)
             row = {**{"psi": "0", "steps": "1", "k": "2.5"}, **{c: v for c, v in d["input"].items() if v != ""}}
             target = (float(row["u_a"]), float(row["v_a"]), float(row["psi"]))
             assert "figure_eight" in d or "segments" in d, d
