@@ -1339,22 +1339,31 @@ static void search(search_t *S, const @PREFIX@_options_t *options, casadi_real h
     S->plan->roots = S->roots;
 }
 
+/* The checks of a target shared by plan_with and plan_all: OK with the shift h_des = |(u, v)| and the rho
+ * table of k prepared, BAD_INPUT or NO_CONVERGENCE otherwise. */
+static int start_search(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k, casadi_real *h_des) {
+    if (!(isfinite(u) && isfinite(v) && isfinite(psi)) || !(fabs(psi) <= PSI_MAX) || !(k >= K_MIN && k <= K_MAX)
+        || steps < 1 || steps > MAX_STEPS)
+        return @PREFIX_UPPER@_BAD_INPUT;
+    *h_des = hypot(u, v);
+    if (!(*h_des > 0.0)) return @PREFIX_UPPER@_BAD_INPUT;
+    if (prepare(k)) return @PREFIX_UPPER@_NO_CONVERGENCE;
+    return @PREFIX_UPPER@_OK;
+}
+
 int @PREFIX@_plan_with(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k,
                        const @PREFIX@_options_t *options, @PREFIX@_plan_t *plan) {
     search_t S;
     casadi_real h_des, residual, bound;
+    int status;
     if (plan == NULL) return @PREFIX_UPPER@_BAD_INPUT;
     plan->a = plan->b = plan->gamma = plan->eta = plan->h = NAN;
     plan->residual = plan->bound = plan->predicted = INFINITY;
     plan->m = 0;
     plan->branches = 0;
     plan->roots = 0;
-    if (!(isfinite(u) && isfinite(v) && isfinite(psi)) || !(fabs(psi) <= PSI_MAX) || !(k >= K_MIN && k <= K_MAX)
-        || steps < 1 || steps > MAX_STEPS)
-        return @PREFIX_UPPER@_BAD_INPUT;
-    h_des = hypot(u, v);
-    if (!(h_des > 0.0)) return @PREFIX_UPPER@_BAD_INPUT;
-    if (prepare(k)) return @PREFIX_UPPER@_NO_CONVERGENCE;
+    status = start_search(u, v, psi, steps, k, &h_des);
+    if (status != @PREFIX_UPPER@_OK) return status;
     s_memo_used = 0;   /* the memo serves one plan (timings of repeated plans stay honest) */
     S.u = u;
     S.v = v;
@@ -1398,15 +1407,11 @@ int @PREFIX@_plan_all(casadi_real u, casadi_real v, casadi_real psi, int steps, 
     search_t S;
     @PREFIX@_plan_t scratch;   /* counts the branches searched */
     casadi_real h_des;
-    int i;
+    int i, status;
     if (count == NULL || capacity < 0 || (plans == NULL && capacity > 0)) return @PREFIX_UPPER@_BAD_INPUT;
     *count = 0;
-    if (!(isfinite(u) && isfinite(v) && isfinite(psi)) || !(fabs(psi) <= PSI_MAX) || !(k >= K_MIN && k <= K_MAX)
-        || steps < 1 || steps > MAX_STEPS)
-        return @PREFIX_UPPER@_BAD_INPUT;
-    h_des = hypot(u, v);
-    if (!(h_des > 0.0)) return @PREFIX_UPPER@_BAD_INPUT;
-    if (prepare(k)) return @PREFIX_UPPER@_NO_CONVERGENCE;
+    status = start_search(u, v, psi, steps, k, &h_des);
+    if (status != @PREFIX_UPPER@_OK) return status;
     s_memo_used = 0;
     S.u = u;
     S.v = v;
