@@ -313,3 +313,29 @@ def test_a_leaf_table_others_may_write_is_refused(tmp_path, monkeypatch):
     table.chmod(0o666)
     with pytest.raises(UnsafeCacheError, match="writable by group or others"):
         rho_table.__wrapped__(3.3)
+
+
+@pytest.mark.parametrize("how", ["inside", "link"])
+def test_a_cache_directory_under_a_folder_others_can_write_is_refused(tmp_path, how):
+    """A private cache folder inside a folder others may write (no sticky bit), or reached by a link that lives in
+    one, can be swapped for another user's: one line, exit 2, nothing written."""
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o777)
+    if how == "inside":
+        folder = shared / "mine"
+        folder.mkdir(mode=0o700)
+    else:
+        target = tmp_path / "own"
+        target.mkdir(mode=0o700)
+        folder = shared / "link"
+        folder.symlink_to(target)
+    r = subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", "--to", "0.3", "0.2"], capture_output=True,
+                       text=True, timeout=300, check=False, env={**os.environ, "ROLLPLAN_CACHE_DIR": str(folder)})
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert str(shared) in r.stderr and "sticky" in r.stderr
+    assert not list(folder.iterdir())
+    shared.chmod(0o1777)   # with the sticky bit (as /tmp) others cannot rename or remove the folder
+    r = subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", "--to", "0.3", "0.2"], capture_output=True,
+                       text=True, timeout=300, check=False, env={**os.environ, "ROLLPLAN_CACHE_DIR": str(folder)})
+    assert r.returncode == 0, r.stderr

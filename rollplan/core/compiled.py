@@ -55,6 +55,7 @@ import os
 import platform
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import tempfile
@@ -95,7 +96,29 @@ def private_cache_dir() -> Path:
     root = cache_dir()
     root.mkdir(mode=0o700, parents=True, exist_ok=True)
     check_private(root)
+    _check_ancestors(root)
     return root
+
+
+def _check_ancestors(root: Path) -> None:
+    """Raise :class:`~rollplan.errors.UnsafeCacheError` if another user could replace the cache directory: a
+    folder above it (on its path as given, where a link may be swapped, or on its resolved path) that another
+    user owns (root aside) or that group or others may write without the sticky bit (which, as on /tmp, keeps
+    them from renaming or removing what they do not own)."""
+    if os.name == "nt":
+        return
+    given = Path(os.path.abspath(root))
+    for folder in {*given.parents, *Path(os.path.realpath(root)).parents}:
+        st = os.stat(folder)
+        if st.st_uid not in (os.geteuid(), 0):
+            why = f"is owned by uid {st.st_uid}"
+        elif st.st_mode & 0o022 and not st.st_mode & stat.S_ISVTX:
+            why = f"is writable by group or others without the sticky bit (mode {st.st_mode & 0o7777:04o})"
+        else:
+            continue
+        raise UnsafeCacheError(f"the cache directory {root}: the folder {folder} above it {why}, so another user "
+                               "could replace it: refusing to use it; set ROLLPLAN_CACHE_DIR to a folder of your "
+                               "own in a private place")
 
 
 def check_private(path) -> None:
