@@ -374,6 +374,35 @@ def test_closed_loop_on_mujoco_estimates_the_real_robot_and_arrives(tmp_path, ca
 
 
 @needs_mujoco
+@pytest.mark.slow
+@pytest.mark.parametrize("steps, duration", [(1, 10), (4, 20)])   # 2.5 s a piece
+def test_closed_loop_on_mujoco_brings_the_issues_mismatched_robot_to_the_goal(tmp_path, capsys, steps, duration):
+    from rollplan.studies.closed_loop import ISSUE_MODEL, issue_real_robot
+
+    names = ("radius", "mass_total", "mass_shell", "rotor_inertia_axial", "rotor_inertia_transverse")
+    files = {}
+    for name, robot in (("model", ISSUE_MODEL), ("real", issue_real_robot())):
+        files[name] = tmp_path / f"{name}.toml"
+        files[name].write_text("".join(f"{k} = {getattr(robot, k)!r}\n" for k in names))
+    real = issue_real_robot()
+    plan, out = tmp_path / "plan.json", tmp_path / "out.json"
+    code, _, err = run(capsys, "plan", "--robot", str(files["model"]), "--to", "0.2", "0.25", "--psi", "0.8",
+                       "--steps", str(steps), "--duration", str(duration), "--json", str(plan))
+    assert code == 0, err
+    code, _, err = run(capsys, "simulate", str(plan), "--robot", str(files["real"]), "--engine", "mujoco",
+                       "--closed-loop", "--json", str(out))
+    assert code == 0, err
+    res = json.loads(out.read_text())
+    k_real = references.inertia_ratio(*(getattr(real, k) for k in names))
+    assert res["plant"] == "mujoco" and res["estimates"][-1]["k"] == pytest.approx(k_real, rel=1e-4)
+    goal = json.loads(plan.read_text())["goal"]
+    keys = ("u_a", "v_a", "psi", "u_o", "v_o")
+    assert [goal[k] for k in keys[:3]] == [0.2, 0.25, 0.8]
+    assert distance([res["final"][k] for k in keys], [goal[k] for k in keys], 0.1) < 1e-3
+    assert res["open_loop_arrival_error"] > 1e-1
+
+
+@needs_mujoco
 def test_simulate_mujoco_refuses_a_replay_longer_than_max_steps(tmp_path, capsys):
     plan = tmp_path / "long.json"
     code, _, err = run(capsys, "plan", "--to", "0", "0.1", "--duration", str(1.5e-4 * engine.MAX_STEPS), "--json",
