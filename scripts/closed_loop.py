@@ -397,7 +397,7 @@ def report(data, out):
     L += ["", "Fed torques, the rotors' absolute momenta are those planned, and J_r enters (11) only through "
           "J_r (I - n_3 n_3^T) next to Jxx - J_r; fed rates, omega scales with J_r phi_dot directly. So a rotor "
           "inertia error costs far less on the torque plant, while a k error costs both alike.", ""]
-    L += mujoco_report(data.get("mujoco"))
+    L += mujoco_report(data["mujoco"]) if "mujoco" in data else []
     write_atomic(out / "closed_loop.md", "\n".join(L).encode())
     print(f"wrote {out / 'closed_loop.md'}, closed_loop.json, closed_loop.png ({data['wall_seconds']:.0f} s)")
 
