@@ -149,6 +149,22 @@ def test_mjcf_command_writes_the_model_and_its_options(tmp_path, capsys):
 
 
 @needs_mujoco
+@pytest.mark.slow
+def test_simulate_engine_mujoco_replays_a_time_optimal_file_onto_the_goal_open_loop(plans, capsys):
+    d, plan_file = plans
+    out = d / "sim-topt.json"
+    plan = json.loads(plan_file("time-optimal").read_text())
+    assert len(plan["torque_breaks"]) > 0 and len(plan["time"]) > len(set(plan["time"]))
+    code, _, err = run(capsys, "simulate", str(plan_file("time-optimal")), "--engine", "mujoco", "--json", str(out))
+    assert code == 0, err
+    res = json.loads(out.read_text())
+    names = ("u_a", "v_a", "psi", "u_o", "v_o")
+    final = [res["final"][k] for k in names]
+    assert res["servo_gain"] == 0 and res["engine"] == "mujoco"
+    assert distance(final, [plan["goal"][k] for k in names], plan["robot"]["radius"]) < 1e-3
+
+
+@needs_mujoco
 @pytest.mark.parametrize("argv, needle", [
     (["--com-offset", "0", "0", "0.2"], "com offset"),
     (["--floor-solref", "1e-5", "1"], "floor solref time constant"),
@@ -169,7 +185,8 @@ def test_mjcf_bad_options_exit_2_with_one_line(tmp_path, capsys, argv, needle):
 
 @pytest.fixture(scope="module")
 def plans(tmp_path_factory):
-    """Plan files: min-jerk (3 s, the default robot); time-optimal sampled densely (60000 samples) on first use."""
+    """Plan files: min-jerk (3 s, the default robot); time-optimal (default samples, its torque steps given as
+    repeated times) on first use."""
     from rollplan.cli import main
 
     d = tmp_path_factory.mktemp("mj")
@@ -181,8 +198,8 @@ def plans(tmp_path_factory):
         if not files[law].exists():
             robot = d / "lim.toml"
             robot.write_text(LIMITED_TOML)
-            assert main(["plan", "--robot", str(robot), "--to", "0", "0.1", "--timing", "time-optimal", "--samples",
-                         "60000", "--json", str(files[law])]) == 0
+            assert main(["plan", "--robot", str(robot), "--to", "0", "0.1", "--timing", "time-optimal",
+                         "--json", str(files[law])]) == 0
         return files[law]
 
     return d, get
@@ -203,6 +220,28 @@ def test_mujoco_replay_of_min_jerk_matches_the_rate_plant(plans):
     assert np.abs((run.state - plant.state) / scale).max() < 1e-3
     assert run.arrival_error < 1e-3
     assert run.max_penetration < 1e-6 * rp.robot.radius and run.slip < 1e-4 * rp.robot.radius
+
+
+def piecewise_linear_integral(t, values, at):
+    """Integral from t[0] to each of ``at`` of the linear interpolant of ``values`` (rows) at ``t``, where a time
+    given twice is a step (its first row the value on the left, its second on the right)."""
+    t, values = np.asarray(t, float), np.asarray(values, float)
+    widths = np.diff(t)
+    cumulative = np.vstack([np.zeros(values.shape[1]),
+                            np.cumsum(widths[:, None] * 0.5 * (values[1:] + values[:-1]), axis=0)])
+    i = np.clip(np.searchsorted(t, at, side="right") - 1, 0, len(t) - 2)   # the last row at or before each time
+    dt = (np.asarray(at) - t[i])[:, None]
+    slope = (values[i + 1] - values[i]) / widths[i][:, None]
+    return cumulative[i] + dt * values[i] + 0.5 * slope * dt ** 2
+
+
+def test_the_tests_own_integral_takes_a_repeated_time_as_a_step():
+    t = [0.0, 1.0, 1.0, 2.0]
+    values = np.array([[0.0, 1.0], [1.0, 1.0], [-1.0, 3.0], [0.0, 3.0]])
+    at = np.array([0.0, 0.5, 1.0, 1.5, 2.0])
+    # the ramp 0 -> 1 then -1 -> 0; the constant 1 then 3: integrals in closed form
+    expected = np.array([[0, 0], [0.125, 0.5], [0.5, 1.0], [0.5 - 0.375, 2.5], [0.0, 4.0]])
+    assert np.allclose(piecewise_linear_integral(t, values, at), expected, atol=1e-15)
 
 
 def independent_replay(robot: dict, t, torques, start, steps_per_second=10_000):
@@ -234,9 +273,10 @@ def independent_replay(robot: dict, t, torques, start, steps_per_second=10_000):
         mujoco.mj_step(model, data)
     n = int(np.ceil((t[-1] - t[0]) * steps_per_second))
     model.opt.timestep = (t[-1] - t[0]) / n
+    edges = t[0] + np.arange(n + 1) * model.opt.timestep
+    means = np.diff(piecewise_linear_integral(t, torques, edges), axis=0) / model.opt.timestep
     for i in range(n):
-        mid = t[0] + (i + 0.5) * model.opt.timestep
-        data.ctrl[:] = [np.interp(mid, t, torques[:, 0]), np.interp(mid, t, torques[:, 1])]
+        data.ctrl[:] = means[i]
         mujoco.mj_step(model, data)
     rot = np.zeros(9)
     mujoco.mju_quat2Mat(rot, data.qpos[3:7])
@@ -331,6 +371,35 @@ def test_closed_loop_on_mujoco_estimates_the_real_robot_and_arrives(tmp_path, ca
     names = ("u_a", "v_a", "psi", "u_o", "v_o")
     assert distance([final[k] for k in names], [goal[k] for k in names], 0.1) == pytest.approx(res["arrival_error"])
     assert res["arrival_error"] < 1e-3 and res["open_loop_arrival_error"] > 1e-2
+
+
+@needs_mujoco
+@pytest.mark.slow
+@pytest.mark.parametrize("steps, duration", [(1, 10), (4, 20)])   # 2.5 s a piece
+def test_closed_loop_on_mujoco_brings_the_issues_mismatched_robot_to_the_goal(tmp_path, capsys, steps, duration):
+    from rollplan.studies.closed_loop import ISSUE_MODEL, issue_real_robot
+
+    names = ("radius", "mass_total", "mass_shell", "rotor_inertia_axial", "rotor_inertia_transverse")
+    files = {}
+    for name, robot in (("model", ISSUE_MODEL), ("real", issue_real_robot())):
+        files[name] = tmp_path / f"{name}.toml"
+        files[name].write_text("".join(f"{k} = {getattr(robot, k)!r}\n" for k in names))
+    real = issue_real_robot()
+    plan, out = tmp_path / "plan.json", tmp_path / "out.json"
+    code, _, err = run(capsys, "plan", "--robot", str(files["model"]), "--to", "0.2", "0.25", "--psi", "0.8",
+                       "--steps", str(steps), "--duration", str(duration), "--json", str(plan))
+    assert code == 0, err
+    code, _, err = run(capsys, "simulate", str(plan), "--robot", str(files["real"]), "--engine", "mujoco",
+                       "--closed-loop", "--json", str(out))
+    assert code == 0, err
+    res = json.loads(out.read_text())
+    k_real = references.inertia_ratio(*(getattr(real, k) for k in names))
+    assert res["plant"] == "mujoco" and res["estimates"][-1]["k"] == pytest.approx(k_real, rel=1e-4)
+    goal = json.loads(plan.read_text())["goal"]
+    keys = ("u_a", "v_a", "psi", "u_o", "v_o")
+    assert [goal[k] for k in keys[:3]] == [0.2, 0.25, 0.8]
+    assert distance([res["final"][k] for k in keys], [goal[k] for k in keys], 0.1) < 1e-3
+    assert res["open_loop_arrival_error"] > 1e-1
 
 
 @needs_mujoco

@@ -6,7 +6,8 @@ map the same function). Each run draws a goal from its seed, plans ``steps`` fig
 model robot and executes the plan on a real robot whose k (through the total mass, Jzz and J_r
 unchanged, as ``scripts/sensitivity.py``) or rotor inertia J_r (axial) is off by ``error``, with a
 random sign, open loop and closed loop (:func:`rollplan.execution.feedback.execute`), with or
-without measurement noise.
+without measurement noise. :func:`run_issue_case` is one run of the issue's mismatched robot
+(:func:`issue_real_robot`) on any plant, MuJoCo included.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from ..robot import Robot
 from .executor import map_in_order
 
 __all__ = ["ISSUE_MODEL", "issue_real_robot", "robot_with_error", "random_goal", "run_case", "run_cases",
-           "summarize"]
+           "run_issue_case", "summarize"]
 
 #: A robot with k = 4.21 built from the issue's numbers (R = 0.1 m, M = 0.957 kg, m_o = 0.4 kg); its rotors are
 #: possible bodies of revolution (J_r <= 2 J_p, also with J_r 10 % larger: :func:`robot_with_error`).
@@ -83,6 +84,25 @@ def run_case(case: dict) -> dict:
                closed_position=runs["closed"].position_error, estimated_k=runs["closed"].estimates[-1].get("k"),
                seconds=time.perf_counter() - t0, failed=None)
     return out
+
+
+def run_issue_case(case: dict) -> dict:
+    """One closed-loop run of the issue's case: ``case`` holds ``goal`` (u_a, v_a, psi), ``steps``,
+    ``piece_duration``, ``plant`` ('rates', 'torques' or 'mujoco'), ``noise`` (measurement sigma [R and rad])
+    and ``seed``; the plan is made for :data:`ISSUE_MODEL` and executed on :func:`issue_real_robot`.
+
+    Returns the case with the closed-loop arrival error (R and rad), the final estimate of k, the real k, the
+    number of samples, the motion's duration and the wall time.
+    """
+    t0 = time.perf_counter()
+    model, real = ISSUE_MODEL, issue_real_robot()
+    dist = (disturbance("measurement", sigma_length=case["noise"], sigma_angle=case["noise"], seed=case["seed"]),) \
+        if case["noise"] > 0 else ()
+    p = make_plan(tuple(case["goal"]), case["steps"], robot=model)
+    run = execute(p, model, real, case["piece_duration"], plant=case["plant"], disturbances=dist)
+    return {**case, "closed": run.arrival_error, "closed_position": run.position_error,
+            "estimated_k": run.estimates[-1].get("k"), "real_k": real.k, "samples": int(run.time.size),
+            "duration": float(run.time[-1] - run.time[0]), "seconds": time.perf_counter() - t0}
 
 
 def run_cases(cases, workers: int = 2, progress=None, scheduler: str | None = None) -> list:
