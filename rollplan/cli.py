@@ -550,8 +550,17 @@ def _noise(args):
 
 
 def _check_simulate_options(args) -> None:
-    """simulate's own options, every one whatever the mode (a seed is checked without --noise too)."""
+    """simulate's own options, every one whatever the mode (a seed is checked without --noise too); the closed
+    loop's own options are refused without --closed-loop (they would do nothing)."""
     check_whole("--seed", args.seed, 0, 2**63 - 1)
+    if not args.closed_loop:
+        for flag, value in (("--average", args.average), ("--tolerance", args.tolerance),
+                            ("--corrections", args.corrections)):
+            if value is not None:
+                raise InputError(f"{flag} applies to --closed-loop only")
+    args.average = 1 if args.average is None else args.average
+    args.tolerance = 1e-6 if args.tolerance is None else args.tolerance
+    args.corrections = 3 if args.corrections is None else args.corrections
     check_whole("--average", args.average, 1, 1_000_000)
     check_whole("--corrections", args.corrections, 0, 100)
     tol = check_finite("--tolerance", args.tolerance)
@@ -781,15 +790,18 @@ def cmd_mjcf(args) -> int:
     robot = load_robot(args.robot) if args.robot else default_robot()
     settings = d = engine.DEFAULT_SETTINGS
     step = d.timestep if args.timestep is None else args.timestep
-    solref = (max(d.solref[0], 2.0 * step), d.solref[1]) if args.floor_solref is None else tuple(args.floor_solref)
-    # one option at a time (the time step first: the contact's time constant is bounded by it), so that a
-    # refusal names the option
-    for flag, field, value in (("--timestep", "timestep", step), ("--floor-solref", "solref", solref),
-                               ("--friction", "friction", d.friction if args.friction is None else args.friction),
-                               ("--rolling-resistance", "rolling", args.rolling_resistance),
-                               ("--com-offset", "com_offset", tuple(args.com_offset))):
+    # one option at a time (the time step first, with the default contact time constant of at least two of its
+    # steps), so that a refusal names the option
+    for flag, fields in (("--timestep", {"timestep": step, "solref": (max(d.solref[0], 2.0 * step), d.solref[1])}),
+                         ("--floor-solref", {"solref": d.solref if args.floor_solref is None else
+                                             tuple(args.floor_solref)}),
+                         ("--friction", {"friction": d.friction if args.friction is None else args.friction}),
+                         ("--rolling-resistance", {"rolling": args.rolling_resistance}),
+                         ("--com-offset", {"com_offset": tuple(args.com_offset)})):
+        if flag == "--floor-solref" and args.floor_solref is None:
+            continue
         try:
-            settings = replace(settings, **{field: value})
+            settings = replace(settings, **fields)
         except InputError as exc:
             raise InputError(f"{flag}: {exc}") from None
     try:
@@ -937,7 +949,7 @@ def _compare_arguments(c) -> None:
     c.add_argument("--degree", type=_whole, default=3, help="collocation degree d in [1, 9] (default 3)")
     c.add_argument("--scheme", choices=collocation.SCHEMES, default="legendre", help="collocation points")
     c.add_argument("--branches", type=_whole, default=2,
-                   help="geometric-phase branches timed and used as warm starts (default 2)")
+                   help="geometric-phase branches timed and used as warm starts, in [1, 100] (default 2)")
     c.add_argument("--contact-bound", type=_number, default=CONTACT_BOUND, metavar="RAD",
                    help="both planners: largest polar angle of the contact point from the south pole, in (0, pi/2) "
                         "(default %.4g rad = 80 deg)" % CONTACT_BOUND)
@@ -1155,7 +1167,7 @@ def build_parser() -> argparse.ArgumentParser:
     m.add_argument("--noise", type=_number, default=0.0, metavar="SIGMA",
                    help="measurement noise: standard deviation on u_a, v_a [R] and the angles [rad], "
                         "at most 0.1 (default 0)")
-    m.add_argument("--seed", type=_whole, default=0, help="seed of the noise (default 0)")
+    m.add_argument("--seed", type=_whole, default=0, help="seed of the noise, in [0, 2^63 - 1] (default 0)")
     m.add_argument("--engine", choices=("model", "mujoco"), default="model",
                    help="model: the paper's equations (default); mujoco: the plan's motor torques replayed on "
                         "MuJoCo's rigid-body model of the robot (pip install 'rollplan[mujoco]')")
@@ -1165,13 +1177,13 @@ def build_parser() -> argparse.ArgumentParser:
                    help="with --engine mujoco: add a rotor-rate loop around the planned rates, gain in [0, 1000] "
                         "N m s/rad (default none: torques alone); --closed-loop and --noise also work with "
                         "--engine mujoco (the state measured from MuJoCo's pose)")
-    m.add_argument("--average", type=_whole, default=1, metavar="N",
-                   help="closed loop: the state at rest is the mean of N sensor readings (default 1)")
-    m.add_argument("--tolerance", type=_number, default=1e-6, metavar="TOL",
-                   help="closed loop: no correction once the measured arrival error is below TOL (R and rad; "
-                        "default 1e-6)")
-    m.add_argument("--corrections", type=_whole, default=3, metavar="N",
-                   help="closed loop: at most N correcting motions after the plan (default 3)")
+    m.add_argument("--average", type=_whole, default=None, metavar="N",
+                   help="closed loop: the state at rest is the mean of N sensor readings, N in [1, 10^6] (default 1)")
+    m.add_argument("--tolerance", type=_number, default=None, metavar="TOL",
+                   help="closed loop: no correction once the measured arrival error is below TOL, in (0, 1] (R and "
+                        "rad; default 1e-6)")
+    m.add_argument("--corrections", type=_whole, default=None, metavar="N",
+                   help="closed loop: at most N correcting motions after the plan, N in [0, 100] (default 3)")
     m.set_defaults(func=cmd_simulate)
 
     j = sub.add_parser("mjcf", help="write the robot's MuJoCo model (MJCF): shell, two rotors, torque motors, floor")
@@ -1180,8 +1192,8 @@ def build_parser() -> argparse.ArgumentParser:
     j.add_argument("--com-offset", type=_number, nargs=3, default=[0.0, 0.0, 0.0], metavar=("DX", "DY", "DZ"),
                    help="centre of mass off the centre, in the shell's frame [m], shorter than R/2 (default 0 0 0)")
     j.add_argument("--floor-solref", type=_number, nargs=2, default=None, metavar=("TIMECONST", "DAMPRATIO"),
-                   help="the contact's spring-damper: time constant [s], at least 2 timesteps, and damping ratio "
-                        "(default 0.0002 1, stiff: two RK4 steps, or 2 DT with --timestep)")
+                   help="the contact's spring-damper: time constant [s] in [2 timesteps, 10], and damping ratio in "
+                        "[0.01, 100] (default 0.0002 1, stiff: two RK4 steps, or 2 DT with --timestep)")
     j.add_argument("--rolling-resistance", type=_number, default=0.0, metavar="MU",
                    help="rolling friction [m] in [0, 1] (default 0: none)")
     j.add_argument("--friction", type=_number, default=None, metavar="MU",
@@ -1207,8 +1219,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="write into an existing DIR that holds other files too (or files codegen wrote that were "
                         "changed since): the files of codegen's names are replaced, the others kept")
     c.add_argument("--steps-per-leaf", type=_steps_per_leaf, default="auto",
-                   help="node intervals per leaf of the step map, a multiple of 10, or auto (the default): the "
-                        "smallest of 240, 320, 400, ... 2000 whose step map is accurate to 1e-10 up to --k-max")
+                   help="node intervals per leaf of the step map, a multiple of 10 in [20, 2000], or auto (the "
+                        "default): the smallest of 240, 320, 400, ... 2000 whose step map is accurate to 1e-10 up "
+                        "to --k-max")
     c.add_argument("--prefix", default="rollplan", help="prefix of the C symbols and files, a C identifier "
                    "(default rollplan)")
     c.add_argument("--k-max", type=_number, default=5.0,

@@ -418,3 +418,14 @@ def test_mjcf_never_overwrites_its_robot_file(tmp_path, capsys):
     robot.write_text(LIMITED_TOML)
     code, _, err = run(capsys, "mjcf", "--robot", str(robot), "--out", str(robot))
     assert code == 2 and one_line(err) and robot.read_text() == LIMITED_TOML, err
+
+
+@needs_mujoco
+@pytest.mark.parametrize("step", [1e-3, 1e-2])
+def test_mjcf_timestep_alone_takes_a_contact_of_two_steps(tmp_path, capsys, step):
+    """`mjcf --timestep DT` without --floor-solref: the contact's time constant is 2 DT (as its help says)."""
+    code, out, err = run(capsys, "mjcf", "--out", str(tmp_path / "m.xml"), "--timestep", repr(step))
+    assert code == 0, err
+    model = engine.compile_model((tmp_path / "m.xml").read_text())
+    assert model.opt.timestep == pytest.approx(step, rel=1e-12)
+    assert f"solref {2 * step:g} s" in out
