@@ -14,6 +14,7 @@ import sys
 import numpy as np
 import pytest
 from conftest import one_line, run
+from test_timing import ROBOT_TOML as LIMITED_TOML
 
 from rollplan import Robot
 from rollplan.execution import mujoco_engine as engine
@@ -30,14 +31,6 @@ except ImportError:
 needs_mujoco = pytest.mark.skipif(mujoco is None, reason="needs mujoco (pip install 'rollplan[mujoco]')")
 
 ROBOTS = [Robot(), Robot(0.15, 2.0, 0.6, 4.0e-4, 2.5e-4), Robot(0.05, 0.3, 0.25, 1.0e-6, 0.6e-6)]
-LIMITED_TOML = """radius = 0.1
-mass_total = 1.2
-mass_shell = 0.4
-rotor_inertia_axial = 2.0e-4
-rotor_inertia_transverse = 1.2e-4
-max_rotor_rate = 300.0
-max_rotor_torque = 0.05
-"""
 
 
 def mujoco_composite(model):
