@@ -258,11 +258,14 @@ def _number(where, key, value, low, high, unit, low_open=False):
 
 
 def _array(where, key, value, columns):
+    """``value`` as a float array: a list of numbers (``columns`` None) or of rows of ``columns`` numbers."""
     try:
         a = np.asarray(value, float)
     except (TypeError, ValueError, OverflowError):
+        a = None
+    if a is None or (a.ndim != 1 if columns is None else (a.ndim != 2 or a.shape[1] != columns)):
         raise InputError(f"{where}: {key!r} is not allowed: it must be a list of numbers"
-                         f"{f' (rows of {columns})' if columns else ''}") from None
+                         f"{f' (rows of {columns})' if columns else ''}")
     return a
 
 

@@ -92,6 +92,8 @@ def _drop_version(d):
     ("goal", lambda d: d["goal"].update(u_a=0.3), "'target'", "0.2"),
     ("timing", lambda d: d.update(timing="fast"), "'timing'", "'fast'"),
     ("segment", lambda d: d.update(segment=d["segment"][:-1]), "'segment'", "["),
+    ("tscalar", lambda d: d.update(time=1.0), "'time'", "list of numbers"),
+    ("rnull", lambda d: d.update(rotor_rates=None), "'rotor_rates'", "rows of 2"),
 ])
 def test_plan_file_keys_are_validated_in_one_line(files, name, change, key, value):
     """Every key simulate and animate read is checked: version 99.0 or none, steps 0 or 1e300, duration "10",
