@@ -41,6 +41,7 @@ from ..execution.path import curve_piece_function
 from ..outputs import check_folder, write_folder
 from ..planners.geometric import GeometricPhasePlanner, leafmap
 from ..planners.geometric import enumerate as enumerate_
+from ..planners.geometric.compiled_search import DEFAULT_K_MAX
 from ..planners.geometric.enumerate import K_MONOTONE
 from ..problem import K_MAX, MAX_STEPS, Problem
 from ..result import CERTIFICATE_TOLERANCE
@@ -75,9 +76,6 @@ DEFAULT_STEPS_PER_LEAF = 240
 #: STEP_MAP_TOL up to k_max is taken. The last is the cap (MAX_STEPS_PER_LEAF), accurate up to K_MAX
 #: (240 serves k_max = 5, 320 k_max = 10, 400 k_max = 16, 480 k_max = 20, 640 k_max = 30, 2000 k_max = 100).
 AUTO_STEPS_PER_LEAF = (240, 320, 400, 480, 560, 640, 800, 1000, 1200, 1600, 2000)
-#: Default largest inertia ratio k the generated planner accepts (``generate(k_max=...)``): the step map at
-#: the default steps per leaf is checked to :data:`STEP_MAP_TOL` up to it when the code is generated.
-DEFAULT_K_MAX = 5.0
 #: Accuracy the step map must have on ``0 < a, b <= A_MAX``, ``k <= k_max`` for :func:`generate` to accept k_max.
 STEP_MAP_TOL = 1e-10
 #: Tolerance of the on-board certificate: residual + error bound [R and rad] (the project's tolerance).

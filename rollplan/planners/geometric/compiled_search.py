@@ -22,11 +22,15 @@ from pathlib import Path
 from typing import NamedTuple
 
 from ...core.compiled import shared_library
+from .enumerate import K_MONOTONE
 
-__all__ = ["PREFIX", "SearchResult", "library", "shortest_root", "all_roots"]
+__all__ = ["PREFIX", "DEFAULT_K_MAX", "SearchResult", "library", "shortest_root", "all_roots"]
 
 #: Prefix of the generated C symbols (the code generator's default).
 PREFIX = "rollplan"
+#: Largest k of the generated C planner unless told otherwise (``rollplan codegen --k-max``): the library of
+#: this search is generated with it, so it serves ``K_MONOTONE <= k <= DEFAULT_K_MAX``.
+DEFAULT_K_MAX = 5.0
 #: Status codes of the generated planner (``<prefix>.h``).
 OK, BAD_INPUT, NO_PLAN, NO_CONVERGENCE, NOT_CERTIFIED, TOO_MANY = 0, 2, 3, 4, 5, 6
 #: Roots asked of ``<prefix>_plan_all`` at first (asked again with room for all if there are more).
@@ -105,7 +109,7 @@ def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: 
     inertia ratio k, over all branches or on ``branch`` only (m relative to psi), by the compiled C search,
     uncertified. None when the library is missing or the C search gives no root (k outside its range, no
     root, search incomplete): the caller then runs the numpy search."""
-    lib = library()
+    lib = library() if K_MONOTONE <= k <= DEFAULT_K_MAX else None   # no build for a k it does not serve
     if lib is None or (branch is not None and abs(branch) > 2**31 - 1):
         return None
     options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
@@ -123,7 +127,7 @@ def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int 
     C search (``<prefix>_plan_all``), uncertified: a list of :class:`SearchResult` (empty when there is no root).
     None when the library is missing or the C search cannot give the list (k outside its range, search
     incomplete): the caller then runs the numpy search."""
-    lib = library()
+    lib = library() if K_MONOTONE <= k <= DEFAULT_K_MAX else None   # no build for a k it does not serve
     if lib is None or (branch is not None and abs(branch) > 2**31 - 1):
         return None
     options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
