@@ -11,7 +11,7 @@ import pytest
 
 import rollplan
 from rollplan import InputError
-from rollplan.execution.path import ContactPath, PathPiece, leaf_function
+from rollplan.execution.path import ArcLengthPiece, ContactPath, leaf_function
 
 import references
 
@@ -112,12 +112,12 @@ def test_a_corner_is_detected_and_declared(asym_plan):
     joint, which is then a corner; a declared corner is one whatever W does."""
     ab = (asym_plan.a / ROBOT.radius, asym_plan.b / ROBOT.radius)
     gamma = asym_plan.gamma
-    bad = ContactPath([PathPiece(leaf_function(0), ab, gamma, 2 * np.pi, ab[0]),
-                       PathPiece(leaf_function(1), ab, gamma, 2 * np.pi, ab[0])], ROBOT)
+    bad = ContactPath([ArcLengthPiece(leaf_function(0), ab, gamma, 2 * np.pi, ab[0]),
+                       ArcLengthPiece(leaf_function(1), ab, gamma, 2 * np.pi, ab[0])], ROBOT)
     assert bad.corners.tolist() == [True]
     assert bad.grid(100).corners.tolist() == [bad.grid(100).joints[0]]
-    declared = ContactPath([PathPiece(leaf_function(0), ab, gamma, 2 * np.pi, ab[0]),
-                            PathPiece(leaf_function(1), ab, gamma, 2 * np.pi, ab[1], corner=True)], ROBOT)
+    declared = ContactPath([ArcLengthPiece(leaf_function(0), ab, gamma, 2 * np.pi, ab[0]),
+                            ArcLengthPiece(leaf_function(1), ab, gamma, 2 * np.pi, ab[1], corner=True)], ROBOT)
     assert declared.corners.tolist() == [True]
 
 

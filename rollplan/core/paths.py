@@ -1,7 +1,7 @@
 """Contact paths made of pieces of curves, integrated piece by piece from any start state.
 
 A composed motion (an approach roll, figure eights, a departure roll; a route of
-such motions) is a sequence of :class:`PathPiece`: one smooth piece of a named
+such motions) is a sequence of :class:`CurvePiece`: one smooth piece of a named
 curve of :data:`CURVES` with its parameters and its rotation gamma about OZ
 (31). :class:`PathIntegrator` integrates the model's curve ODE (28)-(30) along
 the pieces with CVODES (Adams, relative tolerance 3e-15), carrying
@@ -27,15 +27,17 @@ from . import model
 from .curves import Piece, figure_eight, great_circle, rotated_point
 from .integrate import CvodesIntegrator
 
-__all__ = ["CURVES", "PathPiece", "figure_eight_pieces", "allocate_samples", "PathIntegrator"]
+__all__ = ["CURVES", "CurvePiece", "figure_eight_pieces", "allocate_samples", "PathIntegrator"]
 
 #: The curves a path can be made of, by name.
 CURVES = {"figure_eight": figure_eight(), "great_circle": great_circle()}
 
 
 @dataclass(frozen=True)
-class PathPiece:
-    """One smooth piece of a contact path: piece ``index`` of the curve ``CURVES[curve]``.
+class CurvePiece:
+    """One smooth piece of a plan's contact path, named: piece ``index`` of the curve ``CURVES[curve]`` with its
+    parameters, its rotation and its role (execution times it as an
+    :class:`rollplan.execution.path.ArcLengthPiece`).
 
     Attributes
     ----------
@@ -87,7 +89,7 @@ class PathPiece:
 def figure_eight_pieces(a: float, b: float, gamma: float, steps: int, kind: str = "leaf") -> list:
     """The ``2 steps`` leaves of ``steps`` traces of the figure eight (a, b) rotated by gamma (units of R)."""
     params = (float(a), float(b))
-    return [PathPiece("figure_eight", i, params, float(gamma), kind) for _ in range(steps) for i in (0, 1)]
+    return [CurvePiece("figure_eight", i, params, float(gamma), kind) for _ in range(steps) for i in (0, 1)]
 
 
 def allocate_samples(lengths, samples: int) -> np.ndarray:
@@ -116,7 +118,7 @@ def _contact_function(curve: str, index: int) -> ca.Function:
 
 
 class PathIntegrator:
-    """CVODES integration of (28)-(30) along a sequence of :class:`PathPiece` (see the module docstring).
+    """CVODES integration of (28)-(30) along a sequence of :class:`CurvePiece` (see the module docstring).
 
     Integrators are built once per curve piece and output grid and kept.
     """
@@ -136,7 +138,7 @@ class PathIntegrator:
             self._integrators[key] = self._cvodes[curve].piece_integrator(index, grid)
         return self._integrators[key]
 
-    def run(self, piece: PathPiece, x, k: float, count: int = 1) -> np.ndarray:
+    def run(self, piece: CurvePiece, x, k: float, count: int = 1) -> np.ndarray:
         """States (count, 3) at ``count`` uniform piece parameters in (0, 2 pi], from ``x`` (3,)."""
         p = [*piece.params, k, piece.gamma]
         integ = self._integrator(piece.curve, piece.index, count)

@@ -2,7 +2,7 @@
 
 The path parameter
 ------------------
-A plan's contact path is a sequence of smooth pieces (:class:`PathPiece`); piece
+A plan's contact path is a sequence of smooth pieces (:class:`ArcLengthPiece`); piece
 ``j`` is a curve on the sphere traced by its own parameter ``phi in [0, phi_end_j]``
 (a leaf of the figure eight: the circle (35) of radius ``r_j``, ``phi in [0, 2 pi]``).
 One global parameter runs over the whole path,
@@ -28,7 +28,7 @@ enters the torque's velocity term ``B(s)``: a motion passing a pole at ``s'`` ha
 finite torque step ``(B(S_j^+) - B(S_j^-)) s'^2``. Where ``W`` jumps (a *corner*:
 the tangent turns, or the speed per unit s differs on the two sides), every motion
 must come to rest (``s' = 0``), or omega would jump. :class:`ContactPath` marks a
-joint as a corner when the piece after it says so (``PathPiece.corner``) or when
+joint as a corner when the piece after it says so (``ArcLengthPiece.corner``) or when
 ``W`` differs on its two sides by more than :data:`SMOOTH_JOINT_RTOL` of its size.
 
 Coefficients along s
@@ -54,7 +54,7 @@ A composed plan (:mod:`rollplan.planners.geometric.composed`: approach roll, fig
 eights, turns in place, legs, departure roll) and a route give their contact path as
 pieces of the named curves of :data:`rollplan.core.paths.CURVES`, each traced at
 constant speed over ``phi in [0, 2 pi]``; :meth:`ContactPath.of_plan` makes every one a
-:class:`PathPiece` with ``c_j = length_j / (2 pi)`` (the leaf radius for a circle,
+:class:`ArcLengthPiece` with ``c_j = length_j / (2 pi)`` (the leaf radius for a circle,
 ``|sigma_1 - sigma_0| / (2 pi)`` for a roll along a great circle), so s is the contact arc
 length on every piece, and starts the path at the plan's start state. The joints where a
 roll meets a figure eight, where the direction gamma changes between two legs or two
@@ -83,8 +83,8 @@ from ..errors import InputError
 from ..planners.geometric.composed import as_composed
 from ..robot import Robot
 
-__all__ = ["SMOOTH_JOINT_RTOL", "curve_piece_function", "piece_function", "leaf_function", "PathPiece", "PathSample",
-           "PathGrid", "ContactPath", "plan_pieces"]
+__all__ = ["SMOOTH_JOINT_RTOL", "curve_piece_function", "piece_function", "leaf_function", "ArcLengthPiece",
+           "PathSample", "PathGrid", "ContactPath", "plan_pieces"]
 
 #: A joint is smooth when omega per unit s' (``W``) agrees on its two sides to this fraction of its size.
 SMOOTH_JOINT_RTOL = 1e-8
@@ -135,8 +135,9 @@ def leaf_function(index: int) -> ca.Function:
 
 
 @dataclass(frozen=True)
-class PathPiece:
-    """One smooth piece of a contact path.
+class ArcLengthPiece:
+    """One smooth piece of a :class:`ContactPath`, compiled for timing: the curve's function, its range and its
+    arc length per unit phi (made from a plan's :class:`rollplan.core.paths.CurvePiece` by :func:`plan_pieces`).
 
     Attributes
     ----------
@@ -237,14 +238,14 @@ class ContactPath:
 
     Parameters
     ----------
-    pieces : sequence of PathPiece
+    pieces : sequence of ArcLengthPiece
     robot : Robot
     start : (u_a, v_a, psi)
         State at the start of the path [R, rad] (psi of any size, module docstring).
 
     Attributes
     ----------
-    pieces : tuple of PathPiece
+    pieces : tuple of ArcLengthPiece
     robot : Robot
     starts : ndarray, shape (P + 1,)
         s at the start of every piece, and the length L at the end [R].
@@ -303,12 +304,12 @@ class ContactPath:
         return cls(pieces, robot, start)
 
     # ------------------------------------------------------------------ internals
-    def _parameters(self, piece: PathPiece) -> np.ndarray:
+    def _parameters(self, piece: ArcLengthPiece) -> np.ndarray:
         r = self.robot
         return np.concatenate([np.asarray(piece.params, float),
                                [piece.gamma, r.k, r.j_xx, r.j_zz, r.rotor_inertia_axial]])
 
-    def _ode(self, piece: PathPiece) -> dict:
+    def _ode(self, piece: ArcLengthPiece) -> dict:
         """The 5-state ODE in phi along a piece: (u_a, v_a, psi, rotor angle 1, rotor angle 2)."""
         f = piece.function
         if id(f) not in self._odes:
@@ -418,7 +419,8 @@ class ContactPath:
 
 
 def plan_pieces(plan, robot: Robot) -> tuple[list, tuple]:
-    """The pieces of a plan's contact path as :class:`PathPiece` objects, and its start ``(u_a, v_a, psi)`` [R, rad].
+    """The pieces of a plan's contact path as :class:`ArcLengthPiece` objects, and its start ``(u_a, v_a, psi)``
+    [R, rad].
 
     Every piece of :func:`rollplan.planners.geometric.as_composed` (leaves, rolls, circles of a
     turn, legs; a route's legs one after the other) becomes a piece over ``phi in [0, 2 pi]``
@@ -441,7 +443,7 @@ def plan_pieces(plan, robot: Robot) -> tuple[list, tuple]:
     if not math.isclose(plan.radius, robot.radius, rel_tol=1e-12, abs_tol=0.0):
         raise InputError(f"the plan's radius = {plan.radius!r} differs from the robot's radius = {robot.radius!r}")
     composed = as_composed(plan)
-    pieces = [PathPiece(piece_function(p.curve, p.index), tuple(float(v) for v in p.params), float(p.gamma),
+    pieces = [ArcLengthPiece(piece_function(p.curve, p.index), tuple(float(v) for v in p.params), float(p.gamma),
                         2 * np.pi, p.length / (2 * np.pi)) for p in composed.pieces]
     start = composed.problem.scaled(composed.problem.start)
     return pieces, (start.u_a, start.v_a, start.psi)

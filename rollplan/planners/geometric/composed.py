@@ -133,7 +133,7 @@ class ComposedPlan(CertifiedMotion):
         The circle pairs of a turn in place [units of R].
     intermediate : ndarray or None
         The pole state between two legs, relative to the start of the figure eights [units of R, rad].
-    pieces : tuple of PathPiece
+    pieces : tuple of CurvePiece
         The contact path, piece by piece [units of R].
     certificate : Certificate
         CVODES integration of the whole motion from the start state, and its residual.

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...core.paths import PathPiece
+from ...core.paths import CurvePiece
 from ...core.plane import inverse
 
 __all__ = ["StraightRoll", "departure_element"]
@@ -65,10 +65,10 @@ class StraightRoll:
         g = departure_element(self.sigma, self.beta)
         return g if self.kind == "departure" else inverse(g)
 
-    def piece(self) -> PathPiece:
+    def piece(self) -> CurvePiece:
         """The roll as a piece of a contact path (the great-circle curve rotated by beta)."""
         ends = (0.0, self.sigma) if self.kind == "departure" else (self.sigma, 0.0)
-        return PathPiece("great_circle", 0, ends, self.beta, self.kind)
+        return CurvePiece("great_circle", 0, ends, self.beta, self.kind)
 
     def as_dict(self) -> dict:
         return {"sigma": self.sigma, "beta": self.beta, "path_length": self.sigma}

@@ -42,7 +42,7 @@ class Route(CertifiedMotion):
     waypoints : tuple of Waypoint
     plans : tuple
         The plan of each leg (:class:`.planner.Plan` or :class:`.composed.ComposedPlan`).
-    pieces : tuple of PathPiece
+    pieces : tuple of CurvePiece
         The whole contact path [units of R].
     leg_of_piece : ndarray of int
         The leg each piece belongs to.

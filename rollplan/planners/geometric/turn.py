@@ -20,7 +20,7 @@ import numpy as np
 
 from ...core.curves import A_MAX, figure_eight
 from ...core.integrate import DEFAULT_NODES, spectral_step
-from ...core.paths import PathPiece
+from ...core.paths import CurvePiece
 from ...core.roots import brent
 from ...errors import NoPlanError
 
@@ -117,7 +117,7 @@ class CircleTurn:
 
     def pieces(self) -> list:
         """The circles as pieces of a contact path."""
-        return [PathPiece("figure_eight", self.side, (self.b, self.b), g, "turn") for g in self.gammas]
+        return [CurvePiece("figure_eight", self.side, (self.b, self.b), g, "turn") for g in self.gammas]
 
     def as_dict(self, radius: float = 1.0) -> dict:
         return {"kind": "circle_pairs", "side": self.side, "b": self.b * radius, "eta": self.eta,
