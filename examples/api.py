@@ -14,5 +14,5 @@ print(gp.path_length, oc.path_length)
 
 robot = rollplan.default_robot()
 pm = rollplan.plan((0.0, 0.1, 0.0), robot=robot)     # lengths in metres
-motion = rollplan.actuate(pm, robot, duration=10.0)  # omega, rotor rates, angles and torques in time
-print(abs(motion.rotor_torques).max(), "N m")
+motion = rollplan.actuate(pm, robot, duration=10.0)  # .series: a TimeSeries of omega, rotor rates, torques
+print(abs(motion.series.rotor_torques).max(), "N m")

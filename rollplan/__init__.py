@@ -23,8 +23,8 @@ _LAZY = {
     "A_MAX": "core.curves", "Curve": "core.curves", "Piece": "core.curves", "circle_point": "core.curves",
     "figure_eight": "core.curves",
     "InputError": "errors", "NoPlanError": "errors", "SolverError": "errors", "UnsafeCacheError": "errors",
-    "Motion": "execution.actuation", "actuate": "execution.actuation",
-    "Simulation": "execution.plants", "simulate_rotors": "execution.plants",
+    "Actuation": "execution.actuation", "actuate": "execution.actuation",
+    "RotorSimulation": "execution.plants", "simulate_rotors": "execution.plants",
     "METHODS": "planners", "solve": "planners",
     "CollocationPlanner": "planners.collocation", "CollocationResult": "planners.collocation",
     "collocate": "planners.collocation",
@@ -34,6 +34,7 @@ _LAZY = {
     "CERTIFICATE_TOLERANCE": "result", "Certificate": "result", "Measures": "result", "PlanResult": "result",
     "SolverStats": "result", "Trajectory": "result",
     "Robot": "robot", "default_robot": "robot", "load_robot": "robot",
+    "TimeSeries": "timeseries",
     "read_waypoints": "waypoints",
 }
 
@@ -62,11 +63,11 @@ __all__ = [
     "A_MAX", "Curve", "Piece", "circle_point", "figure_eight",
     "InputError", "NoPlanError", "SolverError", "UnsafeCacheError",
     "STATE_NAMES", "N3Z_MIN", "State", "Problem",
-    "CERTIFICATE_TOLERANCE", "Certificate", "Measures", "PlanResult", "SolverStats", "Trajectory",
+    "CERTIFICATE_TOLERANCE", "Certificate", "Measures", "PlanResult", "SolverStats", "Trajectory", "TimeSeries",
     "METHODS", "solve",
     "SOLVERS", "GeometricPhasePlanner", "Plan", "StepResult", "plan", "step",
     "LEGS", "ComposedPlanner", "ComposedPlan", "as_composed", "Route", "plan_route", "read_waypoints",
     "CollocationPlanner", "CollocationResult", "collocate",
     "Robot", "load_robot", "default_robot",
-    "Motion", "actuate", "Simulation", "simulate_rotors",
+    "Actuation", "actuate", "RotorSimulation", "simulate_rotors",
 ]

@@ -1,8 +1,8 @@
 """Costs of a timed motion, by name: one function for the motions of every method.
 
-A :class:`TimedMotion` is a motion sampled in time with what the costs need: the
-state, the angular velocity, the rotor rates and the motor torques. Both planners'
-motions become one (the geometric-phase path timed by a law,
+A :class:`~rollplan.timeseries.TimeSeries` with what the costs need (the state, the
+contact velocity, the angular velocity, the rotor rates and the motor torques) is the
+input. Both planners' motions become one (the geometric-phase path timed by a law,
 :mod:`rollplan.execution.optimal_timing`; the rest-to-rest collocation,
 :mod:`rollplan.planners.collocation.rest`), and :func:`measure` computes every
 cost of :data:`COSTS` from the samples alone, the same way for both.
@@ -16,15 +16,12 @@ accuracy.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from .errors import InputError
-from .problem import STATE_NAMES
-from .result import Trajectory
+from .timeseries import TimeSeries
 
-__all__ = ["COSTS", "TimedMotion", "measure", "integrate_samples"]
+__all__ = ["COSTS", "measure", "integrate_samples"]
 
 #: Cost names and what they are (units with lengths in the motion's length unit).
 COSTS = {
@@ -35,57 +32,6 @@ COSTS = {
     "peak_rotor_torque": "largest |tau_i| [N m]",
     "duration": "T [s]",
 }
-
-
-@dataclass(frozen=True)
-class TimedMotion:
-    """A motion sampled in time (see the module docstring on jumps).
-
-    Attributes
-    ----------
-    t : ndarray, shape (N,)
-        Non-decreasing times [s]; a time given twice marks a jump (value before, then after).
-    state : ndarray, shape (N, 5)
-        (u_a, v_a, psi, u_o, v_o) [length unit, rad].
-    velocity : ndarray, shape (N, 2)
-        (u_a_dot, v_a_dot) [length unit / s].
-    omega : ndarray, shape (N, 3)
-        Angular velocity of the sphere, plane frame [rad/s].
-    rotor_rates, rotor_torques : ndarray, shape (N, 2)
-        phi_i_dot from (11) [rad/s] and the motor torques [N m].
-    radius : float
-        Sphere radius [length unit].
-    """
-
-    t: np.ndarray
-    state: np.ndarray
-    velocity: np.ndarray
-    omega: np.ndarray
-    rotor_rates: np.ndarray
-    rotor_torques: np.ndarray
-    radius: float = 1.0
-
-    def __post_init__(self) -> None:
-        n = np.asarray(self.t).size
-        shapes = {"state": 5, "velocity": 2, "omega": 3, "rotor_rates": 2, "rotor_torques": 2}
-        for name, cols in shapes.items():
-            if np.asarray(getattr(self, name)).shape != (n, cols):
-                raise InputError(f"TimedMotion.{name} of shape {np.asarray(getattr(self, name)).shape} is not "
-                                 f"allowed: expected ({n}, {cols})")
-        if n < 2 or np.any(np.diff(self.t) < 0) or not np.all(np.isfinite(self.t)):
-            raise InputError("TimedMotion.t must hold at least 2 finite, non-decreasing times")
-
-    def trajectory(self) -> Trajectory:
-        """The samples as a :class:`~rollplan.result.Trajectory` in time (jumps' repeated samples dropped)."""
-        keep = np.r_[True, np.diff(self.t) > 0]
-        return Trajectory(self.t[keep], self.state[keep], np.zeros(int(keep.sum()), int), self.radius, "t")
-
-    def columns(self) -> dict:
-        """``t`` and the state's columns (jumps' repeated samples dropped), as lists: the JSON form."""
-        tr = self.trajectory()
-        d = {"t": [float(v) for v in tr.s]}
-        d.update({n: [float(v) for v in tr.state[:, i]] for i, n in enumerate(STATE_NAMES)})
-        return d
 
 
 def integrate_samples(t, y) -> float:
@@ -108,16 +54,22 @@ def integrate_samples(t, y) -> float:
     return float(total)
 
 
-def measure(m: TimedMotion) -> dict:
-    """Every cost of :data:`COSTS` of a timed motion, from its samples alone: ``{name: value}``."""
-    if not isinstance(m, TimedMotion):
-        raise InputError(f"motion = {m!r:.60} is not allowed: give a rollplan.measures.TimedMotion")
+def measure(m: TimeSeries) -> dict:
+    """Every cost of :data:`COSTS` of a motion in time, from its samples alone: ``{name: value}``.
+
+    ``m`` needs ``velocity``, ``omega``, ``rotor_rates`` and ``rotor_torques``.
+    """
+    if not isinstance(m, TimeSeries):
+        raise InputError(f"motion = {m!r:.60} is not allowed: give a rollplan.timeseries.TimeSeries")
+    missing = [name for name in ("velocity", "omega", "rotor_rates", "rotor_torques") if getattr(m, name) is None]
+    if missing:
+        raise InputError(f"motion without {', '.join(missing)} is not allowed: the costs need them")
     speed = np.hypot(m.velocity[:, 0], m.velocity[:, 1])
     return {
-        "path_length": integrate_samples(m.t, speed),
-        "angular_velocity": integrate_samples(m.t, (m.omega ** 2).sum(axis=1)),
-        "rotor_energy": integrate_samples(m.t, (m.rotor_torques ** 2).sum(axis=1)),
+        "path_length": integrate_samples(m.time, speed),
+        "angular_velocity": integrate_samples(m.time, (m.omega ** 2).sum(axis=1)),
+        "rotor_energy": integrate_samples(m.time, (m.rotor_torques ** 2).sum(axis=1)),
         "peak_rotor_rate": float(np.abs(m.rotor_rates).max()),
         "peak_rotor_torque": float(np.abs(m.rotor_torques).max()),
-        "duration": float(m.t[-1] - m.t[0]),
+        "duration": m.duration,
     }

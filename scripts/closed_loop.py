@@ -75,7 +75,7 @@ def bar(label):
 
 def replay_gap(replay, run, radius) -> float:
     """Largest difference of the replay's final state from the run's [R, rad] (psi wrapped)."""
-    return float(np.abs(arrival_error(rollplan.State(*replay.state[-1]), run.final, radius)).max())
+    return float(np.abs(arrival_error(rollplan.State(*replay.series.state[-1]), run.final, radius)).max())
 
 
 def issue_case(seeds, workers):
@@ -90,22 +90,22 @@ def issue_case(seeds, workers):
         t0 = time.perf_counter()
         ol = execute(p, model, real, PIECE, plant=plant, closed_loop=False, **kw)
         cl = execute(p, model, real, PIECE, plant=plant, **kw)
-        replay = simulate_rotors(real, cl.time, cl.rotor_rates, x0=p.problem.start.array())
+        replay = simulate_rotors(real, cl.series.time, cl.series.rotor_rates, x0=p.problem.start.array())
         rows.append({"plant": label, "open": ol.arrival_error, "open_position": ol.position_error,
                      "closed": cl.arrival_error, "required": max(1e-3, 0.05 * ol.arrival_error),
                      "replay": replay_gap(replay, cl, real.radius),
-                     "samples": int(cl.time.size), "duration": float(cl.time[-1]),
+                     "samples": int(cl.series.time.size), "duration": float(cl.series.time[-1]),
                      "seconds": time.perf_counter() - t0, "estimates": cl.estimates})
         runs[label] = cl
     p1 = rollplan.plan(GOAL, 1, robot=model)
     t0 = time.perf_counter()
     ol = execute(p1, model, real, PIECE, closed_loop=False)
     cl = execute(p1, model, real, PIECE)
-    replay = simulate_rotors(real, cl.time, cl.rotor_rates, x0=p1.problem.start.array())
+    replay = simulate_rotors(real, cl.series.time, cl.series.rotor_rates, x0=p1.problem.start.array())
     rows.append({"plant": "rate plant, 1 figure eight", "open": ol.arrival_error, "open_position": ol.position_error,
                  "closed": cl.arrival_error, "required": max(1e-3, 0.05 * ol.arrival_error),
                  "replay": replay_gap(replay, cl, real.radius),
-                 "samples": int(cl.time.size), "duration": float(cl.time[-1]),
+                 "samples": int(cl.series.time.size), "duration": float(cl.series.time[-1]),
                  "seconds": time.perf_counter() - t0, "estimates": cl.estimates})
     noise = []
     for sigma in NOISE_LEVELS:
@@ -183,18 +183,18 @@ def torque_vs_rate():
         p = rollplan.plan(target, steps, robot=robot)
         m = rollplan.actuate(p, robot, duration)
         t0 = time.perf_counter()
-        a = run_rates(robot, m.time, m.rotor_rates)
+        a = run_rates(robot, m.series.time, m.series.rotor_rates)
         t1 = time.perf_counter()
-        b = run_torques(robot, m.time, m.rotor_torques, breaks=joints(m))
+        b = run_torques(robot, m.series.time, m.series.rotor_torques, breaks=joints(m.series))
         t2 = time.perf_counter()
-        one = run_torques(robot, m.time, m.rotor_torques)
+        one = run_torques(robot, m.series.time, m.series.rotor_torques)
         R = robot.radius
-        rows.append({"target": target, "steps": steps, "samples": int(m.time.size),
-                     "position": float(np.abs(a.state[:, :2] - b.state[:, :2]).max() / R),
-                     "angles": float(np.abs(a.state[:, 2:] - b.state[:, 2:]).max()),
-                     "one_spline": float(np.abs(a.state[:, :2] - one.state[:, :2]).max() / R),
-                     "arrival_rates": arrival_residual(a.state[-1], p.goal, R),
-                     "arrival_torques": arrival_residual(b.state[-1], p.goal, R),
+        rows.append({"target": target, "steps": steps, "samples": int(m.series.time.size),
+                     "position": float(np.abs(a.series.state[:, :2] - b.series.state[:, :2]).max() / R),
+                     "angles": float(np.abs(a.series.state[:, 2:] - b.series.state[:, 2:]).max()),
+                     "one_spline": float(np.abs(a.series.state[:, :2] - one.series.state[:, :2]).max() / R),
+                     "arrival_rates": arrival_residual(a.series.state[-1], p.goal, R),
+                     "arrival_torques": arrival_residual(b.series.state[-1], p.goal, R),
                      "seconds_rates": t1 - t0, "seconds_torques": t2 - t1})
     # the same plan on the issue's mismatched robot, open loop, fed rates or torques
     model, real = ISSUE_MODEL, issue_real_robot()

@@ -30,14 +30,14 @@ if __name__ == "__main__":
     motion = actuate(pm, robot, duration=10.0)
     save_figure(plot_motion(motion, pm, pm.sample(), "m"), OUT / "motion.png")
     heavier = replace(robot, mass_total=robot.mass_total * 1.05)
-    sim = simulate_rotors(heavier, motion.time, motion.rotor_rates, pm.goal)
+    sim = simulate_rotors(heavier, motion.series.time, motion.series.rotor_rates, pm.goal)
     miss = sim.position_error * heavier.radius
     title = (f"rotor-driven simulation, robot with 5 % more total mass: arrival error {sim.arrival_error:.2e} "
              f"(Euclidean norm; lengths in R, angles in rad),\nposition error {miss:.2e} m")
-    save_figure(plot_simulation(sim.time, sim.state, motion.rotor_rates, pm.goal, motion.state, heavier, title),
+    save_figure(plot_simulation(sim.series, pm.goal, motion.series.state, heavier, title),
                 OUT / "simulation.png")
-    exact = simulate_rotors(robot, motion.time, motion.rotor_rates, pm.goal)
+    exact = simulate_rotors(robot, motion.series.time, motion.series.rotor_rates, pm.goal)
     with Progress(unit="frames") as progress:
-        make_animation(motion.time, exact.state, motion.rotor_rates, robot, pm.goal, OUT / "roll.gif", frames=40,
+        make_animation(exact.series, robot, pm.goal, OUT / "roll.gif", frames=40,
                        fps=8, progress=progress, dpi=80)
     print(f"wrote {OUT / 'plan.png'}, motion.png, simulation.png, roll.gif")

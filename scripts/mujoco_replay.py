@@ -42,8 +42,8 @@ def exact_switches(motion):
     right value (a repeated time): ``(t, torques)``."""
     prof, path = motion.profile, motion.path
     b = prof.breaks[1:-1]
-    keep = np.min(np.abs(motion.time[:, None] - b[None, :]), axis=1) > 1e-12 * motion.duration
-    t_u = motion.time[keep]
+    keep = np.min(np.abs(motion.series.time[:, None] - b[None, :]), axis=1) > 1e-12 * motion.duration
+    t_u = motion.series.time[keep]
 
     def torques(t, piece, side):
         s, sd, sdd = prof.evaluate(t, piece)
@@ -51,7 +51,8 @@ def exact_switches(motion):
         return ps.A * sdd[:, None] + ps.B * sd[:, None] ** 2
 
     k = np.arange(1, prof.breaks.size - 1)
-    rows = [(t_u, motion.rotor_torques[keep], np.zeros(t_u.size)), (b, torques(b, k - 1, "left"), np.ones(b.size)),
+    rows = [(t_u, motion.series.rotor_torques[keep], np.zeros(t_u.size)),
+            (b, torques(b, k - 1, "left"), np.ones(b.size)),
             (b, torques(b, k, "right"), 2 * np.ones(b.size))]
     t = np.concatenate([r[0] for r in rows])
     tau = np.vstack([r[1] for r in rows])
@@ -77,7 +78,7 @@ def model_plant(robot, t, tau, goal):
         if t[i] <= t[i - 1]:
             t[i] = t[i - 1] + 1e-12 * (t[-1] - t[0])
     run = run_torques(robot, t, tau, interpolation="linear")
-    return arrival_residual(run.state[-1], goal, robot.radius)
+    return arrival_residual(run.series.state[-1], goal, robot.radius)
 
 
 def main():
@@ -104,12 +105,14 @@ def main():
     series = []
     for samples in (2001, 20001):
         m = actuate(plan, robot, duration, samples=samples)
-        series.append((f"min-jerk, {m.time.size} samples", robot, m.time, m.rotor_torques, m.goal))
+        series.append((f"min-jerk, {m.series.time.size} samples", robot, m.series.time, m.series.rotor_torques, m.goal))
     m = actuate(rollplan.plan(GOAL, robot=limited), limited, timing="time-optimal")
-    series.append((f"time-optimal, {m.time.size} samples", limited, m.time, m.rotor_torques, m.goal))
+    series.append((f"time-optimal, {m.series.time.size} samples", limited, m.series.time, m.series.rotor_torques,
+                   m.goal))
     if not args.quick:
         m10 = actuate(rollplan.plan(GOAL, robot=limited), limited, timing="time-optimal", samples=60000)
-        series.append((f"time-optimal, {m10.time.size} samples", limited, m10.time, m10.rotor_torques, m10.goal))
+        series.append((f"time-optimal, {m10.series.time.size} samples", limited, m10.series.time,
+                       m10.series.rotor_torques, m10.goal))
     t_b, tau_b = exact_switches(m)
     series.append((f"time-optimal, exact switches ({t_b.size} samples)", limited, t_b, tau_b, m.goal))
     data["plans"] = []
@@ -131,7 +134,7 @@ def main():
                ("timestep 5e-5, solref 1e-4 1", replace(d, timestep=5e-5, solref=(1e-4, 1.0)))]
     data["settings_trials"] = []
     for name, s in trials:
-        r = replay(robot, fine.time, fine.rotor_torques, fine.goal, s)
+        r = replay(robot, fine.series.time, fine.series.rotor_torques, fine.goal, s)
         r.update(name=name, settings=s.as_dict())
         data["settings_trials"].append(r)
         print(name, r["arrival_error"], r["max_penetration"])
@@ -146,9 +149,10 @@ def main():
                ("rolling resistance 1e-4 m", replace(d, rolling=1e-4))]
     data["options"] = []
     for name, s in options:
-        r = replay(robot, coarse.time, coarse.rotor_torques, coarse.goal, s)
+        r = replay(robot, coarse.series.time, coarse.series.rotor_torques, coarse.goal, s)
         r.update(name=name)
-        rr = replay(robot, coarse.time, coarse.rotor_torques, coarse.goal, s, servo=0.05, rates=coarse.rotor_rates)
+        rr = replay(robot, coarse.series.time, coarse.series.rotor_torques, coarse.goal, s, servo=0.05,
+                    rates=coarse.series.rotor_rates)
         r["servo_arrival_error"] = rr["arrival_error"]
         data["options"].append(r)
         print(name, r["arrival_error"], rr["arrival_error"])

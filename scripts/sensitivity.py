@@ -72,7 +72,7 @@ def main():
     for target, steps, duration in CASES:
         plan = rollplan.plan(target, steps, robot=robot)
         motion = rollplan.actuate(plan, robot, duration)
-        t, rates = motion.time, motion.rotor_rates
+        t, rates = motion.series.time, motion.series.rotor_rates
         nominal = rollplan.simulate_rotors(robot, t, rates, plan.goal)
         h = math.hypot(*target[:2])
         lines += [

@@ -102,13 +102,13 @@ def row(name, robot, target, steps, settings):
     r["time-optimal_vs_phase_plane"] = r["time-optimal"] / pp["duration"] - 1
     to = profiles["time-optimal"]
     m = sample_motion(path, to, 4, plan.goal, LAWS["time-optimal"].samples_per_piece)
-    rate = np.abs(m.rotor_rates).max(axis=1) / lim.max_rotor_rate
-    torque = np.abs(m.rotor_torques).max(axis=1) / lim.max_rotor_torque
-    r["samples"] = int(m.time.size)
+    rate = np.abs(m.series.rotor_rates).max(axis=1) / lim.max_rotor_rate
+    torque = np.abs(m.series.rotor_torques).max(axis=1) / lim.max_rotor_torque
+    r["samples"] = int(m.series.time.size)
     r["max_utilisation"] = float(max(rate.max(), torque.max()))
     r["active_rate"], r["active_torque"] = float(np.mean(rate > 0.99)), float(np.mean(torque > 0.99))
     r["active_any"] = float(np.mean(np.maximum(rate, torque) > 0.99))
-    sim = simulate_rotors(robot, m.time, m.rotor_rates, plan.goal)
+    sim = simulate_rotors(robot, m.series.time, m.series.rotor_rates, plan.goal)
     r["sim_position_error_R"], r["sim_arrival_error"] = sim.position_error, sim.arrival_error
     figure = (target, steps) == FIGURE_CASE and name in ("default", "default, slow motor")
     if settings["figures"] is not None and figure:

@@ -64,43 +64,43 @@ def test_rest_to_rest_profile_is_minimum_jerk(motion, asym_plan):
     np.testing.assert_allclose(poly.deriv()(tau), 30 * tau**2 * (1 - tau) ** 2, atol=1e-13)
     np.testing.assert_allclose(poly.deriv(2)(tau), 60 * tau * (1 - tau) * (1 - 2 * tau), atol=1e-13)
     # the motion's first half-step (2 s of 8): s = 2 pi a_R s(tau), closed form in time
-    first = motion.time <= 2.0
-    tau = motion.time[first] / 2.0
+    first = motion.series.time <= 2.0
+    tau = motion.series.time[first] / 2.0
     leaf = 2 * np.pi * asym_plan.a / asym_plan.radius
     np.testing.assert_allclose(motion.s[first], leaf * (10 * tau**3 - 15 * tau**4 + 6 * tau**5), atol=1e-13)
     np.testing.assert_allclose(motion.s_dot[first], leaf * 30 * tau**2 * (1 - tau) ** 2 / 2.0, atol=1e-12)
 
 
 def test_sampling(motion, asym_plan):
-    n = motion.time.size
+    n = motion.series.time.size
     assert n >= 2000 and n == 4 * 1000 + 1
-    assert motion.omega.shape == (n, 3) and motion.rotor_rates.shape == (n, 2)
-    assert motion.rotor_angles.shape == (n, 2) and motion.rotor_torques.shape == (n, 2)
-    np.testing.assert_allclose(np.diff(motion.time), 8.0 / (n - 1), rtol=1e-9)
-    assert motion.time[0] == 0 and motion.time[-1] == 8.0
-    assert list(motion.time[motion.rest_indices]) == pytest.approx([0, 2, 4, 6, 8])
+    assert motion.series.omega.shape == (n, 3) and motion.series.rotor_rates.shape == (n, 2)
+    assert motion.series.rotor_angles.shape == (n, 2) and motion.series.rotor_torques.shape == (n, 2)
+    np.testing.assert_allclose(np.diff(motion.series.time), 8.0 / (n - 1), rtol=1e-9)
+    assert motion.series.time[0] == 0 and motion.series.time[-1] == 8.0
+    assert list(motion.series.time[motion.rest_indices]) == pytest.approx([0, 2, 4, 6, 8])
     few = actuate(asym_plan, ROBOT, 8.0, 10)
-    assert few.time.size == 4 * MIN_SAMPLES_PER_LEAF + 1
+    assert few.series.time.size == 4 * MIN_SAMPLES_PER_LEAF + 1
 
 
 def test_omega_zero_at_rest_points(motion):
     rest = motion.rest_indices
-    assert np.all(motion.omega[rest] == 0) and np.all(motion.rotor_rates[rest] == 0)
-    assert np.abs(motion.rotor_torques[rest]).max() < 1e-12 * np.abs(motion.rotor_torques).max()
-    assert np.abs(motion.omega).max() > 0.1  # it does move in between
+    assert np.all(motion.series.omega[rest] == 0) and np.all(motion.series.rotor_rates[rest] == 0)
+    assert np.abs(motion.series.rotor_torques[rest]).max() < 1e-12 * np.abs(motion.series.rotor_torques).max()
+    assert np.abs(motion.series.omega).max() > 0.1  # it does move in between
     # each leaf starts at the south pole
-    assert np.abs(motion.state[rest, 3:5]).max() < 1e-12
+    assert np.abs(motion.series.state[rest, 3:5]).max() < 1e-12
 
 
 def test_arrives_at_target(motion, asym_plan):
     g = asym_plan.goal
     assert motion.goal == g
-    np.testing.assert_allclose(motion.state[-1], [g.u_a, g.v_a, g.psi, 0, 0], atol=1e-10)
+    np.testing.assert_allclose(motion.series.state[-1], [g.u_a, g.v_a, g.psi, 0, 0], atol=1e-10)
 
 
 def test_realizability_13_along_motion(motion):
-    _, _, n3 = references.axes(*contact(motion.state))
-    w = motion.omega
+    _, _, n3 = references.axes(*contact(motion.series.state))
+    w = motion.series.omega
     res = references.realizability(n3, w, ROBOT.k)  # (13)
     assert np.abs(res).max() < 1e-13 * np.abs(w).max()
     # pure rolling (omega_z = 0) would violate it: the spin is really used
@@ -108,15 +108,16 @@ def test_realizability_13_along_motion(motion):
 
 
 def test_momentum_integral_11(motion):
-    n1, n2, _ = references.axes(*contact(motion.state))
-    jc_w = motion.omega * [ROBOT.j_xx, ROBOT.j_xx, ROBOT.j_zz]
-    total = jc_w + ROBOT.rotor_inertia_axial * (n1 * motion.rotor_rates[:, :1] + n2 * motion.rotor_rates[:, 1:])
+    n1, n2, _ = references.axes(*contact(motion.series.state))
+    jc_w = motion.series.omega * [ROBOT.j_xx, ROBOT.j_xx, ROBOT.j_zz]
+    rates = motion.series.rotor_rates
+    total = jc_w + ROBOT.rotor_inertia_axial * (n1 * rates[:, :1] + n2 * rates[:, 1:])
     assert np.abs(total).max() < 1e-14 * np.abs(jc_w).max() + 1e-18
 
 
 def test_omega_drives_the_state_by_montana(motion):
     """Finite differences of the sampled contact coordinates equal Montana's (6)-(10) with the output omega."""
-    t, x, w, R = motion.time, motion.state, motion.omega, ROBOT.radius
+    t, x, w, R = motion.series.time, motion.series.state, motion.series.omega, ROBOT.radius
     u, v, psi = contact(x)
     rates = references.montana(w, u, v, psi, R)
     fd = np.gradient(x, t, axis=0, edge_order=2)
@@ -125,42 +126,42 @@ def test_omega_drives_the_state_by_montana(motion):
 
 
 def test_rotor_angles_integrate_rates(motion):
-    t, r = motion.time, motion.rotor_rates
+    t, r = motion.series.time, motion.series.rotor_rates
     trap = np.vstack([[0, 0], np.cumsum(0.5 * (r[1:] + r[:-1]) * np.diff(t)[:, None], axis=0)])
-    assert np.abs(trap - motion.rotor_angles).max() < 1e-4 * np.abs(motion.rotor_angles).max()
+    assert np.abs(trap - motion.series.rotor_angles).max() < 1e-4 * np.abs(motion.series.rotor_angles).max()
 
 
 def test_torques_equal_rate_of_rotor_angular_momentum(motion):
     """tau_i = n_i . dH_i/dt with the full H_i of an axisymmetric rotor (axial J_r, transverse J_p)."""
     jr, jp = ROBOT.rotor_inertia_axial, ROBOT.rotor_inertia_transverse
-    t, w = motion.time, motion.omega
-    n = references.axes(*contact(motion.state))
+    t, w = motion.series.time, motion.series.omega
+    n = references.axes(*contact(motion.series.state))
     for i in range(2):
         ni = n[i]
         axial = np.sum(ni * w, axis=1)
-        H = jp * w + ((jr - jp) * axial + jr * motion.rotor_rates[:, i])[:, None] * ni
+        H = jp * w + ((jr - jp) * axial + jr * motion.series.rotor_rates[:, i])[:, None] * ni
         dH = np.gradient(H, t, axis=0, edge_order=2)
         fd = np.sum(ni * dH, axis=1)
-        tau = motion.rotor_torques[:, i]
+        tau = motion.series.rotor_torques[:, i]
         assert np.abs(fd - tau).max() < 2e-4 * np.abs(tau).max()  # O(h^2); J_r d(phi_dot)/dt alone is off by 2e-2
 
 
 def test_time_scaling(asym_plan, motion):
     """Doubling T halves rates and omega, quarters torques, keeps the path and rotor angles."""
     slow = actuate(asym_plan, ROBOT, 16.0, 4000)
-    np.testing.assert_allclose(slow.time, 2 * motion.time, rtol=1e-12)
-    np.testing.assert_allclose(slow.state, motion.state, atol=1e-11)
-    np.testing.assert_allclose(slow.rotor_angles, motion.rotor_angles, atol=1e-9)
-    np.testing.assert_allclose(slow.omega, motion.omega / 2, atol=1e-12)
-    np.testing.assert_allclose(slow.rotor_rates, motion.rotor_rates / 2, atol=1e-10)
-    np.testing.assert_allclose(slow.rotor_torques, motion.rotor_torques / 4, atol=1e-12)
+    np.testing.assert_allclose(slow.series.time, 2 * motion.series.time, rtol=1e-12)
+    np.testing.assert_allclose(slow.series.state, motion.series.state, atol=1e-11)
+    np.testing.assert_allclose(slow.series.rotor_angles, motion.series.rotor_angles, atol=1e-9)
+    np.testing.assert_allclose(slow.series.omega, motion.series.omega / 2, atol=1e-12)
+    np.testing.assert_allclose(slow.series.rotor_rates, motion.series.rotor_rates / 2, atol=1e-10)
+    np.testing.assert_allclose(slow.series.rotor_torques, motion.series.rotor_torques / 4, atol=1e-12)
 
 
 def test_symmetric_plan_mirror(sym_plan):
     """a = b, psi = 0: the two half-steps mirror in time; the rotor rate magnitudes repeat."""
     assert sym_plan.a == pytest.approx(sym_plan.b, rel=1e-9)
     m = actuate(sym_plan, ROBOT, 10.0, 2000)
-    r = np.abs(m.rotor_rates)
+    r = np.abs(m.series.rotor_rates)
     np.testing.assert_allclose(r, r[::-1], atol=1e-8 * r.max())
 
 

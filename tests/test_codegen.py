@@ -819,12 +819,13 @@ def test_sample_is_the_python_min_jerk_law(clib, target, steps, duration):
         return np.array(rates), np.array(angles), np.array(state)
 
     rng = np.random.default_rng(5)
-    size = max(1.0, float(np.abs(motion.rotor_angles).max()))
-    for i in rng.choice(motion.time.size, 12, replace=False):
-        rates, angles, state = sample(motion.time[i])
-        assert np.abs(rates - motion.rotor_rates[i]).max() <= 1e-10
-        assert np.abs(angles - motion.rotor_angles[i]).max() <= 1e-10 * size
-        assert np.all(np.abs(state * [R, R, 1, 1, 1] - motion.state[i]) <= 1e-10 * (1 + np.abs(motion.state[i])))
+    size = max(1.0, float(np.abs(motion.series.rotor_angles).max()))
+    for i in rng.choice(motion.series.time.size, 12, replace=False):
+        rates, angles, state = sample(motion.series.time[i])
+        assert np.abs(rates - motion.series.rotor_rates[i]).max() <= 1e-10
+        assert np.abs(angles - motion.series.rotor_angles[i]).max() <= 1e-10 * size
+        want = motion.series.state[i]
+        assert np.all(np.abs(state * [R, R, 1, 1, 1] - want) <= 1e-10 * (1 + np.abs(want)))
     for t in rng.uniform(0.05, 0.95, 3) * duration:
         fd = (sample(t + 1e-6)[1] - sample(t - 1e-6)[1]) / 2e-6
         np.testing.assert_allclose(fd, sample(t)[0], rtol=1e-6, atol=1e-6)

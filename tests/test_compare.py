@@ -18,7 +18,7 @@ from rollplan import Problem, default_robot, plan
 from rollplan.cli import main
 from rollplan.execution.optimal_timing import optimal_timing, timed_samples, timing_bound
 from rollplan.execution.path import ContactPath
-from rollplan.measures import TimedMotion, integrate_samples, measure
+from rollplan.measures import integrate_samples, measure
 from rollplan.planners.collocation.costs import N_PAR
 from rollplan.planners.collocation.rest import (
     MAX_INTERVALS,
@@ -29,6 +29,7 @@ from rollplan.planners.collocation.rest import (
     rest_parameters,
 )
 from rollplan.studies.comparison import SIDE_KEYS, TRAJECTORY_KEYS, compare, leaf_radius_bound, robot_for_k
+from rollplan.timeseries import TimeSeries
 
 import references
 
@@ -303,15 +304,15 @@ def test_cli_compare_needs_one_leg_of_figure_eights(psi, capsys):
     assert "one leg of figure eights" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
-def test_timed_motion_refuses_bad_shapes():
+def test_time_series_refuses_bad_shapes():
     from rollplan.errors import InputError
 
     with pytest.raises(InputError, match="velocity"):
-        TimedMotion(np.arange(3.0), np.zeros((3, 5)), np.zeros((2, 2)), np.zeros((3, 3)), np.zeros((3, 2)),
-                    np.zeros((3, 2)))
+        TimeSeries(np.arange(3.0), np.zeros((3, 5)), velocity=np.zeros((2, 2)), omega=np.zeros((3, 3)),
+                   rotor_rates=np.zeros((3, 2)), rotor_torques=np.zeros((3, 2)))
     with pytest.raises(InputError, match="non-decreasing"):
-        TimedMotion(np.array([0.0, 2.0, 1.0]), np.zeros((3, 5)), np.zeros((3, 2)), np.zeros((3, 3)),
-                    np.zeros((3, 2)), np.zeros((3, 2)))
+        TimeSeries(np.array([0.0, 2.0, 1.0]), np.zeros((3, 5)), velocity=np.zeros((3, 2)), omega=np.zeros((3, 3)),
+                   rotor_rates=np.zeros((3, 2)), rotor_torques=np.zeros((3, 2)))
 
 
 @pytest.mark.slow

@@ -45,18 +45,19 @@ def plan4():
 def eight(plan4):
     """The first figure eight of the four-step plan for the model, timed (2.5 s a leaf)."""
     m = actuate(plan4, MODEL, 20.0, samples=3201)
-    end = joints(m)[1]
-    return m.time[:end + 1], m.rotor_rates[:end + 1], m.rotor_torques[:end + 1], joints(m)[:1]
+    s = m.series
+    end = joints(s)[1]
+    return s.time[:end + 1], s.rotor_rates[:end + 1], s.rotor_torques[:end + 1], joints(s)[:1]
 
 
 def test_window_integrals_of_omega_are_plane_displacements(eight):
     """int omega_x dt = -dv_a / R and int omega_y dt = du_a / R by (6), (7): the line integral gives them back."""
     t, r, _, _ = eight
     run = run_rates(REAL, t, r)
-    res = window_integrals(t, run.state, REAL.radius, 37)
+    res = window_integrals(t, run.series.state, REAL.radius, 37)
     edges = np.append(np.arange(0, t.size, 37)[: res["W"].shape[0]], t.size - 1)
-    np.testing.assert_allclose(res["W"][:, 0], -np.diff(run.state[edges, 1]) / REAL.radius, atol=1e-10)
-    np.testing.assert_allclose(res["W"][:, 1], np.diff(run.state[edges, 0]) / REAL.radius, atol=1e-10)
+    np.testing.assert_allclose(res["W"][:, 0], -np.diff(run.series.state[edges, 1]) / REAL.radius, atol=1e-10)
+    np.testing.assert_allclose(res["W"][:, 1], np.diff(run.series.state[edges, 0]) / REAL.radius, atol=1e-10)
 
 
 def test_ratio_estimator_recovers_the_true_ratios_noise_free(eight):
@@ -65,7 +66,7 @@ def test_ratio_estimator_recovers_the_true_ratios_noise_free(eight):
     est = RatioEstimator(REAL.radius)
     with pytest.raises(InputError, match="no motion"):
         est.estimate()
-    est.add(run.time, run.measured, run.commanded)
+    est.add(run.series.time, run.measured, run.commanded)
     e = est.estimate()
     jr = REAL.rotor_inertia_axial
     assert e.alpha == pytest.approx(REAL.j_xx / jr, rel=1e-8)
@@ -77,14 +78,14 @@ def test_inertia_estimator_recovers_inertias_and_friction_noise_free(eight):
     t, _, tq, breaks = eight
     run = run_torques(REAL, t, tq, breaks=breaks, disturbances=[disturbance("friction", c=(1e-5, 3e-5))])
     est = InertiaEstimator(REAL.radius, friction=True)
-    est.add(run.time, run.measured, run.commanded_momenta, run.rotor_angles)
+    est.add(run.series.time, run.measured, run.commanded_momenta, run.series.rotor_angles)
     e = est.estimate()
     assert e.j_xx == pytest.approx(REAL.j_xx, rel=1e-7)
     assert e.j_zz == pytest.approx(REAL.j_zz, rel=1e-7)
     assert e.j_r == pytest.approx(REAL.rotor_inertia_axial, rel=1e-6)
     np.testing.assert_allclose(e.friction, (1e-5, 3e-5), rtol=1e-6)
     with pytest.raises(InputError, match="rotor angles"):
-        InertiaEstimator(REAL.radius).add(run.time, run.measured, run.commanded_momenta)
+        InertiaEstimator(REAL.radius).add(run.series.time, run.measured, run.commanded_momenta)
 
 
 def test_ratio_estimator_under_measurement_noise_is_unbiased_within_its_errors(eight):
@@ -95,7 +96,7 @@ def test_ratio_estimator_under_measurement_noise_is_unbiased_within_its_errors(e
         noise = disturbance("measurement", sigma_length=1e-3, sigma_angle=1e-3, seed=seed)
         run = run_rates(REAL, t, r, disturbances=[noise])
         est = RatioEstimator(REAL.radius)
-        est.add(run.time, run.measured, run.commanded)
+        est.add(run.series.time, run.measured, run.commanded)
         ks.append(est.estimate().k / REAL.k - 1)
     ks = np.array(ks)
     assert np.abs(ks).max() < 0.01
@@ -121,7 +122,7 @@ def test_applied_rates_reproduce_the_final_state_independently(runs):
     """The applied rotor rates alone drive DOP853 on the printed (6)-(10) with (11) of the real robot to the
     reported final state."""
     ex = runs[True]
-    t, rates = ex.time, ex.rotor_rates
+    t, rates = ex.series.time, ex.series.rotor_rates
     assert np.all(np.diff(t) > 0)
     f = references.rotor_driven_rhs(REAL.j_xx, REAL.j_zz, REAL.rotor_inertia_axial, REAL.radius,
                                     CubicSpline(t, rates, axis=0))
@@ -250,9 +251,9 @@ def test_open_loop_on_the_exact_robot_is_the_plan(asym_plan):
     simulated axial momenta (P)) are the plan's torques (T) computed by AD along the path."""
     robot = rollplan.Robot()
     ex = execute(asym_plan, robot, robot, 2.5, closed_loop=False)
-    m = actuate(asym_plan, robot, 10.0, samples=ex.time.size)
-    np.testing.assert_allclose(ex.time, m.time, atol=1e-12)
+    m = actuate(asym_plan, robot, 10.0, samples=ex.series.time.size)
+    np.testing.assert_allclose(ex.series.time, m.series.time, atol=1e-12)
     assert ex.arrival_error < 1e-8
-    assert np.abs(ex.rotor_torques - m.rotor_torques).max() < 1e-5 * np.abs(m.rotor_torques).max()
+    assert np.abs(ex.series.rotor_torques - m.series.rotor_torques).max() < 1e-5 * np.abs(m.series.rotor_torques).max()
     t = execute(asym_plan, robot, robot, 2.5, plant="torques", closed_loop=False)
     assert t.arrival_error < 1e-8

@@ -21,7 +21,7 @@ def test_timing_phase_plane_is_in_metres_for_a_robot():
     line = next(ln for ln in phase.get_lines() if ln.get_label() == "min-jerk")
     # the contact path's length in metres, as the plan states it, and the mean speed of the whole motion
     assert np.max(line.get_xdata()) == pytest.approx(p.path_length, rel=1e-6)
-    assert np.trapezoid(line.get_ydata(), m.time) == pytest.approx(p.path_length, rel=1e-3)
+    assert np.trapezoid(line.get_ydata(), m.series.time) == pytest.approx(p.path_length, rel=1e-3)
 
 
 WAYPOINTS = "u_a,v_a,psi,u_o,v_o,steps,label\n0,0,0,,,,home\n1.0,0.5,0.3,,,1,a\n1.0,0.5,1.3,,,1,turn in place\n" \
@@ -49,10 +49,11 @@ def test_simulation_figure_draws_the_planned_curve_over_the_simulated_one():
     """In sim.png the planned curve (dashed) was drawn first and hidden under the simulated one."""
     from rollplan.plots.colors import PLANNED, SIMULATED
     from rollplan.plots.motion import plot_simulation
+    from rollplan.timeseries import TimeSeries
 
     t = np.linspace(0.0, 1.0, 50)
     states = np.column_stack([t, t ** 2, t, 0 * t, 0 * t])
-    fig = plot_simulation(t, states, np.zeros((50, 2)), states[-1], planned=states)
+    fig = plot_simulation(TimeSeries(t, states, rotor_rates=np.zeros((50, 2))), states[-1], planned=states)
     for ax in fig.axes[:2]:
         planned = [ln for ln in ax.get_lines() if ln.get_color() == PLANNED and ln.get_linestyle() == "--"]
         simulated = [ln for ln in ax.get_lines() if ln.get_color() == SIMULATED and len(ln.get_xdata()) == 50]
@@ -71,9 +72,9 @@ def test_the_animation_of_100_frames_stays_under_1_5_mb(tmp_path):
     robot = rollplan.default_robot()
     p = rollplan.plan((0.0, 0.1, 1.0), robot=robot)
     m = actuate(p, robot, 10.0)
-    sim = rollplan.simulate_rotors(robot, m.time, m.rotor_rates, p.goal)
+    sim = rollplan.simulate_rotors(robot, m.series.time, m.series.rotor_rates, p.goal)
     gif = tmp_path / "roll.gif"
-    make_animation(m.time, sim.state, m.rotor_rates, robot, p.goal, gif, 100, 20)
+    make_animation(sim.series, robot, p.goal, gif, 100, 20)
     assert gif.stat().st_size < 1.5e6
     im = Image.open(gif)
     assert im.n_frames == 100

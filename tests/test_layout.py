@@ -82,7 +82,7 @@ def test_no_module_imports_another_modules_private_names():
 LAYERS = (
     {"", "version", "errors", "interrupts", "progress", "threads", "inputs", "outputs"},  # foundations
     {"core"},  # the model, curves, integrators, compiled functions
-    {"robot", "problem", "result", "measures", "waypoints"},  # the problem statement and the result types
+    {"robot", "problem", "result", "timeseries", "measures", "waypoints"},  # the problem statement and the result types
     {"planners"},
     {"execution"},  # timing, actuation, plants, feedback
     {"codegen", "io"},  # generated C; JSON forms of results and plan files

@@ -210,7 +210,7 @@ def test_mujoco_replay_of_min_jerk_matches_the_rate_plant(plans):
                         rp.start, rp.goal)
     plant = run_rates(rp.robot, rp.time, rp.rotor_rates, x0=rp.start.array())
     scale = np.array([rp.robot.radius, rp.robot.radius, 1, 1, 1])
-    assert np.abs((run.state - plant.state) / scale).max() < 1e-3
+    assert np.abs((run.series.state - plant.series.state) / scale).max() < 1e-3
     assert run.arrival_error < 1e-3
     assert run.max_penetration < 1e-6 * rp.robot.radius and run.slip < 1e-4 * rp.robot.radius
 

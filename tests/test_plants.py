@@ -33,8 +33,8 @@ def test_constant_rotor_rate_closed_form():
     sim = simulate_rotors(ROBOT, t, np.column_stack([np.full(50, c), np.zeros(50)]))
     rate = ROBOT.rotor_inertia_axial * c / ROBOT.j_xx
     expected = np.column_stack([0 * t, ROBOT.radius * rate * t, 0 * t, 0 * t, rate * t])
-    np.testing.assert_allclose(sim.state, expected, atol=1e-11)
-    np.testing.assert_allclose(sim.omega, np.tile([-rate, 0, 0], (50, 1)), atol=1e-13)
+    np.testing.assert_allclose(sim.series.state, expected, atol=1e-11)
+    np.testing.assert_allclose(sim.series.omega, np.tile([-rate, 0, 0], (50, 1)), atol=1e-13)
 
 
 def _numpy_rhs(robot, spline):
@@ -50,7 +50,7 @@ def test_against_scipy_dop853():
     # (6)-(10) with omega from (11), the printed equations and (2) composed in numpy (references)
     ref = references.rotor_drive(ROBOT.as_dict(), t, rates)
     assert np.abs(ref[-1]).max() > 0.1  # a real motion
-    np.testing.assert_allclose(sim.state, ref, atol=1e-9)
+    np.testing.assert_allclose(sim.series.state, ref, atol=1e-9)
 
 
 def test_scaling_all_inertias_changes_nothing():
@@ -60,7 +60,7 @@ def test_scaling_all_inertias_changes_nothing():
     heavy = rollplan.Robot(0.1, 2 * 1.2, 2 * 0.4, 2 * 2.0e-4, 2 * 1.2e-4)
     a = simulate_rotors(ROBOT, t, rates)
     b = simulate_rotors(heavy, t, rates)
-    np.testing.assert_allclose(a.state, b.state, atol=1e-11)
+    np.testing.assert_allclose(a.series.state, b.series.state, atol=1e-11)
 
 
 @pytest.mark.parametrize("target, steps, duration", [((0.0, 0.1, 0.0), 1, 10.0),      # symmetric, a = b
@@ -74,25 +74,25 @@ def test_rotor_rates_reproduce_the_plan(target, steps, duration):
     else:
         assert abs(p.a - p.b) > 1e-3 * ROBOT.radius
     m = actuate(p, ROBOT, duration)
-    assert m.time.size >= 2000
-    sim = simulate_rotors(ROBOT, m.time, m.rotor_rates, p.goal)
+    assert m.series.time.size >= 2000
+    sim = simulate_rotors(ROBOT, m.series.time, m.series.rotor_rates, p.goal)
     assert sim.arrival_error < 1e-6
-    assert np.array_equal(sim.final, sim.state[-1])
+    assert np.array_equal(sim.final, sim.series.state[-1])
     g, R = p.goal, ROBOT.radius   # the arrival error: lengths in units of R, psi wrapped, u_o and v_o
     want = [(sim.final[0] - g.u_a) / R, (sim.final[1] - g.v_a) / R, references.wrap(sim.final[2] - g.psi),
             sim.final[3], sim.final[4]]
     assert np.allclose(sim.error, want, rtol=0, atol=1e-15)
     assert sim.arrival_error == pytest.approx(np.linalg.norm(want), abs=1e-15)
-    dev = np.abs(sim.state - m.state).max(axis=0)
+    dev = np.abs(sim.series.state - m.series.state).max(axis=0)
     assert dev[:2].max() < 1e-6 * ROBOT.radius and dev[2:].max() < 1e-6
-    np.testing.assert_allclose(sim.omega, m.omega, atol=1e-6 * np.abs(m.omega).max())
+    np.testing.assert_allclose(sim.series.omega, m.series.omega, atol=1e-6 * np.abs(m.series.omega).max())
 
 
 def test_wrong_k_misses_the_target():
     p = rollplan.plan((0.05, 0.08, 0.5), 2, robot=ROBOT)
     m = actuate(p, ROBOT, 6.0)
     heavier = rollplan.Robot(mass_total=1.3)  # k larger by ~7 %
-    sim = simulate_rotors(heavier, m.time, m.rotor_rates, p.goal)
+    sim = simulate_rotors(heavier, m.series.time, m.series.rotor_rates, p.goal)
     assert sim.arrival_error > 1e-3
 
 
@@ -111,8 +111,8 @@ def test_many_steps_still_arrive():
     """Six steps (12 half-steps, >= 400 samples each): the spline-driven simulation still arrives within 1e-6 R."""
     p = rollplan.plan((0.3, -0.2, 2.0), 6, robot=ROBOT)
     m = actuate(p, ROBOT, 30.0)
-    assert m.time.size == 12 * 400 + 1
-    sim = simulate_rotors(ROBOT, m.time, m.rotor_rates, p.goal)
+    assert m.series.time.size == 12 * 400 + 1
+    sim = simulate_rotors(ROBOT, m.series.time, m.series.rotor_rates, p.goal)
     assert sim.arrival_error < 1e-6
 
 
@@ -122,6 +122,6 @@ def test_restart_from_a_midway_state_continues_the_motion():
     t = np.linspace(0, 2, 201)
     rates = np.column_stack([10 * np.sin(3 * t), 8 * np.cos(2 * t) - 8])
     whole = simulate_rotors(ROBOT, t, rates, goal=State(0.01, 0.02, 0.3))
-    half = simulate_rotors(ROBOT, t[100:], rates[100:], x0=whole.state[100])
-    np.testing.assert_allclose(half.state, whole.state[100:], atol=1e-8)
+    half = simulate_rotors(ROBOT, t[100:], rates[100:], x0=whole.series.state[100])
+    np.testing.assert_allclose(half.series.state, whole.series.state[100:], atol=1e-8)
     assert half.error is None and half.arrival_error is None and whole.arrival_error > 0

@@ -397,23 +397,23 @@ def test_actuation_of_a_composed_plan_rests_at_every_joint(timed):
     assert [q.kind for q in p.pieces] == ["approach", "leaf", "leaf", "departure"]
     rest = m.rest_indices
     assert rest.size == len(p.pieces) + 1
-    assert np.all(m.omega[rest] == 0) and np.all(m.rotor_rates[rest] == 0)
-    assert np.abs(m.omega).max() > 0.1
-    np.testing.assert_allclose(m.state[0], p.problem.start, atol=1e-15)
-    err = m.state[-1] - np.asarray(p.goal)
+    assert np.all(m.series.omega[rest] == 0) and np.all(m.series.rotor_rates[rest] == 0)
+    assert np.abs(m.series.omega).max() > 0.1
+    np.testing.assert_allclose(m.series.state[0], p.problem.start, atol=1e-15)
+    err = m.series.state[-1] - np.asarray(p.goal)
     err[2] = ref.wrap(err[2])
     assert np.abs(err).max() < 1e-9
     # the joints are where the pieces end: at the pole between the rolls and the figure eights
-    assert np.abs(m.state[rest[1:-1], 3:]).max() < 1e-12
-    _, _, n3 = ref.axes(m.state[:, 3], m.state[:, 4], m.state[:, 2])
-    assert np.abs(ref.realizability(n3, m.omega, robot.k)).max() < 1e-12 * np.abs(m.omega).max()
+    assert np.abs(m.series.state[rest[1:-1], 3:]).max() < 1e-12
+    _, _, n3 = ref.axes(m.series.state[:, 3], m.series.state[:, 4], m.series.state[:, 2])
+    assert np.abs(ref.realizability(n3, m.series.omega, robot.k)).max() < 1e-12 * np.abs(m.series.omega).max()
 
 
 def test_the_rotor_rates_alone_drive_the_robot_from_the_start_to_the_goal(timed):
     from rollplan.execution.plants import simulate_rotors
 
     p, m, robot = timed
-    sim = simulate_rotors(robot, m.time, m.rotor_rates, p.goal, x0=p.problem.start.array())
+    sim = simulate_rotors(robot, m.series.time, m.series.rotor_rates, p.goal, x0=p.problem.start.array())
     assert sim.arrival_error < 1e-6
 
 
@@ -446,11 +446,11 @@ def test_a_composed_plan_timed_time_optimally_is_driven_onto_the_goal_by_its_rot
     assert m.path.corners.all()   # roll to circle, circle to circle (another gamma), circle to roll
     _, s_dot, _ = m.profile.evaluate(joint_times(m.path, m.profile))
     assert np.abs(s_dot).max() < 1e-9 * m.s_dot.max() and m.s_dot[0] == m.s_dot[-1] == 0.0
-    util = m.limits.utilisation(m.rotor_rates, m.rotor_torques)
+    util = m.limits.utilisation(m.series.rotor_rates, m.series.rotor_torques)
     assert util.max() <= 1 + 1e-6 and np.mean(util > 0.99) > 0.8
-    np.testing.assert_allclose(m.state[0], start, atol=1e-15)
+    np.testing.assert_allclose(m.series.state[0], start, atol=1e-15)
     f = ref.rotor_driven_rhs(robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, R,
-                             CubicSpline(m.time, m.rotor_rates, bc_type="not-a-knot"))
+                             CubicSpline(m.series.time, m.series.rotor_rates, bc_type="not-a-knot"))
     sol = solve_ivp(f, (0.0, m.duration), start, method="DOP853", rtol=1e-11, atol=1e-13)
     err = sol.y[:, -1] - goal
     err[2] = ref.wrap(err[2])
@@ -463,7 +463,8 @@ def test_the_empty_motion_is_at_rest():
     robot = rollplan.default_robot()
     state = (0.01, 0.02, 0.3, 0.1, 0.1)
     m = actuate(rollplan.plan(state, robot=robot, start=state), robot, 2.0, 10)
-    assert m.time.size == 10 and np.all(m.rotor_rates == 0) and np.all(m.state == np.asarray(state))
+    s = m.series
+    assert s.time.size == 10 and np.all(s.rotor_rates == 0) and np.all(s.state == np.asarray(state))
 
 
 def test_collocation_refuses_a_start_beyond_its_contact_bound_clearly():

@@ -3,6 +3,7 @@ and a user's mistake is one line with exit 2. Each test names the defect it pins
 other files are listed in the issue's table of the closing report (test_inputs, test_outputs, test_batch,
 test_robot, test_interrupts, test_codegen, test_fuzz)."""
 
+import dataclasses
 import json
 import math
 import os
@@ -66,7 +67,7 @@ def test_rotor_simulation_from_a_large_psi_keeps_full_accuracy():
     two_pi = references.two_pi_fraction()
     reduced = float(Fraction(1e8) - two_pi * round(Fraction(1e8) / two_pi))
     small = rollplan.simulate_rotors(robot, t, rates, x0=(0, 0, reduced, 0, 0))
-    np.testing.assert_allclose(big.state, small.state, atol=1e-12)
+    np.testing.assert_allclose(big.series.state, small.series.state, atol=1e-12)
 
 
 @pytest.mark.parametrize("options, needle", [
@@ -376,7 +377,7 @@ def test_a_motion_that_misses_is_not_a_success(monkeypatch, capsys, tmp_path):
 
     def halved(*args, **kwargs):
         m = real(*args, **kwargs)
-        object.__setattr__(m, "rotor_rates", m.rotor_rates / 2)
+        object.__setattr__(m, "series", dataclasses.replace(m.series, rotor_rates=m.series.rotor_rates / 2))
         return m
 
     monkeypatch.setattr(actuation, "sample_motion", halved)

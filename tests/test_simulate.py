@@ -290,15 +290,15 @@ def test_time_optimal_breaks_against_a_brute_force_scan():
     robot = replace(rollplan.default_robot(), max_rotor_rate=300.0, max_rotor_torque=0.05)
     m = actuate(rollplan.plan((0.0, 0.1, 0.0), robot=robot), robot, None, timing="time-optimal")
     tb, left, right = torque_breaks(m)
-    dq = np.abs(np.diff(m.rotor_torques, axis=0)).max(axis=1)
-    flagged = np.nonzero((dq > 20 * np.median(dq)) & (dq > 1e-2 * np.abs(m.rotor_torques).max()))[0]
+    dq = np.abs(np.diff(m.series.rotor_torques, axis=0)).max(axis=1)
+    flagged = np.nonzero((dq > 20 * np.median(dq)) & (dq > 1e-2 * np.abs(m.series.rotor_torques).max()))[0]
     assert flagged.size >= 2
     for i in flagged:
-        assert np.any((tb >= m.time[i]) & (tb <= m.time[i + 1])), m.time[i]
-    big = tb[np.abs(right - left).max(axis=1) > 0.05 * np.abs(m.rotor_torques).max()]
+        assert np.any((tb >= m.series.time[i]) & (tb <= m.series.time[i + 1])), m.series.time[i]
+    big = tb[np.abs(right - left).max(axis=1) > 0.05 * np.abs(m.series.rotor_torques).max()]
     assert big.size >= 2
     for b in big:
-        i = np.searchsorted(m.time, b) - 1
+        i = np.searchsorted(m.series.time, b) - 1
         assert i in flagged or i + 1 in flagged or i - 1 in flagged, b
 
 
@@ -359,7 +359,7 @@ def test_a_long_series_is_simulated_in_chunks_with_progress():
     f = references.rotor_driven_rhs(MODEL.j_xx, MODEL.j_zz, MODEL.rotor_inertia_axial, MODEL.radius,
                                     CubicSpline(t, rates, axis=0))
     ref = solve_ivp(f, (t[0], t[-1]), np.zeros(5), method="DOP853", rtol=1e-12, atol=1e-15).y[:, -1]
-    assert np.abs(sim.state[-1] - ref).max() < 1e-9
+    assert np.abs(sim.series.state[-1] - ref).max() < 1e-9
 
 
 @pytest.mark.slow

@@ -134,7 +134,7 @@ def test_time_optimal_within_limits_with_one_active(profiles, path):
     faster than every other law at its own shortest duration."""
     prof = profiles["time-optimal"]
     m = sample_motion(path, prof, 4, per_piece=3000)
-    util = LIMITS.utilisation(m.rotor_rates, m.rotor_torques)
+    util = LIMITS.utilisation(m.series.rotor_rates, m.series.rotor_torques)
     assert util.max() <= 1 + 1e-6
     assert np.mean(util > 0.99) > 0.9
     ur, uq = peak_utilisation(path, prof, LIMITS, per_piece=32)  # twice as dense as the law's own check
@@ -169,7 +169,7 @@ def test_rotor_rates_alone_reach_the_target(name, profiles, path, plan):
     """The rotor rates, sampled by the law's own rule, drive (6)-(10) with omega from (11) (CVODES, cubic
     spline through the samples) onto the target to 1e-5 R."""
     m = sample_motion(path, profiles[name], 2000, plan.goal, LAWS[name].samples_per_piece)
-    sim = simulate_rotors(ROBOT, m.time, m.rotor_rates, plan.goal)
+    sim = simulate_rotors(ROBOT, m.series.time, m.series.rotor_rates, plan.goal)
     assert sim.position_error < 1e-5 and sim.arrival_error < 1e-5
 
 
@@ -178,7 +178,7 @@ def test_time_optimal_rates_drive_the_printed_equations_onto_the_target(profiles
     """The same with scipy's DOP853 on the printed (2), (6)-(10), (11) and scipy's not-a-knot spline."""
     m = sample_motion(path, profiles["time-optimal"], 2000, plan.goal, 3000)
     f = references.rotor_driven_rhs(ROBOT.j_xx, ROBOT.j_zz, ROBOT.rotor_inertia_axial, ROBOT.radius,
-                                    CubicSpline(m.time, m.rotor_rates, bc_type="not-a-knot"))
+                                    CubicSpline(m.series.time, m.series.rotor_rates, bc_type="not-a-knot"))
     sol = solve_ivp(f, (0, m.duration), np.zeros(5), method="DOP853", rtol=1e-11, atol=1e-13)
     g = plan.goal
     err = np.hypot(sol.y[0, -1] - g.u_a, sol.y[1, -1] - g.v_a) / ROBOT.radius
@@ -190,18 +190,18 @@ def test_torques_are_rates_of_axial_momentum(profiles, path):
     the torque steps; the trapezoid integral of the samples (the replay rule of rollplan.execution.actuation)
     tracks the momentum to O(h x step) per pole passage."""
     m = sample_motion(path, profiles["smooth-cruise"], 40001)
-    n1, n2, _ = references.axes(m.state[:, 3], m.state[:, 4], m.state[:, 2])
-    jr, dt = ROBOT.rotor_inertia_axial, m.time[1] - m.time[0]
+    n1, n2, _ = references.axes(m.series.state[:, 3], m.series.state[:, 4], m.series.state[:, 2])
+    jr, dt = ROBOT.rotor_inertia_axial, m.series.time[1] - m.series.time[0]
     tj = joint_times(path, m.profile)
-    far = np.all(np.abs(m.time[:, None] - tj[None, :]) > 3 * dt, axis=1)[1:-1]
+    far = np.all(np.abs(m.series.time[:, None] - tj[None, :]) > 3 * dt, axis=1)[1:-1]
     sd = m.profile.evaluate(tj)[1]
     steps = np.abs(path.evaluate(path.joints, "right").B - path.evaluate(path.joints, "left").B) * sd[:, None] ** 2
     for i, n in enumerate((n1, n2)):
-        h = jr * (np.sum(n * m.omega, axis=1) + m.rotor_rates[:, i])
-        tau = m.rotor_torques[:, i]
-        fd = np.gradient(h, m.time)[1:-1]
+        h = jr * (np.sum(n * m.series.omega, axis=1) + m.series.rotor_rates[:, i])
+        tau = m.series.rotor_torques[:, i]
+        fd = np.gradient(h, m.series.time)[1:-1]
         assert np.abs(fd - tau[1:-1])[far].max() < 1e-5 * np.abs(tau).max()
-        trap = np.concatenate([[0.0], np.cumsum(0.5 * (tau[1:] + tau[:-1]) * np.diff(m.time))])
+        trap = np.concatenate([[0.0], np.cumsum(0.5 * (tau[1:] + tau[:-1]) * np.diff(m.series.time))])
         assert np.abs(trap - h).max() < dt * steps[:, i].sum() + 1e-6 * np.abs(h).max()
 
 
@@ -214,8 +214,8 @@ def test_torque_steps_at_poles_for_nonstop_laws(profiles, path):
     step = (right.B - left.B) * sd[:, None] ** 2
     assert np.abs(step).max() > 0.1 * LIMITS.max_rotor_torque and np.all(sd > 0)
     m = sample_motion(path, prof, 100001)
-    i = np.searchsorted(m.time, tj[0])
-    seen = m.rotor_torques[i + 1] - m.rotor_torques[i - 1]
+    i = np.searchsorted(m.series.time, tj[0])
+    seen = m.series.rotor_torques[i + 1] - m.series.rotor_torques[i - 1]
     np.testing.assert_allclose(seen, step[0], atol=0.02 * np.abs(step[0]).max())
 
 
@@ -223,15 +223,16 @@ def test_actuate_times_a_plan(plan):
     """actuate: the default is min-jerk; with limits and no duration, the law's shortest duration."""
     m = actuate(plan, ROBOT, None, 10, "time-optimal")
     assert m.timing == "time-optimal" and m.duration == m.minimum_duration
-    assert m.time.size == 4 * get_law("time-optimal").samples_per_piece + 1
-    assert np.array_equal(m.rest_indices, [0, m.time.size - 1])
-    assert m.segment[0] == 0 and m.segment[-1] == 3 and np.all(np.diff(m.segment) >= 0)
-    traj = m.trajectory()
-    assert traj.parameter == "t" and np.array_equal(traj.s, m.time) and np.array_equal(traj.segment, m.segment)
-    np.testing.assert_allclose(m.state[-1], [*plan.goal[:3], 0.0, 0.0], atol=1e-10)
+    assert m.series.time.size == 4 * get_law("time-optimal").samples_per_piece + 1
+    assert np.array_equal(m.rest_indices, [0, m.series.time.size - 1])
+    assert m.series.segment[0] == 0 and m.series.segment[-1] == 3 and np.all(np.diff(m.series.segment) >= 0)
+    traj = m.series.trajectory()
+    assert traj.parameter == "t" and np.array_equal(traj.s, m.series.time)
+    assert np.array_equal(traj.segment, m.series.segment)
+    np.testing.assert_allclose(m.series.state[-1], [*plan.goal[:3], 0.0, 0.0], atol=1e-10)
     mj = actuate(plan, rollplan.Robot(), 12.0)
     assert mj.timing == "min-jerk" and mj.minimum_duration is None
-    np.testing.assert_allclose(mj.time[mj.rest_indices], [0, 3, 6, 9, 12], atol=1e-12)
+    np.testing.assert_allclose(mj.series.time[mj.rest_indices], [0, 3, 6, 9, 12], atol=1e-12)
 
 
 # ----------------------------------------------------------------------------- paths with corners, closed forms
@@ -422,7 +423,7 @@ def test_timing_figure_follows_the_colour_and_unit_conventions():
     torques = next(ax for ax in fig.axes if ax.get_ylabel() == "motor torque [N m]")
     lines = [ln for ln in torques.get_lines() if len(ln.get_xdata()) > 2]
     assert [to_rgba(ln.get_color()) for ln in lines] == [to_rgba(c) for c in ROTOR]
-    assert np.allclose(lines[0].get_ydata(), m.rotor_torques[:, 0])
+    assert np.allclose(lines[0].get_ydata(), m.series.rotor_torques[:, 0])
     limits = sorted(ln.get_ydata()[0] for ln in torques.get_lines() if len(ln.get_xdata()) == 2)
     assert limits == pytest.approx([-ROBOT.max_rotor_torque, ROBOT.max_rotor_torque])
     phase = fig.axes[-1]

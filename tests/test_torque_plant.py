@@ -91,23 +91,25 @@ def motion(asym_plan):
 
 @pytest.fixture(scope="module")
 def rate_run(motion):
-    return run_rates(ROBOT, motion.time, motion.rotor_rates)
+    return run_rates(ROBOT, motion.series.time, motion.series.rotor_rates)
 
 
 @pytest.fixture(scope="module")
 def torque_run(motion):
-    return run_torques(ROBOT, motion.time, motion.rotor_torques, breaks=joints(motion))
+    return run_torques(ROBOT, motion.series.time, motion.series.rotor_torques, breaks=joints(motion.series))
 
 
 def test_torque_plant_reproduces_the_rate_plant(asym_plan, motion, rate_run, torque_run):
     """Driven by a plan's torques (T), the torque plant follows the rate plant, rotor rates included, and
     arrives; its momenta return to zero at every rest point."""
     R = ROBOT.radius
-    assert np.abs(torque_run.state - rate_run.state).max() / R < 1e-7
-    assert np.abs(torque_run.rotor_rates - motion.rotor_rates).max() < 1e-6 * np.abs(motion.rotor_rates).max()
-    assert np.abs(torque_run.rotor_angles - motion.rotor_angles).max() < 1e-6
-    assert rollplan.problem.arrival_residual(torque_run.state[-1], asym_plan.goal, R) < 1e-7
-    assert np.abs(torque_run.momenta[motion.rest_indices]).max() < 1e-9 * np.abs(torque_run.momenta).max()
+    assert np.abs(torque_run.series.state - rate_run.series.state).max() / R < 1e-7
+    rates = motion.series.rotor_rates
+    assert np.abs(torque_run.series.rotor_rates - rates).max() < 1e-6 * np.abs(rates).max()
+    assert np.abs(torque_run.series.rotor_angles - motion.series.rotor_angles).max() < 1e-6
+    assert rollplan.problem.arrival_residual(torque_run.series.state[-1], asym_plan.goal, R) < 1e-7
+    momenta = torque_run.series.rotor_momenta
+    assert np.abs(momenta[motion.rest_indices]).max() < 1e-9 * np.abs(momenta).max()
 
 
 @pytest.mark.slow
@@ -116,10 +118,10 @@ def test_one_spline_across_the_joints_converges_only_as_h2(asym_plan):
     errs = {}
     for n in (1601, 3201):
         m = actuate(asym_plan, ROBOT, 10.0, samples=n)
-        assert m.time.size == n
-        ref = run_rates(ROBOT, m.time, m.rotor_rates).state
-        one = run_torques(ROBOT, m.time, m.rotor_torques).state
-        split = run_torques(ROBOT, m.time, m.rotor_torques, breaks=joints(m)).state
+        assert m.series.time.size == n
+        ref = run_rates(ROBOT, m.series.time, m.series.rotor_rates).series.state
+        one = run_torques(ROBOT, m.series.time, m.series.rotor_torques).series.state
+        split = run_torques(ROBOT, m.series.time, m.series.rotor_torques, breaks=joints(m.series)).series.state
         errs[n] = (np.abs(one - ref).max(), np.abs(split - ref).max())
     assert 3.0 < errs[1601][0] / errs[3201][0] < 5.0
     assert errs[3201][1] < 0.01 * errs[3201][0]
@@ -134,33 +136,33 @@ def test_torque_plant_with_friction_matches_dop853_on_the_printed_equations():
     spline = CubicSpline(t, tau, axis=0)
     f, rates = references.torque_driven_rhs(*J, ROBOT.radius, spline, c)
     sol = solve_ivp(f, (0, 3), np.zeros(7), method="DOP853", rtol=1e-12, atol=1e-14, t_eval=t)
-    assert np.abs(run.state - sol.y[:5].T).max() < 1e-9
-    np.testing.assert_allclose(run.momenta, sol.y[5:].T, atol=1e-12)
+    assert np.abs(run.series.state - sol.y[:5].T).max() < 1e-9
+    np.testing.assert_allclose(run.series.rotor_momenta, sol.y[5:].T, atol=1e-12)
     pd = np.array([rates(z)[1] for z in sol.y.T])
-    np.testing.assert_allclose(run.rotor_rates, pd, atol=1e-7 * np.abs(pd).max())
+    np.testing.assert_allclose(run.series.rotor_rates, pd, atol=1e-7 * np.abs(pd).max())
 
 
 def _lp(run, rates):
-    lp, omega = references.momentum_about_contact(run.time, run.state, rates, ROBOT.j_xx, ROBOT.j_zz,
+    lp, omega = references.momentum_about_contact(run.series.time, run.series.state, rates, ROBOT.j_xx, ROBOT.j_zz,
                                                   ROBOT.rotor_inertia_axial, ROBOT.mass_total, ROBOT.radius)
     return lp, omega, np.abs(ROBOT.rotor_inertia_axial * rates).max()
 
 
 def test_momentum_about_contact_is_conserved_on_the_rate_plant(rate_run):
-    lp, _, scale = _lp(rate_run, rate_run.rotor_rates)
+    lp, _, scale = _lp(rate_run, rate_run.series.rotor_rates)
     assert np.abs(lp).max() < 1e-6 * scale
 
 
 def test_momentum_about_contact_is_conserved_on_the_torque_plant(motion, torque_run):
     """Rotor rates from p = int tau (scipy, not the plant): phi_dot = p / J_r - n . omega."""
     m = motion
-    p = np.zeros((m.time.size, 2))
-    edges = [0, *joints(m), m.time.size - 1]
+    p = np.zeros((m.series.time.size, 2))
+    edges = [0, *joints(m.series), m.series.time.size - 1]
     for a, b in zip(edges[:-1], edges[1:]):
-        p[a:b + 1] = p[a] + CubicSpline(m.time[a:b + 1], m.rotor_torques[a:b + 1], axis=0).antiderivative()(
-            m.time[a:b + 1])
-    _, omega, _ = _lp(torque_run, np.zeros((m.time.size, 2)))
-    x = torque_run.state
+        t = m.series.time[a:b + 1]
+        p[a:b + 1] = p[a] + CubicSpline(t, m.series.rotor_torques[a:b + 1], axis=0).antiderivative()(t)
+    _, omega, _ = _lp(torque_run, np.zeros((m.series.time.size, 2)))
+    x = torque_run.series.state
     n = np.array([axes(u, v, s) for u, v, s in zip(x[:, 3], x[:, 4], x[:, 2])])
     rates = p / ROBOT.rotor_inertia_axial - np.einsum("nji,nj->ni", n[:, :, :2], omega)
     lp, _, scale = _lp(torque_run, rates)
@@ -170,31 +172,31 @@ def test_momentum_about_contact_is_conserved_on_the_torque_plant(motion, torque_
 def test_friction_keeps_the_momentum_and_brings_the_robot_to_rest(motion):
     """Bearing friction is internal: L_P stays zero while it drains the rotors, so the robot coasts to rest."""
     m = motion
-    t = np.concatenate([m.time, m.time[-1] + np.linspace(0, 30, 301)[1:]])
-    tq = np.vstack([m.rotor_torques, np.zeros((300, 2))])
-    run = run_torques(ROBOT, t, tq, breaks=[*joints(m), m.time.size - 1],
+    t = np.concatenate([m.series.time, m.series.time[-1] + np.linspace(0, 30, 301)[1:]])
+    tq = np.vstack([m.series.rotor_torques, np.zeros((300, 2))])
+    run = run_torques(ROBOT, t, tq, breaks=[*joints(m.series), m.series.time.size - 1],
                       disturbances=[disturbance("friction", c=(2e-5, 4e-5))])
-    lp, _, scale = _lp(run, run.rotor_rates)
+    lp, _, scale = _lp(run, run.series.rotor_rates)
     assert np.abs(lp).max() < 1e-6 * scale
-    assert np.abs(run.momenta[m.time.size - 1]).max() > 1e-4
-    assert np.abs(run.omega[-1]).max() < 1e-3 * np.abs(run.omega).max()
+    assert np.abs(run.series.rotor_momenta[m.series.time.size - 1]).max() > 1e-4
+    assert np.abs(run.series.omega[-1]).max() < 1e-3 * np.abs(run.series.omega).max()
 
 
 def test_disturbances_by_name_and_seed(motion):
-    t, r = motion.time[:401], motion.rotor_rates[:401]
+    t, r = motion.series.time[:401], motion.series.rotor_rates[:401]
     meas = disturbance("measurement", sigma_length=1e-3, sigma_angle=2e-3, seed=7)
     a = run_rates(ROBOT, t, r, disturbances=[meas])
     b = run_rates(ROBOT, t, r, disturbances=[meas])
     c = run_rates(ROBOT, t, r, disturbances=[meas], segment=1)
     np.testing.assert_array_equal(a.measured, b.measured)
     assert not np.array_equal(a.measured, c.measured)
-    np.testing.assert_array_equal(a.state, run_rates(ROBOT, t, r).state)      # noise never touches the truth
-    d = a.measured - a.state
+    np.testing.assert_array_equal(a.series.state, run_rates(ROBOT, t, r).series.state)   # noise never touches the truth
+    d = a.measured - a.series.state
     assert d[:, :2].std() == pytest.approx(1e-3 * ROBOT.radius, rel=0.15)
     assert d[:, 2:].std() == pytest.approx(2e-3, rel=0.15)
-    noisy = run_torques(ROBOT, t, motion.rotor_torques[:401], disturbances=[disturbance("torque_noise", sigma=1e-4)])
-    assert noisy.commanded is not None and not np.allclose(noisy.state, run_torques(ROBOT, t,
-                                                                                     motion.rotor_torques[:401]).state)
+    tq = motion.series.rotor_torques[:401]
+    noisy = run_torques(ROBOT, t, tq, disturbances=[disturbance("torque_noise", sigma=1e-4)])
+    assert noisy.commanded is not None and not np.allclose(noisy.series.state, run_torques(ROBOT, t, tq).series.state)
     with pytest.raises(InputError, match="not known"):
         disturbance("wind", speed=3)
     with pytest.raises(InputError, match="wind"):

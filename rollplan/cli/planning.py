@@ -174,7 +174,7 @@ def _timed(args, p, robot):
     shortest = motion.minimum_duration
     at_shortest = shortest is not None and motion.duration == shortest
     print(f"  motion        T = {num(motion.duration)} s{' (the shortest feasible)' if at_shortest else ''}, "
-          f"{motion.time.size} samples, timing {timing}"
+          f"{motion.series.time.size} samples, timing {timing}"
           f"{' (rest-to-rest per piece: leaf, roll)' if timing == 'min-jerk' else ''}")
     if motion.path is None:
         print("  limits        none needed: the plan is the empty motion (at rest)")
@@ -184,7 +184,7 @@ def _timed(args, p, robot):
     else:
         print("  limits        none in the robot file (add max_rotor_rate [rad/s] and max_rotor_torque [N m] "
               "to keep the motors within them)")
-    rate, torque = abs(motion.rotor_rates).max(), abs(motion.rotor_torques).max()
+    rate, torque = abs(motion.series.rotor_rates).max(), abs(motion.series.rotor_torques).max()
     use_rate = f" ({rate / lim.max_rotor_rate:.1%} of the limit)" if lim.max_rotor_rate is not None else ""
     use_torque = f" ({torque / lim.max_rotor_torque:.1%} of the limit)" if lim.max_rotor_torque is not None else ""
     print(f"  rotors        max |rate| = {num(rate)} rad/s{use_rate}   max |torque| = {num(torque)} N m{use_torque}")

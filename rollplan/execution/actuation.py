@@ -59,7 +59,7 @@ vector ``H_i`` projected on ``n_i``, which does not use the simplification above
 
 Samples and how to replay them
 ------------------------------
-A :class:`Motion` is sampled uniformly in time, at least the law's
+An :class:`Actuation` is sampled uniformly in time, at least the law's
 ``samples_per_piece`` per piece on average (so that a cubic spline through the rotor rates
 drives the rotor-only simulation onto the target; see
 :mod:`rollplan.execution.timing`). The rotor rates and angles are continuous in
@@ -90,14 +90,14 @@ import numpy as np
 
 from ..errors import InputError, NoPlanError, check_range, check_whole
 from ..problem import State
-from ..result import Trajectory
 from ..robot import Robot
+from ..timeseries import TimeSeries
 from .limits import Limits
 from .path import ContactPath, plan_pieces
-from .plants import Simulation, simulate_rotors
+from .plants import RotorSimulation, simulate_rotors
 from .timing import TimeLaw, TimeProfile, get_law, joint_times
 
-__all__ = ["Motion", "actuate", "sample_motion", "samples_per_piece", "certify_motion", "torque_breaks",
+__all__ = ["Actuation", "actuate", "sample_motion", "samples_per_piece", "certify_motion", "torque_breaks",
            "motion_samples", "TORQUE_STEP", "DEFAULT_SAMPLES",
            "MIN_SAMPLES_PER_LEAF", "MAX_SAMPLES", "MOTION_TOLERANCE"]
 
@@ -115,32 +115,19 @@ MOTION_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True)
-class Motion:
-    """A plan's path timed by a law: what the two rotors must do.
-
-    All arrays have ``N`` rows, one per time sample (uniform in time). Lengths in the
-    robot's unit [m].
+class Actuation:
+    """A plan's path timed by a law: what the two rotors must do, as a :class:`~rollplan.timeseries.TimeSeries`.
 
     Attributes
     ----------
-    time : ndarray, shape (N,)
-        Time [s], from 0 to ``duration``.
+    series : TimeSeries
+        ``N`` samples uniform in time from 0 to ``duration`` [s]: ``state`` (u_a [m], v_a [m], psi, u_o,
+        v_o [rad]), ``segment`` (the piece of the contact path: a leaf, a half-step, of a figure eight; a
+        roll; a circle of a turn; numbered as in the plan's ``pieces``), ``omega`` (as in (6)-(11)),
+        ``rotor_rates`` (11), ``rotor_angles`` (zero at t = 0) and ``rotor_torques`` ((T) of the module
+        docstring); lengths in the robot's unit [m].
     s, s_dot, s_ddot : ndarray, shape (N,)
-        Path parameter (contact arc length) [R] and its time derivatives [R/s, R/s^2].
-    segment : ndarray, shape (N,), int
-        Piece of the contact path (a leaf, a half-step, of a figure eight; a roll; a circle of a turn)
-        each sample lies on, numbered as in :class:`rollplan.result.Trajectory` and the plan's
-        ``pieces`` (a sample at a joint belongs to the piece that ends there).
-    state : ndarray, shape (N, 5)
-        Contact coordinates in :class:`~rollplan.problem.State` order (u_a [m], v_a [m], psi, u_o, v_o [rad]).
-    omega : ndarray, shape (N, 3)
-        Angular velocity of the sphere in the plane frame, as in (6)-(11) [rad/s].
-    rotor_rates : ndarray, shape (N, 2)
-        phi_1_dot, phi_2_dot from (11) [rad/s].
-    rotor_angles : ndarray, shape (N, 2)
-        phi_1, phi_2, zero at t = 0 [rad].
-    rotor_torques : ndarray, shape (N, 2)
-        Motor torques about n_1, n_2, (T) of the module docstring [N m].
+        Path parameter (contact arc length) [R] and its time derivatives [R/s, R/s^2] at the samples.
     robot : Robot
         With its limits (``Limits.of(robot)``).
     duration : float
@@ -158,16 +145,10 @@ class Motion:
         The plan's path with the robot's rotor coefficients (None for the empty motion).
     """
 
-    time: np.ndarray
+    series: TimeSeries
     s: np.ndarray
     s_dot: np.ndarray
     s_ddot: np.ndarray
-    segment: np.ndarray
-    state: np.ndarray
-    omega: np.ndarray
-    rotor_rates: np.ndarray
-    rotor_angles: np.ndarray
-    rotor_torques: np.ndarray
     robot: Robot
     duration: float
     goal: State
@@ -184,10 +165,6 @@ class Motion:
     def rest_indices(self) -> np.ndarray:
         """Indices of the samples at rest (``s' = 0``): t = 0, t = T, and every stop on the way."""
         return np.nonzero(self.s_dot <= 1e-12 * max(float(self.s_dot.max()), 1e-300))[0]
-
-    def trajectory(self) -> Trajectory:
-        """The motion as a :class:`~rollplan.result.Trajectory` with the time as its parameter."""
-        return Trajectory(self.time, self.state, self.segment, self.robot.radius, "t")
 
 
 def samples_per_piece(pieces: int, samples: int, per_piece: int, law: str = "") -> int:
@@ -206,7 +183,7 @@ def samples_per_piece(pieces: int, samples: int, per_piece: int, law: str = "") 
 
 
 def sample_motion(path: ContactPath, profile: TimeProfile, samples: int, goal=None,
-                  per_piece: int = MIN_SAMPLES_PER_LEAF) -> Motion:
+                  per_piece: int = MIN_SAMPLES_PER_LEAF) -> Actuation:
     """Sample a timed path uniformly in time: state, omega, rotor rates, angles and torques.
 
     Parameters
@@ -224,7 +201,7 @@ def sample_motion(path: ContactPath, profile: TimeProfile, samples: int, goal=No
 
     Returns
     -------
-    Motion
+    Actuation
     """
     pieces = len(path.pieces)
     m = samples_per_piece(pieces, samples, per_piece, profile.law)
@@ -250,15 +227,16 @@ def sample_motion(path: ContactPath, profile: TimeProfile, samples: int, goal=No
         goal = State(fin[0] * R, fin[1] * R, fin[2])
     log.info("motion (%s): %d pieces x %d samples, T = %g s, max |rotor rate| = %.3g rad/s, "
              "max |torque| = %.3g N m", profile.law, pieces, m, T, np.abs(rates).max(), np.abs(torques).max())
-    return Motion(t, s, sd, sdd, ps.segment, state, ps.W * sd[:, None], rates, ps.rotor_angles, torques,
-                  path.robot, T, goal, profile.law, profile.minimum_duration, profile, path)
+    series = TimeSeries(t, state, ps.segment, omega=ps.W * sd[:, None], rotor_rates=rates,
+                        rotor_angles=ps.rotor_angles, rotor_torques=torques, radius=R)
+    return Actuation(series, s, sd, sdd, path.robot, T, goal, profile.law, profile.minimum_duration, profile, path)
 
 
 #: Smallest step of the torques listed as a break, relative to the motion's largest torque.
 TORQUE_STEP = 1e-9
 
 
-def torque_breaks(motion: Motion) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def torque_breaks(motion: Actuation) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where a motion's torques step: ``(times, left, right)``, the times in (0, T) and the one-sided torques.
 
     Candidates are the law's breaks (where s'' may jump: the switches of the time-optimal law, the ends of
@@ -283,28 +261,28 @@ def torque_breaks(motion: Motion) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         ps = path.evaluate(np.clip(sv, 0.0, path.length), side)
         values.append(ps.A * sdd[:, None] + ps.B * sd[:, None] ** 2)
     left, right = values
-    scale = max(float(np.abs(motion.rotor_torques).max()), 1e-300)
+    scale = max(float(np.abs(motion.series.rotor_torques).max()), 1e-300)
     jump = np.abs(right - left).max(axis=1) > TORQUE_STEP * scale
     return cand[jump], left[jump], right[jump]
 
 
-def motion_samples(motion: Motion) -> dict:
+def motion_samples(motion: Actuation) -> TimeSeries:
     """The motion's samples with every step of the torques as a time given twice (:func:`torque_breaks`).
 
-    Returns ``time``, ``omega``, ``rotor_rates``, ``rotor_angles``, ``rotor_torques``, ``state``,
-    ``segment`` (arrays with the rows of the breaks inserted) and ``torque_breaks``. At a break the first
-    row holds the torque's limit from the left and the piece that ends there, the second the limit from the
-    right and the piece that starts there; the other quantities are continuous (both rows agree). A uniform
-    sample on a break is replaced by the two rows. Replayed linearly between rows of different times, with
-    the step at a time given twice, the torques are the law's piecewise-smooth profile to second order.
+    A :class:`~rollplan.timeseries.TimeSeries` like ``motion.series`` with the rows of the breaks inserted:
+    at a break the first row holds the torque's limit from the left and the piece that ends there, the
+    second the limit from the right and the piece that starts there; the other quantities are continuous
+    (both rows agree). A uniform sample on a break is replaced by the two rows. Replayed linearly between
+    rows of different times, with the step at a time given twice, the torques are the law's
+    piecewise-smooth profile to second order. The times given twice are the breaks (``repeated_times()``).
     """
     tb, left, right = torque_breaks(motion)
-    arrays = {"omega": motion.omega, "rotor_rates": motion.rotor_rates, "rotor_angles": motion.rotor_angles,
-              "rotor_torques": motion.rotor_torques, "state": motion.state, "segment": motion.segment}
+    m = motion.series
     if tb.size == 0:
-        return {"time": motion.time, **arrays, "torque_breaks": tb}
+        return m
+    keys = ("omega", "rotor_rates", "rotor_angles", "rotor_torques", "state", "segment")
     T, path, prof = motion.duration, motion.path, motion.profile
-    t = motion.time
+    t = m.time
     on = np.zeros(t.size, bool)
     near = np.clip(np.searchsorted(tb, t), 0, tb.size - 1)
     for cand in (near, np.clip(near - 1, 0, None)):
@@ -319,15 +297,12 @@ def motion_samples(motion: Motion) -> dict:
                       "segment": path.segment_of(ps.s, side)}
     time = np.concatenate([t[~on], tb, tb])
     order = np.lexsort((np.r_[np.zeros((~on).sum()), np.zeros(tb.size), np.ones(tb.size)], time))
-    out = {"time": time[order]}
-    for key, a in arrays.items():
-        out[key] = np.concatenate([a[~on], rows["left"][key], rows["right"][key]])[order]
-    out["torque_breaks"] = tb
-    return out
+    out = {key: np.concatenate([getattr(m, key)[~on], rows["left"][key], rows["right"][key]])[order] for key in keys}
+    return TimeSeries(time[order], radius=m.radius, **out)
 
 
 def actuate(plan, robot: Robot, duration: float | None = None, samples: int = DEFAULT_SAMPLES,
-            timing: str | TimeLaw = "min-jerk") -> Motion:
+            timing: str | TimeLaw = "min-jerk") -> Actuation:
     """Time a plan by a law within the robot's limits and compute omega, rotor rates, angles and torques.
 
     The plan's path from its start state along its contact arc length
@@ -353,7 +328,7 @@ def actuate(plan, robot: Robot, duration: float | None = None, samples: int = DE
 
     Returns
     -------
-    Motion
+    Actuation
         Starting at the plan's start state. The empty motion (start = goal) is ``samples`` samples
         at rest over the given duration.
 
@@ -373,7 +348,7 @@ def actuate(plan, robot: Robot, duration: float | None = None, samples: int = DE
     return sample_motion(path, profile, samples, plan.goal, law.samples_per_piece)
 
 
-def _at_rest(plan, robot: Robot, law: TimeLaw, duration, samples: int) -> Motion:
+def _at_rest(plan, robot: Robot, law: TimeLaw, duration, samples: int) -> Actuation:
     """The empty motion: ``samples`` samples at the start state over ``duration``, every rate zero."""
     duration = law.check(Limits.of(robot), duration)
     if duration is None:
@@ -383,11 +358,12 @@ def _at_rest(plan, robot: Robot, law: TimeLaw, duration, samples: int) -> Motion
     zero = lambda m: np.zeros((samples, m)) if m else np.zeros(samples)  # noqa: E731
     state = np.repeat(plan.problem.start.array()[None, :], samples, axis=0)
     profile = TimeProfile(np.array([0.0, duration]), np.zeros((1, 1)), law.name, 0.0)
-    return Motion(np.linspace(0.0, duration, samples), zero(0), zero(0), zero(0), np.zeros(samples, int), state,
-                  zero(3), zero(2), zero(2), zero(2), robot, duration, plan.goal, law.name, None, profile, None)
+    series = TimeSeries(np.linspace(0.0, duration, samples), state, np.zeros(samples, int), omega=zero(3),
+                        rotor_rates=zero(2), rotor_angles=zero(2), rotor_torques=zero(2), radius=robot.radius)
+    return Actuation(series, zero(0), zero(0), zero(0), robot, duration, plan.goal, law.name, None, profile, None)
 
 
-def certify_motion(motion: Motion, tol: float = MOTION_TOLERANCE) -> Simulation:
+def certify_motion(motion: Actuation, tol: float = MOTION_TOLERANCE) -> RotorSimulation:
     """A motion's certificate: drive the robot by its sampled rotor rates alone, from the motion's start
     state, and compare with the goal.
 
@@ -398,7 +374,8 @@ def certify_motion(motion: Motion, tol: float = MOTION_TOLERANCE) -> Simulation:
     reported as a success.
     """
     tol = check_range("tol", tol, 0.0, None, low_open=True)
-    sim = simulate_rotors(motion.robot, motion.time, motion.rotor_rates, motion.goal, x0=motion.state[0])
+    m = motion.series
+    sim = simulate_rotors(motion.robot, m.time, m.rotor_rates, motion.goal, x0=m.state[0])
     if not sim.arrival_error <= tol:
         raise NoPlanError(f"the motion over T = {motion.duration!r} s misses the goal when driven by its rotor rates "
                           f"alone: arrival error {sim.arrival_error:.2e} > {tol:.0e}; try more samples or another "

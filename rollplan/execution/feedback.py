@@ -51,13 +51,14 @@ from ..core.spline import CubicSpline
 from ..errors import InputError, NoPlanError, check_finite, check_whole
 from ..problem import STATE_NAMES, State, arrival_error
 from ..robot import Robot
+from ..timeseries import Arrival, TimeSeries
 from .actuation import actuate, motion_samples
 from .estimate import InertiaEstimator, RatioEstimator
 from .limits import Limits
 from .plants import PLANT_NAMES, by_name, measure, run_rates, run_torques
 from .timing import get_law
 
-__all__ = ["joints", "robot_from_inertias", "Execution", "execute", "execute_samples", "Samples",
+__all__ = ["joints", "robot_from_inertias", "ExecutionResult", "execute", "execute_samples", "Samples",
            "DEFAULT_SAMPLES_PER_PIECE", "DEFAULT_WINDOW", "DEFAULT_TOLERANCE", "DEFAULT_CORRECTIONS"]
 
 #: Time samples per piece (leaf, roll) of the commanded series.
@@ -96,39 +97,32 @@ def robot_from_inertias(radius: float, j_xx: float, j_zz: float, j_r: float, lik
                      f"{refusal}")
 
 
-@dataclass
-class Execution:
+@dataclass(frozen=True)
+class ExecutionResult(Arrival):
     """A plan executed on a (real) robot, open or closed loop.
-
-    Arrays have one row per sample, the segments concatenated (a shared boundary sample once).
 
     Attributes
     ----------
     plant : str
-        ``"rates"`` or ``"torques"``.
+        ``"rates"``, ``"torques"`` or ``"mujoco"``.
     closed_loop : bool
     goal : State
-        [m, rad].
-    time : (N,) [s]
-    state : (N, 5)
-        True state (u_a, v_a, psi, u_o, v_o) [m, m, rad, rad, rad].
+        [m, rad]; with it ``final``, ``error`` (:func:`rollplan.problem.arrival_error` of ``final`` to
+        ``goal``), ``arrival_error`` and ``position_error`` [R and rad; R] (:class:`~rollplan.timeseries.Arrival`).
+    series : TimeSeries
+        One row per sample, the segments concatenated (a shared boundary sample once): the true ``state``
+        (u_a, v_a, psi, u_o, v_o) [m, m, rad, rad, rad]; ``rotor_rates`` relative to the shell as applied
+        [rad/s] (rate plant: the commands plus any rate noise); ``rotor_torques``, on the torque plant the
+        torques commanded (with the friction feed-forward), on the rate plant the rate of change of the
+        rotors' axial momenta (P), i.e. the torques the motors delivered [N m]; ``segment``, the index into
+        ``segments`` of each sample.
     measured : (N, 5)
         What the sensors reported.
-    rotor_rates : (N, 2)
-        Rotor rates relative to the shell as applied [rad/s] (rate plant: the commands plus any rate noise).
-    rotor_torques : (N, 2)
-        Torque plant: the torques commanded (with the friction feed-forward); rate plant: the rate of
-        change of the rotors' axial momenta (P), i.e. the torques the motors delivered [N m].
-    segment : (N,) int
-        Index into ``segments`` of each sample.
     segments : list of dict
         One per applied piece of motion: start and end time, the figure eights left, the plan's mode.
     estimates : list of dict
         The robot used for each figure eight (the model robot before any data): k, Jxx/J_r, Jzz/J_r,
         Jxx, Jzz, J_r (and the friction on the torque plant); ``rejected`` when an estimate was refused.
-    final : State
-    error : (5,) :func:`rollplan.problem.arrival_error` of ``final`` to ``goal``
-    arrival_error, position_error : float [R and rad; R]
     stopped : str or None
         Closed loop: why the corrections ended before the tolerance was met (no correcting motion from
         the measured state, or the budget spent); None when they met it or none was asked.
@@ -137,27 +131,20 @@ class Execution:
     plant: str
     closed_loop: bool
     goal: State
-    time: np.ndarray
-    state: np.ndarray
+    series: TimeSeries
     measured: np.ndarray
-    rotor_rates: np.ndarray
-    rotor_torques: np.ndarray
-    segment: np.ndarray
     segments: list = field(default_factory=list)
     estimates: list = field(default_factory=list)
-    final: State = None
-    error: np.ndarray = None
-    arrival_error: float = None
-    position_error: float = None
     stopped: str | None = None
 
     def to_dict(self) -> dict:
         """The keys of ``rollplan simulate --closed-loop --json``."""
         rows = lambda a: [[float(v) for v in r] for r in np.asarray(a)]  # noqa: E731
+        m = self.series
         return {"plant": self.plant, "closed_loop": self.closed_loop, "goal": self.goal.as_dict(),
-                "time": [float(v) for v in self.time], "rotor_rates": rows(self.rotor_rates),
-                "rotor_torques": rows(self.rotor_torques), "state": rows(self.state),
-                "segment": [int(v) for v in self.segment], "final": self.final.as_dict(),
+                "time": [float(v) for v in m.time], "rotor_rates": rows(m.rotor_rates),
+                "rotor_torques": rows(m.rotor_torques), "state": rows(m.state),
+                "segment": [int(v) for v in m.segment], "final": self.final.as_dict(),
                 "error": dict(zip(STATE_NAMES, map(float, self.error))), "arrival_error": self.arrival_error,
                 "position_error": self.position_error, "estimates": self.estimates, "segments": self.segments,
                 "stopped": self.stopped}
@@ -192,7 +179,7 @@ class _Controller:
         self.inertias = InertiaEstimator(real.radius, window, friction=estimate_friction)
 
     def apply(self, motion, end: int, info: dict):
-        """Apply samples ``0..end`` of a timed motion (:class:`Samples` or a Motion); returns the run."""
+        """Apply samples ``0..end`` of a timed motion (:class:`Samples`); returns the plant's response."""
         sl = slice(0, end + 1)
         t_all = motion.time[sl] - motion.time[0] + self.t0
         rates_all, n = motion.rotor_rates[sl], len(self.segments)
@@ -203,7 +190,7 @@ class _Controller:
         breaks = [int(i) for i in joints(motion) if 0 < i < end]
         if self.plant == "rates":
             run = run_rates(self.real, t, rates, self.x, self.dist, n, self.phi)
-            torques = _piecewise_derivative(t, run.momenta, [] if linear else breaks)
+            torques = _piecewise_derivative(t, run.series.rotor_momenta, [] if linear else breaks)
         else:
             torques = motion.rotor_torques[sl] + self.friction_hat * rates_all
             runner = run_torques if self.session is None else self.session.run
@@ -212,17 +199,18 @@ class _Controller:
                          servo_gain=self.servo_gain, reference_rates=rates_all if self.servo_gain > 0 else None)
             self.P = run.commanded_momenta[-1]
             torques = run.commanded
+        r = run.series
         keep = slice(1, None) if self.parts else slice(None)
-        self.parts.append((t[keep], run.state[keep], run.measured[keep], run.rotor_rates[keep], torques[keep],
+        self.parts.append((t[keep], r.state[keep], run.measured[keep], r.rotor_rates[keep], torques[keep],
                            np.full(t[keep].size, n)))
         self.segments.append({"t0": float(t[0]), "t1": float(t[-1]), **info})
         self.measured = run.measured[-1].copy()
-        self.x, self.p, self.phi, self.t0 = run.state[-1].copy(), run.momenta[-1], run.rotor_angles[-1], float(t[-1])
+        self.x, self.p, self.phi, self.t0 = r.state[-1].copy(), r.rotor_momenta[-1], r.rotor_angles[-1], float(t[-1])
         if self.closed_loop:
             if self.plant == "rates":
-                self.ratios.add(run.time, run.measured, run.commanded)
+                self.ratios.add(r.time, run.measured, run.commanded)
             else:
-                self.inertias.add(run.time, run.measured, run.commanded_momenta, run.rotor_angles)
+                self.inertias.add(r.time, run.measured, run.commanded_momenta, r.rotor_angles)
         return run
 
     def estimate(self, model_robot: Robot) -> tuple[Robot, np.ndarray | None]:
@@ -274,7 +262,8 @@ class Samples:
 
 
 def joints(motion) -> np.ndarray:
-    """Sample indices of the joints between the pieces of a timed motion (where its ``segment`` changes).
+    """Sample indices of the joints between the pieces of a timed motion (a :class:`~rollplan.timeseries.TimeSeries`
+    or :class:`Samples`: where its ``segment`` changes).
 
     A sample at a joint belongs to the piece that ends there; with the min-jerk law these are rest
     points, and the breaks at which torque samples must be split (:func:`~.plants.input_function`).
@@ -315,7 +304,7 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
             closed_loop: bool = True, disturbances=(), samples_per_piece: int = DEFAULT_SAMPLES_PER_PIECE,
             window: int = DEFAULT_WINDOW, estimate_friction: bool = True, rest_readings: int = 0,
             servo_gain: float = 0.0, mujoco_model=None, progress=None, timing: str = "min-jerk",
-            tolerance: float = DEFAULT_TOLERANCE, corrections: int = DEFAULT_CORRECTIONS) -> Execution:
+            tolerance: float = DEFAULT_TOLERANCE, corrections: int = DEFAULT_CORRECTIONS) -> ExecutionResult:
     """Execute a geometric-phase plan on ``real_robot``, open or closed loop (module docstring).
 
     Parameters
@@ -359,7 +348,7 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
 
     Returns
     -------
-    Execution
+    ExecutionResult
 
     Raises
     ------
@@ -386,9 +375,8 @@ def _as_samples(m, kinds) -> Samples:
     """A timed motion as the controller applies it: min-jerk (continuous torques) as its uniform samples with
     splines split at the joints; a law whose torques step, with the steps as times given twice, linearly."""
     ms = motion_samples(m)
-    if ms["torque_breaks"].size == 0:
-        return Samples(m.time, m.rotor_rates, m.rotor_torques, m.segment, tuple(kinds), "spline")
-    return Samples(ms["time"], ms["rotor_rates"], ms["rotor_torques"], ms["segment"], tuple(kinds), "linear")
+    interpolation = "linear" if ms.repeated_times().size else "spline"
+    return Samples(ms.time, ms.rotor_rates, ms.rotor_torques, ms.segment, tuple(kinds), interpolation)
 
 
 def _positive(name, value) -> float:
@@ -420,7 +408,7 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
                     samples_per_piece: int = DEFAULT_SAMPLES_PER_PIECE, window: int = DEFAULT_WINDOW,
                     estimate_friction: bool = True, rest_readings: int = 0, servo_gain: float = 0.0,
                     mujoco_model=None, progress=None, timing: str = "min-jerk", tolerance: float = DEFAULT_TOLERANCE,
-                    corrections: int = DEFAULT_CORRECTIONS) -> Execution:
+                    corrections: int = DEFAULT_CORRECTIONS) -> ExecutionResult:
     """Execute a timed motion given as samples (a plan file's) on ``real_robot``, open or closed loop.
 
     Open loop: ``first`` is applied whole. Closed loop: ``first`` is applied up to the end of its first
@@ -523,7 +511,5 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
         if progress:
             progress("closed loop, corrections", c + 1, corrections)
     time, state, meas, rates, torques, seg = ctl.arrays()
-    final = State(*(float(v) for v in state[-1]))
-    err = arrival_error(final, goal, R)
-    return Execution(plant, closed_loop, goal, time, state, meas, rates, torques, seg, ctl.segments, estimates,
-                     final, err, float(np.linalg.norm(err)), float(np.hypot(err[0], err[1])), stopped)
+    series = TimeSeries(time, state, seg, rotor_rates=rates, rotor_torques=torques, radius=R)
+    return ExecutionResult(plant, closed_loop, goal, series, meas, ctl.segments, estimates, stopped)

@@ -28,9 +28,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..errors import InputError, check_finite, check_range
-from ..problem import State, arrival_error
+from ..problem import State
 from ..progress import report
 from ..robot import Robot
+from ..timeseries import Arrival, TimeSeries
 from .poses import pose_of_state, rotation_from_quaternion, state_from_pose
 
 __all__ = ["INSTALL_HINT", "require", "Settings", "DEFAULT_SETTINGS", "mjcf", "compile_model", "radius_of",
@@ -273,17 +274,17 @@ def torque_samples(time, torques, where: str = "plan file") -> tuple[np.ndarray,
 
 
 @dataclass(frozen=True)
-class Replay:
+class Replay(Arrival):
     """A plan's torques applied to the MuJoCo model.
 
     Attributes
     ----------
-    time : (N,) the plan's sample times [s]
-    state : (N, 5) the state read from MuJoCo's pose at ``time`` (u_a, v_a [m], psi unwrapped, u_o, v_o [rad])
-    rotor_rates : (N, 2) the hinges' rates relative to the shell [rad/s]
-    final : State
-    error : (5,) :func:`rollplan.problem.arrival_error` of ``final`` to the goal (None without a goal)
-    arrival_error, position_error : float [R and rad; R] (None without a goal)
+    series : TimeSeries
+        At the plan's sample times [s]: ``state`` read from MuJoCo's pose (u_a, v_a [m], psi unwrapped, u_o,
+        v_o [rad]) and ``rotor_rates``, the hinges' rates relative to the shell [rad/s].
+    goal : State or None
+        With it ``final``, ``error``, ``arrival_error`` and ``position_error`` [R and rad; R]
+        (:class:`~rollplan.timeseries.Arrival`).
     slip : float
         Distance slid at the contact [m]: the integral of the horizontal speed of the shell's material point at
         the contact.
@@ -293,13 +294,8 @@ class Replay:
     steps : int; timestep : float [s]
     """
 
-    time: np.ndarray
-    state: np.ndarray
-    rotor_rates: np.ndarray
-    final: State
-    error: np.ndarray | None
-    arrival_error: float | None
-    position_error: float | None
+    series: TimeSeries
+    goal: State | None
     slip: float
     max_penetration: float
     final_rotor_rates: np.ndarray
@@ -401,7 +397,7 @@ class Session:
         not needed: the samples are always interpolated linearly, a time given twice being a step. Disturbances:
         ``measurement``, ``torque_noise``.
         """
-        from .plants import PlantRun, by_name, measure, rotor_momenta
+        from .plants import PlantResponse, by_name, measure, rotor_momenta
 
         d = by_name(disturbances, "mujoco")
         t = np.asarray(t, float)
@@ -415,8 +411,9 @@ class Session:
         impulse = np.vstack([np.zeros((1, 2)), np.cumsum(rec["torque"] * np.diff(rec["t"])[:, None], axis=0)])
         start_p = np.asarray(p0 if commanded_p0 is None else commanded_p0, float)
         cmd_p = start_p + at(impulse)
-        return PlantRun("mujoco", t, state, measure(state, d, robot.radius, segment), omega, rates, angles, momenta,
-                        commanded, cmd_p)
+        series = TimeSeries(t, state, omega=omega, rotor_rates=rates, rotor_angles=angles, rotor_momenta=momenta,
+                            radius=robot.radius)
+        return PlantResponse("mujoco", series, measure(state, d, robot.radius, segment), commanded, cmd_p)
 
 
 def replay(model, time, torques, start=None, goal=None, rates=None, servo_gain: float = 0.0,
@@ -444,11 +441,7 @@ def replay(model, time, torques, start=None, goal=None, rates=None, servo_gain: 
     rec = session.advance(t, torques, rates, servo_gain)
     R = session.radius
     at = lambda a: np.column_stack([np.interp(t, rec["t"], a[:, j]) for j in range(a.shape[1])])  # noqa: E731
-    final = State(*(float(v) for v in rec["state"][-1]))
-    err = arr = pos = None
-    if goal is not None:
-        err = arrival_error(final, State.of(goal, "goal"), R)
-        arr, pos = float(np.linalg.norm(err)), float(np.hypot(err[0], err[1]))
-    return Replay(t, at(rec["state"]), at(rec["rotor_rates"]), final, err, arr, pos, session.slip,
+    series = TimeSeries(t, at(rec["state"]), rotor_rates=at(rec["rotor_rates"]), radius=R)
+    return Replay(series, None if goal is None else State.of(goal, "goal"), session.slip,
                   session.max_penetration, rec["rotor_rates"][-1].copy(), rec["speed"], session.steps,
                   rec["timestep"])

@@ -41,7 +41,7 @@ import numpy as np
 from .. import interrupts
 from ..core import model
 from ..errors import InputError, SolverError, check_range, check_whole
-from ..measures import TimedMotion
+from ..timeseries import TimeSeries
 from .path import ContactPath
 from .timing import TimeProfile
 
@@ -177,9 +177,9 @@ def contact_rates(omega, state) -> np.ndarray:
     return np.array(_plane_rates().map(omega.shape[0])(omega.T, state[:, 3], state[:, 4], state[:, 2])).T
 
 
-def timed_samples(path: ContactPath, profile: TimeProfile, per: int = 8) -> TimedMotion:
+def timed_samples(path: ContactPath, profile: TimeProfile, per: int = 8) -> TimeSeries:
     """The path run by ``profile`` sampled on every piece of the profile, both ends included (jumps of s''
-    at the breaks appear as repeated times), as a :class:`~rollplan.measures.TimedMotion` [robot's unit]."""
+    at the breaks appear as repeated times), as a :class:`~rollplan.timeseries.TimeSeries` [robot's unit]."""
     per = check_whole("per", per, 1, 10000)
     ts, ks = [], []
     for k in range(profile.coeffs.shape[0]):
@@ -193,5 +193,5 @@ def timed_samples(path: ContactPath, profile: TimeProfile, per: int = 8) -> Time
     omega = ps.W * sd[:, None]
     velocity = contact_rates(omega, ps.state)[:, :2] * R
     state = ps.state * np.array([R, R, 1.0, 1.0, 1.0])
-    return TimedMotion(t, state, velocity, omega, ps.G * sd[:, None], ps.A * sdd[:, None] + ps.B * sd[:, None] ** 2,
-                       R)
+    return TimeSeries(t, state, ps.segment, velocity, omega, ps.G * sd[:, None], ps.rotor_angles,
+                      ps.A * sdd[:, None] + ps.B * sd[:, None] ** 2, radius=R)

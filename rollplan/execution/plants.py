@@ -9,7 +9,7 @@ CVODES. The rates between samples come from an interpolating cubic spline
 (CasADi's ``bspline`` interpolant, not-a-knot). Nothing of the planner is
 used: this is the paper's "verified under simulation".
 
-Two plants share one result, :class:`PlantRun` (:data:`PLANTS`):
+Two plants share one result, :class:`PlantResponse` (:data:`PLANTS`):
 
 ``rates`` (:func:`run_rates`)
     the rotors follow the commanded rates exactly (ideal velocity servos): :func:`simulate_rotors`.
@@ -29,7 +29,7 @@ Two plants share one result, :class:`PlantRun` (:data:`PLANTS`):
 Torque samples between sample times: timed torques have a kink (min-jerk) or a step (the non-stop
 and time-optimal laws) at the joints of the contact path, so one spline across a joint converges
 only as h^2 or rings. :func:`input_function` splits the samples at given ``breaks`` (the joints,
-``Motion.rest_indices`` for min-jerk) into not-a-knot cubic splines, or interpolates linearly.
+``Actuation.rest_indices`` for min-jerk) into not-a-knot cubic splines, or interpolates linearly.
 
 Disturbances (:data:`DISTURBANCES`, by name with parameters and a seed, :func:`disturbance`):
 ``friction`` (bearing friction, torque plant), ``measurement`` (white noise on every measured state
@@ -58,13 +58,15 @@ from ..core import model
 from ..core.plane import wrap_exact
 from ..core.spline import CubicSpline
 from ..errors import InputError, SolverError, check_finite
-from ..problem import State, arrival_error
+from ..problem import State
 from ..progress import report
 from ..robot import Robot
+from ..timeseries import Arrival, TimeSeries
 
-__all__ = ["Simulation", "rate_spline", "check_samples", "simulate_rotors", "MAX_TURN", "Friction", "MeasurementNoise",
-           "TorqueNoise", "RateNoise", "DISTURBANCES", "disturbance", "PlantRun", "input_function", "run_rates",
-           "run_torques", "PLANTS", "PLANT_NAMES", "by_name", "measure", "rotor_momenta"]
+__all__ = ["RotorSimulation", "rate_spline", "check_samples", "simulate_rotors", "MAX_TURN", "Friction",
+           "MeasurementNoise", "TorqueNoise", "RateNoise", "DISTURBANCES", "disturbance", "PlantResponse",
+           "input_function", "run_rates", "run_torques", "PLANTS", "PLANT_NAMES", "by_name", "measure",
+           "rotor_momenta"]
 
 #: Sample intervals per chunk of :func:`simulate_rotors` (a longer series runs in chunks, with progress: the
 #: cost of one spline grows faster than its length).
@@ -79,36 +81,21 @@ log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
-class Simulation:
-    """Result of a rotor-driven simulation.
+class RotorSimulation(Arrival):
+    """Result of a rotor-driven simulation (:func:`simulate_rotors`).
 
     Attributes
     ----------
-    time : ndarray, shape (N,)
-        Output times [s] (the sample times given).
-    state : ndarray, shape (N, 5)
-        Contact coordinates in :class:`~rollplan.problem.State` order (u_a [m], v_a [m], psi, u_o, v_o [rad])
-        at ``time``.
-    omega : ndarray, shape (N, 3)
-        Angular velocity from (11) at ``time`` [rad/s], plane frame.
-    final : State
-        ``state[-1]``.
-    error : ndarray, shape (5,) or None
-        :func:`rollplan.problem.arrival_error` of ``final`` to the goal (u_a, v_a
-        in units of R, psi wrapped to (-pi, pi], u_o, v_o in rad); None without a goal.
-    arrival_error : float or None
-        Euclidean norm of ``error`` (the measure of a plan's residual).
-    position_error : float or None
-        Distance of the final contact point from the goal's [units of R].
+    series : TimeSeries
+        At the sample times given [s]: ``state`` (u_a [m], v_a [m], psi, u_o, v_o [rad]), ``omega`` from
+        (11) [rad/s] (plane frame) and the ``rotor_rates`` given [rad/s].
+    goal : State or None
+        Planned arrival [m, rad]; with it ``final``, ``error``, ``arrival_error`` (the measure of a plan's
+        residual) and ``position_error`` [units of R] (:class:`~rollplan.timeseries.Arrival`).
     """
 
-    time: np.ndarray
-    state: np.ndarray
-    omega: np.ndarray
-    final: State
-    error: np.ndarray | None
-    arrival_error: float | None
-    position_error: float | None
+    series: TimeSeries
+    goal: State | None = None
 
 
 def rate_spline(t, rates) -> ca.Function:
@@ -136,7 +123,7 @@ def check_samples(t, rates):
 
 
 def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 1e-11,
-                    abstol: float = 1e-13) -> Simulation:
+                    abstol: float = 1e-13) -> RotorSimulation:
     """Integrate (6)-(10) with omega from (11), driven by sampled rotor rates.
 
     Solves ``x_dot = montana(omega(t, x), x)`` with
@@ -158,7 +145,7 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
 
     Returns
     -------
-    Simulation
+    RotorSimulation
     """
     if not isinstance(robot, Robot):
         raise InputError(f"robot = {robot!r:.60} is not allowed: give a rollplan.Robot")
@@ -203,14 +190,12 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
     except RuntimeError as exc:
         raise SolverError(f"CVODES could not integrate the rotor-driven motion: {str(exc).splitlines()[-1][:120]}",
                           "CVODES_failed") from None
-    final = State(*(float(v) for v in xs[-1]))
-    err = arr = pos = None
+    sim = RotorSimulation(TimeSeries(t, xs, omega=omegas, rotor_rates=rates, radius=R),
+                          None if goal is None else State.of(goal, "goal"))
     if goal is not None:
-        err = arrival_error(final, State.of(goal, "goal"), R)
-        arr = float(np.linalg.norm(err))
-        pos = float(np.hypot(err[0], err[1]))
-        log.info("rotor-driven simulation: arrival error %.3e (position %.3e R)", arr, pos)
-    return Simulation(t, xs, omegas, final, err, arr, pos)
+        log.info("rotor-driven simulation: arrival error %.3e (position %.3e R)", sim.arrival_error,
+                 sim.position_error)
+    return sim
 
 
 _TAG = {"measurement": 1, "torque_noise": 2, "rate_noise": 3, "rest": 4}
@@ -329,26 +314,20 @@ def measure(state, disturbances: dict, radius: float, segment: int, readings: in
 
 
 @dataclass(frozen=True)
-class PlantRun:
+class PlantResponse:
     """What a plant did over one input series, one row per sample time.
 
     Attributes
     ----------
     plant : str
-        ``"rates"`` or ``"torques"``.
-    time : ndarray (N,) [s]
-    state : ndarray (N, 5)
-        True state (u_a [m], v_a [m], psi, u_o, v_o [rad]).
+        ``"rates"``, ``"torques"`` or ``"mujoco"``.
+    series : TimeSeries
+        The true motion: ``state`` (u_a [m], v_a [m], psi, u_o, v_o [rad]), ``omega`` (of the shell, plane
+        frame [rad/s]), ``rotor_rates`` (relative to the shell as realised [rad/s]), ``rotor_angles``
+        (continuing from the run's start value [rad]) and ``rotor_momenta`` (the rotors' absolute axial
+        momenta (P) [N m s]).
     measured : ndarray (N, 5)
-        What the sensors report (``state`` plus measurement noise, if any).
-    omega : ndarray (N, 3)
-        Angular velocity of the shell, plane frame [rad/s].
-    rotor_rates : ndarray (N, 2)
-        Rotor rates relative to the shell as realised [rad/s].
-    rotor_angles : ndarray (N, 2)
-        Rotor angles [rad], continuing from the run's start value.
-    momenta : ndarray (N, 2)
-        The rotors' absolute axial momenta (P) [N m s].
+        What the sensors report (``series.state`` plus measurement noise, if any).
     commanded : ndarray (N, 2)
         The input as commanded, before noise: rotor rates [rad/s] or torques [N m].
     commanded_momenta : ndarray (N, 2) or None
@@ -356,13 +335,8 @@ class PlantRun:
     """
 
     plant: str
-    time: np.ndarray
-    state: np.ndarray
+    series: TimeSeries
     measured: np.ndarray
-    omega: np.ndarray
-    rotor_rates: np.ndarray
-    rotor_angles: np.ndarray
-    momenta: np.ndarray
     commanded: np.ndarray
     commanded_momenta: np.ndarray | None = None
 
@@ -380,7 +354,7 @@ def rotor_momenta(robot: Robot, state, omega, rotor_rates) -> np.ndarray:
     return np.array(f(state.T, omega.T, rotor_rates.T, robot.rotor_inertia_axial)).T
 
 
-def run_rates(robot: Robot, t, rates, x0=None, disturbances=(), segment: int = 0, phi0=(0.0, 0.0)) -> PlantRun:
+def run_rates(robot: Robot, t, rates, x0=None, disturbances=(), segment: int = 0, phi0=(0.0, 0.0)) -> PlantResponse:
     """The rate-driven plant: :func:`simulate_rotors` from ``x0``, with the ``measurement`` and ``rate_noise``
     disturbances.
 
@@ -400,9 +374,11 @@ def run_rates(robot: Robot, t, rates, x0=None, disturbances=(), segment: int = 0
     applied = rates + (d["rate_noise"].draw(t.size, segment) if "rate_noise" in d else 0.0)
     sim = simulate_rotors(robot, t, applied, x0=x0)
     angles = np.asarray(phi0, float) + CubicSpline(t, applied, axis=0).antiderivative()(t)
-    p = rotor_momenta(robot, sim.state, sim.omega, applied)
-    return PlantRun("rates", t, sim.state, measure(sim.state, d, robot.radius, segment), sim.omega, applied, angles,
-                    p, rates)
+    m = sim.series
+    p = rotor_momenta(robot, m.state, m.omega, applied)
+    series = TimeSeries(t, m.state, omega=m.omega, rotor_rates=applied, rotor_angles=angles, rotor_momenta=p,
+                        radius=robot.radius)
+    return PlantResponse("rates", series, measure(m.state, d, robot.radius, segment), rates)
 
 
 def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Function:
@@ -440,7 +416,7 @@ def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Functio
 def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0), disturbances=(),
                 segment: int = 0, breaks=(), interpolation: str = "spline", commanded_p0=None,
                 servo_gain: float = 0.0, reference_rates=None, reltol: float = 1e-12,
-                abstol: float = 1e-14) -> PlantRun:
+                abstol: float = 1e-14) -> PlantResponse:
     """The torque-driven plant: integrate ``dp/dt = tau - c phi_dot``, (O) and Montana (6)-(10) by CVODES.
 
     Parameters
@@ -465,7 +441,7 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
 
     Returns
     -------
-    PlantRun
+    PlantResponse
         ``commanded`` holds the commanded torques (with the servo's share).
     """
     d = by_name(disturbances, "torques")
@@ -508,8 +484,9 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     om, pd, cm = (np.array(v).T for v in ca.Function("out", [time, z], [omega, phi_dot, cmd]).map(t.size)(t[None, :],
                                                                                                          zs.T))
     state = zs[:, 0:5]
-    return PlantRun("torques", t, state, measure(state, d, robot.radius, segment), om, pd, zs[:, 7:9], zs[:, 5:7],
-                    cm, zs[:, 9:11])
+    series = TimeSeries(t, state, omega=om, rotor_rates=pd, rotor_angles=zs[:, 7:9], rotor_momenta=zs[:, 5:7],
+                        radius=robot.radius)
+    return PlantResponse("torques", series, measure(state, d, robot.radius, segment), cm, zs[:, 9:11])
 
 
 #: Plants by name.

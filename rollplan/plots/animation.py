@@ -33,21 +33,20 @@ log = logging.getLogger(__name__)
 GIF_COLOURS = 64
 
 
-def make_animation(time, state, rates, robot, goal, out, frames: int = 100, fps: int = 20, progress=None,
+def make_animation(motion, robot, goal, out, frames: int = 100, fps: int = 20, progress=None,
                    dpi: float | None = None) -> None:
     """Write a GIF of the sphere rolling (see module docstring) to ``out`` atomically.
 
-    ``state`` (N, 5) in :class:`~rollplan.problem.State` order at ``time``; ``goal`` (u_a, v_a, ...) [m];
+    ``motion`` is a :class:`~rollplan.timeseries.TimeSeries` with ``rotor_rates`` (the state in
+    :class:`~rollplan.problem.State` order, [m, rad]); ``goal`` (u_a, v_a, ...) [m];
     ``progress(label, done, total)`` is called after each frame written; ``dpi`` scales the frames
     (default: matplotlib's).
     """
     from matplotlib.lines import Line2D
 
     R = robot.radius
+    time, state, rates = motion.time, motion.state, motion.rotor_rates
     t, x, rot, contact = animation_frames(time, state, frames)
-    time = np.asarray(time, float)
-    state = np.asarray(state, float)
-    rates = np.asarray(rates, float)
 
     fig = Figure(figsize=(11, 5.2))
     ax = fig.add_subplot(1, 2, 1, projection="3d")

@@ -57,17 +57,17 @@ def plot_comparison(c, unit: str = "R") -> Figure:
         ax_plane.plot(traj.u_a, traj.v_a, color=color, linewidth=1.4)
         handles.append(Line2D([], [], color=color, linewidth=1.5, label=f"{who}: length "
                               f"{side.costs['path_length']:.4g} {unit}, {c.cost} {side.costs[c.cost]:.4g}"))
-        ax_speed.plot(m.t, np.sqrt((m.omega ** 2).sum(axis=1)), color=color, linewidth=1.2, label=who)
+        ax_speed.plot(m.time, np.sqrt((m.omega ** 2).sum(axis=1)), color=color, linewidth=1.2, label=who)
         omega_ax, rate_ax, torque_ax = rows[name]
-        _series(omega_ax, m.t, m.omega, OMEGA, OMEGA_LABELS, "angular velocity [rad/s]",
+        _series(omega_ax, m.time, m.omega, OMEGA, OMEGA_LABELS, "angular velocity [rad/s]",
                 f"{who}: omega (plane frame)")
-        _series(rate_ax, m.t, m.rotor_rates, ROTOR, [f"$\\dot\\varphi_{i + 1}$, {lab}" for i, lab in
+        _series(rate_ax, m.time, m.rotor_rates, ROTOR, [f"$\\dot\\varphi_{i + 1}$, {lab}" for i, lab in
                                                      enumerate(ROTOR_LABELS)], "rotor rate [rad/s]",
                 f"{who}: rotor rates, eq. (11)")
-        _series(torque_ax, m.t, m.rotor_torques, ROTOR, [f"$\\tau_{i + 1}$, {lab}" for i, lab in
+        _series(torque_ax, m.time, m.rotor_torques, ROTOR, [f"$\\tau_{i + 1}$, {lab}" for i, lab in
                                                          enumerate(ROTOR_LABELS)], f"motor torque [{torque_unit}]",
                 f"{who}: motor torques")
-        clip_spikes(torque_ax, m.t, m.rotor_torques, ROTOR)   # the impulsive start and stop of T, ramped over dt
+        clip_spikes(torque_ax, m.time, m.rotor_torques, ROTOR)   # the impulsive start and stop of T, ramped over dt
     p, g = c.problem, c.problem.goal
     bound = p.radius * np.sin(min(c.contact_bound, np.pi / 2))   # the bound's circle as seen from below
     s = np.linspace(0.0, 2.0 * np.pi, 241)
@@ -79,7 +79,7 @@ def plot_comparison(c, unit: str = "R") -> Figure:
                         Line2D([], [], color=MARK, marker="+", linestyle="", label="south pole")],
                      loc="upper right", fontsize=7)
     plane_axes(ax_plane, g[:2], unit, "contact paths on the plane", handles=handles)
-    _time_axes(ax_speed, c.gp.motion.t, "|omega| [rad/s]", "|omega| of both motions")
+    _time_axes(ax_speed, c.gp.motion.time, "|omega| [rad/s]", "|omega| of both motions")
     tr = c.result.transcription
     fig.suptitle(f"k = {p.k:.4g}, target (u_a, v_a, psi) = ({g.u_a:g} {unit}, {g.v_a:g} {unit}, {g.psi:g} rad), "
                  f"n = {p.steps}; "

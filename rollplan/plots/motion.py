@@ -20,17 +20,19 @@ def _rests(ax, times):
 
 
 def draw_time_series(ax, motion, values, labels, ylabel, title, scale=1.0, colors=None):
-    """Columns of ``values`` against time, in ``colors``; thin grey lines mark the stops (at rest) on the way."""
-    stops = motion.time[motion.rest_indices]
-    stops = stops[(stops > motion.time[0]) & (stops < motion.time[-1])]
+    """Columns of ``values`` against the time of ``motion`` (an :class:`~rollplan.execution.actuation.Actuation`),
+    in ``colors``; thin grey lines mark the stops (at rest) on the way."""
+    time = motion.series.time
+    stops = time[motion.rest_indices]
+    stops = stops[(stops > time[0]) & (stops < time[-1])]
     _rests(ax, stops)
     colors = colors or [None] * len(labels)
     for col, label, color in zip(np.asarray(values).T, labels, colors):
-        ax.plot(motion.time, col * scale, linewidth=1.2, label=label, color=color)
+        ax.plot(time, col * scale, linewidth=1.2, label=label, color=color)
     ax.set_xlabel("time t [s]")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
-    ax.set_xlim(motion.time[0], motion.time[-1])
+    ax.set_xlim(time[0], time[-1])
     ax.grid(True, alpha=0.3)
     handles, _ = ax.get_legend_handles_labels()
     if stops.size:
@@ -39,19 +41,20 @@ def draw_time_series(ax, motion, values, labels, ylabel, title, scale=1.0, color
 
 
 def plot_motion(motion, plan=None, traj=None, unit="m") -> Figure:
-    """Omega, rotor rates and torques of a :class:`rollplan.execution.actuation.Motion` in time.
+    """Omega, rotor rates and torques of an :class:`rollplan.execution.actuation.Actuation` in time.
 
     With ``plan`` and ``traj`` (a :class:`rollplan.result.Trajectory`) a fourth panel
     shows the contact path on the plane; otherwise the rotor angles. Torques in N m.
     """
     fig = Figure(figsize=(12, 8), layout="constrained")
     axes = fig.subplots(2, 2)
-    draw_time_series(axes[0, 0], motion, motion.omega, OMEGA_LABELS, "angular velocity [rad/s]",
+    m = motion.series
+    draw_time_series(axes[0, 0], motion, m.omega, OMEGA_LABELS, "angular velocity [rad/s]",
                      "sphere angular velocity (plane frame), (18), (19), (13)", colors=OMEGA)
     rate_labels = [f"$\\dot\\varphi_{i + 1}$, {lab}" for i, lab in enumerate(ROTOR_LABELS)]
-    draw_time_series(axes[0, 1], motion, motion.rotor_rates, rate_labels, "rotor rate [rad/s]",
+    draw_time_series(axes[0, 1], motion, m.rotor_rates, rate_labels, "rotor rate [rad/s]",
                      "rotor rates, eq. (11)", colors=ROTOR)
-    draw_time_series(axes[1, 0], motion, motion.rotor_torques, [f"$\\tau_{i + 1}$, {lab}" for i, lab in
+    draw_time_series(axes[1, 0], motion, m.rotor_torques, [f"$\\tau_{i + 1}$, {lab}" for i, lab in
                                                                  enumerate(ROTOR_LABELS)],
                      "motor torque [N m]", "rotor torques", colors=ROTOR)
     if plan is not None and traj is not None:
@@ -60,27 +63,24 @@ def plot_motion(motion, plan=None, traj=None, unit="m") -> Figure:
         else:
             draw_plane_path(axes[1, 1], traj, plan.goal[:2], unit)
     else:
-        draw_time_series(axes[1, 1], motion, motion.rotor_angles / (2 * np.pi),
+        draw_time_series(axes[1, 1], motion, m.rotor_angles / (2 * np.pi),
                          [f"$\\varphi_{i + 1}$, {lab}" for i, lab in enumerate(ROTOR_LABELS)],
                          "rotor angle [turns]", "rotor angles", colors=ROTOR)
     r = motion.robot
     pieces = "pieces (leaves, rolls, circles)" if plan is None or hasattr(plan, "pieces") else "half-steps"
-    fig.suptitle(f"T = {motion.duration:.6g} s, {int(motion.segment.max()) + 1} {pieces} (timing {motion.timing}); "
+    fig.suptitle(f"T = {motion.duration:.6g} s, {int(m.segment.max()) + 1} {pieces} (timing {motion.timing}); "
                  f"R = {r.radius:.6g} m, k = {r.k:.6g}, $J_r$ = {r.rotor_inertia_axial:.6g} kg m$^2$")
     return fig
 
 
-def plot_simulation(time, simulated, rates, goal, planned=None, robot=None, title="") -> Figure:
+def plot_simulation(simulated, goal, planned=None, robot=None, title="") -> Figure:
     """A rotor-driven simulation against its plan: paths, psi, deviation and the rotor rates that drove it.
 
     Parameters
     ----------
-    time : (N,)
-        Sample times [s].
-    simulated : (N, 5)
-        Simulated states in :class:`~rollplan.problem.State` order [m, rad].
-    rates : (N, 2)
-        Rotor rates that drove the simulation [rad/s].
+    simulated : TimeSeries
+        The simulated motion (:class:`~rollplan.timeseries.TimeSeries`): its ``time`` [s], ``state`` in
+        :class:`~rollplan.problem.State` order [m, rad] and ``rotor_rates``, the rates that drove it [rad/s].
     goal : State or sequence
         Planned arrival (u_a, v_a, psi, ...) [m, rad].
     planned : (N, 5), optional
@@ -90,8 +90,7 @@ def plot_simulation(time, simulated, rates, goal, planned=None, robot=None, titl
     title : str
         Figure title (a line on the robot is added).
     """
-    time = np.asarray(time, float)
-    sim = np.asarray(simulated, float)
+    time, sim, rates = simulated.time, simulated.state, simulated.rotor_rates
     fig = Figure(figsize=(12, 8), layout="constrained")
     axes = fig.subplots(2, 2)
     ax = axes[0, 0]
@@ -131,7 +130,7 @@ def plot_simulation(time, simulated, rates, goal, planned=None, robot=None, titl
     ax.set_xlabel("time t [s]")
     ax.grid(True, alpha=0.3)
     ax = axes[1, 1]
-    for i, (col, lab) in enumerate(zip(np.asarray(rates, float).T, ROTOR_LABELS)):
+    for i, (col, lab) in enumerate(zip(rates.T, ROTOR_LABELS)):
         ax.plot(time, col, color=ROTOR[i], linewidth=1.2, label=f"$\\dot\\varphi_{i + 1}$, {lab}")
     ax.set_xlabel("time t [s]")
     ax.set_ylabel("rotor rate [rad/s]")

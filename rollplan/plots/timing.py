@@ -1,6 +1,6 @@
 """Figures of timed motions: rotor rates and torques in time with the motors' limits, and the phase plane (s, s').
 
-The functions take :class:`rollplan.execution.actuation.Motion` objects (and the maximum
+The functions take :class:`rollplan.execution.actuation.Actuation` objects (and the maximum
 velocity curve, :func:`rollplan.execution.timing.velocity_limit`) and compute nothing.
 """
 
@@ -23,11 +23,11 @@ def _limit_lines(ax, value, scale, label):
 
 def draw_rates_torques(ax_rates, ax_torques, motion, legend=True):
     """Rotor rates [rad/s] and motor torques [N m] of a motion against time, with the robot's limits dashed."""
-    lim = motion.limits
+    lim, m = motion.limits, motion.series
     for i, color in enumerate(ROTOR):
-        ax_rates.plot(motion.time, motion.rotor_rates[:, i], color=color, linewidth=1.0,
+        ax_rates.plot(m.time, m.rotor_rates[:, i], color=color, linewidth=1.0,
                       label=f"$\\dot\\varphi_{i + 1}$, {ROTOR_LABELS[i]}")
-        ax_torques.plot(motion.time, motion.rotor_torques[:, i], color=color, linewidth=1.0,
+        ax_torques.plot(m.time, m.rotor_torques[:, i], color=color, linewidth=1.0,
                         label=f"$\\tau_{i + 1}$, {ROTOR_LABELS[i]}")
     _limit_lines(ax_rates, lim.max_rotor_rate, 1.0, "max_rotor_rate")
     _limit_lines(ax_torques, lim.max_rotor_torque, 1.0, "max_rotor_torque")
@@ -39,7 +39,7 @@ def draw_rates_torques(ax_rates, ax_torques, motion, legend=True):
     ax_torques.set_ylabel("motor torque [N m]")
     for ax in (ax_rates, ax_torques):
         ax.set_xlabel("time t [s]")
-        ax.set_xlim(motion.time[0], motion.time[-1])
+        ax.set_xlim(m.time[0], m.time[-1])
         ax.grid(True, alpha=0.3)
         if legend:
             ax.legend(loc="upper right", fontsize=7)
@@ -51,7 +51,7 @@ def draw_phase_plane(ax, motions, velocity_limit=None, joints=(), reference=None
 
     Parameters
     ----------
-    motions : sequence of Motion
+    motions : sequence of Actuation
     velocity_limit : (s, s'_max), optional
         The maximum velocity curve [R, R/s] (inf where no limit binds).
     joints : sequence of float
@@ -89,7 +89,7 @@ def plot_timing(motions, velocity_limit=None, title: str = "", reference=None) -
 
     Parameters
     ----------
-    motions : Motion or sequence of Motion
+    motions : Actuation or sequence of Actuation
         Timed motions of one path (e.g. the same plan under several laws).
     velocity_limit : (s, s'_max), optional
         The maximum velocity curve, :func:`rollplan.execution.timing.velocity_limit`.
@@ -112,5 +112,5 @@ def plot_timing(motions, velocity_limit=None, title: str = "", reference=None) -
     draw_phase_plane(fig.add_subplot(grid[2, :]), motions, velocity_limit, () if path is None else path.joints,
                      reference, r.radius, "m")
     fig.suptitle(title or (f"R = {r.radius:.6g} m, k = {r.k:.6g}, {m.limits.describe()}; "
-                           f"{int(m.segment.max()) + 1} pieces"), fontsize=10)
+                           f"{int(m.series.segment.max()) + 1} pieces"), fontsize=10)
     return fig

@@ -101,8 +101,8 @@ def run_issue_case(case: dict) -> dict:
     p = make_plan(tuple(case["goal"]), case["steps"], robot=model)
     run = execute(p, model, real, case["piece_duration"], plant=case["plant"], disturbances=dist)
     return {**case, "closed": run.arrival_error, "closed_position": run.position_error,
-            "estimated_k": run.estimates[-1].get("k"), "real_k": real.k, "samples": int(run.time.size),
-            "duration": float(run.time[-1] - run.time[0]), "seconds": time.perf_counter() - t0}
+            "estimated_k": run.estimates[-1].get("k"), "real_k": real.k, "samples": int(run.series.time.size),
+            "duration": run.series.duration, "seconds": time.perf_counter() - t0}
 
 
 def run_cases(cases, workers: int = 2, progress=None, scheduler: str | None = None) -> list:

@@ -16,7 +16,7 @@ the same cost, measured by the same function on the same trajectory type.
 * psi is an angle. The collocation is solved from several starts with their own whole turns m of
   psi (multistart, :func:`compare`), and the best certified one is kept.
 * Costs by name (:data:`COMPARED_COSTS`), every one measured by :func:`rollplan.measures.measure` on
-  the :class:`~rollplan.measures.TimedMotion` of each side (the GP's from the exact path, the
+  the :class:`~rollplan.timeseries.TimeSeries` of each side (the GP's from the exact path, the
   collocation's from the CVODES certification).
 
 Starts of the multistart (each a :class:`Start`): ``gpI:m`` the collocation warm-started from the
@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -39,7 +39,7 @@ from ..errors import InputError, NoPlanError, SolverError, check_range, check_wh
 from ..execution.actuation import actuate
 from ..execution.optimal_timing import TIMING_COSTS, contact_rates, optimal_timing, timed_samples, timing_bound
 from ..execution.path import ContactPath
-from ..measures import TimedMotion, measure
+from ..measures import measure
 from ..planners.collocation.rest import (
     MinimumTimePlanner,
     RestResult,
@@ -55,6 +55,7 @@ from ..planners.geometric import plan as gp_plan
 from ..problem import K_MAX, Problem
 from ..progress import report
 from ..robot import Robot
+from ..timeseries import TimeSeries
 
 __all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side", "Comparison",
            "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict", "MinimumTime",
@@ -123,7 +124,7 @@ class Side:
 
     Attributes
     ----------
-    motion : TimedMotion
+    motion : TimeSeries
     costs : dict
         :func:`rollplan.measures.measure` of ``motion``.
     residual : float
@@ -132,7 +133,7 @@ class Side:
         Wall time of the whole side [s]: GP planning and timing of its branches; every start of the collocation.
     """
 
-    motion: TimedMotion
+    motion: TimeSeries
     costs: dict
     residual: float
     solve_time_s: float
@@ -220,11 +221,11 @@ def _branches(problem: Problem, robot: Robot, contact_bound: float, wanted: int)
     return ok[:wanted]
 
 
-def _warm_samples(motion: TimedMotion, radius: float) -> tuple[np.ndarray, np.ndarray]:
+def _warm_samples(motion: TimeSeries, radius: float) -> tuple[np.ndarray, np.ndarray]:
     """``(t, x7)`` of a timed GP motion: the state in units of R and the contact rates, (8)-(9)."""
     rates = contact_rates(motion.omega, motion.state)[:, 2:4]
     x7 = np.column_stack([motion.state / np.array([radius, radius, 1.0, 1.0, 1.0]), rates])
-    return motion.t, x7
+    return motion.time, x7
 
 
 def _robot(problem: Problem, robot: Robot | None) -> Robot:
@@ -449,15 +450,14 @@ def minimum_time(target, robot: Robot, steps: int = 1, intervals: int = 60, degr
                                                                True, True))
     t0 = time.perf_counter()
     p = _branches(problem, robot, contact_bound, 1)[0]
-    m = actuate(p, robot, timing="time-optimal")
+    a = actuate(p, robot, timing="time-optimal")
     gp_time = time.perf_counter() - t0
-    R = robot.radius
+    R, m = robot.radius, a.series
     rates = contact_rates(m.omega, m.state)[:, 2:4]
     x7 = np.column_stack([m.state / np.array([R, R, 1.0, 1.0, 1.0]), rates])
-    velocity = contact_rates(m.omega, m.state)[:, :2] * R
-    gp_motion = TimedMotion(m.time, m.state, velocity, m.omega, m.rotor_rates, m.rotor_torques, R)
+    gp_motion = replace(m, velocity=contact_rates(m.omega, m.state)[:, :2] * R)
     turns = round((p.final.psi - problem.goal.psi) / (2 * math.pi))
     guess = guess_from_samples(planner.base.transcription, m.time, x7, "gp-time-optimal")
-    T, r = interrupts.call(planner.solve, problem, guess, m.duration, robot, turns)
-    return MinimumTime(problem, p, m.duration, T, Side(gp_motion, measure(gp_motion), p.residual, gp_time),
+    T, r = interrupts.call(planner.solve, problem, guess, a.duration, robot, turns)
+    return MinimumTime(problem, p, a.duration, T, Side(gp_motion, measure(gp_motion), p.residual, gp_time),
                        Side(r.motion, measure(r.motion), r.residual, r.stats.time_s))

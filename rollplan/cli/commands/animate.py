@@ -24,8 +24,7 @@ def cmd_animate(args) -> int:
     keep = rp.distinct
     sim = simulate_rotors(rp.robot, rp.time[keep], rp.rotor_rates[keep], rp.goal, x0=rp.start.array())
     with Progress(unit="frames") as progress:
-        make_animation(rp.time[keep], sim.state, rp.rotor_rates[keep], rp.robot, rp.goal, args.out, args.frames,
-                       args.fps, progress=progress)
+        make_animation(sim.series, rp.robot, rp.goal, args.out, args.frames, args.fps, progress=progress)
     print(f"wrote {args.out}")
     return EXIT_OK
 

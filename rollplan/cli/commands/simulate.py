@@ -110,7 +110,7 @@ def _simulate_executed(args, rp, robot, plant=None, **engine) -> int:
         title = (f"{plant} plant, {'closed' if args.closed_loop else 'open'} loop on {args.plan_file}: arrival "
                  f"error {run.arrival_error:.2e} ({NORM})" + (f", open loop {opened.arrival_error:.2e}"
                                                             if args.closed_loop else ""))
-        _plot_simulation(args, rp, run.time, run.state, run.rotor_rates, robot, title)
+        _plot_simulation(args, rp, run.series, robot, title)
     return EXIT_OK
 
 
@@ -132,10 +132,10 @@ def _planned_states(rp, time=None):
     return np.column_stack([np.interp(time, rp.time[keep], state[keep, i]) for i in range(5)])
 
 
-def _plot_simulation(args, rp, time, state, rates, robot, title) -> None:
+def _plot_simulation(args, rp, series, robot, title) -> None:
     from ...plots.motion import plot_simulation
 
-    save_figure(plot_simulation(time, state, rates, rp.goal, _planned_states(rp, time), robot, title), args.plot)
+    save_figure(plot_simulation(series, rp.goal, _planned_states(rp, series.time), robot, title), args.plot)
     print(f"wrote {args.plot}")
 
 
@@ -175,7 +175,7 @@ def cmd_simulate(args) -> int:
     if args.plot:
         title = (f"rotor-driven simulation of {args.plan_file}: arrival error {sim.arrival_error:.2e} ({NORM}),\n"
                  f"position error {sim.position_error * robot.radius:.2e} m")
-        _plot_simulation(args, rp, sim.time, sim.state, rp.rotor_rates[keep], robot, title)
+        _plot_simulation(args, rp, sim.series, robot, title)
     return EXIT_OK
 
 
@@ -250,8 +250,7 @@ def _simulate_mujoco(args, rp, robot, gain: float) -> int:
 
         title = (f"MuJoCo replay of {args.plan_file}: arrival error {run.arrival_error:.2e} ({NORM}),\n"
                  f"slip {run.slip:.2e} m, max penetration {run.max_penetration:.2e} m")
-        save_figure(plot_simulation(run.time, run.state, run.rotor_rates, g, _planned_states(rp), robot, title),
-                    args.plot)
+        save_figure(plot_simulation(run.series, g, _planned_states(rp), robot, title), args.plot)
         print(f"wrote {args.plot}")
     return EXIT_OK
 

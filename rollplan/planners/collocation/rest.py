@@ -24,10 +24,11 @@ import numpy as np
 from ... import interrupts
 from ...core import model
 from ...errors import InputError, SolverError, check_range, check_whole
-from ...measures import TimedMotion, measure
+from ...measures import measure
 from ...problem import Problem, State
 from ...result import CERTIFICATE_TOLERANCE, Certificate, SolverStats, Trajectory
 from ...robot import Robot
+from ...timeseries import TimeSeries
 from .costs import N_PAR
 from .transcription import (
     CollocationRun,
@@ -129,7 +130,7 @@ class RestResult(CollocationRun):
         The cost of ``controls`` (CVODES quadrature; lengths in R; ``rotor_energy`` divided by J_r^2); the
         NLP's optimal value is ``stats.details["nlp_objective"]``, the contact bound the last NLP solved with
         ``stats.details["backed_off_bound"]``.
-    motion : TimedMotion
+    motion : TimeSeries
         The certified motion (CVODES samples) [length unit].
     certificate : Certificate
     stats : SolverStats
@@ -137,7 +138,7 @@ class RestResult(CollocationRun):
 
     controls: np.ndarray
     objective: float
-    motion: TimedMotion
+    motion: TimeSeries
     certificate: Certificate
     stats: SolverStats
 
@@ -287,12 +288,13 @@ def _certificate(problem: Problem, fin: State, end_rates, where: str) -> Certifi
     return cert
 
 
-def scaled_motion(motion: TimedMotion, horizon: float) -> TimedMotion:
+def scaled_motion(motion: TimeSeries, horizon: float) -> TimeSeries:
     """A motion of normalized time (T = 1) on the horizon ``horizon`` [s] (docs/design/collocation.md, time scaling):
     times times T, velocities, omega and rotor rates divided by T, torques by T^2; the states unchanged."""
     T = float(horizon)
-    return TimedMotion(motion.t * T, motion.state, motion.velocity / T, motion.omega / T, motion.rotor_rates / T,
-                       motion.rotor_torques / T ** 2, motion.radius)
+    return TimeSeries(motion.time * T, motion.state, velocity=motion.velocity / T, omega=motion.omega / T,
+                      rotor_rates=motion.rotor_rates / T, rotor_torques=motion.rotor_torques / T ** 2,
+                      radius=motion.radius)
 
 
 def normalized_guess(g: Guess, horizon: float) -> Guess:
@@ -302,7 +304,7 @@ def normalized_guess(g: Guess, horizon: float) -> Guess:
                  np.asarray(g.controls, float) * horizon ** 2, g.name)
 
 
-def polar_angles(motion: TimedMotion) -> np.ndarray:
+def polar_angles(motion: TimeSeries) -> np.ndarray:
     """Polar angle of the contact point from the south pole at every sample of ``motion`` [rad]: from (1),
     ``acos(cos u_o cos v_o)``."""
     return np.arccos(np.clip(np.cos(motion.state[:, 3]) * np.cos(motion.state[:, 4]), -1.0, 1.0))
@@ -356,8 +358,8 @@ def _interval_integrator(per: int) -> ca.Function:
 def certify(controls, start, problem: Problem, horizon: float, per: int = 8, robot: Robot | None = None,
             end_rates: bool = False):
     """CVODES integration of the 7-state ODE with piecewise-constant accelerations ``controls`` (N, 2) [rad/s^2]
-    from ``start`` (7,) (units of R, rates in rad/s): the samples of every interval, both ends included, as a
-    :class:`~rollplan.measures.TimedMotion` in the problem's length unit.
+    from ``start`` (7,) (units of R, rates in rad/s): the samples of every interval, both ends included, as
+    the :class:`~rollplan.timeseries.TimeSeries` in the problem's length unit.
 
     The integration runs in normalized time ``tau = t / T`` (accelerations times T^2) and the motion is
     scaled to T exactly (:func:`scaled_motion`). With ``end_rates`` also returns the final contact rates in
@@ -383,7 +385,8 @@ def certify(controls, start, problem: Problem, horizon: float, per: int = 8, rob
     xdot, omega, rates, torque = (np.array(v).T for v in f.map(X.shape[1])(X, A, par))
     R = problem.radius
     state = X[:5].T * np.array([R, R, 1.0, 1.0, 1.0])
-    motion = scaled_motion(TimedMotion(t, state, xdot[:, :2] * R, omega, rates, torque, R), horizon)
+    motion = scaled_motion(TimeSeries(t, state, velocity=xdot[:, :2] * R, omega=omega, rotor_rates=rates,
+                                      rotor_torques=torque, radius=R), horizon)
     return (motion, X[5:7, -1].copy()) if end_rates else motion
 
 
