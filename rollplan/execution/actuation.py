@@ -90,7 +90,7 @@ import numpy as np
 
 from ..errors import InputError, NoPlanError, check_range, check_whole
 from ..problem import State
-from ..result import Trajectory
+from ..result import DEFAULT_SAMPLES, Trajectory
 from ..robot import Robot
 from .limits import Limits
 from .path import ContactPath, plan_pieces
@@ -103,8 +103,6 @@ __all__ = ["Motion", "actuate", "sample_motion", "samples_per_piece", "certify_m
 
 log = logging.getLogger(__name__)
 
-#: Default total number of time samples of a motion (at least).
-DEFAULT_SAMPLES = 2000
 #: Least number of samples per leaf of the min-jerk law: a cubic spline through the rotor rates then drives
 #: the rotor-only simulation to the target within ~1e-8 R (the error falls as h^4; see the tests).
 MIN_SAMPLES_PER_LEAF = get_law("min-jerk").samples_per_piece
