@@ -17,7 +17,7 @@ from ..errors import InputError
 from ..problem import Problem
 from ..result import PlanResult, require_certified
 
-__all__ = ["Method", "renamed_option"]
+__all__ = ["Method", "renamed_option", "with_steps"]
 
 
 class Method:
@@ -65,6 +65,14 @@ class Method:
         for name, value in options.items():
             setattr(other, name, value)
         return other
+
+
+def with_steps(problem: Problem, steps: int | None) -> Problem:
+    """``problem`` with the method's ``steps`` (figure eights per leg), or as it is when ``steps`` is None."""
+    if steps is None or steps == problem.steps:
+        return problem
+    return Problem(problem.goal, problem.start, None if problem.robot is not None else problem.k, problem.robot,
+                   problem.radius, steps)
 
 
 def renamed_option(old: str, old_value, new: str, new_value, default) -> tuple:

@@ -15,7 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 
 import casadi as ca
@@ -30,7 +30,7 @@ from ...problem import Problem, State, check_steps
 from ...result import CERTIFICATE_TOLERANCE, Certificate, Measures, SolverStats, Trajectory, certify
 from ...robot import Robot
 from ..geometric.composed import as_composed, default_composed_planner
-from ..method import Method
+from ..method import Method, with_steps
 from .costs import COSTS, N_PAR, Cost
 from .transcription import (
     SCHEMES,
@@ -325,8 +325,7 @@ class CollocationPlanner(Method):
 
     def _check(self, problem) -> Problem:
         problem = super()._check(problem)
-        if self.steps is not None and self.steps != problem.steps:
-            problem = replace(problem, steps=self.steps)
+        problem = with_steps(problem, self.steps)
         self._boundary(problem, 0 if self.turns is None else self.turns)   # bad input is refused before any work
         if self.warm_start is not None:
             _check_warm_start(self.warm_start, problem)

@@ -27,7 +27,7 @@ from ...errors import InputError, NoPlanError, check_choice, check_flag, check_w
 from ...problem import Problem, State, arrival_residual, check_reach, check_steps
 from ...result import DEFAULT_SAMPLES, Certificate, CertifiedMotion, SolverStats, Trajectory, certify
 from ...robot import Robot
-from ..method import Method, renamed_option
+from ..method import Method, renamed_option, with_steps
 from .legs import intermediate_state, second_leg, two_leg_candidates
 from .maneuvers import StraightRoll
 from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
@@ -260,8 +260,7 @@ class ComposedPlanner(Method):
 
     def _check(self, problem) -> Problem:
         problem = super()._check(problem)
-        if self.steps is not None and self.steps != problem.steps:
-            problem = replace(problem, steps=self.steps)
+        problem = with_steps(problem, self.steps)
         check_reach(problem.start, problem.goal, problem.radius)
         return problem
 
