@@ -209,7 +209,7 @@ def test_contact_bound_holds_between_collocation_points():
     from rollplan.studies.comparison import branch_guess
 
     problem = Problem((0.5, 0.3, 0.4), k=K)
-    planner = RestToRestPlanner(8, 3, cost="path_length", contact_bound=0.6)
+    planner = RestToRestPlanner(8, 3, cost="path_energy", contact_bound=0.6)
     guess, m = branch_guess(problem, planner)
     r = planner.solve(problem, guess, 1.0, m)
     polar, backed = _polar(r.motion.state).max(), r.stats.details["backed_off_bound"]
