@@ -15,7 +15,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from .core import model
-from .errors import NoPlanError, check_whole
+from .errors import InputError, NoPlanError, check_whole
 from .problem import STATE_NAMES, Problem, State
 
 __all__ = ["CERTIFICATE_TOLERANCE", "DEFAULT_SAMPLES", "Certificate", "SolverStats", "Trajectory", "Measures",
@@ -269,14 +269,16 @@ class PlanResult(Protocol):
         ...
 
 
-def certify(problem: Problem, final, integrator: str, *, error_bound: float = 0.0,
+def certify(problem: Problem | None, final, integrator: str, *, error_bound: float = 0.0,
             tolerance: float = CERTIFICATE_TOLERANCE, residual: float | None = None) -> Certificate:
     """The certificate of a motion of ``problem`` whose independent integration ``integrator`` ended at ``final``
     [length unit of the problem, rad]: its residual to the goal (:meth:`Problem.residual`, or ``residual`` when
-    the method measures it itself, e.g. in a frame with psi reduced, or with the end rates of a rest-to-rest
-    motion), the integration's ``error_bound`` and the accepted ``tolerance``. Every method makes its
-    certificate here."""
+    the caller measures it itself, e.g. in a frame with psi reduced, with the end rates of a rest-to-rest
+    motion, or for a motion without a Problem), the integration's ``error_bound`` and the accepted
+    ``tolerance``. Every method, and the rotor-only check of a timed motion, makes its certificate here."""
     final = State(*(float(v) for v in final))
+    if residual is None and problem is None:
+        raise InputError("certify needs the problem or the residual")
     residual = problem.residual(final) if residual is None else float(residual)
     return Certificate(integrator, final, residual, float(error_bound), float(tolerance))
 

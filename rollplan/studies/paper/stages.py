@@ -51,7 +51,7 @@ from ...core.roots import brent
 from ...errors import InputError
 from ...planners.geometric import GeometricPhasePlanner, Plan, default_planner
 from ...problem import Problem
-from ...result import Certificate, SolverStats
+from ...result import SolverStats, certify
 from .values import A_MIN, K_RANGE, PAPER, shift_pure_rolling
 
 __all__ = ["Sweep", "Crossings", "CaseStudy", "refine_root", "bracket_roots", "count_self_intersections",
@@ -350,7 +350,7 @@ class CaseStudy:
         h = float(np.hypot(out[0], out[1]))
         problem = Problem((0.0, h, 0.0), k=k)
         final, bound, _ = self.planner.certifier.certify(a, a, k, gamma, 1, self.planner.tol)
-        cert = Certificate(self.planner.certifier.name, final, problem.residual(final), bound, self.planner.tol)
+        cert = certify(problem, final, self.planner.certifier.name, error_bound=bound, tolerance=self.planner.tol)
         stats = SolverStats("none", "given (paper's case study)", 0, 0.0)
         return Plan(problem, a, a, gamma, 0, h, float(out[2]), 4 * math.pi * a, cert, stats, (), self.planner)
 
