@@ -406,6 +406,7 @@ def comparison_to_dict(c: Comparison) -> dict:
     return {
         "target": {"u_a": g.u_a, "v_a": g.v_a, "psi": g.psi}, "k": c.problem.k, "radius": c.problem.radius,
         "horizon": c.horizon, "steps": c.problem.steps, "cost": c.cost,
+        # the JSON keys of the sides (kept): "geometric_phase" is the method "geometric"
         "geometric_phase": _side(c, c.gp), "collocation": _side(c, c.collocation),
         "details": {
             "geometric_phase": {"costs": c.gp.costs, "figure_eight": {"a": p.a, "b": p.b, "gamma": p.gamma},
