@@ -199,7 +199,7 @@ def section_plan(ctx):
     for target, steps in TARGETS:
         p = rollplan.plan(target, steps, k=K)                 # warms the planner, per-k tables, compiled functions
         t_warm, c_warm, ts = _median_times(lambda: rollplan.plan(target, steps, k=K), ctx["repeats"])
-        t_newton, _ = _median_time(lambda: rollplan.plan(target, steps, k=K, method="newton"), ctx["repeats"])
+        t_newton, _ = _median_time(lambda: rollplan.plan(target, steps, k=K, root_solver="newton"), ctx["repeats"])
         t_polish, t_cert, c_polish, c_cert = _phases(p, target)
         x0, eta_m, h_m = _start_near(p, target)
         res = {}

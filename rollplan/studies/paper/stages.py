@@ -456,12 +456,13 @@ def crossings_stage(study: CaseStudy, a0: float, k_roots, samples: int, per_inte
 
 
 def trajectories_stage(study: CaseStudy, a0: float, a_roots, samples: int, progress: Progress | None = None):
-    """The plans of Figs 6-8, 11-12 with their sampled trajectories, and their path lengths; (plans, evidence)."""
+    """The plans of Figs 6-8, 11-12 with their trajectories sampled ``samples`` times per half-step (leaf), and
+    their path lengths; (plans, evidence)."""
     plans = {}
     for name, (a, kk) in {"k0": (a0, 0.0), "k2.5": (a0, 2.5), "k5": (a0, 5.0),
                           "a1": (a_roots[0], 2.5), "a2": (a_roots[1], 2.5)}.items():
         p = study.symmetric_plan(a, kk)
-        plans[name] = (p, p.sample(samples))
+        plans[name] = (p, p.sample(1 + 2 * p.steps * samples))   # the start, then samples per leaf
         if progress is not None:
             progress("trajectories", len(plans), 5)
     ev = {"path_length_formula": {n: plans[n][0].path_length for n in plans},
