@@ -183,7 +183,7 @@ def _phases(p, target):
 
     planner = geometric.default_planner()
     _, eta_m, h_m = _start_near(p, target)
-    solve = polisher(planner.method, panels_for(p.k))
+    solve = polisher(planner.root_solver, panels_for(p.k))
     t_polish, c_polish, _ = _median_times(lambda: solve([p.a, p.b], [p.k, eta_m, h_m], 1e-6, A_MAX), 41)
     t_cert, c_cert, _ = _median_times(lambda: planner.certifier.certify(p.a, p.b, p.k, p.gamma, p.steps), 41)
     return t_polish * 1e3, t_cert * 1e3, c_polish * 1e3, c_cert * 1e3
@@ -468,7 +468,7 @@ def section_profile(ctx):
     wanted = {("planner.py", "solve"): "whole plan (GeometricPhasePlanner.solve)",
               ("enumerate.py", "branches"): "branches (enumeration)",
               ("enumerate.py", "roots"): "roots of the branches (enumeration)",
-              ("planner.py", "_polish"): f"polish ({planner.method})",
+              ("planner.py", "_polish"): f"polish ({planner.root_solver})",
               ("certify.py", "certify"): "certificate (RK8, n steps)",
               ("planner.py", "_certified"): "gamma + certificate"}
     plan_line = geometric.GeometricPhasePlanner.solve.__code__.co_firstlineno

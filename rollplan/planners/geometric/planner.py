@@ -254,6 +254,12 @@ class GeometricPhasePlanner(Method):
         self.curve = figure_eight()
         self.certifier = CERTIFIERS[check_choice("certifier", certifier, CERTIFIERS)]()
 
+    @property
+    def method(self) -> str:
+        """Deprecated name of :attr:`root_solver` (``method`` names the planning method)."""
+        warnings.warn("GeometricPhasePlanner.method is deprecated: use root_solver", DeprecationWarning, stacklevel=2)
+        return self.root_solver
+
     @cached_property
     def cvodes(self) -> CvodesCertifier:
         """The CVODES integration that samples plans (:meth:`sample`)."""
