@@ -430,7 +430,7 @@ def test_plan_all_capacity_and_bad_arguments(built):
 
 def test_search_falls_back_to_certifying_every_root(built, tmp_path):
     """The search's fallback: when the shortest root fails its certificate, the search runs again certifying every
-    root, so the plan is the shortest certified one. A test build (planner.c with ROLLPLAN_TEST_REJECT_BELOW = L,
+    root, so the plan is the shortest certified one. A test build (planner.c with RP_TEST_REJECT_BELOW = L,
     linked with the fixture's objects) rejects every plan with a + b < L: for L just above the shortest plan it
     returns the shortest of the Python planner's certified plans with a + b >= L; for L beyond every plan it
     reports the best rejected root with status NOT_CERTIFIED."""
@@ -442,7 +442,7 @@ def test_search_falls_back_to_certifying_every_root(built, tmp_path):
     out = built.out
     for limit, exe in ((cut, "fallback"), (100.0, "reject_all")):
         subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror",
-                        f"-DROLLPLAN_TEST_REJECT_BELOW={limit!r}",
+                        f"-DRP_TEST_REJECT_BELOW={limit!r}",
                         "-I", str(out), "-o", str(tmp_path / exe), str(out / "plan_demo.o"),
                         str(out / "rollplan_planner.c"), str(out / "rollplan_model.o"), "-lm"], check=True)
     run = subprocess.run([str(tmp_path / "fallback"), *map(str, target)], capture_output=True, text=True, check=False)
@@ -466,7 +466,7 @@ def test_close_pair_hidden_by_the_table_is_split_in_c(built, tmp_path):
     first = brentq(_g, res.x - 1e-6, res.x, args=(eta, h, k), xtol=1e-16, rtol=1e-15)
     out = built.out
     limit = first + float(_b_of(np.array([first]), eta, k)[0]) - 1e-6
-    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", f"-DROLLPLAN_TEST_REJECT_BELOW={limit!r}",
+    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", f"-DRP_TEST_REJECT_BELOW={limit!r}",
                     "-I", str(out), "-o", str(tmp_path / "pair"), str(out / "plan_demo.o"),
                     str(out / "rollplan_planner.c"), str(out / "rollplan_model.o"), "-lm"], check=True)
     run = subprocess.run([str(tmp_path / "pair"), repr(h), "0", repr(eta), "1", repr(k), "0"], capture_output=True,

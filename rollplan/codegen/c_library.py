@@ -470,8 +470,10 @@ def _check_prefix(prefix) -> str:
 
 #: Files for the microcontroller builds (QEMU's mps2-an500 and mps2-an386 boards), copied into the output.
 #: What the generated Makefile builds in its folder (its ``clean`` target removes them).
-_BUILD_PRODUCTS = ("plan_demo", "plan_demo.o", "@PREFIX@_planner.o", "@PREFIX@_model.o", "lib@PREFIX@.a",
+_BUILD_PRODUCTS = ("plan_demo", "plan_demo.o", "rollplan_planner.o", "@PREFIX@_model.o", "lib@PREFIX@.a",
                    "lib@PREFIX@.so", "build")
+#: The planner's static sources (package folder ``rollplan/csrc``), copied unchanged.
+_STATIC = ("rollplan_planner.c", "rollplan_planner.h")
 _EMBEDDED = ("startup.c", "mps2-common.ld", "mps2-an500.ld", "mps2-an386.ld", "planner_only.c", "stack_bound.py")
 
 
@@ -533,6 +535,19 @@ def _enumeration_constants(k_max: float) -> dict:
 
 def _template(name: str) -> str:
     return (Path(__file__).with_name("c_templates") / name).read_text()
+
+
+def _static(name: str) -> str:
+    return (Path(__file__).parents[1] / "csrc" / name).read_text()
+
+
+def _real_macros(real: str) -> str:
+    """``RP_R`` (a floating literal) and ``RP_SIN`` ... (the math functions) of casadi_real = ``real``: the names
+    of :func:`_to_float` with the suffix ``f`` in a float build."""
+    suffix = "" if real == "double" else "f"
+    lines = ["#define RP_R(x) x" + ("##f" if suffix else "")]
+    lines += [f"#define RP_{name.upper()} {name}{suffix}" for name in _MATH]
+    return "\n".join(lines)
 
 
 def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX,
@@ -605,6 +620,7 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         **_enumeration_constants(k_max),
         "@STEPS_PER_LEAF@": str(int(steps_per_leaf)),
         "@REAL@": real,
+        "@REAL_MACROS@": _real_macros(real),
         "@K_MAX@": repr(k_max),
         "@MAX_STEPS@": show_limit(MAX_STEPS),
         "@CERT_TOL@": repr(CERT_TOL if real == "double" else FLOAT_CERT_TOL),
@@ -632,13 +648,14 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     if real == "float":
         model_c = _to_float(model_c)
     glue = {name: fill(_template(template)) for name, template in
-            ((f"{prefix}.h", "planner.h"), (f"{prefix}_planner.c", "planner.c"))}
+            ((f"{prefix}.h", "interface.h"), ("rollplan_config.h", "rollplan_config.h"))}
     if real == "float":
         glue = {name: _to_float(text) for name, text in glue.items()}
     files = {
         f"{lib}.c": model_c,
         f"{lib}.h": model_h,
         **glue,
+        **{name: _static(name) for name in _STATIC},
         "plan_demo.c": fill(_template("plan_demo.c")),
         "Makefile": fill(_template("Makefile")),
         **{name: fill(_template(name)) for name in _EMBEDDED},

@@ -68,7 +68,8 @@ class SearchResult(NamedTuple):
 
 def _sources() -> list:
     """The files whose contents define the generated library: every module of rollplan and the C templates."""
-    files = sorted(_PACKAGE.rglob("*.py")) + sorted((_PACKAGE / "codegen" / "c_templates").iterdir())
+    files = sorted(_PACKAGE.rglob("*.py")) + sorted((_PACKAGE / "codegen" / "c_templates").iterdir()) \
+        + sorted((_PACKAGE / "csrc").iterdir())
     return [f for f in files if f.is_file()]
 
 
@@ -101,7 +102,7 @@ def library():
     script = (f"import sys; sys.path.insert(0, {str(_PACKAGE.parent)!r}); "
               "from rollplan.codegen import generate; generate('.', overwrite=True)")
     return shared_library("c_planner_search", f"prefix={PREFIX}", _sources(), [sys.executable, "-c", script],
-                          [f"{PREFIX}_model.c", f"{PREFIX}_planner.c"], _load, "the numpy search")
+                          [f"{PREFIX}_model.c", "rollplan_planner.c"], _load, "the numpy search")
 
 
 def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
