@@ -14,6 +14,7 @@
 
 #include "rollplan_planner.h"
 
+#ifndef @PREFIX_UPPER@_OK   /* (with the prefix rp these are the RP_ names themselves) */
 /* Status codes. */
 #define @PREFIX_UPPER@_OK RP_OK
 #define @PREFIX_UPPER@_BAD_INPUT RP_BAD_INPUT
@@ -22,12 +23,13 @@
 #define @PREFIX_UPPER@_NOT_CERTIFIED RP_NOT_CERTIFIED
 #define @PREFIX_UPPER@_TOO_MANY RP_TOO_MANY
 
-/* The limits of this generation. */
+/* The limits of this generation (RP_A_MAX ... of rollplan_config.h). */
 #define @PREFIX_UPPER@_A_MAX @A_MAX@
 #define @PREFIX_UPPER@_K_MIN @K_MIN@
 #define @PREFIX_UPPER@_K_MAX @K_MAX@
 #define @PREFIX_UPPER@_PSI_MAX @PSI_MAX@
 #define @PREFIX_UPPER@_MAX_STEPS @MAX_STEPS@
 #define @PREFIX_UPPER@_CERT_TOL @CERT_TOL@
+#endif
 
 #endif /* @PREFIX_UPPER@_H */
