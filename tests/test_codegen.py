@@ -540,6 +540,7 @@ def test_cli_codegen(tmp_path, capsys):
     with pytest.raises(SystemExit, match="2"):
         main(["codegen", "--out", str(tmp_path / "d"), "--k-max", "nan"])
     assert main(["codegen", "--out", str(tmp_path / "d"), "--prefix", "9x"]) == 2
+    assert main(["codegen", "--out", str(tmp_path / "d"), "--prefix", "rollplan_planner"]) == 2
     assert not (tmp_path / "d").exists()   # a refused run leaves no empty folder behind
     assert main(["codegen", "--out", str(tmp_path / "no" / "such")]) == 2
     assert "not allowed" in capsys.readouterr().err
@@ -552,6 +553,38 @@ def _codegen(*argv):
 
 def _contents(folder):
     return {p.relative_to(folder).as_posix(): (p.read_bytes() if p.is_file() else None) for p in folder.rglob("*")}
+
+
+def _package_csrc():
+    """``{file name: bytes}`` of the C sources of the installed package (``rollplan/csrc``)."""
+    from importlib.resources import files
+
+    folder = files("rollplan") / "csrc"
+    return {f.name: f.read_bytes() for f in folder.iterdir() if f.name.endswith((".c", ".h"))}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("argv", [(), ("--real", "float"), ("--prefix", "rp_2", "--k-max", "2.5")])
+def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv):
+    """One copy of the C search: the files that `rollplan codegen` writes for it are byte for byte the files of the
+    installed package, for a double and a float build and another prefix (what varies by generation is in the
+    generated rollplan_config.h, which has no template token left); the build compiles them as they are."""
+    package = _package_csrc()
+    assert {"rollplan_planner.c", "rollplan_planner.h"} <= set(package)
+    out = tmp_path / "c"
+    r = _codegen("--out", str(out), *argv)
+    assert r.returncode == 0, r.stderr
+    for name, data in package.items():
+        assert (out / name).read_bytes() == data, name
+        assert b"@" not in re.sub(rb"/\*.*?\*/", b"", data, flags=re.S), name   # no template token in the code
+    config = (out / "rollplan_config.h").read_text()
+    prefix = argv[argv.index("--prefix") + 1] if "--prefix" in argv else "rollplan"
+    assert f"#define RP_NAME(x) {prefix}_##x" in config and "@" not in config
+    run = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], capture_output=True, text=True,
+                         check=False)
+    assert run.returncode == 0 and len(run.stdout.split()) == 6, run.stderr
 
 
 @pytest.mark.slow

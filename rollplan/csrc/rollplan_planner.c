@@ -1,4 +1,5 @@
-/* <prefix>_planner.c -- the planner of rollplan.planners.geometric in C (hand-written glue).
+/* rollplan_planner.c -- the planner of rollplan.planners.geometric in C (a static source of the package,
+ * rollplan/csrc/; what varies by generation comes from rollplan_config.h, see rollplan_planner.h).
  *
  * The ODE of the certificate is in <prefix>_model.c, generated from rollplan's symbolic model. The planner
  * solves the problem of rollplan.planners.geometric and makes the same choice (the shortest certified plan),
