@@ -59,10 +59,9 @@ from scipy.optimize import least_squares
 import rollplan
 from rollplan import Problem
 from rollplan.core.curves import A_MAX
-from rollplan.core.plane import wrap
+from rollplan.core.plane import target_shift, wrap
 from rollplan.io import write_atomic, write_json
 from rollplan.planners import geometric
-from rollplan.planners.geometric.brackets import target_shift
 
 import bench_batch
 import bench_codegen

@@ -1,42 +1,37 @@
-"""The search of the generated C planner, called from Python: the shortest root of (32)-(33) in C.
+"""The C search, called from Python: the shortest root of (32)-(33) in C.
 
-The C planner that :mod:`rollplan.codegen` writes (``c_templates/planner.c``, ``1/2 <= k <= k_max``, 5 by
-default) enumerates the roots on one graph per branch over the smaller leaf radius and runs the bounded search
-of :meth:`.GeometricPhasePlanner._solve_enumerated`; the numpy search (:mod:`.enumerate`) uses other graphs, so
+The C planner (the static sources ``rollplan/csrc/rollplan_planner.c`` and ``.h`` with the generated model
+functions and ``rollplan_config.h`` of :mod:`.c_sources`; ``1/2 <= k <= k_max``, 5 here) enumerates the roots on
+one graph per branch over the smaller leaf radius and runs the bounded search of
+:meth:`.GeometricPhasePlanner._solve_enumerated`; the numpy search (:mod:`.enumerate`) uses other graphs, so
 the two are different algorithms, complete by the same argument and checked to choose the same plan.
 :func:`shortest_root` returns its shortest root uncertified, and :func:`all_roots` every root of every branch
 (``<prefix>_plan_all``), for the Python planner to polish and certify; :func:`library` is None without a C
 compiler (or with ``ROLLPLAN_NO_COMPILE=1``), and the numpy search serves.
 
-How it is built, loaded and called: docs/design/c-planner.md.
-"""
+How it is built, loaded and called: docs/design/c-planner.md."""
 
 from __future__ import annotations
 
 import ctypes
 import math
-import sys
 import threading
 from functools import lru_cache
-from pathlib import Path
 from typing import NamedTuple
 
 from ...core.compiled import shared_library
+from .c_sources import DEFAULT_K_MAX, generator_files, sources
 from .enumerate import K_MONOTONE
 
 __all__ = ["PREFIX", "DEFAULT_K_MAX", "SearchResult", "library", "shortest_root", "all_roots"]
 
 #: Prefix of the generated C symbols (the code generator's default).
 PREFIX = "rollplan"
-#: Largest k of the generated C planner unless told otherwise (``rollplan codegen --k-max``): the library of
-#: this search is generated with it, so it serves ``K_MONOTONE <= k <= DEFAULT_K_MAX``.
-DEFAULT_K_MAX = 5.0
 #: Status codes of the generated planner (``<prefix>.h``).
 OK, BAD_INPUT, NO_PLAN, NO_CONVERGENCE, NOT_CERTIFIED, TOO_MANY = 0, 2, 3, 4, 5, 6
 #: Roots asked of ``<prefix>_plan_all`` at first (asked again with room for all if there are more).
 _FIRST_CAPACITY = 4096
 
-_PACKAGE = Path(__file__).resolve().parents[2]
 _lock = threading.Lock()
 
 
@@ -66,12 +61,6 @@ class SearchResult(NamedTuple):
     roots: int
 
 
-def _sources() -> list:
-    """The files whose contents define the generated library: every module of rollplan and the C templates."""
-    files = sorted(_PACKAGE.rglob("*.py")) + sorted((_PACKAGE / "codegen" / "c_templates").iterdir())
-    return [f for f in files if f.is_file()]
-
-
 class _Library(NamedTuple):
     """The entry points of the compiled C planner (ctypes)."""
 
@@ -96,12 +85,8 @@ def _load(path: str):
 def library():
     """``<prefix>_plan_with`` and ``<prefix>_plan_all`` of the compiled C planner (ctypes), built on first use;
     None without it."""
-    # the generator runs in a subprocess (and imports this rollplan, not another one on the path), in the build's
-    # own new folder, which holds the build's log too
-    script = (f"import sys; sys.path.insert(0, {str(_PACKAGE.parent)!r}); "
-              "from rollplan.codegen import generate; generate('.', overwrite=True)")
-    return shared_library("c_planner_search", f"prefix={PREFIX}", _sources(), [sys.executable, "-c", script],
-                          [f"{PREFIX}_model.c", f"{PREFIX}_planner.c"], _load, "the numpy search")
+    return shared_library("c_planner_search", lambda: sources(PREFIX), _load, "the numpy search",
+                          memo=generator_files())
 
 
 def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):

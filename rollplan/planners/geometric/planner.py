@@ -27,7 +27,7 @@ from ...core import model
 from ...core.curves import A_MAX, figure_eight, rotated_point
 from ...core.integrate import DEFAULT_NODES, spectral_step
 from ...core.paths import figure_eight_pieces
-from ...core.plane import n_step_sum, wrap, wrap_exact
+from ...core.plane import n_step_sum, target_shift, wrap, wrap_exact
 from ...errors import (
     InputError,
     NoPlanError,
@@ -50,12 +50,10 @@ from ...result import (
 )
 from ...robot import Robot
 from ..method import Method, renamed_option
-from .brackets import find_brackets, target_shift
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
 from .compiled_search import all_roots, shortest_root
 from .enumerate import NOT_A_ROOT, branches, roots
 from .leafmap import panels_for, step_values
-from .leaves import LeafTables
 from .refine import SOLVERS, leaf_step, polisher, step_residual
 
 __all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
@@ -213,8 +211,8 @@ class GeometricPhasePlanner(Method):
     (:func:`.enumerate.rho_table`); the compiled shooting residual and its solver
     (:func:`.refine.polisher`, per panel count of the leaf map), the certifier's compiled
     integration and the C search (:mod:`.compiled_search`) are built or loaded from the disk cache
-    on first use. The spectral step map, its residual and the leaf tables of the bracketing
-    (:meth:`brackets`) are not used by :meth:`solve`; they serve the atlas and the benchmarks.
+    on first use. The spectral step map and its residual are not used by :meth:`solve`; they serve the
+    atlas and the benchmarks.
 
     Parameters
     ----------
@@ -265,19 +263,15 @@ class GeometricPhasePlanner(Method):
         """The CVODES integration that samples plans (:meth:`sample`)."""
         return self.certifier if isinstance(self.certifier, CvodesCertifier) else CvodesCertifier()
 
-    # -- the spectral step map and the bracketing (atlas, benchmarks; not used by solve) ----
+    # -- the spectral step map (atlas, benchmarks; not used by solve) --------------------
     @cached_property
     def step_map(self) -> ca.Function:
-        """The spectral step map of :mod:`rollplan.core.integrate` (the atlas and the bracketing)."""
+        """The spectral step map of :mod:`rollplan.core.integrate` (the atlas)."""
         return spectral_step(self.curve, self.nodes)
 
     @cached_property
     def residual(self) -> ca.Function:
         return step_residual(self.step_map)
-
-    @cached_property
-    def tables(self) -> LeafTables:
-        return LeafTables()
 
     # -- step map ------------------------------------------------------------------
     def step(self, a: float, b: float | None = None, *, k: float, gamma: float = 0.0) -> StepResult:
@@ -289,13 +283,6 @@ class GeometricPhasePlanner(Method):
         shift, eta = step_values(a, b, k, gamma)
         z = complex(shift[0])
         return StepResult(a, b, k, gamma, np.array([z.real, z.imag]), abs(z), float(eta[0]), math.atan2(z.imag, z.real))
-
-    def brackets(self, k: float, h_des: float, psi: float, steps: int, fine: bool = False) -> np.ndarray:
-        """Cells bracketing roots of (32)-(33) for a shift h_des [R], psi in (-pi, pi].
-
-        See :func:`.brackets.find_brackets`.
-        """
-        return find_brackets(self.tables.cells(k, fine), h_des, psi, steps)
 
     # -- solve -----------------------------------------------------------------------
     def solve(self, problem: Problem, all_solutions: bool | None = None, branch: int | None = None) -> Plan:
