@@ -60,7 +60,12 @@ class Method:
 
     def _with(self, **options) -> Method:
         """A shallow copy with some per-solve options changed (for the positional per-call arguments that
-        :meth:`solve` of some methods still accepts)."""
+        :meth:`solve` of some methods still accepts); ``self`` when nothing changes."""
+        def same(old, new) -> bool:
+            return old is new or (isinstance(new, (bool, int, float, str)) and type(old) is type(new) and old == new)
+
+        if all(same(getattr(self, name), value) for name, value in options.items()):
+            return self
         other = copy.copy(self)
         for name, value in options.items():
             setattr(other, name, value)
