@@ -43,7 +43,7 @@ from ..planners.geometric import GeometricPhasePlanner, leafmap
 from ..planners.geometric import enumerate as enumerate_
 from ..planners.geometric.compiled_search import DEFAULT_K_MAX
 from ..planners.geometric.enumerate import K_MONOTONE
-from ..problem import K_MAX, MAX_STEPS, Problem
+from ..problem import K_MAX, K_MIN, MAX_STEPS, Problem
 from ..result import CERTIFICATE_TOLERANCE
 
 __all__ = [
@@ -505,7 +505,7 @@ def _enumeration_constants(k_max: float) -> dict:
     # the table's radii (enumerate.table_radii): their number grows with k for k >= 1/2 (E is monotone, its
     # steps grow with k); the cell of the last radius is one more
     ntable = 1 + max(enumerate_.table_radii(kk, enumerate_.TABLE_STEP, enumerate_.TABLE_PHASE,
-                                            enumerate_.TABLE_INV_S).size for kk in (K_MONOTONE, k_max))
+                                            enumerate_.TABLE_INV_S).size for kk in (K_MIN, K_MONOTONE, k_max))
     if ntable >= 2 ** 16:
         raise ValueError(f"the rho table at k_max = {k_max:g} needs {ntable} radii: its buckets hold 16-bit indices")
     return {
@@ -518,6 +518,8 @@ def _enumeration_constants(k_max: float) -> dict:
         "@MAX_PANELS@": str(buckets[-1][1]),
         "@PHASE_STEP@": repr(enumerate_.PHASE_STEP),
         "@X_STEP@": repr(enumerate_.X_STEP),
+        "@SIGMA_STEP@": repr(enumerate_.SIGMA_STEP),
+        "@K_MONOTONE@": repr(float(enumerate_.K_MONOTONE)),
         "@HERMITE_REL@": repr(enumerate_.HERMITE_REL),
         "@POLISH_STEP@": repr(enumerate_.POLISH_STEP),
         "@POLISH_BRACKET@": repr(enumerate_.POLISH_BRACKET),
@@ -599,7 +601,7 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
         "@SZ_IW@": str(max(sizes["sz_iw"], 1)),
         "@SZ_W@": str(max(sizes["sz_w"], 1)),
         "@A_MAX@": repr(float(A_MAX)),
-        "@K_MIN@": repr(float(K_MONOTONE)),
+        "@K_MIN@": repr(float(K_MIN)),
         "@PSI_MAX@": repr(PSI_MAX),
         **_two_pi_parts(),
         **_enumeration_constants(k_max),

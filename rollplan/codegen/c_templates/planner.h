@@ -64,9 +64,9 @@ extern "C" {
 
 /* Largest admissible leaf radius [R] (the equator of the body frame is singular). */
 #define @PREFIX_UPPER@_A_MAX @A_MAX@
-/* Smallest inertia ratio k accepted: the turn E(r, k) of a leaf is strictly decreasing in r for k >= 1/2,
- * which this code's enumeration (one graph per branch over the smaller leaf radius) relies on; below it this
- * code refuses (rollplan's Python planner enumerates every k, on graphs over the monotone pieces of E). */
+/* Smallest inertia ratio k accepted (k = 0 is pure rolling): the enumeration runs on one graph per branch over the
+ * smaller leaf radius for k >= 1/2, where the turn E(r, k) of a leaf is strictly decreasing in r, and on graphs over
+ * the monotone pieces of E below. */
 #define @PREFIX_UPPER@_K_MIN @K_MIN@
 /* Largest inertia ratio k accepted (`rollplan codegen --k-max`): the leaf map's Gauss rule is accurate up to
  * rollplan's K_MAX, the step map @PREFIX@_step_jac to 1e-10 up to this k, and the rho table is sized for it. */

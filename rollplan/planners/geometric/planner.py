@@ -279,6 +279,8 @@ class GeometricPhasePlanner:
         found = shortest_root(target[0], target[1], target[2], steps, k, branch)
         if found is None:
             return None
+        if math.isnan(found.a):   # the complete search found no root
+            raise _no_root(problem, f"{found.branches} branches searched completely")
         eta = (target[2] + 2.0 * math.pi * found.m) / steps
         h = float(target_shift(math.hypot(target[0], target[1]), eta, steps))
         x, status, iters = self._polish(_Root(found.a, found.b, 0.0, found.m, h, eta), k)
@@ -297,8 +299,10 @@ class GeometricPhasePlanner:
         None when the C search gives no list or no root of it certifies (the numpy search then decides)."""
         k, steps = problem.k, problem.steps
         listed = all_roots(target[0], target[1], target[2], steps, k, branch)
-        if not listed:
+        if listed is None:
             return None
+        if not listed:   # the complete search found no root
+            raise _no_root(problem, "the complete search found none")
         found = []
         label = f"certify (k = {k:g}, {len(listed)} roots)"
         for i, r in enumerate(listed):
@@ -380,8 +384,7 @@ class GeometricPhasePlanner:
         elapsed = time.perf_counter() - t_start
         if not found:
             self._raise_if_rejected(where, rejected)
-            raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R "
-                              f"({len(brs)} branches searched completely); try more steps")
+            raise _no_root(problem, f"{len(brs)} branches searched completely")
         found.sort(key=lambda c: c[0].a + c[0].b)
         details = {"candidates": tried, "solves": len(found), "branches": visited, "roots": tried, "search": "numpy"}
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
@@ -442,6 +445,12 @@ class GeometricPhasePlanner:
         start = np.zeros((1, 5))
         return Trajectory(np.concatenate([[0.0], theta]), np.vstack([start, state]),
                           np.concatenate([[0], segment]).astype(int), p.radius, "theta")
+
+
+def _no_root(problem: Problem, how: str) -> NoPlanError:
+    """The error of a complete search without a root of (32)-(33); ``how`` says what was searched."""
+    return NoPlanError(f"no plan for {problem.describe()}: no branch of (32)-(33) has a root with 0 < a, b <= "
+                       f"{A_MAX} R ({how}); try more steps")
 
 
 @lru_cache(maxsize=1)
