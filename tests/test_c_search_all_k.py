@@ -24,12 +24,11 @@ def _gamma_tol(a, b):
     return 1e-12 * (1.0 + (1.0 - 2.0 * r * r) ** -1.5)
 
 
-def _require_library(k):
-    """Skip without a C compiler; with one, the library serving k must build (a failed build fails the test)."""
+def _require_library():
+    """Skip without a C compiler; with one, the compiled search must build (a failed build fails the test)."""
     if compiled.compiler_command() is None:
         pytest.skip("no C compiler: the compiled search is not built")
-    k_max = next(km for km in compiled_search.K_RANGES if k <= km)
-    assert compiled_search.library(k_max) is not None, compiled.last_build()
+    assert compiled_search.library() is not None, compiled.last_build()
 
 
 def _targets(seed, ks, count, steps=None):
@@ -93,20 +92,19 @@ def _check_same_lists(seed, ks, count, fixed_steps=None):
 
 def test_same_plan_as_the_numpy_search_below_one_half():
     """k in [0.1, 1/2) (E not monotone or increasing: the C sigma graphs)."""
-    _require_library(0.3)
+    _require_library()
     assert _check_same_plans(31, lambda rng: rng.uniform(0.1, 0.5), 16) >= 4
 
 
 def test_same_lists_as_the_numpy_search_below_one_half():
-    _require_library(0.3)
+    _require_library()
     assert _check_same_lists(32, lambda rng: rng.uniform(0.1, 0.5), 6) >= 2
 
 
 @pytest.mark.slow
 def test_same_plan_as_the_numpy_search_for_every_k():
-    """k log-uniform in [0.1, 30], both sides of 1/2 and of the two libraries' ranges (k <= 5, k <= K_MAX)."""
-    _require_library(0.3)
-    _require_library(30.0)
+    """k log-uniform in [0.1, 30]: both graphs of the C search (sigma graphs below 1/2, the graph over x above)."""
+    _require_library()
     ks = lambda rng: math.exp(rng.uniform(math.log(0.1), math.log(30.0)))   # noqa: E731
     assert _check_same_plans(33, ks, 16) >= 8
     assert _check_same_lists(34, ks, 4, fixed_steps=1) >= 2
@@ -117,7 +115,7 @@ def test_c_roots_against_the_2d_brute_force(k):
     """Every root of the C search (rollplan_plan_all, uncertified) is one of the brute force's and none is missed;
     the shortest root (rollplan_plan_with) is the brute force's shortest. Targets with psi = 0 have the branch
     eta = 0 (a = b, and a != b with E(a) = E(b) where E is not monotone)."""
-    _require_library(k)
+    _require_library()
     rng = np.random.default_rng(int(k * 1000) + 41)
     targets = [((0.3, 0.2, 0.0), 1), ((0.05, -0.1, 0.0), 2)]
     targets += [((rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-np.pi, np.pi)), int(rng.integers(1, 4)))

@@ -430,7 +430,7 @@ def test_plan_all_capacity_and_bad_arguments(built):
 
 def test_search_falls_back_to_certifying_every_root(built, tmp_path):
     """The search's fallback: when the shortest root fails its certificate, the search runs again certifying every
-    root, so the plan is the shortest certified one. A test build (planner.c with ROLLPLAN_TEST_REJECT_BELOW = L,
+    root, so the plan is the shortest certified one. A test build (planner.c with RP_TEST_REJECT_BELOW = L,
     linked with the fixture's objects) rejects every plan with a + b < L: for L just above the shortest plan it
     returns the shortest of the Python planner's certified plans with a + b >= L; for L beyond every plan it
     reports the best rejected root with status NOT_CERTIFIED."""
@@ -442,7 +442,7 @@ def test_search_falls_back_to_certifying_every_root(built, tmp_path):
     out = built.out
     for limit, exe in ((cut, "fallback"), (100.0, "reject_all")):
         subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror",
-                        f"-DROLLPLAN_TEST_REJECT_BELOW={limit!r}",
+                        f"-DRP_TEST_REJECT_BELOW={limit!r}",
                         "-I", str(out), "-o", str(tmp_path / exe), str(out / "plan_demo.o"),
                         str(out / "rollplan_planner.c"), str(out / "rollplan_model.o"), "-lm"], check=True)
     run = subprocess.run([str(tmp_path / "fallback"), *map(str, target)], capture_output=True, text=True, check=False)
@@ -466,7 +466,7 @@ def test_close_pair_hidden_by_the_table_is_split_in_c(built, tmp_path):
     first = brentq(_g, res.x - 1e-6, res.x, args=(eta, h, k), xtol=1e-16, rtol=1e-15)
     out = built.out
     limit = first + float(_b_of(np.array([first]), eta, k)[0]) - 1e-6
-    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", f"-DROLLPLAN_TEST_REJECT_BELOW={limit!r}",
+    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", f"-DRP_TEST_REJECT_BELOW={limit!r}",
                     "-I", str(out), "-o", str(tmp_path / "pair"), str(out / "plan_demo.o"),
                     str(out / "rollplan_planner.c"), str(out / "rollplan_model.o"), "-lm"], check=True)
     run = subprocess.run([str(tmp_path / "pair"), repr(h), "0", repr(eta), "1", repr(k), "0"], capture_output=True,
@@ -540,6 +540,7 @@ def test_cli_codegen(tmp_path, capsys):
     with pytest.raises(SystemExit, match="2"):
         main(["codegen", "--out", str(tmp_path / "d"), "--k-max", "nan"])
     assert main(["codegen", "--out", str(tmp_path / "d"), "--prefix", "9x"]) == 2
+    assert main(["codegen", "--out", str(tmp_path / "d"), "--prefix", "rollplan_planner"]) == 2
     assert not (tmp_path / "d").exists()   # a refused run leaves no empty folder behind
     assert main(["codegen", "--out", str(tmp_path / "no" / "such")]) == 2
     assert "not allowed" in capsys.readouterr().err
@@ -552,6 +553,38 @@ def _codegen(*argv):
 
 def _contents(folder):
     return {p.relative_to(folder).as_posix(): (p.read_bytes() if p.is_file() else None) for p in folder.rglob("*")}
+
+
+def _package_csrc():
+    """``{file name: bytes}`` of the C sources of the installed package (``rollplan/csrc``)."""
+    from importlib.resources import files
+
+    folder = files("rollplan") / "csrc"
+    return {f.name: f.read_bytes() for f in folder.iterdir() if f.name.endswith((".c", ".h"))}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("argv", [(), ("--real", "float"), ("--prefix", "rp_2", "--k-max", "2.5")])
+def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv):
+    """One copy of the C search: the files that `rollplan codegen` writes for it are byte for byte the files of the
+    installed package, for a double and a float build and another prefix (what varies by generation is in the
+    generated rollplan_config.h, which has no template token left); the build compiles them as they are."""
+    package = _package_csrc()
+    assert {"rollplan_planner.c", "rollplan_planner.h"} <= set(package)
+    out = tmp_path / "c"
+    r = _codegen("--out", str(out), *argv)
+    assert r.returncode == 0, r.stderr
+    for name, data in package.items():
+        assert (out / name).read_bytes() == data, name
+        assert b"@" not in re.sub(rb"/\*.*?\*/", b"", data, flags=re.S), name   # no template token in the code
+    config = (out / "rollplan_config.h").read_text()
+    prefix = argv[argv.index("--prefix") + 1] if "--prefix" in argv else "rollplan"
+    assert f"#define RP_NAME(x) {prefix}_##x" in config and "@" not in config
+    run = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], capture_output=True, text=True,
+                         check=False)
+    assert run.returncode == 0 and len(run.stdout.split()) == 6, run.stderr
 
 
 @pytest.mark.slow

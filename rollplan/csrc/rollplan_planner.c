@@ -1,11 +1,13 @@
-/* <prefix>_planner.c -- the planner of rollplan.planners.geometric in C (hand-written glue).
+/* rollplan_planner.c -- the planner of rollplan.planners.geometric in C (a static source of the package,
+ * rollplan/csrc/; what varies by generation comes from rollplan_config.h, see rollplan_planner.h).
  *
  * The ODE of the certificate is in <prefix>_model.c, generated from rollplan's symbolic model. The planner
- * solves the problem of rollplan.planners.geometric and makes the same choice (the shortest certified plan),
- * but its enumeration is its own: one graph per branch over the smaller leaf radius x, with the rho table
- * interpolated in r, for 1/2 <= k <= K_MAX; the numpy search (enumerate.py) uses sigma graphs for k < 0.6 and
- * root-phase (w) graphs above (docs/design/c-planner.md, docs/design/enumeration.md). Each formula is written
- * once, here, with the Python function it ports where there is one:
+ * solves the problem of rollplan.planners.geometric and makes the same choice (the shortest certified plan) for
+ * every k in [K_MIN, K_MAX]: the roots are enumerated on one graph per branch over the smaller leaf radius x for
+ * k >= 1/2 (E decreasing), and on the sigma graphs of enumerate.py (one per branch and rectangle of monotone
+ * pieces of E) below, with the rho table interpolated in r (docs/design/c-planner.md,
+ * docs/design/enumeration.md). Each formula is written once, here, with the Python function it ports where
+ * there is one:
  *   leafmap.turn / turn_dr / turn_inverse   closed-form turn E(r, k) of a leaf and its inverse
  *   leafmap.displacement / signed_length    the leaf's displacement d(r, k) by the Gauss rule in chi (the
  *                                           nodes chi < pi; the others by the symmetry chi -> 2 pi - chi),
@@ -13,9 +15,12 @@
  *   enumerate.branches                      branches m of (32) (make_branch)
  *   (no Python counterpart)                 the graph over x: y(x) = E^-1(E(x) - e) (other) and the scalar
  *                                           equation g(x) of (33) on it (branch_values)
+ *   enumerate._SigmaGraphs, leafmap.turn_pieces
+ *                                           the sigma graphs (sigma_graphs, sigma_radii, sigma_values)
  *   enumerate.rho_table / rho_lookup        rho tabulated once per k (cubic Hermite in r)
  *   enumerate.roots (_cells, _critical, _examine, _bracketed, _tangencies, _outward, _polish)
- *                                           every root on a branch (search_branch and the functions it calls)
+ *                                           every root on a branch (search_branch, search_sigma, sweep and the
+ *                                           functions they call)
  *   planner._solve_enumerated               the bounded search for the shortest certified plan
  *   planner._certified                      gamma from the geometry
  * Static memory only; not reentrant (one static work area and the table of the last k). */

@@ -1,45 +1,37 @@
-"""The search of the generated C planner, called from Python: the shortest root of (32)-(33) in C.
+"""The C search, called from Python: the shortest root of (32)-(33) in C.
 
-The C planner that :mod:`rollplan.codegen` writes (``c_templates/planner.c``, ``0 <= k <= k_max``) enumerates
-the roots on one graph per branch over the smaller leaf radius for ``k >= 1/2`` and on the sigma graphs of
-:mod:`.enumerate` below, and runs the bounded search of :meth:`.GeometricPhasePlanner._solve_enumerated`.
-:func:`shortest_root` returns its shortest root uncertified, and :func:`all_roots` every root of every branch
-(``<prefix>_plan_all``), for the Python planner to polish and certify. Two libraries serve every accepted k
-(:data:`K_RANGES`: ``k <= 5``, and ``k <= K_MAX`` with the larger tables and step map that needs), each built on
-first use; :func:`library` is None without a C compiler (or with ``ROLLPLAN_NO_COMPILE=1``), and the numpy
-search serves.
+The C planner (the static sources ``rollplan/csrc/rollplan_planner.c`` and ``.h`` with the generated model
+functions and ``rollplan_config.h`` of :mod:`.c_sources`; built here for ``K_MIN <= k <= K_MAX``, every k the
+planner accepts) enumerates the roots on one graph per branch over the smaller leaf radius for ``k >= 1/2`` and on
+the sigma graphs of :mod:`.enumerate` below, and runs the bounded search of
+:meth:`.GeometricPhasePlanner._solve_enumerated`. :func:`shortest_root` returns its shortest root uncertified,
+and :func:`all_roots` every root of every branch (``<prefix>_plan_all``), for the Python planner to polish and
+certify; :func:`library` is None without a C compiler (or with ``ROLLPLAN_NO_COMPILE=1``), and the numpy search
+serves.
 
-How it is built, loaded and called: docs/design/c-planner.md.
-"""
+How it is built, loaded and called: docs/design/c-planner.md."""
 
 from __future__ import annotations
 
 import ctypes
 import math
-import sys
 import threading
-from functools import cache
-from pathlib import Path
+from functools import lru_cache
 from typing import NamedTuple
 
 from ...core.compiled import shared_library
 from ...problem import K_MAX, K_MIN
+from .c_sources import DEFAULT_K_MAX, generator_files, sources
 
-__all__ = ["PREFIX", "DEFAULT_K_MAX", "K_RANGES", "SearchResult", "library", "shortest_root", "all_roots"]
+__all__ = ["PREFIX", "DEFAULT_K_MAX", "SearchResult", "library", "shortest_root", "all_roots"]
 
 #: Prefix of the generated C symbols (the code generator's default).
 PREFIX = "rollplan"
-#: Largest k of the generated C planner unless told otherwise (``rollplan codegen --k-max``).
-DEFAULT_K_MAX = 5.0
-#: The k_max of the libraries of this search: a k is served by the first that covers it (its tables, sized for
-#: k_max, and, for k_max > 5, the larger step map it is generated with make it slower to build).
-K_RANGES = (DEFAULT_K_MAX, K_MAX)
 #: Status codes of the generated planner (``<prefix>.h``).
 OK, BAD_INPUT, NO_PLAN, NO_CONVERGENCE, NOT_CERTIFIED, TOO_MANY = 0, 2, 3, 4, 5, 6
 #: Roots asked of ``<prefix>_plan_all`` at first (asked again with room for all if there are more).
 _FIRST_CAPACITY = 4096
 
-_PACKAGE = Path(__file__).resolve().parents[2]
 _lock = threading.Lock()
 
 
@@ -69,12 +61,6 @@ class SearchResult(NamedTuple):
     roots: int
 
 
-def _sources() -> list:
-    """The files whose contents define the generated library: every module of rollplan and the C templates."""
-    files = sorted(_PACKAGE.rglob("*.py")) + sorted((_PACKAGE / "codegen" / "c_templates").iterdir())
-    return [f for f in files if f.is_file()]
-
-
 class _Library(NamedTuple):
     """The entry points of the compiled C planner (ctypes)."""
 
@@ -95,32 +81,21 @@ def _load(path: str):
     return _Library(plan_with, plan_all)
 
 
-@cache
-def library(k_max: float = DEFAULT_K_MAX):
-    """``<prefix>_plan_with`` and ``<prefix>_plan_all`` of the compiled C planner generated for ``k_max`` (one of
-    :data:`K_RANGES`; ctypes), built on first use; None without it."""
-    # the generator runs in a subprocess (and imports this rollplan, not another one on the path), in the build's
-    # own new folder, which holds the build's log too
-    size = "" if k_max == DEFAULT_K_MAX else ", steps_per_leaf='auto'"
-    script = (f"import sys; sys.path.insert(0, {str(_PACKAGE.parent)!r}); "
-              f"from rollplan.codegen import generate; generate('.', overwrite=True, k_max={k_max!r}{size})")
-    return shared_library("c_planner_search", f"prefix={PREFIX} k_max={k_max!r}", _sources(),
-                          [sys.executable, "-c", script], [f"{PREFIX}_model.c", f"{PREFIX}_planner.c"], _load,
-                          "the numpy search")
-
-
-def _library_for(k: float):
-    """The library that serves k (None for a k outside [K_MIN, K_MAX] or without a compiler)."""
-    k_max = next((km for km in K_RANGES if K_MIN <= k <= km), None)
-    return None if k_max is None else library(k_max)
+@lru_cache(maxsize=1)
+def library():
+    """``<prefix>_plan_with`` and ``<prefix>_plan_all`` of the compiled C planner (ctypes), built on first use;
+    None without it. Its tables are sized for every k the planner accepts (``k_max = K_MAX``); its step map
+    ``<prefix>_step_eval``, which the search does not use, has the default size (accurate up to k = 5)."""
+    return shared_library("c_planner_search", lambda: sources(PREFIX, k_max=K_MAX), _load, "the numpy search",
+                          memo=generator_files())
 
 
 def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
     """The shortest root of (32)-(33) for the target ``(u, v, psi)`` [R, rad] in ``steps`` figure eights at
     inertia ratio k, over all branches or on ``branch`` only (m relative to psi), by the compiled C search,
     uncertified; a result with ``a`` and ``b`` NaN when the (complete) search found no root. None when the library
-    is missing or the search is incomplete: the caller then runs the numpy search."""
-    lib = _library_for(k)
+    is missing, k is outside [K_MIN, K_MAX] or the search is incomplete: the caller then runs the numpy search."""
+    lib = library() if K_MIN <= k <= K_MAX else None
     if lib is None or (branch is not None and abs(branch) > 2**31 - 1):
         return None
     options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
@@ -138,9 +113,9 @@ def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: 
 def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
     """Every root of (32)-(33) on every branch (or on ``branch`` only), shortest (a + b) first, by the compiled
     C search (``<prefix>_plan_all``), uncertified: a list of :class:`SearchResult` (empty when there is no root).
-    None when the library is missing or the C search cannot give the list (k outside its range, search
+    None when the library is missing or the C search cannot give the list (k outside [K_MIN, K_MAX], search
     incomplete): the caller then runs the numpy search."""
-    lib = _library_for(k)
+    lib = library() if K_MIN <= k <= K_MAX else None
     if lib is None or (branch is not None and abs(branch) > 2**31 - 1):
         return None
     options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
