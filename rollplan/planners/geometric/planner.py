@@ -3,8 +3,8 @@
 Trace the figure eight (31) rotated by gamma ``n`` times from rest at the origin to ``(u_a, v_a, psi)`` at the
 pole: on each branch m solve ``eta(a, b) = (psi + 2 pi m) / n`` (32) and
 ``h(a, b) = h_des |sin(eta / 2) / sin(n eta / 2)|`` (33) ((34) where ``sin(eta / 2) = 0``), then gamma from
-the geometry. The roots are enumerated completely (:mod:`.enumerate`; for ``1/2 <= k <= k_max`` first by the C
-search, :mod:`.compiled_search`), polished by a solver chosen by name
+the geometry. The roots are enumerated completely (by the C search, :mod:`.compiled_search`; by the numpy
+search of :mod:`.enumerate` without a compiler or after a rejected root), polished by a solver chosen by name
 (:mod:`.refine`) and certified by an independent integration (:mod:`.certify`).
 
 Derivation, the search, the polish and the certificate: docs/design/geometric-planner.md.
@@ -184,8 +184,7 @@ class GeometricPhasePlanner:
         step-doubling error bound) or ``"cvodes"``.
     compiled_search : bool
         Search the shortest (or one branch's) root, or with ``all_solutions`` every root, with the compiled C
-        search where it applies (``1/2 <= k <= k_max``, docs/design/geometric-planner.md); False always runs the
-        numpy search.
+        search (every k, docs/design/geometric-planner.md); False always runs the numpy search.
     """
 
     def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
