@@ -322,13 +322,16 @@ def test_plan_demo_branch_without_plan_agrees_with_python(built, target, branch)
 
 @pytest.mark.slow
 def test_random_targets_same_plan_as_python(built):
-    """Random targets, k in [1/2, K_MAX]: the C planner and the Python planner give the same outcome, and
-    where there is a plan, the same branch and (a, b, gamma) to 1e-8."""
+    """Random targets, k in [1/2, K_MAX] (and a few in [0, 1/2), close to the pole, where there are plans): the C
+    planner and the Python planner give the same outcome, and where there is a plan, the same branch and
+    (a, b, gamma) to 1e-8."""
     rng = np.random.default_rng(11)
     plans = 0
-    for _ in range(30):
+    for i in range(36):
         u, v = rng.uniform(-2, 2, 2)
         psi, n, k = rng.uniform(-4, 4), int(rng.integers(1, 5)), float(rng.uniform(0.5, DEFAULT_K_MAX))
+        if i >= 30:
+            u, v, psi, k = 0.2 * u, 0.2 * v, 0.1 * psi, float(rng.uniform(0.0, 0.5))
         run = demo(built, repr(float(u)), repr(float(v)), repr(float(psi)), n, repr(k))
         q = reference_plan((u, v, psi), n, k)
         assert (run.returncode == 0) == (q is not None), (u, v, psi, n, k, run.stderr)
@@ -381,10 +384,12 @@ def _check_all(built, target, checked=3):
     return count
 
 
-@pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 2, 1.5), (0.0, 1.0, 0.0, 1, 0.5)])
+@pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 2, 1.5), (0.0, 1.0, 0.0, 1, 0.5),
+                                    (0.3, 0.2, 0.5, 2, 0.1), (0.3, 0.2, 0.0, 1, 0.45)])
 def test_plan_demo_all_lists_the_plans_of_python_all(built, target):
     """plan_demo --all (every root on every branch, certified on board) against the numpy search's --all list; the
-    paper's case k = 2.5, h = 1 R has its smallest solution a = b = 0.300429 R first."""
+    paper's case k = 2.5, h = 1 R has its smallest solution a = b = 0.300429 R first; k < 1/2 (sigma graphs of the
+    C search; psi = 0: the branch eta = 0 where E is not monotone)."""
     assert _check_all(built, target) >= 3
     if target == (0.0, 1.0, 0.0, 1, 2.5):
         first = _parse_all(demo(built, "--all", *target))[0][0]
