@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from test_enumerate import _brute_roots_2d, _same_sets
+from test_interrupts import run_and_interrupt
 
 from rollplan import NoPlanError, Problem
 from rollplan.core import compiled
@@ -132,3 +133,15 @@ def test_c_roots_against_the_2d_brute_force(k):
             continue
         shortest = min(a + b for _, a, b in brute)
         assert first.a + first.b == pytest.approx(shortest, abs=1e-9), (target, steps)
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_a_long_c_search_exits_130():
+    """`plan --all --k 99` spends minutes in one call of the C search (every root of 511 branches); a SIGINT during
+    it exits 130 within two seconds (the call runs in a helper thread, the main thread acts on the signal), one
+    line, no traceback."""
+    _require_library()
+    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99", "--all"], 5.0)
+    assert code == 130, err
+    assert elapsed < 2.0
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"

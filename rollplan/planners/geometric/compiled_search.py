@@ -19,6 +19,7 @@ import threading
 from functools import lru_cache
 from typing import NamedTuple
 
+from ... import interrupts
 from ...core.compiled import shared_library
 from ...problem import K_MAX, K_MIN
 from .c_sources import DEFAULT_K_MAX, generator_files, sources
@@ -33,6 +34,10 @@ OK, BAD_INPUT, NO_PLAN, NO_CONVERGENCE, NOT_CERTIFIED, TOO_MANY = 0, 2, 3, 4, 5,
 _FIRST_CAPACITY = 4096
 
 _lock = threading.Lock()
+#: A call of the C search is made directly (not by a helper thread) only when it is short: k the last k the C
+#: planner prepared its table for (its table is kept), at most DEFAULT_K_MAX, and at most this many steps.
+_DIRECT_STEPS = 16
+_last_k = [math.nan]
 
 
 class _Plan(ctypes.Structure):
@@ -86,8 +91,24 @@ def library():
     """``<prefix>_plan_with`` and ``<prefix>_plan_all`` of the compiled C planner (ctypes), built on first use;
     None without it. Its tables are sized for every k the planner accepts (``k_max = K_MAX``); its step map
     ``<prefix>_step_eval``, which the search does not use, has the default size (accurate up to k = 5)."""
-    return shared_library("c_planner_search", lambda: sources(PREFIX, k_max=K_MAX), _load, "the numpy search",
-                          memo=generator_files())
+    # a build (seconds) runs in a helper thread: CasADi's code generation would swallow a Ctrl-C
+    return interrupts.call_in_thread(shared_library, "c_planner_search", lambda: sources(PREFIX, k_max=K_MAX), _load,
+                                     "the numpy search", memo=generator_files())
+
+
+def _call(entry, k: float, direct: bool, *args) -> int:
+    """``entry(*args)`` of the C planner (one call at a time: the planner keeps static state). A call that may be
+    long (a new k builds the rho table: 1.3 s at k = 99; a high k or many steps search many branches; every root)
+    runs in a helper thread (:func:`rollplan.interrupts.call_in_thread`), so that Ctrl-C acts at once; ``direct``
+    allows a direct call where it is short (see :data:`_DIRECT_STEPS`)."""
+    def locked():
+        with _lock:
+            return entry(*args)
+
+    short = direct and k == _last_k[0] and k <= DEFAULT_K_MAX
+    status = locked() if short else interrupts.call_in_thread(locked)
+    _last_k[0] = k
+    return status
 
 
 def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
@@ -100,9 +121,8 @@ def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: 
         return None
     options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
     plan = _Plan()
-    with _lock:
-        status = lib.plan_with(float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options),
-                               ctypes.byref(plan))
+    status = _call(lib.plan_with, k, steps <= _DIRECT_STEPS, float(u), float(v), float(psi), int(steps), float(k),
+                   ctypes.byref(options), ctypes.byref(plan))
     if status == NO_PLAN:
         return SearchResult(math.nan, math.nan, 0, int(plan.branches), int(plan.roots))
     if status != OK or not (math.isfinite(plan.a) and math.isfinite(plan.b)):
@@ -122,9 +142,8 @@ def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int 
     capacity, count = _FIRST_CAPACITY, ctypes.c_int(0)
     while True:
         plans = (_Plan * capacity)()
-        with _lock:
-            status = lib.plan_all(float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options), plans,
-                                  capacity, ctypes.byref(count))
+        status = _call(lib.plan_all, k, False, float(u), float(v), float(psi), int(steps), float(k),
+                       ctypes.byref(options), plans, capacity, ctypes.byref(count))
         if status != TOO_MANY or count.value <= capacity:
             break
         capacity = count.value
