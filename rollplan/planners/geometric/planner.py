@@ -3,8 +3,8 @@
 Trace the figure eight (31) rotated by gamma ``n`` times from rest at the origin to ``(u_a, v_a, psi)`` at the
 pole: on each branch m solve ``eta(a, b) = (psi + 2 pi m) / n`` (32) and
 ``h(a, b) = h_des |sin(eta / 2) / sin(n eta / 2)|`` (33) ((34) where ``sin(eta / 2) = 0``), then gamma from
-the geometry. The roots are enumerated completely (:mod:`.enumerate`; for ``1/2 <= k <= k_max`` first by the C
-search, :mod:`.compiled_search`), polished by a solver chosen by name
+the geometry. The roots are enumerated completely (by the C search, :mod:`.compiled_search`; by the numpy
+search of :mod:`.enumerate` without a compiler or after a rejected root), polished by a solver chosen by name
 (:mod:`.refine`) and certified by an independent integration (:mod:`.certify`).
 
 Derivation, the search, the polish and the certificate: docs/design/geometric-planner.md.
@@ -229,8 +229,7 @@ class GeometricPhasePlanner(Method):
         step-doubling error bound) or ``"cvodes"``.
     compiled_search : bool
         Search the shortest (or one branch's) root, or with ``all_solutions`` every root, with the compiled C
-        search where it applies (``1/2 <= k <= k_max``, docs/design/geometric-planner.md); False always runs the
-        numpy search.
+        search (every k, docs/design/geometric-planner.md); False always runs the numpy search.
     all_solutions : bool
         Also return the other certified branches in ``Plan.alternatives``.
     branch : int or None
@@ -338,6 +337,8 @@ class GeometricPhasePlanner(Method):
         found = shortest_root(target[0], target[1], target[2], steps, k, branch)
         if found is None:
             return None
+        if math.isnan(found.a):   # the complete search found no root
+            raise _no_root(problem, f"{found.branches} branches searched completely")
         eta = (target[2] + 2.0 * math.pi * found.m) / steps
         h = float(target_shift(math.hypot(target[0], target[1]), eta, steps))
         x, status, iters = self._polish(_Root(found.a, found.b, 0.0, found.m, h, eta), k)
@@ -356,8 +357,10 @@ class GeometricPhasePlanner(Method):
         None when the C search gives no list or no root of it certifies (the numpy search then decides)."""
         k, steps = problem.k, problem.steps
         listed = all_roots(target[0], target[1], target[2], steps, k, branch)
-        if not listed:
+        if listed is None:
             return None
+        if not listed:   # the complete search found no root
+            raise _no_root(problem, "the complete search found none")
         found = []
         label = f"certify (k = {k:g}, {len(listed)} roots)"
         for i, r in enumerate(listed):
@@ -439,8 +442,7 @@ class GeometricPhasePlanner(Method):
         elapsed = time.perf_counter() - t_start
         if not found:
             self._raise_if_rejected(where, rejected)
-            raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R "
-                              f"({len(brs)} branches searched completely); try more steps")
+            raise _no_root(problem, f"{len(brs)} branches searched completely")
         found.sort(key=lambda c: c[0].a + c[0].b)
         details = {"candidates": tried, "solves": len(found), "branches": visited, "roots": tried, "search": "numpy"}
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
@@ -502,6 +504,12 @@ class GeometricPhasePlanner(Method):
         start = np.zeros((1, 5))
         return Trajectory(np.concatenate([[0.0], theta]), np.vstack([start, state]),
                           np.concatenate([[0], segment]).astype(int), p.radius, "theta")
+
+
+def _no_root(problem: Problem, how: str) -> NoPlanError:
+    """The error of a complete search without a root of (32)-(33); ``how`` says what was searched."""
+    return NoPlanError(f"no plan for {problem.describe()}: no branch of (32)-(33) has a root with 0 < a, b <= "
+                       f"{A_MAX} R ({how}); try more steps")
 
 
 @lru_cache(maxsize=1)
