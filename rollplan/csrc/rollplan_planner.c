@@ -941,7 +941,7 @@ static int excluded(const branch_t *br, casadi_real x0, casadi_real x1, casadi_r
 static int sgn(casadi_real x) { return (x > RP_R(0.0)) - (x < RP_R(0.0)); }
 
 /* Branch m (enumerate.branches): eta_m = (psi_w + 2 pi m) / n, h_m = h_des / |sin(n eta / 2) / sin(eta / 2)|
- * (h_des / n where |sin(eta / 2)| < 1e-12; brackets.target_shift, core.plane.n_step_gain). Returns 0 if the
+ * (h_des / n where |sin(eta / 2)| < 1e-12; core.plane.target_shift and n_step_gain). Returns 0 if the
  * branch cannot hold a root (|eta_m| > |E(A_MAX)| or h_m unreachable). */
 static int make_branch(long m, casadi_real psi_w, int steps, casadi_real h_des, casadi_real k, branch_t *br) {
     casadi_real eta = (psi_w + TWO_PI * (casadi_real)m) / steps, num, den, gain;
