@@ -136,7 +136,7 @@ def time_plans(out: Path, prefix: str = "rollplan", targets=TARGETS, reps: int =
     (out / "bench.c").write_text(text)
     exe = out / "bench"
     subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(exe), str(out / "bench.c"),
-                    str(out / f"{prefix}_planner.c"), str(out / f"{prefix}_model.c"), "-lm"], check=True,
+                    str(out / "rollplan_planner.c"), str(out / f"{prefix}_model.c"), "-lm"], check=True,
                    capture_output=True)
     lines = subprocess.run([str(exe), str(reps)], check=True, capture_output=True, text=True).stdout.splitlines()
     return [tuple(float(x) for x in line.split()[:4]) + (int(line.split()[4]),) for line in lines]

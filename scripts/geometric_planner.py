@@ -34,9 +34,9 @@ import numpy as np
 
 import rollplan
 from rollplan.core.curves import A_MAX
+from rollplan.core.plane import target_shift
 from rollplan.io import write_atomic, write_json
 from rollplan.planners.geometric import enumerate as en
-from rollplan.planners.geometric.brackets import target_shift
 from rollplan.problem import K_MAX
 
 from benchmark import _median_time, git_commit, machine, scipy_plan, scipy_step  # noqa: E402  (scripts/ is on the path)

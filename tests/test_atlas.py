@@ -94,3 +94,18 @@ def test_cli_atlas(tmp_path):
     assert d["h"][1][3] == pytest.approx(s.h, rel=1e-12)
     assert cli.main(["atlas", "--k", "-2", "--out", str(png)]) == 2
     assert cli.main(["atlas", "--k", "1", "--out", str(tmp_path / "no" / "a.png")]) == 2
+
+
+def test_the_atlas_takes_the_method_geometric_of_the_registry(atlas):
+    """The step map of the registry's method "geometric" (given as a method or as its pole-to-pole planner)
+    is the default's; anything else is one clear line."""
+    from rollplan.planners import METHODS
+
+    method = METHODS["geometric"](nodes=24)
+    for planner in (method, method.planner):
+        other = compute_atlas(2.5, steps=2, resolution=6, planner=planner)
+        assert np.allclose(other.h, atlas.h, rtol=1e-9, atol=1e-12)
+        assert np.allclose(other.eta, atlas.eta, rtol=1e-9, atol=1e-12)
+    with pytest.raises(InputError, match="planner") as err:
+        compute_atlas(2.5, resolution=6, planner="geometric")
+    assert "\n" not in str(err.value)

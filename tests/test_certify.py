@@ -106,3 +106,8 @@ def test_one_certificate_tolerance(generated_c):
     assert inspect.signature(certify.initial_steps).parameters["tol"].default is tol
     header = (generated_c.out / f"{generated_c.prefix}.h").read_text()
     assert f"_CERT_TOL {tol!r}" in header and f"plans are certified to {tol:g}." in header
+    from rollplan.planners.geometric import c_sources
+
+    assert c_sources.CERT_TOL is tol
+    config = (generated_c.out / c_sources.CONFIG_HEADER).read_text()
+    assert f"#define RP_CERT_TOL {tol!r}\n" in config and f"plans are certified to {tol:g}." in config

@@ -322,13 +322,16 @@ def test_plan_demo_branch_without_plan_agrees_with_python(built, target, branch)
 
 @pytest.mark.slow
 def test_random_targets_same_plan_as_python(built):
-    """Random targets, k in [1/2, K_MAX]: the C planner and the Python planner give the same outcome, and
-    where there is a plan, the same branch and (a, b, gamma) to 1e-8."""
+    """Random targets, k in [1/2, K_MAX] (and a few in [0, 1/2), close to the pole, where there are plans): the C
+    planner and the Python planner give the same outcome, and where there is a plan, the same branch and
+    (a, b, gamma) to 1e-8."""
     rng = np.random.default_rng(11)
     plans = 0
-    for _ in range(30):
+    for i in range(36):
         u, v = rng.uniform(-2, 2, 2)
         psi, n, k = rng.uniform(-4, 4), int(rng.integers(1, 5)), float(rng.uniform(0.5, DEFAULT_K_MAX))
+        if i >= 30:
+            u, v, psi, k = 0.2 * u, 0.2 * v, 0.1 * psi, float(rng.uniform(0.0, 0.5))
         run = demo(built, repr(float(u)), repr(float(v)), repr(float(psi)), n, repr(k))
         q = reference_plan((u, v, psi), n, k)
         assert (run.returncode == 0) == (q is not None), (u, v, psi, n, k, run.stderr)
@@ -381,10 +384,12 @@ def _check_all(built, target, checked=3):
     return count
 
 
-@pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 2, 1.5), (0.0, 1.0, 0.0, 1, 0.5)])
+@pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 2, 1.5), (0.0, 1.0, 0.0, 1, 0.5),
+                                    (0.3, 0.2, 0.5, 2, 0.1), (0.3, 0.2, 0.0, 1, 0.45)])
 def test_plan_demo_all_lists_the_plans_of_python_all(built, target):
     """plan_demo --all (every root on every branch, certified on board) against the numpy search's --all list; the
-    paper's case k = 2.5, h = 1 R has its smallest solution a = b = 0.300429 R first."""
+    paper's case k = 2.5, h = 1 R has its smallest solution a = b = 0.300429 R first; k < 1/2 (sigma graphs of the
+    C search; psi = 0: the branch eta = 0 where E is not monotone)."""
     assert _check_all(built, target) >= 3
     if target == (0.0, 1.0, 0.0, 1, 2.5):
         first = _parse_all(demo(built, "--all", *target))[0][0]
@@ -424,13 +429,13 @@ def test_plan_all_capacity_and_bad_arguments(built):
     status, count, part = plan_all(target, 2)
     assert status == 6 and count == total and part == full[:2]
     assert plan_all(target, 2, count=False)[0] == 2 and plan_all(target, -1)[0] == 2
-    assert plan_all((0.0, 0.0, 0.5, 1, 2.5), 4)[0] == 2 and plan_all((0.3, 0.2, 0.5, 1, 0.4), 4)[0] == 2
+    assert plan_all((0.0, 0.0, 0.5, 1, 2.5), 4)[0] == 2 and plan_all((0.3, 0.2, 0.5, 1, -0.1), 4)[0] == 2
     assert plan_all((2.0, 2.0, 0.0, 1, 5.0), 4)[:2] == (3, 0)
 
 
 def test_search_falls_back_to_certifying_every_root(built, tmp_path):
     """The search's fallback: when the shortest root fails its certificate, the search runs again certifying every
-    root, so the plan is the shortest certified one. A test build (planner.c with ROLLPLAN_TEST_REJECT_BELOW = L,
+    root, so the plan is the shortest certified one. A test build (planner.c with RP_TEST_REJECT_BELOW = L,
     linked with the fixture's objects) rejects every plan with a + b < L: for L just above the shortest plan it
     returns the shortest of the Python planner's certified plans with a + b >= L; for L beyond every plan it
     reports the best rejected root with status NOT_CERTIFIED."""
@@ -442,7 +447,7 @@ def test_search_falls_back_to_certifying_every_root(built, tmp_path):
     out = built.out
     for limit, exe in ((cut, "fallback"), (100.0, "reject_all")):
         subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror",
-                        f"-DROLLPLAN_TEST_REJECT_BELOW={limit!r}",
+                        f"-DRP_TEST_REJECT_BELOW={limit!r}",
                         "-I", str(out), "-o", str(tmp_path / exe), str(out / "plan_demo.o"),
                         str(out / "rollplan_planner.c"), str(out / "rollplan_model.o"), "-lm"], check=True)
     run = subprocess.run([str(tmp_path / "fallback"), *map(str, target)], capture_output=True, text=True, check=False)
@@ -466,7 +471,7 @@ def test_close_pair_hidden_by_the_table_is_split_in_c(built, tmp_path):
     first = brentq(_g, res.x - 1e-6, res.x, args=(eta, h, k), xtol=1e-16, rtol=1e-15)
     out = built.out
     limit = first + float(_b_of(np.array([first]), eta, k)[0]) - 1e-6
-    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", f"-DROLLPLAN_TEST_REJECT_BELOW={limit!r}",
+    subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", f"-DRP_TEST_REJECT_BELOW={limit!r}",
                     "-I", str(out), "-o", str(tmp_path / "pair"), str(out / "plan_demo.o"),
                     str(out / "rollplan_planner.c"), str(out / "rollplan_model.o"), "-lm"], check=True)
     run = subprocess.run([str(tmp_path / "pair"), repr(h), "0", repr(eta), "1", repr(k), "0"], capture_output=True,
@@ -489,7 +494,7 @@ def test_plan_demo_reproduces_paper_radius(built):
     (("x", 1, 0, 1, 2.5), 2), ((0, 1, 0, 0, 2.5), 2), ((0, 1, 0, 1.5, 2.5), 2), ((0, 1, 0, 1, -1), 2),
     ((0, 0, 0, 1, 2.5), 2), ((0, 1, 0, 1), 2), ((0, 1, "nan", 1, 2.5), 2),
     ((0, 2, 0, 1, 50), 2), ((0, 1, 0, 1, 5.000001), 2), ((0, 1, 0, 1001, 2.5), 2), ((0, 1, 0, 1, "inf"), 2),
-    ((0, 1, 0, 1, 0.49), 2),        # below K_MIN = 1/2: the complete enumeration does not apply
+    ((0, 1, 0, 1, -0.01), 2),       # below K_MIN = 0
     ((0, 1, 1e7, 1, 2.5), 2), ((0, 1, 0, 1, 2.5, 0.5), 2), (("--all", 0, 1, 0, 1), 2), (("--all", 0, 0, 0, 1, 2.5), 2),
     (("--all", 2, 2, 0, 1, 5), 3),
     ((30, 0, 0, 1, 2.5), 3),        # farther than any figure eight reaches in one step
@@ -504,8 +509,8 @@ def test_plan_demo_reports_bad_input_and_no_plan(built, args, status):
 @pytest.mark.parametrize("args, needle", [
     (("0", "0x10", "0", "1", "2.5"), "usage"),          # hexadecimal is not a decimal number (strtod reads 16)
     (("0", "1", "0", "1", "1e308"), "K = 1e308"),       # beyond K_MAX: bad input, not "no convergence"
-    (("0", "1", "0", "1", "100.5"), f"[0.5, {DEFAULT_K_MAX!r}]"),   # the k range fixed at generation
-    (("0", "1", "0", "1", "0.25"), "below 0.5"), (("0", "1", "2e6", "1", "2.5"), f"at most {PSI_MAX!r}"),
+    (("0", "1", "0", "1", "100.5"), f"[0.0, {DEFAULT_K_MAX!r}]"),   # the k range fixed at generation
+    (("0", "1", "0", "1", "-0.25"), "K = -0.25"), (("0", "1", "2e6", "1", "2.5"), f"at most {PSI_MAX!r}"),
     (("0", "1", "0", "1001", "2.5"), "[1, 1000]"),
     (("0", "1", "0", "1", "inf"), "usage"), ((" 0", "1", "0", "1", "2.5"), "usage"),
     (("0", "1_0", "0", "1", "2.5"), "usage"), (("0", "1e400", "0", "1", "2.5"), "usage"),
@@ -540,6 +545,7 @@ def test_cli_codegen(tmp_path, capsys):
     with pytest.raises(SystemExit, match="2"):
         main(["codegen", "--out", str(tmp_path / "d"), "--k-max", "nan"])
     assert main(["codegen", "--out", str(tmp_path / "d"), "--prefix", "9x"]) == 2
+    assert main(["codegen", "--out", str(tmp_path / "d"), "--prefix", "rollplan_planner"]) == 2
     assert not (tmp_path / "d").exists()   # a refused run leaves no empty folder behind
     assert main(["codegen", "--out", str(tmp_path / "no" / "such")]) == 2
     assert "not allowed" in capsys.readouterr().err
@@ -552,6 +558,38 @@ def _codegen(*argv):
 
 def _contents(folder):
     return {p.relative_to(folder).as_posix(): (p.read_bytes() if p.is_file() else None) for p in folder.rglob("*")}
+
+
+def _package_csrc():
+    """``{file name: bytes}`` of the C sources of the installed package (``rollplan/csrc``)."""
+    from importlib.resources import files
+
+    folder = files("rollplan") / "csrc"
+    return {f.name: f.read_bytes() for f in folder.iterdir() if f.name.endswith((".c", ".h"))}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("argv", [(), ("--real", "float"), ("--prefix", "rp_2", "--k-max", "2.5")])
+def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv):
+    """One copy of the C search: the files that `rollplan codegen` writes for it are byte for byte the files of the
+    installed package, for a double and a float build and another prefix (what varies by generation is in the
+    generated rollplan_config.h, which has no template token left); the build compiles them as they are."""
+    package = _package_csrc()
+    assert {"rollplan_planner.c", "rollplan_planner.h"} <= set(package)
+    out = tmp_path / "c"
+    r = _codegen("--out", str(out), *argv)
+    assert r.returncode == 0, r.stderr
+    for name, data in package.items():
+        assert (out / name).read_bytes() == data, name
+        assert b"@" not in re.sub(rb"/\*.*?\*/", b"", data, flags=re.S), name   # no template token in the code
+    config = (out / "rollplan_config.h").read_text()
+    prefix = argv[argv.index("--prefix") + 1] if "--prefix" in argv else "rollplan"
+    assert f"#define RP_NAME(x) {prefix}_##x" in config and "@" not in config
+    run = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], capture_output=True, text=True,
+                         check=False)
+    assert run.returncode == 0 and len(run.stdout.split()) == 6, run.stderr
 
 
 @pytest.mark.slow
@@ -720,7 +758,7 @@ def _fuzz_inputs(rng, count, many_steps):
         u, v = (rng.choice(special["u"]) if rng.random() < 0.2 else rng.uniform(-3, 3) for _ in range(2))
         psi = rng.choice(special["psi"]) if rng.random() < 0.2 else rng.uniform(-4, 4)
         steps = int(rng.choice(special["steps"])) if rng.random() < 0.2 else int(rng.integers(1, 5))
-        k = rng.choice(special["k"]) if rng.random() < 0.2 else rng.uniform(0.5, DEFAULT_K_MAX)
+        k = rng.choice(special["k"]) if rng.random() < 0.2 else rng.uniform(0.0, DEFAULT_K_MAX)
         yield float(u), float(v), float(psi), steps, float(k)
 
 

@@ -1,5 +1,6 @@
 """Compiled CasADi functions cached on disk: reuse, staleness, atomic concurrent builds, fallback, Ctrl-C."""
 
+import ast
 import os
 import signal
 import subprocess
@@ -174,8 +175,8 @@ _DAMAGE_SCRIPT = """
 import ctypes, sys
 from rollplan.core import compiled
 src = sys.argv[1]
-write = [sys.executable, "-c", "open('f.c', 'w').write('int f(int x) { return 3 * x + 1; }')"]
-f = compiled.shared_library("dtest", "d", [src], write, ["f.c"], lambda p: ctypes.CDLL(p).f, "python")
+write = lambda: {"f.c": "int f(int x) { return 3 * x + 1; }"}
+f = compiled.shared_library("dtest", write, lambda p: ctypes.CDLL(p).f, "python", memo=[src])
 print(f(4), compiled.last_build()["source"])
 """
 
@@ -207,24 +208,108 @@ def test_a_damaged_cached_library_is_rebuilt_not_loaded(cache):
 
 
 def test_shared_library_is_built_once_then_loaded_and_refused_without_a_compiler(cache, monkeypatch):
-    """A plain C library (the compiled search's way): the command writes the C file, the result is loaded
-    by ctypes and computes; the second call loads the cached file; a failing command or no compiler give None."""
+    """A plain C library (the compiled search's way): a function gives the C files, the result is loaded
+    by ctypes and computes; the second call loads the cached file; a failing generator, C that does not
+    compile or no compiler give None."""
     import ctypes
 
     src = cache / "src.txt"
     src.write_text("v1")
-    write = [sys.executable, "-c", "open('f.c', 'w').write('int f(int x) { return 3 * x + 1; }')"]
+    write = lambda: {"f.c": '#include "g.h"\nint f(int x) { return G * x + 1; }', "g.h": "#define G 3\n"}
 
-    def get(prepare=write):
-        return cmod.shared_library("stest", "d", [src], prepare, ["f.c"], lambda p: ctypes.CDLL(p).f, "python")
+    def get(sources=write):
+        return cmod.shared_library("stest", sources, lambda p: ctypes.CDLL(p).f, "python", memo=[src])
 
     assert get()(4) == 13 and cmod.last_build()["source"] == "built"
     assert get()(5) == 16 and cmod.last_build()["source"] == "cache"
     assert len(list(cache.glob("stest-*.so"))) == 1 and not list(cache.glob(".build-*"))
     src.write_text("v2")
-    assert get([sys.executable, "-c", "raise SystemExit(1)"]) is None and "failed" in cmod.last_build()["reason"]
+    assert get(lambda: 1 / 0) is None and "generating stest failed" in cmod.last_build()["reason"]
+    assert get(lambda: {"f.c": "int f(int x) { return x }"}) is None and "failed" in cmod.last_build()["reason"]
     monkeypatch.setenv("ROLLPLAN_NO_COMPILE", "1")
     assert get() is None and cmod.last_build()["source"] == "vm"
+
+
+def test_without_a_compiler_one_line_says_what_to_install(tmp_path, monkeypatch):
+    """No C compiler on the PATH: the C search is not built and the reason, one line, names what to install
+    (the line a caller that needs the C search shows)."""
+    from rollplan.planners.geometric import compiled_search
+
+    monkeypatch.delenv("CC", raising=False)
+    monkeypatch.delenv("ROLLPLAN_NO_COMPILE", raising=False)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    assert cmod.compiler_command() is None
+    reason = cmod.no_compiler_reason()
+    assert "\n" not in reason and "install gcc or clang" in reason and "apt install gcc" in reason
+    compiled_search.library.cache_clear()
+    try:
+        assert compiled_search.library() is None
+        assert cmod.last_build() == {"source": "vm", "reason": reason}
+    finally:
+        compiled_search.library.cache_clear()
+
+
+def test_shared_library_is_keyed_by_the_c_it_compiles(cache):
+    """The library's key is the text of its C files (and the compiler and its flags): when the code that writes
+    them changes (``memo``) but not the C, the sources are generated again and the library is loaded, not
+    rebuilt; when a header it includes changes, it is rebuilt; an unchanged ``memo`` does not call the generator."""
+    import ctypes
+
+    src, calls = cache / "src.txt", []
+    src.write_text("v1")
+
+    def get(factor):
+        def write():
+            calls.append(factor)
+            return {"f.c": '#include "g.h"\nint f(int x) { return G * x + 1; }', "g.h": f"#define G {factor}\n"}
+        return cmod.shared_library("ktest", write, lambda p: ctypes.CDLL(p).f, "python", memo=[src])
+
+    assert get(3)(4) == 13 and cmod.last_build()["source"] == "built" and calls == [3]
+    assert get(3)(4) == 13 and cmod.last_build()["source"] == "cache" and calls == [3]   # not generated again
+    src.write_text("v2")   # the generator's code changed, its C did not
+    assert get(3)(4) == 13 and cmod.last_build()["source"] == "cache" and calls == [3, 3]
+    src.write_text("v3")
+    assert get(5)(4) == 21 and cmod.last_build()["source"] == "built" and calls == [3, 3, 5]
+    assert len(list(cache.glob("ktest-*.so"))) == 2
+
+
+@pytest.mark.slow
+def test_the_c_search_is_generated_again_only_when_the_code_that_writes_it_changes():
+    """The C search library is keyed by its C text; its generated sources are remembered under the hash of
+    generator_files(). Every rollplan file whose code runs while the sources are generated, and every module
+    that the generating modules import (constants read), is one of them; plots, the CLI, studies, execution and
+    the code generator are not (editing a plot does not even generate the sources again)."""
+    import importlib
+
+    from rollplan.planners.geometric import c_sources
+
+    package = Path(importlib.import_module("rollplan").__file__).parent
+    listed = {p.resolve() for p in c_sources.generator_files()}
+    assert all(p.is_file() for p in listed)
+    ran = set()
+
+    def profile(frame, event, arg):
+        if event == "call":
+            ran.add(frame.f_code.co_filename)
+
+    sys.setprofile(profile)
+    try:
+        texts = c_sources.sources()
+    finally:
+        sys.setprofile(None)
+    ran = {Path(f).resolve() for f in ran if f.startswith(str(package))}
+    assert ran and ran <= listed, sorted(map(str, ran - listed))
+    for module in ("rollplan.planners.geometric.c_sources", "rollplan.core.c_functions"):
+        path = Path(importlib.import_module(module).__file__)
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.level:   # from .x import y, from . import x
+                base = path.parents[node.level - 1].joinpath(*(node.module.split(".") if node.module else []))
+                for stem in ([base] if node.module else [base / a.name for a in node.names]):
+                    file = stem.with_suffix(".py") if stem.with_suffix(".py").is_file() else stem / "__init__.py"
+                    assert file.resolve() in listed, (module, str(file))
+    assert not [p for p in listed if p.parts[len(package.parts)] in ("plots", "cli", "cli.py", "studies", "execution",
+                                                                      "codegen", "io.py")]
+    assert set(c_sources.STATIC_FILES) <= set(texts) and (package / "csrc").resolve() in {p.parent for p in listed}
 
 
 def test_the_test_run_has_its_own_cache_directory():
@@ -243,8 +328,8 @@ def test_the_test_run_has_its_own_cache_directory():
 def _stest(src):
     import ctypes
 
-    write = [sys.executable, "-c", "open('f.c', 'w').write('int f(int x) { return 3 * x + 1; }')"]
-    return cmod.shared_library("stest", "d", [src], write, ["f.c"], lambda p: ctypes.CDLL(p).f, "python")
+    write = lambda: {"f.c": "int f(int x) { return 3 * x + 1; }"}
+    return cmod.shared_library("stest", write, lambda p: ctypes.CDLL(p).f, "python", memo=[src])
 
 
 @pytest.mark.parametrize("mode", [0o777, 0o757, 0o1777])

@@ -1,5 +1,5 @@
 """The geometric-phase planner (rollplan.planners.geometric): plans for the paper's case, asymmetric and
-multi-step targets, all solution branches, input rules, and the pieces (brackets, certificate,
+multi-step targets, all solution branches, input rules, and the pieces (the n-step law, certificate,
 sampling), every plan checked by the independent reference: the paper's printed (28)-(30), (35)
 and Rz(gamma) (31) integrated by scipy DOP853 over all n steps (``tests/references.py``)."""
 
@@ -14,8 +14,8 @@ import rollplan
 from rollplan import InputError, NoPlanError, PlanResult, Problem, Robot, State
 from rollplan.core import model
 from rollplan.core.curves import A_MAX
+from rollplan.core.plane import target_shift
 from rollplan.planners import solve
-from rollplan.planners.geometric.brackets import BRACKET_FIELDS, target_shift
 from rollplan.problem import arrival_error
 
 import references
@@ -368,7 +368,7 @@ def test_plan_is_a_certified_result(planner):
 
 def test_sample_starts_at_rest_and_ends_on_target():
     p = rollplan.plan((0.5, 0.7, 0.8), k=2.5)
-    t = p.sample(50)
+    t = p.sample(1 + 2 * 50)   # samples in all: the start and 50 per leaf
     assert t.parameter == "theta" and t.radius == p.radius
     assert t.s[0] == 0 and t.s[-1] == pytest.approx(2 * np.pi * p.steps)
     assert np.all(t.state[0] == 0)
@@ -386,7 +386,7 @@ def test_trajectory_against_the_printed_curve_and_reference(target, steps, k, ra
     reference's dense solution at the same curve parameter; segment = 2 step + leaf."""
     p = rollplan.plan(target, steps=steps, k=k, radius=radius)
     R = p.radius
-    t = p.sample(40)
+    t = p.sample(1 + 2 * p.steps * 40)   # samples in all: the start and 40 per leaf
     step, leaf = t.segment // 2, t.segment % 2
     assert np.array_equal(t.segment[1:], np.repeat(np.arange(2 * p.steps), 40)) and t.segment[0] == 0
     phi = 2 * (t.s - 2 * np.pi * step - np.pi * leaf)   # theta = 2 pi step + pi leaf + phi / 2
@@ -419,7 +419,7 @@ def test_realizability_13_along_the_computed_motion(target, steps, k):
     """Finite differences of the orientation (2) along the CVODES trajectory give omega;
     n3 . Jc omega = 0 must hold there (and fails for another k: the check can fail)."""
     p = rollplan.plan(target, steps=steps, k=k)
-    t = p.sample(4000)
+    t = p.sample(1 + 2 * steps * 4000)
     q = ca.SX.sym("q", 3)
     rot = ca.Function("R", [q], [model.orientation(q[0], q[1], q[2])]).map(t.s.size)
     mats = np.array(rot(np.vstack([t.u_o, t.v_o, t.psi]))).reshape(3, t.s.size, 3).transpose(1, 0, 2)
@@ -451,44 +451,6 @@ def test_certifier_matches_scipy(planner, a, b, k, gamma, steps):
     e = np.asarray(x[:3], float) - ref
     e[2] = wrap(e[2])
     assert np.abs(e).max() < 2e-10
-
-
-def _brackets_full_grid(planner, k, h_des, psi, steps):
-    """The bracketing test applied to every cell of the grid (the foundation's algorithm, written out)."""
-    t = planner.tables.table(k)
-    r, d0, eta0, d1, eta1 = t[0], t[1:3], t[3], t[4:6], t[6]
-    eta = eta0[:, None] + eta1[None, :]
-    shift = references.rotate(eta0, d0)[:, :, None] + d1[:, None, :]
-    h = np.hypot(shift[0], shift[1])
-    rows = []
-    n = r.size - 1
-    corners = lambda z: np.stack([z[:-1, :-1], z[1:, :-1], z[:-1, 1:], z[1:, 1:]])  # noqa: E731
-    ec, hc = corners(eta), corners(h)
-    emin, emax, hmin, hmax = ec.min(0), ec.max(0), hc.min(0), hc.max(0)
-    for i in range(n):
-        lo = np.ceil((steps * emin[i] - psi) / (2 * np.pi)).astype(int)
-        hi = np.floor((steps * emax[i] - psi) / (2 * np.pi)).astype(int)
-        for j in np.nonzero(hi >= lo)[0]:
-            for m in range(lo[j], hi[j] + 1):
-                eta_m = (psi + 2 * np.pi * m) / steps
-                h_m = float(target_shift(h_des, eta_m, steps))
-                if np.isfinite(h_m) and hmin[i, j] <= h_m <= hmax[i, j]:
-                    rows.append((r[i] + r[j], i * n + j, m))
-    rows.sort(key=lambda x: (x[0], x[1], x[2]))
-    return [(c, m) for _, c, m in rows]
-
-
-@pytest.mark.parametrize("k,h_des,psi,steps", [(0.0, 1.0, 0.0, 1), (1.0, 0.7, 0.4, 2), (2.5, 1.3, -2.0, 3),
-                                                (2.5, 0.2, 3.0, 1)])
-def test_bracket_index_finds_the_same_cells_as_the_full_grid(planner, k, h_des, psi, steps):
-    br = planner.brackets(k, h_des, psi, steps)
-    assert br.dtype.names == tuple(name for name, _ in BRACKET_FIELDS)
-    r = planner.tables.table(k)[0]
-    n = r.size - 1
-    ii = np.searchsorted(r, br["a0"]) - 1
-    jj = np.searchsorted(r, br["b0"]) - 1
-    got = list(zip((ii * n + jj).tolist(), br["m"].astype(int).tolist()))
-    assert got == _brackets_full_grid(planner, k, h_des, psi, steps)
 
 
 @pytest.mark.parametrize("eta,steps", [(0.3, 1), (0.3, 4), (0.0, 3), (2 * np.pi, 2), (np.pi / 2, 4), (-1.1, 5)])

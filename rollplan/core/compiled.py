@@ -39,9 +39,11 @@ Interrupts
     whole group (driver, cc1, as, ld) is killed at once, the temporary directory removed, and the
     KeyboardInterrupt propagates (after a timeout the virtual machine is used).
 Plain C libraries
-    :func:`shared_library` builds a shared library from C files that a command writes (e.g. the C
-    planner of :mod:`rollplan.codegen`), with the same key, directory, atomic rename, interrupts and
-    fallback (None instead of a function), and loads it with a given loader (e.g. ``ctypes.CDLL``).
+    :func:`shared_library` builds a shared library from C sources that a function gives (e.g. the C planner
+    of :mod:`rollplan.planners.geometric.c_sources`), with the same directory, atomic rename, interrupts and
+    fallback (None instead of a function), and loads it with a given loader (e.g. ``ctypes.CDLL``). Its key is
+    the content of the C sources, the compiler and its flags only; the sources' key is remembered under the
+    hash of the code that writes them (a ``.key`` file), so that they are generated only when that changes.
 Fallback
     Without a C compiler, with ``ROLLPLAN_NO_COMPILE=1``, or when a build or a load fails, the
     function itself (CasADi's SX/MX virtual machine) is returned and one warning per reason logged.
@@ -70,7 +72,7 @@ from ..version import __version__
 
 __all__ = ["DEFAULT_FLAGS", "BUILD_TIMEOUT", "cache_dir", "private_cache_dir", "check_private", "compiler_command",
            "compiled", "compiled_lazy",
-           "shared_library", "clear_cache", "last_build"]
+           "shared_library", "no_compiler_reason", "clear_cache", "last_build"]
 
 log = logging.getLogger(__name__)
 
@@ -193,7 +195,7 @@ def compiled(fn: ca.Function, jacobian: bool = False, flags=DEFAULT_FLAGS,
     _last.clear()
     cc = compiler_command()
     if cc is None:
-        return _fallback(fn, _no_compiler_reason())
+        return _fallback(fn, no_compiler_reason())
     key = _key((fn.name(), cc, " ".join(flags), jacobian), (fn.serialize().encode(),))
     return _get(fn.name(), key, lambda: fn, cc, flags, timeout, jacobian)
 
@@ -210,15 +212,17 @@ def compiled_lazy(name: str, build, descriptor: str, sources=(), jacobian: bool 
     _last.clear()
     cc = compiler_command()
     if cc is None:
-        return _fallback(build(), _no_compiler_reason())
+        return _fallback(build(), no_compiler_reason())
     key = _key((name, descriptor, cc, " ".join(flags), jacobian), [Path(s).read_bytes() for s in sources])
     return _get(name, key, build, cc, flags, timeout, jacobian)
 
 
-def _no_compiler_reason() -> str:
+def no_compiler_reason() -> str:
+    """Why :func:`compiler_command` gives None, in one line that says what to install."""
     if os.environ.get("ROLLPLAN_NO_COMPILE", "") not in ("", "0"):
         return "ROLLPLAN_NO_COMPILE is set"
-    return "no C compiler found (set CC)"
+    return ("no C compiler found: install gcc or clang (Debian/Ubuntu: apt install gcc; Fedora: dnf install gcc; "
+            "macOS: xcode-select --install; conda: conda install c-compiler) or set CC to one")
 
 
 def _fallback(fn, why: str, instead: str = "CasADi's virtual machine"):
@@ -370,23 +374,31 @@ def _get(name: str, key: str, build, cc: str, flags, timeout: float, jacobian: b
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def shared_library(name: str, descriptor: str, sources, prepare, c_files, load, instead: str,
-                   flags=DEFAULT_FLAGS + ("-std=c99",), timeout: float = BUILD_TIMEOUT):
+def shared_library(name: str, sources, load, instead: str, memo=(), flags=DEFAULT_FLAGS + ("-std=c99",),
+                   timeout: float = BUILD_TIMEOUT):
     """A shared library compiled from C sources, cached on disk (module docstring), loaded by ``load``.
 
     Parameters
     ----------
-    name, descriptor, sources
-        As in :func:`compiled_lazy`: the key holds ``name``, ``descriptor`` and the bytes of the files
-        ``sources`` (those that define the C code).
-    prepare : sequence of str
-        A command run in an empty build directory that writes the C files there (on a build only).
-    c_files : sequence of str
-        The C files (names in the build directory) compiled into the library.
+    name : str
+        Name of the library (its file name starts with it).
+    sources : callable
+        ``sources()`` returns ``{file name: text}``: the ``.c`` files compiled into the library and the files
+        they include (headers), written side by side into the build folder. Called in this process.
     load : callable
         ``load(path)`` returns the loaded library; an OSError means an unusable file (rebuilt).
     instead : str
         What the caller uses without the library (named in the one warning per reason).
+    memo : sequence of path
+        The files whose bytes decide what ``sources()`` returns (the code that writes them).
+    flags : sequence of str
+        Compiler flags.
+
+    The library's key is the SHA-256 of the names and texts of the sources, the compiler command and flags and
+    the platform: it is rebuilt exactly when the C it is compiled from changes. Beside it, the key of the sources
+    is remembered under the hash of ``memo`` (and CasADi's version), so that a later process loads the library
+    without calling ``sources()``; when a file of ``memo`` changes, ``sources()`` runs again and the library is
+    rebuilt only if the C it gives differs.
 
     Returns
     -------
@@ -395,11 +407,26 @@ def shared_library(name: str, descriptor: str, sources, prepare, c_files, load, 
     _last.clear()
     cc = compiler_command()
     if cc is None:
-        return _fallback(None, _no_compiler_reason(), instead)
-    key = _key((name, descriptor, cc, " ".join(flags)), [Path(s).read_bytes() for s in sources])
+        return _fallback(None, no_compiler_reason(), instead)
     root = cache_dir()
-    lib = root / f"{name}-{key}{'.dll' if os.name == 'nt' else '.so'}"
+    suffix = ".dll" if os.name == "nt" else ".so"
     t0 = time.perf_counter()
+    memo_key = _key((name, cc, " ".join(flags)), [Path(m).read_bytes() for m in memo])
+    memo_path = root / f"{name}-sources-{memo_key}.key"
+    try:
+        _check_cached(memo_path)
+        key = memo_path.read_text().strip() if memo_path.is_file() else ""
+    except OSError as exc:
+        return _fallback(None, f"cannot write the cache directory {root} ({exc.strerror})", instead)
+    texts = None
+    if not (len(key) == 32 and key.isalnum()):
+        try:
+            texts = _sources(name, sources)
+        except Exception as exc:   # a generator that fails: the caller's alternative serves
+            log.debug("generating %s failed", name, exc_info=True)
+            return _fallback(None, f"generating {name} failed ({type(exc).__name__})", instead)
+        key = _source_key(texts, cc, flags)
+    lib = root / f"{name}-{key}{suffix}"
     try:
         _check_cached(lib)
     except OSError as exc:
@@ -407,10 +434,19 @@ def shared_library(name: str, descriptor: str, sources, prepare, c_files, load, 
     if _intact(lib):
         try:
             out = load(str(lib))
+            _remember(memo_path, key)
             _last.update(source="cache", load_s=time.perf_counter() - t0, path=str(lib))
             return out
         except OSError as exc:
             log.info("rollplan: rebuilding the unusable %s (%s)", lib, exc)
+    if texts is None:   # remembered, but the library is gone or damaged: generated again
+        try:
+            texts = _sources(name, sources)
+        except Exception as exc:
+            log.debug("generating %s failed", name, exc_info=True)
+            return _fallback(None, f"generating {name} failed ({type(exc).__name__})", instead)
+        key = _source_key(texts, cc, flags)
+        lib = root / f"{name}-{key}{suffix}"
     try:
         tmp = Path(tempfile.mkdtemp(prefix=f".build-{name}-", dir=root))
     except OSError as exc:
@@ -419,29 +455,62 @@ def shared_library(name: str, descriptor: str, sources, prepare, c_files, load, 
         log.info("rollplan: building %s (first use; cached in %s)", name, root)
         t1 = time.perf_counter()
         out = tmp / lib.name
-        steps = ((list(prepare), f"generating {name} (first use; cached after)"),
-                 (cc.split() + list(flags) + ["-o", str(out), *c_files, "-lm"],
-                  f"compiling {name} (first use; cached after)"))
-        for cmd, label in steps:
-            try:
-                code, output = _run_compiler(cmd, tmp, max(timeout - (time.perf_counter() - t1), 1.0), label)
-            except subprocess.TimeoutExpired:
-                return _fallback(None, f"building {name} took more than {timeout:g} s", instead)
-            except OSError as exc:
-                return _fallback(None, f"cannot run {cmd[0]!r} ({exc.strerror})", instead)
-            if code != 0:
-                log.debug("build output:\n%s", output)
-                return _fallback(None, f"building {name} failed (exit {code} of {Path(cmd[0]).name})", instead)
+        for file, text in texts.items():
+            (tmp / file).write_text(text, encoding="utf-8")
+        cmd = cc.split() + list(flags) + ["-o", str(out), *(f for f in texts if f.endswith(".c")), "-lm"]
+        try:
+            code, output = _run_compiler(cmd, tmp, timeout, f"compiling {name} (first use; cached after)")
+        except subprocess.TimeoutExpired:
+            return _fallback(None, f"building {name} took more than {timeout:g} s", instead)
+        except OSError as exc:
+            return _fallback(None, f"cannot run {cmd[0]!r} ({exc.strerror})", instead)
+        if code != 0:
+            log.debug("build output:\n%s", output)
+            return _fallback(None, f"building {name} failed (exit {code} of {Path(cmd[0]).name})", instead)
         t2 = time.perf_counter()
         _seal(out, lib)
         try:
             loaded = load(str(lib))
         except OSError:
             return _fallback(None, f"the compiled {name} does not load", instead)
+        _remember(memo_path, key)
         _last.update(source="built", compile_s=t2 - t1, load_s=time.perf_counter() - t2, path=str(lib))
         return loaded
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _sources(name: str, sources) -> dict:
+    """``sources()``, with progress reported while it runs."""
+    label = f"generating {name} (first use; cached after)"
+    report(label, 0, 1)
+    texts = sources()
+    report(label, 1, 1)
+    return texts
+
+
+def _source_key(texts: dict, cc: str, flags) -> str:
+    """The key of a library compiled from ``texts`` (``{file name: text}``) by ``cc`` with ``flags``."""
+    h = hashlib.sha256()
+    for part in (cc, " ".join(flags), platform.machine(), sys.platform):
+        h.update(part.encode() + b"\0")
+    for file in sorted(texts):
+        h.update(file.encode() + b"\0" + texts[file].encode() + b"\0")
+    return h.hexdigest()[:32]
+
+
+def _remember(memo_path: Path, key: str) -> None:
+    """Write ``key`` into ``memo_path`` atomically, writable by this user only (failures are harmless)."""
+    try:
+        if memo_path.is_file() and memo_path.read_text().strip() == key:
+            return
+        fd, tmp = tempfile.mkstemp(prefix=".memo-", dir=memo_path.parent)
+        with os.fdopen(fd, "w") as fh:
+            fh.write(key + "\n")
+        os.chmod(tmp, 0o600)
+        os.replace(tmp, memo_path)
+    except OSError as exc:
+        log.debug("cannot remember %s: %s", memo_path, exc)
 
 
 def clear_cache() -> int:
@@ -455,6 +524,8 @@ def clear_cache() -> int:
                 p.unlink(missing_ok=True)
                 _digest_path(p).unlink(missing_ok=True)
                 n += 1
+            elif p.suffix == ".key":
+                p.unlink(missing_ok=True)
             elif p.name.startswith(".build-") and p.is_dir():
                 shutil.rmtree(p, ignore_errors=True)
     return n

@@ -5,7 +5,9 @@ rates of (u_a, v_a) are those at psi = 0 turned by -psi, so psi and then (u_a, v
 Chebyshev spectral integration on panels (a CasADi function, exactly differentiable; the structure is checked
 by :func:`check_heading_structure`). ``"cvodes"`` (:class:`CvodesIntegrator`): the independent, adaptive
 integrator that verifies plans. :func:`rk8_formula`, :func:`rk8_step`: the fixed-step order-8 formula of
-DOP853 used by the certificates. The state is ``x = (u_a, v_a, psi)`` in units of R and rad.
+DOP853 used by the certificates. :func:`curve_piece_function`: everything along one piece per unit of its
+parameter (the right side, the contact point, omega, the rotor rates). The state is ``x = (u_a, v_a, psi)`` in
+units of R and rad.
 
 Derivation and who uses which: docs/design/integration.md.
 """
@@ -25,9 +27,9 @@ from ..progress import report
 from . import model
 from .curves import Curve, rotated_point
 
-__all__ = ["DEFAULT_NODES", "piece_rhs", "heading_free_rates", "check_heading_structure", "chebyshev_matrices",
-           "spectral_leaf", "spectral_step", "CvodesIntegrator", "DOP853_C", "DOP853_A", "DOP853_B",
-           "rk8_formula", "rk8_step"]
+__all__ = ["DEFAULT_NODES", "piece_rhs", "curve_piece_function", "heading_free_rates", "check_heading_structure",
+           "chebyshev_matrices", "spectral_leaf", "spectral_step", "CvodesIntegrator", "DOP853_C", "DOP853_A",
+           "DOP853_B", "rk8_formula", "rk8_step"]
 
 #: Chebyshev degree per panel of the spectral integrator.
 DEFAULT_NODES = 32
@@ -61,6 +63,34 @@ def piece_rhs(curve: Curve, index: int) -> ca.Function:
     rhs = ca.substitute(rhs, psi, x[2])
     return ca.Function(f"rhs{index}", [phi, x, params, k, gamma], [rhs],
                        ["phi", "x", "p", "k", "gamma"], ["xdot"])
+
+
+def curve_piece_function(curve: Curve, index: int) -> ca.Function:
+    """Geometry of one piece of a curve, per unit of its parameter phi (all from :mod:`rollplan.core.model`).
+
+    ``F(phi, psi, p[n], gamma, k, jxx, jzz, jr) -> (xdot[5], uv[2], w[3], g[2], a[2], da[2])`` for the
+    piece ``index`` of ``curve`` rotated by gamma about OZ (31):
+
+    * ``xdot`` -- d/dphi of (u_a, v_a, psi, rotor angle 1, rotor angle 2); the first three are
+      (28)-(30) (units of R), the last two ``g``;
+    * ``uv`` -- contact coordinates (u_o, v_o), (24)-(25);
+    * ``w`` -- omega / phi_dot, (18), (19), (13);
+    * ``g`` -- rotor rates / phi_dot, (11);
+    * ``a`` -- ``n_i . w + g_i``, the rotors' axial spins per phi_dot;
+    * ``da`` -- total derivative of ``a`` along the piece, d/dphi with psi' from (30).
+    """
+    phi, psi, gamma, k = (ca.SX.sym(n) for n in ("phi", "psi", "gamma", "k"))
+    p = ca.SX.sym("p", curve.n_params)
+    jxx, jzz, jr = ca.SX.sym("jxx"), ca.SX.sym("jzz"), ca.SX.sym("jr")
+    w, u_o, v_o = model.curve_omega(rotated_point(curve.pieces[index], phi, p, gamma), phi, psi, k)
+    g = model.rotor_rates(w, u_o, v_o, psi, jxx, jzz, jr)
+    a = model.rotor_axial_spins(w, u_o, v_o, psi, jxx, jzz, jr)
+    xdot3 = piece_rhs(curve, index)(phi, ca.vertcat(0, 0, psi), p, k, gamma)
+    da = ca.jacobian(a, phi) + ca.jacobian(a, psi) * xdot3[2]
+    return ca.Function(f"piece{index}", [phi, psi, p, gamma, k, jxx, jzz, jr],
+                       [ca.vertcat(xdot3, g), ca.vertcat(u_o, v_o), w, g, a, da],
+                       ["phi", "psi", "p", "gamma", "k", "jxx", "jzz", "jr"],
+                       ["xdot", "uv", "w", "g", "a", "da"])
 
 
 def heading_free_rates(f: ca.Function) -> ca.Function:

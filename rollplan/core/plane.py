@@ -16,7 +16,8 @@ from decimal import Decimal, localcontext
 
 import numpy as np
 
-__all__ = ["TWO_PI", "wrap", "wrap_exact", "rotate", "n_step_sum", "n_step_gain", "compose", "inverse", "relative"]
+__all__ = ["TWO_PI", "wrap", "wrap_exact", "rotate", "n_step_sum", "n_step_gain", "target_shift", "compose", "inverse",
+           "relative"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -87,6 +88,17 @@ def n_step_gain(eta, steps: int, eps: float = 1e-12):
     num, den = np.sin(steps * eta / 2), np.sin(eta / 2)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(np.abs(den) < eps, float(steps), np.abs(num / den))
+
+
+def target_shift(h_des, eta_m, steps: int):
+    """Shift one step must produce on branches eta_m, from (33)-(34); nan where unreachable.
+
+    ``h = h_des / |sin(n eta / 2) / sin(eta / 2)|`` (:func:`n_step_gain`); where ``sin(n eta / 2) = 0`` but
+    ``sin(eta / 2) != 0`` the n shifts cancel and no h reaches a nonzero h_des.
+    """
+    gain = n_step_gain(eta_m, steps)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(gain < 1e-12, np.nan, h_des / np.where(gain < 1e-12, 1.0, gain))
 
 
 def compose(g, h) -> np.ndarray:

@@ -49,7 +49,7 @@ import numpy as np
 
 from ..core.spline import CubicSpline
 from ..errors import InputError, NoPlanError, check_finite, check_whole
-from ..problem import STATE_NAMES, State, arrival_error
+from ..problem import STATE_NAMES, Problem, State, arrival_error
 from ..robot import Robot
 from ..timeseries import Arrival, TimeSeries
 from .actuation import actuate, motion_samples
@@ -289,9 +289,7 @@ def _first_eight_end(motion, kinds) -> int | None:
 
 
 def _pieces(plan):
-    from ..planners.geometric import as_composed
-
-    return as_composed(plan).pieces
+    return plan.pieces
 
 
 #: Closed loop: arrival error [R and rad] of the measured state below which no correction follows.
@@ -420,7 +418,11 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
     ``piece_duration`` a piece (or the law's shortest duration within the limits, if longer). The other
     parameters are those of :func:`execute`.
     """
-    from ..planners.geometric import plan as make_plan
+    from ..planners import solve
+
+    def make_plan(n: int, robot: Robot, start: State):
+        """Re-plan by the method "geometric": ``n`` figure eights from ``start`` to the goal."""
+        return solve(Problem(goal, start=start, robot=robot), "geometric", steps=n)
 
     if plant not in (*PLANT_NAMES, "mujoco"):
         raise InputError(f"plant {plant!r} is not known: choose one of {', '.join(PLANT_NAMES)}, mujoco")
@@ -482,12 +484,12 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
         j += 1
         measured = update(j)
         try:
-            current = make_plan(goal, steps - j, robot=robot_est, start=State(*measured))
+            current = make_plan(steps - j, robot_est, State(*measured))
         except (NoPlanError, InputError) as exc:
             raise type(exc)(f"re-planning {steps - j} figure eights from the measured state "
                             f"{tuple(round(float(v), 6) for v in measured)} failed: {exc}") from None
         motion = _as_samples(timed(current, robot_est), (p.kind for p in _pieces(current)))
-        kinds, mode = motion.kinds, getattr(current, "mode", "one")
+        kinds, mode = motion.kinds, current.mode
     stopped = None
     for c in range(corrections + 1 if closed_loop else 0):
         measured = update(steps + c + 1)
@@ -497,7 +499,7 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
             stopped = f"the budget of {corrections} corrections is spent"
             break
         try:
-            current = make_plan(goal, 1, robot=robot_est, start=State(*measured))
+            current = make_plan(1, robot_est, State(*measured))
         except (NoPlanError, InputError) as exc:
             stopped = f"no correcting motion from the measured state: {exc}"
             break

@@ -74,9 +74,7 @@ import casadi as ca
 import numpy as np
 
 from .. import interrupts
-from ..core import model
-from ..core.curves import Curve, rotated_point
-from ..core.integrate import piece_rhs
+from ..core.integrate import curve_piece_function
 from ..core.paths import CURVES
 from ..core.plane import wrap_exact
 from ..errors import InputError
@@ -90,34 +88,6 @@ __all__ = ["SMOOTH_JOINT_RTOL", "curve_piece_function", "piece_function", "leaf_
 SMOOTH_JOINT_RTOL = 1e-8
 
 _CVODES = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 200000}
-
-
-def curve_piece_function(curve: Curve, index: int) -> ca.Function:
-    """Geometry of one piece of a curve, per unit of its parameter phi (all from :mod:`rollplan.core.model`).
-
-    ``F(phi, psi, p[n], gamma, k, jxx, jzz, jr) -> (xdot[5], uv[2], w[3], g[2], a[2], da[2])`` for the
-    piece ``index`` of ``curve`` rotated by gamma about OZ (31):
-
-    * ``xdot`` -- d/dphi of (u_a, v_a, psi, rotor angle 1, rotor angle 2); the first three are
-      (28)-(30) (units of R), the last two ``g``;
-    * ``uv`` -- contact coordinates (u_o, v_o), (24)-(25);
-    * ``w`` -- omega / phi_dot, (18), (19), (13);
-    * ``g`` -- rotor rates / phi_dot, (11);
-    * ``a`` -- ``n_i . w + g_i``, the rotors' axial spins per phi_dot;
-    * ``da`` -- total derivative of ``a`` along the piece, d/dphi with psi' from (30).
-    """
-    phi, psi, gamma, k = (ca.SX.sym(n) for n in ("phi", "psi", "gamma", "k"))
-    p = ca.SX.sym("p", curve.n_params)
-    jxx, jzz, jr = ca.SX.sym("jxx"), ca.SX.sym("jzz"), ca.SX.sym("jr")
-    w, u_o, v_o = model.curve_omega(rotated_point(curve.pieces[index], phi, p, gamma), phi, psi, k)
-    g = model.rotor_rates(w, u_o, v_o, psi, jxx, jzz, jr)
-    a = model.rotor_axial_spins(w, u_o, v_o, psi, jxx, jzz, jr)
-    xdot3 = piece_rhs(curve, index)(phi, ca.vertcat(0, 0, psi), p, k, gamma)
-    da = ca.jacobian(a, phi) + ca.jacobian(a, psi) * xdot3[2]
-    return ca.Function(f"piece{index}", [phi, psi, p, gamma, k, jxx, jzz, jr],
-                       [ca.vertcat(xdot3, g), ca.vertcat(u_o, v_o), w, g, a, da],
-                       ["phi", "psi", "p", "gamma", "k", "jxx", "jzz", "jr"],
-                       ["xdot", "uv", "w", "g", "a", "da"])
 
 
 @lru_cache(maxsize=16)
@@ -432,8 +402,7 @@ def plan_pieces(plan, robot: Robot) -> tuple[list, tuple]:
     InputError
         Not a geometric-phase plan, not a Robot, or a plan made for another k or radius.
     """
-    if not (hasattr(plan, "pieces") or all(hasattr(plan, n) for n in ("a", "b", "gamma", "steps"))) or \
-            not all(hasattr(plan, n) for n in ("k", "radius", "problem")):
+    if getattr(plan, "method", None) != "geometric" or not all(hasattr(plan, n) for n in ("k", "radius", "problem")):
         raise InputError(f"plan = {plan!r:.60} is not allowed: timing needs a geometric-phase plan (rollplan.plan)")
     if not isinstance(robot, Robot):
         raise InputError(f"robot = {robot!r:.60} is not allowed: give a rollplan.Robot")

@@ -3,10 +3,9 @@ extension to any start and goal state.
 
 Pieces: :mod:`.leafmap` (the accurate leaf map: closed-form turn, Gauss-rule displacement, up to K_MAX),
 :mod:`.enumerate` (complete enumeration of the roots of (32)-(33) for every k), :mod:`.compiled_search` (the
-generated C planner's search, for ``1/2 <= k <= k_max``), :mod:`.refine` (the polish: root solvers by name),
+C planner's search, for every k), :mod:`.refine` (the polish: root solvers by name),
 :mod:`.certify` (independent integration of the whole motion), :mod:`.planner` (the pole-to-pole problem class
-:class:`GeometricPhasePlanner`); :mod:`.leaves` and :mod:`.brackets` (the bracketing of leaf-table cells, no
-longer reached by the planner); full reconfiguration: :mod:`.maneuvers` (approach and departure rolls),
+:class:`GeometricPhasePlanner`); full reconfiguration: :mod:`.maneuvers` (approach and departure rolls),
 :mod:`.turn` (turning in place), :mod:`.legs` (two legs), :mod:`.composed` (:class:`ComposedPlanner` and
 :func:`plan`, for any start and goal), :mod:`.route`. Design: docs/design/geometric-planner.md.
 """

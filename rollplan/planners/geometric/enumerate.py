@@ -5,7 +5,7 @@ On branch m of ``n eta = psi + 2 pi m`` (32) fixes ``eta_m`` and (33) becomes, o
 per-k table, :func:`rho_table`). The level set is covered by graphs: over the root phase ``w = sqrt(-E)`` for
 ``k >= K_FAST`` (:class:`_WGraphs`), over ``sigma = a +- b`` on the monotone pieces of E below
 (:class:`_SigmaGraphs`); every root on them is found by Hermite cells (:func:`roots`). The C planner's search
-(:mod:`.compiled_search`) uses another graph, over the smaller radius, for ``1/2 <= k <= k_max``.
+(:mod:`.compiled_search`) uses the sigma graphs for ``k < 1/2`` and another graph, over the smaller radius, above.
 
 Derivation and completeness argument: docs/design/enumeration.md.
 """
@@ -24,9 +24,9 @@ import numpy as np
 
 from ...core.compiled import cache_dir, check_private, private_cache_dir
 from ...core.curves import A_MAX
+from ...core.plane import target_shift
 from ...progress import report
 from . import leafmap
-from .brackets import target_shift
 from .leafmap import radius_of_root_phase, root_phase, signed_length, turn, turn_dr, turn_inverse, turn_pieces
 
 __all__ = ["K_MONOTONE", "K_ENUMERATED", "K_FAST", "PHASE_STEP", "X_STEP", "SIGMA_STEP", "HERMITE_REL", "SAFETY",
@@ -263,7 +263,7 @@ def branches(k: float, psi: float, steps: int, h_des: float, only: int | None = 
     """Branches m that can hold a root, sorted by their lower bound of ``a + b``.
 
     ``psi`` in (-pi, pi]; ``only`` restricts to one m. A branch is kept when ``|eta_m|`` is at most
-    the range of E on ``(0, A_MAX]``, ``h_m`` is finite (:func:`.brackets.target_shift`) and its level
+    the range of E on ``(0, A_MAX]``, ``h_m`` is finite (:func:`rollplan.core.plane.target_shift`) and its level
     set is not empty.
     """
     k = float(k)
