@@ -132,7 +132,7 @@ def test_v_closed_form_turn_against_dop853(name):
         for k in KS:
             e_ref = leaf_end(name, a, k)[2]
             worst = max(worst, abs(closed_turn(name, a, k) - e_ref) / (1 + abs(e_ref)))
-    assert worst < 1e-10, worst
+    assert worst < 1e-12, worst
 
 
 @pytest.mark.parametrize("name", ("viviani", "triangle", "square"))
@@ -192,7 +192,7 @@ def test_iii_displacement_is_real_rho_times_half_turn(name):
             worst = max(worst, abs((d * np.exp(0.5j * end[2])).imag))
             mirror = leaf_end(name, a, k, side=-1.0)
             assert abs(mirror[0] + 1j * mirror[1] - np.conj(d)) < 1e-11 and mirror[2] == pytest.approx(-end[2])
-    assert worst < 1e-11, worst
+    assert worst < 1e-12, worst
 
 
 @pytest.mark.parametrize("name", NAMES)
