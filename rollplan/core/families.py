@@ -14,16 +14,17 @@ closed forms: docs/design/curve-families.md.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
 
-from ..errors import check_choice
-from .curves import Curve, Piece, circle_point
+from ..errors import check_choice, check_finite, check_range
+from .curves import A_MAX, Curve, Piece, circle_point
 from .curves import figure_eight as circle_figure_eight
 
 __all__ = ["FAMILIES", "TRIANGLE_APEX", "SQUARE_APEX", "viviani_point", "polygon_vertices", "geodesic_point",
-           "leaf_pieces", "figure_eight", "pieces_per_leaf", "turn", "area", "leaf_length"]
+           "leaf_pieces", "figure_eight", "pieces_per_leaf", "turn", "area", "leaf_length", "step"]
 
 #: The leaf families by name (``circles`` is the paper's (35)).
 FAMILIES = ("circles", "viviani", "triangle", "square")
@@ -195,3 +196,24 @@ def area(name: str, a):
     if name == "circles":
         return 2.0 * np.pi * (1.0 - np.sqrt(1.0 - np.asarray(a, float) ** 2))
     return turn(name, a, 0.0)
+
+
+@lru_cache(maxsize=len(FAMILIES))
+def _integrators(name: str):
+    from .integrate import CvodesIntegrator
+
+    return CvodesIntegrator(figure_eight(name)).integrators()
+
+
+def step(name: str, a: float, b: float | None = None, *, k: float, gamma: float = 0.0) -> np.ndarray:
+    """End state (u_a, v_a, psi) of one figure eight (a, b) of family ``name`` rotated by gamma, from zero, by
+    CVODES piece by piece (adaptive, so accurate for every k; docs/design/curve-families.md).
+    ``k`` is checked by the caller."""
+    from .integrate import CvodesIntegrator
+
+    check_choice("curve", name, FAMILIES)
+    b = a if b is None else b
+    a, b = (check_range(n, v, 0.0, A_MAX, low_open=True) for n, v in (("a", a), ("b", b)))
+    gamma = check_finite("gamma", gamma)
+    integ = CvodesIntegrator(figure_eight(name))
+    return integ.trace([a, b], float(k), gamma, integrators=_integrators(name))[1][-1]
