@@ -110,6 +110,23 @@ def _target(path) -> Path:
     return Path(os.path.realpath(path)) if os.path.islink(path) else Path(path)
 
 
+def _check_parent(p: Path, folder: Path, what: str, text: str, failed: str) -> None:
+    """OutputError (one line: ``what`` ``text`` ``failed``: why) unless ``folder``, the folder of the new
+    output ``p``, exists, is a writable folder and allows ``p``'s name."""
+    try:
+        fst = os.stat(folder)
+    except OSError:
+        raise OutputError(f"{what} {show_path(text)} {failed}: folder {show_path(folder)} does not exist") from None
+    if not stat.S_ISDIR(fst.st_mode):
+        raise OutputError(f"{what} {show_path(text)} {failed}: {show_path(folder)} is not a folder")
+    if _read_only(fst, folder):
+        raise OutputError(f"{what} {show_path(text)} {failed}: no permission to write in folder {show_path(folder)}")
+    size, limit = len(p.name.encode(errors="surrogateescape")), _name_max(folder)
+    if size > limit:
+        raise OutputError(f"{what} {show_path(text)} {failed}: its name has {size} bytes, the file system "
+                          f"allows {limit}")
+
+
 def check_writable(path, what: str = "output", inputs=()) -> Path:
     """The file that writing ``path`` replaces, or OutputError (one line) unless it can be written.
 
@@ -137,20 +154,7 @@ def check_writable(path, what: str = "output", inputs=()) -> Path:
             raise OutputError(f"{what} {show_path(text)} is not allowed: it exists and is not a regular file")
         if _read_only(st, p):
             raise OutputError(f"{what} {show_path(text)} is read-only: make it writable or choose another name")
-    try:
-        fst = os.stat(folder)
-    except OSError:
-        raise OutputError(f"{what} {show_path(text)} is not writable: folder {show_path(folder)} does not exist") \
-            from None
-    if not stat.S_ISDIR(fst.st_mode):
-        raise OutputError(f"{what} {show_path(text)} is not writable: {show_path(folder)} is not a folder")
-    if _read_only(fst, folder):
-        raise OutputError(f"{what} {show_path(text)} is not writable: no permission to write in folder "
-                          f"{show_path(folder)}")
-    size, limit = len(p.name.encode(errors="surrogateescape")), _name_max(folder)
-    if size > limit:
-        raise OutputError(f"{what} {show_path(text)} is not writable: its name has {size} bytes, the file system "
-                          f"allows {limit}")
+    _check_parent(p, folder, what, text, "is not writable")
     for source in inputs:
         if source is None:
             continue
@@ -481,7 +485,13 @@ def check_folder(path, what: str = "output folder", overwrite: bool = False) -> 
     existing writable folder. Nothing is created."""
     text = check_path(path, what)
     p = Path(text)
-    if p.exists():
+    try:
+        exists = p.exists()
+    except OSError as exc:   # a name too long for the file system: said by _check_parent, with the sizes
+        if exc.errno != errno.ENAMETOOLONG:
+            raise _failure(what, text, exc) from None
+        exists = False
+    if exists:
         if not p.is_dir():
             raise OutputError(f"{what} {show_path(text)} is a file: give a folder")
         try:
@@ -497,16 +507,7 @@ def check_folder(path, what: str = "output folder", overwrite: bool = False) -> 
                               "choose a new or empty folder, or give overwrite=True to replace the files of the "
                               "same names in it")
         return p
-    parent = p.absolute().parent
-    if not parent.is_dir():
-        raise OutputError(f"{what} {show_path(text)} cannot be created: folder {show_path(p.parent)} does not exist")
-    if _read_only(os.stat(parent), parent):
-        raise OutputError(f"{what} {show_path(text)} cannot be created: no permission to write in folder "
-                          f"{show_path(p.parent)}")
-    size, limit = len(p.name.encode(errors="surrogateescape")), _name_max(parent)
-    if size > limit:
-        raise OutputError(f"{what} {show_path(text)} cannot be created: its name has {size} bytes, the file system "
-                          f"allows {limit}")
+    _check_parent(p, p.parent, what, text, "cannot be created")
     return p
 
 

@@ -14,7 +14,7 @@ import pytest
 from conftest import fill, one_line, run
 
 from rollplan.errors import InputError, OutputError
-from rollplan.outputs import LineWriter, check_writable, claim, make_folder, write_atomic
+from rollplan.outputs import LineWriter, check_folder, check_writable, claim, make_folder, write_atomic
 
 STEP = ["step", "--a", "0.3", "--k", "2.5", "--json"]
 
@@ -62,6 +62,33 @@ def test_long_names(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == [name]
     code, _, err = run(capsys, *STEP, str(tmp_path / ("y" * 300 + ".json")))
     assert code == 2 and "name has 305 bytes" in err and one_line(err)
+
+
+def test_file_and_folder_outputs_check_their_folder_alike(tmp_path):
+    """An output file and an output folder (codegen's) are refused for the same reasons in their parent folder:
+    missing, not a folder, not writable, a name too long for it; each in one line naming the output."""
+    plain = tmp_path / "plain"
+    plain.write_text("")
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    cases = [(tmp_path / "missing" / "x", "folder"), (plain / "x", "not a folder"), (ro / "x", "no permission"),
+             (tmp_path / ("y" * 300), "name has 300 bytes")]
+    try:
+        for path, reason in cases:
+            for check, verb in ((check_writable, "is not writable"), (check_folder, "cannot be created")):
+                with pytest.raises(OutputError) as info:
+                    check(str(path))
+                message = str(info.value)
+                assert reason in message and "\n" not in message, message
+                assert verb in message or reason == "not a folder", message
+    finally:
+        ro.chmod(0o755)
+
+
+def test_codegen_folder_name_too_long_is_one_line(tmp_path, capsys):
+    code, _, err = run(capsys, "codegen", "--out", str(tmp_path / ("y" * 300)))
+    assert code == 2 and "name has 300 bytes" in err and "standard output" not in err and one_line(err)
 
 
 def test_empty_and_directory_outputs(tmp_path, capsys):
