@@ -452,3 +452,15 @@ def test_closed_loop_on_mujoco_under_noise_arrives_and_leaves_the_robot_at_rest(
     ends = [int(np.nonzero(segment == s)[0][-1]) for s in np.unique(segment)]
     assert len(ends) >= 4
     assert np.abs(rates[ends]).max() < 1e-6 * np.abs(rates).max()
+
+
+@needs_mujoco
+def test_rolling_resistance_below_mujocos_least_friction_acts_as_that_least():
+    """What the Settings docstring says: with condim 6 MuJoCo's contact carries at least mjMINMU (1e-5) as torsional
+    and rolling friction, whatever smaller value (0 for the torsional) the model file gives."""
+    from rollplan.execution.mujoco_engine import Session, Settings, compile_model, mjcf
+
+    session = Session(compile_model(mjcf(Robot(), Settings(rolling=1e-9))))
+    contact = session.data.contact[0]
+    assert session.data.ncon == 1 and contact.dim == 6
+    np.testing.assert_array_equal(contact.friction, [2.0, 2.0, mujoco.mjMINMU, mujoco.mjMINMU, mujoco.mjMINMU])
