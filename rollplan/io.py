@@ -16,6 +16,7 @@ from .errors import InputError, show, show_limit
 from .inputs import load_json, show_path
 from .outputs import check_figure_path, check_writable, save_figure, write_atomic, write_json
 from .planners.geometric.composed import as_composed
+from .planners.geometric.planner import Plan
 from .problem import State, check_contact
 from .robot import Robot, robot_from_mapping
 from .version import __version__
@@ -55,7 +56,7 @@ def _rows(a):
 def plan_to_dict(plan, traj=None, include_alternatives=True) -> dict:
     """A geometric-phase plan as the JSON object of ``rollplan plan --json`` (a composed plan:
     :func:`composed_to_dict`)."""
-    if hasattr(plan, "pieces"):
+    if not isinstance(plan, Plan):   # a composed plan or a route
         return composed_to_dict(plan, traj, include_alternatives)
     g = plan.goal
     d = {

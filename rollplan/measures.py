@@ -16,15 +16,33 @@ accuracy.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, check_choice
 from .problem import STATE_NAMES
 from .result import Trajectory
 
-__all__ = ["COSTS", "TimedMotion", "measure", "integrate_samples"]
+__all__ = ["COSTS", "RENAMED_COSTS", "cost_key", "TimedMotion", "measure", "integrate_samples"]
+
+#: Old names of the planners' running costs, ``{old: new}``: ``"path_length"`` named the energy form
+#: ``int |v|^2 dt`` (now ``"path_energy"``) in :data:`rollplan.planners.collocation.COSTS`,
+#: :data:`~rollplan.planners.collocation.rest.REST_COSTS` and
+#: :data:`~rollplan.execution.optimal_timing.TIMING_COSTS`, while here it is the length ``int |v| dt``.
+RENAMED_COSTS = {"path_length": "path_energy"}
+
+
+def cost_key(name, choices, option: str = "cost") -> str:
+    """``name`` if it is one of ``choices``; the new name of a renamed cost (:data:`RENAMED_COSTS`) with a
+    DeprecationWarning; else InputError naming ``option`` and the choices."""
+    if isinstance(name, str) and name not in choices and RENAMED_COSTS.get(name) in choices:
+        warnings.warn(f"{option} = {name!r} is deprecated: use {RENAMED_COSTS[name]!r} (the same integral "
+                      "int |v|^2 dt)", DeprecationWarning, stacklevel=3)
+        name = RENAMED_COSTS[name]
+    return check_choice(option, name, choices)
+
 
 #: Cost names and what they are (units with lengths in the motion's length unit).
 COSTS = {

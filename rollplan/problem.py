@@ -26,11 +26,13 @@ from .core.plane import wrap, wrap_exact
 from .errors import InputError, check_finite, check_range, check_whole
 from .robot import Robot
 
-__all__ = ["STATE_NAMES", "State", "Problem", "K_MAX", "MAX_STEPS", "DEFAULT_K", "N3Z_MIN", "check_k", "check_steps",
-           "check_contact", "check_reach", "MAX_DISTANCE", "arrival_error", "arrival_residual"]
+__all__ = ["STATE_NAMES", "State", "Problem", "K_MIN", "K_MAX", "MAX_STEPS", "DEFAULT_K", "N3Z_MIN", "check_k",
+           "check_steps", "check_contact", "check_reach", "MAX_DISTANCE", "arrival_error", "arrival_residual"]
 
 #: Names of the state's entries, in the one order used everywhere (arrays, JSON, CSV).
 STATE_NAMES = ("u_a", "v_a", "psi", "u_o", "v_o")
+#: Smallest inertia ratio accepted (k = 0 is pure rolling).
+K_MIN = 0.0
 #: Largest inertia ratio accepted (physical robots have 1 < k < ~30).
 K_MAX = 100.0
 #: Largest number of figure-eight steps a plan may have.
@@ -127,8 +129,8 @@ def arrival_residual(final, goal, radius: float = 1.0) -> float:
 
 
 def check_k(k) -> float:
-    """The inertia ratio k (14) as a float in [0, K_MAX]; InputError otherwise."""
-    return check_range("k", k, 0.0, K_MAX)
+    """The inertia ratio k (14) as a float in [K_MIN, K_MAX]; InputError otherwise."""
+    return check_range("k", k, K_MIN, K_MAX)
 
 
 def check_contact(u_o, v_o, name: str = "contact") -> tuple[float, float]:

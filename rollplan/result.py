@@ -4,7 +4,7 @@ A plan of any method (see :mod:`rollplan.planners`) satisfies :class:`PlanResult
 it names its :class:`~rollplan.problem.Problem`, carries a :class:`Certificate`
 (an independent integration of the whole motion from the start state and its
 residual to the goal), solver statistics (:class:`SolverStats`), its contact
-path length, and samples itself as a :class:`Trajectory`.
+path length, and samples itself as a :class:`Trajectory`. :func:`certify` makes every certificate.
 """
 
 from __future__ import annotations
@@ -15,14 +15,17 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from .core import model
+from .errors import InputError, NoPlanError, check_whole
 from .problem import STATE_NAMES, Problem, State
 
-__all__ = ["CERTIFICATE_TOLERANCE", "Certificate", "SolverStats", "Trajectory", "Measures", "CertifiedMotion",
-           "PlanResult"]
+__all__ = ["CERTIFICATE_TOLERANCE", "DEFAULT_SAMPLES", "Certificate", "SolverStats", "Trajectory", "Measures",
+           "CertifiedMotion", "PlanResult", "certify", "require_certified"]
 
 #: Largest accepted ``residual + error_bound`` of a plan's certificate, lengths in units of R and angles in
 #: rad (:func:`rollplan.problem.arrival_residual`): every planner's default, the generated C planner's too.
 CERTIFICATE_TOLERANCE = 1e-9
+#: Samples of ``result.sample()`` when none are asked for: in all, over the whole motion.
+DEFAULT_SAMPLES = 2000
 
 
 @dataclass(frozen=True)
@@ -149,6 +152,14 @@ class Trajectory:
         """Length of the sampled contact path on the plane (polyline) [length unit]."""
         return float(np.hypot(np.diff(self.u_a), np.diff(self.v_a)).sum())
 
+    def subsampled(self, samples: int) -> Trajectory:
+        """``samples`` of these samples, evenly by index, the first and the last included (no interpolation:
+        every sample stays one of the integration's). InputError if there are fewer than ``samples``."""
+        n = self.s.size
+        samples = check_whole("samples", samples, min(2, n), n)
+        idx = np.unique(np.round(np.linspace(0, n - 1, samples)).astype(int))
+        return Trajectory(self.s[idx], self.state[idx], self.segment[idx], self.radius, self.parameter)
+
     def as_dict(self) -> dict:
         """Columns as lists: the parameter (``theta`` or ``t``), the state names and ``segment``."""
         d = {self.parameter: [float(v) for v in self.s]}
@@ -225,6 +236,13 @@ class PlanResult(Protocol):
         ``certificate.final``.
     residual : float
         ``certificate.residual``.
+    pieces : tuple
+        The contact path piece by piece (leaves, rolls, circles) [units of R]; ``()`` for a motion that is not
+        made of closed-form pieces (collocation).
+    legs : tuple of Plan
+        The legs of figure eights in the motion (a one-leg plan is its own only leg); ``()`` for collocation.
+    alternatives : tuple
+        Other certified solutions, best first (``()`` unless asked for, e.g. ``all_solutions``).
     """
 
     problem: Problem
@@ -232,6 +250,13 @@ class PlanResult(Protocol):
     certificate: Certificate
     stats: SolverStats
     path_length: float
+    alternatives: tuple
+
+    @property
+    def pieces(self) -> tuple: ...
+
+    @property
+    def legs(self) -> tuple: ...
 
     @property
     def final(self) -> State: ...
@@ -239,6 +264,31 @@ class PlanResult(Protocol):
     @property
     def residual(self) -> float: ...
 
-    def sample(self, samples: int = ...) -> Trajectory:
-        """The motion sampled as a :class:`Trajectory`."""
+    def sample(self, samples: int = DEFAULT_SAMPLES) -> Trajectory:
+        """The motion sampled as a :class:`Trajectory`: ``samples`` samples in all, both ends included."""
         ...
+
+
+def certify(problem: Problem | None, final, integrator: str, *, error_bound: float = 0.0,
+            tolerance: float = CERTIFICATE_TOLERANCE, residual: float | None = None) -> Certificate:
+    """The certificate of a motion of ``problem`` whose independent integration ``integrator`` ended at ``final``
+    [length unit of the problem, rad]: its residual to the goal (:meth:`Problem.residual`, or ``residual`` when
+    the caller measures it itself, e.g. in a frame with psi reduced, with the end rates of a rest-to-rest
+    motion, or for a motion without a Problem), the integration's ``error_bound`` and the accepted
+    ``tolerance``. Every method, and the rotor-only check of a timed motion, makes its certificate here."""
+    final = State(*(float(v) for v in final))
+    if residual is None and problem is None:
+        raise InputError("certify needs the problem or the residual")
+    residual = problem.residual(final) if residual is None else float(residual)
+    return Certificate(integrator, final, residual, float(error_bound), float(tolerance))
+
+
+def require_certified(result, where: str = ""):
+    """``result`` if its certificate (and every alternative's) has passed; NoPlanError naming the residual
+    otherwise: no method returns a plan above its tolerance."""
+    for r in (result, *getattr(result, "alternatives", ())):
+        c = r.certificate
+        if not c.passed:
+            raise NoPlanError(f"no certified plan{' for ' + where if where else ''}: the certified residual plus "
+                              f"error bound {c.residual + c.error_bound:.2e} exceeds {c.tolerance:.0e}")
+    return result

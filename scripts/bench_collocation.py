@@ -24,7 +24,7 @@ K = 2.5
 BUDGET_S = 1.0
 
 
-def measure(repeats: int = 11, targets=TARGETS, k: float = K, cost: str = "path_length", intervals: int = 100,
+def measure(repeats: int = 11, targets=TARGETS, k: float = K, cost: str = "path_energy", intervals: int = 100,
             degree: int = 3, scheme: str = "legendre", naive: bool = True, report=None) -> dict:
     """Median IPOPT time from the warm start, and convergence from the naive guess.
 
@@ -82,7 +82,7 @@ def measure(repeats: int = 11, targets=TARGETS, k: float = K, cost: str = "path_
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--repeats", type=int, default=11)
-    ap.add_argument("--cost", choices=sorted(COSTS), default="path_length")
+    ap.add_argument("--cost", choices=sorted(COSTS), default="path_energy")
     ap.add_argument("--no-naive", action="store_true", help="skip the naive-guess solves")
     args = ap.parse_args()
     res = measure(args.repeats, cost=args.cost, naive=not args.no_naive, report=print)

@@ -182,7 +182,7 @@ def _phases(p, target):
 
     planner = geometric.default_planner()
     _, eta_m, h_m = _start_near(p, target)
-    solve = polisher(planner.method, panels_for(p.k))
+    solve = polisher(planner.root_solver, panels_for(p.k))
     t_polish, c_polish, _ = _median_times(lambda: solve([p.a, p.b], [p.k, eta_m, h_m], 1e-6, A_MAX), 41)
     t_cert, c_cert, _ = _median_times(lambda: planner.certifier.certify(p.a, p.b, p.k, p.gamma, p.steps), 41)
     return t_polish * 1e3, t_cert * 1e3, c_polish * 1e3, c_cert * 1e3
@@ -198,7 +198,7 @@ def section_plan(ctx):
     for target, steps in TARGETS:
         p = rollplan.plan(target, steps, k=K)                 # warms the planner, per-k tables, compiled functions
         t_warm, c_warm, ts = _median_times(lambda: rollplan.plan(target, steps, k=K), ctx["repeats"])
-        t_newton, _ = _median_time(lambda: rollplan.plan(target, steps, k=K, method="newton"), ctx["repeats"])
+        t_newton, _ = _median_time(lambda: rollplan.plan(target, steps, k=K, root_solver="newton"), ctx["repeats"])
         t_polish, t_cert, c_polish, c_cert = _phases(p, target)
         x0, eta_m, h_m = _start_near(p, target)
         res = {}
@@ -467,7 +467,7 @@ def section_profile(ctx):
     wanted = {("planner.py", "solve"): "whole plan (GeometricPhasePlanner.solve)",
               ("enumerate.py", "branches"): "branches (enumeration)",
               ("enumerate.py", "roots"): "roots of the branches (enumeration)",
-              ("planner.py", "_polish"): f"polish ({planner.method})",
+              ("planner.py", "_polish"): f"polish ({planner.root_solver})",
               ("certify.py", "certify"): "certificate (RK8, n steps)",
               ("planner.py", "_certified"): "gamma + certificate"}
     plan_line = geometric.GeometricPhasePlanner.solve.__code__.co_firstlineno

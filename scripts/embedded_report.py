@@ -28,6 +28,7 @@ import numpy as np
 
 from rollplan.codegen import c_library as codegen
 from rollplan.io import write_atomic, write_json
+from rollplan.problem import K_MIN
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_codegen  # noqa: E402
@@ -119,7 +120,7 @@ def report(data: dict) -> str:
     lines = ["# The C planner on microcontrollers", "",
              "Regenerate: `python scripts/embedded_report.py` (writes this file and `embedded.json`).",
              f"Toolchain: {data['versions']['arm-none-eabi-gcc']}; {data['versions']['qemu-system-arm']}.",
-             f"Planner: {codegen.K_MONOTONE:g} <= k <= {data['k_max']:g} (step map of rollplan_step_eval: "
+             f"Planner: {K_MIN:g} <= k <= {data['k_max']:g} (step map of rollplan_step_eval: "
              f"{data['steps_per_leaf']} steps per leaf), certificate "
              f"tolerance {codegen.CERT_TOL:g} (double) / {codegen.FLOAT_CERT_TOL:g} (float).", "",
              "## Memory (bytes; static only, no heap)", "",

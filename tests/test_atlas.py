@@ -119,3 +119,18 @@ def test_atlas_of_a_curve_family_matches_scipy(tmp_path, curve):
     jac = np.column_stack([(he(a + step, b) - he(a - step, b)) / (2 * step),
                            (he(a, b + step) - he(a, b - step)) / (2 * step)])
     assert d["det"][1][2] == pytest.approx(np.linalg.det(jac), rel=1e-5, abs=1e-7)
+
+
+def test_the_atlas_takes_the_method_geometric_of_the_registry(atlas):
+    """The step map of the registry's method "geometric" (given as a method or as its pole-to-pole planner)
+    is the default's; anything else is one clear line."""
+    from rollplan.planners import METHODS
+
+    method = METHODS["geometric"](nodes=24)
+    for planner in (method, method.planner):
+        other = compute_atlas(2.5, steps=2, resolution=6, planner=planner)
+        assert np.allclose(other.h, atlas.h, rtol=1e-9, atol=1e-12)
+        assert np.allclose(other.eta, atlas.eta, rtol=1e-9, atol=1e-12)
+    with pytest.raises(InputError, match="planner") as err:
+        compute_atlas(2.5, resolution=6, planner="geometric")
+    assert "\n" not in str(err.value)

@@ -322,13 +322,16 @@ def test_plan_demo_branch_without_plan_agrees_with_python(built, target, branch)
 
 @pytest.mark.slow
 def test_random_targets_same_plan_as_python(built):
-    """Random targets, k in [1/2, K_MAX]: the C planner and the Python planner give the same outcome, and
-    where there is a plan, the same branch and (a, b, gamma) to 1e-8."""
+    """Random targets, k in [1/2, K_MAX] (and a few in [0, 1/2), close to the pole, where there are plans): the C
+    planner and the Python planner give the same outcome, and where there is a plan, the same branch and
+    (a, b, gamma) to 1e-8."""
     rng = np.random.default_rng(11)
     plans = 0
-    for _ in range(30):
+    for i in range(36):
         u, v = rng.uniform(-2, 2, 2)
         psi, n, k = rng.uniform(-4, 4), int(rng.integers(1, 5)), float(rng.uniform(0.5, DEFAULT_K_MAX))
+        if i >= 30:
+            u, v, psi, k = 0.2 * u, 0.2 * v, 0.1 * psi, float(rng.uniform(0.0, 0.5))
         run = demo(built, repr(float(u)), repr(float(v)), repr(float(psi)), n, repr(k))
         q = reference_plan((u, v, psi), n, k)
         assert (run.returncode == 0) == (q is not None), (u, v, psi, n, k, run.stderr)
@@ -381,10 +384,12 @@ def _check_all(built, target, checked=3):
     return count
 
 
-@pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 2, 1.5), (0.0, 1.0, 0.0, 1, 0.5)])
+@pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 2, 1.5), (0.0, 1.0, 0.0, 1, 0.5),
+                                    (0.3, 0.2, 0.5, 2, 0.1), (0.3, 0.2, 0.0, 1, 0.45)])
 def test_plan_demo_all_lists_the_plans_of_python_all(built, target):
     """plan_demo --all (every root on every branch, certified on board) against the numpy search's --all list; the
-    paper's case k = 2.5, h = 1 R has its smallest solution a = b = 0.300429 R first."""
+    paper's case k = 2.5, h = 1 R has its smallest solution a = b = 0.300429 R first; k < 1/2 (sigma graphs of the
+    C search; psi = 0: the branch eta = 0 where E is not monotone)."""
     assert _check_all(built, target) >= 3
     if target == (0.0, 1.0, 0.0, 1, 2.5):
         first = _parse_all(demo(built, "--all", *target))[0][0]
@@ -424,7 +429,7 @@ def test_plan_all_capacity_and_bad_arguments(built):
     status, count, part = plan_all(target, 2)
     assert status == 6 and count == total and part == full[:2]
     assert plan_all(target, 2, count=False)[0] == 2 and plan_all(target, -1)[0] == 2
-    assert plan_all((0.0, 0.0, 0.5, 1, 2.5), 4)[0] == 2 and plan_all((0.3, 0.2, 0.5, 1, 0.4), 4)[0] == 2
+    assert plan_all((0.0, 0.0, 0.5, 1, 2.5), 4)[0] == 2 and plan_all((0.3, 0.2, 0.5, 1, -0.1), 4)[0] == 2
     assert plan_all((2.0, 2.0, 0.0, 1, 5.0), 4)[:2] == (3, 0)
 
 
@@ -489,7 +494,7 @@ def test_plan_demo_reproduces_paper_radius(built):
     (("x", 1, 0, 1, 2.5), 2), ((0, 1, 0, 0, 2.5), 2), ((0, 1, 0, 1.5, 2.5), 2), ((0, 1, 0, 1, -1), 2),
     ((0, 0, 0, 1, 2.5), 2), ((0, 1, 0, 1), 2), ((0, 1, "nan", 1, 2.5), 2),
     ((0, 2, 0, 1, 50), 2), ((0, 1, 0, 1, 5.000001), 2), ((0, 1, 0, 1001, 2.5), 2), ((0, 1, 0, 1, "inf"), 2),
-    ((0, 1, 0, 1, 0.49), 2),        # below K_MIN = 1/2: the complete enumeration does not apply
+    ((0, 1, 0, 1, -0.01), 2),       # below K_MIN = 0
     ((0, 1, 1e7, 1, 2.5), 2), ((0, 1, 0, 1, 2.5, 0.5), 2), (("--all", 0, 1, 0, 1), 2), (("--all", 0, 0, 0, 1, 2.5), 2),
     (("--all", 2, 2, 0, 1, 5), 3),
     ((30, 0, 0, 1, 2.5), 3),        # farther than any figure eight reaches in one step
@@ -504,8 +509,8 @@ def test_plan_demo_reports_bad_input_and_no_plan(built, args, status):
 @pytest.mark.parametrize("args, needle", [
     (("0", "0x10", "0", "1", "2.5"), "usage"),          # hexadecimal is not a decimal number (strtod reads 16)
     (("0", "1", "0", "1", "1e308"), "K = 1e308"),       # beyond K_MAX: bad input, not "no convergence"
-    (("0", "1", "0", "1", "100.5"), f"[0.5, {DEFAULT_K_MAX!r}]"),   # the k range fixed at generation
-    (("0", "1", "0", "1", "0.25"), "below 0.5"), (("0", "1", "2e6", "1", "2.5"), f"at most {PSI_MAX!r}"),
+    (("0", "1", "0", "1", "100.5"), f"[0.0, {DEFAULT_K_MAX!r}]"),   # the k range fixed at generation
+    (("0", "1", "0", "1", "-0.25"), "K = -0.25"), (("0", "1", "2e6", "1", "2.5"), f"at most {PSI_MAX!r}"),
     (("0", "1", "0", "1001", "2.5"), "[1, 1000]"),
     (("0", "1", "0", "1", "inf"), "usage"), ((" 0", "1", "0", "1", "2.5"), "usage"),
     (("0", "1_0", "0", "1", "2.5"), "usage"), (("0", "1e400", "0", "1", "2.5"), "usage"),
@@ -753,7 +758,7 @@ def _fuzz_inputs(rng, count, many_steps):
         u, v = (rng.choice(special["u"]) if rng.random() < 0.2 else rng.uniform(-3, 3) for _ in range(2))
         psi = rng.choice(special["psi"]) if rng.random() < 0.2 else rng.uniform(-4, 4)
         steps = int(rng.choice(special["steps"])) if rng.random() < 0.2 else int(rng.integers(1, 5))
-        k = rng.choice(special["k"]) if rng.random() < 0.2 else rng.uniform(0.5, DEFAULT_K_MAX)
+        k = rng.choice(special["k"]) if rng.random() < 0.2 else rng.uniform(0.0, DEFAULT_K_MAX)
         yield float(u), float(v), float(psi), steps, float(k)
 
 

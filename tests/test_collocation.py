@@ -58,7 +58,7 @@ def scipy_final(controls, k, horizon=1.0):
 
 @pytest.fixture(scope="module")
 def planner40():
-    return CollocationPlanner(40, 3, "legendre", "path_length")
+    return CollocationPlanner(40, 3, "legendre", "path_energy")
 
 
 @pytest.fixture(scope="module")
@@ -183,7 +183,7 @@ def test_verified_residual_of_optimal_solutions_shrinks_at_order(scheme, degree,
     """The end error of optimal solutions before the Newton correction (controls re-optimized at each N, integrated
     by CVODES) follows the same order; after it the residual is below the tolerance."""
     Ns = [20, 40, 80]
-    runs = [CollocationPlanner(N, degree, scheme, "path_length").solve(PROBLEM) for N in Ns]
+    runs = [CollocationPlanner(N, degree, scheme, "path_energy").solve(PROBLEM) for N in Ns]
     assert max(r.residual for r in runs) < 1e-9
     res = np.array([r.stats.details["uncorrected_error"] for r in runs])
     slope = -np.polyfit(np.log(Ns), np.log(res), 1)[0]
@@ -235,15 +235,32 @@ def test_rotor_effort_equals_quadrature_of_rotor_rates():
 
 
 def test_costs_registry():
-    assert {"path_length", "angular_velocity", "rotor_effort"} <= set(COSTS)
+    assert {"path_energy", "angular_velocity", "rotor_effort"} <= set(COSTS)
     assert COSTS["rotor_effort"].needs_robot
+
+
+def test_energy_form_of_the_path_length_has_its_own_name():
+    """"path_length" is int |v| dt in rollplan.measures but was int |v|^2 dt here: the energy form is now
+    "path_energy", and the old key still gives it, with a DeprecationWarning."""
+    from rollplan.execution.optimal_timing import TIMING_COSTS
+    from rollplan.measures import COSTS as MEASURED
+    from rollplan.planners.collocation.rest import REST_COSTS
+
+    assert "path_length" in MEASURED and "path_length" not in COSTS
+    assert "path_length" not in REST_COSTS and "path_length" not in TIMING_COSTS
+    x, w, xdot, omega, par = (ca.SX.sym(n, m) for n, m in (("x", 5), ("w", 2), ("xd", 5), ("om", 3), ("p", 6)))
+    energy = ca.Function("L", [xdot], [COSTS["path_energy"].integrand(x, w, xdot, omega, par)])
+    assert float(energy([0.3, -0.4, 0, 0, 0])) == pytest.approx(0.25, rel=1e-15)   # |v|^2, not |v|
+    with pytest.warns(DeprecationWarning, match="path_energy"):
+        planner = CollocationPlanner(4, 1, cost="path_length")
+    assert planner.cost is COSTS["path_energy"]
 
 
 # ----------------------------------------------------------------------------- errors
 
 
 def test_failed_solve_raises_solver_error_with_status():
-    P = CollocationPlanner(20, 2, "legendre", "path_length", max_iter=2)
+    P = CollocationPlanner(20, 2, "legendre", "path_energy", max_iter=2)
     with pytest.raises(SolverError) as exc:
         P.solve(PROBLEM, guess="naive")
     assert exc.value.status == "Maximum_Iterations_Exceeded"
@@ -301,7 +318,7 @@ def test_collocate_keywords_and_warm_start_plan(warm40):
 def test_naive_guess_is_a_singular_point_and_fails_with_a_hint():
     """At rest on the south pole the linearized kinematics are not controllable: the equality
     Jacobian loses rank, and IPOPT fails from the naive guess for a psi = 0 target (see comparison.md)."""
-    P = CollocationPlanner(10, 3, "legendre", "path_length")
+    P = CollocationPlanner(10, 3, "legendre", "path_energy")
     tr, c = P.transcription, P.contact_bound
     problem = Problem((0.3, 0.0, 0.0), k=K)
     start, final = np.zeros(5), np.array([0.3, 0.0, 0.0, 0.0, 0.0])

@@ -147,11 +147,11 @@ def test_comparison_figure_follows_the_colour_convention(comp):
     fig = plot_comparison(comp)
     by_title = {ax.get_title(): ax for ax in fig.axes}
     rgba = lambda ax: [to_rgba(ln.get_color()) for ln in ax.get_lines() if len(ln.get_xdata()) > 2]  # noqa: E731
-    planners = [to_rgba(PLANNER[n]) for n in ("geometric_phase", "collocation")]
+    planners = [to_rgba(PLANNER[n]) for n in ("geometric", "collocation")]
     assert rgba(by_title["contact paths on the plane"]) == planners
     assert rgba(by_title["|omega| of both motions"]) == planners
     legends = {t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()}
-    for name, side in (("geometric_phase", comp.gp), ("collocation", comp.collocation)):
+    for name, side in (("geometric", comp.gp), ("collocation", comp.collocation)):
         who = PLANNER_LABELS[name]
         assert any(text.startswith(who) for text in legends)
         rates = by_title[f"{who}: rotor rates, eq. (11)"]
@@ -209,7 +209,7 @@ def test_contact_bound_holds_between_collocation_points():
     from rollplan.studies.comparison import branch_guess
 
     problem = Problem((0.5, 0.3, 0.4), k=K)
-    planner = RestToRestPlanner(8, 3, cost="path_length", contact_bound=0.6)
+    planner = RestToRestPlanner(8, 3, cost="path_energy", contact_bound=0.6)
     guess, m = branch_guess(problem, planner)
     r = planner.solve(problem, guess, 1.0, m)
     polar, backed = _polar(r.motion.state).max(), r.stats.details["backed_off_bound"]

@@ -143,8 +143,8 @@ def test_final_state_is_independent_integration():
 
 
 def test_methods_agree():
-    a = rollplan.plan((0.5, 0.7, 0.8), k=2.5, method="ipopt")
-    b = rollplan.plan((0.5, 0.7, 0.8), k=2.5, method="newton")
+    a = rollplan.plan((0.5, 0.7, 0.8), k=2.5, root_solver="ipopt")
+    b = rollplan.plan((0.5, 0.7, 0.8), k=2.5, root_solver="newton")
     assert (a.a, a.b, a.gamma) == pytest.approx((b.a, b.b, b.gamma), abs=1e-9)
 
 
@@ -368,7 +368,7 @@ def test_plan_is_a_certified_result(planner):
 
 def test_sample_starts_at_rest_and_ends_on_target():
     p = rollplan.plan((0.5, 0.7, 0.8), k=2.5)
-    t = p.sample(50)
+    t = p.sample(1 + 2 * 50)   # samples in all: the start and 50 per leaf
     assert t.parameter == "theta" and t.radius == p.radius
     assert t.s[0] == 0 and t.s[-1] == pytest.approx(2 * np.pi * p.steps)
     assert np.all(t.state[0] == 0)
@@ -386,7 +386,7 @@ def test_trajectory_against_the_printed_curve_and_reference(target, steps, k, ra
     reference's dense solution at the same curve parameter; segment = 2 step + leaf."""
     p = rollplan.plan(target, steps=steps, k=k, radius=radius)
     R = p.radius
-    t = p.sample(40)
+    t = p.sample(1 + 2 * p.steps * 40)   # samples in all: the start and 40 per leaf
     step, leaf = t.segment // 2, t.segment % 2
     assert np.array_equal(t.segment[1:], np.repeat(np.arange(2 * p.steps), 40)) and t.segment[0] == 0
     phi = 2 * (t.s - 2 * np.pi * step - np.pi * leaf)   # theta = 2 pi step + pi leaf + phi / 2
@@ -419,7 +419,7 @@ def test_realizability_13_along_the_computed_motion(target, steps, k):
     """Finite differences of the orientation (2) along the CVODES trajectory give omega;
     n3 . Jc omega = 0 must hold there (and fails for another k: the check can fail)."""
     p = rollplan.plan(target, steps=steps, k=k)
-    t = p.sample(4000)
+    t = p.sample(1 + 2 * steps * 4000)
     q = ca.SX.sym("q", 3)
     rot = ca.Function("R", [q], [model.orientation(q[0], q[1], q[2])]).map(t.s.size)
     mats = np.array(rot(np.vstack([t.u_o, t.v_o, t.psi]))).reshape(3, t.s.size, 3).transpose(1, 0, 2)

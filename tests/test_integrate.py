@@ -166,7 +166,7 @@ def test_step_map_jacobian_matches_finite_differences(fmap, a, b, k, row):
 def test_contact_path_length_is_the_curve_length(planner):
     """Rolling: the planar contact path is as long as the spherical one, 2 pi (a + b), for any k."""
     p = planner.solve(Problem((0.0, 1.0, 0.0), k=2.5))
-    traj = p.sample(4000)
+    traj = p.sample(1 + 2 * 4000)
     assert traj.path_length() == pytest.approx(2 * np.pi * (p.a + p.b), rel=1e-6)
     sphere = np.linalg.norm(np.diff(traj.contact, axis=0), axis=1).sum()
     assert sphere == pytest.approx(traj.path_length(), rel=1e-6)

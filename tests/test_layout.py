@@ -188,4 +188,5 @@ def test_lazy_names_resolve():
         rollplan.no_such_name  # noqa: B018
     from rollplan.planners import METHODS
 
-    assert set(METHODS) == {"geometric", "collocation"} and METHODS["geometric"].__name__ == "ComposedPlanner"
+    assert set(METHODS) == {"geometric", "collocation", "rest_to_rest", "minimum_time"}
+    assert METHODS["geometric"].__name__ == "ComposedPlanner"

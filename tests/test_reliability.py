@@ -155,7 +155,8 @@ def test_motion_api_refuses_wrong_types():
     (lambda: rollplan.load_robot(None), "robot file"),
     (lambda: rollplan.load_robot({}), "robot file"),
     (lambda: Robot(radius="0.1"), "radius"),
-    (lambda: rollplan.plan((0, 1, 0), k=2.5).sample("10"), "samples_per_leaf"),
+    (lambda: rollplan.plan((0, 1, 0), k=2.5).sample("10"), "samples"),
+    (lambda: rollplan.plan((0, 1, 0), k=2.5).sample(samples_per_leaf="10"), "samples_per_leaf"),
 ])
 def test_wrong_types_in_the_python_api_are_input_errors(call, needle):
     """TypeError/AttributeError/ValueError from deep inside became InputError with one line."""

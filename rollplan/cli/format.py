@@ -33,7 +33,7 @@ def fmt_all(p, unit) -> str:
     lines = [f"all plans: {len(plans)} (shortest first; a, b [{unit}], gamma [rad], L = contact path [{unit}])",
              f"  {'m':>6} {'a':>12} {'b':>12} {'gamma':>12} {'L':>12} {'residual':>9}"]
     for q in plans:
-        e = q.legs[0] if getattr(q, "legs", None) else q
+        e = q.legs[0] if q.legs else q
         if not hasattr(e, "branch"):
             lines.append(f"  {'-':>6} {'-':>12} {'-':>12} {'-':>12} {q.path_length:>12.6f} {q.residual:>9.1e}")
             continue

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ..errors import InputError, check_whole
 from ..io import save_figure
-from ..planners.geometric import as_composed
+from ..planners.geometric import Plan, as_composed
 from ..problem import check_steps
 from ..progress import report
 from ..robot import default_robot
@@ -140,7 +140,7 @@ def write_results(args, p, robot, unit, to_dict, command) -> None:
 
         save_figure(plot_motion(motion, p, traj, unit), args.plot)
         print(f"wrote {args.plot}")
-    elif args.plot and not hasattr(p, "pieces"):
+    elif args.plot and isinstance(p, Plan):
         from ..plots.plan import plot_plan
 
         save_figure(plot_plan(p, traj, unit), args.plot)

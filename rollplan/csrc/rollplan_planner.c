@@ -2,11 +2,12 @@
  * rollplan/csrc/; what varies by generation comes from rollplan_config.h, see rollplan_planner.h).
  *
  * The ODE of the certificate is in <prefix>_model.c, generated from rollplan's symbolic model. The planner
- * solves the problem of rollplan.planners.geometric and makes the same choice (the shortest certified plan),
- * but its enumeration is its own: one graph per branch over the smaller leaf radius x, with the rho table
- * interpolated in r, for 1/2 <= k <= K_MAX; the numpy search (enumerate.py) uses sigma graphs for k < 0.6 and
- * root-phase (w) graphs above (docs/design/c-planner.md, docs/design/enumeration.md). Each formula is written
- * once, here, with the Python function it ports where there is one:
+ * solves the problem of rollplan.planners.geometric and makes the same choice (the shortest certified plan) for
+ * every k in [K_MIN, K_MAX]: the roots are enumerated on one graph per branch over the smaller leaf radius x for
+ * k >= 1/2 (E decreasing), and on the sigma graphs of enumerate.py (one per branch and rectangle of monotone
+ * pieces of E) below, with the rho table interpolated in r (docs/design/c-planner.md,
+ * docs/design/enumeration.md). Each formula is written once, here, with the Python function it ports where
+ * there is one:
  *   leafmap.turn / turn_dr / turn_inverse   closed-form turn E(r, k) of a leaf and its inverse
  *   leafmap.displacement / signed_length    the leaf's displacement d(r, k) by the Gauss rule in chi (the
  *                                           nodes chi < pi; the others by the symmetry chi -> 2 pi - chi),
@@ -14,9 +15,12 @@
  *   enumerate.branches                      branches m of (32) (make_branch)
  *   (no Python counterpart)                 the graph over x: y(x) = E^-1(E(x) - e) (other) and the scalar
  *                                           equation g(x) of (33) on it (branch_values)
+ *   enumerate._SigmaGraphs, leafmap.turn_pieces
+ *                                           the sigma graphs (sigma_graphs, sigma_radii, sigma_values)
  *   enumerate.rho_table / rho_lookup        rho tabulated once per k (cubic Hermite in r)
  *   enumerate.roots (_cells, _critical, _examine, _bracketed, _tangencies, _outward, _polish)
- *                                           every root on a branch (search_branch and the functions it calls)
+ *                                           every root on a branch (search_branch, search_sigma, sweep and the
+ *                                           functions they call)
  *   planner._solve_enumerated               the bounded search for the shortest certified plan
  *   planner._certified                      gamma from the geometry
  * Static memory only; not reentrant (one static work area and the table of the last k). */
@@ -35,6 +39,7 @@
 #define REAL_MAX RP_REAL_MAX            /* largest finite casadi_real */
 #define A_MAX RP_A_MAX
 #define K_MIN RP_K_MIN
+#define K_MONOTONE RP_K_MONOTONE          /* E strictly decreasing for k >= K_MONOTONE: the graph over x; sigma graphs below */
 #define K_MAX RP_K_MAX
 #define PSI_MAX RP_PSI_MAX
 #define MAX_STEPS RP_MAX_STEPS
@@ -59,6 +64,7 @@
 #define NBUCKET RP_NBUCKET
 #define PHASE_STEP RP_PHASE_STEP
 #define X_STEP RP_X_STEP
+#define SIGMA_STEP RP_SIGMA_STEP        /* initial sampling step of the sigma graphs (enumerate.SIGMA_STEP) */
 #define HERMITE_REL RP_HERMITE_REL
 #define POLISH_BRACKET RP_POLISH_BRACKET  /* a polish step across the root at most this long brackets it */
 #define POLISH_STEP RP_POLISH_STEP        /* Newton steps of the polish below this are taken without a new evaluation */
@@ -570,6 +576,8 @@ static void rho_range(casadi_real r0, casadi_real r1, casadi_real *lo, casadi_re
 /* Rule, E(A_MAX) and the rho table for k (kept for the last k). The radii are those of enumerate.table_radii; eps
  * is SAFETY times the largest error at the midpoints against the accurate map, plus rounding
  * (enumerate._build_rho_table). Returns 0 on success. */
+static void prepare_pieces(casadi_real k);
+
 static int prepare(casadi_real k) {
     int panels = s_bucket_p[NBUCKET - 1], i, j, parts, nr, n;
     casadi_real h, re, rr, x, rho, err, big, e0, e1, is0, is1;
@@ -598,6 +606,7 @@ static int prepare(casadi_real k) {
     }
     if (2 * s_nodes != ORDER * panels) return 1;
     s_e_min = turn(A_MAX, k);
+    prepare_pieces(k);
     s_nt = 0;
     /* radii uniform in r with TABLE_STEP, each cell split evenly so that E changes by at most TABLE_PHASE and
      * 1 / s = (1 - 2 r^2)^(-1/2) by at most TABLE_INV_S (enumerate.table_radii: the same radii) */
@@ -627,7 +636,7 @@ static int prepare(casadi_real k) {
         if (!(isfinite(s_trho[i]) && isfinite(s_tdrho[i]))) return 1;
     }
     s_rscale = NTABLE / A_MAX;
-    s_escale = NTABLE / s_e_min;
+    s_escale = s_e_min < RP_R(0.0) ? NTABLE / s_e_min : RP_R(0.0);   /* (turn buckets serve turn_inverse, k >= K_MONOTONE) */
     for (i = 0, j = 0; j <= NTABLE; ++j) {   /* buckets (both sequences increase along the table) */
         while (i + 1 < n && s_tr[i + 1] <= A_MAX * j / NTABLE) ++i;
         s_rb[j] = (unsigned short)i;
@@ -682,9 +691,164 @@ typedef struct {
     casadi_real e;       /* |eta_m| */
     casadi_real h;       /* shift per step h_m (33)-(34) */
     casadi_real x_end;   /* range [0, x_end] of the smaller radius */
-    casadi_real y0;      /* smallest a + b on the branch */
+    casadi_real y0;      /* smallest a + b on the branch (a lower bound of it on a sigma graph) */
     casadi_real c_half;  /* cos(eta / 2) */
+    /* the graph: over x (kap = 0, k >= K_MONOTONE) or over sigma = a + kap b on a rectangle of monotone pieces of E
+     * (kap = +-1, k < K_MONOTONE: sigma_graphs); the parameter runs over [p_lo, p_hi] */
+    int kap, sa;         /* kap = s_a s_b; s_a the sign of E' on a's piece */
+    casadi_real p_lo, p_hi, a_lo, a_hi, b_lo, b_hi;   /* a at p_lo and p_hi; b's piece [b_lo, b_hi] */
 } branch_t;
+
+/* ------------------------------------------------------------------ sigma graphs (k < K_MONOTONE; enumerate._SigmaGraphs)
+ *
+ * Below K_MONOTONE E is not monotone on (0, A_MAX]: (0, A_MAX] splits into the monotone pieces of E (s_piece_*,
+ * leafmap.turn_pieces: one, or two around the maximum at r* for 1/Q < k < 1/2). On the rectangle of pieces (i, j)
+ * (a on piece i, b on piece j, signs s_i, s_j of E') the level set E(a) - E(b) = eta_m is one curve along which
+ * sigma = a + kap b, kap = s_i s_j, strictly increases, with da/dsigma = E'(b) / (E'(b) + kap E'(a)) in [0, 1] and
+ * db/dsigma = E'(a) / (E'(b) + kap E'(a)); a(sigma) solves E(a) - E(kap (sigma - a)) = eta_m (bracketed Newton on
+ * the closed form, sigma_radii). The cells, their examination and the polish are those of the graph over x with
+ * the parameter sigma (docs/design/enumeration.md). */
+
+/* The monotone pieces of E for the last k (leafmap.turn_pieces) and the range [s_e_lo, s_e_hi] of E on [0, A_MAX]. */
+static int s_npiece, s_piece_sign[2];
+static casadi_real s_piece_lo[2], s_piece_hi[2], s_e_lo, s_e_hi;
+
+static void prepare_pieces(casadi_real k) {
+    casadi_real q = RP_R(1.0) + RP_POW(RP_R(1.0) - RP_R(2.0) * A_MAX * A_MAX, -RP_R(1.5)), s, r_star, e;
+    int i;
+    s_npiece = 1;
+    s_piece_lo[0] = RP_R(0.0);
+    s_piece_hi[0] = A_MAX;
+    if (k >= K_MONOTONE) {
+        s_piece_sign[0] = -1;
+    } else if (k * q <= RP_R(1.0)) {
+        s_piece_sign[0] = 1;
+    } else {
+        s = RP_POW(RP_R(1.0) / k - RP_R(1.0), -RP_R(1.0) / RP_R(3.0));
+        r_star = RP_SQRT(RP_R(0.5) * (RP_R(1.0) - s * s));
+        s_npiece = 2;
+        s_piece_hi[0] = s_piece_lo[1] = r_star;
+        s_piece_hi[1] = A_MAX;
+        s_piece_sign[0] = 1;
+        s_piece_sign[1] = -1;
+    }
+    s_e_lo = s_e_hi = RP_R(0.0);   /* E(0) = 0; the extremes lie at the ends of the pieces */
+    for (i = 0; i < s_npiece; ++i) {
+        e = turn(s_piece_hi[i], k);
+        s_e_lo = MIN(s_e_lo, e);
+        s_e_hi = MAX(s_e_hi, e);
+    }
+}
+
+/* Radius on the piece [lo, hi] (sign of E' there) with E = t (t clipped to the piece's range), by bisection on the
+ * closed form (enumerate._inverse_on). */
+static casadi_real inverse_on(casadi_real t, casadi_real k, casadi_real lo, casadi_real hi, int sign) {
+    casadi_real mid;
+    int it;
+    for (it = 0; it < 60; ++it) {
+        mid = RP_R(0.5) * (lo + hi);
+        if ((turn(mid, k) - t) * sign < RP_R(0.0)) lo = mid; else hi = mid;
+    }
+    return RP_R(0.5) * (lo + hi);
+}
+
+static casadi_real clip(casadi_real x, casadi_real lo, casadi_real hi) { return x < lo ? lo : (x > hi ? hi : x); }
+
+/* (a, b) on the sigma graph br at sigma = p: bracketed Newton on E(a) - E(kap (p - a)) = eta (_SigmaGraphs.radii). */
+static void sigma_radii(casadi_real p, const branch_t *br, casadi_real k, casadi_real *a_out, casadi_real *b_out) {
+    casadi_real lo, hi, span, a, b, f, df, ea, eb, nxt;
+    int it, done;
+    lo = MAX(br->a_lo, br->kap > 0 ? p - br->b_hi : p + br->b_lo);
+    hi = MIN(br->a_hi, br->kap > 0 ? p - br->b_lo : p + br->b_hi);
+    hi = MAX(hi, lo);
+    span = br->p_hi - br->p_lo;
+    a = clip(br->a_lo + (span > RP_R(0.0) ? (p - br->p_lo) / span : RP_R(0.5)) * (br->a_hi - br->a_lo), lo, hi);
+    for (it = 0; it < 80; ++it) {
+        b = clip(br->kap * (p - a), br->b_lo, br->b_hi);
+        ea = turn_and_dr(a, k, &df);
+        eb = turn_and_dr(b, k, &f);
+        df += br->kap * f;
+        f = ea - eb - br->eta;
+        if (f * br->sa < RP_R(0.0)) lo = a; else hi = a;   /* E(a) - E(b) increases along s_a: the root is to the right */
+        nxt = a - f / df;
+        if (!isfinite(nxt) || nxt <= lo || nxt >= hi) nxt = RP_R(0.5) * (lo + hi);
+        done = RP_FABS(nxt - a) <= RP_R(1e-16) + RP_R(2e-16) * a || hi - lo <= RP_R(4e-16) * (RP_R(1.0) + hi) || f == RP_R(0.0);
+        if (f != RP_R(0.0)) a = nxt;
+        if (done) break;
+    }
+    *a_out = a;
+    *b_out = clip(br->kap * (p - a), br->b_lo, br->b_hi);
+}
+
+/* (g, g', a, b) at sigma = p on the sigma graph br (_SigmaGraphs._values): rho of the table (accurate = 0) or of the
+ * accurate map (1); g as in branch_values, g' with da/dsigma and db/dsigma. */
+static void sigma_values(casadi_real p, const branch_t *br, casadi_real k, int accurate, casadi_real *g,
+                         casadi_real *dg, casadi_real *a, casadi_real *b) {
+    casadi_real ra, rb, pa, pb, ea, eb, den, da, db, c = br->c_half;
+    sigma_radii(p, br, k, a, b);
+    if (accurate) {
+        signed_length(*a, k, &ra, &pa);
+        signed_length(*b, k, &rb, &pb);
+    } else {
+        rho_lookup(*a, &ra, &pa);
+        rho_lookup(*b, &rb, &pb);
+    }
+    ea = turn_dr(*a, k);
+    eb = turn_dr(*b, k);
+    den = eb + br->kap * ea;
+    da = den != RP_R(0.0) ? eb / den : RP_R(0.5);
+    db = den != RP_R(0.0) ? ea / den : RP_R(0.5) * br->kap;
+    *g = ra * ra + rb * rb + RP_R(2.0) * c * ra * rb - br->h * br->h;
+    *dg = RP_R(2.0) * (ra + c * rb) * pa * da + RP_R(2.0) * (rb + c * ra) * pb * db;
+}
+
+/* The sigma graphs of the branch br (eta, h and c_half set) into gr, one per rectangle of pieces whose curve is
+ * not empty (_SigmaGraphs.__init__); br->y0 becomes the smallest lower bound a(p_lo) + min b of a + b on them.
+ * Returns their number (0: the level set is empty). */
+static int sigma_graphs(branch_t *br, casadi_real k, branch_t gr[4]) {
+    casadi_real ti[2], tj[2], t_lo, t_hi, a0, a1, b0, b1, v, s0, s1, low;
+    int i, j, n = 0;
+    br->y0 = INFINITY;
+    for (i = 0; i < s_npiece; ++i) {
+        ti[0] = turn(s_piece_lo[i], k);
+        ti[1] = turn(s_piece_hi[i], k);
+        if (ti[0] > ti[1]) { v = ti[0]; ti[0] = ti[1]; ti[1] = v; }
+        for (j = 0; j < s_npiece; ++j) {
+            tj[0] = turn(s_piece_lo[j], k);
+            tj[1] = turn(s_piece_hi[j], k);
+            if (tj[0] > tj[1]) { v = tj[0]; tj[0] = tj[1]; tj[1] = v; }
+            t_lo = MAX(ti[0], tj[0] + br->eta);   /* E(a) in E(piece i) and E(a) - eta in E(piece j) */
+            t_hi = MIN(ti[1], tj[1] + br->eta);
+            if (!(t_hi > t_lo)) continue;
+            a0 = inverse_on(t_lo, k, s_piece_lo[i], s_piece_hi[i], s_piece_sign[i]);
+            a1 = inverse_on(t_hi, k, s_piece_lo[i], s_piece_hi[i], s_piece_sign[i]);
+            b0 = inverse_on(t_lo - br->eta, k, s_piece_lo[j], s_piece_hi[j], s_piece_sign[j]);
+            b1 = inverse_on(t_hi - br->eta, k, s_piece_lo[j], s_piece_hi[j], s_piece_sign[j]);
+            if (s_piece_sign[i] < 0) {   /* a decreasing in E(a): the end of larger E has the smaller a */
+                v = a0; a0 = a1; a1 = v;
+                v = b0; b0 = b1; b1 = v;
+            }
+            s0 = a0 + s_piece_sign[i] * s_piece_sign[j] * b0;
+            s1 = a1 + s_piece_sign[i] * s_piece_sign[j] * b1;
+            if (!(s1 > s0)) continue;
+            gr[n] = *br;
+            gr[n].kap = s_piece_sign[i] * s_piece_sign[j];
+            gr[n].sa = s_piece_sign[i];
+            gr[n].p_lo = s0;
+            gr[n].p_hi = s1;
+            gr[n].a_lo = a0;
+            gr[n].a_hi = a1;
+            gr[n].b_lo = s_piece_lo[j];
+            gr[n].b_hi = s_piece_hi[j];
+            low = a0 + MIN(b0, b1);
+            gr[n].y0 = low;
+            gr[n].x_end = MIN(MAX(a0, a1), MAX(b0, b1));
+            br->y0 = MIN(br->y0, low);
+            ++n;
+        }
+    }
+    return n;
+}
 
 /* Larger radius y(x) = E^-1(E(x) - e) of the branch at the smaller radius x (the graph over x; no Python
  * counterpart since enumerate.py moved to w and sigma graphs). */
@@ -702,6 +866,10 @@ static casadi_real other(casadi_real x, casadi_real e, casadi_real k) {
 static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int accurate, casadi_real *g,
                           casadi_real *dg, casadi_real *a, casadi_real *b) {
     casadi_real y = x, dy = RP_R(1.0), ex, dex, da, db, ra, rb, pa, pb, c;
+    if (br->kap) {
+        sigma_values(x, br, k, accurate, g, dg, a, b);
+        return;
+    }
     if (br->e != RP_R(0.0)) {   /* y = other(x) and dy/dx = E'(x) / E'(y) */
         ex = turn_and_dr(x, k, &dex);
         y = turn_inverse(ex - br->e, k);
@@ -773,21 +941,26 @@ static int excluded(const branch_t *br, casadi_real x0, casadi_real x1, casadi_r
 static int sgn(casadi_real x) { return (x > RP_R(0.0)) - (x < RP_R(0.0)); }
 
 /* Branch m (enumerate.branches): eta_m = (psi_w + 2 pi m) / n, h_m = h_des / |sin(n eta / 2) / sin(eta / 2)|
- * (h_des / n where |sin(eta / 2)| < 1e-12; brackets.target_shift, core.plane.n_step_gain). Returns 0 if the
+ * (h_des / n where |sin(eta / 2)| < 1e-12; core.plane.target_shift and n_step_gain). Returns 0 if the
  * branch cannot hold a root (|eta_m| > |E(A_MAX)| or h_m unreachable). */
 static int make_branch(long m, casadi_real psi_w, int steps, casadi_real h_des, casadi_real k, branch_t *br) {
     casadi_real eta = (psi_w + TWO_PI * (casadi_real)m) / steps, num, den, gain;
     num = RP_SIN(steps * eta / RP_R(2.0));
     den = RP_SIN(eta / RP_R(2.0));
     gain = RP_FABS(den) < RP_R(1e-12) ? (casadi_real)steps : RP_FABS(num / den);
-    if (gain < RP_R(1e-12) || !(RP_FABS(eta) <= -s_e_min)) return 0;
+    if (gain < RP_R(1e-12) || !(RP_FABS(eta) <= s_e_hi - s_e_lo)) return 0;
     br->m = m;
     br->eta = eta;
     br->e = RP_FABS(eta);
     br->h = h_des / gain;
     br->c_half = RP_COS(RP_R(0.5) * eta);
+    if (k < K_MONOTONE) return isfinite(br->h);   /* y0 and the graphs: sigma_graphs() */
     br->y0 = turn_inverse(-br->e, k);
     br->x_end = turn_inverse(s_e_min + br->e, k);
+    br->kap = br->sa = 0;
+    br->p_lo = RP_R(0.0);
+    br->p_hi = br->x_end;
+    br->a_lo = br->a_hi = br->b_lo = br->b_hi = RP_R(0.0);
     return isfinite(br->h) && isfinite(br->y0) && isfinite(br->x_end);
 }
 
@@ -843,7 +1016,7 @@ static casadi_real bracketed(casadi_real lo, casadi_real hi, casadi_real glo, co
  * roots written to xs (0 or 1). */
 static int outward(casadi_real x, casadi_real gx, casadi_real w, int dir, int ref, const branch_t *br, casadi_real k,
                    casadi_real *xs) {
-    casadi_real lim = dir > 0 ? br->x_end : RP_R(0.0), nxt, gn, dg, a, b;
+    casadi_real lim = dir > 0 ? br->p_hi : br->p_lo, nxt, gn, dg, a, b;
     int it;
     for (it = 0; it < 64; ++it) {
         nxt = x + dir * w;
@@ -913,7 +1086,7 @@ static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p
             if (RP_FABS(gb) <= floor_g) branch_values(pts[j + 1], br, k, 1, &gb, &d, &a, &b);
             if (ga * gb < 0) xs[n++] = bracketed(pts[j], pts[j + 1], ga, br, k, 0, 1);
         }
-        if (vals[j + 1] == RP_R(0.0) && pts[j + 1] > 0) xs[n++] = pts[j + 1];
+        if (vals[j + 1] == RP_R(0.0) && pts[j + 1] > br->p_lo) xs[n++] = pts[j + 1];
     }
     for (j = 1; j <= 2; ++j) {
         lo = pts[j - 1];
@@ -964,7 +1137,7 @@ static casadi_real polish(casadi_real x, const branch_t *br, casadi_real k, int 
     branch_values(x, br, k, 1, &gx, &dg, &a, &b);
     nxt = x - newton_step(gx, dg, br->h, &f);
     for (it = 0; it < (quick ? 6 : 12); ++it) {
-        nxt = nxt < RP_R(0.0) ? RP_R(0.0) : (nxt > br->x_end ? br->x_end : nxt);
+        nxt = nxt < br->p_lo ? br->p_lo : (nxt > br->p_hi ? br->p_hi : nxt);
         if (!isfinite(nxt)) break;
         if (quick ? RP_FABS(nxt - x) <= POLISH_STEP : RP_FABS(nxt - x) <= RP_R(4.0) * REAL_EPS * x) return nxt;
         if (!(nxt != x)) break;
@@ -1015,6 +1188,8 @@ static casadi_real rotation(casadi_real u, casadi_real v, casadi_real psi, int s
 
 /* ------------------------------------------------------------------ search (planner._solve_enumerated) */
 
+#define SEEN 16                        /* recent roots of a branch compared for duplicates (plan_all) */
+
 typedef struct {
     casadi_real u, v, psi_w, k, best;   /* target (psi wrapped), inertia ratio, shortest certified a + b so far */
     int steps, certify, defer, rejected, incomplete;
@@ -1022,11 +1197,13 @@ typedef struct {
     casadi_real rej[5];                 /* a, b, gamma, residual, bound of the best rejected root */
     RP_NAME(plan_t) *plan;              /* filled in by an accepted root only */
     /* plan_all: every accepted root goes into list (capacity entries, sorted by a + b, the shortest kept);
-     * count counts them all; (last_m, last_a, last_b) is the last polished root, for duplicates */
+     * count counts them all; the last SEEN polished roots (a, b) of branch last_m (nseen of them, a ring), for
+     * duplicates */
     int all, capacity, count;
     RP_NAME(plan_t) *list;
     long last_m;
-    casadi_real last_a, last_b;
+    int nseen;
+    casadi_real seen[SEEN][2];
 } search_t;
 
 /* The certificate as the search applies it (<prefix>_certify). A test build may define
@@ -1065,8 +1242,23 @@ static void keep(search_t *S, const branch_t *br, casadi_real a, casadi_real b, 
     p->roots = 0;
 }
 
+/* 1 if (a, b) is within 1e-12 of one of the last SEEN roots of branch br (polished, counted), else 0 and (a, b)
+ * joins them. */
+static int seen(search_t *S, const branch_t *br, casadi_real a, casadi_real b) {
+    int i;
+    if (br->m != S->last_m) S->nseen = 0;
+    S->last_m = br->m;
+    for (i = 0; i < S->nseen && i < SEEN; ++i)
+        if (RP_FABS(a - S->seen[i][0]) <= RP_R(1e-12) && RP_FABS(b - S->seen[i][1]) <= RP_R(1e-12)) return 1;
+    S->seen[S->nseen % SEEN][0] = a;
+    S->seen[S->nseen % SEEN][1] = b;
+    S->nseen++;
+    return 0;
+}
+
 /* A root x of branch br (from the table): polish, and accept it as the best plan if a + b < best and
- * (with the certificate) it certifies. Returns 1 if accepted, -1 if a + b >= best (the branch is done), 0 if
+ * (with the certificate) it certifies. Returns 1 if accepted, -1 if a + b >= best (on the graph over x the branch is
+ * done), 0 if
  * rejected by the certificate or if the leaf map misses the target there by more than NOT_A_ROOT (then it is no root
  * of the accurate map, only a tangency of the table within its error, and is not counted). */
 static int candidate(search_t *S, const branch_t *br, casadi_real x) {
@@ -1076,11 +1268,9 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
     branch_values(x, br, S->k, 0, &g, &dg, &a, &b);   /* a and b (which do not depend on the table) */
     if (!(a + b < S->best)) return -1;
     if (!(a > RP_R(0.0) && b > RP_R(0.0))) return 0;
-    if (S->all) {   /* the same root twice (a close pair merged by the polish): once (enumerate.roots) */
-        if (br->m == S->last_m && RP_FABS(a - S->last_a) <= RP_R(1e-12) && RP_FABS(b - S->last_b) <= RP_R(1e-12)) return 0;
-        S->last_m = br->m;
-        S->last_a = a;
-        S->last_b = b;
+    if (S->all) {   /* the same root twice (a close pair merged by the polish, a corner shared by two sigma graphs):
+                     * once (enumerate.roots) */
+        if (seen(S, br, a, b)) return 0;
     }
     gamma = rotation(S->u, S->v, S->psi_w, S->steps, a, b, S->k, &eta, &h, &predicted);
     if (!(predicted <= NOT_A_ROOT)) return 0;   /* no root of the accurate map: a tangency of the table only */
@@ -1125,6 +1315,80 @@ static casadi_real phase_point(int i, int nt, casadi_real t1, casadi_real x_end,
     return isnan(x) ? x_end : x;
 }
 
+/* The cells of branch br from stack[0] on, in increasing parameter (docs/design/enumeration.md): each split at its
+ * midpoint while the Hermite interpolant of (g, g') at its ends misses g there by more than HERMITE_REL of the
+ * cell's largest |g| and more than rounding (down to MIN_WIDTH); a resolved cell is examined unless
+ * min |H| > SAFETY |g(mid) - H(mid)| + floor_g, and its roots go to candidate() in increasing parameter (a root
+ * within 1e-13 of the last one, *last_root, once). Returns 1 when the branch is done: on the graph over x a root
+ * accepted or a + b reaching S->best; on any graph more than MAX_CELLS_PER_BRANCH cells (*cells counts them;
+ * S->incomplete). */
+static int sweep(search_t *S, const branch_t *br, cell_t *stack, casadi_real floor_g, long *cells,
+                 casadi_real *last_root) {
+    const casadi_real k = S->k;
+    int top = 1, nroot, i, j, crosses, status;
+    casadi_real crit[2], hc, low, gm, pm, err, big, xm, hv, xs[MAX_CELL_ROOTS];
+    cell_t c;
+    while (top) {
+        c = stack[--top];
+        if (++*cells > MAX_CELLS_PER_BRANCH) {
+            S->incomplete = 1;
+            return 1;
+        }
+        xm = RP_R(0.5) * (c.x0 + c.x1);
+        gm = gval(xm, br, k, &pm);
+        hv = hermite(c.g0, c.p0, c.g1, c.p1, c.x1 - c.x0, RP_R(0.5));
+        err = RP_FABS(gm - hv);
+        big = RP_FMAX(RP_FMAX(RP_FABS(c.g0), RP_FABS(c.g1)), RP_FABS(gm));
+        if (err > HERMITE_REL * big && err > RP_R(1e-15) * (RP_R(1.0) + br->h * br->h) && c.x1 - c.x0 > MIN_WIDTH
+            && top + 2 <= STACK_CELLS) {
+            /* split: the right half below the left one, so the cells come in increasing x */
+            stack[top].x0 = xm;
+            stack[top].x1 = c.x1;
+            stack[top].g0 = gm;
+            stack[top].p0 = pm;
+            stack[top].g1 = c.g1;
+            stack[top].p1 = c.p1;
+            ++top;
+            stack[top].x0 = c.x0;
+            stack[top].x1 = xm;
+            stack[top].g0 = c.g0;
+            stack[top].p0 = c.p0;
+            stack[top].g1 = gm;
+            stack[top].p1 = pm;
+            ++top;
+            continue;
+        }
+        if (err > HERMITE_REL * big && err > RP_R(1e-15) * (RP_R(1.0) + br->h * br->h) && c.x1 - c.x0 > MIN_WIDTH)
+            S->incomplete = 1;   /* cannot happen: the stack holds the deepest split */
+        critical(c.g0, c.p0, c.g1, c.p1, c.x1 - c.x0, crit);
+        crosses = 0;
+        low = RP_FMIN(RP_FABS(c.g0), RP_FABS(c.g1));
+        for (j = 0; j < 2; ++j) {
+            if (isnan(crit[j])) continue;
+            hc = hermite(c.g0, c.p0, c.g1, c.p1, c.x1 - c.x0, crit[j]);
+            if (hc * c.g0 <= 0) crosses = 1;
+            low = RP_FMIN(low, RP_FABS(hc));
+        }
+        if (!(sgn(c.g0) != sgn(c.g1) || sgn(c.g0) != sgn(gm) || crosses || low <= SAFETY * err + floor_g))
+            continue;
+        nroot = examine(c.x0, c.x1, c.g0, c.p0, c.g1, c.p1, crit, br, k, floor_g, xs);
+        for (i = 1; i < nroot; ++i) {           /* sort (few) */
+            for (j = i; j > 0 && xs[j - 1] > xs[j]; --j) {
+                hv = xs[j];
+                xs[j] = xs[j - 1];
+                xs[j - 1] = hv;
+            }
+        }
+        for (i = 0; i < nroot; ++i) {
+            if (!(xs[i] > br->p_lo) || RP_FABS(xs[i] - *last_root) <= RP_R(1e-13)) continue;
+            *last_root = xs[i];
+            status = candidate(S, br, xs[i]);
+            if (status && !br->kap) return 1;   /* the graph over x: a + b grows with x, the branch is done */
+        }
+    }
+    return 0;
+}
+
 /* The roots of branch br in increasing x until one is accepted or a + b reaches S->best (enumerate.roots
  * with first_only, then the next roots of the branch if the first is rejected). The branch is sampled on a
  * grid uniform in the phase E(x) (PHASE_STEP) and in x (X_STEP); each cell is split at its midpoint while
@@ -1139,20 +1403,19 @@ static casadi_real phase_point(int i, int nt, casadi_real t1, casadi_real x_end,
  * skip to x the grid resumes at its first point beyond x (so a cell may start at a skip's end: it is smaller than
  * a cell of the grid, which the argument allows). Skipping removes no root of the tabulated g (nor a point where
  * |g| is within the floor), so the roots found, and the plan, are those of the search without it (up to the
- * rounding of roots located from other cell ends). Returns 1 if a plan was accepted on the branch. */
-static int search_branch(search_t *S, const branch_t *br) {
+ * rounding of roots located from other cell ends). */
+static void search_branch(search_t *S, const branch_t *br) {
     const casadi_real k = S->k, floor_g = RP_R(1e-13) * (RP_R(1.0) + br->h * br->h) + s_eps_g;
-    casadi_real t1 = turn(br->x_end, k), xp, xl, prev, g = RP_R(0.0), p = RP_R(0.0), crit[2], hc, low, gm, pm, err, big, xm;
-    casadi_real xs[MAX_CELL_ROOTS], last_root = -RP_R(1.0), hv, t, y_prev, y_t, x_lim, xj, wide;
+    casadi_real t1 = turn(br->x_end, k), xp, xl, prev, g = RP_R(0.0), p = RP_R(0.0), last_root = -RP_R(1.0), hv, t, y_prev, y_t, x_lim,
+        xj, wide;
     static cell_t stack[STACK_CELLS];   /* static: the planner is not reentrant anyway, and the stack stays small */
-    cell_t c;
-    int nt, nx, ip = 1, ix = 1, top, nroot, i, j, crosses, status, have_g = 0;
+    int nt, nx, ip = 1, ix = 1, have_g = 0;
     long cells = 0;
     nt = (int)RP_CEIL(RP_FABS(t1) / PHASE_STEP) + 1;
     nx = (int)RP_CEIL(br->x_end / X_STEP) + 1;
     if (nt < 2) nt = 2;
     if (nx < 2) nx = 2;
-    if (!(br->x_end > RP_R(0.0))) return 0;
+    if (!(br->x_end > RP_R(0.0))) return;
     prev = RP_R(0.0);
     y_prev = other(prev, br->e, k);
     /* a root with a + b < best has x <= y (E decreasing, e >= 0), so x < best / 2 and x < best - y0; y grows with x:
@@ -1160,12 +1423,12 @@ static int search_branch(search_t *S, const branch_t *br) {
      * A skip never goes beyond x_lim, where x + y(x) >= best ends the branch. */
     x_lim = br->x_end;
     if (S->best < INFINITY) x_lim = RP_FMIN(x_lim, RP_FMIN(RP_R(0.5) * S->best, S->best - br->y0));
-    if (!(x_lim > RP_R(0.0)) || excluded(br, RP_R(0.0), x_lim, y_prev, other(x_lim, br->e, k), floor_g)) return 0;
+    if (!(x_lim > RP_R(0.0)) || excluded(br, RP_R(0.0), x_lim, y_prev, other(x_lim, br->e, k), floor_g)) return;
     wide = RP_R(0.0);                         /* width of the next skip tried (0: one cell of the grid) */
     xp = -RP_R(1.0);                          /* the next phase point, computed when ip moves on */
     while (prev < br->x_end) {
         /* nothing on or after this cell can be shorter than the best plan: a + b = x + y(x) grows with x */
-        if (prev + y_prev >= S->best) return 0;
+        if (prev + y_prev >= S->best) return;
         /* next grid point: the smaller of the next phase point and the next uniform point */
         if (xp < RP_R(0.0)) xp = ip < nt ? phase_point(ip, nt, t1, br->x_end, k) : INFINITY;
         xl = ix < nx ? (ix == nx - 1 ? br->x_end : br->x_end * ix / (nx - 1)) : INFINITY;
@@ -1227,67 +1490,48 @@ static int search_branch(search_t *S, const branch_t *br) {
         stack[0].p1 = p;
         prev = t;
         y_prev = y_t;
-        top = 1;
-        while (top) {
-            c = stack[--top];
-            if (++cells > MAX_CELLS_PER_BRANCH) {
-                S->incomplete = 1;
-                return 0;
+        if (sweep(S, br, stack, floor_g, &cells, &last_root)) return;
+    }
+    return;
+}
+
+/* The roots of the sigma graphs gr[0 .. n - 1] of one branch (k < K_MONOTONE) with a + b < S->best: a + b is not
+ * monotone along a sigma graph, so every root is found and each goes to candidate() (enumerate.roots keeps the
+ * shortest of each branch). Each graph is sampled uniformly in sigma with steps of at most SIGMA_STEP
+ * (_SigmaGraphs.grid) and its cells go through sweep(); a cell where a + b >= S->best throughout (a increases along
+ * the graph and b is monotone, so a + b >= a(p0) + min(b(p0), b(p1)) on [p0, p1]) holds no shorter root and is
+ * skipped. */
+static void search_sigma(search_t *S, const branch_t *gr, int n) {
+    static cell_t stack[STACK_CELLS];   /* static: the planner is not reentrant anyway, and the stack stays small */
+    const casadi_real k = S->k;
+    casadi_real floor_g, x0, g0, p0, a0, b0, x1, g1, p1, a1, b1, last_root;
+    long cells = 0;
+    int q, i, cnt;
+    for (q = 0; q < n; ++q) {
+        floor_g = RP_R(1e-13) * (RP_R(1.0) + gr[q].h * gr[q].h) + s_eps_g;
+        cnt = (int)RP_CEIL((gr[q].p_hi - gr[q].p_lo) / SIGMA_STEP) + 1;
+        last_root = -INFINITY;
+        x0 = gr[q].p_lo;
+        branch_values(x0, gr + q, k, 0, &g0, &p0, &a0, &b0);
+        for (i = 1; i < cnt; ++i) {
+            x1 = gr[q].p_lo + (casadi_real)i / (cnt - 1) * (gr[q].p_hi - gr[q].p_lo);
+            branch_values(x1, gr + q, k, 0, &g1, &p1, &a1, &b1);
+            if (x1 > x0 && a0 + MIN(b0, b1) < S->best) {
+                stack[0].x0 = x0;
+                stack[0].x1 = x1;
+                stack[0].g0 = g0;
+                stack[0].p0 = p0;
+                stack[0].g1 = g1;
+                stack[0].p1 = p1;
+                if (sweep(S, gr + q, stack, floor_g, &cells, &last_root)) return;
             }
-            xm = RP_R(0.5) * (c.x0 + c.x1);
-            gm = gval(xm, br, k, &pm);
-            hv = hermite(c.g0, c.p0, c.g1, c.p1, c.x1 - c.x0, RP_R(0.5));
-            err = RP_FABS(gm - hv);
-            big = RP_FMAX(RP_FMAX(RP_FABS(c.g0), RP_FABS(c.g1)), RP_FABS(gm));
-            if (err > HERMITE_REL * big && err > RP_R(1e-15) * (RP_R(1.0) + br->h * br->h) && c.x1 - c.x0 > MIN_WIDTH
-                && top + 2 <= STACK_CELLS) {
-                /* split: the right half below the left one, so the cells come in increasing x */
-                stack[top].x0 = xm;
-                stack[top].x1 = c.x1;
-                stack[top].g0 = gm;
-                stack[top].p0 = pm;
-                stack[top].g1 = c.g1;
-                stack[top].p1 = c.p1;
-                ++top;
-                stack[top].x0 = c.x0;
-                stack[top].x1 = xm;
-                stack[top].g0 = c.g0;
-                stack[top].p0 = c.p0;
-                stack[top].g1 = gm;
-                stack[top].p1 = pm;
-                ++top;
-                continue;
-            }
-            if (err > HERMITE_REL * big && err > RP_R(1e-15) * (RP_R(1.0) + br->h * br->h) && c.x1 - c.x0 > MIN_WIDTH)
-                S->incomplete = 1;   /* cannot happen: the stack holds the deepest split */
-            critical(c.g0, c.p0, c.g1, c.p1, c.x1 - c.x0, crit);
-            crosses = 0;
-            low = RP_FMIN(RP_FABS(c.g0), RP_FABS(c.g1));
-            for (j = 0; j < 2; ++j) {
-                if (isnan(crit[j])) continue;
-                hc = hermite(c.g0, c.p0, c.g1, c.p1, c.x1 - c.x0, crit[j]);
-                if (hc * c.g0 <= 0) crosses = 1;
-                low = RP_FMIN(low, RP_FABS(hc));
-            }
-            if (!(sgn(c.g0) != sgn(c.g1) || sgn(c.g0) != sgn(gm) || crosses || low <= SAFETY * err + floor_g))
-                continue;
-            nroot = examine(c.x0, c.x1, c.g0, c.p0, c.g1, c.p1, crit, br, k, floor_g, xs);
-            for (i = 1; i < nroot; ++i) {           /* sort (few) */
-                for (j = i; j > 0 && xs[j - 1] > xs[j]; --j) {
-                    hv = xs[j];
-                    xs[j] = xs[j - 1];
-                    xs[j - 1] = hv;
-                }
-            }
-            for (i = 0; i < nroot; ++i) {
-                if (!(xs[i] > RP_R(0.0)) || RP_FABS(xs[i] - last_root) <= RP_R(1e-13)) continue;
-                last_root = xs[i];
-                status = candidate(S, br, xs[i]);
-                if (status) return status > 0;
-            }
+            x0 = x1;
+            g0 = g1;
+            p0 = p1;
+            a0 = a1;
+            b0 = b1;
         }
     }
-    return 0;
 }
 
 /* psi = psi_w + 2 pi turns with psi_w in [-pi, pi] (core.plane.wrap_exact, exact for |psi| <= PSI_MAX). */
@@ -1305,36 +1549,44 @@ static casadi_real wrap_turns(casadi_real psi, long *turns) {
 }
 
 /* The search of plan_with over the branches (all, in the order of their smallest a + b, or options->branch only). */
+/* Branch m searched: the graph over x (search_branch) or its sigma graphs (search_sigma). Returns 0 if the branch
+ * holds no root (nothing searched), 1 if searched, -1 if it cannot hold a plan shorter than S->best (on the graph
+ * over x then no branch after it in the order of search() can either: y0 = E^-1(-|eta_m|) grows with |eta_m|;
+ * the bound y0 of sigma_graphs need not grow, and a sigma branch is passed over). */
+static int search_m(search_t *S, long m, casadi_real h_des) {
+    branch_t br, gr[4];
+    int n = 1;
+    if (!make_branch(m, S->psi_w, S->steps, h_des, S->k, &br)) return 0;
+    if (S->k < K_MONOTONE && !(n = sigma_graphs(&br, S->k, gr))) return 0;
+    if (!(br.y0 < S->best)) return S->k < K_MONOTONE ? 0 : -1;
+    S->plan->branches++;
+    if (S->k < K_MONOTONE) search_sigma(S, gr, n); else search_branch(S, &br);
+    return 1;
+}
+
 static void search(search_t *S, const RP_NAME(options_t) *options, casadi_real h_des) {
-    branch_t br;
-    casadi_real lam = -s_e_min, dm;
+    casadi_real lam = s_e_hi - s_e_lo, dm;
     long lo, hi, mp, mn, m;
     int steps = S->steps;
     S->best = INFINITY;
     S->rejected = S->incomplete = 0;
     S->roots = 0;
     S->plan->branches = 0;
-    /* branches with |eta_m| <= lam, in increasing |psi_w + 2 pi m| (the order of their smallest a + b, y0;
-     * ties: smaller m first) */
+    /* branches with |eta_m| <= lam (the range of E), in increasing |psi_w + 2 pi m| (the order of their smallest
+     * a + b, y0; ties: smaller m first) */
     dm = RP_FLOOR((steps * lam - S->psi_w) / TWO_PI);
     hi = (long)dm;
     lo = (long)RP_CEIL((-steps * lam - S->psi_w) / TWO_PI);
     if (options && options->use_branch) {
         m = options->branch + S->turns;
-        if (m >= lo && m <= hi && make_branch(m, S->psi_w, steps, h_des, S->k, &br)) {
-            S->plan->branches = 1;
-            search_branch(S, &br);
-        }
+        if (m >= lo && m <= hi) search_m(S, m, h_des);
     } else {
         /* two runs from the centre c = -psi_w / (2 pi) in [-1/2, 1/2]: mn = floor(c) down, mp = mn + 1 up */
         mn = (long)RP_FLOOR(-S->psi_w / TWO_PI);
         for (mp = mn + 1; mn >= lo || mp <= hi;) {
             int use_neg = mp > hi || (mn >= lo && RP_FABS(S->psi_w + TWO_PI * mn) <= RP_FABS(S->psi_w + TWO_PI * mp));
             m = use_neg ? mn-- : mp++;
-            if (m < lo || m > hi || !make_branch(m, S->psi_w, steps, h_des, S->k, &br)) continue;
-            if (!(br.y0 < S->best)) break;   /* y0 grows along the order: nothing left can be shorter */
-            S->plan->branches++;
-            search_branch(S, &br);
+            if (m >= lo && m <= hi && search_m(S, m, h_des) < 0) break;   /* nothing left can be shorter */
         }
     }
     S->plan->roots = S->roots;
@@ -1426,7 +1678,7 @@ int RP_NAME(plan_all)(casadi_real u, casadi_real v, casadi_real psi, int steps, 
     S.capacity = capacity;
     S.count = 0;
     S.last_m = 0;
-    S.last_a = S.last_b = NAN;
+    S.nseen = 0;
     S.psi_w = wrap_turns(psi, &S.turns);
     search(&S, options, h_des);
     *count = S.count;

@@ -70,9 +70,9 @@ extern "C" {
 
 /* The limits of this generation (defined in rollplan_config.h).
  * Largest admissible leaf radius [R] (the equator of the body frame is singular): RP_A_MAX. */
-/* Smallest inertia ratio k accepted: the turn E(r, k) of a leaf is strictly decreasing in r for k >= 1/2,
- * which this code's enumeration (one graph per branch over the smaller leaf radius) relies on; below it this
- * code refuses (rollplan's Python planner enumerates every k, on graphs over the monotone pieces of E): RP_K_MIN. */
+/* Smallest inertia ratio k accepted (k = 0 is pure rolling): RP_K_MIN. The enumeration runs on one graph per
+ * branch over the smaller leaf radius for k >= 1/2, where the turn E(r, k) of a leaf is strictly decreasing in r,
+ * and on graphs over the monotone pieces of E below. */
 /* Largest inertia ratio k accepted (`rollplan codegen --k-max`): the leaf map's Gauss rule is accurate up to
  * rollplan's K_MAX, the step map <prefix>_step_jac to 1e-10 up to this k, and the rho table is sized for it: RP_K_MAX. */
 /* Largest |psi| [rad] accepted: psi is reduced modulo 2 pi exactly up to it: RP_PSI_MAX. */

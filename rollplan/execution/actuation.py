@@ -90,7 +90,7 @@ import numpy as np
 
 from ..errors import InputError, NoPlanError, check_range, check_whole
 from ..problem import State
-from ..result import Trajectory
+from ..result import DEFAULT_SAMPLES, Trajectory, certify
 from ..robot import Robot
 from .limits import Limits
 from .path import ContactPath, plan_pieces
@@ -103,8 +103,6 @@ __all__ = ["Motion", "actuate", "sample_motion", "samples_per_piece", "certify_m
 
 log = logging.getLogger(__name__)
 
-#: Default total number of time samples of a motion (at least).
-DEFAULT_SAMPLES = 2000
 #: Least number of samples per leaf of the min-jerk law: a cubic spline through the rotor rates then drives
 #: the rotor-only simulation to the target within ~1e-8 R (the error falls as h^4; see the tests).
 MIN_SAMPLES_PER_LEAF = get_law("min-jerk").samples_per_piece
@@ -399,7 +397,7 @@ def certify_motion(motion: Motion, tol: float = MOTION_TOLERANCE) -> Simulation:
     """
     tol = check_range("tol", tol, 0.0, None, low_open=True)
     sim = simulate_rotors(motion.robot, motion.time, motion.rotor_rates, motion.goal, x0=motion.state[0])
-    if not sim.arrival_error <= tol:
+    if not certify(None, sim.final, "cvodes", residual=sim.arrival_error, tolerance=tol).passed:
         raise NoPlanError(f"the motion over T = {motion.duration!r} s misses the goal when driven by its rotor rates "
                           f"alone: arrival error {sim.arrival_error:.2e} > {tol:.0e}; try more samples or another "
                           "duration")

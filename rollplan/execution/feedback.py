@@ -25,8 +25,11 @@ Closed loop (``closed_loop=True``)
 
     The controller commands what the plant takes: the rotor rates of the timed re-plan (rate
     plant), or its torques plus the feed-forward ``c_hat phi_dot`` of the estimated friction
-    (torque plant). Why figure eights: their ends are rest points near the pole, where a
-    measurement is clean and the remainder is again a whole number of figure eights.
+    (torque plant; only a friction the data establish,
+    :func:`~rollplan.execution.estimate.established_friction`: one within the measurement noise,
+    fed forward, would leave the rotors spinning after every motion). Why figure eights: their
+    ends are rest points near the pole, where a measurement is clean and the remainder is again a
+    whole number of figure eights.
 
     After the last figure eight, correcting motions follow: from the measured state (step 1), a
     composed plan of one figure eight to the goal with the estimated robot (step 2), applied whole,
@@ -49,10 +52,10 @@ import numpy as np
 
 from ..core.spline import CubicSpline
 from ..errors import InputError, NoPlanError, check_finite, check_whole
-from ..problem import STATE_NAMES, State, arrival_error
+from ..problem import STATE_NAMES, Problem, State, arrival_error
 from ..robot import Robot
 from .actuation import actuate, motion_samples
-from .estimate import InertiaEstimator, RatioEstimator
+from .estimate import InertiaEstimator, RatioEstimator, established_friction
 from .limits import Limits
 from .plants import PLANT_NAMES, by_name, measure, run_rates, run_torques
 from .timing import get_law
@@ -125,7 +128,8 @@ class Execution:
         One per applied piece of motion: start and end time, the figure eights left, the plan's mode.
     estimates : list of dict
         The robot used for each figure eight (the model robot before any data): k, Jxx/J_r, Jzz/J_r,
-        Jxx, Jzz, J_r (and the friction on the torque plant); ``rejected`` when an estimate was refused.
+        Jxx, Jzz, J_r (and on the torque plant ``friction``, the friction fed forward, and
+        ``friction_estimated``, the least-squares value); ``rejected`` when an estimate was refused.
     final : State
     error : (5,) :func:`rollplan.problem.arrival_error` of ``final`` to ``goal``
     arrival_error, position_error : float [R and rad; R]
@@ -163,12 +167,14 @@ class Execution:
                 "stopped": self.stopped}
 
 
-def _estimate_dict(robot: Robot, friction=None) -> dict:
+def _estimate_dict(robot: Robot, friction=None, estimated=None) -> dict:
     jr = robot.rotor_inertia_axial
     d = {"k": robot.k, "alpha": robot.j_xx / jr, "beta": robot.j_zz / jr, "j_xx": robot.j_xx, "j_zz": robot.j_zz,
          "j_r": jr}
     if friction is not None:
         d["friction"] = [float(c) for c in friction]
+    if estimated is not None:
+        d["friction_estimated"] = [float(c) for c in estimated]
     return d
 
 
@@ -188,6 +194,7 @@ class _Controller:
         self.t0 = 0.0
         self.parts, self.segments = [], []
         self.friction_hat = np.zeros(2)
+        self.friction_estimate = None   # the least-squares friction, before established_friction
         self.ratios = RatioEstimator(real.radius, window)
         self.inertias = InertiaEstimator(real.radius, window, friction=estimate_friction)
 
@@ -232,7 +239,8 @@ class _Controller:
             jr = model_robot.rotor_inertia_axial
             return robot_from_inertias(R, e.alpha * jr, e.beta * jr, jr, like=model_robot), None
         e = self.inertias.estimate()
-        return robot_from_inertias(R, e.j_xx, e.j_zz, e.j_r, like=model_robot), np.array(e.friction)
+        self.friction_estimate = np.array(e.friction)
+        return robot_from_inertias(R, e.j_xx, e.j_zz, e.j_r, like=model_robot), np.array(established_friction(e))
 
     def arrays(self):
         return [np.concatenate(c) for c in zip(*self.parts)]
@@ -300,9 +308,7 @@ def _first_eight_end(motion, kinds) -> int | None:
 
 
 def _pieces(plan):
-    from ..planners.geometric import as_composed
-
-    return as_composed(plan).pieces
+    return plan.pieces
 
 
 #: Closed loop: arrival error [R and rad] of the measured state below which no correction follows.
@@ -341,7 +347,8 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     window : int
         Estimator window in sample intervals.
     estimate_friction : bool
-        Torque plant: also estimate the bearing friction and feed it forward.
+        Torque plant: also estimate the bearing friction and feed forward what the data establish
+        (:func:`~rollplan.execution.estimate.established_friction`).
     rest_readings : int
         Closed loop: the state used for a re-plan is the mean of this many sensor readings at the
         rest point (0: the last sample of the run, as measured).
@@ -432,7 +439,11 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
     ``piece_duration`` a piece (or the law's shortest duration within the limits, if longer). The other
     parameters are those of :func:`execute`.
     """
-    from ..planners.geometric import plan as make_plan
+    from ..planners import solve
+
+    def make_plan(n: int, robot: Robot, start: State):
+        """Re-plan by the method "geometric": ``n`` figure eights from ``start`` to the goal."""
+        return solve(Problem(goal, start=start, robot=robot), "geometric", steps=n)
 
     if plant not in (*PLANT_NAMES, "mujoco"):
         raise InputError(f"plant {plant!r} is not known: choose one of {', '.join(PLANT_NAMES)}, mujoco")
@@ -484,7 +495,7 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
     while True:
         cut = _first_eight_end(motion, kinds) if closed_loop and j < steps - 1 else None
         end = motion.time.size - 1 if cut is None else cut
-        estimates.append(_estimate_dict(robot_est, friction))
+        estimates.append(_estimate_dict(robot_est, friction, ctl.friction_estimate))
         ctl.apply(motion, end, {"figure_eights_left": steps - j, "mode": mode, "k": robot_est.k,
                                 "applied": "all" if cut is None else "first figure eight"})
         if progress:
@@ -494,12 +505,12 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
         j += 1
         measured = update(j)
         try:
-            current = make_plan(goal, steps - j, robot=robot_est, start=State(*measured))
+            current = make_plan(steps - j, robot_est, State(*measured))
         except (NoPlanError, InputError) as exc:
             raise type(exc)(f"re-planning {steps - j} figure eights from the measured state "
                             f"{tuple(round(float(v), 6) for v in measured)} failed: {exc}") from None
         motion = _as_samples(timed(current, robot_est), (p.kind for p in _pieces(current)))
-        kinds, mode = motion.kinds, getattr(current, "mode", "one")
+        kinds, mode = motion.kinds, current.mode
     stopped = None
     for c in range(corrections + 1 if closed_loop else 0):
         measured = update(steps + c + 1)
@@ -509,14 +520,14 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
             stopped = f"the budget of {corrections} corrections is spent"
             break
         try:
-            current = make_plan(goal, 1, robot=robot_est, start=State(*measured))
+            current = make_plan(1, robot_est, State(*measured))
         except (NoPlanError, InputError) as exc:
             stopped = f"no correcting motion from the measured state: {exc}"
             break
         if not _pieces(current):
             break
         m = timed(current, robot_est)
-        estimates.append(_estimate_dict(robot_est, friction))
+        estimates.append(_estimate_dict(robot_est, friction, ctl.friction_estimate))
         correction = _as_samples(m, ())
         ctl.apply(correction, correction.time.size - 1,
                   {"figure_eights_left": 0, "mode": "correction", "k": robot_est.k, "applied": "all"})

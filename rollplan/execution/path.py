@@ -400,8 +400,7 @@ def plan_pieces(plan, robot: Robot) -> tuple[list, tuple]:
     InputError
         Not a geometric-phase plan, not a Robot, or a plan made for another k or radius.
     """
-    if not (hasattr(plan, "pieces") or all(hasattr(plan, n) for n in ("a", "b", "gamma", "steps"))) or \
-            not all(hasattr(plan, n) for n in ("k", "radius", "problem")):
+    if getattr(plan, "method", None) != "geometric" or not all(hasattr(plan, n) for n in ("k", "radius", "problem")):
         raise InputError(f"plan = {plan!r:.60} is not allowed: timing needs a geometric-phase plan (rollplan.plan)")
     if not isinstance(robot, Robot):
         raise InputError(f"robot = {robot!r:.60} is not allowed: give a rollplan.Robot")

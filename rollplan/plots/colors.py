@@ -29,8 +29,8 @@ __all__ = ["LEAF", "LEAF_LABELS", "PLANNER", "PLANNER_LABELS", "ROTOR", "ROTOR_L
 
 LEAF = ("tab:red", "tab:blue")
 LEAF_LABELS = ("1st half-step (leaf a)", "2nd half-step (leaf b)")
-PLANNER = {"geometric_phase": "tab:brown", "collocation": "tab:orange"}
-PLANNER_LABELS = {"geometric_phase": "geometric phase", "collocation": "collocation"}
+PLANNER = {"geometric": "tab:brown", "collocation": "tab:orange"}
+PLANNER_LABELS = {"geometric": "geometric phase", "collocation": "collocation"}
 ROTOR = ("tab:purple", "tab:green")
 ROTOR_LABELS = ("rotor 1 (axis n1)", "rotor 2 (axis n2)")
 AXIS_N3 = "tab:gray"

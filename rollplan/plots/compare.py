@@ -16,8 +16,8 @@ from .common import bottom_view_axes, clip_spikes, draw_bottom_view, plane_axes
 
 __all__ = ["plot_comparison"]
 
-#: The sides of a :class:`~rollplan.studies.comparison.Comparison`, in drawing order.
-SIDES = ("geometric_phase", "collocation")
+#: The sides of a :class:`~rollplan.studies.comparison.Comparison`, in drawing order, by method name.
+SIDES = ("geometric", "collocation")
 
 
 def _series(ax, t, values, colors, labels, ylabel, title):
@@ -45,7 +45,7 @@ def plot_comparison(c, unit: str = "R") -> Figure:
     ax_plane = fig.add_subplot(3, 3, 2)
     ax_speed = fig.add_subplot(3, 3, 3)
     rows = {name: [fig.add_subplot(3, 3, 4 + 3 * i + j) for j in range(3)] for i, name in enumerate(SIDES)}
-    sides = {"geometric_phase": c.gp, "collocation": c.collocation}
+    sides = {"geometric": c.gp, "collocation": c.collocation}
     handles, reach = [], 0.0
     torque_unit = "N m" if c.problem.robot is not None else "units of $J_{zz}$ rad/s$^2$"
     for name in SIDES:

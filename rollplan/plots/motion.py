@@ -44,6 +44,9 @@ def plot_motion(motion, plan=None, traj=None, unit="m") -> Figure:
     With ``plan`` and ``traj`` (a :class:`rollplan.result.Trajectory`) a fourth panel
     shows the contact path on the plane; otherwise the rotor angles. Torques in N m.
     """
+    from ..planners.geometric.planner import Plan
+
+    one_leg = isinstance(plan, Plan)   # the paper's plan: its half-steps; else pieces (rolls, leaves, circles)
     fig = Figure(figsize=(12, 8), layout="constrained")
     axes = fig.subplots(2, 2)
     draw_time_series(axes[0, 0], motion, motion.omega, OMEGA_LABELS, "angular velocity [rad/s]",
@@ -55,7 +58,7 @@ def plot_motion(motion, plan=None, traj=None, unit="m") -> Figure:
                                                                  enumerate(ROTOR_LABELS)],
                      "motor torque [N m]", "rotor torques", colors=ROTOR)
     if plan is not None and traj is not None:
-        if hasattr(plan, "pieces"):   # a composed plan or a route: rolls, leaves and turns in their colours
+        if not one_leg:   # a composed plan or a route: rolls, leaves and turns in their colours
             draw_composed_plane(axes[1, 1], plan, traj, unit, "contact path on the plane")
         else:
             draw_plane_path(axes[1, 1], traj, plan.goal[:2], unit)
@@ -64,7 +67,7 @@ def plot_motion(motion, plan=None, traj=None, unit="m") -> Figure:
                          [f"$\\varphi_{i + 1}$, {lab}" for i, lab in enumerate(ROTOR_LABELS)],
                          "rotor angle [turns]", "rotor angles", colors=ROTOR)
     r = motion.robot
-    pieces = "pieces (leaves, rolls, circles)" if plan is None or hasattr(plan, "pieces") else "half-steps"
+    pieces = "pieces (leaves, rolls, circles)" if plan is None or not one_leg else "half-steps"
     fig.suptitle(f"T = {motion.duration:.6g} s, {int(motion.segment.max()) + 1} {pieces} (timing {motion.timing}); "
                  f"R = {r.radius:.6g} m, k = {r.k:.6g}, $J_r$ = {r.rotor_inertia_axial:.6g} kg m$^2$")
     return fig

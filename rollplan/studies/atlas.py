@@ -32,7 +32,8 @@ from ..core.curves import A_MAX
 from ..core.integrate import spectral_step
 from ..core.plane import n_step_gain
 from ..errors import InputError, check_choice, check_whole
-from ..planners.geometric import default_planner
+from ..planners import METHODS
+from ..planners.geometric import ComposedPlanner, GeometricPhasePlanner, default_planner
 from ..problem import check_k, check_steps
 from .executor import Executor, cpu_count
 
@@ -154,7 +155,7 @@ def compute_atlases(ks, steps: int = 1, resolution: int = DEFAULT_RESOLUTION, pl
     if scheduler is not None:
         runner, fn = Executor(1, scheduler), _block
     else:
-        fun = _cached_atlas_function(planner or default_planner(), curve)
+        fun = _cached_atlas_function(_step_planner(planner), curve)
         cores = threads or cpu_count()
         runner, fn = Executor(1), (lambda task: _evaluate(fun, task[0], task[1], task[2], cores))
     parts = []
@@ -188,8 +189,9 @@ def compute_atlas(k: float, steps: int = 1, resolution: int = DEFAULT_RESOLUTION
         n >= 1 for the totals ``H_n``, ``Psi_n``.
     resolution : int
         Grid points per axis, in [2, MAX_RESOLUTION]; ``a_i = A_MAX i / N``, i = 1..N.
-    planner : GeometricPhasePlanner, optional
-        Planner whose step map to use (default: the module's cached one).
+    planner : ComposedPlanner or GeometricPhasePlanner, optional
+        The method ``"geometric"`` (or its pole-to-pole planner) whose step map to use (default: the
+        registry's, :data:`rollplan.planners.METHODS`).
     threads : int, optional
         Threads of the CasADi ``map`` (default: all cores).
     scheduler : str, optional
@@ -200,6 +202,18 @@ def compute_atlas(k: float, steps: int = 1, resolution: int = DEFAULT_RESOLUTION
         Leaf family of the figure eight (default the circles (35)).
     """
     return compute_atlases([k], steps, resolution, planner, threads, scheduler, progress, curve)[0]
+
+
+def _step_planner(planner) -> GeometricPhasePlanner:
+    """The pole-to-pole planner whose step map an atlas evaluates: the method ``"geometric"``'s (the registry's
+    by default, or the one given), or the planner given."""
+    planner = METHODS["geometric"]() if planner is None else planner
+    if isinstance(planner, ComposedPlanner):
+        planner = planner.planner
+    if not isinstance(planner, GeometricPhasePlanner):
+        raise InputError(f"planner = {planner!r:.60} is not allowed: give the method 'geometric' "
+                         "(rollplan.planners.METHODS['geometric']()) or a GeometricPhasePlanner")
+    return planner
 
 
 @lru_cache(maxsize=8)

@@ -58,8 +58,10 @@ from ..errors import InputError, NoPlanError, OutputError, SolverError, check_ch
 from ..inputs import parse_number, parse_whole, read_csv, show_path
 from ..io import plan_to_dict, tagged
 from ..outputs import LineWriter, check_writable, claim, write_atomic
-from ..planners.geometric import SOLVERS, default_planner, plan
-from ..problem import DEFAULT_K
+from ..planners import solve
+from ..planners.geometric import SOLVERS, default_planner
+from ..planners.method import renamed_option
+from ..problem import DEFAULT_K, Problem
 from ..progress import Progress, reporting
 from .executor import MAX_JOBS, Executor
 
@@ -125,10 +127,10 @@ def read_targets(path) -> list:
     return _targets(path).rows
 
 
-def row_key(row: dict, method: str = "ipopt", problem: str | None = None) -> str:
+def row_key(row: dict, root_solver: str = "ipopt", problem: str | None = None) -> str:
     """The content key of a row: SHA-256 of its columns and fields (sorted by column), the root solver,
     and what is wrong with its shape (``problem``), as hex."""
-    content = json.dumps({"format": _KEY_FORMAT, "method": method, "row": row, "problem": problem},
+    content = json.dumps({"format": _KEY_FORMAT, "method": root_solver, "row": row, "problem": problem},
                          sort_keys=True, ensure_ascii=True)
     return hashlib.sha256(content.encode()).hexdigest()
 
@@ -146,18 +148,19 @@ def _parse(row: dict):
     return (vals["u_a"], vals["v_a"], vals["psi"]), steps, vals["k"]
 
 
-def plan_row(index: int, row: dict, method: str = "ipopt", problem: str | None = None) -> dict:
-    """Plan one row; the JSON object of its output line (never raises for a bad row).
+def plan_row(index: int, row: dict, root_solver: str = "ipopt", problem: str | None = None) -> dict:
+    """Plan one row by the method ``"geometric"`` (:func:`rollplan.planners.solve`) with ``root_solver``;
+    the JSON object of its output line (never raises for a bad row).
 
     ``problem`` says what is wrong with the row's shape (it is then recorded as
     failed). KeyboardInterrupt is never caught: an interrupted row is not a result.
     """
-    head = {"index": index, "key": row_key(row, method, problem)}
+    head = {"index": index, "key": row_key(row, root_solver, problem)}
     try:
         if problem:
             raise InputError(problem)
         target, steps, k = _parse(row)
-        p = plan(target, steps, k=k, method=method)
+        p = solve(Problem(target, k=k, steps=steps), "geometric", root_solver=root_solver)
         out = plan_to_dict(p, None, include_alternatives=False)
         return tagged({**head, **out, "input": row, "status": "ok"}, p.problem.unit)
     except (InputError, NoPlanError, SolverError) as exc:
@@ -175,24 +178,24 @@ def _failed(head: dict, row: dict, exc: BaseException) -> dict:
 
 def _lost_row(job, exc) -> dict:
     """The output line of a row whose task was lost on a cluster (e.g. its worker died)."""
-    index, row, method, problem = job
-    return _failed({"index": index, "key": row_key(row, method, problem)}, row, exc)
+    index, row, root_solver, problem = job
+    return _failed({"index": index, "key": row_key(row, root_solver, problem)}, row, exc)
 
 
 class _Warm:
-    """Build the planner of ``method`` once per process (picklable, for spawned workers)."""
+    """Build the planner of ``root_solver`` once per process (picklable, for spawned workers)."""
 
-    def __init__(self, method: str) -> None:
-        self.method = method
+    def __init__(self, root_solver: str) -> None:
+        self.root_solver = root_solver
 
     def __call__(self) -> None:
-        default_planner(self.method)
+        default_planner(self.root_solver)
 
 
 def _plan_job(job):
-    index, row, method, problem = job
+    index, row, root_solver, problem = job
     with reporting(None):   # the batch shows its own progress, not the planner's of each row
-        return plan_row(index, row, method, problem)
+        return plan_row(index, row, root_solver, problem)
 
 
 def _batch_line(raw: bytes):
@@ -236,8 +239,8 @@ def _dump(d: dict) -> str:
 
 
 def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool = False,
-              method: str = "ipopt", progress: Callable | bool | None = None,
-              scheduler: str | None = None) -> BatchResult:
+              method: str | None = None, progress: Callable | bool | None = None,
+              scheduler: str | None = None, *, root_solver: str | None = None) -> BatchResult:
     """Plan every row of ``targets`` into the JSON Lines file ``out``, in input order.
 
     Parameters
@@ -256,13 +259,16 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
     overwrite : bool
         Replace an existing ``out`` (otherwise an existing file needs ``resume``; not both).
     method : str
-        Root solver of :func:`rollplan.planners.geometric.plan`.
+        Deprecated name of ``root_solver``.
     progress : callable ``(done, total, failed)``, True or None
         Progress report after each row; True shows it on stderr (:class:`rollplan.progress.Progress`:
         a bar on a terminal, a line every few seconds otherwise).
     scheduler : str, optional
         Address of a Dask distributed scheduler: plan the rows on its workers instead (``jobs`` is
         then ignored); the output is the same.
+    root_solver : str
+        Root solver of the method ``"geometric"`` (:data:`rollplan.planners.geometric.SOLVERS`; default
+        ``"ipopt"``).
 
     Returns
     -------
@@ -278,21 +284,22 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
         Ctrl-C; the finished lines stay in ``out``.
     """
     jobs = check_whole("jobs", jobs, 1, MAX_JOBS)
-    method = check_choice("method", method, SOLVERS)
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    root_solver = check_choice(name, root_solver, SOLVERS)
     resume, overwrite = check_flag("resume", resume), check_flag("overwrite", overwrite)
     if resume and overwrite:
         raise InputError("resume and overwrite exclude each other: resume keeps the finished lines of the output, "
                          "overwrite replaces it")
     # Checks jobs and scheduler before any file is touched. Local workers are forked after the first row was
     # planned here: they start with what it built (the planner, the tables of its k), built once.
-    executor = Executor(jobs, scheduler, _Warm(method), first_here=True)
+    executor = Executor(jobs, scheduler, _Warm(root_solver), first_here=True)
     table = _targets(targets)
     out = check_writable(out, "output file", inputs=[targets])
     with claim(out, what="output file"):
-        return _run(table, out, executor, resume, overwrite, method, progress)
+        return _run(table, out, executor, resume, overwrite, root_solver, progress)
 
 
-def _run(table, out: Path, executor, resume, overwrite, method, progress) -> BatchResult:
+def _run(table, out: Path, executor, resume, overwrite, root_solver, progress) -> BatchResult:
     if out.exists() and not (resume or overwrite):
         raise InputError(f"output file {show_path(out)} exists: pass --resume to continue it or --overwrite to "
                          "replace it")
@@ -300,11 +307,11 @@ def _run(table, out: Path, executor, resume, overwrite, method, progress) -> Bat
     rows, problems = table.rows, table.problems
     lines, todo = {}, []
     for i, (row, problem) in enumerate(zip(rows, problems)):
-        key = row_key(row, method, problem)
+        key = row_key(row, root_solver, problem)
         if key in done:
             lines[i] = {**done[key], "index": i}
         else:
-            todo.append((i, row, method, problem))
+            todo.append((i, row, root_solver, problem))
     kept = sorted(lines)
     kept_failed = sum(lines[i].get("status") != "ok" for i in kept)
     shown = Progress(unit="targets") if progress is True else None

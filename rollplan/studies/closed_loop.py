@@ -21,7 +21,8 @@ import numpy as np
 from ..errors import InputError, NoPlanError
 from ..execution.feedback import execute
 from ..execution.plants import disturbance
-from ..planners.geometric import plan as make_plan
+from ..planners import solve
+from ..problem import Problem
 from ..robot import Robot
 from .executor import map_in_order
 
@@ -74,7 +75,7 @@ def run_case(case: dict) -> dict:
     out = {k: v for k, v in case.items() if k != "model"}
     out.update(sign=sign, real_k=real.k, model_k=model.k, goal=list(goal))
     try:
-        p = make_plan(goal, case["steps"], robot=model)
+        p = solve(Problem(goal, robot=model), "geometric", steps=case["steps"])
         runs = {name: execute(p, model, real, case["piece_duration"], plant=case["plant"], closed_loop=cl,
                               disturbances=dist) for name, cl in (("open", False), ("closed", True))}
     except NoPlanError as exc:
@@ -98,7 +99,7 @@ def run_issue_case(case: dict) -> dict:
     model, real = ISSUE_MODEL, issue_real_robot()
     dist = (disturbance("measurement", sigma_length=case["noise"], sigma_angle=case["noise"], seed=case["seed"]),) \
         if case["noise"] > 0 else ()
-    p = make_plan(tuple(case["goal"]), case["steps"], robot=model)
+    p = solve(Problem(tuple(case["goal"]), robot=model), "geometric", steps=case["steps"])
     run = execute(p, model, real, case["piece_duration"], plant=case["plant"], disturbances=dist)
     return {**case, "closed": run.arrival_error, "closed_position": run.position_error,
             "estimated_k": run.estimates[-1].get("k"), "real_k": real.k, "samples": int(run.time.size),

@@ -17,7 +17,11 @@ the same cost, measured by the same function on the same trajectory type.
   psi (multistart, :func:`compare`), and the best certified one is kept.
 * Costs by name (:data:`COMPARED_COSTS`), every one measured by :func:`rollplan.measures.measure` on
   the :class:`~rollplan.measures.TimedMotion` of each side (the GP's from the exact path, the
-  collocation's from the CVODES certification).
+  collocation's from the CVODES certification); both sides minimise :data:`MINIMISED_COSTS` of it (the
+  path length by its energy form ``int |v|^2 dt``, whose minimizers on a fixed horizon are the shortest
+  paths at constant speed).
+* Both sides are solved through the registry (:func:`rollplan.planners.solve`): ``"geometric"`` with
+  ``legs="one"``, ``"rest_to_rest"`` (and ``"minimum_time"`` for :func:`minimum_time`).
 
 Starts of the multistart (each a :class:`Start`): ``gpI:m`` the collocation warm-started from the
 timed GP branch I (the first ``branches`` admissible branches, shortest first) with its m whole turns;
@@ -30,18 +34,17 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from .. import interrupts
 from ..errors import InputError, NoPlanError, SolverError, check_range, check_whole
 from ..execution.actuation import actuate
-from ..execution.optimal_timing import TIMING_COSTS, contact_rates, optimal_timing, timed_samples, timing_bound
+from ..execution.optimal_timing import contact_rates, optimal_timing, timed_samples, timing_bound
 from ..execution.path import ContactPath
 from ..measures import TimedMotion, measure
+from ..planners import METHODS, solve
 from ..planners.collocation.rest import (
-    MinimumTimePlanner,
     RestResult,
     RestToRestPlanner,
     check_horizon,
@@ -51,19 +54,23 @@ from ..planners.collocation.rest import (
 )
 from ..planners.collocation.transcription import Guess
 from ..planners.geometric import Plan
-from ..planners.geometric import plan as gp_plan
 from ..problem import K_MAX, Problem
 from ..progress import report
 from ..robot import Robot
 
-__all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side", "Comparison",
-           "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict", "MinimumTime",
-           "minimum_time"]
+__all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "MINIMISED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side",
+           "Comparison", "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict",
+           "MinimumTime", "minimum_time"]
 
 #: Default contact bound of both planners: largest polar angle of the contact point [rad] (80 deg).
 CONTACT_BOUND = math.radians(80.0)
-#: Costs a comparison can be made for (the collocation and the GP timing minimise it).
-COMPARED_COSTS = TIMING_COSTS
+#: Costs a comparison can be made for: names in :data:`rollplan.measures.COSTS`, measured on both motions.
+COMPARED_COSTS = ("path_length", "angular_velocity", "rotor_energy")
+#: What the collocation and the GP timing minimise for each compared cost (names in
+#: :data:`~rollplan.planners.collocation.rest.REST_COSTS` and
+#: :data:`~rollplan.execution.optimal_timing.TIMING_COSTS`).
+MINIMISED_COSTS = {"path_length": "path_energy", "angular_velocity": "angular_velocity",
+                   "rotor_energy": "rotor_energy"}
 #: Keys of each side in the JSON of ``rollplan compare --json``.
 SIDE_KEYS = ("path_length", "effort", "residual", "solve_time_s", "contact_bound", "trajectory")
 #: Columns of each side's trajectory in that JSON.
@@ -186,19 +193,24 @@ class Comparison:
         return self.gp.costs[self.cost], self.collocation.costs[self.cost]
 
 
-@lru_cache(maxsize=8)
+def _nlp_options(intervals, degree, scheme, cost, contact_bound) -> dict:
+    """The options of the method ``"rest_to_rest"`` that make its NLP (shared by every start)."""
+    return {"intervals": intervals, "degree": degree, "scheme": scheme, "cost": cost, "contact_bound": contact_bound}
+
+
 def _planner(intervals, degree, scheme, cost, contact_bound) -> RestToRestPlanner:
-    return RestToRestPlanner(intervals, degree, scheme, cost, contact_bound)
+    """The NLP of the method ``"rest_to_rest"`` for these options (built once, shared with its solves)."""
+    return METHODS["rest_to_rest"](**_nlp_options(intervals, degree, scheme, cost, contact_bound)).planner
 
 
 def _branches(problem: Problem, robot: Robot, contact_bound: float, wanted: int) -> list:
     """Up to ``wanted`` certified GP branches of one leg whose leaves stay within the bound: the planner's
     (the shortest), then its neighbours ``m +- 1, m +- 2, ...`` (at most ``2 wanted + 2`` branches tried)."""
     amax = leaf_radius_bound(contact_bound) * problem.radius
-    kw = {"robot": robot, "radius": problem.radius, "legs": "one"}
-    goal = tuple(problem.goal)
+    gp_problem = Problem(problem.goal, robot=robot, radius=problem.radius, steps=problem.steps)
+    gp_plan = lambda **kw: solve(gp_problem, "geometric", legs="one", **kw)  # noqa: E731
     try:
-        first = gp_plan(goal, problem.steps, **kw)
+        first = gp_plan()
     except NoPlanError as exc:
         raise NoPlanError(f"{exc} (the comparison needs a plan of one leg of figure eights)") from None
     if not isinstance(first, Plan):   # a turn in place or the empty motion: not one leg of figure eights
@@ -209,7 +221,7 @@ def _branches(problem: Problem, robot: Robot, contact_bound: float, wanted: int)
     for d in range(1, wanted + 2):
         for m in (first.branch - d, first.branch + d):
             try:
-                found.append(gp_plan(goal, problem.steps, branch=m, **kw))
+                found.append(gp_plan(branch=m))
             except NoPlanError:
                 continue
     ok = sorted((q for q in found if max(q.a, q.b) <= amax), key=lambda q: q.path_length)
@@ -317,7 +329,8 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     rob = _robot(problem, robot)
     check_intervals(intervals)
     report("compare", 0, 3, stage="building the collocation NLP")
-    planner = _planner(intervals, degree, scheme, cost, contact_bound)   # checks N, d, scheme, bound
+    nlp = _nlp_options(intervals, degree, scheme, MINIMISED_COSTS[cost], contact_bound)
+    planner = _planner(**nlp)   # checks N, d, scheme, bound
 
     t0 = time.perf_counter()
     timed = []
@@ -347,12 +360,12 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     for name, m, t, x7, start_cost in candidates:
         report("compare", 2 + len(starts), total, stage=f"collocation from {name}")
         guess = guess_from_samples(tr, t, x7, name)
-        starts.append(_run(planner, problem, rob, guess, horizon, m, start_cost, results))
+        starts.append(_run(nlp, cost, problem, rob, guess, horizon, m, start_cost, results))
     if naive:
         for m in naive_turns:
             report("compare", 2 + len(starts), total, stage=f"collocation from naive:{m}")
             start, final = planner.boundary(problem, m)
-            starts.append(_run(planner, problem, rob, naive_guess(tr, start, final), horizon, m, None, results,
+            starts.append(_run(nlp, cost, problem, rob, naive_guess(tr, start, final), horizon, m, None, results,
                                f"naive:{m}"))
     coll_time = time.perf_counter() - t1
     report("compare", total, total, stage="done")
@@ -366,15 +379,17 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
                       timing_bound(gp_path, horizon, cost) if cost == "angular_velocity" else None)
 
 
-def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:
+def _run(nlp, cost, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:
+    """One start of the multistart: the method ``"rest_to_rest"`` from ``guess``; its :class:`Start`."""
     t0 = time.perf_counter()
     try:
         # Ctrl-C inside IPOPT ends that solve only: interrupts.call raises it, which stops the whole multistart
-        r = interrupts.call(planner.solve, problem, guess, horizon, turns, robot)
+        r = interrupts.call(solve, problem, "rest_to_rest", **nlp, horizon=horizon, turns=turns, guess=guess,
+                            robot=robot)
     except SolverError as exc:
         return Start(name or guess.name, turns, exc.status, None, start_cost, time.perf_counter() - t0)
     results.append(r)
-    return Start(name or guess.name, turns, "ok", measure(r.motion)[planner.cost], start_cost, r.stats.time_s)
+    return Start(name or guess.name, turns, "ok", measure(r.motion)[cost], start_cost, r.stats.time_s)
 
 
 def _side(c: Comparison, side: Side) -> dict:
@@ -391,6 +406,7 @@ def comparison_to_dict(c: Comparison) -> dict:
     return {
         "target": {"u_a": g.u_a, "v_a": g.v_a, "psi": g.psi}, "k": c.problem.k, "radius": c.problem.radius,
         "horizon": c.horizon, "steps": c.problem.steps, "cost": c.cost,
+        # the JSON keys of the sides (kept): "geometric_phase" is the method "geometric"
         "geometric_phase": _side(c, c.gp), "collocation": _side(c, c.collocation),
         "details": {
             "geometric_phase": {"costs": c.gp.costs, "figure_eight": {"a": p.a, "b": p.b, "gamma": p.gamma},
@@ -429,11 +445,6 @@ class MinimumTime:
     collocation: Side
 
 
-@lru_cache(maxsize=4)
-def _min_time_planner(intervals, degree, contact_bound) -> MinimumTimePlanner:
-    return MinimumTimePlanner(intervals, degree, contact_bound=contact_bound)
-
-
 def minimum_time(target, robot: Robot, steps: int = 1, intervals: int = 60, degree: int = 3,
                  contact_bound: float = CONTACT_BOUND) -> MinimumTime:
     """Minimum time rest to rest under ``robot``'s ``max_rotor_rate`` and ``max_rotor_torque`` (both needed):
@@ -445,8 +456,9 @@ def minimum_time(target, robot: Robot, steps: int = 1, intervals: int = 60, degr
     InputError, NoPlanError, SolverError
     """
     problem = Problem(tuple(target), robot=robot, steps=steps)
-    planner = _min_time_planner(intervals, degree, check_range("contact_bound", contact_bound, 0.0, math.pi / 2,
-                                                               True, True))
+    nlp = {"intervals": intervals, "degree": degree,
+           "contact_bound": check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)}
+    planner = METHODS["minimum_time"](**nlp).planner   # the NLP, built once (shared with the solve below)
     t0 = time.perf_counter()
     p = _branches(problem, robot, contact_bound, 1)[0]
     m = actuate(p, robot, timing="time-optimal")
@@ -458,6 +470,7 @@ def minimum_time(target, robot: Robot, steps: int = 1, intervals: int = 60, degr
     gp_motion = TimedMotion(m.time, m.state, velocity, m.omega, m.rotor_rates, m.rotor_torques, R)
     turns = round((p.final.psi - problem.goal.psi) / (2 * math.pi))
     guess = guess_from_samples(planner.base.transcription, m.time, x7, "gp-time-optimal")
-    T, r = interrupts.call(planner.solve, problem, guess, m.duration, robot, turns)
-    return MinimumTime(problem, p, m.duration, T, Side(gp_motion, measure(gp_motion), p.residual, gp_time),
+    r = interrupts.call(solve, problem, "minimum_time", **nlp, guess=guess, duration_guess=m.duration, robot=robot,
+                        turns=turns)
+    return MinimumTime(problem, p, m.duration, r.duration, Side(gp_motion, measure(gp_motion), p.residual, gp_time),
                        Side(r.motion, measure(r.motion), r.residual, r.stats.time_s))

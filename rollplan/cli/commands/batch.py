@@ -38,7 +38,7 @@ def cmd_batch(args) -> int:
     quiet_dask(args)
     try:
         jobs = args.jobs if args.jobs is not None else cpu_count()
-        r = run_batch(args.targets, args.out, jobs, args.resume, args.overwrite, args.method,
+        r = run_batch(args.targets, args.out, jobs, args.resume, args.overwrite, root_solver=args.method,
                       progress=not args.quiet, scheduler=args.scheduler)
     except interrupts.Terminated:
         print(f"rollplan: terminated; finished lines are kept in {args.out}: rerun with --resume", file=sys.stderr)

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 from ...io import composed_to_dict
-from ...planners import geometric
+from ...planners import geometric, solve
+from ...problem import Problem
 from ..arguments import JSON_HELP, STEPS_HELP, add_target_options, number, whole
 from ..common import EXIT_OK, check_target
 from ..format import fmt_all, fmt_composed, fmt_plan, fmt_solver, fmt_state, num
@@ -15,11 +16,12 @@ def cmd_plan(args) -> int:
     check_target(args, robot, args.start, args.contact)
     goal = (args.to[0], args.to[1], args.psi, args.contact[0], args.contact[1])
     stage(args, "plan", "planning")
-    p = geometric.plan(goal, args.steps, k, robot, args.radius, args.all, args.method, branch=args.branch,
-                       start=args.start, legs=args.legs)
+    problem = Problem(goal, start=args.start, k=k, robot=robot, radius=args.radius)
+    p = solve(problem, "geometric", root_solver=args.method, legs=args.legs, steps=args.steps, all_solutions=args.all,
+              branch=args.branch)
     unit = p.problem.unit
     g = p.goal
-    composed = hasattr(p, "pieces")
+    composed = not isinstance(p, geometric.Plan)   # the paper's one-leg plan has a summary of its own
     radius = f"R = {num(p.radius)} {'m' if unit == 'm' else '(lengths in units of R)'}"
     if composed or tuple(p.problem.start) != (0.0,) * 5:
         print(f"rollplan: k = {num(p.k)}, {radius}, steps = {p.steps}, from (u_a, v_a, psi, u_o, v_o) = "

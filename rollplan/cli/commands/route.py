@@ -20,14 +20,14 @@ def cmd_route(args) -> int:
     radius = radius_in_use(args, robot)
     geometric.route.check_legs(waypoints, radius, f"waypoints file {show_path(args.waypoints)}: ")
     print(f"rollplan route: {len(waypoints)} waypoints from {args.waypoints}")
-    r = geometric.plan_route(waypoints, args.steps, k, robot, args.radius, args.legs, args.method,
+    r = geometric.plan_route(waypoints, args.steps, k, robot, args.radius, args.legs, root_solver=args.method,
                              progress=lambda done, total: report("route", done, total, stage="legs"))
     unit = r.problem.unit
     print(f"rollplan route: k = {num(r.k)}, R = {num(r.radius)} {'m' if unit == 'm' else '(lengths in units of R)'}, "
           f"{len(r.plans)} legs, default steps = {r.steps}")
     for i, (p, w, res) in enumerate(zip(r.plans, r.waypoints[1:], r.waypoint_residuals), 1):
         label = f" {w.label!r}" if w.label else ""
-        print(f"  leg {i} to waypoint {i + 1}{label} {fmt_state(w.state, unit)}: {getattr(p, 'mode', 'one')}, "
+        print(f"  leg {i} to waypoint {i + 1}{label} {fmt_state(w.state, unit)}: {p.mode}, "
               f"{num(p.path_length)} {unit}, waypoint residual {res:.2e} (R, rad)")
     print(f"  path length   {num(r.path_length)} {unit} in {len(r.pieces)} pieces")
     print(f"  final         {fmt_state(r.final, unit, wrapped=True)}")

@@ -82,8 +82,7 @@ int main(int argc, char **argv) {
     }
     if (!(k >= (double)@PREFIX_UPPER@_K_MIN && k <= (double)@PREFIX_UPPER@_K_MAX)) {
         fprintf(stderr, "%s: K = %s is not allowed: it must lie in [@K_MIN@, @K_MAX@] (the range this planner was "
-                "generated for: rollplan codegen --k-max; below @K_MIN@ the complete enumeration does not apply)\n",
-                argv[0], argv[5]);
+                "generated for: rollplan codegen --k-max)\n", argv[0], argv[5]);
         return @PREFIX_UPPER@_BAD_INPUT;
     }
     if (!(fabs(psi) <= (double)@PREFIX_UPPER@_PSI_MAX)) {

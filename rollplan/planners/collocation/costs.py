@@ -48,9 +48,9 @@ def _rotor_effort(x, w, xdot, omega, par):
     return ca.sumsqr(model.rotor_rates(omega, x[3], x[4], x[2], par[3], par[4], par[5]))
 
 
-#: Costs by name.
+#: Costs by name (``"path_energy"`` was ``"path_length"``: :data:`rollplan.measures.RENAMED_COSTS`).
 COSTS = {
-    "path_length": Cost("path_length", "contact path length in its energy form int |v|^2 dt (on a fixed horizon "
+    "path_energy": Cost("path_energy", "contact path length in its energy form int |v|^2 dt (on a fixed horizon "
                         "its minimizers are the shortest paths at constant speed)", "R^2/s", False, _path_length),
     "path_length_smooth": Cost("path_length_smooth", "contact path length int sqrt(eps + |v|^2) dt", "R", False,
                                _path_length_smooth),

@@ -25,10 +25,12 @@ from ... import interrupts
 from ...core import model
 from ...core.plane import wrap_exact
 from ...errors import InputError, SolverError, check_choice, check_range, check_whole
-from ...problem import Problem, State
-from ...result import CERTIFICATE_TOLERANCE, Certificate, Measures, SolverStats, Trajectory
+from ...measures import cost_key
+from ...problem import Problem, State, check_steps
+from ...result import CERTIFICATE_TOLERANCE, Certificate, Measures, SolverStats, Trajectory, certify
 from ...robot import Robot
 from ..geometric.composed import as_composed, default_composed_planner
+from ..method import Method, with_steps
 from .costs import COSTS, N_PAR, Cost
 from .transcription import (
     SCHEMES,
@@ -136,17 +138,21 @@ class CollocationResult(CollocationRun):
         return self.measures.path_length
 
     def sample(self, samples: int | None = None) -> Trajectory:
-        """The certified motion sampled by CVODES on at least ``samples`` points (default: :attr:`trajectory`)."""
+        """The certified motion sampled by CVODES, ``samples`` samples in all, both ends included (evenly by
+        index among the integration's samples); None: :attr:`trajectory` as certified."""
         if samples is None:
             return self.trajectory
-        samples = check_whole("samples", samples, 1, 10**7)
+        samples = check_whole("samples", samples, 2, 10**7)
+        if samples <= self.trajectory.s.size:
+            return self.trajectory.subsampled(samples)
         tr = self.transcription
-        per = max(1, math.ceil(samples / tr.intervals))
+        per = max(1, math.ceil((samples - 1) / tr.intervals))
         p = self.problem
         ver = _verifier(tr.intervals, per).verify(self.solution.controls, p.k, self.horizon, p.robot,
                                                   p.scaled(p.start).array())
         R = self.problem.radius
-        return Trajectory(ver["t"], ver["x"] * np.array([R, R, 1.0, 1.0, 1.0]), ver["segment"], R, "t")
+        return Trajectory(ver["t"], ver["x"] * np.array([R, R, 1.0, 1.0, 1.0]), ver["segment"], R,
+                          "t").subsampled(samples)
 
 
 def _point_function(cost: Cost) -> ca.Function:
@@ -219,8 +225,12 @@ def _warm_guess(planner: CollocationPlanner, problem: Problem, start, final, hor
 GUESSES = {"naive": _naive_guess, "warm": _warm_guess}
 
 
-class CollocationPlanner:
-    """Direct-collocation planner (problem class): the NLP is built once.
+_UNSET = object()
+
+
+class CollocationPlanner(Method):
+    """Direct-collocation planner (problem class): the NLP is built once; the method ``"collocation"`` of
+    :data:`rollplan.planners.METHODS`.
 
     Parameters
     ----------
@@ -242,6 +252,18 @@ class CollocationPlanner:
     verify_tol : float or None
         Largest certified residual of a returned solution; a larger one raises
         SolverError with status ``"Verification_Failed"``. None: report only.
+    horizon : float
+        T > 0 [s].
+    guess : str
+        Initial guess, a name in :data:`GUESSES`.
+    turns : int or None
+        Whole turns m added to psi (None: the warm plan's, else 0).
+    smoothing : float
+        eps of the path-length integrand, >= 0.
+    warm_start : Plan or ComposedPlan or None
+        The geometric-phase plan the ``"warm"`` guess follows (None: planned for the problem).
+    steps : int or None
+        Figure eights of that warm plan (None: the problem's ``steps``).
 
     Attributes
     ----------
@@ -251,13 +273,19 @@ class CollocationPlanner:
         Rows of the NLP's constraints that are the contact bound (the others are equalities).
     """
 
-    def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre", cost: str = "path_length",
-                 contact_bound: float = CONTACT_BOUND, tol: float = 1e-10, max_iter: int = 500,
-                 verify_samples: int = 1000, verify_tol: float | None = TOLERANCE) -> None:
+    name = "collocation"
+
+    def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre",
+                 cost: str = "path_energy", contact_bound: float = CONTACT_BOUND, tol: float = 1e-10,
+                 max_iter: int = 500, verify_samples: int = 1000, verify_tol: float | None = TOLERANCE, *,
+                 horizon: float = 1.0, guess: str = "warm", turns: int | None = None, smoothing: float = SMOOTHING,
+                 warm_start=None, steps: int | None = None) -> None:
+        for name, value in self._solve_options(horizon, guess, turns, smoothing, warm_start).items():
+            setattr(self, name, value)
+        self.steps = None if steps is None else check_steps(steps)
         check_whole("intervals", intervals, MIN_INTERVALS, 100000)
         self.transcription = Transcription(intervals, degree, scheme)
-        check_choice("cost", cost, COSTS)
-        self.cost = COSTS[cost]
+        self.cost = COSTS[cost_key(cost, COSTS)]
         self.contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
         self.verify_tol = None if verify_tol is None else check_range("verify_tol", verify_tol, 0.0, None, True)
         self.tol = check_range("tol", tol, 0.0, 1e-2, low_open=True)
@@ -270,33 +298,56 @@ class CollocationPlanner:
         self.solver = ca.nlpsol("collocation", "ipopt", nlp, ipopt_options(self.tol, self.max_iter))
         self.build_time_s = time.perf_counter() - t0
 
+    @staticmethod
+    def _solve_options(horizon, guess, turns, smoothing, warm_start) -> dict:
+        """The per-solve options, validated (the warm start against the problem at the solve)."""
+        return {"horizon": check_range("horizon", horizon, 0.0, None, low_open=True),
+                "guess": check_choice("guess", guess, GUESSES),
+                "turns": None if turns is None else check_whole("turns", turns),
+                "smoothing": check_range("smoothing", smoothing, 0.0, None), "warm_start": warm_start}
+
     # -- solve --------------------------------------------------------------------------
-    def solve(self, problem: Problem, horizon: float = 1.0, guess: str = "warm", turns: int | None = None,
-              smoothing: float = SMOOTHING, warm_start=None) -> CollocationResult:
+    def solve(self, problem: Problem, horizon=_UNSET, guess=_UNSET, turns=_UNSET, smoothing=_UNSET,
+              warm_start=_UNSET) -> CollocationResult:
         """Solve the optimal-control problem for ``problem``; see :func:`collocate`.
 
-        ``guess`` names an initial guess in :data:`GUESSES`; ``warm_start`` is the
-        geometric-phase plan the ``"warm"`` guess follows (planned for the problem if None).
+        The arguments after ``problem``, when given, override the planner's options of the same names for
+        this solve (the NLP is built once, in the constructor).
         """
-        check_choice("guess", guess, GUESSES)
-        self._boundary(problem, 0 if turns is None else turns)       # bad input is refused before any work
-        horizon = check_range("horizon", horizon, 0.0, None, low_open=True)
-        check_range("smoothing", smoothing, 0.0, None)
-        if warm_start is not None:
-            _check_warm_start(warm_start, problem)
+        given = {"horizon": horizon, "guess": guess, "turns": turns, "smoothing": smoothing,
+                 "warm_start": warm_start}
+        planner = self
+        if any(v is not _UNSET for v in given.values()):
+            mine = {n: getattr(self, n) for n in given}
+            planner = self._with(**self._solve_options(**{n: mine[n] if v is _UNSET else v
+                                                          for n, v in given.items()}))
+        return Method.solve(planner, problem)
+
+    def _check(self, problem) -> Problem:
+        problem = super()._check(problem)
+        problem = with_steps(problem, self.steps)
+        self._boundary(problem, 0 if self.turns is None else self.turns)   # bad input is refused before any work
+        if self.warm_start is not None:
+            _check_warm_start(self.warm_start, problem)
+        return problem
+
+    def _solve(self, problem: Problem) -> CollocationResult:
         t0 = time.perf_counter()
-        if guess == "warm" and warm_start is None:
+        warm_start, turns = self.warm_start, self.turns
+        if self.guess == "warm" and warm_start is None:
             warm_start = _geometric_plan(problem)
         if turns is None:
             turns = _whole_turns(warm_start) if warm_start is not None else 0
         start, final = self._boundary(problem, turns)
-        g = GUESSES[guess](self, problem, start, final, horizon, warm_start)
-        return self._solve(problem, g, horizon, turns, smoothing, time.perf_counter() - t0)
+        g = GUESSES[self.guess](self, problem, start, final, self.horizon, warm_start)
+        return self._run(problem, g, self.horizon, turns, self.smoothing, time.perf_counter() - t0)
 
     def solve_from(self, problem: Problem, initial: Guess, horizon: float = 1.0, turns: int = 0,
                    smoothing: float = SMOOTHING) -> CollocationResult:
         """Solve from an explicit initial guess (e.g. a previous solution's arrays)."""
-        return self._solve(problem, self.transcription.check_guess(initial), horizon, turns, smoothing, 0.0)
+        problem = Method._check(self, problem)
+        result = self._run(problem, self.transcription.check_guess(initial), horizon, turns, smoothing, 0.0)
+        return result
 
     def _boundary(self, problem: Problem, turns) -> tuple:
         if not isinstance(problem, Problem):
@@ -315,7 +366,7 @@ class CollocationPlanner:
         final[2] = reduced + 2 * math.pi * (turns + goal_turns - start_turns)
         return start, final
 
-    def _solve(self, problem, g: Guess, horizon, turns, smoothing, guess_time) -> CollocationResult:
+    def _run(self, problem, g: Guess, horizon, turns, smoothing, guess_time) -> CollocationResult:
         start, final = self._boundary(problem, turns)
         horizon = check_range("horizon", horizon, 0.0, None, low_open=True)
         smoothing = check_range("smoothing", smoothing, 0.0, None)
@@ -347,7 +398,7 @@ class CollocationPlanner:
         fin = State(*(ver["xf"] * scale))
         residual = problem.residual(fin)  # psi is compared as an angle: the turns do not count
         tol = self.verify_tol if self.verify_tol is not None else math.inf
-        cert = Certificate("cvodes", fin, residual, 0.0, tol)
+        cert = certify(problem, fin, "cvodes", tolerance=tol, residual=residual)
         if not cert.passed:
             raise SolverError(f"the collocation solution ({where}) misses the goal by {residual:.2e} > {tol:.0e} "
                               f"when integrated by CVODES (IPOPT: {status}, {iters} iterations; Newton correction to "
@@ -474,7 +525,7 @@ def _planner(intervals, degree, scheme, cost, contact_bound) -> CollocationPlann
 
 
 def collocate(target, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
-              cost: str = "path_length", intervals: int = 100, degree: int = 3, scheme: str = "legendre",
+              cost: str = "path_energy", intervals: int = 100, degree: int = 3, scheme: str = "legendre",
               horizon: float = 1.0, guess: str = "warm", steps: int = 1, turns: int | None = None,
               smoothing: float = SMOOTHING, contact_bound: float = CONTACT_BOUND, start=None,
               warm_start=None) -> CollocationResult:
@@ -533,5 +584,5 @@ def collocate(target, k: float | None = None, robot: Robot | None = None, radius
     """
     problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
                       steps=steps)
-    return _planner(intervals, degree, scheme, cost, contact_bound).solve(problem, horizon, guess, turns, smoothing,
-                                                                          warm_start)
+    return _planner(intervals, degree, scheme, cost, contact_bound).solve(
+        problem, horizon, guess, turns, smoothing, warm_start)

@@ -24,10 +24,12 @@ import numpy as np
 from ... import interrupts
 from ...core import model
 from ...errors import InputError, SolverError, check_range, check_whole
-from ...measures import TimedMotion, measure
+from ...measures import TimedMotion, cost_key, measure
 from ...problem import Problem, State
 from ...result import CERTIFICATE_TOLERANCE, Certificate, SolverStats, Trajectory
+from ...result import certify as certificate_of
 from ...robot import Robot
+from ..method import Method
 from .costs import N_PAR
 from .transcription import (
     CollocationRun,
@@ -39,16 +41,18 @@ from .transcription import (
     sensitivity_step,
 )
 
-__all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "MinimumTimePlanner", "certify", "rest_parameters",
+__all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "MinimumTimePlanner", "RestToRestMethod",
+           "MinimumTimeMethod", "certify", "rest_parameters",
            "motion_function", "naive_guess", "guess_from_samples", "correct", "check_horizon",
            "polar_angles", "check_intervals", "TOLERANCE", "MIN_INTERVALS", "MAX_INTERVALS", "MEMORY_GB",
            "HORIZON_RANGE", "COST_POWERS"]
 
 log = logging.getLogger(__name__)
 
-#: Running costs of the rest-to-rest problem, by name: ``L(xdot, omega, torque, par)``.
+#: Running costs of the rest-to-rest problem, by name: ``L(xdot, omega, torque, par)`` (``"path_energy"`` was
+#: ``"path_length"``: :data:`rollplan.measures.RENAMED_COSTS`).
 REST_COSTS = {
-    "path_length": lambda xdot, omega, torque, par: xdot[0] ** 2 + xdot[1] ** 2,
+    "path_energy": lambda xdot, omega, torque, par: xdot[0] ** 2 + xdot[1] ** 2,
     "angular_velocity": lambda xdot, omega, torque, par: ca.sumsqr(omega),
     "rotor_energy": lambda xdot, omega, torque, par: ca.sumsqr(torque / par[5]),
 }
@@ -67,7 +71,7 @@ MEMORY_GB = 2
 #: Horizons T [s] served (docs/design/collocation.md, time scaling).
 HORIZON_RANGE = (1e-6, 1e6)
 #: Power p of the scaling law ``J(T) = J(1) T^p`` of each cost.
-COST_POWERS = {"path_length": -1, "angular_velocity": -1, "rotor_energy": -3}
+COST_POWERS = {"path_energy": -1, "angular_velocity": -1, "rotor_energy": -3}
 #: Most NLP solves with a backed-off bound (or backed-off limits) before giving up.
 BACKOFF_TRIES = 4
 #: Safety factor of a backoff: the bound (or limit) is lowered by this times the excess measured on the samples.
@@ -123,6 +127,10 @@ class RestResult(CollocationRun):
     ----------
     problem, cost, transcription, horizon, turns, guess, contact_bound
         As in :class:`.transcription.CollocationRun` (``cost`` a name in :data:`REST_COSTS`).
+    method : str
+        ``"rest_to_rest"``, or ``"minimum_time"`` for a solution of :class:`MinimumTimePlanner`.
+    duration : float
+        T [s] (``horizon``): for minimum time, the minimum.
     controls : ndarray, shape (N, 2)
         Contact accelerations on each interval [rad/s^2], after the Newton correction (:func:`correct`).
     objective : float
@@ -142,12 +150,31 @@ class RestResult(CollocationRun):
     stats: SolverStats
 
     @property
+    def method(self) -> str:
+        return "minimum_time" if self.cost == "minimum_time" else "rest_to_rest"
+
+    @property
+    def duration(self) -> float:
+        return self.horizon
+
+    @property
     def path_length(self) -> float:
         return measure(self.motion)["path_length"]
 
     def sample(self, samples: int | None = None) -> Trajectory:
-        """The certified motion as a :class:`~rollplan.result.Trajectory` in time."""
-        return self.motion.trajectory()
+        """The certified motion as a :class:`~rollplan.result.Trajectory` in time: ``samples`` samples in all,
+        both ends included (evenly by index among the CVODES samples, integrated again more densely when
+        there are fewer); None: every certified sample."""
+        traj = self.motion.trajectory()
+        if samples is None:
+            return traj
+        samples = check_whole("samples", samples, 2, 10**7)
+        if samples > traj.s.size:
+            N = self.transcription.intervals
+            per = -(-(samples - 1) // N)
+            start = np.concatenate([self.problem.scaled(self.problem.start).array(), [0.0, 0.0]])
+            traj = certify(self.controls, start, self.problem, self.horizon, per + per % 2).trajectory()
+        return traj.subsampled(samples)
 
 
 class RestToRestPlanner:
@@ -175,9 +202,7 @@ class RestToRestPlanner:
                  max_iter: int = 150, samples_per_interval: int = 8) -> None:
         check_intervals(intervals)
         self.transcription = Transcription(intervals, degree, scheme, nx=7, nu=2)
-        if not isinstance(cost, str) or cost not in REST_COSTS:
-            raise InputError(f"cost = {cost!r} is not allowed: choose one of {', '.join(REST_COSTS)}")
-        self.cost = cost
+        cost = self.cost = cost_key(cost, REST_COSTS)
         self.contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
         self.tol = check_range("tol", tol, 0.0, 1e-2, low_open=True)
         self.max_iter = check_whole("max_iter", max_iter, 1, 100000)
@@ -279,7 +304,7 @@ def _certificate(problem: Problem, fin: State, end_rates, where: str) -> Certifi
     residual or its final rates ``end_rates`` (rad per horizon) exceed :data:`TOLERANCE`."""
     residual = problem.residual(fin)   # psi compared as an angle
     rest = float(np.abs(end_rates).max())
-    cert = Certificate("cvodes", fin, max(residual, rest), 0.0, TOLERANCE)
+    cert = certificate_of(problem, fin, "cvodes", residual=max(residual, rest))
     if not cert.passed:
         raise SolverError(f"the collocation solution ({where}) misses the goal by {residual:.2e} and rest by "
                           f"{rest:.2e} > {TOLERANCE:.0e} when integrated by CVODES after the Newton correction; "
@@ -318,7 +343,7 @@ def _newton_step(cost: str) -> ca.Function:
     return sensitivity_step("rest_newton", x, acc, par, xdot, quad)
 
 
-def correct(controls, start, final, par, cost: str = "path_length", where: str = "rest-to-rest"):
+def correct(controls, start, final, par, cost: str = "path_energy", where: str = "rest-to-rest"):
     """Minimum-norm Gauss-Newton correction (:func:`.transcription.gauss_newton`) of piecewise-constant
     accelerations in normalized time (T = 1), through CVODES with sensitivities, until the motion from ``start``
     (7,) ends at ``final`` (7,: the goal at rest) to :data:`CORRECTION_TOL`. ``par`` are :func:`rest_parameters`
@@ -426,7 +451,7 @@ class MinimumTimePlanner:
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre",
                  contact_bound: float = math.radians(80.0), tol: float = 1e-9, max_iter: int = 300,
                  samples_per_interval: int = 8) -> None:
-        base = RestToRestPlanner(intervals, degree, scheme, "path_length", contact_bound, tol, max_iter,
+        base = RestToRestPlanner(intervals, degree, scheme, "path_energy", contact_bound, tol, max_iter,
                                  samples_per_interval)
         self.base = base
         tr = base.transcription
@@ -456,7 +481,8 @@ class MinimumTimePlanner:
 
     def solve(self, problem: Problem, guess: Guess, duration_guess: float, robot: Robot, turns: int = 0):
         """Minimum-time rest-to-rest motion within ``robot``'s limits (both must be set), from ``guess``
-        (normalized time) and ``duration_guess`` [s]. Returns ``(duration, RestResult)``.
+        (normalized time) and ``duration_guess`` [s]. Returns the :class:`RestResult` (its ``duration`` the
+        minimum time).
 
         Raises
         ------
@@ -510,5 +536,116 @@ class MinimumTimePlanner:
         cert = _certificate(problem, State(*motion.state[-1]), end_rates, where)
         stats = SolverStats("ipopt", status, iters, solve_time, {"backed_off_limits": tuple(backed),
                                                                  "backed_off_bound": bound})
-        return T, RestResult(problem, "minimum_time", tr, T, int(turns), guess.name, c, controls, T, motion, cert,
+        return RestResult(problem, "minimum_time", tr, T, int(turns), guess.name, c, controls, T, motion, cert,
                              stats)
+
+
+@lru_cache(maxsize=8)
+def _rest_planner(intervals, degree, scheme, cost, contact_bound, tol, max_iter, samples_per_interval):
+    return RestToRestPlanner(intervals, degree, scheme, cost, contact_bound, tol, max_iter, samples_per_interval)
+
+
+@lru_cache(maxsize=4)
+def _min_time_planner(intervals, degree, scheme, contact_bound, tol, max_iter, samples_per_interval):
+    return MinimumTimePlanner(intervals, degree, scheme, contact_bound, tol, max_iter, samples_per_interval)
+
+
+def _initial_guess(tr: Transcription, guess, start, final) -> Guess:
+    """The guess ``"naive"`` (:func:`naive_guess`) or a :class:`Guess` as given (checked)."""
+    if isinstance(guess, Guess):
+        return tr.check_guess(guess)
+    if guess != "naive":
+        raise InputError(f"guess = {guess!r:.60} is not allowed: give 'naive' or a Guess (e.g. guess_from_samples)")
+    return naive_guess(tr, start, final)
+
+
+def _check_robot(robot) -> Robot | None:
+    if robot is not None and not isinstance(robot, Robot):
+        raise InputError(f"robot = {robot!r:.60} is not allowed: give a rollplan.Robot or None")
+    return robot
+
+
+class RestToRestMethod(Method):
+    """The method ``"rest_to_rest"`` of :data:`rollplan.planners.METHODS`: :class:`RestToRestPlanner` (its NLP
+    built once per set of NLP options and shared) with the options of one solve.
+
+    Parameters
+    ----------
+    intervals, degree, scheme, cost, contact_bound, tol, max_iter, samples_per_interval
+        Of the NLP, as in :class:`RestToRestPlanner`.
+    horizon : float
+        T [s], in :data:`HORIZON_RANGE`.
+    turns : int
+        Whole turns m added to psi.
+    guess : str or Guess
+        ``"naive"`` (:func:`naive_guess`, the default) or a :class:`Guess` in time over ``horizon``
+        (e.g. :func:`guess_from_samples` of a timed geometric-phase plan).
+    robot : Robot or None
+        Inertias of the rotor rates and torques when the problem has no robot.
+    """
+
+    name = "rest_to_rest"
+
+    def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre",
+                 cost: str = "angular_velocity", contact_bound: float = math.radians(80.0), tol: float = 1e-9,
+                 max_iter: int = 150, samples_per_interval: int = 8, *, horizon: float = 1.0, turns: int = 0,
+                 guess="naive", robot: Robot | None = None) -> None:
+        self.planner = _rest_planner(check_intervals(intervals), degree, scheme, cost_key(cost, REST_COSTS),
+                                     contact_bound, tol, max_iter, samples_per_interval)
+        self.horizon, self.turns = check_horizon(horizon), check_whole("turns", turns)
+        self.guess, self.robot = guess, _check_robot(robot)
+
+    def _check(self, problem) -> Problem:
+        problem = super()._check(problem)
+        self.planner.boundary(problem, self.turns)
+        return problem
+
+    def _solve(self, problem: Problem) -> RestResult:
+        start, final = self.planner.boundary(problem, self.turns)
+        guess = _initial_guess(self.planner.transcription, self.guess, start, final)
+        return self.planner.solve(problem, guess, self.horizon, self.turns, self.robot)
+
+
+class MinimumTimeMethod(Method):
+    """The method ``"minimum_time"`` of :data:`rollplan.planners.METHODS`: :class:`MinimumTimePlanner` (its NLP
+    built once per set of NLP options and shared) with the options of one solve. The result's ``duration``
+    is the minimum time.
+
+    Parameters
+    ----------
+    intervals, degree, scheme, contact_bound, tol, max_iter, samples_per_interval
+        Of the NLP, as in :class:`MinimumTimePlanner`.
+    duration_guess : float
+        First guess of the duration [s].
+    turns : int
+        Whole turns m added to psi.
+    guess : str or Guess
+        ``"naive"`` (the default) or a :class:`Guess` in normalized time.
+    robot : Robot or None
+        The robot whose ``max_rotor_rate`` and ``max_rotor_torque`` bound the motion (default: the problem's).
+    """
+
+    name = "minimum_time"
+
+    def __init__(self, intervals: int = 60, degree: int = 3, scheme: str = "legendre",
+                 contact_bound: float = math.radians(80.0), tol: float = 1e-9, max_iter: int = 300,
+                 samples_per_interval: int = 8, *, duration_guess: float = 1.0, turns: int = 0, guess="naive",
+                 robot: Robot | None = None) -> None:
+        self.planner = _min_time_planner(check_intervals(intervals), degree, scheme, contact_bound, tol, max_iter,
+                                         samples_per_interval)
+        self.duration_guess = check_range("duration_guess", duration_guess, 0.0, 1e6, low_open=True)
+        self.turns, self.guess, self.robot = check_whole("turns", turns), guess, _check_robot(robot)
+
+    def _check(self, problem) -> Problem:
+        problem = super()._check(problem)
+        robot = self.robot if self.robot is not None else problem.robot
+        if robot is None or robot.max_rotor_rate is None or robot.max_rotor_torque is None:
+            raise InputError("minimum time needs a robot with max_rotor_rate and max_rotor_torque")
+        self.planner.base.boundary(problem, self.turns)
+        return problem
+
+    def _solve(self, problem: Problem) -> RestResult:
+        robot = self.robot if self.robot is not None else problem.robot
+        start, final = self.planner.base.boundary(problem, self.turns)
+        guess = _initial_guess(self.planner.base.transcription, self.guess, start, final)
+        return self.planner.solve(problem, guess, self.duration_guess, robot, self.turns)

@@ -345,6 +345,10 @@ class CollocationRun(CertifiedMotion):
     """
 
     method = "collocation"
+    #: A collocation motion has no closed-form pieces, no legs of figure eights and no alternatives.
+    pieces = ()
+    legs = ()
+    alternatives = ()
 
     problem: Problem
     cost: str

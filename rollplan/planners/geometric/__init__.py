@@ -3,7 +3,7 @@ extension to any start and goal state.
 
 Pieces: :mod:`.leafmap` (the accurate leaf map: closed-form turn, Gauss-rule displacement, up to K_MAX),
 :mod:`.enumerate` (complete enumeration of the roots of (32)-(33) for every k), :mod:`.compiled_search` (the
-generated C planner's search, for ``1/2 <= k <= k_max``), :mod:`.refine` (the polish: root solvers by name),
+C planner's search, for every k), :mod:`.refine` (the polish: root solvers by name),
 :mod:`.certify` (independent integration of the whole motion), :mod:`.planner` (the pole-to-pole problem class
 :class:`GeometricPhasePlanner`); full reconfiguration: :mod:`.maneuvers` (approach and departure rolls),
 :mod:`.turn` (turning in place), :mod:`.legs` (two legs), :mod:`.composed` (:class:`ComposedPlanner` and

@@ -28,7 +28,7 @@ from ...core.c_functions import (
 from ...core.curves import A_MAX, figure_eight
 from ...core.integrate import DOP853_C
 from ...errors import show_limit
-from ...problem import MAX_STEPS
+from ...problem import K_MIN, MAX_STEPS
 from ...result import CERTIFICATE_TOLERANCE
 from . import enumerate as enumerate_
 from . import leafmap
@@ -44,8 +44,7 @@ CSRC = Path(__file__).resolve().parents[2] / "csrc"
 STATIC_FILES = ("rollplan_planner.c", "rollplan_planner.h")
 #: The generated header the static sources include.
 CONFIG_HEADER = "rollplan_config.h"
-#: Largest k of the generated C planner unless told otherwise (``rollplan codegen --k-max``); the Python
-#: planner's C search is generated with it, so it serves ``K_MONOTONE <= k <= DEFAULT_K_MAX``.
+#: Largest k of the generated C planner unless told otherwise (``rollplan codegen --k-max``).
 DEFAULT_K_MAX = 5.0
 #: Tolerance of the on-board certificate: residual + error bound [R and rad] (the project's tolerance).
 CERT_TOL = CERTIFICATE_TOLERANCE
@@ -90,9 +89,9 @@ def _enumeration_constants(k_max: float) -> dict:
     buckets = [(kk, p) for kk, p in leafmap.BUCKETS if kk < k_max] + [next((kk, p) for kk, p in leafmap.BUCKETS
                                                                            if kk >= k_max)]
     # the table's radii (enumerate.table_radii): their number grows with k for k >= 1/2 (E is monotone, its
-    # steps grow with k); the cell of the last radius is one more
+    # steps grow with k; below 1/2 |E'| is smaller than at 1/2); the cell of the last radius is one more
     ntable = 1 + max(enumerate_.table_radii(kk, enumerate_.TABLE_STEP, enumerate_.TABLE_PHASE,
-                                            enumerate_.TABLE_INV_S).size for kk in (K_MONOTONE, k_max))
+                                            enumerate_.TABLE_INV_S).size for kk in (K_MIN, K_MONOTONE, k_max))
     if ntable >= 2 ** 16:
         raise ValueError(f"the rho table at k_max = {k_max:g} needs {ntable} radii: its buckets hold 16-bit indices")
     return {
@@ -105,6 +104,8 @@ def _enumeration_constants(k_max: float) -> dict:
         "MAX_PANELS": str(buckets[-1][1]),
         "PHASE_STEP": repr(enumerate_.PHASE_STEP),
         "X_STEP": repr(enumerate_.X_STEP),
+        "SIGMA_STEP": repr(enumerate_.SIGMA_STEP),
+        "K_MONOTONE": repr(float(K_MONOTONE)),
         "HERMITE_REL": repr(enumerate_.HERMITE_REL),
         "POLISH_STEP": repr(enumerate_.POLISH_STEP),
         "POLISH_BRACKET": repr(enumerate_.POLISH_BRACKET),
@@ -137,7 +138,7 @@ def config_values(functions, steps_per_leaf: int, k_max: float, real: str) -> di
         "REAL_EPS": "DBL_EPSILON" if double else "FLT_EPSILON",
         "REAL_MAX": "DBL_MAX" if double else "FLT_MAX",
         "A_MAX": repr(float(A_MAX)),
-        "K_MIN": repr(float(K_MONOTONE)),
+        "K_MIN": repr(float(K_MIN)),
         "K_MAX": repr(float(k_max)),
         "PSI_MAX": repr(PSI_MAX),
         "MAX_STEPS": show_limit(MAX_STEPS),

@@ -1,13 +1,13 @@
 """The C search, called from Python: the shortest root of (32)-(33) in C.
 
 The C planner (the static sources ``rollplan/csrc/rollplan_planner.c`` and ``.h`` with the generated model
-functions and ``rollplan_config.h`` of :mod:`.c_sources`; ``1/2 <= k <= k_max``, 5 here) enumerates the roots on
-one graph per branch over the smaller leaf radius and runs the bounded search of
-:meth:`.GeometricPhasePlanner._solve_enumerated`; the numpy search (:mod:`.enumerate`) uses other graphs, so
-the two are different algorithms, complete by the same argument and checked to choose the same plan.
-:func:`shortest_root` returns its shortest root uncertified, and :func:`all_roots` every root of every branch
-(``<prefix>_plan_all``), for the Python planner to polish and certify; :func:`library` is None without a C
-compiler (or with ``ROLLPLAN_NO_COMPILE=1``), and the numpy search serves.
+functions and ``rollplan_config.h`` of :mod:`.c_sources`; built here for ``K_MIN <= k <= K_MAX``, every k the
+planner accepts) enumerates the roots on one graph per branch over the smaller leaf radius for ``k >= 1/2`` and on
+the sigma graphs of :mod:`.enumerate` below, and runs the bounded search of
+:meth:`.GeometricPhasePlanner._solve_enumerated`. :func:`shortest_root` returns its shortest root uncertified,
+and :func:`all_roots` every root of every branch (``<prefix>_plan_all``), for the Python planner to polish and
+certify; :func:`library` is None without a C compiler (or with ``ROLLPLAN_NO_COMPILE=1``), and the numpy search
+serves.
 
 How it is built, loaded and called: docs/design/c-planner.md."""
 
@@ -19,9 +19,10 @@ import threading
 from functools import lru_cache
 from typing import NamedTuple
 
+from ... import interrupts
 from ...core.compiled import shared_library
+from ...problem import K_MAX, K_MIN
 from .c_sources import DEFAULT_K_MAX, generator_files, sources
-from .enumerate import K_MONOTONE
 
 __all__ = ["PREFIX", "DEFAULT_K_MAX", "SearchResult", "library", "shortest_root", "all_roots"]
 
@@ -33,6 +34,10 @@ OK, BAD_INPUT, NO_PLAN, NO_CONVERGENCE, NOT_CERTIFIED, TOO_MANY = 0, 2, 3, 4, 5,
 _FIRST_CAPACITY = 4096
 
 _lock = threading.Lock()
+#: A call of the C search is made directly (not by a helper thread) only when it is short: k the last k the C
+#: planner prepared its table for (its table is kept), at most DEFAULT_K_MAX, and at most this many steps.
+_DIRECT_STEPS = 16
+_last_k = [math.nan]
 
 
 class _Plan(ctypes.Structure):
@@ -84,24 +89,42 @@ def _load(path: str):
 @lru_cache(maxsize=1)
 def library():
     """``<prefix>_plan_with`` and ``<prefix>_plan_all`` of the compiled C planner (ctypes), built on first use;
-    None without it."""
-    return shared_library("c_planner_search", lambda: sources(PREFIX), _load, "the numpy search",
-                          memo=generator_files())
+    None without it. Its tables are sized for every k the planner accepts (``k_max = K_MAX``); its step map
+    ``<prefix>_step_eval``, which the search does not use, has the default size (accurate up to k = 5)."""
+    # a build (seconds) runs in a helper thread: CasADi's code generation would swallow a Ctrl-C
+    return interrupts.call_in_thread(shared_library, "c_planner_search", lambda: sources(PREFIX, k_max=K_MAX), _load,
+                                     "the numpy search", memo=generator_files())
+
+
+def _call(entry, k: float, direct: bool, *args) -> int:
+    """``entry(*args)`` of the C planner (one call at a time: the planner keeps static state). A call that may be
+    long (a new k builds the rho table: 1.3 s at k = 99; a high k or many steps search many branches; every root)
+    runs in a helper thread (:func:`rollplan.interrupts.call_in_thread`), so that Ctrl-C acts at once; ``direct``
+    allows a direct call where it is short (see :data:`_DIRECT_STEPS`)."""
+    def locked():
+        with _lock:
+            return entry(*args)
+
+    short = direct and k == _last_k[0] and k <= DEFAULT_K_MAX
+    status = locked() if short else interrupts.call_in_thread(locked)
+    _last_k[0] = k
+    return status
 
 
 def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
     """The shortest root of (32)-(33) for the target ``(u, v, psi)`` [R, rad] in ``steps`` figure eights at
     inertia ratio k, over all branches or on ``branch`` only (m relative to psi), by the compiled C search,
-    uncertified. None when the library is missing or the C search gives no root (k outside its range, no
-    root, search incomplete): the caller then runs the numpy search."""
-    lib = library() if K_MONOTONE <= k <= DEFAULT_K_MAX else None   # no build for a k it does not serve
+    uncertified; a result with ``a`` and ``b`` NaN when the (complete) search found no root. None when the library
+    is missing, k is outside [K_MIN, K_MAX] or the search is incomplete: the caller then runs the numpy search."""
+    lib = library() if K_MIN <= k <= K_MAX else None
     if lib is None or (branch is not None and abs(branch) > 2**31 - 1):
         return None
     options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
     plan = _Plan()
-    with _lock:
-        status = lib.plan_with(float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options),
-                               ctypes.byref(plan))
+    status = _call(lib.plan_with, k, steps <= _DIRECT_STEPS, float(u), float(v), float(psi), int(steps), float(k),
+                   ctypes.byref(options), ctypes.byref(plan))
+    if status == NO_PLAN:
+        return SearchResult(math.nan, math.nan, 0, int(plan.branches), int(plan.roots))
     if status != OK or not (math.isfinite(plan.a) and math.isfinite(plan.b)):
         return None
     return SearchResult(plan.a, plan.b, int(plan.m), int(plan.branches), int(plan.roots))
@@ -110,18 +133,17 @@ def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: 
 def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
     """Every root of (32)-(33) on every branch (or on ``branch`` only), shortest (a + b) first, by the compiled
     C search (``<prefix>_plan_all``), uncertified: a list of :class:`SearchResult` (empty when there is no root).
-    None when the library is missing or the C search cannot give the list (k outside its range, search
+    None when the library is missing or the C search cannot give the list (k outside [K_MIN, K_MAX], search
     incomplete): the caller then runs the numpy search."""
-    lib = library() if K_MONOTONE <= k <= DEFAULT_K_MAX else None   # no build for a k it does not serve
+    lib = library() if K_MIN <= k <= K_MAX else None
     if lib is None or (branch is not None and abs(branch) > 2**31 - 1):
         return None
     options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
     capacity, count = _FIRST_CAPACITY, ctypes.c_int(0)
     while True:
         plans = (_Plan * capacity)()
-        with _lock:
-            status = lib.plan_all(float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options), plans,
-                                  capacity, ctypes.byref(count))
+        status = _call(lib.plan_all, k, False, float(u), float(v), float(psi), int(steps), float(k),
+                       ctypes.byref(options), plans, capacity, ctypes.byref(count))
         if status != TOO_MANY or count.value <= capacity:
             break
         capacity = count.value

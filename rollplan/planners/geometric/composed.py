@@ -23,10 +23,11 @@ import numpy as np
 from ...core.integrate import DEFAULT_NODES
 from ...core.paths import PathIntegrator, allocate_samples, figure_eight_pieces
 from ...core.plane import compose, inverse, relative, wrap, wrap_exact
-from ...errors import InputError, NoPlanError, check_whole
-from ...problem import Problem, State, arrival_residual, check_reach
-from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
+from ...errors import InputError, NoPlanError, check_choice, check_flag, check_whole
+from ...problem import Problem, State, arrival_residual, check_reach, check_steps
+from ...result import DEFAULT_SAMPLES, Certificate, CertifiedMotion, SolverStats, Trajectory, certify
 from ...robot import Robot
+from ..method import Method, renamed_option, with_steps
 from .legs import intermediate_state, second_leg, two_leg_candidates
 from .maneuvers import StraightRoll
 from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
@@ -40,8 +41,6 @@ __all__ = ["LEGS", "IDENTITY_TOL", "ComposedPlan", "ComposedPlanner", "default_c
 LEGS = ("fallback", "shortest", "one", "two")
 #: A figure-eight target this close to zero (units of R and rad) is no motion at all.
 IDENTITY_TOL = 1e-12
-#: Default number of samples of :meth:`ComposedPlan.sample`.
-DEFAULT_SAMPLES = 2000
 
 
 #: Largest shift of the contact point by one figure eight over the admissible leaf radii, about [R]
@@ -90,7 +89,7 @@ def certify_path(problem: Problem, pieces, tol: float = TOLERANCE) -> tuple:
     final = State(*(float(v) for v in ends[-1]))
     residual = arrival_residual(final, _reduced(problem, "goal")[0])
     final = final._replace(psi=final.psi + 2.0 * math.pi * turns).scaled(problem.radius)
-    return Certificate(PathIntegrator.name, final, residual, 0.0, tol), ends
+    return certify(problem, final, PathIntegrator.name, tolerance=tol, residual=residual), ends
 
 
 def sample_path(problem: Problem, pieces, samples: int) -> Trajectory:
@@ -189,64 +188,89 @@ def _pole_to_pole(problem: Problem) -> bool:
 
 def as_composed(result) -> ComposedPlan:
     """A geometric-phase :class:`Plan` as a one-leg :class:`ComposedPlan` (its pieces and certificate);
-    a result that has ``pieces`` already (a composed plan, a route) is returned as it is."""
-    if hasattr(result, "pieces"):
-        return result
+    another geometric-phase result (a composed plan, a route) is returned as it is."""
     if not isinstance(result, Plan):
+        if getattr(result, "method", None) == "geometric" and hasattr(result, "pieces"):
+            return result
         raise InputError(f"{result!r:.60} is not allowed: give a geometric-phase plan")
-    R = result.radius
-    pieces = tuple(figure_eight_pieces(result.a / R, result.b / R, result.gamma, result.steps))
+    pieces = result.pieces
     goal = result.problem.scaled(result.goal)
     return ComposedPlan(result.problem, "one", None, None, np.array(goal[:3]), (result,), None, None, pieces,
                         result.certificate, result.stats, result.path_length)
 
 
-class ComposedPlanner:
+class ComposedPlanner(Method):
     """Planner for any start and goal state (docs/design/composition.md); the method ``"geometric"`` of
     :data:`rollplan.planners.METHODS`.
 
     Parameters
     ----------
-    method : str
-        Root solver of the figure eights, from :data:`.refine.SOLVERS`.
+    root_solver : str
+        Root solver of the figure eights, from :data:`.refine.SOLVERS` (its old name ``method`` still works,
+        with a DeprecationWarning).
     nodes : int
         Chebyshev degree per panel of the spectral step map, in [4, 200].
     tol : float
         Largest certified residual of a returned plan, in (0, 1e-3].
     legs : str
         Policy in :data:`LEGS` (default ``"fallback"``).
+    steps : int or None
+        Figure eights per leg n (pairs of circles for a turn in place); None: the problem's ``steps``.
+    all_solutions : bool
+        Also return the other certified branches of one leg in ``alternatives``.
+    branch : int or None
+        Only the branch m of ``n eta = psi + 2 pi m`` of one leg (no fallback to two legs).
     """
 
-    def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
-                 legs: str = "fallback") -> None:
-        if not isinstance(legs, str) or legs not in LEGS:
-            raise InputError(f"legs = {legs!r} is not allowed: choose one of {', '.join(LEGS)}")
-        if not isinstance(method, str) or method not in SOLVERS:
-            raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
+    name = "geometric"
+
+    def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
+                 legs: str = "fallback", *, steps: int | None = None, all_solutions: bool = False,
+                 branch: int | None = None, method: str | None = None) -> None:
+        root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+        self.legs = check_choice("legs", legs, LEGS)
+        check_choice(name, root_solver, SOLVERS)
+        self.steps = None if steps is None else check_steps(steps)
+        self.all_solutions = check_flag("all_solutions", all_solutions)
+        self.branch = self._check_branch(branch)
         default = nodes == DEFAULT_NODES and tol == TOLERANCE
-        self.planner = default_planner(method) if default else GeometricPhasePlanner(method, nodes, tol)
-        self.legs = legs
+        self.planner = default_planner(root_solver) if default else GeometricPhasePlanner(root_solver, nodes, tol)
+        self.root_solver = root_solver
         self.tol = self.planner.tol
 
-    def solve(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
+    def _check_branch(self, branch):
+        if branch is None:
+            return None
+        branch = check_whole("branch", branch)
+        if self.legs == "two":
+            raise InputError("branch selects a branch of one leg of figure eights; it does not apply to legs='two'")
+        return branch
+
+    def solve(self, problem: Problem, all_solutions: bool | None = None, branch: int | None = None):
         """Plan for ``problem``: a :class:`Plan` for a pole-to-pole problem from rest that one leg
         serves (unless ``legs`` asks otherwise), else a :class:`ComposedPlan`; see :func:`plan`.
+        ``all_solutions`` and ``branch``, when given, override the planner's options for this solve.
         Ctrl-C stops it (KeyboardInterrupt), also inside a root solve (:mod:`rollplan.interrupts`)."""
-        return self._solve(problem, all_solutions, branch)
+        planner = self
+        if all_solutions is not None or branch is not None:
+            planner = self._with(all_solutions=check_flag("all_solutions", all_solutions)
+                                 if all_solutions is not None else self.all_solutions,
+                                 branch=self._check_branch(branch) if branch is not None else self.branch)
+        return Method.solve(planner, problem)
+
+    def _check(self, problem) -> Problem:
+        problem = super()._check(problem)
+        problem = with_steps(problem, self.steps)
+        check_reach(problem.start, problem.goal, problem.radius)
+        return problem
 
     def _leg(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
         """One leg of figure eights by the pole-to-pole planner."""
         return self.planner.solve(problem, all_solutions, branch)
 
-    def _solve(self, problem: Problem, all_solutions: bool, branch: int | None):
+    def _solve(self, problem: Problem):
         t0 = time.perf_counter()
-        if not isinstance(problem, Problem):
-            raise InputError(f"problem = {problem!r} is not allowed: give a rollplan.Problem")
-        check_reach(problem.start, problem.goal, problem.radius)
-        if branch is not None:
-            branch = check_whole("branch", branch)
-            if self.legs == "two":
-                raise InputError("branch selects a branch of one leg of figure eights; it does not apply to legs='two'")
+        all_solutions, branch = self.all_solutions, self.branch
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
         one_only = self.legs == "one" or branch is not None
         if _pole_to_pole(problem) and self.legs != "two" and math.hypot(goal.u_a, goal.v_a) > IDENTITY_TOL:
@@ -387,7 +411,7 @@ class ComposedPlanner:
             iterations = sum(leg.stats.iterations for leg in legs)
         else:
             status, iterations = ("turn" if turn is not None else "closed form"), 0
-        stats = SolverStats(self.planner.method if legs else "brentq" if turn is not None else "none", status,
+        stats = SolverStats(self.root_solver if legs else "brentq" if turn is not None else "none", status,
                             iterations, time.perf_counter() - t0, {"mode": mode, **details})
         length = sum(p.length for p in pieces) * problem.radius
         return ComposedPlan(problem, mode, approach, departure, np.asarray(target, float), tuple(legs), turn, w,
@@ -395,14 +419,14 @@ class ComposedPlanner:
 
 
 @lru_cache(maxsize=8)
-def default_composed_planner(method: str = "ipopt", legs: str = "fallback") -> ComposedPlanner:
+def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback") -> ComposedPlanner:
     """The shared composed planner of :func:`plan` for a root solver and a legs policy."""
-    return ComposedPlanner(method, legs=legs)
+    return ComposedPlanner(root_solver, legs=legs)
 
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
-         all_solutions: bool = False, method: str = "ipopt", branch: int | None = None, start=None,
-         legs: str = "fallback"):
+         all_solutions: bool = False, method: str | None = None, branch: int | None = None, start=None,
+         legs: str = "fallback", *, root_solver: str | None = None):
     """Plan an exact, dynamically realizable motion from ``start`` to ``target``, any two states.
 
     From rest at the origin to a goal at the south pole this is the paper's
@@ -427,20 +451,22 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     all_solutions : bool
         Also return the other certified branches of one leg in ``alternatives``.
     method : str
-        Root solver name from :data:`.refine.SOLVERS`.
+        Deprecated name of ``root_solver``.
     branch : int, optional
         Only the branch m of ``n eta = psi + 2 pi m`` of one leg (no fallback to two legs).
     start : State or sequence, optional
         Start state (default zero: at rest at the origin, contact at the pole).
     legs : str
         ``"fallback"`` (default), ``"shortest"``, ``"one"`` or ``"two"`` (docs/design/composition.md).
+    root_solver : str
+        Root solver name from :data:`.refine.SOLVERS` (default ``"ipopt"``).
 
     Returns
     -------
-    Plan or ComposedPlan
+    PlanResult
         A :class:`Plan` for the paper's problem when one leg serves it, else a
-        :class:`ComposedPlan`; both satisfy :class:`rollplan.result.PlanResult`
-        (:func:`as_composed` views a Plan as a one-leg ComposedPlan).
+        :class:`ComposedPlan`; both satisfy :class:`rollplan.result.PlanResult` with the same surface
+        (``pieces``, ``legs``, ``mode``, ``alternatives``, ``sample(samples)``).
 
     Raises
     ------
@@ -451,10 +477,9 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     SolverError
         The root solver broke down.
     """
-    if not isinstance(method, str) or method not in SOLVERS:
-        raise InputError(f"method = {method!r} is not allowed: choose one of {', '.join(SOLVERS)}")
-    if not isinstance(legs, str) or legs not in LEGS:
-        raise InputError(f"legs = {legs!r} is not allowed: choose one of {', '.join(LEGS)}")
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    check_choice(name, root_solver, SOLVERS)
+    check_choice("legs", legs, LEGS)
     problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
                       steps=steps)
-    return default_composed_planner(method, legs).solve(problem, all_solutions, branch)
+    return default_composed_planner(root_solver, legs).solve(problem, all_solutions, branch)

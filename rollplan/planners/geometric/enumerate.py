@@ -5,7 +5,7 @@ On branch m of ``n eta = psi + 2 pi m`` (32) fixes ``eta_m`` and (33) becomes, o
 per-k table, :func:`rho_table`). The level set is covered by graphs: over the root phase ``w = sqrt(-E)`` for
 ``k >= K_FAST`` (:class:`_WGraphs`), over ``sigma = a +- b`` on the monotone pieces of E below
 (:class:`_SigmaGraphs`); every root on them is found by Hermite cells (:func:`roots`). The C planner's search
-(:mod:`.compiled_search`) uses another graph, over the smaller radius, for ``1/2 <= k <= k_max``.
+(:mod:`.compiled_search`) uses the sigma graphs for ``k < 1/2`` and another graph, over the smaller radius, above.
 
 Derivation and completeness argument: docs/design/enumeration.md.
 """

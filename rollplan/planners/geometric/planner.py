@@ -3,8 +3,8 @@
 Trace the figure eight (31) rotated by gamma ``n`` times from rest at the origin to ``(u_a, v_a, psi)`` at the
 pole: on each branch m solve ``eta(a, b) = (psi + 2 pi m) / n`` (32) and
 ``h(a, b) = h_des |sin(eta / 2) / sin(n eta / 2)|`` (33) ((34) where ``sin(eta / 2) = 0``), then gamma from
-the geometry. The roots are enumerated completely (:mod:`.enumerate`; for ``1/2 <= k <= k_max`` first by the C
-search, :mod:`.compiled_search`), polished by a solver chosen by name
+the geometry. The roots are enumerated completely (by the C search, :mod:`.compiled_search`; by the numpy
+search of :mod:`.enumerate` without a compiler or after a rejected root), polished by a solver chosen by name
 (:mod:`.refine`) and certified by an independent integration (:mod:`.certify`).
 
 Derivation, the search, the polish and the certificate: docs/design/geometric-planner.md.
@@ -15,6 +15,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+import warnings
 from dataclasses import dataclass, field, replace
 from functools import cached_property, lru_cache
 from typing import NamedTuple
@@ -25,6 +26,7 @@ import numpy as np
 from ...core import model
 from ...core.curves import A_MAX, figure_eight, rotated_point
 from ...core.integrate import DEFAULT_NODES, spectral_step
+from ...core.paths import figure_eight_pieces
 from ...core.plane import n_step_sum, target_shift, wrap, wrap_exact
 from ...errors import (
     InputError,
@@ -37,8 +39,17 @@ from ...errors import (
 )
 from ...problem import Problem, State, arrival_residual, check_k, check_reach
 from ...progress import report
-from ...result import CERTIFICATE_TOLERANCE, Certificate, CertifiedMotion, SolverStats, Trajectory
+from ...result import (
+    CERTIFICATE_TOLERANCE,
+    DEFAULT_SAMPLES,
+    Certificate,
+    CertifiedMotion,
+    SolverStats,
+    Trajectory,
+    certify,
+)
 from ...robot import Robot
+from ..method import Method, renamed_option
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
 from .compiled_search import all_roots, shortest_root
 from .enumerate import NOT_A_ROOT, branches, roots
@@ -51,6 +62,8 @@ log = logging.getLogger(__name__)
 
 #: Default tolerance of the certified residual (units of R and rad).
 TOLERANCE = CERTIFICATE_TOLERANCE
+#: Most CVODES samples per leaf of :meth:`GeometricPhasePlanner.sample`.
+_MAX_PER_LEAF = 100000
 #: Largest number of branches enumerated together.
 _CHUNK = 64
 #: A polished root farther than this from the enumerated one (in a or b [R]) is not taken (the solver
@@ -131,9 +144,16 @@ class Plan(CertifiedMotion):
         ``branches`` (branches searched), ``roots`` and ``search`` (``"compiled"`` or ``"numpy"``).
     alternatives : tuple of Plan
         The other certified solution branches, shortest first (``all_solutions`` only).
+    pieces : tuple of PathPiece
+        The contact path, leaf by leaf [units of R].
+    legs : tuple of Plan
+        ``(self,)``: the plan is its own only leg.
+    mode : str
+        ``"one"``: one leg of figure eights (as :attr:`.composed.ComposedPlan.mode`).
     """
 
     method = "geometric"
+    mode = "one"
 
     problem: Problem
     a: float
@@ -152,13 +172,40 @@ class Plan(CertifiedMotion):
     def steps(self) -> int:
         return self.problem.steps
 
-    def sample(self, samples_per_leaf: int = 200) -> Trajectory:
-        """The plan sampled by CVODES, ``samples_per_leaf`` points per leaf; ``segment`` numbers the leaves."""
-        return self._planner.sample(self, samples_per_leaf)
+    @property
+    def pieces(self) -> tuple:
+        R = self.radius
+        return tuple(figure_eight_pieces(self.a / R, self.b / R, self.gamma, self.steps))
+
+    @property
+    def legs(self) -> tuple:
+        return (self,)
+
+    def sample(self, samples: int = DEFAULT_SAMPLES, *, samples_per_leaf: int | None = None) -> Trajectory:
+        """The plan sampled by CVODES, ``samples`` samples in all: the start, then the leaves' samples, spread
+        evenly over the 2n leaves (the first leaves one more when they do not divide evenly), each leaf's last at
+        its end; ``segment`` numbers the leaves. (``samples_per_leaf=q``, deprecated, is ``samples = 1 + 2 n q``.)"""
+        leaves = len(self._planner.curve.pieces) * self.steps
+        if samples_per_leaf is not None:
+            warnings.warn("sample(samples_per_leaf=q) is deprecated: use sample(samples) with the samples in all, "
+                          "1 + 2 n q", DeprecationWarning, stacklevel=2)
+            samples = 1 + leaves * check_whole("samples_per_leaf", samples_per_leaf, 1, _MAX_PER_LEAF)
+        samples = check_whole("samples", samples, leaves + 1, 1 + leaves * _MAX_PER_LEAF)
+        per = -(-(samples - 1) // leaves)
+        traj = self._planner.sample(self, per)
+        base, extra = divmod(samples - 1, leaves)
+        idx = [0]
+        for j in range(leaves):
+            n = base + (j < extra)
+            idx += [j * per + round(per * (i + 1) / n) for i in range(n)]
+        idx = np.array(idx)
+        return Trajectory(traj.s[idx], traj.state[idx], traj.segment[idx], traj.radius, traj.parameter)
 
 
-class GeometricPhasePlanner:
-    """Geometric-phase planner for repeated solves (problem class).
+class GeometricPhasePlanner(Method):
+    """Geometric-phase planner for repeated solves (problem class): one leg of figure eights from rest at the
+    origin to a goal at the pole (a :class:`~rollplan.planners.method.Method`; the registered method
+    ``"geometric"``, :class:`.composed.ComposedPlanner`, uses it for every leg).
 
     Builds nothing a plan does not use: the leaf map is plain numpy with per-k tables
     (:func:`.enumerate.rho_table`); the compiled shooting residual and its solver
@@ -169,10 +216,10 @@ class GeometricPhasePlanner:
 
     Parameters
     ----------
-    method : str
+    root_solver : str
         Solver of the shooting problem (32)-(33) from :data:`.refine.SOLVERS`: ``"ipopt"`` (the
         default) or ``"newton"``. It polishes each enumerated root (started there, it needs at most one or
-        two iterations).
+        two iterations). (Its old name ``method`` still works, with a DeprecationWarning.)
     nodes : int
         Chebyshev degree per panel of the spectral step map, in [4, 200].
     tol : float
@@ -182,18 +229,33 @@ class GeometricPhasePlanner:
         step-doubling error bound) or ``"cvodes"``.
     compiled_search : bool
         Search the shortest (or one branch's) root, or with ``all_solutions`` every root, with the compiled C
-        search where it applies (``1/2 <= k <= k_max``, docs/design/geometric-planner.md); False always runs the
-        numpy search.
+        search (every k, docs/design/geometric-planner.md); False always runs the numpy search.
+    all_solutions : bool
+        Also return the other certified branches in ``Plan.alternatives``.
+    branch : int or None
+        Only the branch m of ``n eta = psi + 2 pi m`` (psi as given).
     """
 
-    def __init__(self, method: str = "ipopt", nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
-                 certifier: str = DEFAULT_CERTIFIER, compiled_search: bool = True) -> None:
-        self.method = check_choice("method", method, SOLVERS)
+    name = "geometric"
+
+    def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
+                 certifier: str = DEFAULT_CERTIFIER, compiled_search: bool = True, *, all_solutions: bool = False,
+                 branch: int | None = None, method: str | None = None) -> None:
+        root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+        self.root_solver = check_choice(name, root_solver, SOLVERS)
+        self.all_solutions = check_flag("all_solutions", all_solutions)
+        self.branch = None if branch is None else check_whole("branch", branch)
         self.compiled_search = check_flag("compiled_search", compiled_search)
         self.tol = check_range("tol", tol, 0.0, 1e-3, low_open=True)
         self.nodes = check_whole("nodes", nodes, 4, 200)
         self.curve = figure_eight()
         self.certifier = CERTIFIERS[check_choice("certifier", certifier, CERTIFIERS)]()
+
+    @property
+    def method(self) -> str:
+        """Deprecated name of :attr:`root_solver` (``method`` names the planning method)."""
+        warnings.warn("GeometricPhasePlanner.method is deprecated: use root_solver", DeprecationWarning, stacklevel=2)
+        return self.root_solver
 
     @cached_property
     def cvodes(self) -> CvodesCertifier:
@@ -222,18 +284,27 @@ class GeometricPhasePlanner:
         return StepResult(a, b, k, gamma, np.array([z.real, z.imag]), abs(z), float(eta[0]), math.atan2(z.imag, z.real))
 
     # -- solve -----------------------------------------------------------------------
-    def solve(self, problem: Problem, all_solutions: bool = False, branch: int | None = None) -> Plan:
-        """Plan for ``problem`` (start at rest at the origin, goal at the pole); see :func:`plan`."""
-        t_start = time.perf_counter()
-        if not isinstance(problem, Problem):
-            raise InputError(f"problem = {problem!r} is not allowed: give a rollplan.Problem")
+    def solve(self, problem: Problem, all_solutions: bool | None = None, branch: int | None = None) -> Plan:
+        """Plan for ``problem`` (start at rest at the origin, goal at the pole); see :func:`plan`.
+        ``all_solutions`` and ``branch``, when given, override the planner's options for this solve."""
+        planner = self
+        if all_solutions is not None or branch is not None:
+            planner = self._with(all_solutions=check_flag("all_solutions", all_solutions)
+                                 if all_solutions is not None else self.all_solutions,
+                                 branch=check_whole("branch", branch) if branch is not None else self.branch)
+        return Method.solve(planner, problem)
+
+    def _check(self, problem) -> Problem:
+        problem = super()._check(problem)
         check_reach(problem.start, problem.goal, problem.radius)
         if tuple(problem.start) != tuple(State()) or not problem.goal.at_pole:
             raise InputError("the geometric-phase planner plans from rest at the origin (start = 0) to a goal "
                              "with the contact point at the south pole (u_o = v_o = 0)")
-        all_solutions = check_flag("all_solutions", all_solutions)
-        if branch is not None:
-            branch = check_whole("branch", branch)
+        return problem
+
+    def _solve(self, problem: Problem) -> Plan:
+        t_start = time.perf_counter()
+        all_solutions, branch = self.all_solutions, self.branch
         goal_r = problem.scaled(problem.goal)
         psi_des, turns = wrap_exact(goal_r.psi)  # psi is an angle; branch numbers stay relative to psi as given
         h_des = math.hypot(goal_r.u_a, goal_r.v_a)
@@ -266,6 +337,8 @@ class GeometricPhasePlanner:
         found = shortest_root(target[0], target[1], target[2], steps, k, branch)
         if found is None:
             return None
+        if math.isnan(found.a):   # the complete search found no root
+            raise _no_root(problem, f"{found.branches} branches searched completely")
         eta = (target[2] + 2.0 * math.pi * found.m) / steps
         h = float(target_shift(math.hypot(target[0], target[1]), eta, steps))
         x, status, iters = self._polish(_Root(found.a, found.b, 0.0, found.m, h, eta), k)
@@ -284,8 +357,10 @@ class GeometricPhasePlanner:
         None when the C search gives no list or no root of it certifies (the numpy search then decides)."""
         k, steps = problem.k, problem.steps
         listed = all_roots(target[0], target[1], target[2], steps, k, branch)
-        if not listed:
+        if listed is None:
             return None
+        if not listed:   # the complete search found no root
+            raise _no_root(problem, "the complete search found none")
         found = []
         label = f"certify (k = {k:g}, {len(listed)} roots)"
         for i, r in enumerate(listed):
@@ -367,8 +442,7 @@ class GeometricPhasePlanner:
         elapsed = time.perf_counter() - t_start
         if not found:
             self._raise_if_rejected(where, rejected)
-            raise NoPlanError(f"no plan for {where}: no branch of (32)-(33) has a root with 0 < a, b <= {A_MAX} R "
-                              f"({len(brs)} branches searched completely); try more steps")
+            raise _no_root(problem, f"{len(brs)} branches searched completely")
         found.sort(key=lambda c: c[0].a + c[0].b)
         details = {"candidates": tried, "solves": len(found), "branches": visited, "roots": tried, "search": "numpy"}
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
@@ -378,7 +452,7 @@ class GeometricPhasePlanner:
         """``((a, b), status, iterations)``: the enumerated root ``q`` polished by the shooting solver
         (:func:`.refine.polisher`) on the leaf map's residual of (32)-(33); the enumerated root itself
         (status prefixed ``enumerated:``) when the solver fails or leaves it."""
-        x, status, iters, ok = polisher(self.method, panels_for(k))([q.a, q.b], [k, q.eta, q.h], 1e-6, A_MAX)
+        x, status, iters, ok = polisher(self.root_solver, panels_for(k))([q.a, q.b], [k, q.eta, q.h], 1e-6, A_MAX)
         if ok and abs(x[0] - q.a) <= _POLISH_MOVE and abs(x[1] - q.b) <= _POLISH_MOVE:
             return (float(x[0]), float(x[1])), str(status), iters
         log.info("polish of branch m=%d (a=%.6f, b=%.6f) not taken (%s)", q.m, q.a, q.b, status)
@@ -396,9 +470,10 @@ class GeometricPhasePlanner:
                           float(wrap(problem.steps * eta - target_r[2])))
         final_r, bound, _ = self.certifier.certify(a, b, problem.k, gamma, problem.steps, self.tol)
         goal_r = problem.scaled(problem.goal)
-        residual = arrival_residual(final_r, State(goal_r.u_a, goal_r.v_a, target_r[2]))
-        cert = Certificate(self.certifier.name, final_r.scaled(problem.radius), residual, bound, self.tol)
-        stats = SolverStats(method or self.method, status, iters, 0.0)
+        residual = arrival_residual(final_r, State(goal_r.u_a, goal_r.v_a, target_r[2]))   # psi reduced
+        cert = certify(problem, final_r.scaled(problem.radius), self.certifier.name, error_bound=bound,
+                       tolerance=self.tol, residual=residual)
+        stats = SolverStats(method or self.root_solver, status, iters, 0.0)
         return _Root(a, b, gamma, m, abs(shift), eta, miss), cert, stats
 
     def _plan(self, problem, cand, stats) -> Plan:
@@ -431,6 +506,12 @@ class GeometricPhasePlanner:
                           np.concatenate([[0], segment]).astype(int), p.radius, "theta")
 
 
+def _no_root(problem: Problem, how: str) -> NoPlanError:
+    """The error of a complete search without a root of (32)-(33); ``how`` says what was searched."""
+    return NoPlanError(f"no plan for {problem.describe()}: no branch of (32)-(33) has a root with 0 < a, b <= "
+                       f"{A_MAX} R ({how}); try more steps")
+
+
 @lru_cache(maxsize=1)
 def _contact_coordinates() -> ca.Function:
     """``point (3,) -> (u_o, v_o)`` of (24)-(25) (:func:`rollplan.core.model.contact_coordinates`)."""
@@ -439,14 +520,15 @@ def _contact_coordinates() -> ca.Function:
 
 
 @lru_cache(maxsize=4)
-def default_planner(method: str = "ipopt", certifier: str = DEFAULT_CERTIFIER) -> GeometricPhasePlanner:
-    """The shared planner of :func:`plan` and :func:`step` for a solver and a certifier (built once per
+def default_planner(root_solver: str = "ipopt", certifier: str = DEFAULT_CERTIFIER) -> GeometricPhasePlanner:
+    """The shared planner of :func:`plan` and :func:`step` for a root solver and a certifier (built once per
     process)."""
-    return GeometricPhasePlanner(method, certifier=certifier)
+    return GeometricPhasePlanner(root_solver, certifier=certifier)
 
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
-         all_solutions: bool = False, method: str = "ipopt", branch: int | None = None) -> Plan:
+         all_solutions: bool = False, method: str | None = None, branch: int | None = None, *,
+         root_solver: str | None = None) -> Plan:
     """Plan an exact, dynamically realizable motion by tracing a figure eight n times.
 
     Solves (32)-(33) for the leaf radii (a, b) on every branch
@@ -469,9 +551,11 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     all_solutions : bool
         Also return the other certified branches in ``Plan.alternatives``.
     method : str
-        Root solver name from :data:`.refine.SOLVERS`.
+        Deprecated name of ``root_solver``.
     branch : int, optional
         Only the branch m of ``n eta = psi + 2 pi m`` (psi as given).
+    root_solver : str
+        Root solver name from :data:`.refine.SOLVERS` (default ``"ipopt"``).
 
     Returns
     -------
@@ -485,9 +569,10 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     NoPlanError
         No certified plan exists in the admissible range ``0 < a, b <= A_MAX R``.
     """
-    check_choice("method", method, SOLVERS)
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    check_choice(name, root_solver, SOLVERS)
     problem = Problem(target, k=k, robot=robot, radius=radius, steps=steps)
-    return default_planner(method).solve(problem, all_solutions, branch)
+    return default_planner(root_solver).solve(problem, all_solutions, branch)
 
 
 def step(a: float, b: float | None = None, *, k: float, gamma: float = 0.0) -> StepResult:

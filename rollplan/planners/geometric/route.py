@@ -22,10 +22,11 @@ import numpy as np
 from ...core.plane import wrap_exact
 from ...errors import InputError, NoPlanError, show
 from ...problem import Problem, State, arrival_residual, check_reach
-from ...result import Certificate, CertifiedMotion, SolverStats, Trajectory
+from ...result import DEFAULT_SAMPLES, Certificate, CertifiedMotion, SolverStats, Trajectory
 from ...robot import Robot
 from ...waypoints import Waypoint
-from .composed import DEFAULT_SAMPLES, LEGS, as_composed, certify_path, default_composed_planner, sample_path
+from ..method import renamed_option
+from .composed import LEGS, as_composed, certify_path, default_composed_planner, sample_path
 from .refine import SOLVERS
 
 __all__ = ["Route", "plan_route", "check_legs"]
@@ -56,6 +57,7 @@ class Route(CertifiedMotion):
     """
 
     method = "geometric"
+    alternatives = ()
 
     problem: Problem
     waypoints: tuple
@@ -71,6 +73,11 @@ class Route(CertifiedMotion):
     def steps(self) -> int:
         return self.problem.steps
 
+    @property
+    def legs(self) -> tuple:
+        """The legs of figure eights of every leg of the route, in order."""
+        return tuple(leg for p in self.plans for leg in p.legs)
+
     def sample(self, samples: int = DEFAULT_SAMPLES) -> Trajectory:
         """The whole route sampled by CVODES from the first waypoint, ``samples`` in all."""
         return sample_path(self.problem, self.pieces, samples)
@@ -84,8 +91,8 @@ def check_legs(waypoints, radius: float, where: str = "") -> None:
 
 
 def plan_route(waypoints, steps: int = 1, k: float | None = None, robot: Robot | None = None,
-               radius: float | None = None, legs: str = "fallback", method: str = "ipopt",
-               progress: Callable | None = None) -> Route:
+               radius: float | None = None, legs: str = "fallback", method: str | None = None,
+               progress: Callable | None = None, *, root_solver: str | None = None) -> Route:
     """Plan and certify a route through ``waypoints`` (module docstring).
 
     Parameters
@@ -96,8 +103,9 @@ def plan_route(waypoints, steps: int = 1, k: float | None = None, robot: Robot |
         Figure eights per leg where a waypoint does not say.
     k, robot, radius
         As for :func:`.composed.plan`.
-    legs, method
-        The legs policy and root solver of every leg (:func:`.composed.plan`).
+    legs, root_solver
+        The legs policy and root solver of every leg (:func:`.composed.plan`); ``method`` is the deprecated
+        name of ``root_solver``.
     progress : callable, optional
         ``progress(done, total)`` after every leg.
 
@@ -108,7 +116,10 @@ def plan_route(waypoints, steps: int = 1, k: float | None = None, robot: Robot |
     NoPlanError
         A leg has no plan (the message names it), or the route fails its certificate.
     """
-    return _plan_route(waypoints, steps, k, robot, radius, legs, method, progress)
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    if not isinstance(root_solver, str) or root_solver not in SOLVERS:
+        raise InputError(f"{name} = {show(root_solver)} is not allowed: choose one of {', '.join(SOLVERS)}")
+    return _plan_route(waypoints, steps, k, robot, radius, legs, root_solver, progress)
 
 
 def _plan_route(waypoints, steps, k, robot, radius, legs, method, progress) -> Route:
@@ -119,8 +130,6 @@ def _plan_route(waypoints, steps, k, robot, radius, legs, method, progress) -> R
         raise InputError(f"progress = {show(progress)} is not allowed: give a function progress(done, total) or None")
     if not isinstance(legs, str) or legs not in LEGS:
         raise InputError(f"legs = {show(legs)} is not allowed: choose one of {', '.join(LEGS)}")
-    if not isinstance(method, str) or method not in SOLVERS:
-        raise InputError(f"method = {show(method)} is not allowed: choose one of {', '.join(SOLVERS)}")
     wps = tuple(w if isinstance(w, Waypoint) else Waypoint(State.of(w, f"waypoint {i}"))
                 for i, w in enumerate(waypoints))
     if len(wps) < 2:
@@ -156,7 +165,7 @@ def _plan_route(waypoints, steps, k, robot, radius, legs, method, progress) -> R
     if not cert.passed or residuals.max() > planner.tol:
         raise NoPlanError(f"the route fails its certificate: worst waypoint residual {residuals.max():.2e} > "
                           f"{planner.tol:.0e}")
-    stats = SolverStats(planner.planner.method, "ok", sum(p.stats.iterations for p in plans),
+    stats = SolverStats(planner.root_solver, "ok", sum(p.stats.iterations for p in plans),
                         time.perf_counter() - t0, {"modes": [getattr(p, "mode", "one") for p in plans]})
     length = sum(p.path_length for p in plans)
     return Route(whole, wps, tuple(plans), tuple(pieces), owner, cert, residuals, stats, length)

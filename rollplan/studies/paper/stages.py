@@ -51,7 +51,7 @@ from ...core.roots import brent
 from ...errors import InputError
 from ...planners.geometric import GeometricPhasePlanner, Plan, default_planner
 from ...problem import Problem
-from ...result import Certificate, SolverStats
+from ...result import SolverStats, certify
 from .values import A_MIN, K_RANGE, PAPER, shift_pure_rolling
 
 __all__ = ["Sweep", "Crossings", "CaseStudy", "refine_root", "bracket_roots", "count_self_intersections",
@@ -350,7 +350,7 @@ class CaseStudy:
         h = float(np.hypot(out[0], out[1]))
         problem = Problem((0.0, h, 0.0), k=k)
         final, bound, _ = self.planner.certifier.certify(a, a, k, gamma, 1, self.planner.tol)
-        cert = Certificate(self.planner.certifier.name, final, problem.residual(final), bound, self.planner.tol)
+        cert = certify(problem, final, self.planner.certifier.name, error_bound=bound, tolerance=self.planner.tol)
         stats = SolverStats("none", "given (paper's case study)", 0, 0.0)
         return Plan(problem, a, a, gamma, 0, h, float(out[2]), 4 * math.pi * a, cert, stats, (), self.planner)
 
@@ -456,12 +456,13 @@ def crossings_stage(study: CaseStudy, a0: float, k_roots, samples: int, per_inte
 
 
 def trajectories_stage(study: CaseStudy, a0: float, a_roots, samples: int, progress: Progress | None = None):
-    """The plans of Figs 6-8, 11-12 with their sampled trajectories, and their path lengths; (plans, evidence)."""
+    """The plans of Figs 6-8, 11-12 with their trajectories sampled ``samples`` times per half-step (leaf), and
+    their path lengths; (plans, evidence)."""
     plans = {}
     for name, (a, kk) in {"k0": (a0, 0.0), "k2.5": (a0, 2.5), "k5": (a0, 5.0),
                           "a1": (a_roots[0], 2.5), "a2": (a_roots[1], 2.5)}.items():
         p = study.symmetric_plan(a, kk)
-        plans[name] = (p, p.sample(samples))
+        plans[name] = (p, p.sample(1 + 2 * p.steps * samples))   # the start, then samples per leaf
         if progress is not None:
             progress("trajectories", len(plans), 5)
     ev = {"path_length_formula": {n: plans[n][0].path_length for n in plans},

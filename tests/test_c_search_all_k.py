@@ -1,0 +1,147 @@
+"""The C search for every k the planner accepts (sigma graphs below k = 1/2, the graph over x above;
+docs/design/enumeration.md): the Python planner's plans through it against the numpy search, and its roots
+against the 2-D brute force of tests/test_enumerate.py (scipy's brentq and bounded minimiser on the level set)."""
+
+import math
+
+import numpy as np
+import pytest
+from test_enumerate import _brute_roots_2d, _same_sets
+from test_interrupts import run_and_interrupt
+
+from rollplan import NoPlanError, Problem
+from rollplan.core import compiled
+from rollplan.core.curves import A_MAX
+from rollplan.core.plane import wrap_exact
+from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search, leafmap
+
+
+def _gamma_tol(a, b):
+    """Tolerance of gamma of the same root from the two searches: 1e-12 times 1 + s^-3 (s = sqrt(1 - 2 r^2) of the
+    larger radius r): gamma turns the step's shift, whose derivative in r grows like s^-3 (docs/design/leaf-map.md),
+    so the last bit of a polished radius (the two polishes start from the two searches' roots) moves gamma by
+    ~1e-14 s^-3."""
+    r = max(a, b)
+    return 1e-12 * (1.0 + (1.0 - 2.0 * r * r) ** -1.5)
+
+
+def _require_library():
+    """Skip without a C compiler; with one, the compiled search must build (a failed build fails the test)."""
+    if compiled.compiler_command() is None:
+        pytest.skip("no C compiler: the compiled search is not built")
+    assert compiled_search.library() is not None, compiled.last_build()
+
+
+def _targets(seed, ks, count, steps=None):
+    """Random targets ((u, v, psi), steps, k): k from ``ks(rng)``, psi within the reach of the turns of the leaves."""
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        k, n = float(ks(rng)), int(rng.integers(1, 4)) if steps is None else steps
+        e = leafmap.turn(np.linspace(0.0, A_MAX, 2001), k)
+        span = float(e.max() - min(e.min(), 0.0))
+        d, th = rng.uniform(0.02, 0.5), rng.uniform(-np.pi, np.pi)
+        psi = rng.uniform(-1.0, 1.0) * min(np.pi, 0.9 * n * span)
+        yield (float(d * np.cos(th)), float(d * np.sin(th)), float(psi)), n, k
+
+
+def _solve(planner, target, steps, k, **kw):
+    try:
+        return planner.solve(Problem(target, k=k, steps=steps), **kw)
+    except NoPlanError:
+        return None
+
+
+def _check_same_plans(seed, ks, count):
+    """The planner with the compiled search and with the numpy search: the same outcome and, where there is a plan,
+    the same branch, (a, b) to 1e-12 and gamma to :func:`_gamma_tol` (both polished by the same solver); returns
+    how many plans."""
+    fast, slow = GeometricPhasePlanner(), GeometricPhasePlanner(compiled_search=False)
+    plans = 0
+    for target, steps, k in _targets(seed, ks, count):
+        p, q = _solve(fast, target, steps, k), _solve(slow, target, steps, k)
+        assert (p is None) == (q is None), (target, steps, k)
+        if p is None:
+            continue
+        plans += 1
+        assert p.stats.details["search"] == "compiled" and q.stats.details["search"] == "numpy"
+        assert p.branch == q.branch, (target, steps, k)
+        assert np.allclose([p.a, p.b], [q.a, q.b], rtol=0, atol=1e-12), (target, steps, k)
+        assert abs(p.gamma - q.gamma) <= _gamma_tol(q.a, q.b), (target, steps, k)
+    return plans
+
+
+def _check_same_lists(seed, ks, count, fixed_steps=None):
+    """all_solutions with the compiled and the numpy search: as many plans, and the same ones (branch, (a, b) to
+    1e-12, gamma to :func:`_gamma_tol`), paired in the order of (branch, a, b); returns how many lists were not
+    empty."""
+    fast, slow = GeometricPhasePlanner(), GeometricPhasePlanner(compiled_search=False)
+    listed = 0
+    for target, steps, k in _targets(seed, ks, count, fixed_steps):
+        p, q = (_solve(pl, target, steps, k, all_solutions=True) for pl in (fast, slow))
+        assert (p is None) == (q is None), (target, steps, k)
+        if p is None:
+            continue
+        listed += 1
+        got, want = (sorted((r.branch, r.a, r.b, r.gamma) for r in (x, *x.alternatives)) for x in (p, q))
+        assert len(got) == len(want), (target, steps, k, len(got), len(want))
+        for x, y in zip(got, want):
+            assert x[0] == y[0] and np.allclose(x[1:3], y[1:3], rtol=0, atol=1e-12), (target, steps, k, x, y)
+            assert abs(x[3] - y[3]) <= _gamma_tol(y[1], y[2]), (target, steps, k, x, y)
+        assert p.stats.details["search"] == "compiled"
+    return listed
+
+
+def test_same_plan_as_the_numpy_search_below_one_half():
+    """k in [0.1, 1/2) (E not monotone or increasing: the C sigma graphs)."""
+    _require_library()
+    assert _check_same_plans(31, lambda rng: rng.uniform(0.1, 0.5), 16) >= 4
+
+
+def test_same_lists_as_the_numpy_search_below_one_half():
+    _require_library()
+    assert _check_same_lists(32, lambda rng: rng.uniform(0.1, 0.5), 6) >= 2
+
+
+@pytest.mark.slow
+def test_same_plan_as_the_numpy_search_for_every_k():
+    """k log-uniform in [0.1, 30]: both graphs of the C search (sigma graphs below 1/2, the graph over x above)."""
+    _require_library()
+    ks = lambda rng: math.exp(rng.uniform(math.log(0.1), math.log(30.0)))   # noqa: E731
+    assert _check_same_plans(33, ks, 16) >= 8
+    assert _check_same_lists(34, ks, 4, fixed_steps=1) >= 2
+
+
+@pytest.mark.parametrize("k", [0.0, 0.1, 0.3, 0.45])
+def test_c_roots_against_the_2d_brute_force(k):
+    """Every root of the C search (rollplan_plan_all, uncertified) is one of the brute force's and none is missed;
+    the shortest root (rollplan_plan_with) is the brute force's shortest. Targets with psi = 0 have the branch
+    eta = 0 (a = b, and a != b with E(a) = E(b) where E is not monotone)."""
+    _require_library()
+    rng = np.random.default_rng(int(k * 1000) + 41)
+    targets = [((0.3, 0.2, 0.0), 1), ((0.05, -0.1, 0.0), 2)]
+    targets += [((rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-np.pi, np.pi)), int(rng.integers(1, 4)))
+                for _ in range(2)]
+    for target, steps in targets:
+        brute = _brute_roots_2d(target, steps, k)
+        turns = wrap_exact(target[2])[1]
+        listed = compiled_search.all_roots(*target, steps, k)
+        got = [(r.m - turns, r.a, r.b) for r in listed]
+        assert _same_sets(brute, got) == ([], []), (target, steps)
+        first = compiled_search.shortest_root(*target, steps, k)
+        if not brute:
+            assert math.isnan(first.a) and math.isnan(first.b)
+            continue
+        shortest = min(a + b for _, a, b in brute)
+        assert first.a + first.b == pytest.approx(shortest, abs=1e-9), (target, steps)
+
+
+@pytest.mark.slow
+def test_ctrl_c_during_a_long_c_search_exits_130():
+    """`plan --all --k 99` spends minutes in one call of the C search (every root of 511 branches); a SIGINT during
+    it exits 130 within two seconds (the call runs in a helper thread, the main thread acts on the signal), one
+    line, no traceback."""
+    _require_library()
+    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99", "--all"], 5.0)
+    assert code == 130, err
+    assert elapsed < 2.0
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
