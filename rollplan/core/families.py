@@ -24,7 +24,7 @@ from .curves import A_MAX, Curve, Piece, circle_point
 from .curves import figure_eight as circle_figure_eight
 
 __all__ = ["FAMILIES", "TRIANGLE_APEX", "SQUARE_APEX", "viviani_point", "polygon_vertices", "geodesic_point",
-           "leaf_pieces", "figure_eight", "pieces_per_leaf", "turn", "area", "leaf_length", "step"]
+           "leaf_pieces", "figure_eight", "pieces_per_leaf", "circle_turn", "turn", "area", "leaf_length", "step"]
 
 #: The leaf families by name (``circles`` is the paper's (35)).
 FAMILIES = ("circles", "viviani", "triangle", "square")
@@ -173,11 +173,24 @@ def _edge_terms(start, end, k):
     return primitive(psi[1]) - primitive(psi[0])
 
 
+def circle_turn(r, k):
+    """Turn ``E(r, k)`` of psi over the +y circle of radius r from zero [rad] (closed form, (20) over (35)).
+
+    ``2 pi r^2 / (1 + c) - 4 pi k c r^2 / (s (1 + s))`` with ``c = sqrt(1 - r^2)``, ``s = sqrt(1 - 2 r^2)``, the
+    same as ``2 pi (1 - c) + 2 pi k c (1 - 1/s)`` without cancellation at small r.
+    """
+    r = np.asarray(r, float)
+    c = np.sqrt(1.0 - r * r)
+    s = np.sqrt(1.0 - 2.0 * r * r)
+    return 2.0 * math.pi * r * r / (1.0 + c) - 2.0 * (2.0 * math.pi) * k * c * r * r / (s * (1.0 + s))
+
+
 def turn(name: str, a, k: float):
     """Closed-form turn ``E(a, k)`` of psi over the +y leaf of size ``a`` from zero [rad]
-    (``E = A - k * int (1 + 1/z^2) dA`` over the leaf, docs/design/curve-families.md); the circles' is
-    ``rollplan.planners.geometric.leafmap.turn``."""
-    check_choice("curve", name, FAMILIES[1:])
+    (``E = A - k * int (1 + 1/z^2) dA`` over the leaf, docs/design/curve-families.md)."""
+    check_choice("curve", name, FAMILIES)
+    if name == "circles":
+        return circle_turn(a, k)
     a = np.asarray(a, float)
     c = np.sqrt(1.0 - a * a)
     if name == "viviani":
@@ -193,8 +206,6 @@ def turn(name: str, a, k: float):
 
 def area(name: str, a):
     """Area of the +y leaf of size ``a`` on the unit sphere (the turn of pure rolling, ``turn(name, a, 0)``)."""
-    if name == "circles":
-        return 2.0 * np.pi * (1.0 - np.sqrt(1.0 - np.asarray(a, float) ** 2))
     return turn(name, a, 0.0)
 
 
