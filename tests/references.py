@@ -621,3 +621,93 @@ def replay(u_o, v_o, segment, x0, k):
         out[idx[1:]] = sol.y[:, 1:].T
         x = sol.y[:, -1]
     return out
+
+
+# ----------------------------------------------------------------------------- other leaf families (any curve)
+
+
+def curve_leaf_end(curve, x0, k, span=2 * np.pi, rtol=1e-13, atol=1e-14):
+    """(u_a, v_a, psi) at the end of any curve ``curve(phi) -> (point, dpoint)`` (numpy, unit sphere, phi in
+    [0, span]) from ``x0``: the printed (28)-(30) (:func:`curve_rhs`) by DOP853."""
+    sol = solve_ivp(lambda t, x: curve_rhs(*curve(t), x[2], k), (0.0, span), np.asarray(x0, float),
+                    method="DOP853", rtol=rtol, atol=atol)
+    assert sol.success, sol.message
+    return sol.y[:, -1]
+
+
+def viviani(a, side=1.0):
+    """The Viviani lobe of size a as a curve for :func:`curve_leaf_end`: the sphere cut by the cylinder
+    ``(X - (1 - rho))^2 + Y^2 = rho^2``, ``rho = a^2``, touching it at (1, 0, 0), parametrized by the angle t about
+    the cylinder's axis, ``Z = 2 sqrt(rho (1 - rho)) sin(t / 2) >= 0``, then turned by the rotation
+    (X, Y, Z) -> (Y, side Z, -X) that takes the touching point to the south pole and the axis to +-y."""
+    rho = a * a
+    w = 2 * np.sqrt(rho * (1 - rho))
+
+    def curve(t):
+        big = np.array([1 - rho + rho * np.cos(t), rho * np.sin(t), w * np.sin(t / 2)])
+        dbig = np.array([-rho * np.sin(t), rho * np.cos(t), w * np.cos(t / 2) / 2])
+        return (np.array([big[1], side * big[2], -big[0]]), np.array([dbig[1], side * dbig[2], -dbig[0]]))
+
+    return curve
+
+
+def polar_point(sigma, beta, side=1.0):
+    """Unit vector at polar distance sigma from the south pole, direction beta from +y towards +x, y times side."""
+    return np.array([np.sin(sigma) * np.sin(beta), side * np.sin(sigma) * np.cos(beta), -np.cos(sigma)])
+
+
+def polygon_corners(name, a, side=1.0):
+    """Corners of the polygon leaf (pole first and last): ``triangle``, apex 60 degrees, legs D = 2 asin a;
+    ``square``, the rhombus of four equal sides with 90 degrees at the pole and the far corner at D on the axis,
+    its side corners at 45 degrees found by bisection on the equal-side condition (not by a formula)."""
+    from scipy.optimize import brentq
+
+    pole, d = np.array([0.0, 0.0, -1.0]), 2 * np.arcsin(a)
+    if name == "triangle":
+        return [pole, polar_point(d, np.pi / 6, side), polar_point(d, -np.pi / 6, side), pole]
+    far = polar_point(d, 0.0, side)
+
+    def gap(leg):
+        p = polar_point(leg, np.pi / 4, side)
+        return np.arccos(np.clip(p @ far, -1, 1)) - np.arccos(np.clip(p @ pole, -1, 1))
+
+    leg = brentq(gap, 1e-9, d, xtol=1e-15)
+    return [pole, polar_point(leg, np.pi / 4, side), far, polar_point(leg, -np.pi / 4, side), pole]
+
+
+def geodesic(p, q):
+    """Great-circle arc from unit p to unit q over t in [0, 2 pi], constant speed: p turned about the axis
+    p x q by Rodrigues' formula; a curve for :func:`curve_leaf_end`."""
+    axis = np.cross(p, q)
+    angle = np.arctan2(np.linalg.norm(axis), p @ q)
+    axis = axis / np.linalg.norm(axis)
+
+    def curve(t):
+        s = angle * t / (2 * np.pi)
+        point = p * np.cos(s) + np.cross(axis, p) * np.sin(s) + axis * (axis @ p) * (1 - np.cos(s))
+        dpoint = (-p * np.sin(s) + np.cross(axis, p) * np.cos(s) + axis * (axis @ p) * np.sin(s)) * angle / (2 * np.pi)
+        return point, dpoint
+
+    return curve
+
+
+def family_leaf(name, a, side=1.0):
+    """A leaf of family ``name`` (``circles`` (35), ``viviani``, ``triangle``, ``square``) as a list of curves
+    (one per smooth piece), each over [0, 2 pi]."""
+    if name == "circles":
+        return [lambda t: circle(a, t, side)]
+    if name == "viviani":
+        return [viviani(a, side)]
+    corners = polygon_corners(name, a, side)
+    return [geodesic(p, q) for p, q in zip(corners, corners[1:])]
+
+
+def family_trace(name, a, b, k, gamma=0.0, x0=(0.0, 0.0, 0.0)):
+    """(u_a, v_a, psi) after the figure eight of family ``name`` (leaf a on +y, leaf b on -y) rotated by gamma
+    (31), by DOP853 on the printed (28)-(30) piece by piece."""
+    x = np.asarray(x0, float)
+    rz = _rz(gamma)
+    for size, side in ((a, 1.0), (b, -1.0)):
+        for piece in family_leaf(name, size, side):
+            x = curve_leaf_end(lambda t, piece=piece: tuple(rz @ v for v in piece(t)), x, k)
+    return x

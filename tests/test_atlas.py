@@ -96,6 +96,31 @@ def test_cli_atlas(tmp_path):
     assert cli.main(["atlas", "--k", "1", "--out", str(tmp_path / "no" / "a.png")]) == 2
 
 
+@pytest.mark.parametrize("curve", ["viviani", "triangle", "square"])
+def test_atlas_of_a_curve_family_matches_scipy(tmp_path, curve):
+    """`rollplan atlas --curve NAME`: h and eta of the family's figure eight on the grid against DOP853 on the
+    printed (28)-(30) along the leaves as typed in tests/references.py; the fold determinant against finite
+    differences of that reference; the JSON names the curve."""
+    png, js = tmp_path / "atlas.png", tmp_path / "atlas.json"
+    assert cli.main(["atlas", "--curve", curve, "--k", "2.5", "--resolution", "4", "--out", str(png),
+                     "--json", str(js)]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    d = json.loads(js.read_text())
+    assert d["curve"] == curve
+
+    def he(a, b):
+        x = references.family_trace(curve, a, b, 2.5)
+        return np.array([np.hypot(x[0], x[1]), x[2]])
+
+    for i, j in [(0, 3), (2, 1)]:
+        a, b = d["a"][i], d["b"][j]
+        assert [d["h"][i][j], d["eta"][i][j]] == pytest.approx(he(a, b), abs=1e-8)
+    a, b, step = d["a"][1], d["b"][2], 1e-5
+    jac = np.column_stack([(he(a + step, b) - he(a - step, b)) / (2 * step),
+                           (he(a, b + step) - he(a, b - step)) / (2 * step)])
+    assert d["det"][1][2] == pytest.approx(np.linalg.det(jac), rel=1e-5, abs=1e-7)
+
+
 def test_the_atlas_takes_the_method_geometric_of_the_registry(atlas):
     """The step map of the registry's method "geometric" (given as a method or as its pole-to-pole planner)
     is the default's; anything else is one clear line."""

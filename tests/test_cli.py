@@ -69,6 +69,30 @@ def test_step_command_matches_printed_reference(tmp_path, capsys, argv, ab, k, g
     assert float(shown["eta"]) == pytest.approx(ref[2], rel=5e-6, abs=1e-12)
 
 
+@pytest.mark.parametrize("curve,ab,k,gamma", [
+    ("viviani", (0.5, 0.3), 2.5, 0.0),
+    ("triangle", (0.69, 0.2), 20.0, 0.4),
+    ("square", (0.1, 0.6), 0.0, -1.0),
+    ("circles", (0.3, 0.4), 2.5, 0.0),
+])
+def test_step_curve_matches_printed_reference(tmp_path, capsys, curve, ab, k, gamma):
+    """`rollplan step --curve NAME`: the family's figure eight (docs/design/curve-families.md) against DOP853 on
+    the printed (28)-(30) along the leaves as typed in tests/references.py; the JSON names the curve."""
+    js = tmp_path / "s.json"
+    code, out, _ = run(capsys, "step", "--curve", curve, "--a", str(ab[0]), "--b", str(ab[1]), "--k", str(k),
+                       "--gamma", str(gamma), "--json", str(js))
+    assert code == 0
+    d = json.loads(js.read_text())
+    ref = references.family_trace(curve, ab[0], ab[1], k, gamma)
+    assert d["curve"] == curve and (d["a"], d["b"], d["k"], d["gamma"]) == (ab[0], ab[1], k, gamma)
+    scale = 1e-9 * (1 + abs(ref[2]))
+    assert [d["final"]["u_a"], d["final"]["v_a"], d["final"]["psi"]] == pytest.approx(ref, abs=scale)
+    assert d["h"] == pytest.approx(np.hypot(ref[0], ref[1]), abs=scale)
+    assert d["eta"] == pytest.approx(ref[2], abs=scale)
+    shown = dict(re.findall(r"\b(h|eta) = (\S+)", out))
+    assert float(shown["eta"]) == pytest.approx(ref[2], rel=5e-6, abs=1e-12)
+
+
 @pytest.mark.parametrize("argv,needle", [
     (["plan", "--to", "nan", "1"], "nan"),
     (["plan", "--to", "0", "inf"], "inf"),
@@ -82,6 +106,9 @@ def test_step_command_matches_printed_reference(tmp_path, capsys, argv, ab, k, g
     (["step", "--a", "0.8", "--k", "2.5"], "a = 0.8"),
     (["step", "--a", "0.3", "--b", "0", "--k", "2.5"], "b = 0"),
     (["step", "--k", "2.5"], "--a"),
+    (["step", "--a", "0.3", "--curve", "hexagon"], "hexagon"),
+    (["step", "--a", "0.7", "--curve", "viviani"], "a = 0.7"),
+    (["step", "--a", "0.3", "--curve", "square", "--k", "101"], "k = 101"),
     (["frobnicate"], "invalid choice"),
 ])
 def test_bad_input_exits_2_with_one_line(capsys, argv, needle):

@@ -257,3 +257,41 @@ def test_open_loop_on_the_exact_robot_is_the_plan(asym_plan):
     assert np.abs(ex.series.rotor_torques - m.series.rotor_torques).max() < 1e-5 * np.abs(m.series.rotor_torques).max()
     t = execute(asym_plan, robot, robot, 2.5, plant="torques", closed_loop=False)
     assert t.arrival_error < 1e-8
+
+
+def _noise(seed, sigma=1e-3):
+    return disturbance("measurement", sigma_length=sigma, sigma_angle=sigma, seed=seed)
+
+
+@pytest.mark.parametrize("c", [0.0, 2e-5])
+def test_only_an_established_friction_is_fed_forward(eight, c):
+    """One figure eight with noise 1e-3 on the measured states: a frictionless robot's least-squares friction is
+    noise and is not fed forward (zero); a real friction of 2e-5 is fed forward (its standard error from one
+    figure eight is about 4 %)."""
+    from rollplan.execution.estimate import established_friction
+
+    t, _, tq, breaks = eight
+    fr = [disturbance("friction", c=c)] if c else []
+    for seed in range(3):
+        run = run_torques(REAL, t, tq, breaks=breaks, disturbances=[_noise(seed), *fr])
+        est = InertiaEstimator(REAL.radius, friction=True)
+        est.add(run.series.time, run.measured, run.commanded_momenta, run.series.rotor_angles)
+        e = est.estimate()
+        if c == 0:
+            assert established_friction(e) == (0.0, 0.0)
+        else:
+            np.testing.assert_allclose(established_friction(e), (c, c), rtol=0.15)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [1, 2])
+def test_torque_closed_loop_under_noise_leaves_the_frictionless_robot_at_rest(seed):
+    """Every applied motion of a min-jerk plan runs rest to rest; on a robot without bearing friction the rotors
+    must then stand still (relative to the shell) at the end of each, also when the measurements are noisy."""
+    p = rollplan.plan(GOAL, 1, robot=MODEL)
+    ex = execute(p, MODEL, REAL, 2.5, plant="torques", disturbances=[_noise(seed)])
+    assert len(ex.segments) == 4                 # the plan and three corrections
+    ends = [int(np.nonzero(ex.series.segment == i)[0][-1]) for i in range(len(ex.segments))]
+    peak = np.abs(ex.series.rotor_rates).max()
+    assert np.abs(ex.series.rotor_rates[ends]).max() < 1e-7 * peak
+    assert all(d["friction"] == [0.0, 0.0] for d in ex.estimates[1:])

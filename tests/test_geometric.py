@@ -143,8 +143,8 @@ def test_final_state_is_independent_integration():
 
 
 def test_methods_agree():
-    a = rollplan.plan((0.5, 0.7, 0.8), k=2.5, method="ipopt")
-    b = rollplan.plan((0.5, 0.7, 0.8), k=2.5, method="newton")
+    a = rollplan.plan((0.5, 0.7, 0.8), k=2.5, root_solver="ipopt")
+    b = rollplan.plan((0.5, 0.7, 0.8), k=2.5, root_solver="newton")
     assert (a.a, a.b, a.gamma) == pytest.approx((b.a, b.b, b.gamma), abs=1e-9)
 
 

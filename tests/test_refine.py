@@ -61,7 +61,7 @@ def test_solvers_follow_the_contract_from_a_nearby_start(method):
 
 @pytest.mark.parametrize("method", ["ipopt", "newton"])
 def test_plans_record_the_polish(method):
-    p = rollplan.plan((1, -0.5, 1), steps=3, k=2.5, method=method)
+    p = rollplan.plan((1, -0.5, 1), steps=3, k=2.5, root_solver=method)
     assert p.stats.method == method and p.certificate.passed
     assert p.stats.status in ("Solve_Succeeded", "success") and 0 <= p.stats.iterations <= 3
     ref = references.trace(p.a, p.b, p.k, p.gamma, p.steps)

@@ -50,12 +50,13 @@ def test_closed_loop_script_runs(tmp_path):
     one plan of the torque-against-rate comparison (every section, fewer samples of each than even --quick)."""
     scripts = Path(__file__).resolve().parent.parent / "scripts"
     run = ("import sys; sys.path.insert(0, sys.argv[1]); import closed_loop as c; c.ERRORS = (0.01, 0.10); "
-           "c.NOISE_LEVELS = (1e-3,); c.TORQUE_CASES = c.TORQUE_CASES[:1]; sys.argv = [c.__file__] + sys.argv[2:]; "
-           "c.main()")
-    subprocess.run([sys.executable, "-c", run, str(scripts), "--seeds", "1", "--torque-seeds", "1", "--out-dir",
-                    str(tmp_path)], check=True, capture_output=True, timeout=1800)
+           "c.NOISE_LEVELS = (1e-3,); c.TORQUE_CASES = c.TORQUE_CASES[:1]; c.MUJOCO_STEPS = (1,); "
+           "c.BEYOND = c.BEYOND[:1]; sys.argv = [c.__file__] + sys.argv[2:]; c.main()")
+    subprocess.run([sys.executable, "-c", run, str(scripts), "--seeds", "1", "--torque-seeds", "1", "--mujoco-seeds",
+                    "1", "--out-dir", str(tmp_path)], check=True, capture_output=True, timeout=1800)
     text = (tmp_path / "closed_loop.md").read_text()
     assert "## 1. The issue's robot" in text and "## 2. Monte Carlo" in text and "## 3. Torque-driven" in text
+    assert "## 4. The issue's robot closed loop" in text and "| torque plant | 1 |" in text
     assert (tmp_path / "closed_loop.png").stat().st_size > 0 and (tmp_path / "closed_loop.json").stat().st_size > 0
 
 

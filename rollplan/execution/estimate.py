@@ -42,6 +42,12 @@ solved by linear least squares (absolute inertias: the momenta carry units). J_r
 separated from X only through ``V``, i.e. through the tilt of n_3 away from the vertical
 along the figure eight, so it is less well determined than X and Z (the tests and the
 report give the numbers); ``friction=False`` drops c.
+
+A friction fed forward must be the robot's, not the noise's: a feed-forward ``c_hat phi_dot``
+with an error ``dc`` leaves the rotors the momentum ``dc Phi`` at the end of a motion that
+turned them by ``Phi``, and without real friction to take it out the robot never comes to
+rest again. :func:`established_friction` keeps only what the data establish: ``c_i > 0`` (a
+bearing dissipates) and more than :data:`FRICTION_SIGNIFICANCE` standard errors from zero.
 """
 
 from __future__ import annotations
@@ -54,7 +60,11 @@ from ..core import model
 from ..core.spline import CubicSpline
 from ..errors import InputError
 
-__all__ = ["RatioEstimate", "RatioEstimator", "InertiaEstimate", "InertiaEstimator", "window_integrals"]
+__all__ = ["RatioEstimate", "RatioEstimator", "InertiaEstimate", "InertiaEstimator", "window_integrals",
+           "FRICTION_SIGNIFICANCE", "established_friction"]
+
+#: Standard errors by which an estimated friction coefficient must exceed zero to be fed forward.
+FRICTION_SIGNIFICANCE = 3.0
 
 _GL_NODES, _GL_WEIGHTS = np.polynomial.legendre.leggauss(3)
 
@@ -281,3 +291,14 @@ class InertiaEstimator:
         c = tuple(theta[3:5]) if self.friction else (0.0, 0.0)
         return InertiaEstimate(float(X + jr), float(Z + jr), float(jr), tuple(float(v) for v in c),
                                float((X + jr) / (Z + jr)), std, float(np.linalg.cond(As)), A.shape[0] // 3)
+
+
+def established_friction(estimate: InertiaEstimate, significance: float = FRICTION_SIGNIFICANCE) -> tuple:
+    """The friction coefficients the data establish: ``c_i`` where ``c_i > significance * std(c_i)``, else 0.
+
+    A negative ``c_i`` (a bearing that gives energy) or one within the noise is taken as none: fed forward, it
+    would leave the rotors spinning at the end of every motion (module docstring).
+    """
+    if estimate.std.size < 5:     # friction not estimated
+        return (0.0, 0.0)
+    return tuple(float(c) if c > significance * float(s) else 0.0 for c, s in zip(estimate.friction, estimate.std[3:5]))

@@ -25,8 +25,11 @@ Closed loop (``closed_loop=True``)
 
     The controller commands what the plant takes: the rotor rates of the timed re-plan (rate
     plant), or its torques plus the feed-forward ``c_hat phi_dot`` of the estimated friction
-    (torque plant). Why figure eights: their ends are rest points near the pole, where a
-    measurement is clean and the remainder is again a whole number of figure eights.
+    (torque plant; only a friction the data establish,
+    :func:`~rollplan.execution.estimate.established_friction`: one within the measurement noise,
+    fed forward, would leave the rotors spinning after every motion). Why figure eights: their
+    ends are rest points near the pole, where a measurement is clean and the remainder is again a
+    whole number of figure eights.
 
     After the last figure eight, correcting motions follow: from the measured state (step 1), a
     composed plan of one figure eight to the goal with the estimated robot (step 2), applied whole,
@@ -53,7 +56,7 @@ from ..problem import STATE_NAMES, Problem, State, arrival_error
 from ..robot import Robot
 from ..timeseries import Arrival, TimeSeries
 from .actuation import actuate, motion_samples
-from .estimate import InertiaEstimator, RatioEstimator
+from .estimate import InertiaEstimator, RatioEstimator, established_friction
 from .limits import Limits
 from .plants import PLANT_NAMES, by_name, measure, run_rates, run_torques
 from .timing import get_law
@@ -122,7 +125,8 @@ class ExecutionResult(Arrival):
         One per applied piece of motion: start and end time, the figure eights left, the plan's mode.
     estimates : list of dict
         The robot used for each figure eight (the model robot before any data): k, Jxx/J_r, Jzz/J_r,
-        Jxx, Jzz, J_r (and the friction on the torque plant); ``rejected`` when an estimate was refused.
+        Jxx, Jzz, J_r (and on the torque plant ``friction``, the friction fed forward, and
+        ``friction_estimated``, the least-squares value); ``rejected`` when an estimate was refused.
     stopped : str or None
         Closed loop: why the corrections ended before the tolerance was met (no correcting motion from
         the measured state, or the budget spent); None when they met it or none was asked.
@@ -150,12 +154,14 @@ class ExecutionResult(Arrival):
                 "stopped": self.stopped}
 
 
-def _estimate_dict(robot: Robot, friction=None) -> dict:
+def _estimate_dict(robot: Robot, friction=None, estimated=None) -> dict:
     jr = robot.rotor_inertia_axial
     d = {"k": robot.k, "alpha": robot.j_xx / jr, "beta": robot.j_zz / jr, "j_xx": robot.j_xx, "j_zz": robot.j_zz,
          "j_r": jr}
     if friction is not None:
         d["friction"] = [float(c) for c in friction]
+    if estimated is not None:
+        d["friction_estimated"] = [float(c) for c in estimated]
     return d
 
 
@@ -175,6 +181,7 @@ class _Controller:
         self.t0 = 0.0
         self.parts, self.segments = [], []
         self.friction_hat = np.zeros(2)
+        self.friction_estimate = None   # the least-squares friction, before established_friction
         self.ratios = RatioEstimator(real.radius, window)
         self.inertias = InertiaEstimator(real.radius, window, friction=estimate_friction)
 
@@ -220,7 +227,8 @@ class _Controller:
             jr = model_robot.rotor_inertia_axial
             return robot_from_inertias(R, e.alpha * jr, e.beta * jr, jr, like=model_robot), None
         e = self.inertias.estimate()
-        return robot_from_inertias(R, e.j_xx, e.j_zz, e.j_r, like=model_robot), np.array(e.friction)
+        self.friction_estimate = np.array(e.friction)
+        return robot_from_inertias(R, e.j_xx, e.j_zz, e.j_r, like=model_robot), np.array(established_friction(e))
 
     def arrays(self):
         return [np.concatenate(c) for c in zip(*self.parts)]
@@ -328,7 +336,8 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     window : int
         Estimator window in sample intervals.
     estimate_friction : bool
-        Torque plant: also estimate the bearing friction and feed it forward.
+        Torque plant: also estimate the bearing friction and feed forward what the data establish
+        (:func:`~rollplan.execution.estimate.established_friction`).
     rest_readings : int
         Closed loop: the state used for a re-plan is the mean of this many sensor readings at the
         rest point (0: the last sample of the run, as measured).
@@ -474,7 +483,7 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
     while True:
         cut = _first_eight_end(motion, kinds) if closed_loop and j < steps - 1 else None
         end = motion.time.size - 1 if cut is None else cut
-        estimates.append(_estimate_dict(robot_est, friction))
+        estimates.append(_estimate_dict(robot_est, friction, ctl.friction_estimate))
         ctl.apply(motion, end, {"figure_eights_left": steps - j, "mode": mode, "k": robot_est.k,
                                 "applied": "all" if cut is None else "first figure eight"})
         if progress:
@@ -506,7 +515,7 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
         if not _pieces(current):
             break
         m = timed(current, robot_est)
-        estimates.append(_estimate_dict(robot_est, friction))
+        estimates.append(_estimate_dict(robot_est, friction, ctl.friction_estimate))
         correction = _as_samples(m, ())
         ctl.apply(correction, correction.time.size - 1,
                   {"figure_eights_left": 0, "mode": "correction", "k": robot_est.k, "applied": "all"})

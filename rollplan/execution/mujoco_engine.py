@@ -72,8 +72,9 @@ class Settings:
     friction : float
         Sliding friction coefficient of the contact (elliptic cone).
     rolling : float
-        Rolling resistance [m] (MuJoCo's rolling friction; 0: none, condim 3; > 0: condim 6, no torsional
-        friction).
+        Rolling resistance [m] (MuJoCo's rolling friction; 0: none, condim 3; > 0: condim 6, with MuJoCo's least
+        torsional friction: MuJoCo raises any coefficient below ``mjMINMU`` = 1e-5 to it, the torsional one given
+        as 0 included, so a rolling resistance below 1e-5 m acts as 1e-5 m).
     com_offset : (3,) [m]
         The composite centre of mass in the shell's frame (0: the centre, as the paper assumes); the shell body's
         centre of mass moves by ``com_offset M / m_shell_body``.

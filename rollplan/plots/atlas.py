@@ -131,6 +131,7 @@ def plot_atlas(at):
     ax.set_xlabel(f"turn psi reached by {at.steps} step(s), n eta wrapped to (-pi, pi] [rad]")
     ax.set_ylabel(f"shift reached by {at.steps} step(s) [R]")
     ax.set_title("reachable (turn, shift) pairs (white: not reached)")
-    fig.suptitle(f"Reachability atlas of the figure eight, k = {at.k:.6g}, n = {at.steps}, "
+    family = "" if at.curve == "circles" else f" of {at.curve} leaves"
+    fig.suptitle(f"Reachability atlas of the figure eight{family}, k = {at.k:.6g}, n = {at.steps}, "
                  f"{at.a.size} x {at.b.size} grid")
     return fig

@@ -27,9 +27,11 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from ..core import families
 from ..core.curves import A_MAX
+from ..core.integrate import spectral_step
 from ..core.plane import n_step_gain
-from ..errors import InputError, check_whole
+from ..errors import InputError, check_choice, check_whole
 from ..planners import METHODS
 from ..planners.geometric import ComposedPlanner, GeometricPhasePlanner, default_planner
 from ..problem import check_k, check_steps
@@ -70,6 +72,8 @@ class Atlas:
         Turn reached by n steps, ``Psi_n = n eta`` [rad] (not wrapped).
     fold_cells : int
         Grid cells whose corners' ``det`` change sign.
+    curve : str
+        Leaf family of the figure eight (:data:`rollplan.core.families.FAMILIES`; a, b are then leaf sizes).
     """
 
     k: float
@@ -82,6 +86,7 @@ class Atlas:
     shift_total: np.ndarray
     turn_total: np.ndarray
     fold_cells: int
+    curve: str = "circles"
 
 
 def atlas_function(step_map: ca.Function) -> ca.Function:
@@ -114,12 +119,12 @@ def _evaluate(fun: ca.Function, k: float, a_rows, b, threads: int):
 
 def _block(task):
     """A block of rows of an atlas on a cluster worker (the workers' default planner, one thread)."""
-    k, a_rows, b = task
-    return _evaluate(_cached_atlas_function(default_planner()), k, a_rows, b, 1)
+    k, a_rows, b, curve = task
+    return _evaluate(_cached_atlas_function(default_planner(), curve), k, a_rows, b, 1)
 
 
 def compute_atlases(ks, steps: int = 1, resolution: int = DEFAULT_RESOLUTION, planner=None, threads: int | None = None,
-                    scheduler: str | None = None, progress=None) -> list:
+                    scheduler: str | None = None, progress=None, curve: str = "circles") -> list:
     """:func:`compute_atlas` for each k of ``ks``, in order: a sweep over k, in blocks of rows.
 
     Parameters
@@ -132,7 +137,10 @@ def compute_atlases(ks, steps: int = 1, resolution: int = DEFAULT_RESOLUTION, pl
         Address of a Dask distributed scheduler: evaluate the blocks on its workers instead.
     progress : callable, optional
         ``progress("atlas", blocks done, blocks)`` after each block.
+    curve : str
+        Leaf family of the figure eight (default the circles (35); docs/design/curve-families.md).
     """
+    curve = check_choice("curve", curve, families.FAMILIES)
     try:
         ks = [check_k(k) for k in ks]
     except TypeError:
@@ -143,11 +151,11 @@ def compute_atlases(ks, steps: int = 1, resolution: int = DEFAULT_RESOLUTION, pl
     resolution = check_whole("resolution", resolution, 2, MAX_RESOLUTION)
     r = A_MAX * np.arange(1, resolution + 1) / resolution
     per = math.ceil(resolution / _BLOCKS)
-    blocks = [(k, r[i:i + per], r) for k in ks for i in range(0, resolution, per)]
+    blocks = [(k, r[i:i + per], r, curve) for k in ks for i in range(0, resolution, per)]
     if scheduler is not None:
         runner, fn = Executor(1, scheduler), _block
     else:
-        fun = _cached_atlas_function(_step_planner(planner))
+        fun = _cached_atlas_function(_step_planner(planner), curve)
         cores = threads or cpu_count()
         runner, fn = Executor(1), (lambda task: _evaluate(fun, task[0], task[1], task[2], cores))
     parts = []
@@ -164,12 +172,13 @@ def compute_atlases(ks, steps: int = 1, resolution: int = DEFAULT_RESOLUTION, pl
         s = np.sign(det)
         corners = np.stack([s[:-1, :-1], s[1:, :-1], s[:-1, 1:], s[1:, 1:]])
         fold = int(np.count_nonzero(corners.min(0) != corners.max(0)))
-        out.append(Atlas(k, int(steps), r, r.copy(), h, eta, det, total_h, total_psi, fold))
+        out.append(Atlas(k, int(steps), r, r.copy(), h, eta, det, total_h, total_psi, fold, curve))
     return out
 
 
 def compute_atlas(k: float, steps: int = 1, resolution: int = DEFAULT_RESOLUTION, planner=None,
-                  threads: int | None = None, scheduler: str | None = None, progress=None) -> Atlas:
+                  threads: int | None = None, scheduler: str | None = None, progress=None,
+                  curve: str = "circles") -> Atlas:
     """Evaluate h, eta and the fold determinant on a ``resolution`` x ``resolution`` grid of (0, A_MAX]^2.
 
     Parameters
@@ -189,8 +198,10 @@ def compute_atlas(k: float, steps: int = 1, resolution: int = DEFAULT_RESOLUTION
         Address of a Dask distributed scheduler to evaluate the grid on (see :func:`compute_atlases`).
     progress : callable, optional
         ``progress("atlas", done, total)`` per block of rows.
+    curve : str
+        Leaf family of the figure eight (default the circles (35)).
     """
-    return compute_atlases([k], steps, resolution, planner, threads, scheduler, progress)[0]
+    return compute_atlases([k], steps, resolution, planner, threads, scheduler, progress, curve)[0]
 
 
 def _step_planner(planner) -> GeometricPhasePlanner:
@@ -205,15 +216,20 @@ def _step_planner(planner) -> GeometricPhasePlanner:
     return planner
 
 
-@lru_cache(maxsize=4)
-def _cached_atlas_function(planner) -> ca.Function:
-    return atlas_function(planner.step_map)
+@lru_cache(maxsize=8)
+def _cached_atlas_function(planner, curve: str = "circles") -> ca.Function:
+    """The atlas function of the planner's step map (circles), or of the spectral step of another family's
+    figure eight with the planner's nodes."""
+    if curve == "circles":
+        return atlas_function(planner.step_map)
+    return atlas_function(spectral_step(families.figure_eight(curve), planner.nodes))
 
 
 def atlas_to_dict(at: Atlas) -> dict:
     """The atlas as the JSON object of ``rollplan atlas --json`` (2-D arrays as lists of rows over a)."""
     rows = lambda z: [[float(v) for v in row] for row in np.asarray(z)]
-    return {"k": at.k, "steps": at.steps, "a": [float(v) for v in at.a], "b": [float(v) for v in at.b],
+    return {"curve": at.curve, "k": at.k, "steps": at.steps, "a": [float(v) for v in at.a],
+            "b": [float(v) for v in at.b],
             "h": rows(at.h), "eta": rows(at.eta), "det": rows(at.det),
             "shift_total": rows(at.shift_total), "turn_total": rows(at.turn_total), "fold_cells": at.fold_cells,
             "ranges": {"h": [float(at.h.min()), float(at.h.max())], "eta": [float(at.eta.min()), float(at.eta.max())],

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ...core import families
 from ...errors import InputError
 from ...io import save_figure
 from ...problem import DEFAULT_K
@@ -37,11 +38,13 @@ def cmd_atlas(args) -> int:
                        figure=_per_k(args.out, k))
     with Progress(unit="blocks", delay=1.0) as progress:
         quiet_dask(args)
-        atlases = compute_atlases(args.k, args.steps, args.resolution, scheduler=args.scheduler, progress=progress)
+        atlases = compute_atlases(args.k, args.steps, args.resolution, scheduler=args.scheduler, progress=progress,
+                                  curve=args.curve)
     for at in atlases:
         out = _per_k(args.out, at.k)
         save_figure(plot_atlas(at), out)
-        print(f"rollplan atlas: k = {num(at.k)}, steps = {at.steps}, {at.a.size} x {at.b.size} grid on "
+        family = "" if at.curve == "circles" else f"curve = {at.curve}, "
+        print(f"rollplan atlas: {family}k = {num(at.k)}, steps = {at.steps}, {at.a.size} x {at.b.size} grid on "
               f"(0, {num(at.a[-1])} R]^2")
         print(f"  shift per step h in [{num(at.h.min())}, {num(at.h.max())}] R, holonomy eta in "
               f"[{num(at.eta.min())}, {num(at.eta.max())}] rad, {at.fold_cells} grid cells on the fold det = 0")
@@ -57,6 +60,9 @@ def _atlas_arguments(t) -> None:
 
     t.add_argument("--k", type=number, nargs="+", default=[DEFAULT_K], metavar="K",
                    help=K_HELP + "; several values sweep over k (then put {k} in --out and --json)")
+    t.add_argument("--curve", choices=families.FAMILIES, default="circles",
+                   help="leaf family of the figure eight (default circles; a, b are then leaf sizes, "
+                        "docs/design/curve-families.md)")
     t.add_argument("--steps", type=whole, default=1, help=f"also map what n figure eights reach, n {STEPS_HELP} "
                    "(default 1)")
     t.add_argument("--resolution", type=whole, default=DEFAULT_RESOLUTION,

@@ -18,6 +18,7 @@ from functools import lru_cache
 import numpy as np
 
 from ...core.curves import A_MAX
+from ...core.families import circle_turn as turn
 from ...problem import K_MAX
 
 __all__ = ["ORDER", "BUCKETS", "panels_for", "gauss_nodes", "turn", "turn_dr", "turn_inverse", "turn_pieces",
@@ -56,17 +57,6 @@ def _consts(r):
     c = np.sqrt(1.0 - r * r)
     s = np.sqrt(1.0 - 2.0 * r * r)
     return c, s, r * r / (c * c + s)
-
-
-def turn(r, k):
-    """Turn ``E(r, k)`` of psi over the +y leaf of radius r from zero [rad] (closed form).
-
-    ``2 pi r^2 / (1 + c) - 4 pi k c r^2 / (s (1 + s))``, the same as
-    ``2 pi (1 - c) + 2 pi k c (1 - 1/s)`` without cancellation at small r.
-    """
-    r = np.asarray(r, float)
-    c, s, _ = _consts(r)
-    return _TWO_PI * r * r / (1.0 + c) - 2.0 * _TWO_PI * k * c * r * r / (s * (1.0 + s))
 
 
 def turn_dr(r, k):
