@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Speed of the complete enumeration (:mod:`rollplan.planners.geometric.enumerate`), before and after.
+"""Speed of the numpy reference enumeration (tests/reference_enumerate.py), before and after.
 
 Writes ``results/enumerate_speed.md`` and ``results/enumerate_speed.json``. Run from the repository
 root (git is used to load the enumeration of a base commit next to the current one):
@@ -37,10 +37,11 @@ from pathlib import Path
 
 import rollplan
 from rollplan.io import write_atomic, write_json
-from rollplan.planners.geometric import enumerate as current
 from rollplan.problem import K_MAX
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+import reference_enumerate as current  # noqa: E402  (tests/ is on the path: the numpy enumeration lives there)
 from benchmark import git_commit, machine  # noqa: E402  (scripts/ is on the path)
 
 ROOT = Path(__file__).resolve().parent.parent
