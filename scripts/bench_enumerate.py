@@ -11,7 +11,7 @@ anything):
 
 * ``shortest``: the planner's search for the shortest plan without its certificate (branches in
   chunks of growing size ordered by their lower bound of ``a + b``, ``roots(..., first_only=True)``
-  below the best length so far, as ``GeometricPhasePlanner._solve_enumerated`` does), with
+  below the best length so far, as ``ReferencePlanner._solve_enumerated`` of tests/reference_enumerate.py does), with
   ``branches`` included; every root is taken as certified;
 * ``all``: ``roots`` of every branch.
 
