@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Speed of the complete enumeration (:mod:`rollplan.planners.geometric.enumerate`), before and after.
+"""Speed of the numpy reference enumeration (tests/reference_enumerate.py), before and after.
 
 Writes ``results/enumerate_speed.md`` and ``results/enumerate_speed.json``. Run from the repository
 root (git is used to load the enumeration of a base commit next to the current one):
@@ -11,7 +11,7 @@ anything):
 
 * ``shortest``: the planner's search for the shortest plan without its certificate (branches in
   chunks of growing size ordered by their lower bound of ``a + b``, ``roots(..., first_only=True)``
-  below the best length so far, as ``GeometricPhasePlanner._solve_enumerated`` does), with
+  below the best length so far, as ``ReferencePlanner._solve_enumerated`` of tests/reference_enumerate.py does), with
   ``branches`` included; every root is taken as certified;
 * ``all``: ``roots`` of every branch.
 
@@ -37,10 +37,11 @@ from pathlib import Path
 
 import rollplan
 from rollplan.io import write_atomic, write_json
-from rollplan.planners.geometric import enumerate as current
 from rollplan.problem import K_MAX
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+import reference_enumerate as current  # noqa: E402  (tests/ is on the path: the numpy enumeration lives there)
 from benchmark import git_commit, machine  # noqa: E402  (scripts/ is on the path)
 
 ROOT = Path(__file__).resolve().parent.parent

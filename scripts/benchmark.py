@@ -236,8 +236,8 @@ def section_plan(ctx):
              "tables and compiled functions loaded); scipy = median of "
              f"{ctx['scipy_repeats']} runs. 'of which' columns: the IPOPT polish and the RK8 certificate timed alone "
              "on the plan's root (median of 21); the rest of a warm plan is the search of the shortest root (column "
-             "'search': the generated C planner's search through ctypes, planners/geometric/compiled_search.py, "
-             "or the numpy enumeration, planners/geometric/enumerate.py) and Python glue; each phase timed inside "
+             "'search': the generated C planner's search through ctypes, planners/geometric/compiled_search.py) "
+             "and Python glue; each phase timed inside "
              "the plan: "
              "results/plan_profile.md (scripts/profile_plan.py).",
              "Residual (CVODES) = |(u_a, v_a, psi, u_o, v_o) - (target, 0, 0)| after n steps by the same CVODES "

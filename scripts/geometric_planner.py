@@ -36,9 +36,10 @@ import rollplan
 from rollplan.core.curves import A_MAX
 from rollplan.core.plane import target_shift
 from rollplan.io import write_atomic, write_json
-from rollplan.planners.geometric import enumerate as en
 from rollplan.problem import K_MAX
 
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+import reference_enumerate as en  # noqa: E402  (tests/ is on the path: the numpy enumeration lives there)
 from benchmark import _median_time, git_commit, machine, scipy_plan, scipy_step  # noqa: E402  (scripts/ is on the path)
 
 PLAN_TARGETS = [((0.0, 1.0, 0.0), 1), ((0.5, 0.3, 0.4), 2), ((1.0, -0.5, 1.0), 3), ((0.2, 0.2, -0.3), 1)]

@@ -5,9 +5,7 @@
 Writes ``plan_profile.md`` and ``plan_profile.json``. The targets and k are those of the plan section of
 ``scripts/benchmark.py``. Each phase is timed inside the plan (wall time, mean over the repeats) by
 wrapping the planner's calls: the compiled C search of the shortest root
-(:func:`rollplan.planners.geometric.compiled_search.shortest_root`; column "search" says which search chose the
-plan), or the numpy search: the branch list (:func:`rollplan.planners.geometric.enumerate.branches`) and
-the enumeration of the roots (:func:`~rollplan.planners.geometric.enumerate.roots`); the IPOPT polish of the
+(:func:`rollplan.planners.geometric.compiled_search.shortest_root`, the planner's only search); the IPOPT polish of the
 winning root (``GeometricPhasePlanner._polish``), the step's shift for gamma (the compiled leaf-map step)
 and the RK8 certificate; "rest" is the plan's time minus these (problem checks, gamma, the result objects).
 The fixed costs below them are measured alone: one C search, one IPOPT call on a trivial 2 x 2 system (IPOPT's cost
@@ -40,7 +38,7 @@ from rollplan.planners.geometric.refine import leaf_residual
 
 from benchmark import TARGETS, K, git_commit
 
-PHASES = ("C search", "branches", "roots", "polish (IPOPT)", "step for gamma", "certificate (RK8)")
+PHASES = ("C search", "polish (IPOPT)", "step for gamma", "certificate (RK8)")
 
 
 def _timed(acc: dict, label: str, fn):
@@ -68,11 +66,8 @@ def in_plan(repeats: int) -> list:
     """Per target: median wall and CPU time of a warm plan and the mean time of each phase inside it [ms]."""
     acc = defaultdict(float)
     pl = planner.default_planner("ipopt")
-    saved = (planner.branches, planner.roots, planner.leaf_step, planner.shortest_root, pl._polish,
-             pl.certifier.certify)
+    saved = (planner.leaf_step, planner.shortest_root)
     planner.shortest_root = _timed(acc, "C search", planner.shortest_root)
-    planner.branches = _timed(acc, "branches", planner.branches)
-    planner.roots = _timed(acc, "roots", planner.roots)
     pl._polish = _timed(acc, "polish (IPOPT)", pl._polish)
     pl.certifier.certify = _timed(acc, "certificate (RK8)", pl.certifier.certify)
     step = planner.leaf_step
@@ -104,7 +99,7 @@ def in_plan(repeats: int) -> list:
             row["IPOPT iterations"] = p.stats.iterations
             rows.append(row)
     finally:
-        planner.branches, planner.roots, planner.leaf_step, planner.shortest_root = saved[:4]
+        planner.leaf_step, planner.shortest_root = saved
         del pl._polish, pl.certifier.certify
     return rows
 

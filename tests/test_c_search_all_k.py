@@ -1,5 +1,6 @@
 """The C search for every k the planner accepts (sigma graphs below k = 1/2, the graph over x above;
-docs/design/enumeration.md): the Python planner's plans through it against the numpy search, and its roots
+docs/design/enumeration.md): the Python planner's plans through it against the numpy reference search
+(tests/reference_enumerate.py), and its roots
 against the 2-D brute force of tests/test_enumerate.py (scipy's brentq and bounded minimiser on the level set)."""
 
 import math
@@ -14,6 +15,8 @@ from rollplan.core import compiled
 from rollplan.core.curves import A_MAX
 from rollplan.core.plane import wrap_exact
 from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search, leafmap
+
+from reference_enumerate import ReferencePlanner
 
 
 def _gamma_tol(a, b):
@@ -55,7 +58,7 @@ def _check_same_plans(seed, ks, count):
     """The planner with the compiled search and with the numpy search: the same outcome and, where there is a plan,
     the same branch, (a, b) to 1e-12 and gamma to :func:`_gamma_tol` (both polished by the same solver); returns
     how many plans."""
-    fast, slow = GeometricPhasePlanner(), GeometricPhasePlanner(compiled_search=False)
+    fast, slow = GeometricPhasePlanner(), ReferencePlanner()
     plans = 0
     for target, steps, k in _targets(seed, ks, count):
         p, q = _solve(fast, target, steps, k), _solve(slow, target, steps, k)
@@ -74,7 +77,7 @@ def _check_same_lists(seed, ks, count, fixed_steps=None):
     """all_solutions with the compiled and the numpy search: as many plans, and the same ones (branch, (a, b) to
     1e-12, gamma to :func:`_gamma_tol`), paired in the order of (branch, a, b); returns how many lists were not
     empty."""
-    fast, slow = GeometricPhasePlanner(), GeometricPhasePlanner(compiled_search=False)
+    fast, slow = GeometricPhasePlanner(), ReferencePlanner()
     listed = 0
     for target, steps, k in _targets(seed, ks, count, fixed_steps):
         p, q = (_solve(pl, target, steps, k, all_solutions=True) for pl in (fast, slow))

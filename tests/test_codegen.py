@@ -26,7 +26,6 @@ from rollplan.codegen.c_library import (
     PSI_MAX,
     certificate_functions,
     generated_functions,
-    reference_plan,
 )
 from rollplan.core import model
 from rollplan.core.curves import A_MAX, figure_eight
@@ -37,6 +36,7 @@ from rollplan.inputs import show_path
 from rollplan.planners.geometric import GeometricPhasePlanner
 
 import references
+from reference_enumerate import ReferencePlanner, reference_plan
 
 pytestmark = pytest.mark.skipif(shutil.which("make") is None or shutil.which("cc") is None,
                                 reason="needs make and a C compiler")
@@ -350,11 +350,10 @@ def _parse_all(run):
 
 
 def _reference_all(target):
-    """Every certified plan of the Python planner's numpy search (``--all``), shortest first; [] if none."""
+    """Every certified plan of the numpy reference search (``--all``), shortest first; [] if none."""
     u, v, psi, n, k = target
     try:
-        best = GeometricPhasePlanner(compiled_search=False).solve(Problem((u, v, psi), k=k, steps=n),
-                                                                  all_solutions=True)
+        best = ReferencePlanner().solve(Problem((u, v, psi), k=k, steps=n), all_solutions=True)
     except NoPlanError:
         return []
     return [best, *best.alternatives]

@@ -122,14 +122,17 @@ def test_without_a_compiler_the_virtual_machine_serves(cache, monkeypatch):
     assert not list(cache.glob("*.so"))
 
 
-def test_a_plan_runs_without_a_compiler(tmp_path):
+def test_a_plan_without_a_compiler_is_one_solver_error(tmp_path):
+    """The C search is the planner's only search (issue 24): without a compiler a plan raises one SolverError line
+    naming why, and nothing is compiled."""
     env = {**os.environ, "ROLLPLAN_CACHE_DIR": str(tmp_path), "ROLLPLAN_NO_COMPILE": "1"}
-    code = ("import rollplan; p = rollplan.plan((1, -0.5, 1), steps=3, k=2.5); "
-            "print(p.certificate.passed, p.certificate.method, p.stats.method)")
+    code = ("import rollplan\ntry:\n    rollplan.plan((1, -0.5, 1), steps=3, k=2.5)\n"
+            "except rollplan.SolverError as e:\n    print(e.status, '|', e)")
     run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300,
                          check=False)
     assert run.returncode == 0, run.stderr
-    assert run.stdout.split() == ["True", "rk8", "ipopt"]
+    assert run.stdout == ("no C search | the geometric planner's search is compiled C and cannot be used: "
+                          "ROLLPLAN_NO_COMPILE is set\n")
     assert not list(Path(tmp_path).glob("*.so"))
 
 
@@ -387,9 +390,10 @@ def test_a_library_or_directory_others_control_is_refused_by_the_api(cache, dama
 
 
 def test_a_leaf_table_others_may_write_is_refused(tmp_path, monkeypatch):
-    """The planner's leaf tables live in the same cache directory and are refused on the same terms."""
+    """The reference enumeration's leaf tables live in the same cache directory and are refused on the same terms."""
     from rollplan import UnsafeCacheError
-    from rollplan.planners.geometric.enumerate import rho_table
+
+    from reference_enumerate import rho_table
 
     monkeypatch.setenv("ROLLPLAN_CACHE_DIR", str(tmp_path / "cache"))
     first = rho_table.__wrapped__(3.3)   # built and stored (the cache of this process is bypassed)

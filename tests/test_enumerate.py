@@ -4,8 +4,8 @@ Leaf map (:mod:`rollplan.planners.geometric.leafmap`): the closed-form turn, the
 displacement, the symmetry that makes ``exp(i E/2) d`` real, and ``step`` against scipy DOP853 on
 the printed equations (``tests/references.py``) over the accepted domain, up to (A_MAX, K_MAX).
 
-Enumeration (:mod:`rollplan.planners.geometric.enumerate`) against a brute force of its own: for
-each branch m, a dense scan in the first leaf radius a (uniform in the turn E(a) and in a, ten times
+Enumeration (the numpy reference of the C search, ``tests/reference_enumerate.py``) against a brute force of
+its own: for each branch m, a dense scan in the first leaf radius a (uniform in the turn E(a) and in a, ten times
 finer than the planner's grid), b from ``E(b) = E(a) - eta_m`` by scipy's brentq on the closed form,
 h from the complex step map (not the rho form the planner uses), every sign change refined by
 brentq and every local minimum of ``|h^2 - h_m^2|`` checked for a close pair by scipy's bounded
@@ -28,10 +28,10 @@ import rollplan
 from rollplan import InputError
 from rollplan.core.curves import A_MAX
 from rollplan.core.plane import n_step_gain
-from rollplan.planners.geometric import enumerate as en
 from rollplan.planners.geometric import leafmap
 from rollplan.problem import K_MAX
 
+import reference_enumerate as en
 import references
 
 wrap = references.wrap

@@ -3,9 +3,15 @@ multi-step targets, all solution branches, input rules, and the pieces (the n-st
 sampling), every plan checked by the independent reference: the paper's printed (28)-(30), (35)
 and Rz(gamma) (31) integrated by scipy DOP853 over all n steps (``tests/references.py``)."""
 
+import os
+import subprocess
+import sys
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 import pytest
+from conftest import one_line
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
@@ -19,6 +25,7 @@ from rollplan.planners import solve
 from rollplan.problem import arrival_error
 
 import references
+from reference_enumerate import ReferencePlanner
 
 wrap = references.wrap
 
@@ -478,14 +485,15 @@ def _compiled_search_built():
 
 
 def test_compiled_search_chooses_the_plan_of_the_numpy_search():
-    """The C search (the generated planner's enumeration, called through ctypes) and the numpy enumeration
-    choose the same plan: branch and (a, b, gamma), by default (the shortest) and with branch=, on random
-    targets; the numpy search is the one checked against brute forces in tests/test_enumerate.py."""
+    """The C search (the generated planner's enumeration, called through ctypes) and the numpy reference
+    enumeration (tests/reference_enumerate.py) choose the same plan: branch and (a, b, gamma), by default (the
+    shortest) and with branch=, on random targets; the reference is checked against brute forces in
+    tests/test_enumerate.py."""
     from rollplan.planners.geometric import GeometricPhasePlanner
 
     if not _compiled_search_built():
         pytest.skip("no C compiler: the compiled search is not built")
-    fast, slow = GeometricPhasePlanner(), GeometricPhasePlanner(compiled_search=False)
+    fast, slow = GeometricPhasePlanner(), ReferencePlanner()
     rng = np.random.default_rng(7)
     compiled = 0
     for i in range(12):
@@ -513,12 +521,13 @@ def _all_plans(p):
 
 def test_compiled_search_lists_the_plans_of_the_numpy_search():
     """all_solutions by the C search (every root of every branch, rollplan_plan_all through ctypes, polished and
-    certified in Python) and by the numpy search: the same plans, branch and (a, b, gamma), on random targets."""
+    certified in Python) and by the numpy reference search: the same plans, branch and (a, b, gamma), on random
+    targets."""
     from rollplan.planners.geometric import GeometricPhasePlanner
 
     if not _compiled_search_built():
         pytest.skip("no C compiler: the compiled search is not built")
-    fast, slow = GeometricPhasePlanner(), GeometricPhasePlanner(compiled_search=False)
+    fast, slow = GeometricPhasePlanner(), ReferencePlanner()
     rng = np.random.default_rng(8)
     compiled = 0
     for i in range(4):
@@ -557,44 +566,80 @@ def test_compiled_all_solutions_report_progress():
     assert mine[0][1] == 0 and mine[-1][1] == mine[-1][2] == p.stats.details["roots"] == len(mine) - 1
 
 
-def _cli_all(extra_env, *argv):
-    import os
-    import subprocess
-    import sys
-
-    run = subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", *argv, "--all"], check=False,
-                         capture_output=True, text=True, env={**os.environ, **extra_env}, timeout=600)
-    assert run.returncode == 0, run.stderr
-    lines = run.stdout.split("all plans:")[1].splitlines()
-    return int(lines[0].split()[0]), [tuple(float(x) for x in line.split()[:4]) for line in lines[2:]]
+def _cli(extra_env, *argv):
+    """``rollplan argv`` in a subprocess with ``extra_env`` added to the environment."""
+    return subprocess.run([sys.executable, "-m", "rollplan.cli", *argv], check=False, capture_output=True, text=True,
+                          env={**os.environ, **extra_env}, timeout=600)
 
 
-def test_cli_all_lists_the_same_plans_with_and_without_the_compiled_search():
-    """rollplan plan --all: the same count and plans (m, a, b, gamma as printed) with the compiled C search and
-    without it (ROLLPLAN_NO_COMPILE=1: the numpy search)."""
+def test_cli_all_lists_the_plans_of_the_numpy_search():
+    """rollplan plan --all (the C search, in a subprocess): the count and plans (m, a, b, gamma as printed) of the
+    numpy reference search."""
     if not _compiled_search_built():
         pytest.skip("no C compiler: the compiled search is not built")
-    argv = ("--to", "0.3", "-0.2", "--psi", "0.5", "--steps", "2", "--k", "1.5")
-    count, plans = _cli_all({}, *argv)
-    count_numpy, plans_numpy = _cli_all({"ROLLPLAN_NO_COMPILE": "1"}, *argv)
-    assert count == count_numpy == len(plans) == len(plans_numpy) >= 3
-    for x, y in zip(sorted(plans), sorted(plans_numpy)):
+    run = _cli({}, "plan", "--to", "0.3", "-0.2", "--psi", "0.5", "--steps", "2", "--k", "1.5", "--all")
+    assert run.returncode == 0, run.stderr
+    lines = run.stdout.split("all plans:")[1].splitlines()
+    count, plans = int(lines[0].split()[0]), [tuple(float(x) for x in line.split()[:4]) for line in lines[2:]]
+    ref = ReferencePlanner().solve(Problem((0.3, -0.2, 0.5), k=1.5, steps=2), all_solutions=True)
+    ref_plans = [(q.branch, q.a, q.b, q.gamma) for q in (ref, *ref.alternatives)]
+    assert count == len(plans) == len(ref_plans) >= 3
+    for x, y in zip(sorted(plans), sorted(ref_plans)):
         assert x[0] == y[0] and np.allclose(x[1:], y[1:], rtol=0, atol=2e-9), (x, y)
 
 
-def test_planner_works_without_a_compiler(monkeypatch):
-    """With ROLLPLAN_NO_COMPILE the compiled search is not built and the numpy search gives the same plan."""
+def test_a_rejected_shortest_root_is_replaced_by_the_next_certified_one_of_the_c_search(monkeypatch):
+    """When the certificate rejects the C search's shortest root, the planner certifies the C search's other roots
+    shortest first (no numpy search): the plan of the numpy reference search under the same rejection."""
+    from rollplan.planners.geometric import GeometricPhasePlanner
+
+    if not _compiled_search_built():
+        pytest.skip("no C compiler: the compiled search is not built")
+    problem = Problem((0.3, -0.2, 0.5), k=1.5, steps=2)
+    shortest = GeometricPhasePlanner().solve(problem)
+    certified = GeometricPhasePlanner._certified
+
+    def reject_the_shortest(self, problem, x, *args, **kwargs):
+        root, cert, stats = certified(self, problem, x, *args, **kwargs)
+        if abs(x[0] - shortest.a) < 1e-6 and abs(x[1] - shortest.b) < 1e-6:
+            cert = replace(cert, residual=1.0)   # fails the certificate
+        return root, cert, stats
+
+    monkeypatch.setattr(GeometricPhasePlanner, "_certified", reject_the_shortest)
+    p = GeometricPhasePlanner().solve(problem)
+    ref = ReferencePlanner().solve(problem)
+    assert p.stats.details["search"] == "compiled" and p.certificate.passed
+    assert p.a + p.b > shortest.a + shortest.b
+    assert (p.branch, p.a, p.b) == (ref.branch, pytest.approx(ref.a, abs=1e-9), pytest.approx(ref.b, abs=1e-9))
+
+
+def test_planner_without_a_compiler_says_what_to_install(tmp_path):
+    """Without the C search (ROLLPLAN_NO_COMPILE=1, or no compiler on the PATH) `rollplan plan` prints one line
+    naming why (and what to install) and exits 4 (solver failed), no traceback."""
+    for env, why in (({"ROLLPLAN_NO_COMPILE": "1"}, "ROLLPLAN_NO_COMPILE is set"),
+                     ({"PATH": str(tmp_path), "CC": ""}, "install gcc or clang")):
+        run = _cli(env, "plan", "--to", "0", "1")
+        assert run.returncode == 4 and one_line(run.stderr), run.stderr
+        assert run.stderr.startswith("rollplan: solver failed (no C search): ") and why in run.stderr, run.stderr
+
+
+def test_planner_without_a_compiler_raises_solver_error(monkeypatch):
+    """With ROLLPLAN_NO_COMPILE the C search is not built and the planner raises one SolverError line."""
+    from rollplan import SolverError
     from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search
 
-    target, planner = (0.5, 0.3, 0.4), GeometricPhasePlanner()
-    before = planner.solve(Problem(target, k=2.5, steps=2))
     monkeypatch.setenv("ROLLPLAN_NO_COMPILE", "1")
     compiled_search.library.cache_clear()
     try:
-        assert compiled_search.library() is None
-        p = planner.solve(Problem(target, k=2.5, steps=2))
+        with pytest.raises(SolverError, match="ROLLPLAN_NO_COMPILE is set") as err:
+            GeometricPhasePlanner().solve(Problem((0.5, 0.3, 0.4), k=2.5, steps=2))
     finally:
         compiled_search.library.cache_clear()
-    assert p.stats.details["search"] == "numpy" and p.certificate.passed
-    assert (p.branch, p.a, p.b) == (before.branch, pytest.approx(before.a, abs=1e-9), pytest.approx(before.b, abs=1e-9))
-    assert reaches(p) < 1e-9
+    assert err.value.status == compiled_search.UNAVAILABLE and "\n" not in str(err.value)
+
+
+def test_compiled_search_false_is_refused():
+    from rollplan.planners.geometric import GeometricPhasePlanner
+
+    with pytest.raises(InputError, match="compiled_search = False is not allowed"):
+        GeometricPhasePlanner(compiled_search=False)

@@ -100,13 +100,13 @@ def test_interrupts_call_passes_results_and_errors_through():
 
 @pytest.mark.slow
 def test_planner_is_interrupted_not_sent_to_another_branch(tmp_path, monkeypatch):
-    """A Ctrl-C during a k = 99 plan (its leaf table built afresh, then the search) stops it with
-    KeyboardInterrupt, not a NoPlanError, SolverError or a plan on a longer branch."""
+    """A Ctrl-C during a k = 99 plan (its C search and compiled functions built afresh, then the search) stops it
+    with KeyboardInterrupt, not a NoPlanError, SolverError or a plan on a longer branch."""
     from rollplan import Problem
-    from rollplan.planners.geometric import enumerate as enumeration
+    from rollplan.planners.geometric import compiled_search
 
-    monkeypatch.setenv("ROLLPLAN_CACHE_DIR", str(tmp_path))   # no table on disk: the plan takes seconds
-    enumeration.rho_table.cache_clear()
+    monkeypatch.setenv("ROLLPLAN_CACHE_DIR", str(tmp_path))   # nothing compiled on disk: the plan takes seconds
+    compiled_search.library.cache_clear()
     planner = GeometricPhasePlanner()
     timer = interrupt_after(0.5)
     try:
@@ -114,7 +114,7 @@ def test_planner_is_interrupted_not_sent_to_another_branch(tmp_path, monkeypatch
             planner.solve(Problem((0.0, 1.0, 0.0), k=99.0))
     finally:
         timer.cancel()
-        enumeration.rho_table.cache_clear()
+        compiled_search.library.cache_clear()
     # within a second on an idle machine; the bound leaves room for a loaded one (2.5 s seen at load 5 on 2 cores)
     assert time.perf_counter() - timer.sent[0] < 5.0
 

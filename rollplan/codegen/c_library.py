@@ -35,9 +35,8 @@ from ..core.c_functions import (
 )
 from ..core.curves import A_MAX, figure_eight
 from ..core.integrate import piece_rhs, rk8_step
-from ..errors import InputError, NoPlanError, check_flag, show
+from ..errors import InputError, check_flag, show
 from ..outputs import check_folder, write_folder
-from ..planners.geometric import GeometricPhasePlanner
 from ..planners.geometric.c_sources import (
     CERT_BASE,
     CERT_TOL,
@@ -50,8 +49,8 @@ from ..planners.geometric.c_sources import (
     config_values,
     sources,
 )
-from ..planners.geometric.enumerate import K_MONOTONE
-from ..problem import K_MAX, Problem
+from ..planners.geometric.search_constants import K_MONOTONE
+from ..problem import K_MAX
 
 __all__ = [
     "DEFAULT_STEPS_PER_LEAF",
@@ -72,7 +71,6 @@ __all__ = [
     "generated_functions",
     "generate",
     "auto_steps_per_leaf",
-    "reference_plan",
 ]
 
 log = logging.getLogger(__name__)
@@ -195,25 +193,6 @@ def auto_steps_per_leaf(k_max) -> int:
     raise InputError(f"k_max = {k_max:g} is not allowed: even the largest automatic size, {AUTO_STEPS_PER_LEAF[-1]} "
                      f"steps per leaf, leaves the step map off by {worst:.1e} (more than {STEP_MAP_TOL:g}) near "
                      f"A_MAX; give a smaller k_max")
-
-
-def reference_plan(target, steps: int, k: float, near=None, branch: int | None = None):
-    """The Python planner's certified plan for the same target, for cross-checking the C planner.
-
-    :class:`rollplan.planners.geometric.GeometricPhasePlanner` on ``Problem(target, k, steps)``: the shortest
-    plan over all branches (the C planner's default), or on ``branch`` only; with ``near = (a, b)`` the plan
-    of all certified ones closest to it. None if there is none. The planner runs its numpy search, not the
-    compiled C search it would otherwise call: the comparison is between two implementations.
-    """
-    problem = Problem(tuple(float(x) for x in target), k=k, steps=steps)
-    try:
-        best = GeometricPhasePlanner(compiled_search=False).solve(problem, all_solutions=near is not None,
-                                                                  branch=branch)
-    except NoPlanError:
-        return None
-    if near is None:
-        return best
-    return min((best,) + best.alternatives, key=lambda q: (max(abs(q.a - near[0]), abs(q.b - near[1])), q.a + q.b))
 
 
 # ----------------------------------------------------------------------------- C sources

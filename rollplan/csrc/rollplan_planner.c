@@ -7,7 +7,8 @@
  * k >= 1/2 (E decreasing), and on the sigma graphs of enumerate.py (one per branch and rectangle of monotone
  * pieces of E) below, with the rho table interpolated in r (docs/design/c-planner.md,
  * docs/design/enumeration.md). Each formula is written once, here, with the Python function it ports where
- * there is one:
+ * there is one (enumerate = tests/reference_enumerate.py, the tests' numpy reference; its constants and
+ * table_radii are in rollplan/planners/geometric/search_constants.py):
  *   leafmap.turn / turn_dr / turn_inverse   closed-form turn E(r, k) of a leaf and its inverse
  *   leafmap.displacement / signed_length    the leaf's displacement d(r, k) by the Gauss rule in chi (the
  *                                           nodes chi < pi; the others by the symmetry chi -> 2 pi - chi),
@@ -21,7 +22,8 @@
  *   enumerate.roots (_cells, _critical, _examine, _bracketed, _tangencies, _outward, _polish)
  *                                           every root on a branch (search_branch, search_sigma, sweep and the
  *                                           functions they call)
- *   planner._solve_enumerated               the bounded search for the shortest certified plan
+ *   enumerate.ReferencePlanner._solve_enumerated
+ *                                           the bounded search for the shortest certified plan
  *   planner._certified                      gamma from the geometry
  * Static memory only; not reentrant (one static work area and the table of the last k). */
 #include <float.h>

@@ -2,8 +2,8 @@
 extension to any start and goal state.
 
 Pieces: :mod:`.leafmap` (the accurate leaf map: closed-form turn, Gauss-rule displacement, up to K_MAX),
-:mod:`.enumerate` (complete enumeration of the roots of (32)-(33) for every k), :mod:`.compiled_search` (the
-C planner's search, for every k), :mod:`.refine` (the polish: root solvers by name),
+:mod:`.compiled_search` (the C planner's search: complete enumeration of the roots of (32)-(33) for every k;
+constants in :mod:`.search_constants`), :mod:`.refine` (the polish: root solvers by name),
 :mod:`.certify` (independent integration of the whole motion), :mod:`.planner` (the pole-to-pole problem class
 :class:`GeometricPhasePlanner`); full reconfiguration: :mod:`.maneuvers` (approach and departure rolls),
 :mod:`.turn` (turning in place), :mod:`.legs` (two legs), :mod:`.composed` (:class:`ComposedPlanner` and

@@ -30,9 +30,9 @@ from ...core.integrate import DOP853_C
 from ...errors import show_limit
 from ...problem import K_MIN, MAX_STEPS
 from ...result import CERTIFICATE_TOLERANCE
-from . import enumerate as enumerate_
 from . import leafmap
-from .enumerate import K_MONOTONE
+from . import search_constants as sc
+from .search_constants import K_MONOTONE
 
 __all__ = ["CSRC", "STATIC_FILES", "CONFIG_HEADER", "DEFAULT_K_MAX", "CERT_TOL", "FLOAT_CERT_TOL", "CERT_DELTA",
            "CERT_BASE", "CERT_SAFETY", "PSI_MAX", "static_sources", "config_values", "accuracy", "config_header",
@@ -81,17 +81,17 @@ def _two_pi_parts() -> dict:
 
 
 def _enumeration_constants(k_max: float) -> dict:
-    """The constants of :mod:`.leafmap` and :mod:`.enumerate` the C planner uses, and the sizes of its static
+    """The constants of :mod:`.leafmap` and :mod:`.search_constants` the C planner uses, and the sizes of its static
     tables for ``k <= k_max``."""
     if leafmap.ORDER % 2:
         raise ValueError("the C leaf map evaluates the nodes chi < pi only (symmetry): it needs an even ORDER")
     x, w = np.polynomial.legendre.leggauss(leafmap.ORDER)
     buckets = [(kk, p) for kk, p in leafmap.BUCKETS if kk < k_max] + [next((kk, p) for kk, p in leafmap.BUCKETS
                                                                            if kk >= k_max)]
-    # the table's radii (enumerate.table_radii): their number grows with k for k >= 1/2 (E is monotone, its
+    # the table's radii (search_constants.table_radii): their number grows with k for k >= 1/2 (E is monotone, its
     # steps grow with k; below 1/2 |E'| is smaller than at 1/2); the cell of the last radius is one more
-    ntable = 1 + max(enumerate_.table_radii(kk, enumerate_.TABLE_STEP, enumerate_.TABLE_PHASE,
-                                            enumerate_.TABLE_INV_S).size for kk in (K_MIN, K_MONOTONE, k_max))
+    ntable = 1 + max(sc.table_radii(kk, sc.TABLE_STEP, sc.TABLE_PHASE, sc.TABLE_INV_S).size
+                     for kk in (K_MIN, K_MONOTONE, k_max))
     if ntable >= 2 ** 16:
         raise ValueError(f"the rho table at k_max = {k_max:g} needs {ntable} radii: its buckets hold 16-bit indices")
     return {
@@ -102,19 +102,19 @@ def _enumeration_constants(k_max: float) -> dict:
         "BUCKET_K": ", ".join(repr(float(kk)) for kk, _ in buckets),
         "BUCKET_P": ", ".join(str(p) for _, p in buckets),
         "MAX_PANELS": str(buckets[-1][1]),
-        "PHASE_STEP": repr(enumerate_.PHASE_STEP),
-        "X_STEP": repr(enumerate_.X_STEP),
-        "SIGMA_STEP": repr(enumerate_.SIGMA_STEP),
+        "PHASE_STEP": repr(sc.PHASE_STEP),
+        "X_STEP": repr(sc.X_STEP),
+        "SIGMA_STEP": repr(sc.SIGMA_STEP),
         "K_MONOTONE": repr(float(K_MONOTONE)),
-        "HERMITE_REL": repr(enumerate_.HERMITE_REL),
-        "POLISH_STEP": repr(enumerate_.POLISH_STEP),
-        "POLISH_BRACKET": repr(enumerate_.POLISH_BRACKET),
-        "NOT_A_ROOT": repr(enumerate_.NOT_A_ROOT),
-        "SAFETY": repr(enumerate_.SAFETY),
-        "MIN_WIDTH": repr(enumerate_.MIN_WIDTH),
-        "TABLE_PHASE": repr(enumerate_.TABLE_PHASE),
-        "TABLE_STEP": repr(enumerate_.TABLE_STEP),
-        "TABLE_INV_S": repr(enumerate_.TABLE_INV_S),
+        "HERMITE_REL": repr(sc.HERMITE_REL),
+        "POLISH_STEP": repr(sc.POLISH_STEP),
+        "POLISH_BRACKET": repr(sc.POLISH_BRACKET),
+        "NOT_A_ROOT": repr(sc.NOT_A_ROOT),
+        "SAFETY": repr(sc.SAFETY),
+        "MIN_WIDTH": repr(sc.MIN_WIDTH),
+        "TABLE_PHASE": repr(sc.TABLE_PHASE),
+        "TABLE_STEP": repr(sc.TABLE_STEP),
+        "TABLE_INV_S": repr(sc.TABLE_INV_S),
         "NTABLE": str(ntable),
     }
 

@@ -1,13 +1,14 @@
 """The C search, called from Python: the shortest root of (32)-(33) in C.
 
 The C planner (the static sources ``rollplan/csrc/rollplan_planner.c`` and ``.h`` with the generated model
-functions and ``rollplan_config.h`` of :mod:`.c_sources`; built here for ``K_MIN <= k <= K_MAX``, every k the
+functions and ``rollplan_config.h`` of :mod:`.c_sources`; built here for ``0 <= k <= K_MAX``, every k the
 planner accepts) enumerates the roots on one graph per branch over the smaller leaf radius for ``k >= 1/2`` and on
-the sigma graphs of :mod:`.enumerate` below, and runs the bounded search of
-:meth:`.GeometricPhasePlanner._solve_enumerated`. :func:`shortest_root` returns its shortest root uncertified,
-and :func:`all_roots` every root of every branch (``<prefix>_plan_all``), for the Python planner to polish and
-certify; :func:`library` is None without a C compiler (or with ``ROLLPLAN_NO_COMPILE=1``), and the numpy search
-serves.
+sigma graphs below (docs/design/enumeration.md), and runs a bounded search for the shortest root.
+:func:`shortest_root` returns its shortest root uncertified, and :func:`all_roots` every root of every branch
+(``<prefix>_plan_all``), for the Python planner to polish and certify. It is the planner's only search: without a
+C compiler (or with ``ROLLPLAN_NO_COMPILE=1``) both raise a :class:`~rollplan.errors.SolverError` whose one line
+says what to install (:func:`unavailable`). The tests check it against a numpy enumeration
+(tests/reference_enumerate.py).
 
 How it is built, loaded and called: docs/design/c-planner.md."""
 
@@ -20,11 +21,13 @@ from functools import lru_cache
 from typing import NamedTuple
 
 from ... import interrupts
-from ...core.compiled import shared_library
-from ...problem import K_MAX, K_MIN
+from ...core.compiled import last_build, no_compiler_reason, shared_library
+from ...errors import SolverError
+from ...problem import K_MAX
 from .c_sources import DEFAULT_K_MAX, generator_files, sources
 
-__all__ = ["PREFIX", "DEFAULT_K_MAX", "SearchResult", "library", "shortest_root", "all_roots"]
+__all__ = ["PREFIX", "DEFAULT_K_MAX", "UNAVAILABLE", "SearchResult", "library", "unavailable", "shortest_root",
+           "all_roots"]
 
 #: Prefix of the generated C symbols (the code generator's default).
 PREFIX = "rollplan"
@@ -38,6 +41,10 @@ _lock = threading.Lock()
 #: planner prepared its table for (its table is kept), at most DEFAULT_K_MAX, and at most this many steps.
 _DIRECT_STEPS = 16
 _last_k = [math.nan]
+#: Status of the :class:`~rollplan.errors.SolverError` raised when the C search cannot be built or loaded.
+UNAVAILABLE = "no C search"
+#: Why :func:`library` gave None (set when it does).
+_why = [""]
 
 
 class _Plan(ctypes.Structure):
@@ -92,8 +99,29 @@ def library():
     None without it. Its tables are sized for every k the planner accepts (``k_max = K_MAX``); its step map
     ``<prefix>_step_eval``, which the search does not use, has the default size (accurate up to k = 5)."""
     # a build (seconds) runs in a helper thread: CasADi's code generation would swallow a Ctrl-C
-    return interrupts.call_in_thread(shared_library, "c_planner_search", lambda: sources(PREFIX, k_max=K_MAX), _load,
-                                     "the numpy search", memo=generator_files())
+    lib = interrupts.call_in_thread(shared_library, "c_planner_search", lambda: sources(PREFIX, k_max=K_MAX), _load,
+                                    "no C search", memo=generator_files())
+    if lib is None:
+        _why[0] = last_build().get("reason") or no_compiler_reason()
+    return lib
+
+
+def unavailable() -> SolverError:
+    """The error of a planner search without the C library: one line naming why and what to install."""
+    return SolverError(f"the geometric planner's search is compiled C and cannot be used: {_why[0]}",
+                       UNAVAILABLE)
+
+
+def _library():
+    """:func:`library`, or the :func:`unavailable` error."""
+    lib = library()
+    if lib is None:
+        raise unavailable()
+    return lib
+
+
+def _incomplete(status: int) -> SolverError:
+    return SolverError(f"the C search did not complete (status {status} of the C planner)", f"C status {status}")
 
 
 def _call(entry, k: float, direct: bool, *args) -> int:
@@ -113,12 +141,12 @@ def _call(entry, k: float, direct: bool, *args) -> int:
 
 def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
     """The shortest root of (32)-(33) for the target ``(u, v, psi)`` [R, rad] in ``steps`` figure eights at
-    inertia ratio k, over all branches or on ``branch`` only (m relative to psi), by the compiled C search,
-    uncertified; a result with ``a`` and ``b`` NaN when the (complete) search found no root. None when the library
-    is missing, k is outside [K_MIN, K_MAX] or the search is incomplete: the caller then runs the numpy search."""
-    lib = library() if K_MIN <= k <= K_MAX else None
-    if lib is None or (branch is not None and abs(branch) > 2**31 - 1):
-        return None
+    inertia ratio k (in [K_MIN, K_MAX]), over all branches or on ``branch`` only (m relative to psi), by the
+    compiled C search, uncertified; a result with ``a`` and ``b`` NaN when the (complete) search found no root.
+    SolverError without the library (:func:`unavailable`) or when the search does not complete."""
+    lib = _library()
+    if branch is not None and abs(branch) > 2**31 - 1:   # |eta| beyond the range of E: no root on it
+        return SearchResult(math.nan, math.nan, 0, 0, 0)
     options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
     plan = _Plan()
     status = _call(lib.plan_with, k, steps <= _DIRECT_STEPS, float(u), float(v), float(psi), int(steps), float(k),
@@ -126,18 +154,17 @@ def shortest_root(u: float, v: float, psi: float, steps: int, k: float, branch: 
     if status == NO_PLAN:
         return SearchResult(math.nan, math.nan, 0, int(plan.branches), int(plan.roots))
     if status != OK or not (math.isfinite(plan.a) and math.isfinite(plan.b)):
-        return None
+        raise _incomplete(status)
     return SearchResult(plan.a, plan.b, int(plan.m), int(plan.branches), int(plan.roots))
 
 
 def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
     """Every root of (32)-(33) on every branch (or on ``branch`` only), shortest (a + b) first, by the compiled
     C search (``<prefix>_plan_all``), uncertified: a list of :class:`SearchResult` (empty when there is no root).
-    None when the library is missing or the C search cannot give the list (k outside [K_MIN, K_MAX], search
-    incomplete): the caller then runs the numpy search."""
-    lib = library() if K_MIN <= k <= K_MAX else None
-    if lib is None or (branch is not None and abs(branch) > 2**31 - 1):
-        return None
+    SolverError without the library (:func:`unavailable`) or when the search does not complete."""
+    lib = _library()
+    if branch is not None and abs(branch) > 2**31 - 1:   # |eta| beyond the range of E: no root on it
+        return []
     options = _Options(int(branch is not None), 0 if branch is None else int(branch), 0)
     capacity, count = _FIRST_CAPACITY, ctypes.c_int(0)
     while True:
@@ -150,5 +177,5 @@ def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int 
     if status == NO_PLAN:
         return []
     if status != OK:
-        return None
+        raise _incomplete(status)
     return [SearchResult(p.a, p.b, int(p.m), int(p.branches), int(p.roots)) for p in plans[:count.value]]

@@ -3,9 +3,9 @@
 Trace the figure eight (31) rotated by gamma ``n`` times from rest at the origin to ``(u_a, v_a, psi)`` at the
 pole: on each branch m solve ``eta(a, b) = (psi + 2 pi m) / n`` (32) and
 ``h(a, b) = h_des |sin(eta / 2) / sin(n eta / 2)|`` (33) ((34) where ``sin(eta / 2) = 0``), then gamma from
-the geometry. The roots are enumerated completely (by the C search, :mod:`.compiled_search`; by the numpy
-search of :mod:`.enumerate` without a compiler or after a rejected root), polished by a solver chosen by name
-(:mod:`.refine`) and certified by an independent integration (:mod:`.certify`).
+the geometry. The roots are enumerated completely by the C search (:mod:`.compiled_search`; without a C compiler
+the planner stops with one line saying what to install), polished by a solver chosen by name (:mod:`.refine`) and
+certified by an independent integration (:mod:`.certify`).
 
 Derivation, the search, the polish and the certificate: docs/design/geometric-planner.md.
 """
@@ -52,9 +52,9 @@ from ...robot import Robot
 from ..method import Method, renamed_option
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
 from .compiled_search import all_roots, shortest_root
-from .enumerate import NOT_A_ROOT, branches, roots
 from .leafmap import panels_for, step_values
 from .refine import SOLVERS, leaf_step, polisher, step_residual
+from .search_constants import NOT_A_ROOT
 
 __all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
 
@@ -64,8 +64,6 @@ log = logging.getLogger(__name__)
 TOLERANCE = CERTIFICATE_TOLERANCE
 #: Most CVODES samples per leaf of :meth:`GeometricPhasePlanner.sample`.
 _MAX_PER_LEAF = 100000
-#: Largest number of branches enumerated together.
-_CHUNK = 64
 #: A polished root farther than this from the enumerated one (in a or b [R]) is not taken (the solver
 #: left the root it was started at); the enumerated root is certified instead.
 _POLISH_MOVE = 1e-6
@@ -141,7 +139,8 @@ class Plan(CertifiedMotion):
         Independent integration of all n steps (:mod:`.certify`) and its residual.
     stats : SolverStats
         ``details`` holds ``candidates`` (roots polished and certified), ``solves`` (plans certified),
-        ``branches`` (branches searched), ``roots`` and ``search`` (``"compiled"`` or ``"numpy"``).
+        ``branches`` (branches searched), ``roots`` and ``search`` (``"compiled"``; ``"numpy"`` from the
+        tests' reference enumeration).
     alternatives : tuple of Plan
         The other certified solution branches, shortest first (``all_solutions`` only).
     pieces : tuple of CurvePiece
@@ -208,7 +207,7 @@ class GeometricPhasePlanner(Method):
     ``"geometric"``, :class:`.composed.ComposedPlanner`, uses it for every leg).
 
     Builds nothing a plan does not use: the leaf map is plain numpy with per-k tables
-    (:func:`.enumerate.rho_table`); the compiled shooting residual and its solver
+    (in the C search); the compiled shooting residual and its solver
     (:func:`.refine.polisher`, per panel count of the leaf map), the certifier's compiled
     integration and the C search (:mod:`.compiled_search`) are built or loaded from the disk cache
     on first use. The spectral step map and its residual are not used by :meth:`solve`; they serve the
@@ -228,8 +227,8 @@ class GeometricPhasePlanner(Method):
         Certifier from :data:`.certify.CERTIFIERS`: ``"rk8"`` (the default: compiled RK8 with a
         step-doubling error bound) or ``"cvodes"``.
     compiled_search : bool
-        Search the shortest (or one branch's) root, or with ``all_solutions`` every root, with the compiled C
-        search (every k, docs/design/geometric-planner.md); False always runs the numpy search.
+        Only True: the roots are searched by the compiled C search (every k, docs/design/geometric-planner.md).
+        False (the numpy search, now the tests' reference) is refused with an InputError.
     all_solutions : bool
         Also return the other certified branches in ``Plan.alternatives``.
     branch : int or None
@@ -245,7 +244,10 @@ class GeometricPhasePlanner(Method):
         self.root_solver = check_choice(name, root_solver, SOLVERS)
         self.all_solutions = check_flag("all_solutions", all_solutions)
         self.branch = None if branch is None else check_whole("branch", branch)
-        self.compiled_search = check_flag("compiled_search", compiled_search)
+        if not check_flag("compiled_search", compiled_search):
+            raise InputError("compiled_search = False is not allowed: the C search is the planner's only search "
+                             "(the numpy enumeration is the tests' reference, tests/reference_enumerate.py)")
+        self.compiled_search = True
         self.tol = check_range("tol", tol, 0.0, 1e-3, low_open=True)
         self.nodes = check_whole("nodes", nodes, 4, 200)
         self.curve = figure_eight()
@@ -313,13 +315,8 @@ class GeometricPhasePlanner(Method):
             raise NoPlanError(f"no plan for {where}: the target is the start point, and rollplan plans "
                               "motions with a nonzero displacement")
         target = (goal_r.u_a, goal_r.v_a, psi_des)
-        if self.compiled_search:
-            solve_compiled = self._solve_compiled_all if all_solutions else self._solve_compiled
-            quick = solve_compiled(problem, None if branch is None else branch + turns, target, turns, t_start)
-            if quick is not None:
-                return quick
-        return self._solve_enumerated(problem, all_solutions, None if branch is None else branch + turns,
-                                      target, turns, t_start)
+        solve = self._solve_compiled_all if all_solutions else self._solve_compiled
+        return solve(problem, None if branch is None else branch + turns, target, turns, t_start)
 
     def _raise_if_rejected(self, where: str, rejected: list) -> None:
         """NoPlanError naming the best certified residual when roots were found but none certified."""
@@ -329,53 +326,45 @@ class GeometricPhasePlanner(Method):
                               f"{self.tol:.0e}; "
                               "try more steps")
 
-    def _solve_compiled(self, problem, branch, target, turns, t_start) -> Plan | None:
-        """The shortest root (on ``branch`` if given) by the compiled C search, polished and certified here;
-        None when the C search gives none or its root fails the certificate
+    def _solve_compiled(self, problem, branch, target, turns, t_start) -> Plan:
+        """The shortest root (on ``branch`` if given) by the compiled C search, polished and certified here; when
+        the certificate rejects it, every root (:func:`.compiled_search.all_roots`), certified shortest first
         (docs/design/geometric-planner.md)."""
         k, steps = problem.k, problem.steps
         found = shortest_root(target[0], target[1], target[2], steps, k, branch)
-        if found is None:
-            return None
         if math.isnan(found.a):   # the complete search found no root
             raise _no_root(problem, f"{found.branches} branches searched completely")
-        eta = (target[2] + 2.0 * math.pi * found.m) / steps
-        h = float(target_shift(math.hypot(target[0], target[1]), eta, steps))
-        x, status, iters = self._polish(_Root(found.a, found.b, 0.0, found.m, h, eta), k)
+        q = self._listed_root(found, target, steps)
+        x, status, iters = self._polish(q, k)
         cand = self._certified(problem, x, found.m - turns, target, status, iters)
-        if not cand[1].passed:
-            log.info("compiled search: branch m=%d (a=%.6f, b=%.6f) not certified; running the numpy search",
-                     found.m - turns, found.a, found.b)
-            return None
-        details = {"candidates": 1, "solves": 1, "branches": found.branches, "roots": found.roots,
+        if cand[1].passed:
+            details = {"candidates": 1, "solves": 1, "branches": found.branches, "roots": found.roots,
+                       "search": "compiled"}
+            return self._plan(problem, cand, replace(cand[2], time_s=time.perf_counter() - t_start, details=details))
+        rejected = [cand[1].residual + cand[1].error_bound] if self._log_rejected(q, cand, turns) else []
+        listed = [r for r in all_roots(target[0], target[1], target[2], steps, k, branch)
+                  if (r.m, r.a, r.b) != (found.m, found.a, found.b)]
+        found_all, more, tried = self._certify_listed(problem, listed, target, turns, first_only=True)
+        if not found_all:
+            self._raise_if_rejected(problem.describe(), rejected + more)
+            raise _no_root(problem, f"{found.branches} branches searched completely")
+        details = {"candidates": 1 + tried, "solves": 1, "branches": found.branches, "roots": len(listed) + 1,
                    "search": "compiled"}
+        cand = found_all[0]
         return self._plan(problem, cand, replace(cand[2], time_s=time.perf_counter() - t_start, details=details))
 
-    def _solve_compiled_all(self, problem, branch, target, turns, t_start) -> Plan | None:
+    def _solve_compiled_all(self, problem, branch, target, turns, t_start) -> Plan:
         """Every root of every branch (of ``branch`` if given) by the compiled C search
-        (:func:`.compiled_search.all_roots`), each polished and certified here as in :meth:`_solve_enumerated`;
-        None when the C search gives no list or no root of it certifies (the numpy search then decides)."""
+        (:func:`.compiled_search.all_roots`), each polished and certified here; the certified ones, shortest
+        first."""
         k, steps = problem.k, problem.steps
         listed = all_roots(target[0], target[1], target[2], steps, k, branch)
-        if listed is None:
-            return None
         if not listed:   # the complete search found no root
             raise _no_root(problem, "the complete search found none")
-        found = []
-        label = f"certify (k = {k:g}, {len(listed)} roots)"
-        for i, r in enumerate(listed):
-            report(label, i, len(listed))
-            eta = (target[2] + 2.0 * math.pi * r.m) / steps
-            q = _Root(r.a, r.b, 0.0, r.m, float(target_shift(math.hypot(target[0], target[1]), eta, steps)), eta)
-            x, status, iters = self._polish(q, k)
-            cand = self._certified(problem, x, r.m - turns, target, status, iters)
-            if cand[1].passed:
-                found.append(cand)
-            else:
-                self._log_rejected(q, cand, turns)
-        report(label, len(listed), len(listed))
+        found, rejected, _ = self._certify_listed(problem, listed, target, turns)
         if not found:
-            return None
+            self._raise_if_rejected(problem.describe(), rejected)
+            raise _no_root(problem, f"{listed[0].branches} branches searched completely, no root certified")
         found.sort(key=lambda c: c[0].a + c[0].b)
         details = {"candidates": len(listed), "solves": len(found), "branches": listed[0].branches,
                    "roots": len(listed), "search": "compiled"}
@@ -383,70 +372,43 @@ class GeometricPhasePlanner(Method):
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
         return replace(plans[0], alternatives=tuple(plans[1:]))
 
+    @staticmethod
+    def _listed_root(r, target, steps) -> _Root:
+        """The :class:`_Root` of a root ``r`` of the C search (branch turn and shift from the target)."""
+        eta = (target[2] + 2.0 * math.pi * r.m) / steps
+        return _Root(r.a, r.b, 0.0, r.m, float(target_shift(math.hypot(target[0], target[1]), eta, steps)), eta)
+
+    def _certify_listed(self, problem, listed, target, turns, first_only: bool = False) -> tuple:
+        """``(certified, rejected, tried)``: the roots ``listed`` (shortest first) polished and certified, stopping
+        at the first certified one if ``first_only``; ``rejected`` the certified residuals plus bounds of the roots
+        the certificate rejected, ``tried`` the number of roots certified."""
+        found, rejected, tried = [], [], 0
+        label = f"certify (k = {problem.k:g}, {len(listed)} roots)"
+        for i, r in enumerate(listed):
+            report(label, i, len(listed))
+            tried += 1
+            q = self._listed_root(r, target, problem.steps)
+            x, status, iters = self._polish(q, problem.k)
+            cand = self._certified(problem, x, r.m - turns, target, status, iters)
+            if cand[1].passed:
+                found.append(cand)
+                if first_only:
+                    break
+            elif self._log_rejected(q, cand, turns):
+                rejected.append(cand[1].residual + cand[1].error_bound)
+        report(label, len(listed), len(listed))
+        return found, rejected, tried
+
     def _log_rejected(self, q, cand, turns) -> bool:
         """Log a root ``q`` whose plan ``cand`` failed the certificate; True if it is a root the certificate
         rejected, False if the leaf map misses there by more than NOT_A_ROOT (a tangency of the table only)."""
-        if cand[0].miss > NOT_A_ROOT * self.tol:   # a tangency of the table only (enumerate)
+        if cand[0].miss > NOT_A_ROOT * self.tol:   # a tangency of the search's table only
             log.info("branch m=%d (a=%.6f, b=%.6f): no root, the leaf map misses by %.2e",
                      q.m - turns, q.a, q.b, cand[0].miss)
             return False
         log.warning("branch m=%d (a=%.6f, b=%.6f) rejected: certified residual + bound %.2e > %.0e",
                     q.m - turns, q.a, q.b, cand[1].residual + cand[1].error_bound, self.tol)
         return True
-
-    def _solve_enumerated(self, problem, all_solutions, branch, target, turns, t_start) -> Plan:
-        """Complete enumeration (every k): every root of every branch (``all_solutions``) or the
-        bounded search for the shortest certified plan (docs/design/geometric-planner.md)."""
-        k, steps = problem.k, problem.steps
-        h_des = math.hypot(target[0], target[1])
-        brs = branches(k, target[2], steps, h_des, branch)
-        where = problem.describe()
-        found, rejected, tried = [], [], 0
-        # branches in increasing order of the smallest a + b they can hold, in growing chunks; once a plan
-        # is certified, only lengths below it are searched, and no branch whose smallest a + b is not
-        # below it is visited (the first root of a branch in x is its shortest)
-        best = math.inf
-        label = f"search (k = {k:g}, {len(brs)} branches)"
-        visited = 0
-        start, size = 0, 4
-        while start < len(brs):
-            chunk = [br for br in brs[start:start + size] if br.y0 < best]
-            start, size = start + size, min(2 * size, _CHUNK)
-            if not chunk:
-                if not all_solutions:
-                    break       # y0 grows along brs: nothing left can be shorter
-                continue
-            visited += len(chunk)
-            cands = roots(chunk, k, first_only=not all_solutions,
-                          lengths=(0.0, math.inf if all_solutions else best))
-            for r in cands:
-                if not all_solutions and r.a + r.b >= best:
-                    break
-                queue = [r]
-                while queue:   # a branch's next roots only if its first is rejected
-                    q = queue.pop(0)
-                    tried += 1
-                    x, status, iters = self._polish(q, k)
-                    cand = self._certified(problem, x, q.m - turns, target, status, iters)
-                    if cand[1].passed:
-                        found.append(cand)
-                        if not all_solutions:
-                            best = min(best, q.a + q.b)
-                        break
-                    if self._log_rejected(q, cand, turns):
-                        rejected.append(cand[1].residual + cand[1].error_bound)
-                    if not all_solutions and q is r:   # the branch's other roots, shortest first
-                        queue = [q2 for q2 in roots([next(b_ for b_ in chunk if b_.m == r.m)], k)
-                                 if abs(q2.a - r.a) > 1e-12 or abs(q2.b - r.b) > 1e-12]
-            report(label, visited, len(brs))
-        elapsed = time.perf_counter() - t_start
-        if not found:
-            self._raise_if_rejected(where, rejected)
-            raise _no_root(problem, f"{len(brs)} branches searched completely")
-        found.sort(key=lambda c: c[0].a + c[0].b)
-        details = {"candidates": tried, "solves": len(found), "branches": visited, "roots": tried, "search": "numpy"}
-        plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
-        return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
 
     def _polish(self, q, k: float):
         """``((a, b), status, iterations)``: the enumerated root ``q`` polished by the shooting solver

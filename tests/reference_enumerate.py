@@ -1,11 +1,14 @@
-"""Complete enumeration of the roots of (32)-(33): one scalar equation per graph of each branch.
+"""The tests' numpy reference of the C search: complete enumeration of the roots of (32)-(33), one scalar
+equation per graph of each branch. Not used by the planner; the tests check the C search
+(:mod:`rollplan.planners.geometric.compiled_search`) against it and it against brute forces.
 
 On branch m of ``n eta = psi + 2 pi m`` (32) fixes ``eta_m`` and (33) becomes, on the level set
 ``E(a) - E(b) = eta_m``, ``g = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta_m / 2) - h_m^2 = 0`` (rho from a
 per-k table, :func:`rho_table`). The level set is covered by graphs: over the root phase ``w = sqrt(-E)`` for
 ``k >= K_FAST`` (:class:`_WGraphs`), over ``sigma = a +- b`` on the monotone pieces of E below
-(:class:`_SigmaGraphs`); every root on them is found by Hermite cells (:func:`roots`). The C planner's search
-(:mod:`.compiled_search`) uses the sigma graphs for ``k < 1/2`` and another graph, over the smaller radius, above.
+(:class:`_SigmaGraphs`); every root on them is found by Hermite cells (:func:`roots`). The C search uses the sigma
+graphs for ``k < 1/2`` and another graph, over the smaller radius, above; both take their constants from
+:mod:`rollplan.planners.geometric.search_constants`.
 
 Derivation and completeness argument: docs/design/enumeration.md.
 """
@@ -16,58 +19,62 @@ import hashlib
 import math
 import os
 import tempfile
+import time
+from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from ...core.compiled import cache_dir, check_private, private_cache_dir
-from ...core.curves import A_MAX
-from ...core.plane import target_shift
-from ...progress import report
-from . import leafmap
-from .leafmap import radius_of_root_phase, root_phase, signed_length, turn, turn_dr, turn_inverse, turn_pieces
+from rollplan.core.compiled import cache_dir, check_private, private_cache_dir
+from rollplan.core.curves import A_MAX
+from rollplan.core.plane import target_shift, wrap_exact
+from rollplan.errors import NoPlanError
+from rollplan.planners.geometric import leafmap, search_constants
+from rollplan.planners.geometric.leafmap import (
+    radius_of_root_phase,
+    root_phase,
+    signed_length,
+    turn,
+    turn_dr,
+    turn_inverse,
+    turn_pieces,
+)
+from rollplan.planners.geometric.planner import GeometricPhasePlanner
+from rollplan.planners.geometric.planner import _no_root as no_root
+from rollplan.planners.geometric.search_constants import (
+    HERMITE_REL,
+    K_MONOTONE,
+    MIN_WIDTH,
+    NOT_A_ROOT,
+    PHASE_STEP,
+    POLISH_BRACKET,
+    POLISH_STEP,
+    SAFETY,
+    SIGMA_STEP,
+    TABLE_INV_S,
+    TABLE_PHASE,
+    TABLE_STEP,
+    X_STEP,
+    table_radii,
+)
+from rollplan.problem import Problem
+from rollplan.progress import report
 
 __all__ = ["K_MONOTONE", "K_ENUMERATED", "K_FAST", "PHASE_STEP", "X_STEP", "SIGMA_STEP", "HERMITE_REL", "SAFETY",
            "MIN_WIDTH", "TABLE_PHASE", "TABLE_STEP", "TABLE_INV_S", "POLISH_STEP", "POLISH_BRACKET", "NOT_A_ROOT",
            "Branch", "Root", "branches", "roots", "cache_dir", "rho_table", "table_radii", "RhoTable", "rho_lookup",
-           "newton_step"]
+           "newton_step", "ReferencePlanner", "reference_plan"]
 
-#: Smallest k for which E is strictly decreasing on (0, A_MAX].
-K_MONOTONE = 0.5
 #: Smallest k the enumeration serves: every accepted k.
 K_ENUMERATED = 0.0
 #: Smallest k of the root-phase parametrisation (above K_MONOTONE: w is smooth in r for k > 1/2).
 K_FAST = 0.6
-#: Initial sampling steps of the w graphs: in the turn E [rad] and in the radius [R].
-PHASE_STEP = 0.5
-X_STEP = 0.02
-#: Initial sampling step of the sigma graphs [R].
-SIGMA_STEP = 0.005
-#: A cell is split while its Hermite midpoint error exceeds this fraction of its largest |g|.
-HERMITE_REL = 1e-2
-#: Factor between the Hermite error anywhere in a cell and at its midpoint.
-SAFETY = 4.0
-#: Table of rho: steps in the turn E [rad] and in r [R].
-TABLE_PHASE = 0.15
-TABLE_STEP = 0.004
-TABLE_INV_S = 0.005
 _TABLE_CHUNK = 512
-#: Newton steps on the accurate map below this are taken without a new evaluation (see :func:`_polish`).
-POLISH_STEP = 1e-8
-#: A polish step across the root brackets it on the accurate map if it is at most this long (in the graph's
-#: parameter; a longer one leaves the neighbourhood of the table's root, where other roots may lie).
-POLISH_BRACKET = 1e-3
 _POLISH_CHUNK = 2048
-#: A polished root whose leaf-map miss exceeds this times the certificate's tolerance is no root (a tangency
-#: of the table only): the leaf map errs by less than 1e-13 per leaf (:mod:`.leafmap`), 2e-10 over the most
-#: steps, so the certificate could never accept it.
-NOT_A_ROOT = 10.0
 #: Table-level roots are located to this (absolute, in the graph's parameter) before the polish.
 ROOT_TOL = 1e-10
-#: Smallest cell width (in the graph's parameter).
-MIN_WIDTH = 1e-10
 
 
 class Branch(NamedTuple):
@@ -130,7 +137,7 @@ def rho_lookup(r, t: RhoTable):
 def _table_file(k: float) -> Path:
     """Cache file of the table of k, keyed by the sources that define it and the table's parameters."""
     h = hashlib.sha256()
-    for src in (__file__, leafmap.__file__):
+    for src in (__file__, leafmap.__file__, search_constants.__file__):
         h.update(Path(src).read_bytes())
     h.update(repr((float(k), TABLE_PHASE, TABLE_STEP, TABLE_INV_S, SAFETY, K_FAST, np.__version__)).encode())
     return cache_dir() / f"rho_table_{h.hexdigest()[:32]}.npz"
@@ -165,19 +172,6 @@ def rho_table(k: float) -> RhoTable:
     except OSError:
         pass
     return t
-
-
-def table_radii(k: float, step: float, phase: float, inv_s: float = math.inf) -> np.ndarray:
-    """Radii uniform in r with ``step``, each cell split evenly so that E changes by at most ``phase`` and
-    ``1 / s = (1 - 2 r^2)^(-1/2)`` (whose powers make the leaf map steep near A_MAX) by at most ``inv_s``."""
-    base = np.linspace(0.0, A_MAX, math.ceil(A_MAX / step) + 1)
-    parts = np.maximum(np.ceil(np.abs(np.diff(turn(base, k))) / phase),
-                       np.ceil(np.diff((1.0 - 2.0 * base * base) ** -0.5) / inv_s))
-    parts = np.maximum(1, parts).astype(int)
-    idx = np.repeat(np.arange(parts.size), parts)
-    frac = (np.arange(idx.size) - np.repeat(np.cumsum(parts) - parts, parts)) / np.repeat(parts, parts)
-    r = base[idx] + frac * (base[idx + 1] - base[idx])
-    return np.append(r, A_MAX)
 
 
 def _accurate_rho(r, k: float, label: str):
@@ -943,3 +937,96 @@ def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)
     for j in lost:
         out += roots([brs[j]], k, lengths=lengths, polish=polish)[:1]
     return sorted(out, key=lambda r: r.a + r.b)
+
+
+# ----------------------------------------------------------------------------- the planner on this search
+
+
+#: Largest number of branches enumerated together.
+_CHUNK = 64
+
+
+class ReferencePlanner(GeometricPhasePlanner):
+    """The geometric planner with this numpy search in place of the C search: the same polish and certificate,
+    the bounded search for the shortest certified plan, or every root of every branch (``all_solutions``).
+    Plans carry ``details["search"] == "numpy"``."""
+
+    def _solve(self, problem):
+        t_start = time.perf_counter()
+        goal_r = problem.scaled(problem.goal)
+        psi_des, turns = wrap_exact(goal_r.psi)
+        h_des = math.hypot(goal_r.u_a, goal_r.v_a)
+        if h_des == 0.0:
+            raise NoPlanError(f"no plan for {problem.describe()}: the target is the start point, and rollplan plans "
+                              "motions with a nonzero displacement")
+        target = (goal_r.u_a, goal_r.v_a, psi_des)
+        branch = None if self.branch is None else self.branch + turns
+        return self._solve_enumerated(problem, self.all_solutions, branch, target, turns, t_start)
+
+    def _solve_enumerated(self, problem, all_solutions, branch, target, turns, t_start):
+        """Complete enumeration (every k): every root of every branch (``all_solutions``) or the
+        bounded search for the shortest certified plan (docs/design/geometric-planner.md)."""
+        k, steps = problem.k, problem.steps
+        h_des = math.hypot(target[0], target[1])
+        brs = branches(k, target[2], steps, h_des, branch)
+        where = problem.describe()
+        found, rejected, tried = [], [], 0
+        # branches in increasing order of the smallest a + b they can hold, in growing chunks; once a plan
+        # is certified, only lengths below it are searched, and no branch whose smallest a + b is not
+        # below it is visited (the first root of a branch in x is its shortest)
+        best = math.inf
+        label = f"search (k = {k:g}, {len(brs)} branches)"
+        visited = 0
+        start, size = 0, 4
+        while start < len(brs):
+            chunk = [br for br in brs[start:start + size] if br.y0 < best]
+            start, size = start + size, min(2 * size, _CHUNK)
+            if not chunk:
+                if not all_solutions:
+                    break       # y0 grows along brs: nothing left can be shorter
+                continue
+            visited += len(chunk)
+            cands = roots(chunk, k, first_only=not all_solutions,
+                          lengths=(0.0, math.inf if all_solutions else best))
+            for r in cands:
+                if not all_solutions and r.a + r.b >= best:
+                    break
+                queue = [r]
+                while queue:   # a branch's next roots only if its first is rejected
+                    q = queue.pop(0)
+                    tried += 1
+                    x, status, iters = self._polish(q, k)
+                    cand = self._certified(problem, x, q.m - turns, target, status, iters)
+                    if cand[1].passed:
+                        found.append(cand)
+                        if not all_solutions:
+                            best = min(best, q.a + q.b)
+                        break
+                    if self._log_rejected(q, cand, turns):
+                        rejected.append(cand[1].residual + cand[1].error_bound)
+                    if not all_solutions and q is r:   # the branch's other roots, shortest first
+                        queue = [q2 for q2 in roots([next(b_ for b_ in chunk if b_.m == r.m)], k)
+                                 if abs(q2.a - r.a) > 1e-12 or abs(q2.b - r.b) > 1e-12]
+            report(label, visited, len(brs))
+        elapsed = time.perf_counter() - t_start
+        if not found:
+            self._raise_if_rejected(where, rejected)
+            raise no_root(problem, f"{len(brs)} branches searched completely")
+        found.sort(key=lambda c: c[0].a + c[0].b)
+        details = {"candidates": tried, "solves": len(found), "branches": visited, "roots": tried, "search": "numpy"}
+        plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
+        return replace(plans[0], alternatives=tuple(plans[1:]) if all_solutions else ())
+
+
+def reference_plan(target, steps: int, k: float, near=None, branch: int | None = None):
+    """The reference planner's certified plan for ``Problem(target, k, steps)``, for cross-checking the C planner:
+    the shortest plan over all branches (the C planner's default), or on ``branch`` only; with ``near = (a, b)``
+    the plan of all certified ones closest to it. None if there is none."""
+    problem = Problem(tuple(float(x) for x in target), k=k, steps=steps)
+    try:
+        best = ReferencePlanner().solve(problem, all_solutions=near is not None, branch=branch)
+    except NoPlanError:
+        return None
+    if near is None:
+        return best
+    return min((best,) + best.alternatives, key=lambda q: (max(abs(q.a - near[0]), abs(q.b - near[1])), q.a + q.b))
