@@ -655,7 +655,7 @@ def test_generated_prefix_builds_and_plans(tmp_path):
         assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) <= CERT_TOL
     run = subprocess.run([str(out / "plan_demo"), "0", "2", "0", "1", "10.5"], check=False, capture_output=True)
     assert run.returncode == 2
-    run = subprocess.run([str(out / "plan_demo"), "0", "2", "0", "1", "0.4"], check=False, capture_output=True)
+    run = subprocess.run([str(out / "plan_demo"), "0", "2", "0", "1", "-0.1"], check=False, capture_output=True)
     assert run.returncode == 2
 
 

@@ -286,7 +286,7 @@ def test_cli_main_exits_130_when_the_interrupt_left_an_exec(tmp_path):
         "from rollplan.planners import geometric\n"
         "def interrupted(*args, **kwargs):\n"
         "    exec('raise KeyboardInterrupt')\n"
-        "geometric.plan = interrupted\n"
+        "geometric.ComposedPlanner.solve = interrupted   # what the plan command runs\n"
         "sys.exit(cli.main(['plan', '--to', '0', '1']))\n"))
     assert proc.returncode == 130, (proc.returncode, proc.stderr)
     assert proc.stderr.strip().splitlines()[-1] == "rollplan: interrupted"
