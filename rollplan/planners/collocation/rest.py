@@ -43,7 +43,7 @@ __all__ = ["REST_COSTS", "RestResult", "NlpSolution", "RestToRestPlanner", "Mini
            "rest_parameters",
            "motion_function", "naive_guess", "guess_from_samples", "correct", "check_horizon",
            "polar_angles", "check_intervals", "TOLERANCE", "MIN_INTERVALS", "MAX_INTERVALS", "MEMORY_GB",
-           "HORIZON_RANGE", "COST_POWERS"]
+           "HORIZON_RANGE", "COST_POWERS", "REST_IPOPT_OPTIONS"]
 
 log = logging.getLogger(__name__)
 
@@ -73,6 +73,10 @@ COST_POWERS = {"path_length": -1, "angular_velocity": -1, "rotor_energy": -3}
 BACKOFF_TRIES = 4
 #: Safety factor of a backoff: the bound (or limit) is lowered by this times the excess measured on the samples.
 BACKOFF_FACTOR = 1.25
+#: IPOPT options of the rest-to-rest NLP beyond :func:`.transcription.ipopt_options`: MUMPS orders its KKT
+#: systems (banded blocks, one per interval) by approximate minimum degree, which factors them faster than
+#: MUMPS's automatic choice of ordering.
+REST_IPOPT_OPTIONS = {"ipopt.mumps_pivot_order": 0}
 _NEWTON_STEPS = 8
 
 
@@ -210,6 +214,11 @@ class RestToRestPlanner:
         IPOPT's iteration limit.
     samples_per_interval : int
         CVODES samples per interval of the certified motion (even, >= 2).
+
+    Attributes
+    ----------
+    ipopt_options : dict
+        The options of its IPOPT solver (:func:`.transcription.ipopt_options` and :data:`REST_IPOPT_OPTIONS`).
     """
 
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre",
@@ -233,7 +242,8 @@ class RestToRestPlanner:
         log.info("building the collocation NLP: N = %d, d = %d, cost %s", intervals, degree, cost)
         nlp, self.path_rows = self.transcription.contact_nlp(self.point, N_PAR)
         # minutes for a large N, in C++ that never returns to Python: built in a thread, so Ctrl-C acts at once
-        self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, ipopt_options(self.tol, self.max_iter))
+        self.ipopt_options = {**ipopt_options(self.tol, self.max_iter), **REST_IPOPT_OPTIONS}
+        self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, self.ipopt_options)
         self.build_time_s = time.perf_counter() - t0
 
     def boundary(self, problem: Problem, turns: int) -> tuple[np.ndarray, np.ndarray]:
