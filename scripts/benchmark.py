@@ -683,7 +683,8 @@ def section_peer(ctx):
                      "solve rollplan, median [s]": r["solve_median_s"],
                      "solve rockit, median [s]": r["peer_solve_median_s"]})
     notes = [f"k = {K}, T = 1 s, cost angular_velocity, contact bound 80 deg, Legendre d = 3; both IPOPT with the same "
-             "options (tol 1e-9), from the same guess (naive: the straight line at rest; gp: the shortest geometric-"
+             "options (the planner's ipopt_options: tol 1e-9, MUMPS ordered by minimum degree), from the same guess "
+             "(naive: the straight line at rest; gp: the shortest geometric-"
              "phase branch timed by its optimal rest-to-rest timing). rockit's NLP: its DirectCollocation (M = 1) "
              "of the same dynamics (the model's CasADi function), cost, bounds and boundary conditions, expanded to "
              "SX like rollplan's. Solve times: wall time of the solver call from the same guess, "

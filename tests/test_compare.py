@@ -353,3 +353,21 @@ def test_minimum_time_within_the_limits():
     assert np.abs(mt.collocation.motion.omega[[0, -1]]).max() < 1e-9
     # one limit is active: the motion could not be run faster
     assert max(o["peak_rotor_torque"] / 0.05, o["peak_rotor_rate"] / 300.0) > 0.95
+
+
+def test_multistart_corrects_only_the_best_start_and_keeps_the_best_certified_optimum(monkeypatch):
+    """The Gauss-Newton correction and the CVODES certificate cost more than an IPOPT solve; the multistart
+    corrected and certified every converged start. Now only the start with the least NLP optimum is finished,
+    and it is the one a brute force keeps: every converged start finished on its own, the least certified cost."""
+    from rollplan.planners.collocation import rest
+
+    calls, solved, real_correct, real_nlp = [], [], rest.correct, rest.RestToRestPlanner.solve_nlp
+    monkeypatch.setattr(rest, "correct", lambda *a, **kw: calls.append(a) or real_correct(*a, **kw))
+    monkeypatch.setattr(rest.RestToRestPlanner, "solve_nlp",
+                        lambda self, *a: solved.append((self, real_nlp(self, *a))) or solved[-1][1])
+    c = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=1)
+    converged = [s for s in c.starts if s.status == "ok"]
+    assert len(converged) >= 2 and len(calls) == 1 and len(solved) == len(converged)
+    brute = [measure(planner.finish(nlp).motion)["angular_velocity"] for planner, nlp in solved]
+    assert c.collocation.costs["angular_velocity"] == pytest.approx(min(brute), rel=1e-12)
+    assert c.result.stats.details["nlp_objective"] == min(nlp.objective for _, nlp in solved)

@@ -50,3 +50,19 @@ def test_peer_bad_input_and_missing_rockit(monkeypatch):
     monkeypatch.setitem(sys.modules, "rockit", None)
     with pytest.raises(InputError, match="rockit-meco"):
         rockit_solve(planner, problem, guess)
+
+
+def test_rockit_gets_the_planners_ipopt_options(monkeypatch):
+    """The peer is timed like for like: rockit's IPOPT receives exactly the options of rollplan's solver
+    (including its MUMPS ordering), expanded to SX like rollplan's NLP."""
+    import rockit
+
+    seen, real = [], rockit.Ocp.solver
+    monkeypatch.setattr(rockit.Ocp, "solver", lambda self, name, opts=None, *a, **kw:
+                        seen.append((name, dict(opts or {}))) or real(self, name, opts, *a, **kw))
+    planner = RestToRestPlanner(8, 2)
+    problem = Problem((-0.4, 0.4, 1.0), k=K)
+    guess = naive_guess(planner.transcription, *planner.boundary(problem, 0))
+    rockit_solve(planner, problem, guess)
+    assert seen == [("ipopt", {**planner.ipopt_options, "expand": True})]
+    assert planner.ipopt_options["ipopt.mumps_pivot_order"] == 0

@@ -110,7 +110,8 @@ class Start:
     status : str
         IPOPT's status, ``"Verification_Failed"``, or ``"ok"``.
     cost : float or None
-        The compared cost of the certified optimum, measured (None when it failed).
+        The compared cost: of the kept start measured on its certified motion, of the other converged starts
+        their NLP optimum (only the best NLP optimum is corrected and certified); None when it failed.
     start_cost : float or None
         The same cost of the timed GP branch it started from (``gpI:m`` starts only).
     solve_time_s : float
@@ -357,40 +358,60 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
         candidates.append((f"gp{best_gp}:{m0}->{m2}", m2, t_best, x2, None))
     t1 = time.perf_counter()
     naive_turns = sorted({m0, 0}, key=abs) if naive else []
-    total = 2 + len(candidates) + len(naive_turns)
+    total = 3 + len(candidates) + len(naive_turns)
     for name, m, t, x7, start_cost in candidates:
         report("compare", 2 + len(starts), total, stage=f"collocation from {name}")
         guess = guess_from_samples(tr, t, x7, name)
-        starts.append(_run(nlp, cost, problem, rob, guess, horizon, m, start_cost, results))
+        starts.append(_run(planner, problem, rob, guess, horizon, m, start_cost, results))
     if naive:
         for m in naive_turns:
             report("compare", 2 + len(starts), total, stage=f"collocation from naive:{m}")
             start, final = planner.boundary(problem, m)
-            starts.append(_run(nlp, cost, problem, rob, naive_guess(tr, start, final), horizon, m, None, results,
+            starts.append(_run(planner, problem, rob, naive_guess(tr, start, final), horizon, m, None, results,
                                f"naive:{m}"))
+    report("compare", total - 1, total, stage="correcting and certifying the best optimum")
+    best, starts = _finish_best(planner, results, starts)
     coll_time = time.perf_counter() - t1
     report("compare", total, total, stage="done")
-    if not results:
+    if best is None:
         worst = starts[0].status
         raise SolverError(f"no start of the collocation converged for {problem.describe()} (first: {worst})", worst)
-    best = min(results, key=lambda r: measure(r.motion)[cost])
     coll = Side(best.motion, measure(best.motion), best.residual, coll_time)
     return Comparison(problem, rob, float(horizon), cost, contact_bound, plan, gp_side, coll, best, tuple(starts),
                       tuple((p, s) for p, s, _ in timed),
                       timing_bound(gp_path, horizon, cost) if cost == "angular_velocity" else None)
 
 
-def _run(nlp, cost, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:
-    """One start of the multistart: the method ``"rest_to_rest"`` from ``guess``; its :class:`Start`."""
+def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:
+    """IPOPT from one start (not corrected, not certified): its :class:`Start` with the NLP optimum as its
+    cost; the solution appended to ``results`` as ``(index of the start, NlpSolution)``."""
     t0 = time.perf_counter()
+    name = name or guess.name
     try:
         # Ctrl-C inside IPOPT ends that solve only: interrupts.call raises it, which stops the whole multistart
-        r = interrupts.call(solve, problem, "rest_to_rest", **nlp, horizon=horizon, turns=turns, guess=guess,
-                            robot=robot)
+        r = interrupts.call(planner.solve_nlp, problem, guess, horizon, turns, robot)
     except SolverError as exc:
-        return Start(name or guess.name, turns, exc.status, None, start_cost, time.perf_counter() - t0)
-    results.append(r)
-    return Start(name or guess.name, turns, "ok", measure(r.motion)[cost], start_cost, r.stats.time_s)
+        return Start(name, turns, exc.status, None, start_cost, time.perf_counter() - t0)
+    results.append((name, r))
+    return Start(name, turns, "ok", r.objective, start_cost, r.solve_time_s)
+
+
+def _finish_best(planner, results, starts):
+    """Correct and certify the converged starts in the order of their NLP optima until one passes:
+    ``(RestResult or None, starts)`` with that start's cost measured on its certified motion and every start
+    that failed the correction or the certificate marked with its status."""
+    by_name = {s.name: i for i, s in enumerate(starts)}
+    starts = list(starts)
+    for name, nlp in sorted(results, key=lambda item: item[1].objective):
+        i = by_name[name]
+        try:
+            best = interrupts.call(planner.finish, nlp)
+        except SolverError as exc:
+            starts[i] = replace(starts[i], status=exc.status, cost=None)
+            continue
+        starts[i] = replace(starts[i], cost=measure(best.motion)[planner.cost], solve_time_s=best.stats.time_s)
+        return best, starts
+    return None, starts
 
 
 def _side(c: Comparison, side: Side) -> dict:

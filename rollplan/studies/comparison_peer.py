@@ -18,8 +18,8 @@ to it is the one of :mod:`rollplan.planners.collocation.rest`, term by term:
   ``|u_o|, |v_o| <= bound`` there, as in :meth:`.transcription.Transcription.contact_bounds`;
 * transcription: rockit's direct collocation with the same degree d and the same points (Legendre or
   Radau, :func:`casadi.collocation_points`), one collocation polynomial per control interval (M = 1);
-* solver: IPOPT with the same options, started from the same guess (its states at the interval
-  boundaries and collocation points, its accelerations).
+* solver: IPOPT with the same options (the planner's ``ipopt_options``), started from the same guess
+  (its states at the interval boundaries and collocation points, its accelerations).
 
 Both NLPs are then the same finite-dimensional problem written by two independent codes (ordering,
 scaling and the form of the boundary conditions differ: rockit imposes them as constraints, rollplan
@@ -55,7 +55,7 @@ from ..planners.collocation.rest import (
     naive_guess,
     rest_parameters,
 )
-from ..planners.collocation.transcription import Guess, ipopt_options
+from ..planners.collocation.transcription import Guess
 from ..problem import Problem, State
 from ..robot import Robot
 from .comparison import branch_guess
@@ -155,7 +155,7 @@ def rockit_solve(planner: RestToRestPlanner, problem: Problem, guess: Guess, hor
     ocp.set_initial(x, _guess_function(guess, tr, horizon)(ocp.t))
     ocp.set_initial(a, guess.controls.T)
     ocp.method(rockit.DirectCollocation(N=tr.intervals, M=1, degree=tr.degree, scheme=tr.scheme))
-    ocp.solver("ipopt", {**ipopt_options(planner.tol, planner.max_iter), "expand": True})
+    ocp.solver("ipopt", {**planner.ipopt_options, "expand": True})
 
     def solve():
         t0 = time.perf_counter()

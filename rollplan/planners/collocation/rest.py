@@ -42,11 +42,11 @@ from .transcription import (
     sensitivity_step,
 )
 
-__all__ = ["REST_COSTS", "RestResult", "RestToRestPlanner", "MinimumTimePlanner", "RestToRestMethod",
+__all__ = ["REST_COSTS", "RestResult", "NlpSolution", "RestToRestPlanner", "MinimumTimePlanner", "RestToRestMethod",
            "MinimumTimeMethod", "certify", "rest_parameters",
            "motion_function", "naive_guess", "guess_from_samples", "correct", "check_horizon",
            "polar_angles", "check_intervals", "TOLERANCE", "MIN_INTERVALS", "MAX_INTERVALS", "MEMORY_GB",
-           "HORIZON_RANGE", "COST_POWERS"]
+           "HORIZON_RANGE", "COST_POWERS", "REST_IPOPT_OPTIONS"]
 
 log = logging.getLogger(__name__)
 
@@ -77,6 +77,10 @@ COST_POWERS = {"path_energy": -1, "angular_velocity": -1, "rotor_energy": -3}
 BACKOFF_TRIES = 4
 #: Safety factor of a backoff: the bound (or limit) is lowered by this times the excess measured on the samples.
 BACKOFF_FACTOR = 1.25
+#: IPOPT options of the rest-to-rest NLP beyond :func:`.transcription.ipopt_options`: MUMPS orders its KKT
+#: systems (banded blocks, one per interval) by approximate minimum degree, which factors them faster than
+#: MUMPS's automatic choice of ordering.
+REST_IPOPT_OPTIONS = {"ipopt.mumps_pivot_order": 0}
 _NEWTON_STEPS = 8
 
 
@@ -178,6 +182,47 @@ class RestResult(CollocationRun):
         return traj.subsampled(samples)
 
 
+@dataclass(frozen=True)
+class NlpSolution:
+    """IPOPT's solution of the rest-to-rest NLP before the correction and the certificate
+    (:meth:`RestToRestPlanner.solve_nlp`; :meth:`RestToRestPlanner.finish` completes it).
+
+    Attributes
+    ----------
+    problem, guess, horizon, turns, robot
+        As given (``guess`` in normalized time; ``robot`` the one whose inertias are used, or None).
+    start, final : ndarray, shape (7,)
+        The boundary states (units of R, at rest).
+    par : ndarray
+        The NLP parameters (:func:`rest_parameters`, T = 1).
+    where : str
+        The problem and start, for messages.
+    x : ndarray
+        The NLP's solution vector.
+    objective : float
+        The NLP's optimal value scaled to ``horizon`` (the ``nlp_objective`` of the finished result).
+    status : str
+    iterations : int
+    solve_time_s : float
+        IPOPT's wall time [s].
+    """
+
+    problem: Problem
+    guess: Guess
+    horizon: float
+    turns: int
+    robot: Robot | None
+    start: np.ndarray
+    final: np.ndarray
+    par: np.ndarray
+    where: str
+    x: np.ndarray
+    objective: float
+    status: str
+    iterations: int
+    solve_time_s: float
+
+
 class RestToRestPlanner:
     """The rest-to-rest collocation NLP (docs/design/collocation.md), built once; IPOPT solves it.
 
@@ -196,6 +241,11 @@ class RestToRestPlanner:
         IPOPT's iteration limit.
     samples_per_interval : int
         CVODES samples per interval of the certified motion (even, >= 2).
+
+    Attributes
+    ----------
+    ipopt_options : dict
+        The options of its IPOPT solver (:func:`.transcription.ipopt_options` and :data:`REST_IPOPT_OPTIONS`).
     """
 
     def __init__(self, intervals: int = 100, degree: int = 3, scheme: str = "legendre",
@@ -217,7 +267,8 @@ class RestToRestPlanner:
         log.info("building the collocation NLP: N = %d, d = %d, cost %s", intervals, degree, cost)
         nlp, self.path_rows = self.transcription.contact_nlp(self.point, N_PAR)
         # minutes for a large N, in C++ that never returns to Python: built in a thread, so Ctrl-C acts at once
-        self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, ipopt_options(self.tol, self.max_iter))
+        self.ipopt_options = {**ipopt_options(self.tol, self.max_iter), **REST_IPOPT_OPTIONS}
+        self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, self.ipopt_options)
         self.build_time_s = time.perf_counter() - t0
 
     def boundary(self, problem: Problem, turns: int) -> tuple[np.ndarray, np.ndarray]:
@@ -237,7 +288,8 @@ class RestToRestPlanner:
 
         ``guess`` is in time over ``horizon`` (rates in rad/s, accelerations in rad/s^2); the NLP is solved in
         normalized time and the result scaled to ``horizon`` exactly (docs/design/collocation.md), the controls
-        corrected (:func:`correct`) and certified (:func:`certify`).
+        corrected (:func:`correct`) and certified (:func:`certify`). The same as :meth:`finish` of
+        :meth:`solve_nlp`.
 
         ``robot`` gives the inertias of the rotor rates and torques when the problem has none
         (default: the problem's robot; without either they are computed with unit inertias).
@@ -251,6 +303,21 @@ class RestToRestPlanner:
             (``"Correction_Failed"``), the samples left the contact bound after :data:`BACKOFF_TRIES` solves
             (``"Bound_Violated"``) or the certified residual exceeds :data:`TOLERANCE` (``"Verification_Failed"``).
         """
+        return self.finish(self.solve_nlp(problem, guess, horizon, turns, robot))
+
+    def solve_nlp(self, problem: Problem, guess: Guess, horizon: float = 1.0, turns: int = 0,
+                  robot: Robot | None = None) -> NlpSolution:
+        """The first stage of :meth:`solve`: IPOPT's solution of the NLP from ``guess``, neither corrected nor
+        certified. A multistart ranks its starts by :attr:`NlpSolution.objective` and passes only the best
+        to :meth:`finish`.
+
+        Raises
+        ------
+        InputError
+            Bad input.
+        SolverError
+            IPOPT failed (``.status`` is its status).
+        """
         start, final = self.boundary(problem, turns)
         if self.cost == "rotor_energy" and robot is None and problem.robot is None:
             raise InputError("cost = 'rotor_energy' needs robot parameters: give a robot "
@@ -262,30 +329,51 @@ class RestToRestPlanner:
         if robot is not None and not math.isclose(robot.k, problem.k, rel_tol=1e-12):
             raise InputError(f"robot has k = {robot.k:.12g}, the problem k = {problem.k:.12g}")
         par = rest_parameters(problem.k, 1.0, robot)      # normalized time (docs/design/collocation.md)
-        c = self.contact_bound
         where = f"rest-to-rest N = {tr.intervals}, d = {tr.degree}, cost {self.cost}, {guess.name} guess, m = {turns}"
-        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, c, self.path_rows)
-        bound, solve_time, iters = c, 0.0, 0
+        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, self.contact_bound, self.path_rows)
+        v, f, status, iters, solve_time = self._ipopt(x0, lbx, ubx, lbg, ubg, par, where, 0)
+        return NlpSolution(problem, guess, float(horizon), int(turns), robot, start, final, par, where, v,
+                           f * horizon ** COST_POWERS[self.cost], status, iters, solve_time)
+
+    def _ipopt(self, x0, lbx, ubx, lbg, ubg, par, where: str, iters: int):
+        """One IPOPT solve: ``(x, f, status, iters + its iterations, wall time)``; SolverError if it failed."""
+        t0 = time.perf_counter()
+        sol = interrupts.call(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
+        solve_time = time.perf_counter() - t0
+        st = self.solver.stats()
+        status = str(st["return_status"])
+        iters += int(st["iter_count"])
+        if not st["success"]:
+            raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {status} after {iters} "
+                              "iterations; hint: warm-start from a geometric-phase plan", status)
+        return np.array(sol["x"]).ravel(), float(sol["f"]), status, iters, solve_time
+
+    def finish(self, nlp: NlpSolution) -> RestResult:
+        """The second stage of :meth:`solve`: the Newton correction and the CVODES certificate of ``nlp`` (a
+        :meth:`solve_nlp` of this planner), the contact bound backed off and the NLP solved again (warm-started)
+        when the samples leave it.
+
+        Raises
+        ------
+        SolverError
+            As :meth:`solve`.
+        """
+        tr, c, where = self.transcription, self.contact_bound, nlp.where
+        problem, guess, horizon, start, final, par = nlp.problem, nlp.guess, nlp.horizon, nlp.start, nlp.final, nlp.par
+        v, f, status, iters, solve_time = nlp.x, nlp.objective / horizon ** COST_POWERS[self.cost], nlp.status, \
+            nlp.iterations, nlp.solve_time_s
+        bound = c
         for _ in range(BACKOFF_TRIES):
-            t0 = time.perf_counter()
-            sol = interrupts.call(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
-            solve_time += time.perf_counter() - t0
-            st = self.solver.stats()
-            status = str(st["return_status"])
-            iters += int(st["iter_count"])
-            if not st["success"]:
-                raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {status} after {iters} "
-                                  "iterations; hint: warm-start from a geometric-phase plan", status)
-            v = np.array(sol["x"]).ravel()
             controls, objective = correct(tr.unpack(v)[2], start, final, par, self.cost, where)
-            motion, end_rates = certify(controls, start, problem, 1.0, self.samples_per_interval, robot, True)
+            motion, end_rates = certify(controls, start, problem, 1.0, self.samples_per_interval, nlp.robot, True)
             excess = polar_angles(motion).max() - c
             if excess <= 0.0:
                 break
             # the bound holds at the collocation points only: back it off (warm-started)
             bound -= BACKOFF_FACTOR * excess
             _, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, bound, self.path_rows)
-            x0 = np.clip(v, lbx, ubx)
+            v, f, status, iters, dt = self._ipopt(np.clip(v, lbx, ubx), lbx, ubx, lbg, ubg, par, where, iters)
+            solve_time += dt
         else:
             raise SolverError(f"the collocation solution ({where}) leaves the contact bound {c:.6g} rad between "
                               f"collocation points by {excess:.2e} rad after {BACKOFF_TRIES} backed-off solves; "
@@ -295,8 +383,8 @@ class RestToRestPlanner:
         scale = horizon ** COST_POWERS[self.cost]
         stats = SolverStats("ipopt", status, iters, solve_time, {"build_time_s": self.build_time_s,
                                                                  "backed_off_bound": bound,
-                                                                 "nlp_objective": float(sol["f"]) * scale})
-        return RestResult(problem, self.cost, tr, float(horizon), int(turns), guess.name, c,
+                                                                 "nlp_objective": f * scale})
+        return RestResult(problem, self.cost, tr, horizon, nlp.turns, guess.name, c,
                           controls / horizon ** 2, objective * scale, motion, cert, stats)
 
 
