@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import one_line
+from conftest import one_line, run
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 from test_interrupts import run_and_interrupt
@@ -95,21 +95,22 @@ def _drop_version(d):
     ("tscalar", lambda d: d.update(time=1.0), "'time'", "list of numbers"),
     ("rnull", lambda d: d.update(rotor_rates=None), "'rotor_rates'", "rows of 2"),
 ])
-def test_plan_file_keys_are_validated_in_one_line(files, name, change, key, value):
+def test_plan_file_keys_are_validated_in_one_line(files, name, change, key, value, capsys):
     """Every key simulate and animate read is checked: version 99.0 or none, steps 0 or 1e300, duration "10",
     negative or not the span of the samples, a target that is not the goal (the goal won silently), an
-    unknown timing law, a segment list of the wrong length: one line naming the file, key and value, exit 2."""
+    unknown timing law, a segment list of the wrong length: one line naming the file, key and value, exit 2.
+    (In this process: the message and the exit status are the command's, not the process's.)"""
     path = _mutate(files, name, change)
     for argv in (["simulate", path], ["animate", path, "--out", files / "a.gif"]):
-        code, _, err = command(*argv)
+        code, _, err = run(capsys, *map(str, argv))
         assert code == 2 and one_line(err), err
         assert path.name in err and key in err and value in err and "allowed" in err, err
 
 
-def test_seed_is_checked_without_noise(files):
+def test_seed_is_checked_without_noise(files, capsys):
     """`--seed -1` was accepted without --noise and refused with it: refused in both."""
     for extra in ([], ["--noise", "1e-3"]):
-        code, _, err = command("simulate", files / "p1.json", "--seed", "-1", *extra)
+        code, _, err = run(capsys, "simulate", str(files / "p1.json"), "--seed", "-1", *extra)
         assert code == 2 and one_line(err) and "--seed" in err, err
 
 
