@@ -135,6 +135,7 @@ def _scipy_rates(path, robot):
     return float(np.linalg.norm(arrival_error(State(*sol.y[:, -1]), goal, robot.radius)))
 
 
+@pytest.mark.slow
 def test_a_tampered_file_gives_its_true_open_loop_error_in_every_mode(files):
     """With the file's rotor_rates doubled, plain simulate reported the miss but --closed-loop and --noise
     re-planned from the goal and reported an open loop of 2e-9: every mode now drives the file's own rates."""
@@ -159,8 +160,8 @@ def test_a_tampered_file_gives_its_true_open_loop_error_in_every_mode(files):
     assert d["open_loop_arrival_error"] > 1e-2 and d["arrival_error"] < 1e-6
 
 
-@pytest.mark.parametrize("extra", [[], ["--closed-loop"], ["--plant", "torques"], ["--noise", "1e-3"],
-                                   ["--closed-loop", "--plant", "torques"]])
+@pytest.mark.parametrize("extra", [[], *(pytest.param(e, marks=pytest.mark.slow) for e in (
+    ["--closed-loop"], ["--plant", "torques"], ["--noise", "1e-3"], ["--closed-loop", "--plant", "torques"]))])
 def test_plot_is_written_in_every_mode(files, extra, tmp_path):
     """`--closed-loop --plot F` exited 0 and wrote no figure."""
     png = tmp_path / "s.png"
