@@ -68,12 +68,47 @@ def asym_plan():
     return rollplan.plan((0.05, 0.08, 0.5), 2, robot=rollplan.Robot())
 
 
+@contextlib.contextmanager
+def run_wide(tmp_path_factory, name):
+    """``(folder, first)`` under a lock that every pytest-xdist worker of this run shares: ``folder`` is the same
+    path in every worker (in this run's temporary folder), ``first`` is True for the one that made it. Whatever the
+    first writes there is seen by the others after it; without xdist the folder is this process's own."""
+    import fcntl
+
+    root = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent   # the folder of this run that holds each worker's temporary folder
+    folder = root / f"run-wide-{name}"
+    with open(root / f"run-wide-{name}.lock", "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            first = not folder.exists()
+            if first:
+                folder.mkdir()
+            yield folder, first
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+
+
 @pytest.fixture(scope="session")
 def generated_c(tmp_path_factory):
-    """The C planner written by ``rollplan codegen`` with its defaults (``test_codegen``, ``test_embedded``)."""
+    """The C planner written by ``rollplan codegen`` with its defaults and built by its Makefile (``plan_demo`` and
+    ``librollplan.so``), once per test run: the pytest-xdist workers share it, so use it read-only (build other
+    targets in a copy). For ``test_codegen``, ``test_certify``, ``test_embedded``."""
+    import pickle
+
     from rollplan import codegen
 
-    return codegen.generate(tmp_path_factory.mktemp("c") / "planner")
+    with run_wide(tmp_path_factory, "c-planner") as (folder, first):
+        if first:
+            made = codegen.generate(folder / "planner")
+            run = subprocess.run(["make", "-C", str(made.out), "plan_demo", "librollplan.so"], check=False,
+                                 capture_output=True, text=True)
+            assert run.returncode == 0, run.stderr
+            (folder / "generated.pickle").write_bytes(pickle.dumps(made))
+        elif not (folder / "generated.pickle").exists():
+            pytest.fail("the C planner could not be built (see the first test that used it)")
+        return pickle.loads((folder / "generated.pickle").read_bytes())
 
 
 @pytest.fixture(scope="session")

@@ -225,6 +225,7 @@ def test_collocation_path_obeys_the_printed_equations(comp):
     assert np.abs(x - tr.state[:, :3]).max() < 1e-5
 
 
+@pytest.mark.slow
 def test_cli_compare_json_has_the_issues_keys(tmp_path, capsys):
     js, png = tmp_path / "c.json", tmp_path / "c.png"
     rc = main(["compare", "--to", "0.5", "0.3", "--psi", "0.4", "--k", "2.5", "--intervals", "20",
@@ -282,6 +283,7 @@ def test_intervals_beyond_what_memory_serves_are_refused_at_once(intervals):
     assert time.perf_counter() - t0 < 60   # before any work (start-up of a loaded machine included)
 
 
+@pytest.mark.slow
 def test_compare_shows_its_progress():
     """Long comparisons were silent: compare reports its stages (the NLP, the GP timing, each collocation start)."""
     from rollplan.progress import reporting

@@ -2,6 +2,7 @@
 
 import ast
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -404,10 +405,22 @@ def test_a_leaf_table_others_may_write_is_refused(tmp_path, monkeypatch):
         rho_table.__wrapped__(3.3)
 
 
+def _session_cache_copied_to(folder, capsys):
+    """Copy this test run's cache (compiled functions and leaf tables of ``rollplan plan --to 0.3 0.2``, planned
+    here first) into ``folder``, so that a command run with it loads them instead of compiling them again."""
+    from conftest import run
+
+    assert run(capsys, "plan", "--to", "0.3", "0.2")[0] == 0
+    for path in Path(os.environ["ROLLPLAN_CACHE_DIR"]).iterdir():
+        if path.is_file() and not path.name.startswith("."):
+            shutil.copy2(path, folder / path.name)
+
+
 @pytest.mark.parametrize("how", ["inside", "link"])
-def test_a_cache_directory_under_a_folder_others_can_write_is_refused(tmp_path, how):
+def test_a_cache_directory_under_a_folder_others_can_write_is_refused(tmp_path, how, capsys):
     """A private cache folder inside a folder others may write (no sticky bit), or reached by a link that lives in
-    one, can be swapped for another user's: one line, exit 2, nothing written."""
+    one, can be swapped for another user's: one line, exit 2, nothing written. With the sticky bit it is used (it
+    holds a copy of this run's cache: the check is the same for a load as for a build)."""
     shared = tmp_path / "shared"
     shared.mkdir()
     shared.chmod(0o777)
@@ -425,6 +438,7 @@ def test_a_cache_directory_under_a_folder_others_can_write_is_refused(tmp_path, 
     assert str(shared) in r.stderr and "sticky" in r.stderr
     assert not list(folder.iterdir())
     shared.chmod(0o1777)   # with the sticky bit (as /tmp) others cannot rename or remove the folder
+    _session_cache_copied_to(folder, capsys)
     r = subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", "--to", "0.3", "0.2"], capture_output=True,
                        text=True, timeout=300, check=False, env={**os.environ, "ROLLPLAN_CACHE_DIR": str(folder)})
     assert r.returncode == 0, r.stderr

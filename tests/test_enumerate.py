@@ -336,6 +336,7 @@ def _cli(capsys, *args):
     return code, out.out, out.err
 
 
+@pytest.mark.slow
 def test_cli_step_at_the_corner_of_the_domain_and_beyond(capsys):
     """`rollplan step --a 0.69 --k 100` prints the DOP853 shift; k above K_MAX is refused (exit 2)."""
     code, out, _ = _cli(capsys, "step", "--a", "0.69", "--k", "100", "--json", "-")   # full precision: JSON

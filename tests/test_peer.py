@@ -21,7 +21,7 @@ import references
 K = 2.5
 
 
-@pytest.mark.parametrize("scheme, degree", [("legendre", 3), ("radau", 4)])
+@pytest.mark.parametrize("scheme, degree", [("legendre", 3), pytest.param("radau", 4, marks=pytest.mark.slow)])
 def test_rockit_and_rollplan_have_the_same_optimum(scheme, degree):
     """Same OCP, same transcription class, same guess: the optima agree to 1e-6 (relative), the controls too,
     and rockit's controls (Newton-corrected), integrated by scipy's DOP853 on the printed (15), (16), (20),

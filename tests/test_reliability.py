@@ -348,6 +348,7 @@ def test_motor_limits_have_ranges(tmp_path, capsys, key, value):
         Robot(**{key: float(value)})
 
 
+@pytest.mark.slow
 def test_timed_route_is_certified_by_its_rotors_and_read_back(tmp_path, capsys):
     """A route timed within the motors' limits: its rotor rates alone carry the robot from the first waypoint
     to the last (DOP853 on the printed equations, independent of rollplan), and `simulate` reads it back."""

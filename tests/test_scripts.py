@@ -1,5 +1,6 @@
 """The scripts in scripts/ run on the package as it is (they are not part of the package's API)."""
 
+import json
 import os
 import shutil
 import subprocess
@@ -68,3 +69,61 @@ def test_embedded_report_script_runs(tmp_path):
     text = (tmp_path / "embedded.md").read_text()
     assert "| double | m7 (mps2-an500) |" in text and "| float | m4f (mps2-an386) |" in text
     assert "Instructions per plan" in text and (tmp_path / "embedded.json").stat().st_size > 0
+
+
+FAKE_TESTS = """import time
+import pytest
+
+def test_quick():
+    pass
+
+@pytest.mark.slow
+def test_slow():
+    time.sleep(0.3)
+
+@pytest.mark.parametrize("x", [1, 2])
+def test_param(x):
+    assert x
+
+@pytest.mark.skip(reason="shown as skipped")
+def test_skipped():
+    pass
+
+def test_fails():
+    assert False
+"""
+
+
+@pytest.mark.slow
+def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
+    """scripts/suite_report.py runs each tier of a small suite whose counts are known (six tests: four pass,
+    one of them slow, one is skipped, one fails) and writes suite.md from that run: the counts, the slowest
+    test, the status; a second run of one tier keeps the other tier's row."""
+    tests = tmp_path / "fake"
+    tests.mkdir()
+    (tests / "pytest.ini").write_text("[pytest]\nmarkers =\n    slow: slow\n")
+    (tests / "test_fake.py").write_text(FAKE_TESTS)
+    script = Path(__file__).resolve().parent.parent / "scripts" / "suite_report.py"
+    out = tmp_path / "out"
+    run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tests", str(tests), "--out-dir", str(out)],
+                         capture_output=True, text=True, timeout=600, check=False)
+    assert run.returncode == 1, run.stderr      # pytest's status: a test failed
+    data = json.loads((out / "suite.json").read_text())
+    assert (data["unit"]["tests"], data["unit"]["passed"], data["unit"]["failed"], data["unit"]["skipped"]) == \
+        (5, 3, 1, 1)
+    assert (data["full"]["tests"], data["full"]["passed"], data["full"]["failed"], data["full"]["skipped"]) == \
+        (6, 4, 1, 1)
+    assert data["full"]["slowest"][0][0] == "test_fake.py::test_slow" and data["full"]["slowest"][0][1] >= 0.3
+    assert {n for n, _ in data["full"]["slowest"]} == {"test_fake.py::" + n for n in (
+        "test_quick", "test_slow", "test_param[1]", "test_param[2]", "test_skipped", "test_fails")}
+    assert data["full"]["wall_s"] >= 0.3 and data["unit"]["exit_status"] == 1
+    text = (out / "suite.md").read_text()
+    assert "| unit |" in text and "| full |" in text and "6 (4, 1, 1)" in text and "5 (3, 1, 1)" in text
+    assert "`test_fake.py::test_slow`" in text and "scripts/suite_report.py" in text
+    (tests / "test_fake.py").write_text(FAKE_TESTS.replace("assert False", "pass"))
+    run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tier", "unit", "--tests", str(tests),
+                          "--out-dir", str(out)], capture_output=True, text=True, timeout=600, check=False)
+    assert run.returncode == 0, run.stderr
+    again = json.loads((out / "suite.json").read_text())
+    assert again["full"] == data["full"] and (again["unit"]["passed"], again["unit"]["failed"]) == (4, 0)
+    assert "6 (4, 1, 1)" in (out / "suite.md").read_text()

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import one_line
+from conftest import one_line, run
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 from test_interrupts import run_and_interrupt
@@ -95,21 +95,22 @@ def _drop_version(d):
     ("tscalar", lambda d: d.update(time=1.0), "'time'", "list of numbers"),
     ("rnull", lambda d: d.update(rotor_rates=None), "'rotor_rates'", "rows of 2"),
 ])
-def test_plan_file_keys_are_validated_in_one_line(files, name, change, key, value):
+def test_plan_file_keys_are_validated_in_one_line(files, name, change, key, value, capsys):
     """Every key simulate and animate read is checked: version 99.0 or none, steps 0 or 1e300, duration "10",
     negative or not the span of the samples, a target that is not the goal (the goal won silently), an
-    unknown timing law, a segment list of the wrong length: one line naming the file, key and value, exit 2."""
+    unknown timing law, a segment list of the wrong length: one line naming the file, key and value, exit 2.
+    (In this process: the message and the exit status are the command's, not the process's.)"""
     path = _mutate(files, name, change)
     for argv in (["simulate", path], ["animate", path, "--out", files / "a.gif"]):
-        code, _, err = command(*argv)
+        code, _, err = run(capsys, *map(str, argv))
         assert code == 2 and one_line(err), err
         assert path.name in err and key in err and value in err and "allowed" in err, err
 
 
-def test_seed_is_checked_without_noise(files):
+def test_seed_is_checked_without_noise(files, capsys):
     """`--seed -1` was accepted without --noise and refused with it: refused in both."""
     for extra in ([], ["--noise", "1e-3"]):
-        code, _, err = command("simulate", files / "p1.json", "--seed", "-1", *extra)
+        code, _, err = run(capsys, "simulate", str(files / "p1.json"), "--seed", "-1", *extra)
         assert code == 2 and one_line(err) and "--seed" in err, err
 
 
@@ -134,6 +135,7 @@ def _scipy_rates(path, robot):
     return float(np.linalg.norm(arrival_error(State(*sol.y[:, -1]), goal, robot.radius)))
 
 
+@pytest.mark.slow
 def test_a_tampered_file_gives_its_true_open_loop_error_in_every_mode(files):
     """With the file's rotor_rates doubled, plain simulate reported the miss but --closed-loop and --noise
     re-planned from the goal and reported an open loop of 2e-9: every mode now drives the file's own rates."""
@@ -158,8 +160,8 @@ def test_a_tampered_file_gives_its_true_open_loop_error_in_every_mode(files):
     assert d["open_loop_arrival_error"] > 1e-2 and d["arrival_error"] < 1e-6
 
 
-@pytest.mark.parametrize("extra", [[], ["--closed-loop"], ["--plant", "torques"], ["--noise", "1e-3"],
-                                   ["--closed-loop", "--plant", "torques"]])
+@pytest.mark.parametrize("extra", [[], *(pytest.param(e, marks=pytest.mark.slow) for e in (
+    ["--closed-loop"], ["--plant", "torques"], ["--noise", "1e-3"], ["--closed-loop", "--plant", "torques"]))])
 def test_plot_is_written_in_every_mode(files, extra, tmp_path):
     """`--closed-loop --plot F` exited 0 and wrote no figure."""
     png = tmp_path / "s.png"

@@ -45,6 +45,7 @@ def plan_file(tmp_path_factory):
     return folder / "p.json", out
 
 
+@pytest.mark.slow
 def test_open_and_closed_loop_name_the_position_error_in_the_same_units(plan_file):
     """The rate-plant simulation printed its position error in m, the executed (open or closed loop) in R:
     both now print metres and radii, and the arrival error by the same norm."""
@@ -92,6 +93,7 @@ def test_the_solver_line_says_what_happened_in_words():
     assert ("already at the root" in line) == (iterations == 0)
 
 
+@pytest.mark.slow
 def test_the_shortest_duration_used_and_reported_agree(tmp_path):
     """`T = 3.68811 s` was printed beside 'shortest feasible duration 3.68812 s' for the same duration: both
     are now the same number, and the rounded-up value to give back as --duration is named as such and

@@ -396,6 +396,7 @@ def test_cli_timing_errors(argv, match, capsys, tmp_path):
     assert code == 2 and match in err and "Traceback" not in err
 
 
+@pytest.mark.slow
 def test_cli_plan_file_with_limits_round_trip(robot_file, tmp_path, capsys):
     """A plan file keeps the robot's limits; simulate reads it (and plan files without them, see test_cli)."""
     from rollplan.io import load_rotor_plan

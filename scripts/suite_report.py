@@ -1,0 +1,165 @@
+#!/usr/bin/env python
+"""Run the test suite by tier and write results/suite.md (and suite.json) from that measurement.
+
+    python scripts/suite_report.py [--tier unit] [--tier full] [--jobs auto] [--out-dir results]
+
+Tiers: ``unit`` is ``pytest -m "not slow"``, ``full`` the whole suite; each runs as the README's test command
+(``pytest -q -n JOBS``) with ``ROLLPLAN_REQUIRE_EMBEDDED=1`` and ``ROLLPLAN_REQUIRE_MUJOCO=1`` as in ``.ci/run``
+(``--no-require`` leaves the environment as it is). Measured per tier: the wall time of the pytest command
+(collection and the workers' start included), its CPU time (user + system of pytest and everything it started),
+the load average at the start and the end (the machine may be shared), the counts of passed, failed and skipped
+tests and each test's duration (setup, call and teardown, from pytest's JUnit XML). A tier not run this time keeps
+its last measurement (read back from suite.json); suite.md is rendered from suite.json alone.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+import xml.etree.ElementTree as ET
+from collections import defaultdict
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+#: tier -> (pytest arguments selecting it, budget in s on 2 cores, what the budget is)
+TIERS = {"unit": (["-m", "not slow"], 60.0, "under 60 s on 2 cores"),
+         "full": ([], 360.0, "under 6 min on 2 cores, idle")}
+SLOWEST = 20
+FILES = 15
+
+
+def _cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def parse_junit(path) -> list:
+    """``[(node id, seconds, outcome)]`` of every test case of a JUnit XML report written by pytest; outcome is
+    ``passed``, ``failed`` (a failure or an error) or ``skipped``."""
+    cases = []
+    for case in ET.parse(path).getroot().iter("testcase"):
+        parts = case.get("classname", "").split(".")
+        # pytest writes tests/test_x.py::TestY::test_z as classname tests.test_x.TestY, name test_z
+        split = next((i for i, p in enumerate(parts) if p.startswith("test_") or p == "conftest"), len(parts) - 1)
+        node = "/".join(parts[:split + 1]) + ".py"
+        for p in parts[split + 1:]:
+            node += "::" + p
+        node += "::" + case.get("name", "")
+        tags = {child.tag for child in case}
+        outcome = "failed" if tags & {"failure", "error"} else "skipped" if "skipped" in tags else "passed"
+        cases.append((node, float(case.get("time", 0.0)), outcome))
+    return cases
+
+
+def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list) -> dict:
+    """Run one tier; its measurement as a dict (see the module docstring)."""
+    select, _, _ = TIERS[tier]
+    env = dict(os.environ)
+    if require:
+        env.update(ROLLPLAN_REQUIRE_EMBEDDED="1", ROLLPLAN_REQUIRE_MUJOCO="1")
+    with tempfile.TemporaryDirectory() as tmp:
+        xml = Path(tmp) / "junit.xml"
+        cmd = [sys.executable, "-m", "pytest", "-q", "-n", jobs, "-p", "no:cacheprovider", *select,
+               f"--junitxml={xml}", *extra, tests]
+        load0, start = os.getloadavg(), datetime.datetime.now(datetime.timezone.utc)
+        c, t = _cpu(), time.perf_counter()
+        run = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, check=False)
+        wall, cpu, load1 = time.perf_counter() - t, _cpu() - c, os.getloadavg()
+        cases = parse_junit(xml) if xml.exists() else []
+    if run.returncode not in (0, 1):
+        print(run.stdout[-3000:], run.stderr[-3000:], sep="\n", file=sys.stderr)
+    summary = next((line for line in reversed(run.stdout.splitlines()) if line.strip()), "")
+    files = defaultdict(float)
+    for node, seconds, _ in cases:
+        files[node.split("::")[0]] += seconds
+    commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True, check=False).stdout.strip()
+    dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
+                           capture_output=True, text=True, check=False).stdout.strip()
+    return {
+        "command": " ".join(["python -m pytest -q -n", jobs, *(f'-m "{s}"' for s in select[1:]), tests, *extra]),
+        "date": f"{start:%Y-%m-%d %H:%M UTC}", "commit": commit + ("+" if dirty else ""),
+        "exit_status": run.returncode, "summary": summary, "cores": os.cpu_count(), "jobs": jobs,
+        "required": require, "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
+        "load_start": [round(x, 2) for x in load0], "load_end": [round(x, 2) for x in load1],
+        "tests": len(cases), "passed": sum(o == "passed" for _, _, o in cases),
+        "failed": sum(o == "failed" for _, _, o in cases), "skipped": sum(o == "skipped" for _, _, o in cases),
+        "test_seconds": round(sum(s for _, s, _ in cases), 1),
+        "slowest": [[n, round(s, 2)] for n, s, _ in sorted(cases, key=lambda x: -x[1])[:SLOWEST]],
+        "files": [[f, round(s, 1)] for f, s in sorted(files.items(), key=lambda x: -x[1])[:FILES]],
+    }
+
+
+def _minutes(seconds: float) -> str:
+    return f"{int(seconds // 60)} min {seconds % 60:04.1f} s" if seconds >= 60 else f"{seconds:.1f} s"
+
+
+def render(data: dict) -> str:
+    """results/suite.md from the measurements of suite.json."""
+    lines = ["# Duration of the test suite", "",
+             "Written by `python scripts/suite_report.py` from its own run of each tier (do not edit by hand): the "
+             "wall time of the pytest command, collection and the workers' start included. The machine may be "
+             "shared: the load average at the start and the end is given, and the CPU time (user + system of pytest "
+             "and every process it started) depends less on the load than the wall time.", "",
+             "| tier | command | date, commit | tests (passed, failed, skipped) | wall time | budget | CPU time | "
+             "sum of test durations | cores, workers | load average at start, end (1 min) |",
+             "|---|---|---|---:|---:|---|---:|---:|---|---|"]
+    for tier, (_, budget, what) in TIERS.items():
+        m = data.get(tier)
+        if not m:
+            lines.append(f"| {tier} | not run by this script yet | | | | {what} | | | | |")
+            continue
+        verdict = "within" if m["wall_s"] <= budget else "over"
+        lines.append(f"| {tier} | `{m['command']}` | {m['date']}, `{m['commit']}` | {m['tests']} ({m['passed']}, "
+                     f"{m['failed']}, {m['skipped']}) | **{_minutes(m['wall_s'])}** | {verdict} ({what}) | "
+                     f"{_minutes(m['cpu_s'])} | {_minutes(m['test_seconds'])} | {m['cores']}, {m['jobs']} | "
+                     f"{m['load_start'][0]:.2f}, {m['load_end'][0]:.2f} |")
+    for tier in TIERS:
+        m = data.get(tier)
+        if not m:
+            continue
+        lines += ["", f"## The {len(m['slowest'])} slowest tests of the {tier} tier", "",
+                  "Duration: setup, call and teardown of the test (session and module fixtures are paid by the first "
+                  "test of a worker that uses them).", "", "| test | s |", "|---|---:|"]
+        lines += [f"| `{n}` | {s:.1f} |" for n, s in m["slowest"]]
+        lines += ["", f"## The {len(m['files'])} slowest files of the {tier} tier", "", "| file | s |", "|---|---:|"]
+        lines += [f"| `{f}` | {s:.1f} |" for f, s in m["files"]]
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tier", action="append", choices=list(TIERS), help="tier to run (repeatable; default: both)")
+    ap.add_argument("--jobs", default="auto", help="pytest-xdist workers (-n), default auto")
+    ap.add_argument("--out-dir", default=str(ROOT / "results"))
+    ap.add_argument("--tests", default="tests", help="the folder (or file) of tests, default tests")
+    ap.add_argument("--no-require", action="store_true",
+                    help="do not set ROLLPLAN_REQUIRE_EMBEDDED and ROLLPLAN_REQUIRE_MUJOCO (tests may skip)")
+    ap.add_argument("pytest_args", nargs="*", help="more arguments for pytest (after --)")
+    args = ap.parse_args(argv)
+    out = Path(args.out_dir)
+    store = out / "suite.json"
+    data = json.loads(store.read_text()) if store.exists() else {}
+    status = 0
+    for tier in args.tier or list(TIERS):
+        m = run_tier(tier, args.jobs, args.tests, not args.no_require, args.pytest_args)
+        print(f"{tier}: {m['summary']} in {m['wall_s']} s", file=sys.stderr)
+        data[tier] = m
+        status = status or m["exit_status"]
+    from rollplan.outputs import write_atomic, write_json
+
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(store, data)
+    write_atomic(out / "suite.md", render(data).encode())
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main())
