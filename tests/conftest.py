@@ -49,6 +49,31 @@ def pytest_unconfigure(config):
 _CACHE = pytest.StashKey[str]()
 
 
+@pytest.fixture(autouse=True)
+def _signal_handlers_restored():
+    """Each test starts with the SIGINT and SIGTERM handlers the run started with, whatever an earlier test in
+    the same worker left: rollplan.interrupts installs its own handler only over Python's default one, so a
+    leftover handler made a test's Ctrl-C go unheard (an endless CVODES call never returned)."""
+    import signal
+
+    saved = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    for sig, handler in _START_HANDLERS.items():
+        signal.signal(sig, handler)
+    yield
+    for sig, handler in saved.items():
+        signal.signal(sig, handler)
+
+
+def _start_handlers() -> dict:
+    import signal
+
+    return {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+
+
+#: The signal handlers when the tests were collected (Python's defaults, or pytest's own).
+_START_HANDLERS = _start_handlers()
+
+
 @pytest.fixture(scope="session")
 def planner():
     """One geometric-phase planner for the whole session (step map and leaf tables built once)."""
