@@ -151,6 +151,10 @@ def call(function, *args, **kwargs):
     return result
 
 
+#: The name of the helper thread of :func:`call_in_thread`.
+_HELPER = "rollplan-build"
+
+
 def call_in_thread(function, *args, **kwargs):
     """``function(*args, **kwargs)`` run by a helper thread while this (the main) thread waits for it: for long
     calls into C++ that release the GIL but never return to Python, during which Python cannot run its signal
@@ -167,7 +171,7 @@ def call_in_thread(function, *args, **kwargs):
         except BaseException as exc:  # noqa: BLE001 -- passed to the waiting thread
             box["error"] = exc
 
-    helper = threading.Thread(target=run, name="rollplan-build", daemon=True)
+    helper = threading.Thread(target=run, name=_HELPER, daemon=True)
     helper.start()
     try:
         while helper.is_alive():
@@ -181,9 +185,10 @@ def call_in_thread(function, *args, **kwargs):
 
 
 def abandoned() -> bool:
-    """True if an interrupted :func:`call_in_thread` left its helper thread running: the program should end by
-    ``os._exit`` (the C++ work in that thread must not meet the interpreter's shutdown)."""
-    return _State.abandoned
+    """True if an interrupted :func:`call_in_thread` left its helper thread running (also when the interrupt was
+    raised elsewhere, e.g. recorded by :func:`call` around it): the program should end by ``os._exit`` (the
+    C++ work in that thread must not meet the interpreter's shutdown, nor hold it up)."""
+    return _State.abandoned or any(t.name == _HELPER and t.is_alive() for t in threading.enumerate())
 
 
 @contextmanager

@@ -65,8 +65,13 @@ def _signal_handlers_restored():
 
 
 def _start_handlers() -> dict:
+    """The run's own handlers; a SIGINT ignored by inheritance (a background job of a shell without job control)
+    is given Python's default handler, here and so in every command a test starts: the tests of Ctrl-C need it
+    heard."""
     import signal
 
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     return {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
 
 
