@@ -16,6 +16,7 @@ from rollplan.planners.geometric.basepoint import (
     along,
     arc_element,
     arc_piece,
+    beside,
     leaf_bound,
     polar_distance,
     solve_leg,
@@ -69,6 +70,16 @@ def test_arc_matches_printed_equations_and_its_length():
     assert math.isclose(polar_distance(p, mid), 0.5 * polar_distance(p, q), rel_tol=1e-12)
     assert math.isclose(polar_distance(mid, q), 0.5 * polar_distance(p, q), rel_tol=1e-12)
     assert arc_piece(p, p, "approach") is None
+
+
+def test_offset_base_points_lie_off_the_arc_by_the_offset():
+    p, q = (0.5, 0.3), (0.7, -2.0)
+    mid = along(p, q, 0.5)
+    for d in (-0.6, 0.3):
+        b = beside(p, q, 0.5, d)
+        assert math.isclose(polar_distance(mid, b), abs(d), rel_tol=1e-12)
+        assert math.isclose(polar_distance(p, b), polar_distance(q, b), rel_tol=1e-12)   # on the bisector
+    assert beside(p, q, 0.25, 0.0) == along(p, q, 0.25)
 
 
 def test_pole_limit_reproduces_the_pole_figure_eight():

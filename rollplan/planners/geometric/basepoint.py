@@ -29,8 +29,8 @@ from ...core.integrate import DEFAULT_NODES, spectral_step
 from ...core.paths import CURVES, CurvePiece
 from ...core.plane import wrap
 
-__all__ = ["POLAR_MAX", "LEAF_MIN", "BasedLeg", "base_of", "polar_distance", "along", "arc_piece", "arc_element",
-           "step_element", "leaf_bound", "solve_leg"]
+__all__ = ["POLAR_MAX", "LEAF_MIN", "BasedLeg", "base_of", "polar_distance", "along", "beside", "arc_piece",
+           "arc_element", "step_element", "leaf_bound", "solve_leg"]
 
 #: Farthest polar angle a leaf may reach [rad]: that of the largest admissible leaf at the pole, 2 asin(A_MAX)
 #: (n3z >= 1 - 2 A_MAX^2 = 0.048 on the leaves, as for the pole figure eights).
@@ -69,6 +69,20 @@ def along(p, q, t: float) -> tuple[float, float]:
         return p
     e = (math.sin((1.0 - t) * angle) * e0 + math.sin(t * angle) * e1) / math.sin(angle)
     return math.atan2(math.hypot(e[0], e[1]), -e[2]), (math.atan2(e[1], e[0]) if math.hypot(e[0], e[1]) > 0 else 0.0)
+
+
+def beside(p, q, t: float, offset: float) -> tuple[float, float]:
+    """The base point ``offset`` [rad] off the great-circle arc from ``p`` to ``q`` at the fraction ``t`` of its
+    way, along the great circle perpendicular to the arc (positive to the left of ``p x q``); the point of
+    :func:`along` when ``offset`` is 0 or ``p`` and ``q`` coincide."""
+    m = _unit(along(p, q, t))
+    normal = np.cross(_unit(p), _unit(q))
+    if offset == 0.0 or np.linalg.norm(normal) == 0.0:
+        return along(p, q, t)
+    normal -= (normal @ m) * m
+    e = math.cos(offset) * m + math.sin(offset) * normal / np.linalg.norm(normal)
+    rho = math.hypot(e[0], e[1])
+    return math.atan2(rho, -e[2]), (math.atan2(e[1], e[0]) if rho > 0 else 0.0)
 
 
 def arc_piece(p, q, kind: str) -> CurvePiece | None:
