@@ -29,7 +29,17 @@ from ...problem import Problem, State, arrival_residual, check_reach, check_step
 from ...result import DEFAULT_SAMPLES, Certificate, CertifiedMotion, SolverStats, Trajectory, certify
 from ...robot import Robot
 from ..method import Method, renamed_option, with_steps
-from .basepoint import LEAF_MIN, BasedLeg, arc_element, arc_piece, base_of, beside, leaf_bound, solve_leg
+from .basepoint import (
+    LEAF_MIN,
+    BasedLeg,
+    arc_element,
+    arc_piece,
+    base_of,
+    beside,
+    leaf_bound,
+    move_base,
+    solve_leg,
+)
 from .legs import intermediate_state, second_leg, two_leg_candidates
 from .maneuvers import StraightRoll
 from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
@@ -308,7 +318,8 @@ class ComposedPlanner(Method):
 
         Every base point of :data:`BASE_FRACTIONS` x :data:`BASE_OFFSETS` with ``steps`` and ``steps + 1``
         figure eights is screened by the length of the pole plan for its target (the complete pole search); the
-        :data:`BASE_SOLVES` best get the local solve, and the results are certified shortest first.
+        :data:`BASE_SOLVES` best get the local solve at that base point, then the joint local solve that moves the
+        base point too (:func:`.basepoint.move_base`); the results are certified shortest first.
         """
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
         k, R = problem.k, problem.radius
@@ -345,8 +356,15 @@ class ComposedPlanner(Method):
             leg = solve_leg(target, cb, k, n, guesses)
             rolls = sum(p.length for p in (first, last) if p is not None)
             tried.append({"fraction": f, "offset": d, "steps": n, "found": leg is not None})
-            if leg is not None:
-                found.append((rolls + leg.length, f, d, first, leg, last, target))
+            if leg is None:
+                continue
+            found.append((rolls + leg.length, f, d, first, leg, last, target))
+            moved = move_base(start, goal, cs, cg, k, leg)
+            if moved is not None:
+                leg, length = moved
+                first, last = arc_piece(cs, (leg.sigma, leg.beta), "approach"), arc_piece((leg.sigma, leg.beta), cg,
+                                                                                       "departure")
+                found.append((length, f, d, first, leg, last, target))
         for length, f, d, first, leg, last, target in sorted(found, key=lambda c: c[0]):
             if length * R >= bound:
                 break
