@@ -3,6 +3,7 @@ structure claims of docs/design/basepoint.md against scipy's DOP853 on the print
 contact path (tests/references.py: based_circle_path, based_eight, geodesic), and the plans certified by the
 same independent integration."""
 
+import json
 import math
 
 import numpy as np
@@ -204,3 +205,25 @@ def test_any_base_is_never_longer_than_the_pole_plan(seed):
     assert based.path_length <= pole.path_length
     assert based.certificate.residual <= TOL
     certified_by_reference(based, problem)
+
+
+@pytest.mark.slow
+def test_cli_plan_base_any(capsys, tmp_path):
+    from types import SimpleNamespace
+
+    from conftest import run
+
+    argv = ["plan", "--from", "0.3", "-0.2", "0.5", "-0.3", "0.2", "--to", "-0.5", "0.6", "--psi", "-0.7",
+            "--contact", "0.35", "0.25", "--k", "4"]
+    lengths = {}
+    for base in ("pole", "any"):
+        out = tmp_path / f"{base}.json"
+        code, text, err = run(capsys, *argv, "--base", base, "--json", str(out))
+        assert code == 0, err
+        d = json.loads(out.read_text())
+        lengths[base] = d["path_length"]
+    assert d["mode"] == "based" and "base point" in text and d["base"]["guarantee"] in ("best of starts", "local")
+    assert lengths["any"] < lengths["pole"]
+    pieces = [SimpleNamespace(**{n: s[n] for n in ("curve", "index", "params", "gamma")}) for s in d["segments"]]
+    final = ref.composed_final(pieces, np.array([0.3, -0.2, 0.5, -0.3, 0.2]), 4.0)
+    assert np.allclose(final, [-0.5, 0.6, -0.7, 0.35, 0.25], atol=TOL, rtol=0)

@@ -537,7 +537,7 @@ def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback",
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
          all_solutions: bool = False, method: str | None = None, branch: int | None = None, start=None,
-         legs: str = "fallback", *, root_solver: str | None = None):
+         legs: str = "fallback", *, root_solver: str | None = None, base: str = "pole"):
     """Plan an exact, dynamically realizable motion from ``start`` to ``target``, any two states.
 
     From rest at the origin to a goal at the south pole this is the paper's
@@ -571,6 +571,9 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
         ``"fallback"`` (default), ``"shortest"``, ``"one"`` or ``"two"`` (docs/design/composition.md).
     root_solver : str
         Root solver name from :data:`.refine.SOLVERS` (default ``"ipopt"``).
+    base : str
+        ``"pole"`` (default) or ``"any"``: also figure eights at base points off the pole, the shorter plan kept
+        (:class:`ComposedPlanner`).
 
     Returns
     -------
@@ -591,6 +594,7 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
     check_choice(name, root_solver, SOLVERS)
     check_choice("legs", legs, LEGS)
+    check_choice("base", base, BASES)
     problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
                       steps=steps)
-    return default_composed_planner(root_solver, legs).solve(problem, all_solutions, branch)
+    return default_composed_planner(root_solver, legs, base).solve(problem, all_solutions, branch)
