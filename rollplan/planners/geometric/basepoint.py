@@ -173,7 +173,7 @@ def solve_leg(target, base, k: float, steps: int, guesses, tol: float = 1e-11) -
     """The shortest leg of ``steps`` figure eights at ``base`` reaching ``target`` from zero, among local
     solves from ``guesses`` (``(a, b, orientation)`` starts); None when no start converges.
 
-    The turn is matched on the branch nearest each start's own turn and on the wrapped branch.
+    The turn is matched on the wrapped branch, and from the first start on the next branch too.
     A local solve: the best of the starts, not a complete search (module docstring).
     """
     target = np.asarray(target, float)
@@ -186,9 +186,9 @@ def solve_leg(target, base, k: float, steps: int, guesses, tol: float = 1e-11) -
     psi_w = float(wrap(target[2]))
     branches = [psi_w] + [psi_w + 2.0 * math.pi * m for m in (-1, 1) if abs(psi_w + 2.0 * math.pi * m) < 1.5 * math.pi]
     tried = set()
-    for a0, b0, o0 in guesses:
+    for i, (a0, b0, o0) in enumerate(guesses):
         z0 = [min(max(a0, 2 * LEAF_MIN), 0.95 * bound), min(max(b0, 2 * LEAF_MIN), 0.95 * bound), o0]
-        for psi in branches[:2]:
+        for psi in branches[:2] if i == 0 else branches[:1]:
             key = (round(z0[0], 6), round(z0[1], 6), round(o0, 6), round(psi, 9))
             if key in tried:
                 continue

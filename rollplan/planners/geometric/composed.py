@@ -46,8 +46,8 @@ from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
 from .refine import SOLVERS
 from .turn import CircleTurn, turn_in_place
 
-__all__ = ["LEGS", "BASES", "BASE_FRACTIONS", "BASE_OFFSETS", "BASE_SOLVES", "IDENTITY_TOL", "ComposedPlan",
-           "ComposedPlanner", "default_composed_planner", "as_composed",
+__all__ = ["LEGS", "BASES", "BASE_FRACTIONS", "BASE_OFFSETS", "BASE_SOLVES", "BASE_MOVES", "IDENTITY_TOL",
+           "ComposedPlan", "ComposedPlanner", "default_composed_planner", "as_composed",
            "certify_path", "sample_path", "plan"]
 
 #: Policies for the legs of figure eights (docs/design/composition.md).
@@ -58,8 +58,9 @@ BASES = ("pole", "any")
 #: contact point (0) to the goal contact point (1), and offsets [rad] perpendicular to it (:func:`.basepoint.beside`).
 BASE_FRACTIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
 BASE_OFFSETS = (-0.6, -0.3, 0.0, 0.3, 0.6)
-#: How many screened base points get the local solve.
+#: How many screened base points get the local solve, and how many of their solutions the moved base point.
 BASE_SOLVES = 3
+BASE_MOVES = 2
 #: A figure-eight target this close to zero (units of R and rad) is no motion at all.
 IDENTITY_TOL = 1e-12
 
@@ -318,8 +319,9 @@ class ComposedPlanner(Method):
 
         Every base point of :data:`BASE_FRACTIONS` x :data:`BASE_OFFSETS` with ``steps`` and ``steps + 1``
         figure eights is screened by the length of the pole plan for its target (the complete pole search); the
-        :data:`BASE_SOLVES` best get the local solve at that base point, then the joint local solve that moves the
-        base point too (:func:`.basepoint.move_base`); the results are certified shortest first.
+        :data:`BASE_SOLVES` best get the local solve at that base point, the :data:`BASE_MOVES` shortest of those
+        the joint local solve that moves the base point too (:func:`.basepoint.move_base`); the results are
+        certified shortest first.
         """
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
         k, R = problem.k, problem.radius
@@ -356,9 +358,10 @@ class ComposedPlanner(Method):
             leg = solve_leg(target, cb, k, n, guesses)
             rolls = sum(p.length for p in (first, last) if p is not None)
             tried.append({"fraction": f, "offset": d, "steps": n, "found": leg is not None})
-            if leg is None:
-                continue
-            found.append((rolls + leg.length, f, d, first, leg, last, target))
+            if leg is not None:
+                found.append((rolls + leg.length, f, d, first, leg, last, target))
+        found.sort(key=lambda c: c[0])
+        for _, f, d, _, leg, _, target in found[:BASE_MOVES]:
             moved = move_base(start, goal, cs, cg, k, leg)
             if moved is not None:
                 leg, length = moved
