@@ -1211,9 +1211,11 @@ typedef struct {
 /* The certificate as the search applies it (<prefix>_certify). A test build may define
  * <PREFIX>_TEST_REJECT_BELOW = L: then every plan with a + b < L is rejected (after its certificate ran), which
  * makes the shortest root fail and exercises the search's fallback (tests/test_codegen.py); no other build defines it. */
+static casadi_real s_cert_final[3];   /* the finest run of the last certificate of the search */
+static casadi_real s_plan_final[3];   /* that of the plan plan_with returned (for plan_many) */
 static int search_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps, casadi_real k, casadi_real u,
                           casadi_real v, casadi_real psi, casadi_real *residual, casadi_real *bound) {
-    int status = RP_NAME(certify)(a, b, gamma, steps, k, u, v, psi, NULL, residual, bound);
+    int status = RP_NAME(certify)(a, b, gamma, steps, k, u, v, psi, s_cert_final, residual, bound);
 #ifdef RP_TEST_REJECT_BELOW
     if (a + b < RP_TEST_REJECT_BELOW) status = RP_NOT_CERTIFIED;
 #endif
@@ -1295,6 +1297,9 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
         return 0;
     }
     S->best = a + b;
+    s_plan_final[0] = s_cert_final[0];
+    s_plan_final[1] = s_cert_final[1];
+    s_plan_final[2] = s_cert_final[2];
     S->plan->a = a;
     S->plan->b = b;
     S->plan->gamma = gamma;
@@ -1636,6 +1641,9 @@ int RP_NAME(plan_with)(casadi_real u, casadi_real v, casadi_real psi, int steps,
     if (S.defer && S.best < INFINITY) {
         if (search_certify(plan->a, plan->b, plan->gamma, steps, k, u, v, S.psi_w, &residual, &bound)
             == RP_OK) {
+            s_plan_final[0] = s_cert_final[0];
+            s_plan_final[1] = s_cert_final[1];
+            s_plan_final[2] = s_cert_final[2];
             plan->residual = residual;
             plan->bound = bound;
             return RP_OK;
@@ -1696,6 +1704,19 @@ int RP_NAME(plan_all)(casadi_real u, casadi_real v, casadi_real psi, int steps, 
 
 int RP_NAME(plan)(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k, RP_NAME(plan_t) *plan) {
     return RP_NAME(plan_with)(u, v, psi, steps, k, NULL, plan);
+}
+
+int RP_NAME(plan_many)(int count, const casadi_real *targets, int steps, casadi_real k,
+                       const RP_NAME(options_t) *options, RP_NAME(plan_t) *plans, casadi_real *finals, int *status) {
+    int i, j, certified = !options || options->certify;
+    if (count < 0 || (count > 0 && (targets == NULL || plans == NULL || status == NULL))) return RP_BAD_INPUT;
+    for (i = 0; i < count; ++i) {
+        status[i] = RP_NAME(plan_with)(targets[3 * i], targets[3 * i + 1], targets[3 * i + 2], steps, k, options,
+                                       &plans[i]);
+        if (finals)
+            for (j = 0; j < 3; ++j) finals[3 * i + j] = status[i] == RP_OK && certified ? s_plan_final[j] : NAN;
+    }
+    return RP_OK;
 }
 
 /* ------------------------------------------------------------------ time law (rollplan.execution.timing) */
