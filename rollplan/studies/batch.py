@@ -59,7 +59,7 @@ from ..inputs import parse_number, parse_whole, read_csv, show_path
 from ..io import plan_to_dict, tagged
 from ..outputs import LineWriter, check_writable, claim, write_atomic
 from ..planners import solve
-from ..planners.geometric import SOLVERS, default_planner
+from ..planners.geometric import DEFAULT_ROOT_SOLVER, SOLVERS, default_planner
 from ..planners.method import renamed_option
 from ..problem import DEFAULT_K, Problem
 from ..progress import Progress, reporting
@@ -127,7 +127,7 @@ def read_targets(path) -> list:
     return _targets(path).rows
 
 
-def row_key(row: dict, root_solver: str = "ipopt", problem: str | None = None) -> str:
+def row_key(row: dict, root_solver: str = DEFAULT_ROOT_SOLVER, problem: str | None = None) -> str:
     """The content key of a row: SHA-256 of its columns and fields (sorted by column), the root solver,
     and what is wrong with its shape (``problem``), as hex."""
     content = json.dumps({"format": _KEY_FORMAT, "method": root_solver, "row": row, "problem": problem},
@@ -148,7 +148,7 @@ def _parse(row: dict):
     return (vals["u_a"], vals["v_a"], vals["psi"]), steps, vals["k"]
 
 
-def plan_row(index: int, row: dict, root_solver: str = "ipopt", problem: str | None = None) -> dict:
+def plan_row(index: int, row: dict, root_solver: str = DEFAULT_ROOT_SOLVER, problem: str | None = None) -> dict:
     """Plan one row by the method ``"geometric"`` (:func:`rollplan.planners.solve`) with ``root_solver``;
     the JSON object of its output line (never raises for a bad row).
 
@@ -268,7 +268,7 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
         then ignored); the output is the same.
     root_solver : str
         Root solver of the method ``"geometric"`` (:data:`rollplan.planners.geometric.SOLVERS`; default
-        ``"ipopt"``).
+        ``"c"``: the C planner's search, polish and certificate).
 
     Returns
     -------
@@ -284,7 +284,7 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
         Ctrl-C; the finished lines stay in ``out``.
     """
     jobs = check_whole("jobs", jobs, 1, MAX_JOBS)
-    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
     root_solver = check_choice(name, root_solver, SOLVERS)
     resume, overwrite = check_flag("resume", resume), check_flag("overwrite", overwrite)
     if resume and overwrite:
