@@ -54,12 +54,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError, NoPlanError, OutputError, SolverError, check_choice, check_flag, check_whole
 from ..inputs import parse_number, parse_whole, read_csv, show_path
 from ..io import plan_to_dict, tagged
 from ..outputs import LineWriter, check_writable, claim, write_atomic
 from ..planners import solve
-from ..planners.geometric import DEFAULT_ROOT_SOLVER, SOLVERS, default_planner
+from ..planners.geometric import DEFAULT_ROOT_SOLVER, SOLVERS, default_planner, plan_many
 from ..planners.method import renamed_option
 from ..problem import DEFAULT_K, Problem
 from ..progress import Progress, reporting
@@ -192,10 +194,45 @@ class _Warm:
         default_planner(self.root_solver)
 
 
-def _plan_job(job):
-    index, row, root_solver, problem = job
+#: Rows per task of the planning phase: with the default root solver, the rows of a task that share k and steps
+#: are planned by one call of :func:`rollplan.planners.geometric.plan_many`.
+ROWS_PER_TASK = 64
+
+
+def _plan_task(jobs) -> list:
+    """The output lines of the rows ``jobs`` (a task), in order: with the default root solver, the rows of one k
+    and one number of steps by :func:`~rollplan.planners.geometric.plan_many` (a certified one-leg plan, the
+    plan :func:`plan_row` gives it); every other row (and one without such a plan, which may need two legs, or
+    fails with its own reason) by :func:`plan_row`."""
+    lines = [None] * len(jobs)
     with reporting(None):   # the batch shows its own progress, not the planner's of each row
-        return plan_row(index, row, root_solver, problem)
+        if jobs and jobs[0][2] == DEFAULT_ROOT_SOLVER:
+            groups = {}
+            for j, (_, row, _, problem) in enumerate(jobs):
+                if not problem:
+                    try:
+                        target, steps, k = _parse(row)
+                    except InputError:
+                        continue
+                    groups.setdefault((k, steps), []).append((j, target))
+            for (k, steps), members in groups.items():
+                try:
+                    found = plan_many([t for _, t in members], k=k, steps=steps)
+                except (InputError, SolverError):
+                    continue   # planned row by row below, each line with its own reason
+                for i in np.flatnonzero(found.ok):
+                    j = members[i][0]
+                    index, row, root_solver, problem = jobs[j]
+                    p = found.plan(int(i))
+                    head = {"index": index, "key": row_key(row, root_solver, problem)}
+                    lines[j] = tagged({**head, **plan_to_dict(p, None, include_alternatives=False), "input": row,
+                                       "status": "ok"}, p.problem.unit)
+        return [d if d is not None else plan_row(*job) for d, job in zip(lines, jobs)]
+
+
+def _lost_task(jobs, exc) -> list:
+    """The output lines of a task lost on a cluster."""
+    return [_lost_row(job, exc) for job in jobs]
 
 
 def _batch_line(raw: bytes):
@@ -322,10 +359,11 @@ def _run(table, out: Path, executor, resume, overwrite, root_solver, progress) -
     writer = None
     try:
         with executor:   # connects to a scheduler (and checks its workers) before the output is touched
-            results = executor.map(_plan_job, todo, on_error=_lost_row)   # yields in input order
+            tasks = [todo[i:i + ROWS_PER_TASK] for i in range(0, len(todo), ROWS_PER_TASK)]
+            results = executor.map(_plan_task, tasks, on_error=_lost_task)   # yields in input order
             if report:
                 report(count, len(rows), failed)
-            for d in results:
+            for d in (d for lines_ in results for d in lines_):
                 if writer is None:   # the output is replaced when its first new line is ready, not before
                     write_atomic(out, (head + _dump(d)).encode(), "output file")
                     writer = LineWriter(out, "output file", sync_every=1 << 30, sync_seconds=FSYNC_INTERVAL)
