@@ -160,7 +160,9 @@ int RP_NAME(plan_all)(casadi_real u, casadi_real v, casadi_real psi, int steps, 
  * gets N = ceil(w (RP_CERT_BASE + max|psi'|) / RP_CERT_DELTA) equal steps (psi' sampled at 5 points; it does not
  * depend on the state); the motion is integrated with N and with 2N steps per panel, `bound` is
  * |x_2N - x_N| / RP_CERT_SAFETY (step doubling: the error of x_2N of an order-8 method is about
- * |x_2N - x_N| / 255; dividing by RP_CERT_SAFETY only leaves a margin) and `residual` is
+ * |x_2N - x_N| / 255; dividing by RP_CERT_SAFETY only leaves a margin) plus a rounding allowance
+ * RP_CERT_ROUNDING eps (1 + max |psi|) sqrt(steps of the finer run) (the rounding errors, which the difference of
+ * two runs does not show, add like a random walk and reach (u_a, v_a) through psi), and `residual` is
  * |x_2N - (u, v, psi)| (psi wrapped). While that is undecided (residual - bound <= CERT_TOL <
  * residual + bound), the steps are doubled again (x_2N becomes the coarse run), at most 3 times.
  * `final` (may be NULL) receives the finest run.
