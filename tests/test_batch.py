@@ -581,6 +581,7 @@ def test_rows_are_planned_many_per_call_as_one_by_one(tmp_path, monkeypatch):
         return real(targets, *args, **kwargs)
 
     monkeypatch.setattr(batch, "plan_many", counting)
+    monkeypatch.setattr(batch, "_task_size", lambda rows, jobs: batch.ROWS_PER_TASK)   # one task
     out = tmp_path / "plans.jsonl"
     run_batch(csv, out)
     lines = read_lines(out)
@@ -592,3 +593,12 @@ def test_rows_are_planned_many_per_call_as_one_by_one(tmp_path, monkeypatch):
     assert _strip_times(lines) == _strip_times(alone)
     check_lines(lines[:6])
     assert lines[7]["status"] == "ok"
+
+
+def test_a_short_batch_is_shared_row_by_row():
+    """Tasks hold at most an eighth of each worker's share, so a short batch still runs on every worker and its lines
+    are written as they are planned."""
+    from rollplan.studies.batch import ROWS_PER_TASK, _task_size
+
+    assert _task_size(12, 2) == 1 and _task_size(200, 2) == 12 and _task_size(100000, 2) == ROWS_PER_TASK
+    assert _task_size(0, 1) == 1

@@ -194,9 +194,14 @@ class _Warm:
         default_planner(self.root_solver)
 
 
-#: Rows per task of the planning phase: with the default root solver, the rows of a task that share k and steps
-#: are planned by one call of :func:`rollplan.planners.geometric.plan_many`.
+#: Most rows per task of the planning phase (:func:`_task_size`): with the default root solver, the rows of a task
+#: that share k and steps are planned by one call of :func:`rollplan.planners.geometric.plan_many`.
 ROWS_PER_TASK = 64
+
+
+def _task_size(rows: int, jobs: int) -> int:
+    """Rows per task: :data:`ROWS_PER_TASK`, at most an eighth of each worker's share (a short batch: row by row)."""
+    return max(1, min(ROWS_PER_TASK, rows // (8 * jobs)))
 
 
 def _plan_task(jobs) -> list:
@@ -359,7 +364,8 @@ def _run(table, out: Path, executor, resume, overwrite, root_solver, progress) -
     writer = None
     try:
         with executor:   # connects to a scheduler (and checks its workers) before the output is touched
-            tasks = [todo[i:i + ROWS_PER_TASK] for i in range(0, len(todo), ROWS_PER_TASK)]
+            size = _task_size(len(todo), executor.jobs)
+            tasks = [todo[i:i + size] for i in range(0, len(todo), size)]
             results = executor.map(_plan_task, tasks, on_error=_lost_task)   # yields in input order
             if report:
                 report(count, len(rows), failed)
