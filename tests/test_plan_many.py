@@ -106,6 +106,8 @@ def test_plan_many_units_and_wrapped_psi():
         assert r.status[i] == "ok" and r.branch[i] == p.branch
         assert (r.a[i], r.b[i], r.gamma[i]) == pytest.approx((p.a, p.b, p.gamma), abs=1e-13)
         assert r.plan(i).problem == Problem(target, k=2.5, radius=0.1, steps=2)
+    far = rollplan.plan_many([(0.5, 0.3, -1e300), (0.5, 0.3, 0.4)], k=2.5)   # a branch beyond int64: exact
+    assert far.branch[0] == rollplan.plan((0.5, 0.3, -1e300), k=2.5).branch and far.branch[1] == 0
 
 
 def test_plan_many_uses_many_targets_per_call(monkeypatch):

@@ -45,7 +45,8 @@ class PlanMany:
     a, b, gamma, h, eta, path_length : ndarray, shape (N,)
         As in :class:`.planner.Plan` [length unit, rad]; NaN where there is no plan.
     branch : ndarray of int, shape (N,)
-        The branch m of ``n eta = psi + 2 pi m`` (psi as given); 0 where there is no plan.
+        The branch m of ``n eta = psi + 2 pi m`` (psi as given); 0 where there is no plan (dtype object, exact
+        integers, when one is beyond int64).
     residual, error_bound : ndarray, shape (N,)
         The certificate of each plan: the residual of the RK8 integration of the whole motion
         (``<prefix>_certify``) to the target and the bound of its error (their sum is at most
@@ -171,7 +172,7 @@ def plan_many(targets, k: float | None = None, steps: int = 1, *, robot: Robot |
     k, R, steps = check_k(probe.k), probe.radius, probe.steps
     n = t.shape[0]
     scaled = np.column_stack([t[:, 0] / R, t[:, 1] / R, t[:, 2]])
-    turns = np.zeros(n, dtype=np.int64)
+    turns = [0] * n                                              # exact integers: psi may be any double
     for i in np.flatnonzero(np.abs(scaled[:, 2]) > math.pi):   # psi reduced exactly; branches stay relative to psi
         scaled[i, 2], turns[i] = wrap_exact(scaled[i, 2])
     start = np.hypot(scaled[:, 0], scaled[:, 1]) == 0.0          # the target is the start point: no motion to plan
@@ -186,10 +187,15 @@ def plan_many(targets, k: float | None = None, steps: int = 1, *, robot: Robot |
     def only(x, fill=math.nan):
         return np.where(ok, x, fill)
 
+    branch = [int(m) - turn if good else 0 for m, turn, good in zip(p["m"], turns, ok)]
+    try:
+        branch = np.array(branch, dtype=np.int64)
+    except OverflowError:   # a branch beyond int64 (psi of 1e19 rad or more): exact Python integers
+        branch = np.array(branch, dtype=object)
     rejected = ok | ((status == NOT_CERTIFIED) & ~start)
     a, b = only(p["a"]) * R, only(p["b"]) * R
     return PlanMany(t, k, steps, R, names, a, b, only(p["gamma"]), only(p["h"]) * R, only(p["eta"]),
-                    2 * np.pi * steps * (a + b), np.where(ok, p["m"] - turns, 0),
+                    2 * np.pi * steps * (a + b), branch,
                     np.where(rejected, p["residual"], math.nan), np.where(rejected, p["bound"], math.nan),
                     np.where(ok[:, None], final * [R, R, 1.0], math.nan), p["branches"].copy(), p["roots"].copy(),
                     elapsed)
