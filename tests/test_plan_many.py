@@ -34,8 +34,8 @@ def _check_certified(a, b, k, gamma, steps, target, final, residual, bound):
     assert np.abs(np.asarray(final) - x).max() <= bound + 1e-12, (target, final, x, bound)
 
 
-@pytest.mark.parametrize("k", [pytest.param(0.3, marks=pytest.mark.slow), 2.5,
-                               pytest.param(10.0, marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("k", [0.3, 2.5, 10.0])
 def test_the_default_plan_is_certified_in_c(k):
     """rollplan.plan without options: the C search, polish and certificate in one call; the certificate's final state
     is scipy's to within its error bound, and the plan is the one IPOPT's polish and the Python RK8 certificate
