@@ -477,7 +477,8 @@ def section_profile(ctx):
               ("enumerate.py", "roots"): "roots of the branches (enumeration)",
               ("planner.py", "_polish"): f"polish ({planner.root_solver})",
               ("certify.py", "certify"): "certificate (RK8, n steps)",
-              ("planner.py", "_certified"): "gamma + certificate"}
+              ("planner.py", "_certified"): "gamma + certificate",
+              ("compiled_search.py", "certified_plan"): "C planner: search, polish, certificate (one call)"}
     plan_line = geometric.GeometricPhasePlanner.solve.__code__.co_firstlineno
     for (file, line, name), (_cc, _nc, _tt, ct, _callers) in st.stats.items():
         base = os.path.basename(file)
