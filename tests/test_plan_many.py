@@ -135,3 +135,17 @@ def test_plan_many_bad_input_is_one_clear_line(kwargs, name):
     with pytest.raises(InputError) as err:
         rollplan.plan_many(**kwargs)
     assert one_line(str(err.value)) and name in str(err.value)
+
+
+@pytest.mark.slow
+def test_another_tolerance_or_certifier_takes_the_python_path():
+    """The C certificate applies 1e-9: a planner with a tighter tolerance, or the CVODES certifier, certifies in Python
+    (its own tolerance met), and the plan is the same root."""
+    problem = Problem((0.5, 0.3, 0.4), k=2.5, steps=2)
+    default = rollplan.GeometricPhasePlanner().solve(problem)
+    for planner in (rollplan.GeometricPhasePlanner(tol=1e-11), rollplan.GeometricPhasePlanner(certifier="cvodes")):
+        p = planner.solve(problem)
+        assert p.certificate.tolerance == planner.tol and p.certificate.passed
+        assert p.certificate.method == planner.certifier.name and p.stats.status != "ok"
+        assert (p.a, p.b, p.branch) == (pytest.approx(default.a, abs=1e-12), pytest.approx(default.b, abs=1e-12),
+                                        default.branch)

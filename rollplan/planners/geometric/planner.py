@@ -330,7 +330,7 @@ class GeometricPhasePlanner(Method):
                               f"{self.tol:.0e}; "
                               "try more steps")
 
-    @cached_property
+    @property
     def _in_c(self) -> bool:
         """True when one call of the C planner does search, polish and certificate (the default root solver
         with the default certifier and tolerance, which the C certificate applies)."""
