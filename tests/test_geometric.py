@@ -365,7 +365,11 @@ def test_plan_is_a_certified_result(planner):
     x = references.trace(p.a, p.b, p.k, p.gamma, p.steps)
     assert np.abs(np.asarray(c.final[:3]) - x).max() < 1e-10
     assert c.residual == pytest.approx(np.linalg.norm(arrival_error(c.final, problem.goal)), abs=1e-15)
-    assert p.stats.method == "ipopt" and p.stats.status == "Solve_Succeeded" and 0 <= p.stats.iterations <= 3
+    assert p.stats.method == "c" and p.stats.status == "ok"   # the default: search, polish, certificate in C
+    by_ipopt = rollplan.GeometricPhasePlanner(root_solver="ipopt").solve(problem)
+    assert by_ipopt.stats.method == "ipopt" and by_ipopt.stats.status == "Solve_Succeeded"
+    assert 0 <= by_ipopt.stats.iterations <= 3
+    assert (by_ipopt.a, by_ipopt.b, by_ipopt.gamma) == pytest.approx((p.a, p.b, p.gamma), abs=1e-12)
     assert p.stats.time_s > 0
     assert p.stats.details["candidates"] >= p.stats.details["solves"] >= 1
     q = solve(problem, "geometric")
@@ -606,7 +610,7 @@ def test_a_rejected_shortest_root_is_replaced_by_the_next_certified_one_of_the_c
         return root, cert, stats
 
     monkeypatch.setattr(GeometricPhasePlanner, "_certified", reject_the_shortest)
-    p = GeometricPhasePlanner().solve(problem)
+    p = GeometricPhasePlanner(root_solver="ipopt").solve(problem)   # the path that certifies root by root here
     ref = ReferencePlanner().solve(problem)
     assert p.stats.details["search"] == "compiled" and p.certificate.passed
     assert p.a + p.b > shortest.a + shortest.b

@@ -77,6 +77,9 @@ def fmt_solver(stats) -> str:
                      "certified or rejected")
     elif "candidates" in d:
         parts.append(f"{d['candidates']} brackets, {d['solves']} solves")
+    if stats.method == "c" and stats.status == "ok":   # one call of the C planner
+        parts.append("root polished by Newton on the accurate leaf map and certified, in C")
+        return "; ".join(parts) + f"; {stats.time_s * 1e3:.1f} ms"
     polished = "0 iterations (already at the root)" if n == 0 else f"{n} iteration(s)"
     ok = stats.status in ("Solve_Succeeded", "success", "ok")
     parts.append(f"root polished by {stats.method}: {polished}{'' if ok else f' ({stats.status})'}")

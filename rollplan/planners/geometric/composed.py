@@ -43,7 +43,7 @@ from .basepoint import (
 from .legs import intermediate_state, second_leg, two_leg_candidates
 from .maneuvers import StraightRoll
 from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
-from .refine import SOLVERS
+from .refine import DEFAULT_ROOT_SOLVER, SOLVERS
 from .turn import CircleTurn, turn_in_place
 
 __all__ = ["LEGS", "BASES", "BASE_FRACTIONS", "BASE_OFFSETS", "BASE_SOLVES", "BASE_MOVES", "IDENTITY_TOL",
@@ -258,7 +258,7 @@ class ComposedPlanner(Method):
                  legs: str = "fallback", *, steps: int | None = None, all_solutions: bool = False,
                  branch: int | None = None, method: str | None = None, base: str = "pole") -> None:
         self.base = check_choice("base", base, BASES)
-        root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+        root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
         self.legs = check_choice("legs", legs, LEGS)
         check_choice(name, root_solver, SOLVERS)
         self.steps = None if steps is None else check_steps(steps)
@@ -533,7 +533,8 @@ class ComposedPlanner(Method):
 
 
 @lru_cache(maxsize=8)
-def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback", base: str = "pole") -> ComposedPlanner:
+def default_composed_planner(root_solver: str = DEFAULT_ROOT_SOLVER, legs: str = "fallback",
+                             base: str = "pole") -> ComposedPlanner:
     """The shared composed planner of :func:`plan` for a root solver, a legs policy and a base policy."""
     return ComposedPlanner(root_solver, legs=legs, base=base)
 
@@ -573,7 +574,7 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     legs : str
         ``"fallback"`` (default), ``"shortest"``, ``"one"`` or ``"two"`` (docs/design/composition.md).
     root_solver : str
-        Root solver name from :data:`.refine.SOLVERS` (default ``"ipopt"``).
+        Root solver name from :data:`.refine.SOLVERS` (default ``"c"``: the C planner's search, polish and certificate).
     base : str
         ``"pole"`` (default) or ``"any"``: also figure eights at base points off the pole, the shorter plan kept
         (:class:`ComposedPlanner`).
@@ -594,7 +595,7 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     SolverError
         The root solver broke down.
     """
-    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
     check_choice(name, root_solver, SOLVERS)
     check_choice("legs", legs, LEGS)
     check_choice("base", base, BASES)

@@ -51,9 +51,9 @@ from ...result import (
 from ...robot import Robot
 from ..method import Method, renamed_option
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
-from .compiled_search import all_roots, shortest_root
+from .compiled_search import NO_PLAN, NOT_CERTIFIED, OK, all_roots, certified_plan, shortest_root
 from .leafmap import panels_for, step_values
-from .refine import SOLVERS, leaf_step, polisher, step_residual
+from .refine import DEFAULT_ROOT_SOLVER, SOLVERS, leaf_step, polisher, step_residual
 from .search_constants import NOT_A_ROOT
 
 __all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
@@ -216,9 +216,11 @@ class GeometricPhasePlanner(Method):
     Parameters
     ----------
     root_solver : str
-        Solver of the shooting problem (32)-(33) from :data:`.refine.SOLVERS`: ``"ipopt"`` (the
-        default) or ``"newton"``. It polishes each enumerated root (started there, it needs at most one or
-        two iterations). (Its old name ``method`` still works, with a DeprecationWarning.)
+        Solver of the shooting problem (32)-(33) from :data:`.refine.SOLVERS`: ``"c"`` (the default: the C
+        search's own Newton polish; with the default certifier and tol, search, polish and certificate run in one
+        call of the C planner, :func:`.compiled_search.certified_plan`), ``"ipopt"`` or ``"newton"``, which
+        polish each enumerated root again (started there, they need at most one or two iterations) before the
+        certificate of :mod:`.certify`. (Its old name ``method`` still works, with a DeprecationWarning.)
     nodes : int
         Chebyshev degree per panel of the spectral step map, in [4, 200].
     tol : float
@@ -240,7 +242,7 @@ class GeometricPhasePlanner(Method):
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  certifier: str = DEFAULT_CERTIFIER, compiled_search: bool = True, *, all_solutions: bool = False,
                  branch: int | None = None, method: str | None = None) -> None:
-        root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+        root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
         self.root_solver = check_choice(name, root_solver, SOLVERS)
         self.all_solutions = check_flag("all_solutions", all_solutions)
         self.branch = None if branch is None else check_whole("branch", branch)
@@ -316,6 +318,8 @@ class GeometricPhasePlanner(Method):
                               "motions with a nonzero displacement")
         target = (goal_r.u_a, goal_r.v_a, psi_des)
         solve = self._solve_compiled_all if all_solutions else self._solve_compiled
+        if not all_solutions and self._in_c:
+            solve = self._solve_in_c
         return solve(problem, None if branch is None else branch + turns, target, turns, t_start)
 
     def _raise_if_rejected(self, where: str, rejected: list) -> None:
@@ -325,6 +329,34 @@ class GeometricPhasePlanner(Method):
                               f"their certified residual plus error bound (best {min(rejected):.1e}) exceeds "
                               f"{self.tol:.0e}; "
                               "try more steps")
+
+    @property
+    def _in_c(self) -> bool:
+        """True when one call of the C planner does search, polish and certificate (the default root solver
+        with the default certifier and tolerance, which the C certificate applies)."""
+        return (self.root_solver == DEFAULT_ROOT_SOLVER and type(self.certifier) is CERTIFIERS[DEFAULT_CERTIFIER]
+                and self.tol == CERTIFICATE_TOLERANCE)
+
+    def _solve_in_c(self, problem, branch, target, turns, t_start) -> Plan:
+        """The shortest certified plan (on ``branch`` if given) by one call of the C planner: the search, its
+        Newton polish and its RK8 certificate (:func:`.compiled_search.certified_plan`)."""
+        status, p, final = certified_plan(target[0], target[1], target[2], problem.steps, problem.k, branch)
+        if status == OK:
+            R = problem.radius
+            # the figure eight ends at the pole (u_o = v_o = 0) by construction; the certificate integrates u_a,
+            # v_a, psi
+            cert = Certificate(self.certifier.name, State(final[0] * R, final[1] * R, final[2], 0.0, 0.0),
+                               p.residual, p.bound, self.tol)
+            details = {"candidates": int(p.roots), "solves": 1, "branches": int(p.branches), "roots": int(p.roots),
+                       "search": "compiled"}
+            stats = SolverStats(DEFAULT_ROOT_SOLVER, "ok", 0, time.perf_counter() - t_start, details)
+            return Plan(problem, p.a * R, p.b * R, p.gamma, int(p.m) - turns, p.h * R, p.eta,
+                        2 * np.pi * problem.steps * (p.a + p.b) * R, cert, stats, (), self)
+        if status == NO_PLAN:
+            raise _no_root(problem, f"{p.branches} branches searched completely")
+        if status == NOT_CERTIFIED:
+            self._raise_if_rejected(problem.describe(), [p.residual + p.bound])
+        raise _no_root(problem, f"{p.branches} branches searched completely")
 
     def _solve_compiled(self, problem, branch, target, turns, t_start) -> Plan:
         """The shortest root (on ``branch`` if given) by the compiled C search, polished and certified here; when
@@ -482,7 +514,8 @@ def _contact_coordinates() -> ca.Function:
 
 
 @lru_cache(maxsize=4)
-def default_planner(root_solver: str = "ipopt", certifier: str = DEFAULT_CERTIFIER) -> GeometricPhasePlanner:
+def default_planner(root_solver: str = DEFAULT_ROOT_SOLVER,
+                    certifier: str = DEFAULT_CERTIFIER) -> GeometricPhasePlanner:
     """The shared planner of :func:`plan` and :func:`step` for a root solver and a certifier (built once per
     process)."""
     return GeometricPhasePlanner(root_solver, certifier=certifier)
@@ -517,7 +550,8 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     branch : int, optional
         Only the branch m of ``n eta = psi + 2 pi m`` (psi as given).
     root_solver : str
-        Root solver name from :data:`.refine.SOLVERS` (default ``"ipopt"``).
+        Root solver name from :data:`.refine.SOLVERS` (default ``"c"``: search, polish and certificate in
+        one call of the C planner).
 
     Returns
     -------
@@ -531,7 +565,7 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     NoPlanError
         No certified plan exists in the admissible range ``0 < a, b <= A_MAX R``.
     """
-    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
     check_choice(name, root_solver, SOLVERS)
     problem = Problem(target, k=k, robot=robot, radius=radius, steps=steps)
     return default_planner(root_solver).solve(problem, all_solutions, branch)
