@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -373,3 +374,35 @@ def test_multistart_corrects_only_the_best_start_and_keeps_the_best_certified_op
     brute = [measure(planner.finish(nlp).motion)["angular_velocity"] for planner, nlp in solved]
     assert c.collocation.costs["angular_velocity"] == pytest.approx(min(brute), rel=1e-12)
     assert c.result.stats.details["nlp_objective"] == min(nlp.objective for _, nlp in solved)
+
+
+def test_gauss_newton_integrates_sensitivities_only_where_it_steps():
+    """The sensitivities cost about ten times a plain CVODES integration and were computed for every trial,
+    also for the controls that end the correction. Now trials are integrated plainly and the sensitivities
+    only at the controls a step starts from. x1' = w, x2' = x1^2 with w constant on each of 4 intervals: the
+    corrected controls reach the end state by the closed form, and one sensitivity run per step is made."""
+    from rollplan.planners.collocation.transcription import gauss_newton, sensitivity_step
+
+    x, w, par = ca.SX.sym("x", 2), ca.SX.sym("w", 1), ca.SX.sym("par", 1)
+    xdot = ca.vertcat(w, x[0] ** 2)
+    counts = {"jacobians": 0, "plain": 0}
+
+    def counted(fn, key):
+        def call(**kw):
+            counts[key] += 1
+            return fn(**kw)
+        return call
+
+    step = counted(sensitivity_step("gn_test", x, w, par, xdot, ca.SX(0.0)), "jacobians")
+    plain = counted(sensitivity_step("gn_test", x, w, par, xdot, ca.SX(0.0), False), "plain")
+    N, final = 4, np.array([0.3, 0.2])
+    a, _, size, first = gauss_newton(step, np.zeros((N, 1)), np.zeros(2), final, np.zeros(1), 1e-12, 8, plain)
+    x1, x2, h = 0.0, 0.0, 1.0 / N     # closed form: x1 linear, x2 the integral of its square
+    for wi in a[:, 0]:
+        x2 += x1 ** 2 * h + x1 * wi * h ** 2 + wi ** 2 * h ** 3 / 3.0
+        x1 += wi * h
+    assert first > 0.1 and size <= 1e-12
+    assert np.abs([x1 - final[0], x2 - final[1]]).max() <= 1e-11
+    assert counts["jacobians"] % N == 0 and counts["plain"] % N == 0
+    steps = counts["jacobians"] // N
+    assert steps >= 1 and counts["plain"] // N >= steps + 1    # the first controls and one trial per step, plainly
