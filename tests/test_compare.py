@@ -406,3 +406,42 @@ def test_gauss_newton_integrates_sensitivities_only_where_it_steps():
     assert counts["jacobians"] % N == 0 and counts["plain"] % N == 0
     steps = counts["jacobians"] // N
     assert steps >= 1 and counts["plain"] // N >= steps + 1    # the first controls and one trial per step, plainly
+
+
+def test_starts_solved_in_parallel_are_those_solved_one_after_the_other():
+    """The starts of the multistart ran one after the other on one core; now by two workers at once, the second
+    with a twin of the NLP's IPOPT solver (its derivatives shared). The brute force: the same comparison with
+    one worker gives the same starts (names, statuses, NLP optima) and the same kept optimum."""
+    one = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=2, workers=1)
+    two = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=2, workers=2)
+    assert [(s.name, s.turns, s.status) for s in two.starts] == [(s.name, s.turns, s.status) for s in one.starts]
+    for a, b in zip(one.starts, two.starts):
+        assert (a.cost is None) == (b.cost is None)
+        if a.cost is not None:
+            assert b.cost == pytest.approx(a.cost, rel=1e-12)
+    assert two.result.guess == one.result.guess
+    assert np.abs(two.result.controls - one.result.controls).max() <= 1e-9
+    assert two.collocation.residual <= 1e-9 and one.collocation.residual <= 1e-9
+
+
+def test_twin_solver_solves_the_same_nlp_alone_and_at_the_same_time():
+    """A twin's IPOPT (derivatives shared with its planner) solves the NLP to the planner's own optimum, also while
+    the planner solves another start in another thread (each solver's statistics its own)."""
+    import threading
+
+    from rollplan.planners.collocation.rest import RestToRestPlanner
+    from rollplan.studies.comparison import branch_guess
+
+    planner = RestToRestPlanner(16)
+    twin = planner.twin()
+    problem = Problem((0.5, 0.3, 0.4), k=K)
+    guess, m = branch_guess(problem, planner)
+    alone = planner.solve_nlp(problem, guess, 1.0, m)
+    out = {}
+    worker = threading.Thread(target=lambda: out.update(twin=twin.solve_nlp(problem, guess, 1.0, m)))
+    worker.start()
+    out["planner"] = planner.solve_nlp(problem, guess, 1.0, m)
+    worker.join()
+    for r in out.values():
+        assert r.iterations == alone.iterations and r.status == alone.status
+        assert np.abs(r.x - alone.x).max() <= 1e-12

@@ -12,6 +12,7 @@ Problem, time scaling, costs, correction and certification: docs/design/collocat
 
 from __future__ import annotations
 
+import copy
 import logging
 import math
 import time
@@ -270,6 +271,17 @@ class RestToRestPlanner:
         self.ipopt_options = {**ipopt_options(self.tol, self.max_iter), **REST_IPOPT_OPTIONS}
         self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, self.ipopt_options)
         self.build_time_s = time.perf_counter() - t0
+
+    def twin(self) -> RestToRestPlanner:
+        """This planner with its own IPOPT solver of the same NLP, its derivatives shared (not built again): for
+        solves in another thread at the same time (a solver's statistics are those of its last call)."""
+        s = self.solver
+        shared = {"grad_f": s.get_function("nlp_grad_f"), "jac_g": s.get_function("nlp_jac_g"),
+                  "hess_lag": s.get_function("nlp_hess_l")}
+        other = copy.copy(self)
+        other.solver = interrupts.call_in_thread(ca.nlpsol, s.name(), "ipopt", s.oracle(),
+                                                 {**self.ipopt_options, **shared})
+        return other
 
     def boundary(self, problem: Problem, turns: int) -> tuple[np.ndarray, np.ndarray]:
         """Start and final 7-states (units of R) at rest; InputError for a start or goal beyond the bound."""
