@@ -220,18 +220,24 @@ class ComposedPlanner(Method):
         Also return the other certified branches of one leg in ``alternatives``.
     branch : int or None
         Only the branch m of ``n eta = psi + 2 pi m`` of one leg (no fallback to two legs).
+    refine : bool
+        Polish the plan into a shorter certified motion (:func:`rollplan.planners.refined.refine`): a
+        :class:`~rollplan.planners.refined.RefinedPlan`, or the plan with a note in ``stats.details["refine"]``.
     """
 
     name = "geometric"
 
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  legs: str = "fallback", *, steps: int | None = None, all_solutions: bool = False,
-                 branch: int | None = None, method: str | None = None) -> None:
+                 branch: int | None = None, method: str | None = None, refine: bool = False) -> None:
         root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
         self.legs = check_choice("legs", legs, LEGS)
         check_choice(name, root_solver, SOLVERS)
         self.steps = None if steps is None else check_steps(steps)
         self.all_solutions = check_flag("all_solutions", all_solutions)
+        self.refine = check_flag("refine", refine)
+        if self.refine and self.all_solutions:
+            raise InputError("refine and all_solutions do not combine: the polish returns one motion")
         self.branch = self._check_branch(branch)
         default = nodes == DEFAULT_NODES and tol == TOLERANCE
         self.planner = default_planner(root_solver) if default else GeometricPhasePlanner(root_solver, nodes, tol)
@@ -269,6 +275,14 @@ class ComposedPlanner(Method):
         return self.planner.solve(problem, all_solutions, branch)
 
     def _solve(self, problem: Problem):
+        found = self._geometric(problem)
+        if not self.refine:
+            return found
+        from ..refined import refine
+
+        return refine(found)
+
+    def _geometric(self, problem: Problem):
         t0 = time.perf_counter()
         all_solutions, branch = self.all_solutions, self.branch
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
