@@ -69,6 +69,19 @@ class RefinedPlan(CertifiedMotion):
         return self.problem.steps
 
     @property
+    def pieces(self) -> tuple:
+        """``()``: the polished motion is not made of closed-form pieces."""
+        return ()
+
+    @property
+    def legs(self) -> tuple:
+        return ()
+
+    @property
+    def alternatives(self) -> tuple:
+        return ()
+
+    @property
     def unrefined_length(self) -> float:
         return self.unrefined.path_length
 
