@@ -24,13 +24,14 @@ import numpy as np
 
 from .. import interrupts
 from . import model
-from .curves import Piece, figure_eight, great_circle, rotated_point
+from .curves import Piece, arc, based_figure_eight, figure_eight, great_circle, rotated_point
 from .integrate import CvodesIntegrator
 
 __all__ = ["CURVES", "CurvePiece", "figure_eight_pieces", "allocate_samples", "PathIntegrator"]
 
 #: The curves a path can be made of, by name.
-CURVES = {"figure_eight": figure_eight(), "great_circle": great_circle()}
+CURVES = {"figure_eight": figure_eight(), "great_circle": great_circle(), "based_figure_eight": based_figure_eight(),
+          "arc": arc()}
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,8 @@ place, :mod:`.turn`; or two legs, :mod:`.legs`), and a departure roll. By the co
 :mod:`rollplan.core.plane` the figure eights must realize, from zero, ``g_F = g_A^-1 * start^-1 * goal * g_B^-1``
 (F), with ``g_A``, ``g_B`` the rolls' closed-form elements; the whole motion is then certified by one CVODES
 integration from the start state (:func:`certify_path`). ``legs=`` (:data:`LEGS`) chooses between one and two
-legs: ``"fallback"`` (default), ``"shortest"``, ``"one"``, ``"two"``.
+legs: ``"fallback"`` (default), ``"shortest"``, ``"one"``, ``"two"``. ``base="any"`` (:data:`BASES`) also tries one leg
+of figure eights at base points off the pole (:mod:`.basepoint`) and keeps the shorter certified plan.
 
 Derivation, the singular set, the choice of the legs: docs/design/composition.md.
 """
@@ -28,17 +29,24 @@ from ...problem import Problem, State, arrival_residual, check_reach, check_step
 from ...result import DEFAULT_SAMPLES, Certificate, CertifiedMotion, SolverStats, Trajectory, certify
 from ...robot import Robot
 from ..method import Method, renamed_option, with_steps
+from .basepoint import BasedLeg, along, arc_element, arc_piece, base_of, solve_leg
 from .legs import intermediate_state, second_leg, two_leg_candidates
 from .maneuvers import StraightRoll
 from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
 from .refine import SOLVERS
 from .turn import CircleTurn, turn_in_place
 
-__all__ = ["LEGS", "IDENTITY_TOL", "ComposedPlan", "ComposedPlanner", "default_composed_planner", "as_composed",
+__all__ = ["LEGS", "BASES", "BASE_FRACTIONS", "IDENTITY_TOL", "ComposedPlan", "ComposedPlanner",
+           "default_composed_planner", "as_composed",
            "certify_path", "sample_path", "plan"]
 
 #: Policies for the legs of figure eights (docs/design/composition.md).
 LEGS = ("fallback", "shortest", "one", "two")
+#: Where the figure eights may be traced: ``"pole"`` (the south pole only) or ``"any"`` (docs/design/basepoint.md).
+BASES = ("pole", "any")
+#: Base points tried by ``base="any"`` besides the pole: fractions of the great-circle arc from the start contact
+#: point (0) to the goal contact point (1).
+BASE_FRACTIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
 #: A figure-eight target this close to zero (units of R and rad) is no motion at all.
 IDENTITY_TOL = 1e-12
 
@@ -142,6 +150,8 @@ class ComposedPlan(CertifiedMotion):
         Contact path length [length unit].
     alternatives : tuple of ComposedPlan
         With ``all_solutions`` and one leg: the plans through the other certified branches.
+    base : BasedLeg or None
+        Mode ``"based"``: the figure eights at their base point (:class:`.basepoint.BasedLeg`).
     """
 
     method = "geometric"
@@ -159,6 +169,7 @@ class ComposedPlan(CertifiedMotion):
     stats: SolverStats
     path_length: float
     alternatives: tuple = ()
+    base: BasedLeg | None = None
 
     @property
     def steps(self) -> int:
@@ -220,6 +231,11 @@ class ComposedPlanner(Method):
         Also return the other certified branches of one leg in ``alternatives``.
     branch : int or None
         Only the branch m of ``n eta = psi + 2 pi m`` of one leg (no fallback to two legs).
+    base : str
+        ``"pole"`` (default): figure eights at the south pole only. ``"any"``: also one leg of figure eights at
+        the base points of :data:`BASE_FRACTIONS` along the great-circle arc from the start contact point to the
+        goal contact point (local solves, :mod:`.basepoint`); the shorter certified plan is kept, so it is never
+        longer than the ``"pole"`` plan. Slower (about a second warm per plan).
     refine : bool
         Polish the plan into a shorter certified motion (:func:`rollplan.planners.refined.refine`): a
         :class:`~rollplan.planners.refined.RefinedPlan`, or the plan with a note in ``stats.details["refine"]``.
@@ -229,7 +245,9 @@ class ComposedPlanner(Method):
 
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  legs: str = "fallback", *, steps: int | None = None, all_solutions: bool = False,
-                 branch: int | None = None, method: str | None = None, refine: bool = False) -> None:
+                 branch: int | None = None, method: str | None = None, base: str = "pole",
+                 refine: bool = False) -> None:
+        self.base = check_choice("base", base, BASES)
         root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
         self.legs = check_choice("legs", legs, LEGS)
         check_choice(name, root_solver, SOLVERS)
@@ -283,6 +301,64 @@ class ComposedPlanner(Method):
         return refine(found)
 
     def _geometric(self, problem: Problem):
+        if self.base == "pole" or self.branch is not None:
+            return self._solve_pole(problem)
+        t0 = time.perf_counter()
+        try:
+            pole = self._solve_pole(problem)
+        except NoPlanError:
+            based = self._based(problem, t0, math.inf)
+            if based is None:
+                raise
+            return based
+        based = self._based(problem, t0, pole.path_length)
+        return based if based is not None else pole
+
+    def _based(self, problem: Problem, t0: float, bound: float) -> ComposedPlan | None:
+        """The shortest certified plan with one leg of figure eights at a base point of :data:`BASE_FRACTIONS`
+        shorter than ``bound`` [length unit], or None (docs/design/basepoint.md)."""
+        start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
+        k, steps, R = problem.k, problem.steps, problem.radius
+        if arrival_residual(start, goal) <= IDENTITY_TOL:
+            return None
+        cs, cg = base_of(start.u_o, start.v_o), base_of(goal.u_o, goal.v_o)
+        move = relative(start[:3], goal[:3])
+        found, tried = [], []
+        for f in BASE_FRACTIONS:
+            cb = along(cs, cg, f)
+            if cb[0] == 0.0:
+                continue   # the pole: the "pole" plan
+            first, last = arc_piece(cs, cb, "approach"), arc_piece(cb, cg, "departure")
+            rolls = sum(p.length for p in (first, last) if p is not None)
+            if rolls * R >= bound:
+                continue
+            target = compose(compose(inverse(arc_element(first, k)), move), inverse(arc_element(last, k)))
+            guesses = []
+            try:
+                carried = self._leg(Problem(tuple(target), k=k, steps=steps))
+                guesses.append((carried.a / carried.radius, carried.b / carried.radius, carried.gamma - cb[1]))
+            except NoPlanError:
+                carried = None
+            a0, b0 = guesses[0][:2] if guesses else (0.2, 0.2)
+            guesses += [(a0, b0, o) for o in np.linspace(-math.pi, math.pi, 4, endpoint=False)]
+            leg = solve_leg(target, cb, k, steps, guesses)
+            tried.append({"fraction": f, "found": leg is not None})
+            if leg is not None:
+                found.append((rolls + leg.length, f, first, leg, last, target))
+        for length, f, first, leg, last, target in sorted(found, key=lambda c: c[0]):
+            if length * R >= bound:
+                break
+            pieces = tuple(p for p in [first, *leg.pieces(), last] if p is not None)
+            cert, _ = certify_path(problem, pieces, self.tol)
+            if not cert.passed:
+                continue
+            stats = SolverStats("ipopt", leg.guarantee, 0, time.perf_counter() - t0,
+                                {"mode": "based", "fraction": f, "bases": tried})
+            return ComposedPlan(problem, "based", None, None, np.asarray(target, float), (), None, None, pieces,
+                                cert, stats, sum(p.length for p in pieces) * R, base=leg)
+        return None
+
+    def _solve_pole(self, problem: Problem):
         t0 = time.perf_counter()
         all_solutions, branch = self.all_solutions, self.branch
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
@@ -433,9 +509,9 @@ class ComposedPlanner(Method):
 
 
 @lru_cache(maxsize=8)
-def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback") -> ComposedPlanner:
-    """The shared composed planner of :func:`plan` for a root solver and a legs policy."""
-    return ComposedPlanner(root_solver, legs=legs)
+def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback", base: str = "pole") -> ComposedPlanner:
+    """The shared composed planner of :func:`plan` for a root solver, a legs policy and a base policy."""
+    return ComposedPlanner(root_solver, legs=legs, base=base)
 
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
