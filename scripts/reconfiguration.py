@@ -298,8 +298,9 @@ def report(d) -> str:
     L += ["", "## Lengths against optimal control", "",
           "Contact path lengths [R] and wall times [s] of: today's default (*pole*: every leg of figure eights at "
           "the south pole), one leg at any base point along the arc from the start to the goal contact point "
-          "(`base=\"any\"`), `--refine` (`refine=True`: the default plan polished by the rest-to-rest collocation, "
-          "N = 60, polar angle <= 80 deg, certified by CVODES), and a multi-start optimal-control reference "
+          "(`base=\"any\"`), `--refine` (`refine=True`: the rest-to-rest collocation warm-started by the default "
+          "plan and by straight lines, N = 60, polar angle <= 80 deg, certified by CVODES), and a multi-start "
+          "optimal-control reference "
           "(`tests/references.py`: (15), (16), (20) as printed, multiple shooting with RK4, N = 60, rest to rest, "
           "polar angle <= 80 deg, minimum path energy, IPOPT from the straight line on each whole number of turns "
           f"m in {{{', '.join(oc[0]['ocp_turns'])}}} of psi, the shortest kept). Pairs 1 and 2 are the issue's; the "
@@ -318,8 +319,8 @@ def report(d) -> str:
     worst = max(r["refine"] / r["ocp"] for r in oc)
     L += ["", f"* `--refine` is at most {worst:.3f} x the reference's length over these pairs; it takes "
           f"{min(r['refine_time_s'] for r in oc):.1f} to {max(r['refine_time_s'] for r in oc):.1f} s (the plan "
-          "included: three or four IPOPT solves, on the plan's whole turns of psi, its neighbours and 0, then the "
-          "Gauss-Newton correction and the CVODES certificate of the best).",
+          "included: IPOPT from the plan on its whole turns m of psi and on 0, and from the straight line on "
+          "m = -1, 0, 1, then the Gauss-Newton correction and the CVODES certificate of the best).",
           "* *DOP853 replay*: the refined motion's 4001 samples, (15), (16), (20) integrated by DOP853 along cubic "
           "splines of the sampled (u_o, v_o) alone, distance of the end to the goal."]
     notes = [f"pair {i}: {r['refine_note']}" for i, r in enumerate(oc, 1) if not r["refined"]]

@@ -4,10 +4,11 @@ The plan's contact path, timed rest to rest on every piece, warm-starts the rest
 (:mod:`.collocation.rest`) of the same problem: contact accelerations piecewise constant on
 :data:`INTERVALS` intervals, polar angle of the contact point at most :data:`CONTACT_BOUND`, cost the path
 energy ``int |v|^2 dt`` (on a fixed horizon its minimizers are the shortest paths, run at constant speed).
-The plan's whole turns m of psi and its neighbours m - 1, m + 1 and 0 are tried (psi of the warm start
-bent linearly in time); the NLP optima are corrected and certified best first (CVODES, the certificate of
-every plan). The shortest certified motion is returned as a :class:`RefinedPlan` when it is shorter than
-the plan; otherwise the plan itself, with the reason in ``stats.details["refine"]``.
+The plan warm-starts it on its whole turns m of psi and on 0 turns (psi bent linearly in time), the straight
+line from start to goal on the turns :data:`LINE_TURNS` (a long plan can lead IPOPT away from the short
+motions); the NLP optima are corrected and certified best first (CVODES, the certificate of every plan). The
+shortest certified motion is returned as a :class:`RefinedPlan` when it is shorter than the plan; otherwise
+the plan itself, with the reason in ``stats.details["refine"]``.
 """
 
 from __future__ import annotations
@@ -25,12 +26,14 @@ from ..progress import report
 from ..result import DEFAULT_SAMPLES, Certificate, CertifiedMotion, SolverStats, Trajectory
 from ..timeseries import TimeSeries
 
-__all__ = ["INTERVALS", "CONTACT_BOUND", "RefinedPlan", "warm_samples", "refine"]
+__all__ = ["INTERVALS", "CONTACT_BOUND", "LINE_TURNS", "RefinedPlan", "warm_samples", "refine"]
 
 #: Intervals N of the polish's collocation (piecewise-constant contact accelerations).
 INTERVALS = 60
 #: Largest polar angle of the contact point from the south pole along the polished motion [rad] (80 deg).
 CONTACT_BOUND = math.radians(80.0)
+#: Whole turns m of psi of the straight-line starts (every state linear in time from the start to the goal).
+LINE_TURNS = (-1, 0, 1)
 #: A polished motion replaces the plan only when it is shorter by more than this fraction.
 MIN_GAIN = 1e-6
 
@@ -150,7 +153,7 @@ def refine(plan, intervals: int = INTERVALS, contact_bound: float = CONTACT_BOUN
     """The polish of the certified geometric ``plan`` (module docstring): a :class:`RefinedPlan` when a
     certified motion shorter than ``plan`` is found, else ``plan`` with the reason in
     ``stats.details["refine"]``. Ctrl-C stops it (KeyboardInterrupt)."""
-    from .collocation.rest import RestToRestMethod, guess_from_samples
+    from .collocation.rest import RestToRestMethod, guess_from_samples, naive_guess
 
     t_start = time.perf_counter()
     problem = plan.problem
@@ -162,24 +165,28 @@ def refine(plan, intervals: int = INTERVALS, contact_bound: float = CONTACT_BOUN
     except InputError as exc:
         return _unrefined(plan, f"not refined: {exc}")
     m0 = _turns(plan)
-    turns = sorted({m0, m0 - 1, m0 + 1, 0}, key=lambda m: (abs(m - m0), m))
-    total = len(turns) + 2
-    report("refine", 0, total, stage="sampling the plan")
     t, x7 = warm_samples(plan)
     tr = planner.transcription
-    results, tried = [], []
-    for i, m in enumerate(turns):
-        report("refine", 1 + i, total, stage=f"collocation with {m} whole turns of psi")
+    starts = []
+    for m in sorted({m0, 0}, key=lambda m: abs(m - m0)):
         x = x7.copy()
         x[:, 2] += 2.0 * math.pi * (m - m0) * t
-        guess = guess_from_samples(tr, t, x, f"geometric:{m0}" + (f"->{m}" if m != m0 else ""))
+        name = f"plan:{m0}" + (f"->{m}" if m != m0 else "")
+        starts.append((m, lambda x=x, name=name: guess_from_samples(tr, t, x, name)))
+    for m in LINE_TURNS:
+        starts.append((m, lambda m=m: replace(naive_guess(tr, *planner.boundary(problem, m)), name=f"line:{m}")))
+    total = len(starts) + 1
+    results, tried = [], []
+    for i, (m, make) in enumerate(starts):
+        guess = make()
+        report("refine", i, total, stage=f"collocation from {guess.name}")
         try:
             nlp = interrupts.call(planner.solve_nlp, problem, guess, 1.0, m)
         except SolverError as exc:
-            tried.append({"turns": m, "status": exc.status})
+            tried.append({"start": guess.name, "turns": m, "status": exc.status})
             continue
         results.append(nlp)
-        tried.append({"turns": m, "status": nlp.status, "nlp_objective": nlp.objective,
+        tried.append({"start": guess.name, "turns": m, "status": nlp.status, "nlp_objective": nlp.objective,
                       "solve_time_s": nlp.solve_time_s})
     report("refine", total - 1, total, stage="correcting and certifying")
     best, failures = None, []
@@ -188,13 +195,13 @@ def refine(plan, intervals: int = INTERVALS, contact_bound: float = CONTACT_BOUN
             best = interrupts.call(planner.finish, nlp)
             break
         except SolverError as exc:
-            failures.append(f"{nlp.turns}: {exc.status}")
+            failures.append(f"{nlp.guess.name}: {exc.status}")
     report("refine", total, total, stage="done")
     elapsed = time.perf_counter() - t_start
     details = {"unrefined_length": plan.path_length, "unrefined_time_s": plan.stats.time_s, "refine_time_s": elapsed,
                "intervals": intervals, "contact_bound": contact_bound, "starts": tried}
     if best is None:
-        why = ", ".join(failures) or ", ".join(f"{s['turns']}: {s['status']}" for s in tried)
+        why = ", ".join(failures) or ", ".join(f"{s['start']}: {s['status']}" for s in tried)
         return _unrefined(plan, f"not refined: no start of the collocation was certified ({why})")
     if not best.path_length < plan.path_length * (1.0 - MIN_GAIN):
         return _unrefined(plan, f"not refined: the collocation's certified motion ({best.path_length:.6g}) is not "
