@@ -3,6 +3,7 @@ structure claims of docs/design/basepoint.md against scipy's DOP853 on the print
 contact path (tests/references.py: based_circle_path, based_eight, geodesic), and the plans certified by the
 same independent integration."""
 
+import json
 import math
 
 import numpy as np
@@ -16,6 +17,7 @@ from rollplan.planners.geometric.basepoint import (
     along,
     arc_element,
     arc_piece,
+    beside,
     leaf_bound,
     polar_distance,
     solve_leg,
@@ -69,6 +71,16 @@ def test_arc_matches_printed_equations_and_its_length():
     assert math.isclose(polar_distance(p, mid), 0.5 * polar_distance(p, q), rel_tol=1e-12)
     assert math.isclose(polar_distance(mid, q), 0.5 * polar_distance(p, q), rel_tol=1e-12)
     assert arc_piece(p, p, "approach") is None
+
+
+def test_offset_base_points_lie_off_the_arc_by_the_offset():
+    p, q = (0.5, 0.3), (0.7, -2.0)
+    mid = along(p, q, 0.5)
+    for d in (-0.6, 0.3):
+        b = beside(p, q, 0.5, d)
+        assert math.isclose(polar_distance(mid, b), abs(d), rel_tol=1e-12)
+        assert math.isclose(polar_distance(p, b), polar_distance(q, b), rel_tol=1e-12)   # on the bisector
+    assert beside(p, q, 0.25, 0.0) == along(p, q, 0.25)
 
 
 def test_pole_limit_reproduces_the_pole_figure_eight():
@@ -193,3 +205,25 @@ def test_any_base_is_never_longer_than_the_pole_plan(seed):
     assert based.path_length <= pole.path_length
     assert based.certificate.residual <= TOL
     certified_by_reference(based, problem)
+
+
+@pytest.mark.slow
+def test_cli_plan_base_any(capsys, tmp_path):
+    from types import SimpleNamespace
+
+    from conftest import run
+
+    argv = ["plan", "--from", "0.3", "-0.2", "0.5", "-0.3", "0.2", "--to", "-0.5", "0.6", "--psi", "-0.7",
+            "--contact", "0.35", "0.25", "--k", "4"]
+    lengths = {}
+    for base in ("pole", "any"):
+        out = tmp_path / f"{base}.json"
+        code, text, err = run(capsys, *argv, "--base", base, "--json", str(out))
+        assert code == 0, err
+        d = json.loads(out.read_text())
+        lengths[base] = d["path_length"]
+    assert d["mode"] == "based" and "base point" in text and d["base"]["guarantee"] in ("best of starts", "local")
+    assert lengths["any"] < lengths["pole"]
+    pieces = [SimpleNamespace(**{n: s[n] for n in ("curve", "index", "params", "gamma")}) for s in d["segments"]]
+    final = ref.composed_final(pieces, np.array([0.3, -0.2, 0.5, -0.3, 0.2]), 4.0)
+    assert np.allclose(final, [-0.5, 0.6, -0.7, 0.35, 0.25], atol=TOL, rtol=0)

@@ -29,24 +29,38 @@ from ...problem import Problem, State, arrival_residual, check_reach, check_step
 from ...result import DEFAULT_SAMPLES, Certificate, CertifiedMotion, SolverStats, Trajectory, certify
 from ...robot import Robot
 from ..method import Method, renamed_option, with_steps
-from .basepoint import BasedLeg, along, arc_element, arc_piece, base_of, solve_leg
+from .basepoint import (
+    LEAF_MIN,
+    BasedLeg,
+    arc_element,
+    arc_piece,
+    base_of,
+    beside,
+    leaf_bound,
+    move_base,
+    solve_leg,
+)
 from .legs import intermediate_state, second_leg, two_leg_candidates
 from .maneuvers import StraightRoll
 from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
 from .refine import SOLVERS
 from .turn import CircleTurn, turn_in_place
 
-__all__ = ["LEGS", "BASES", "BASE_FRACTIONS", "IDENTITY_TOL", "ComposedPlan", "ComposedPlanner",
-           "default_composed_planner", "as_composed",
+__all__ = ["LEGS", "BASES", "BASE_FRACTIONS", "BASE_OFFSETS", "BASE_SOLVES", "BASE_MOVES", "IDENTITY_TOL",
+           "ComposedPlan", "ComposedPlanner", "default_composed_planner", "as_composed",
            "certify_path", "sample_path", "plan"]
 
 #: Policies for the legs of figure eights (docs/design/composition.md).
 LEGS = ("fallback", "shortest", "one", "two")
 #: Where the figure eights may be traced: ``"pole"`` (the south pole only) or ``"any"`` (docs/design/basepoint.md).
 BASES = ("pole", "any")
-#: Base points tried by ``base="any"`` besides the pole: fractions of the great-circle arc from the start contact
-#: point (0) to the goal contact point (1).
+#: Base points screened by ``base="any"`` besides the pole: fractions of the great-circle arc from the start
+#: contact point (0) to the goal contact point (1), and offsets [rad] perpendicular to it (:func:`.basepoint.beside`).
 BASE_FRACTIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
+BASE_OFFSETS = (-0.6, -0.3, 0.0, 0.3, 0.6)
+#: How many screened base points get the local solve, and how many of their solutions the moved base point.
+BASE_SOLVES = 3
+BASE_MOVES = 2
 #: A figure-eight target this close to zero (units of R and rad) is no motion at all.
 IDENTITY_TOL = 1e-12
 
@@ -315,37 +329,61 @@ class ComposedPlanner(Method):
         return based if based is not None else pole
 
     def _based(self, problem: Problem, t0: float, bound: float) -> ComposedPlan | None:
-        """The shortest certified plan with one leg of figure eights at a base point of :data:`BASE_FRACTIONS`
-        shorter than ``bound`` [length unit], or None (docs/design/basepoint.md)."""
+        """The shortest certified plan with one leg of figure eights at a base point off the pole shorter than
+        ``bound`` [length unit], or None (docs/design/basepoint.md).
+
+        Every base point of :data:`BASE_FRACTIONS` x :data:`BASE_OFFSETS` with ``steps`` and ``steps + 1``
+        figure eights is screened by the length of the pole plan for its target (the complete pole search); the
+        :data:`BASE_SOLVES` best get the local solve at that base point, the :data:`BASE_MOVES` shortest of those
+        the joint local solve that moves the base point too (:func:`.basepoint.move_base`); the results are
+        certified shortest first.
+        """
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
-        k, steps, R = problem.k, problem.steps, problem.radius
+        k, R = problem.k, problem.radius
         if arrival_residual(start, goal) <= IDENTITY_TOL:
             return None
         cs, cg = base_of(start.u_o, start.v_o), base_of(goal.u_o, goal.v_o)
         move = relative(start[:3], goal[:3])
-        found, tried = [], []
+        screened, seen = [], set()
         for f in BASE_FRACTIONS:
-            cb = along(cs, cg, f)
-            if cb[0] == 0.0:
-                continue   # the pole: the "pole" plan
-            first, last = arc_piece(cs, cb, "approach"), arc_piece(cb, cg, "departure")
+            for d in BASE_OFFSETS:
+                cb = beside(cs, cg, f, d)
+                key = (round(cb[0], 12), round(math.cos(cb[1]), 12), round(math.sin(cb[1]), 12))
+                if cb[0] == 0.0 or key in seen or leaf_bound(cb[0]) <= 10 * LEAF_MIN:
+                    continue
+                seen.add(key)
+                first, last = arc_piece(cs, cb, "approach"), arc_piece(cb, cg, "departure")
+                rolls = sum(p.length for p in (first, last) if p is not None)
+                if rolls * R >= bound:
+                    continue
+                target = compose(compose(inverse(arc_element(first, k)), move), inverse(arc_element(last, k)))
+                for n in (problem.steps, problem.steps + 1):
+                    try:
+                        carried = self._leg(Problem(tuple(target), k=k, steps=n))
+                    except NoPlanError:
+                        continue
+                    screened.append((rolls + carried.path_length / carried.radius, f, d, n, cb, first, last,
+                                     target, carried))
+        screened.sort(key=lambda c: c[0])
+        found, tried = [], []
+        for _, f, d, n, cb, first, last, target, carried in screened[:BASE_SOLVES]:
+            a0, b0 = carried.a / carried.radius, carried.b / carried.radius
+            guesses = [(a0, b0, carried.gamma - cb[1])] + [(a0, b0, o) for o in
+                                                           np.linspace(-math.pi, math.pi, 4, endpoint=False)]
+            leg = solve_leg(target, cb, k, n, guesses)
             rolls = sum(p.length for p in (first, last) if p is not None)
-            if rolls * R >= bound:
-                continue
-            target = compose(compose(inverse(arc_element(first, k)), move), inverse(arc_element(last, k)))
-            guesses = []
-            try:
-                carried = self._leg(Problem(tuple(target), k=k, steps=steps))
-                guesses.append((carried.a / carried.radius, carried.b / carried.radius, carried.gamma - cb[1]))
-            except NoPlanError:
-                carried = None
-            a0, b0 = guesses[0][:2] if guesses else (0.2, 0.2)
-            guesses += [(a0, b0, o) for o in np.linspace(-math.pi, math.pi, 4, endpoint=False)]
-            leg = solve_leg(target, cb, k, steps, guesses)
-            tried.append({"fraction": f, "found": leg is not None})
+            tried.append({"fraction": f, "offset": d, "steps": n, "found": leg is not None})
             if leg is not None:
-                found.append((rolls + leg.length, f, first, leg, last, target))
-        for length, f, first, leg, last, target in sorted(found, key=lambda c: c[0]):
+                found.append((rolls + leg.length, f, d, first, leg, last, target))
+        found.sort(key=lambda c: c[0])
+        for _, f, d, _, leg, _, target in found[:BASE_MOVES]:
+            moved = move_base(start, goal, cs, cg, k, leg)
+            if moved is not None:
+                leg, length = moved
+                first, last = arc_piece(cs, (leg.sigma, leg.beta), "approach"), arc_piece((leg.sigma, leg.beta), cg,
+                                                                                       "departure")
+                found.append((length, f, d, first, leg, last, target))
+        for length, f, d, first, leg, last, target in sorted(found, key=lambda c: c[0]):
             if length * R >= bound:
                 break
             pieces = tuple(p for p in [first, *leg.pieces(), last] if p is not None)
@@ -353,7 +391,8 @@ class ComposedPlanner(Method):
             if not cert.passed:
                 continue
             stats = SolverStats("ipopt", leg.guarantee, 0, time.perf_counter() - t0,
-                                {"mode": "based", "fraction": f, "bases": tried})
+                                {"mode": "based", "fraction": f, "offset": d, "screened": len(screened),
+                                 "bases": tried})
             return ComposedPlan(problem, "based", None, None, np.asarray(target, float), (), None, None, pieces,
                                 cert, stats, sum(p.length for p in pieces) * R, base=leg)
         return None
@@ -509,14 +548,15 @@ class ComposedPlanner(Method):
 
 
 @lru_cache(maxsize=8)
-def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback", base: str = "pole") -> ComposedPlanner:
-    """The shared composed planner of :func:`plan` for a root solver, a legs policy and a base policy."""
-    return ComposedPlanner(root_solver, legs=legs, base=base)
+def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback", base: str = "pole",
+                             refine: bool = False) -> ComposedPlanner:
+    """The shared composed planner of :func:`plan` for a root solver, a legs policy, a base policy and the polish."""
+    return ComposedPlanner(root_solver, legs=legs, base=base, refine=refine)
 
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
          all_solutions: bool = False, method: str | None = None, branch: int | None = None, start=None,
-         legs: str = "fallback", *, root_solver: str | None = None):
+         legs: str = "fallback", *, root_solver: str | None = None, base: str = "pole", refine: bool = False):
     """Plan an exact, dynamically realizable motion from ``start`` to ``target``, any two states.
 
     From rest at the origin to a goal at the south pole this is the paper's
@@ -550,6 +590,12 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
         ``"fallback"`` (default), ``"shortest"``, ``"one"`` or ``"two"`` (docs/design/composition.md).
     root_solver : str
         Root solver name from :data:`.refine.SOLVERS` (default ``"ipopt"``).
+    base : str
+        ``"pole"`` (default) or ``"any"``: also figure eights at base points off the pole, the shorter plan kept
+        (:class:`ComposedPlanner`).
+    refine : bool
+        Polish the plan into a shorter certified motion (:mod:`rollplan.planners.refined`): a
+        :class:`~rollplan.planners.refined.RefinedPlan`, or the plan with a note in ``stats.details["refine"]``.
 
     Returns
     -------
@@ -570,6 +616,8 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
     check_choice(name, root_solver, SOLVERS)
     check_choice("legs", legs, LEGS)
+    check_choice("base", base, BASES)
     problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
                       steps=steps)
-    return default_composed_planner(root_solver, legs).solve(problem, all_solutions, branch)
+    return default_composed_planner(root_solver, legs, base, check_flag("refine", refine)).solve(problem, all_solutions,
+                                                                                                branch)
