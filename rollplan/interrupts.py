@@ -48,14 +48,15 @@ program is the command, ignores SIGINT from then on (an ignored signal is left i
 
 from __future__ import annotations
 
+import contextvars
 import os
 import signal
 import sys
 import threading
 from contextlib import contextmanager
 
-__all__ = ["call", "call_in_thread", "abandoned", "Terminated", "terminate_as_interrupt", "guard_start_up",
-           "cli_follows", "end_start_up", "forget_unhandled", "settle"]
+__all__ = ["call", "call_in_thread", "call_in_threads", "abandoned", "Terminated", "terminate_as_interrupt",
+           "guard_start_up", "cli_follows", "end_start_up", "forget_unhandled", "settle"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -182,6 +183,40 @@ def call_in_thread(function, *args, **kwargs):
     if "error" in box:
         raise box["error"]
     return box["result"]
+
+
+def call_in_threads(functions) -> list:
+    """Each of ``functions`` (callables without arguments) run by its own helper thread, all at once, while this
+    (the main) thread waits for them: their results, in order. Ctrl-C (and SIGTERM) act at once as in
+    :func:`call_in_thread` (the helpers are left running, :func:`abandoned` is True); the first error of a
+    helper is raised when all have ended. Each runs in a copy of the caller's context (its progress reporting,
+    :mod:`rollplan.progress`). In another thread they run one after the other."""
+    functions = list(functions)
+    if threading.current_thread() is not threading.main_thread():
+        return [function() for function in functions]
+    boxes = [{} for _ in functions]
+
+    def run(function, box):
+        try:
+            box["result"] = function()
+        except BaseException as exc:  # noqa: BLE001 -- passed to the waiting thread
+            box["error"] = exc
+
+    helpers = [threading.Thread(target=contextvars.copy_context().run, args=(run, f, b), name=_HELPER, daemon=True)
+               for f, b in zip(functions, boxes)]
+    for helper in helpers:
+        helper.start()
+    try:
+        for helper in helpers:
+            while helper.is_alive():
+                helper.join(0.2)
+    except KeyboardInterrupt:
+        _State.abandoned = True
+        raise
+    for box in boxes:
+        if "error" in box:
+            raise box["error"]
+    return [box["result"] for box in boxes]
 
 
 def abandoned() -> bool:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -373,3 +374,74 @@ def test_multistart_corrects_only_the_best_start_and_keeps_the_best_certified_op
     brute = [measure(planner.finish(nlp).motion)["angular_velocity"] for planner, nlp in solved]
     assert c.collocation.costs["angular_velocity"] == pytest.approx(min(brute), rel=1e-12)
     assert c.result.stats.details["nlp_objective"] == min(nlp.objective for _, nlp in solved)
+
+
+def test_gauss_newton_integrates_sensitivities_only_where_it_steps():
+    """The sensitivities cost about ten times a plain CVODES integration and were computed for every trial,
+    also for the controls that end the correction. Now trials are integrated plainly and the sensitivities
+    only at the controls a step starts from. x1' = w, x2' = x1^2 with w constant on each of 4 intervals: the
+    corrected controls reach the end state by the closed form, and one sensitivity run per step is made."""
+    from rollplan.planners.collocation.transcription import gauss_newton, sensitivity_step
+
+    x, w, par = ca.SX.sym("x", 2), ca.SX.sym("w", 1), ca.SX.sym("par", 1)
+    xdot = ca.vertcat(w, x[0] ** 2)
+    counts = {"jacobians": 0, "plain": 0}
+
+    def counted(fn, key):
+        def call(**kw):
+            counts[key] += 1
+            return fn(**kw)
+        return call
+
+    step = counted(sensitivity_step("gn_test", x, w, par, xdot, ca.SX(0.0)), "jacobians")
+    plain = counted(sensitivity_step("gn_test", x, w, par, xdot, ca.SX(0.0), False), "plain")
+    N, final = 4, np.array([0.3, 0.2])
+    a, _, size, first = gauss_newton(step, np.zeros((N, 1)), np.zeros(2), final, np.zeros(1), 1e-12, 8, plain)
+    x1, x2, h = 0.0, 0.0, 1.0 / N     # closed form: x1 linear, x2 the integral of its square
+    for wi in a[:, 0]:
+        x2 += x1 ** 2 * h + x1 * wi * h ** 2 + wi ** 2 * h ** 3 / 3.0
+        x1 += wi * h
+    assert first > 0.1 and size <= 1e-12
+    assert np.abs([x1 - final[0], x2 - final[1]]).max() <= 1e-11
+    assert counts["jacobians"] % N == 0 and counts["plain"] % N == 0
+    steps = counts["jacobians"] // N
+    assert steps >= 1 and counts["plain"] // N >= steps + 1    # the first controls and one trial per step, plainly
+
+
+def test_starts_solved_in_parallel_are_those_solved_one_after_the_other():
+    """The starts of the multistart ran one after the other on one core; now by two workers at once, the second
+    with a twin of the NLP's IPOPT solver (its derivatives shared). The brute force: the same comparison with
+    one worker gives the same starts (names, statuses, NLP optima) and the same kept optimum."""
+    one = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=2, workers=1)
+    two = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=2, workers=2)
+    assert [(s.name, s.turns, s.status) for s in two.starts] == [(s.name, s.turns, s.status) for s in one.starts]
+    for a, b in zip(one.starts, two.starts):
+        assert (a.cost is None) == (b.cost is None)
+        if a.cost is not None:
+            assert b.cost == pytest.approx(a.cost, rel=1e-12)
+    assert two.result.guess == one.result.guess
+    assert np.abs(two.result.controls - one.result.controls).max() <= 1e-9
+    assert two.collocation.residual <= 1e-9 and one.collocation.residual <= 1e-9
+
+
+def test_twin_solver_solves_the_same_nlp_alone_and_at_the_same_time():
+    """A twin's IPOPT (derivatives shared with its planner) solves the NLP to the planner's own optimum, also while
+    the planner solves another start in another thread (each solver's statistics its own)."""
+    import threading
+
+    from rollplan.planners.collocation.rest import RestToRestPlanner
+    from rollplan.studies.comparison import branch_guess
+
+    planner = RestToRestPlanner(16)
+    twin = planner.twin()
+    problem = Problem((0.5, 0.3, 0.4), k=K)
+    guess, m = branch_guess(problem, planner)
+    alone = planner.solve_nlp(problem, guess, 1.0, m)
+    out = {}
+    worker = threading.Thread(target=lambda: out.update(twin=twin.solve_nlp(problem, guess, 1.0, m)))
+    worker.start()
+    out["planner"] = planner.solve_nlp(problem, guess, 1.0, m)
+    worker.join()
+    for r in out.values():
+        assert r.iterations == alone.iterations and r.status == alone.status
+        assert np.abs(r.x - alone.x).max() <= 1e-12

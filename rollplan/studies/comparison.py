@@ -32,8 +32,11 @@ timed GP branch I (the first ``branches`` admissible branches, shortest first) w
 from __future__ import annotations
 
 import math
+import os
+import threading
 import time
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 
@@ -60,7 +63,8 @@ from ..robot import Robot
 from ..timeseries import TimeSeries
 
 __all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "MINIMISED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side",
-           "Comparison", "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict",
+           "Comparison", "MAX_WORKERS", "multistart_workers",
+           "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict",
            "MinimumTime", "minimum_time"]
 
 #: Default contact bound of both planners: largest polar angle of the contact point [rad] (80 deg).
@@ -72,6 +76,8 @@ COMPARED_COSTS = ("path_length", "angular_velocity", "rotor_energy")
 #: :data:`~rollplan.execution.optimal_timing.TIMING_COSTS`).
 MINIMISED_COSTS = {"path_length": "path_energy", "angular_velocity": "angular_velocity",
                    "rotor_energy": "rotor_energy"}
+#: Most starts of the multistart solved at the same time (:func:`multistart_workers`).
+MAX_WORKERS = 2
 #: Keys of each side in the JSON of ``rollplan compare --json``.
 SIDE_KEYS = ("path_length", "effort", "residual", "solve_time_s", "contact_bound", "trajectory")
 #: Columns of each side's trajectory in that JSON.
@@ -285,7 +291,8 @@ def branch_guess(problem: Problem, planner: RestToRestPlanner, horizon: float = 
 def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None = None,
             radius: float | None = None, horizon: float = 1.0, cost: str = "angular_velocity",
             intervals: int = 100, degree: int = 3, scheme: str = "legendre",
-            contact_bound: float = CONTACT_BOUND, branches: int = 2, naive: bool = True) -> Comparison:
+            contact_bound: float = CONTACT_BOUND, branches: int = 2, naive: bool = True,
+            workers: int | None = None) -> Comparison:
     """Solve one problem by both methods, fairly (module docstring), and measure both.
 
     Parameters
@@ -309,6 +316,9 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
         GP branches timed and used as warm starts (>= 1).
     naive : bool
         Also start the collocation from the straight line at rest.
+    workers : int or None
+        Starts solved at the same time, each worker with its own IPOPT solver of the one NLP (None:
+        :func:`multistart_workers`).
 
     Raises
     ------
@@ -328,6 +338,7 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     contact_bound = check_range("contact_bound", contact_bound, 0.0, math.pi / 2, True, True)
     horizon = check_horizon(horizon)
     branches = check_whole("branches", branches, 1, 100)
+    workers = multistart_workers() if workers is None else check_whole("workers", workers, 1, 64)
     rob = _robot(problem, robot)
     check_intervals(intervals)
     nlp = _nlp_options(intervals, degree, scheme, MINIMISED_COSTS[cost], contact_bound)
@@ -348,7 +359,6 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     plan, gp_side, gp_path = timed[best_gp]
     gp_side = Side(gp_side.motion, gp_side.costs, gp_side.residual, gp_time)
 
-    starts, results = [], []
     turns_of = lambda q: _turns(q, problem)  # noqa: E731
     tr = planner.transcription
     candidates = [(f"gp{i}:{turns_of(p)}", turns_of(p), *_warm_samples(side.motion, problem.radius),
@@ -362,16 +372,10 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     t1 = time.perf_counter()
     naive_turns = sorted({m0, 0}, key=abs) if naive else []
     total = 3 + len(candidates) + len(naive_turns)
-    for name, m, t, x7, start_cost in candidates:
-        report("compare", 2 + len(starts), total, stage=f"collocation from {name}")
-        guess = guess_from_samples(tr, t, x7, name)
-        starts.append(_run(planner, problem, rob, guess, horizon, m, start_cost, results))
-    if naive:
-        for m in naive_turns:
-            report("compare", 2 + len(starts), total, stage=f"collocation from naive:{m}")
-            start, final = planner.boundary(problem, m)
-            starts.append(_run(planner, problem, rob, naive_guess(tr, start, final), horizon, m, None, results,
-                               f"naive:{m}"))
+    jobs = [(name, m, partial(guess_from_samples, tr, t, x7, name), start_cost)
+            for name, m, t, x7, start_cost in candidates]
+    jobs += [(f"naive:{m}", m, partial(naive_guess, tr, *planner.boundary(problem, m)), None) for m in naive_turns]
+    starts, results = _multistart(planner, problem, rob, horizon, jobs, total, workers)
     report("compare", total - 1, total, stage="correcting and certifying the best optimum")
     best, starts = _finish_best(planner, results, starts)
     coll_time = time.perf_counter() - t1
@@ -383,6 +387,47 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     return Comparison(problem, rob, float(horizon), cost, contact_bound, plan, gp_side, coll, best, tuple(starts),
                       tuple((p, s) for p, s, _ in timed),
                       timing_bound(gp_path, horizon, cost) if cost == "angular_velocity" else None)
+
+
+def multistart_workers() -> int:
+    """Starts of the multistart solved at the same time by default: one per core the process may use, at most
+    :data:`MAX_WORKERS` (each worker's solver shares the NLP's derivatives, and a start is a fraction of a
+    second, so more gain little)."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:      # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, MAX_WORKERS))
+
+
+def _multistart(planner, problem, robot, horizon, jobs, total, workers):
+    """IPOPT from every start of ``jobs`` (``(name, turns, make guess, start cost)``), by ``workers`` at once
+    (the first with ``planner``'s solver, the others with its twins): ``(starts, results)`` in the order of
+    ``jobs`` (see :func:`_run`)."""
+    pending, lock = iter(range(len(jobs))), threading.Lock()
+    workers = min(workers, len(jobs))
+
+    def work(own):
+        solver, done = None, []
+        while True:
+            with lock:
+                i = next(pending, None)
+            if i is None:
+                return done
+            if solver is None:     # a twin is built only by a worker that gets a start
+                solver = planner if own else planner.twin()
+            name, m, make_guess, start_cost = jobs[i]
+            report("compare", 2 + i, total, stage=f"collocation from {name}")
+            out = []
+            done.append((i, _run(solver, problem, robot, make_guess(), horizon, m, start_cost, out, name), out))
+
+    if workers == 1:
+        finished = work(True)
+    else:
+        finished = [d for w in interrupts.call_in_threads([partial(work, w == 0) for w in range(workers)])
+                    for d in w]
+    finished.sort(key=lambda item: item[0])
+    return [start for _, start, _ in finished], [r for _, _, out in finished for r in out]
 
 
 def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:

@@ -390,7 +390,7 @@ class CollocationPlanner(Method):
         states, colloc, controls = tr.unpack(np.array(sol["x"]).ravel())
         t0 = time.perf_counter()
         controls, objective, miss, uncorrected = gauss_newton(_newton_step(self.cost), controls, start, final, par,
-                                                 CORRECTION_TOL)
+                                                 CORRECTION_TOL, plain=_newton_step(self.cost, False))
         ver = self.verify(controls, problem.k, horizon, problem.robot, start)
         verify_time = time.perf_counter() - t0
         R = problem.radius
@@ -436,11 +436,11 @@ class CollocationPlanner(Method):
 
 
 @lru_cache(maxsize=8)
-def _newton_step(cost: Cost) -> ca.Function:
+def _newton_step(cost: Cost, jacobians: bool = True) -> ca.Function:
     """:func:`.transcription.sensitivity_step` of ``x' = T f(x, w)`` (normalized time), the quadrature ``T L``."""
     x, w, par = ca.SX.sym("x", 5), ca.SX.sym("w", 2), ca.SX.sym("par", N_PAR)
     xdot, L, _ = _point_function(cost)(x, w, par)
-    return sensitivity_step("collocation_newton", x, w, par, par[1] * xdot, par[1] * L)
+    return sensitivity_step("collocation_newton", x, w, par, par[1] * xdot, par[1] * L, jacobians)
 
 
 def _parameters(k, horizon, smoothing, robot) -> np.ndarray:

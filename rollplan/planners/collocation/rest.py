@@ -12,6 +12,7 @@ Problem, time scaling, costs, correction and certification: docs/design/collocat
 
 from __future__ import annotations
 
+import copy
 import logging
 import math
 import time
@@ -271,6 +272,17 @@ class RestToRestPlanner:
         self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, self.ipopt_options)
         self.build_time_s = time.perf_counter() - t0
 
+    def twin(self) -> RestToRestPlanner:
+        """This planner with its own IPOPT solver of the same NLP, its derivatives shared (not built again): for
+        solves in another thread at the same time (a solver's statistics are those of its last call)."""
+        s = self.solver
+        shared = {"grad_f": s.get_function("nlp_grad_f"), "jac_g": s.get_function("nlp_jac_g"),
+                  "hess_lag": s.get_function("nlp_hess_l")}
+        other = copy.copy(self)
+        other.solver = interrupts.call_in_thread(ca.nlpsol, s.name(), "ipopt", s.oracle(),
+                                                 {**self.ipopt_options, **shared})
+        return other
+
     def boundary(self, problem: Problem, turns: int) -> tuple[np.ndarray, np.ndarray]:
         """Start and final 7-states (units of R) at rest; InputError for a start or goal beyond the bound."""
         if not isinstance(problem, Problem):
@@ -423,14 +435,14 @@ def polar_angles(motion: TimeSeries) -> np.ndarray:
     return np.arccos(np.clip(np.cos(motion.state[:, 3]) * np.cos(motion.state[:, 4]), -1.0, 1.0))
 
 
-@lru_cache(maxsize=4)
-def _newton_step(cost: str) -> ca.Function:
+@lru_cache(maxsize=8)
+def _newton_step(cost: str, jacobians: bool = True) -> ca.Function:
     """:func:`.transcription.sensitivity_step` of the 7-state ODE, the quadrature the cost ``cost`` (0 for a
     name not in :data:`REST_COSTS`, e.g. minimum time)."""
     x, acc, par = ca.SX.sym("x", 7), ca.SX.sym("a", 2), ca.SX.sym("par", N_PAR)
     xdot, omega, _, torque = motion_function()(x, acc, par)
     quad = REST_COSTS[cost](xdot, omega, torque, par) if cost in REST_COSTS else ca.SX(0.0)
-    return sensitivity_step("rest_newton", x, acc, par, xdot, quad)
+    return sensitivity_step("rest_newton", x, acc, par, xdot, quad, jacobians)
 
 
 def correct(controls, start, final, par, cost: str = "path_energy", where: str = "rest-to-rest"):
@@ -450,7 +462,8 @@ def correct(controls, start, final, par, cost: str = "path_energy", where: str =
     SolverError
         ``"Correction_Failed"``: the end conditions are not met to :data:`TOLERANCE` after the steps.
     """
-    a, q, size, _ = gauss_newton(_newton_step(cost), controls, start, final, par, CORRECTION_TOL, _NEWTON_STEPS)
+    a, q, size, _ = gauss_newton(_newton_step(cost), controls, start, final, par, CORRECTION_TOL, _NEWTON_STEPS,
+                                 _newton_step(cost, False))
     if not size <= TOLERANCE:
         raise SolverError(f"the Newton correction of the collocation solution ({where}) leaves an end-condition "
                           f"error of {size:.2e} > {TOLERANCE:.0e}; hint: raise N or d", "Correction_Failed")
