@@ -95,7 +95,7 @@ def test_refine_and_all_solutions_do_not_combine():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("delay", [random.Random(25).uniform(0.0, 8.0) for _ in range(2)])
+@pytest.mark.parametrize("delay", [random.Random(25 + i).uniform(0.0, 8.0) for i in range(2)])
 def test_ctrl_c_during_plan_refine_acts_at_once(delay):
     """SIGINT at a random moment of `plan --refine` (NLP construction, IPOPT, correction, certificate): exit 130
     within a few seconds on a loaded machine, or the finished run's 0; one line, no traceback."""

@@ -98,8 +98,13 @@ class RefinedPlan(CertifiedMotion):
         return self.collocation.turns
 
     def sample(self, samples: int = DEFAULT_SAMPLES) -> Trajectory:
-        """The motion sampled in time (parameter ``"t"``), ``samples`` in all (:meth:`RestResult.sample`)."""
-        return self.collocation.sample(samples)
+        """The motion sampled in time (parameter ``"t"``), ``samples`` in all (:meth:`RestResult.sample`);
+        ``segment`` numbers the intervals of constant contact acceleration (a sample at a joint belongs to the
+        interval that ends there)."""
+        tr = self.collocation.sample(samples)
+        N = self.collocation.transcription.intervals
+        seg = np.clip(np.ceil(tr.s / self.collocation.horizon * N - 1e-9).astype(int) - 1, 0, N - 1)
+        return replace(tr, segment=seg)
 
 
 def _turns(plan) -> int:
