@@ -223,6 +223,7 @@ def test_cli_plan_base_any(capsys, tmp_path):
         d = json.loads(out.read_text())
         lengths[base] = d["path_length"]
     assert d["mode"] == "based" and "base point" in text and d["base"]["guarantee"] in ("best of starts", "local")
+    assert "screened by the pole search" in text and "not a complete search" in text
     assert lengths["any"] < lengths["pole"]
     pieces = [SimpleNamespace(**{n: s[n] for n in ("curve", "index", "params", "gamma")}) for s in d["segments"]]
     final = ref.composed_final(pieces, np.array([0.3, -0.2, 0.5, -0.3, 0.2]), 4.0)

@@ -368,6 +368,15 @@ def test_samples_are_checked_before_planning(tmp_path):
     assert out == "" and not (tmp_path / "f.json").exists()
 
 
+def test_samples_cover_the_pieces_of_base_any(tmp_path):
+    """With --base any a plan of one leg may have n + 1 figure eights between two rolls: 2 (n + 1) + 2 pieces,
+    more than --legs one allows at the pole; a --samples too small for it is refused before planning."""
+    code, out, err = cli(tmp_path, "plan", "--from", "0", "0", "0", "0.5", "-0.3", "--to", "0.8", "0.2", "--contact",
+                         "-0.4", "0.4", "--legs", "one", "--base", "any", "--samples", "6", "--json", "f.json")
+    assert code == 2 and one_line(err) and "--samples 6" in err and ">= 7" in err, err
+    assert out == "" and not (tmp_path / "f.json").exists()
+
+
 @pytest.mark.slow
 def test_default_samples_serve_the_largest_steps(tmp_path):
     """The default --samples serves --steps 1000 (2000 did not: a plan of 1000 figure eights has 2000 pieces,

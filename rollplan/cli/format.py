@@ -68,6 +68,9 @@ def fmt_solver(stats) -> str:
         return "none needed: the rolls alone, in closed form"
     if stats.method == "brentq":
         return f"circles of the turn by a scalar root (brentq); {stats.time_s * 1e3:.1f} ms"
+    if d.get("mode") == "based":
+        return (f"{d['screened']} base point(s) screened by the pole search, {len(d['bases'])} solved locally by "
+                f"{stats.method} ({stats.status}; not a complete search); {stats.time_s * 1e3:.1f} ms")
     parts = []
     if "branches" in d:
         parts.append(f"exact search of (32)-(33): {d['branches']} branch(es) searched, {d['roots']} root(s) "
