@@ -608,6 +608,22 @@ def section_budgets(ctx):
             f"{coll['median_s']:.3f} s", _status(coll["met"]))
     else:
         add("4", "collocation", "not run", "n/a")
+    peer = done.get("section_peer", {}).get("summary")
+    if peer:
+        add("28", f"rest-to-rest N = {peer['N']} >= {peer['budget']:g}x faster than rockit, optima within 1e-6",
+            f"{peer['speedup']:.2f}x wall, {peer['speedup_cpu']:.2f}x CPU (medians, same run); optima differ by "
+            f"{peer['relative_difference']:.1e}",
+            _status(peer["speedup"] >= peer["budget"] and peer["relative_difference"] <= 1e-6))
+    else:
+        add("28", "collocation vs rockit", "not run", "n/a")
+    comp = done.get("section_compare", {}).get("summary")
+    if comp:
+        add("28", f"`rollplan compare`{'' if comp.get('default', True) else ' --intervals 20'} <= "
+            f"{comp['budget_s']:g} s (idle)",
+            f"{comp['median_s']:.2f} s wall, {comp['cpu_median_s']:.2f} s CPU", _status(comp["median_s"]
+                                                                                       <= comp["budget_s"]))
+    else:
+        add("28", "compare wall time", "not run", "n/a")
     c = done.get("section_c_planner", {}).get("summary")
     if c and "skipped" not in c:
         worst = max(c["c_us_per_plan"], c["c_us_per_plan_same_k"])
@@ -681,7 +697,11 @@ def section_peer(ctx):
                      f"{r['peer_iterations']}", "build rollplan [s]": r["build_s"],
                      "first solve rockit (build + solve) [s]": r["peer_first_s"],
                      "solve rollplan, median [s]": r["solve_median_s"],
-                     "solve rockit, median [s]": r["peer_solve_median_s"]})
+                     "solve rockit, median [s]": r["peer_solve_median_s"],
+                     "speed-up (rockit / rollplan)": r["peer_solve_median_s"] / r["solve_median_s"],
+                     "solve CPU rollplan / rockit, median [s]": f"{r['solve_cpu_median_s']:.3f} / "
+                     f"{r['peer_solve_cpu_median_s']:.3f}",
+                     "speed-up in CPU time": r["peer_solve_cpu_median_s"] / r["solve_cpu_median_s"]})
     notes = [f"k = {K}, T = 1 s, cost angular_velocity, contact bound 80 deg, Legendre d = 3; both IPOPT with the same "
              "options (the planner's ipopt_options: tol 1e-9, MUMPS ordered by minimum degree), from the same guess "
              "(naive: the straight line at rest; gp: the shortest geometric-"
@@ -691,11 +711,57 @@ def section_peer(ctx):
              f"median of {repeats + 1} (rollplan) and {repeats} (rockit, after the first) solves; rockit's include "
              "its Opti bookkeeping per solve. Build: rollplan's NLP and solver construction; rockit's first solve "
              "includes its transcription and the solver's construction."]
+    summary = None
     if rows:
         worst = max(r["relative difference"] for r in rows)
         notes.append(f"Largest relative difference of the optima: {worst:.1e} "
                      f"({'within' if worst <= 1e-6 else 'NOT within'} 1e-6).")
-    return {"title": title, "rows": rows, "notes": notes}
+        main_row = rows[-1]     # N = 100, d = 3 (the first row alone with --quick)
+        summary = {"N": main_row["N"], "speedup": main_row["speed-up (rockit / rollplan)"],
+                   "speedup_cpu": main_row["speed-up in CPU time"],
+                   "relative_difference": worst, "budget": BUDGET_PEER_SPEEDUP}
+        met = "met" if summary["speedup"] >= BUDGET_PEER_SPEEDUP else "NOT met"
+        notes.append(f"Speed-up of rollplan over rockit on N = {main_row['N']}: "
+                     f"{summary['speedup']:.2f}x in wall time, "
+                     f"{summary['speedup_cpu']:.2f}x in CPU time (budget >= {BUDGET_PEER_SPEEDUP:g}x: {met}; "
+                     "both medians measured in this run, side by side; CPU time is the steadier measure on a loaded "
+                     "machine).")
+    return {"title": title, "rows": rows, "notes": notes, "summary": summary}
+
+
+#: Issue 28: rollplan's rest-to-rest solve at least this many times faster than rockit's, same OCP, same run.
+BUDGET_PEER_SPEEDUP = 1.5
+#: Issue 28: wall time of the default ``rollplan compare`` on an idle machine [s].
+BUDGET_COMPARE_S = 3.0
+#: The command timed by :func:`section_compare` (the default comparison: N = 100, d = 3, 2 branches, 6 starts).
+COMPARE_ARGS = ["compare", "--to", "0.5", "0.3"]
+
+
+def section_compare(ctx):
+    """Wall and CPU time of the whole default ``rollplan compare`` (a fresh process: imports, the NLP's
+    construction, the GP branches, the multistart, the correction and the certificate of the best start)."""
+    args = COMPARE_ARGS + (["--intervals", "20"] if ctx["quick"] else [])    # --quick: a smoke test, small N
+    exe = shutil.which("rollplan", path=os.path.dirname(sys.executable))
+    cmd = [exe, *args] if exe else [sys.executable, "-m", "rollplan.cli", *args]
+    walls, cpus = [], []
+    for _ in range(1 if ctx["quick"] else 3):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.perf_counter()
+        subprocess.run(cmd, capture_output=True, check=True)
+        walls.append(time.perf_counter() - t0)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpus.append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+    m = {"median_s": statistics.median(walls), "cpu_median_s": statistics.median(cpus), "budget_s": BUDGET_COMPARE_S,
+         "load_average": list(os.getloadavg()), "cores": os.cpu_count()}
+    m["default"] = not ctx["quick"]
+    rows = [{"command": "rollplan " + " ".join(args), "runs": len(walls),
+             "wall median [s]": m["median_s"], "wall min [s]": min(walls), "CPU median [s]": m["cpu_median_s"],
+             f"budget <= {BUDGET_COMPARE_S:g} s (idle)": _status(m["median_s"] <= BUDGET_COMPARE_S)}]
+    notes = ["CPU: user + system time of the process and its threads (the starts are solved by two workers "
+             "when two cores are free, so on an idle machine the wall time is below the CPU time). "
+             f"Load average at the end {', '.join(f'{x:.2f}' for x in m['load_average'])} on {m['cores']} cores."]
+    return {"title": "`rollplan compare`: the default comparison, whole command", "rows": rows, "notes": notes,
+            "summary": m}
 
 
 #: The benchmark, in order. Append new sections here; :func:`section_budgets` reads the others' summaries and
@@ -704,6 +770,7 @@ SECTIONS = [section_plan, section_cold, section_high_k, section_step_map, sectio
             section_memory, section_profile,
             section_batch, section_budgets]
 SECTIONS.insert(SECTIONS.index(section_collocation) + 1, section_peer)
+SECTIONS.insert(SECTIONS.index(section_peer) + 1, section_compare)
 
 
 # ----------------------------------------------------------------------------- report

@@ -306,3 +306,15 @@ def test_a_ctrl_c_after_the_command_finished_keeps_its_exit_status(tmp_path):
         "sys.exit(status)\n"))
     assert proc.returncode == 0, (proc.returncode, proc.stderr)
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.slow
+def test_ctrl_c_while_the_multistart_workers_solve_exits_at_once():
+    """The starts of `compare` are solved by two worker threads, in which IPOPT sees no signal; the main thread
+    waits for them and takes Ctrl-C: exit 130 within a second (two on a loaded machine), one line, the workers
+    left to the process's end."""
+    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3"], 0.3,
+                                              wait_for="collocation from")
+    assert code == 130, err
+    assert elapsed < 2.0, (elapsed, err)
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"

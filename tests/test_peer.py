@@ -66,3 +66,14 @@ def test_rockit_gets_the_planners_ipopt_options(monkeypatch):
     rockit_solve(planner, problem, guess)
     assert seen == [("ipopt", {**planner.ipopt_options, "expand": True})]
     assert planner.ipopt_options["ipopt.mumps_pivot_order"] == 0
+
+
+def test_peer_times_both_solves_in_cpu_time_too():
+    """On a loaded machine the wall times of one run swing by 2x and their ratio with them: the comparison now
+    measures the CPU time of every timed solve of both sides as well (the process's time: rockit's Python
+    bookkeeping counts, rollplan's correction does not, as in the wall times)."""
+    c = peer_rest_to_rest(Problem((-0.4, 0.4, 1.0), k=K), "naive", intervals=16, repeats=1)
+    assert len(c.solve_cpu_s) == 2 and len(c.peer.solve_cpu_s) == 1 and len(c.solve_s) == 2
+    row = c.row()
+    assert 0.0 < row["solve_cpu_median_s"] < float("inf") and 0.0 < row["peer_solve_cpu_median_s"] < float("inf")
+    assert c.relative_difference < 1e-6

@@ -22,6 +22,22 @@ def test_benchmark_script_runs(tmp_path):
     assert (tmp_path / "benchmarks.json").stat().st_size > 0
 
 
+@pytest.mark.slow
+def test_benchmark_has_the_peer_ratio_and_the_compare_time(tmp_path):
+    """Issue 28's sections: the speed-up of the rest-to-rest collocation over rockit (wall and CPU time, the optima's
+    difference) and the wall time of `rollplan compare`, each with its budget row."""
+    script = Path(__file__).resolve().parent.parent / "scripts" / "benchmark.py"
+    subprocess.run([sys.executable, str(script), "--quick", "--only", "peer", "compare", "--out-dir", str(tmp_path)],
+                   check=True, capture_output=True, timeout=900)
+    report = json.loads((tmp_path / "benchmarks.json").read_text())
+    sections = {sec["function"]: sec for sec in report["sections"]}
+    peer, comp = sections["section_peer"]["summary"], sections["section_compare"]["summary"]
+    assert peer["speedup"] > 0 and peer["speedup_cpu"] > 0 and peer["relative_difference"] <= 1e-6
+    assert comp["median_s"] > 0 and comp["cpu_median_s"] > 0
+    budgets = [row["budget"] for row in sections["section_budgets"]["rows"]]
+    assert any("faster than rockit" in b for b in budgets) and any("`rollplan compare`" in b for b in budgets)
+
+
 def run_script(name: str, out_dir, *args: str, timeout: float = 900) -> None:
     """Run scripts/NAME with ``args`` and ``--out-dir out_dir``; fails on a nonzero exit."""
     script = Path(__file__).resolve().parent.parent / "scripts" / name

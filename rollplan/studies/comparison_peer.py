@@ -100,6 +100,8 @@ class PeerResult:
     solve_s: list
     residual: float
     costs: dict
+    #: CPU times of the repeated solves [s] (the process's, so also rockit's Python bookkeeping).
+    solve_cpu_s: tuple = ()
 
 
 def _guess_function(guess: Guess, transcription, horizon: float) -> ca.Function:
@@ -158,16 +160,17 @@ def rockit_solve(planner: RestToRestPlanner, problem: Problem, guess: Guess, hor
     ocp.solver("ipopt", {**planner.ipopt_options, "expand": True})
 
     def solve():
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         try:
             sol = interrupts.call(ocp.solve)
         except RuntimeError as exc:
             raise SolverError(f"rockit/IPOPT did not solve the rest-to-rest problem: {exc}",
                               "rockit_failed") from None
-        return sol, time.perf_counter() - t0
+        return sol, time.perf_counter() - t0, time.process_time() - c0
 
-    sol, first = solve()
-    times = [solve()[1] for _ in range(repeats)]
+    sol, first, _ = solve()
+    timed = [solve()[1:] for _ in range(repeats)]
+    times = [t for t, _ in timed]
     controls = np.asarray(sol.sample(a, grid="control")[1], float)[:-1].reshape(tr.intervals, 2)
     controls = correct(controls * horizon ** 2, start, final, rest_parameters(problem.k, 1.0, robot), planner.cost,
                        "rockit's")[0] / horizon ** 2
@@ -177,7 +180,7 @@ def rockit_solve(planner: RestToRestPlanner, problem: Problem, guess: Guess, hor
         raise SolverError(f"rockit's solution misses the goal by {residual:.2e} when integrated by CVODES",
                           "Verification_Failed")
     return PeerResult(float(sol.value(ocp.objective)), controls, int(sol.stats["iter_count"]), first, times,
-                      float(residual), measure(motion))
+                      float(residual), measure(motion), tuple(c for _, c in timed))
 
 
 @dataclass(frozen=True)
@@ -200,7 +203,7 @@ class PeerComparison:
     build_s : float
         rollplan's NLP and solver construction [s].
     solve_s : list of float
-        rollplan's IPOPT wall times of ``repeats + 1`` solves [s].
+        rollplan's IPOPT wall times of ``repeats + 1`` solves [s] (the first with any backed-off solve).
     peer : PeerResult
     residual : float
         rollplan's certified residual.
@@ -220,6 +223,8 @@ class PeerComparison:
     solve_s: list
     peer: PeerResult
     residual: float
+    #: rollplan's CPU times of the same solves (IPOPT from the guess, without the correction) [s].
+    solve_cpu_s: tuple = ()
 
     def row(self) -> dict:
         """A flat dict of the numbers (for tables and JSON): medians of the solve times."""
@@ -230,6 +235,8 @@ class PeerComparison:
                 "iterations": self.iterations, "peer_iterations": p.iterations, "build_s": self.build_s,
                 "peer_first_s": p.first_s, "solve_median_s": statistics.median(self.solve_s),
                 "peer_solve_median_s": statistics.median(p.solve_s) if p.solve_s else p.first_s,
+                "solve_cpu_median_s": statistics.median(self.solve_cpu_s) if self.solve_cpu_s else math.nan,
+                "peer_solve_cpu_median_s": statistics.median(p.solve_cpu_s) if p.solve_cpu_s else math.nan,
                 "residual": self.residual, "peer_residual": p.residual}
 
 
@@ -255,12 +262,15 @@ def peer_rest_to_rest(problem: Problem, guess: Guess | str = "naive", horizon: f
         guess = naive_guess(planner.transcription, *planner.boundary(problem, turns))
     elif not isinstance(guess, Guess):
         raise InputError(f"guess = {guess!r:.40} is not allowed: give 'naive', 'gp' or a Guess")
-    ours = [planner.solve(problem, guess, horizon, turns, robot) for _ in range(check_whole("repeats", repeats, 0,
-                                                                                            1000) + 1)]
+    nlps, cpu = [], []
+    for _ in range(check_whole("repeats", repeats, 0, 1000) + 1):
+        c0 = time.process_time()
+        nlps.append(planner.solve_nlp(problem, guess, horizon, turns, robot))
+        cpu.append(time.process_time() - c0)
+    r = planner.finish(nlps[0])     # the repeats reach the same NLP solution: the first is corrected and certified
     peer = rockit_solve(planner, problem, guess, horizon, turns, robot, repeats)
-    r = ours[0]
     nlp = r.stats.details["nlp_objective"]
     return PeerComparison(tuple(problem.goal)[:3], planner.transcription.intervals, planner.transcription.degree,
                           guess.name, nlp, peer.objective, abs(peer.objective - nlp) / abs(nlp),
                           float(np.abs(peer.controls - r.controls).max()), r.stats.iterations, peer.iterations, build,
-                          [o.stats.time_s for o in ours], peer, r.residual)
+                          [r.stats.time_s] + [n.solve_time_s for n in nlps[1:]], peer, r.residual, tuple(cpu))
