@@ -34,7 +34,8 @@ def _print_refined(p, unit) -> None:
         return
     det = p.stats.details
     print(f"  refined       path length {num(p.path_length)} {unit} (unrefined {num(p.unrefined_length)} {unit}; "
-          f"{p.path_length / p.unrefined_length:.3f} x): minimum-path-length collocation warm-started by the plan, "
+          f"{p.path_length / p.unrefined_length:.3f} x): minimum-path-length collocation warm-started by the plan "
+          "and straight lines, "
           f"{det['intervals']} intervals of constant contact accelerations, polar angle <= "
           f"{num(round(math.degrees(det['contact_bound']), 6))} deg")
     print(f"  final         {fmt_state(p.final, unit, wrapped=True)}")
@@ -115,8 +116,9 @@ def register(sub) -> None:
     p.add_argument("--refine", action="store_true",
                    help="polish the plan into a shorter certified motion: a minimum-path-length optimal-control solve "
                         "(rest to rest, 60 intervals of constant contact accelerations, polar angle <= 80 deg) "
-                        "warm-started by the plan; the plan is kept, with a note, when that is not shorter or not "
-                        "certified (seconds; not with --all, --duration, --timing, --plot, --timing-plot)")
+                        "warm-started by the plan and straight lines; the plan is kept, with a note, when that is not "
+                        "shorter or not certified (seconds; not with --all, --duration, --timing, --plot, "
+                        "--timing-plot)")
     p.add_argument("--json", metavar="FILE", help=JSON_HELP.format("the plan"))
     p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere (from below) and the "
                    "plane, and psi along it (with --duration or --timing: omega, rotor rates and torques in time)")
