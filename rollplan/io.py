@@ -17,13 +17,14 @@ from .inputs import load_json, show_path
 from .outputs import check_figure_path, check_writable, save_figure, write_atomic, write_json
 from .planners.geometric.composed import as_composed
 from .planners.geometric.planner import Plan
+from .planners.refined import RefinedPlan
 from .problem import State, check_contact
 from .robot import Robot, robot_from_mapping
 from .version import __version__
 
 __all__ = ["check_writable", "check_figure_path", "write_atomic", "write_json", "save_figure", "plan_to_dict",
-           "UNITS", "tagged", "composed_to_dict", "route_to_dict", "motion_to_dict", "RotorPlan", "load_rotor_plan",
-           "MAX_PLAN_BYTES", "MAX_PLAN_SAMPLES", "PLAN_FILE_VERSIONS", "check_plan_data"]
+           "UNITS", "tagged", "composed_to_dict", "refined_to_dict", "route_to_dict", "motion_to_dict", "RotorPlan",
+           "load_rotor_plan", "MAX_PLAN_BYTES", "MAX_PLAN_SAMPLES", "PLAN_FILE_VERSIONS", "check_plan_data"]
 
 #: Largest plan file read back (a plan of 1000 steps timed with 10^6 samples fits).
 MAX_PLAN_BYTES = 1 << 30
@@ -128,6 +129,33 @@ def composed_to_dict(plan, traj=None, include_alternatives=True) -> dict:
     alternatives = getattr(plan, "alternatives", ())
     if include_alternatives and alternatives:
         d["alternatives"] = [plan_to_dict(p, None, False) for p in alternatives]
+    return d
+
+
+def refined_to_dict(plan, traj=None) -> dict:
+    """A plan of ``rollplan plan --refine`` as its JSON object.
+
+    Polished (a :class:`~rollplan.planners.refined.RefinedPlan`): ``mode`` ``"refined"``, the states, certificate,
+    ``path_length`` and ``trajectory`` (in time, ``t``) of the polished motion, ``refined`` (its length, the
+    unrefined length, whole turns of psi, intervals, contact bound) and ``unrefined`` (the plan it was polished
+    from, as :func:`composed_to_dict`). Not polished: :func:`composed_to_dict` of the plan with ``refined``
+    null and ``refine_note`` the reason. Both carry ``unrefined_length``.
+    """
+    if not isinstance(plan, RefinedPlan):
+        d = composed_to_dict(plan, traj)
+        d.update(refined=None, refine_note=plan.stats.details.get("refine", ""), unrefined_length=plan.path_length)
+        return d
+    det = plan.stats.details
+    d = {"k": plan.k, "radius": plan.radius, "steps": plan.steps, "start": plan.problem.start.as_dict(),
+         "goal": plan.goal.as_dict(), "mode": plan.mode, "final": plan.final.as_dict(), "residual": plan.residual,
+         "certificate": plan.certificate.as_dict(), "path_length": plan.path_length,
+         "unrefined_length": plan.unrefined_length, "solver": plan.stats.as_dict(),
+         "refined": {"path_length": plan.path_length, "unrefined_length": plan.unrefined_length, "turns": plan.turns,
+                     "intervals": det["intervals"], "contact_bound": det["contact_bound"],
+                     "time_s": det["refine_time_s"]},
+         "unrefined": composed_to_dict(plan.unrefined, None, False)}
+    if traj is not None:
+        d["trajectory"] = traj.as_dict()
     return d
 
 

@@ -11,7 +11,11 @@ Every number is a measurement of this run:
 * turning in place for several psi and k;
 * a route of five waypoints;
 * the JSON trajectory replayed by DOP853 along its sampled contact path, for several sample counts;
-* the figure of a composed plan, results/composed.png.
+* the figure of a composed plan, results/composed.png;
+* lengths against optimal control: for the issue's two pairs and random pairs (contact points up to 60 deg from
+  the pole, k in [1.5, 8]), today's pole plan, one leg at any base point (``base="any"``), ``--refine``
+  (``refine=True``) and a multi-start optimal-control reference solved on the printed (15), (16), (20) by
+  ``tests/references.py`` (multiple shooting, RK4; not the project's collocation), with times.
 
 Run: ``python scripts/reconfiguration.py [--out-dir results] [--quick]``.
 """
@@ -160,6 +164,56 @@ def route():
             "waypoint_residuals": [float(v) for v in r.waypoint_residuals], "dop853_worst_waypoint": worst}
 
 
+#: The issue's two pairs (start, goal, k): the README example and a second one.
+ISSUE_PAIRS = [((0.0, 0.0, 0.0, 0.5, -0.3), (0.8, 0.2, 1.0, -0.4, 0.4), 2.5),
+               ((0.3, -0.2, 0.5, -0.3, 0.2), (-0.5, 0.6, -0.7, 0.35, 0.25), 4.0)]
+
+
+def timed(f):
+    t0 = time.perf_counter()
+    out = f()
+    return out, time.perf_counter() - t0
+
+
+def against_optimal_control(quick):
+    """Lengths and times of the pole plan, base="any", refine=True and the optimal-control reference."""
+    rng = np.random.default_rng(25)
+    pairs = list(ISSUE_PAIRS[:1] if quick else ISSUE_PAIRS)
+    for _ in range(0 if quick else 5):
+        start = (*rng.uniform(-1.0, 1.0, 2), rng.uniform(-np.pi, np.pi),
+                 *contact_at(rng.uniform(0, math.radians(60.0)), rng.uniform(-np.pi, np.pi)))
+        goal = (*rng.uniform(-1.0, 1.0, 2), rng.uniform(-np.pi, np.pi),
+                *contact_at(rng.uniform(0, math.radians(60.0)), rng.uniform(-np.pi, np.pi)))
+        pairs.append((tuple(float(v) for v in start), tuple(float(v) for v in goal), float(rng.uniform(1.5, 8.0))))
+    pole, based, refined = ComposedPlanner(), ComposedPlanner(base="any"), ComposedPlanner(refine=True)
+    pole.solve(Problem((0.0, 1.0, 0.0), k=2.5))   # build once
+    rows = []
+    for i, (start, goal, k) in enumerate(pairs):
+        problem = Problem(goal, start=start, k=k)
+        row = {"start": start, "goal": goal, "k": k}
+        p, row["pole_time_s"] = timed(lambda: pole.solve(problem))
+        row["pole"] = p.path_length
+        try:
+            q, row["based_time_s"] = timed(lambda: based.solve(problem))
+            row.update(based=q.path_length, based_mode=q.mode)
+        except rollplan.NoPlanError as exc:
+            row["based_error"] = str(exc)
+        r, row["refine_time_s"] = timed(lambda: refined.solve(problem))
+        row.update(refine=r.path_length, refine_certificate=r.residual, refined=r.mode == "refined",
+                   refine_note=r.stats.details.get("refine"))
+        if r.mode == "refined":
+            tr = r.sample(4001)
+            out = ref.replay(tr.u_o, tr.v_o, tr.segment, tr.state[0, :3], k)
+            row["refine_replay"] = residual(np.r_[out[-1], tr.state[-1, 3:]], problem.goal)
+        (best, per_turn), row["ocp_time_s"] = timed(lambda: ref.optimal_control_length(
+            start, goal, k, turns=(-1, 0, 1) if quick else (-2, -1, 0, 1, 2)))
+        row.update(ocp=best, ocp_turns={str(m): v for m, v in per_turn.items()})
+        rows.append(row)
+        print(f"optimal control pair {i}: pole {row['pole']:.4f}, any base {row.get('based', float('nan')):.4f}, "
+              f"refined {row['refine']:.4f}, reference {best:.4f}", file=sys.stderr)
+    return rows
+
+
 def replay(p, samples):
     """Max |replayed - sampled| of (u_a, v_a, psi) and |replayed end - goal| (DOP853 along splines of the samples)."""
     tr = p.sample(samples)
@@ -178,7 +232,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     data = {"load_average_at_start": os.getloadavg()[0], "rolls": rolls(args.quick), "pairs": random_pairs(args.quick),
-            "turns": turns(args.quick), "route": route()}
+            "turns": turns(args.quick), "route": route(), "optimal_control": against_optimal_control(args.quick)}
     fig_plan = rollplan.plan((0.0, 0.0, 1.5, -0.4, 0.4), k=2.5, start=(0.0, 0.0, 0.0, 0.5, -0.3))
     data["figure"] = {"mode": fig_plan.mode, "length": fig_plan.path_length, "residual": fig_plan.residual,
                       "lengths": fig_plan.lengths()}
@@ -240,6 +294,38 @@ def report(d) -> str:
           f"`{ROUTE}` at k = 2.5: leg modes {', '.join(r['modes'])}; {r['length']:.4f} R; one-pass certificate "
           f"{r['certificate']:.1e}, worst waypoint residual {max(r['waypoint_residuals']):.1e}; DOP853 through the "
           f"whole route, worst waypoint {r['dop853_worst_waypoint']:.1e}; {r['time_s']:.2f} s."]
+    oc = d["optimal_control"]
+    L += ["", "## Lengths against optimal control", "",
+          "Contact path lengths [R] and wall times [s] of: today's default (*pole*: every leg of figure eights at "
+          "the south pole), one leg at any base point along the arc from the start to the goal contact point "
+          "(`base=\"any\"`), `--refine` (`refine=True`: the rest-to-rest collocation warm-started by the default "
+          "plan and by straight lines, N = 60, polar angle <= 80 deg, certified by CVODES), and a multi-start "
+          "optimal-control reference "
+          "(`tests/references.py`: (15), (16), (20) as printed, multiple shooting with RK4, N = 60, rest to rest, "
+          "polar angle <= 80 deg, minimum path energy, IPOPT from the straight line on each whole number of turns "
+          f"m in {{{', '.join(oc[0]['ocp_turns'])}}} of psi, the shortest kept). Pairs 1 and 2 are the issue's; the "
+          "others random (seed 25): positions in [-1, 1]^2 R, psi in [-pi, pi], both contact points up to 60 deg "
+          "from the pole, k in [1.5, 8]. *ratio* is the length over the reference's.", "",
+          "| pair | k | pole [R] | time | any base [R] | time | --refine [R] | time | reference [R] | time | "
+          "pole ratio | any-base ratio | --refine ratio | --refine certificate | --refine DOP853 replay |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for i, r in enumerate(oc, 1):
+        b = r.get("based", float("nan"))
+        L.append(f"| {i} | {r['k']:.3g} | {r['pole']:.4f} | {r['pole_time_s']:.2f} | {b:.4f} | "
+                 f"{r.get('based_time_s', float('nan')):.2f} | {r['refine']:.4f}{'' if r['refined'] else ' (kept)'} | "
+                 f"{r['refine_time_s']:.1f} | {r['ocp']:.4f} | {r['ocp_time_s']:.1f} | {r['pole'] / r['ocp']:.3f} | "
+                 f"{b / r['ocp']:.3f} | {r['refine'] / r['ocp']:.3f} | {r['refine_certificate']:.1e} | "
+                 f"{r.get('refine_replay', float('nan')):.1e} |")
+    worst = max(r["refine"] / r["ocp"] for r in oc)
+    L += ["", f"* `--refine` is at most {worst:.3f} x the reference's length over these pairs; it takes "
+          f"{min(r['refine_time_s'] for r in oc):.1f} to {max(r['refine_time_s'] for r in oc):.1f} s (the plan "
+          "included: IPOPT from the plan on its whole turns m of psi and on 0, and from the straight line on "
+          "m = -1, 0, 1, then the Gauss-Newton correction and the CVODES certificate of the best).",
+          "* *DOP853 replay*: the refined motion's 4001 samples, (15), (16), (20) integrated by DOP853 along cubic "
+          "splines of the sampled (u_o, v_o) alone, distance of the end to the goal."]
+    notes = [f"pair {i}: {r['refine_note']}" for i, r in enumerate(oc, 1) if not r["refined"]]
+    if notes:
+        L += ["* kept (not refined): " + "; ".join(notes)]
     f = d["figure"]
     L += ["", "## The figure and the trajectory replay", "",
           "`composed.png`: contact (0.5, -0.3) to (-0.4, 0.4), psi 0 to 1.5 at the same plane point, k = 2.5: "

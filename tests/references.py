@@ -32,6 +32,8 @@ corrected and said so), and is what the tests compare rollplan's symbolic model 
   :func:`polar_contact` -- (u_o, v_o) of a point given by polar angle and direction;
   :func:`composed_final` -- a composed motion integrated along its pieces (read from their curve names and
   parameters only); :func:`replay` -- (15), (16), (20) along a sampled contact path alone;
+  :func:`optimal_control_length` -- the shortest rest-to-rest motion found by optimal control on the printed
+  (15), (16), (20) (multiple shooting, RK4, IPOPT through CasADi; multistart over the whole turns of psi);
 * :func:`wrap` -- an angle reduced to (-pi, pi]; :func:`rotate` -- a plane vector turned;
   :func:`two_pi_fraction` -- 2 pi as an exact fraction to many digits (Chudnovsky's series in
   integer arithmetic).
@@ -748,3 +750,80 @@ def family_trace(name, a, b, k, gamma=0.0, x0=(0.0, 0.0, 0.0)):
         for piece in family_leaf(name, size, side):
             x = curve_leaf_end(lambda t, piece=piece: tuple(rz @ v for v in piece(t)), x, k)
     return x
+
+
+# ----------------------------------------------------------------------------- optimal control on (15), (16), (20)
+
+
+def printed_rates(x, acc, k):
+    """d/dt of (u_a, v_a, psi, u_o, v_o, u_o', v_o') in CasADi: (15), (16), (20) as printed (R = 1), the
+    accelerations ``acc``."""
+    import casadi as ca
+
+    psi, u, v, du, dv = x[2], x[3], x[4], x[5], x[6]
+    return ca.vertcat(-ca.cos(psi) * ca.cos(v) * du + ca.sin(psi) * dv,        # (15)
+                      ca.sin(psi) * ca.cos(v) * du + ca.cos(psi) * dv,         # (16)
+                      (1 - k) * ca.sin(v) * du + k * ca.tan(u) / ca.cos(v) * dv,  # (20)
+                      du, dv, acc[0], acc[1])
+
+
+#: The contact bound of :func:`optimal_control_length`: 80 deg from the south pole [rad].
+CONTACT_BOUND_80 = np.radians(80.0)
+
+
+def optimal_control_length(start, goal, k, turns=(-1, 0, 1), intervals=60, substeps=4, bound=CONTACT_BOUND_80):
+    """The shortest contact path [R] between the states ``start`` and ``goal`` (units of R) found by optimal control
+    on (15), (16), (20) as printed (:func:`printed_rates`): contact accelerations constant on ``intervals`` equal
+    intervals of [0, 1], rest at both ends, polar angle of the contact point at most ``bound`` at every node,
+    minimum path energy ``int |(u_a', v_a')|^2 dt`` (on a fixed horizon its minimizers are the shortest paths at
+    constant speed). Multiple shooting, ``substeps`` RK4 steps per interval, IPOPT from the straight line in the
+    state on each whole number of turns m of psi in ``turns``. Returns ``(shortest, {m: length or None})``,
+    the length the RK4 quadrature of the speed along the solution."""
+    import casadi as ca
+
+    x, a = ca.SX.sym("x", 7), ca.SX.sym("a", 2)
+    h = 1.0 / (intervals * substeps)
+
+    def f(z):
+        xdot = printed_rates(z, a, k)
+        return xdot, xdot[0] ** 2 + xdot[1] ** 2, ca.sqrt(xdot[0] ** 2 + xdot[1] ** 2 + 1e-300)
+
+    z, energy, length = x, 0.0, 0.0
+    for _ in range(substeps):   # RK4, the integrals by the same stages
+        k1, e1, l1 = f(z)
+        k2, e2, l2 = f(z + h / 2 * k1)
+        k3, e3, l3 = f(z + h / 2 * k2)
+        k4, e4, l4 = f(z + h * k3)
+        z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        energy += h / 6 * (e1 + 2 * e2 + 2 * e3 + e4)
+        length += h / 6 * (l1 + 2 * l2 + 2 * l3 + l4)
+    step = ca.Function("step", [x, a], [z, energy, length])
+    X, A = ca.SX.sym("X", 7, intervals + 1), ca.SX.sym("A", 2, intervals)
+    Z, E, L = step.map(intervals)(X[:, :-1], A)
+    g = [ca.vec(Z - X[:, 1:]), (ca.cos(X[3, :]) * ca.cos(X[4, :])).T]
+    solver = ca.nlpsol("reference", "ipopt", {"x": ca.veccat(X, A), "f": ca.sum2(E), "g": ca.vertcat(*g)},
+                       {"ipopt.print_level": 0, "print_time": False, "ipopt.max_iter": 500, "ipopt.tol": 1e-10})
+    ng = 7 * intervals
+    lbg = np.r_[np.zeros(ng), np.full(intervals + 1, np.cos(bound))]
+    ubg = np.r_[np.zeros(ng), np.full(intervals + 1, np.inf)]
+    lengths = {}
+    for m in turns:
+        x0 = np.r_[start, 0.0, 0.0]
+        x1 = np.r_[goal, 0.0, 0.0]
+        x1[2] += 2 * np.pi * m
+        lbx = np.full((7, intervals + 1), -np.inf)
+        ubx = np.full((7, intervals + 1), np.inf)
+        lbx[:, 0] = ubx[:, 0] = x0
+        lbx[:, -1] = ubx[:, -1] = x1
+        guess = x0[:, None] + (x1 - x0)[:, None] * np.linspace(0.0, 1.0, intervals + 1)
+        lb = np.r_[lbx.ravel(order="F"), np.full(2 * intervals, -np.inf)]
+        ub = np.r_[ubx.ravel(order="F"), np.full(2 * intervals, np.inf)]
+        sol = solver(x0=np.r_[guess.ravel(order="F"), np.zeros(2 * intervals)], lbx=lb, ubx=ub, lbg=lbg, ubg=ubg)
+        lengths[m] = None
+        if solver.stats()["success"]:
+            v = np.array(sol["x"]).ravel()
+            Xs = v[:7 * (intervals + 1)].reshape((7, intervals + 1), order="F")
+            As = v[7 * (intervals + 1):].reshape((2, intervals), order="F")
+            lengths[m] = float(np.sum(np.array(step.map(intervals)(Xs[:, :-1], As)[2])))
+    found = [v for v in lengths.values() if v is not None]
+    return (min(found) if found else np.inf), lengths

@@ -93,6 +93,8 @@ for _c in ("plan", "route"):
 _numbers("plan", "--from", 5, (["0", "0", "0", "2", "0"], None), (["1e300", "0", "0", "0", "0"], None))
 _numbers("plan", "--contact", 2, (["1.6", "0"], None), (["1.5", "1.5"], None))
 _cases("plan", "--all", (["=1"], None))
+_cases("plan", "--refine", (["=1"], None), (["--all"], "--all"), (["--duration", "5"], "--duration"),
+       (["--timing", "min-jerk"], "--timing"), (["--plot", "p.png"], "--plot"))
 _wholes("plan", "--branch", (["1" * 101], None), (["1_0"], None))
 _numbers("step", "--a", 1, (["0.9"], None), (["0"], None))
 _numbers("step", "--b", 1, (["0.9"], None), (["-0.1"], None))

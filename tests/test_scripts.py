@@ -69,6 +69,7 @@ def test_reconfiguration_script_runs(tmp_path):
     run_script("reconfiguration.py", tmp_path, "--quick")
     text = (tmp_path / "reconfiguration.md").read_text()
     assert "## Turning in place" in text and "DOP853" in text and "## A route of five waypoints" in text
+    assert "## Lengths against optimal control" in text and "--refine ratio" in text
     assert (tmp_path / "composed.png").stat().st_size > 0 and (tmp_path / "reconfiguration.json").stat().st_size > 0
 
 

@@ -2,23 +2,71 @@
 
 from __future__ import annotations
 
-from ...io import composed_to_dict
+import math
+
+from ...errors import InputError
+from ...io import composed_to_dict, refined_to_dict
 from ...planners import geometric, solve
+from ...planners.refined import RefinedPlan
 from ...problem import Problem
 from ..arguments import JSON_HELP, STEPS_HELP, add_target_options, number, whole
-from ..common import EXIT_OK, check_target
+from ..common import EXIT_OK, NORM, check_target, emit_json
 from ..format import fmt_all, fmt_composed, fmt_plan, fmt_solver, fmt_state, num
 from ..planning import add_timing_options, plan_inputs, stage, write_results
 
 
+def _check_refine(args) -> None:
+    """--refine returns one motion in time: it does not combine with --all, timing or plots."""
+    if not args.refine:
+        return
+    other = [flag for flag, given in (("--all", args.all), ("--duration", args.duration is not None),
+                                      ("--timing", args.timing is not None), ("--plot", args.plot is not None),
+                                      ("--timing-plot", args.timing_plot is not None)) if given]
+    if other:
+        raise InputError(f"--refine does not combine with {other[0]}: the polished motion is one certified motion "
+                         "in time, not closed-form pieces (plan without --refine for it)")
+
+
+def _print_refined(p, unit) -> None:
+    """The polish's lines: the polished motion, or why the plan was kept."""
+    if not isinstance(p, RefinedPlan):
+        print(f"  refined       none, the plan is kept ({p.stats.details.get('refine', '')})")
+        return
+    det = p.stats.details
+    print(f"  refined       path length {num(p.path_length)} {unit} (unrefined {num(p.unrefined_length)} {unit}; "
+          f"{p.path_length / p.unrefined_length:.3f} x): minimum-path-length collocation warm-started by the plan "
+          "and straight lines, "
+          f"{det['intervals']} intervals of constant contact accelerations, polar angle <= "
+          f"{num(round(math.degrees(det['contact_bound']), 6))} deg")
+    print(f"  final         {fmt_state(p.final, unit, wrapped=True)}")
+    print(f"  residual      {p.residual:.2e} ({NORM}, and the final contact rates; {p.certificate.method}, the whole "
+          "polished motion from the start state)")
+    print(f"  refine time   {num(round(det['refine_time_s'], 3))} s "
+          f"(the plan: {num(round(det['unrefined_time_s'], 3))} s)")
+
+
+def _write_refined(args, p, unit) -> None:
+    """--json of --refine (the polished motion has no plot or timing here)."""
+    if not args.json:
+        return
+    stage(args, "plan", "sampling")
+    traj = p.sample(args.samples)
+    stage(args, "plan", "writing JSON")
+    emit_json(args, refined_to_dict(p, traj), unit)
+
+
 def cmd_plan(args) -> int:
+    _check_refine(args)
     k, robot = plan_inputs(args)
     check_target(args, robot, args.start, args.contact)
     goal = (args.to[0], args.to[1], args.psi, args.contact[0], args.contact[1])
     stage(args, "plan", "planning")
     problem = Problem(goal, start=args.start, k=k, robot=robot, radius=args.radius)
     p = solve(problem, "geometric", root_solver=args.method, legs=args.legs, steps=args.steps, all_solutions=args.all,
-              branch=args.branch, base=args.base)
+              branch=args.branch, base=args.base, refine=args.refine)
+    refined = p
+    if isinstance(p, RefinedPlan):
+        p = p.unrefined
     unit = p.problem.unit
     g = p.goal
     composed = not isinstance(p, geometric.Plan)   # the paper's one-leg plan has a summary of its own
@@ -33,7 +81,11 @@ def cmd_plan(args) -> int:
     print(f"  solver        {fmt_solver(p.stats)}")
     if args.all:
         print(fmt_all(p, unit))
-    write_results(args, p, robot, unit, composed_to_dict, "plan")
+    if args.refine:
+        _print_refined(refined, unit)
+        _write_refined(args, refined, unit)
+    else:
+        write_results(args, p, robot, unit, composed_to_dict, "plan")
     return EXIT_OK
 
 
@@ -62,6 +114,12 @@ def register(sub) -> None:
                    help="only branch M of n eta = psi + 2 pi M (one leg of figure eights)")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default=geometric.DEFAULT_ROOT_SOLVER,
                    help="root solver")
+    p.add_argument("--refine", action="store_true",
+                   help="polish the plan into a shorter certified motion: a minimum-path-length optimal-control solve "
+                        "(rest to rest, 60 intervals of constant contact accelerations, polar angle <= 80 deg) "
+                        "warm-started by the plan and straight lines; the plan is kept, with a note, when that is not "
+                        "shorter or not certified (seconds; not with --all, --duration, --timing, --plot, "
+                        "--timing-plot)")
     p.add_argument("--json", metavar="FILE", help=JSON_HELP.format("the plan"))
     p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere (from below) and the "
                    "plane, and psi along it (with --duration or --timing: omega, rotor rates and torques in time)")

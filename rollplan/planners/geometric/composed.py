@@ -250,19 +250,26 @@ class ComposedPlanner(Method):
         the base points of :data:`BASE_FRACTIONS` along the great-circle arc from the start contact point to the
         goal contact point (local solves, :mod:`.basepoint`); the shorter certified plan is kept, so it is never
         longer than the ``"pole"`` plan. Slower (about a second warm per plan).
+    refine : bool
+        Polish the plan into a shorter certified motion (:func:`rollplan.planners.refined.refine`): a
+        :class:`~rollplan.planners.refined.RefinedPlan`, or the plan with a note in ``stats.details["refine"]``.
     """
 
     name = "geometric"
 
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  legs: str = "fallback", *, steps: int | None = None, all_solutions: bool = False,
-                 branch: int | None = None, method: str | None = None, base: str = "pole") -> None:
+                 branch: int | None = None, method: str | None = None, base: str = "pole",
+                 refine: bool = False) -> None:
         self.base = check_choice("base", base, BASES)
         root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
         self.legs = check_choice("legs", legs, LEGS)
         check_choice(name, root_solver, SOLVERS)
         self.steps = None if steps is None else check_steps(steps)
         self.all_solutions = check_flag("all_solutions", all_solutions)
+        self.refine = check_flag("refine", refine)
+        if self.refine and self.all_solutions:
+            raise InputError("refine and all_solutions do not combine: the polish returns one motion")
         self.branch = self._check_branch(branch)
         default = nodes == DEFAULT_NODES and tol == TOLERANCE
         self.planner = default_planner(root_solver) if default else GeometricPhasePlanner(root_solver, nodes, tol)
@@ -300,6 +307,14 @@ class ComposedPlanner(Method):
         return self.planner.solve(problem, all_solutions, branch)
 
     def _solve(self, problem: Problem):
+        found = self._geometric(problem)
+        if not self.refine:
+            return found
+        from ..refined import refine
+
+        return refine(found)
+
+    def _geometric(self, problem: Problem):
         if self.base == "pole" or self.branch is not None:
             return self._solve_pole(problem)
         t0 = time.perf_counter()
@@ -533,15 +548,15 @@ class ComposedPlanner(Method):
 
 
 @lru_cache(maxsize=8)
-def default_composed_planner(root_solver: str = DEFAULT_ROOT_SOLVER, legs: str = "fallback",
-                             base: str = "pole") -> ComposedPlanner:
-    """The shared composed planner of :func:`plan` for a root solver, a legs policy and a base policy."""
-    return ComposedPlanner(root_solver, legs=legs, base=base)
+def default_composed_planner(root_solver: str = DEFAULT_ROOT_SOLVER, legs: str = "fallback", base: str = "pole",
+                             refine: bool = False) -> ComposedPlanner:
+    """The shared composed planner of :func:`plan` for a root solver, a legs policy, a base policy and the polish."""
+    return ComposedPlanner(root_solver, legs=legs, base=base, refine=refine)
 
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
          all_solutions: bool = False, method: str | None = None, branch: int | None = None, start=None,
-         legs: str = "fallback", *, root_solver: str | None = None, base: str = "pole"):
+         legs: str = "fallback", *, root_solver: str | None = None, base: str = "pole", refine: bool = False):
     """Plan an exact, dynamically realizable motion from ``start`` to ``target``, any two states.
 
     From rest at the origin to a goal at the south pole this is the paper's
@@ -578,6 +593,9 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     base : str
         ``"pole"`` (default) or ``"any"``: also figure eights at base points off the pole, the shorter plan kept
         (:class:`ComposedPlanner`).
+    refine : bool
+        Polish the plan into a shorter certified motion (:mod:`rollplan.planners.refined`): a
+        :class:`~rollplan.planners.refined.RefinedPlan`, or the plan with a note in ``stats.details["refine"]``.
 
     Returns
     -------
@@ -601,4 +619,5 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     check_choice("base", base, BASES)
     problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
                       steps=steps)
-    return default_composed_planner(root_solver, legs, base).solve(problem, all_solutions, branch)
+    return default_composed_planner(root_solver, legs, base, check_flag("refine", refine)).solve(problem, all_solutions,
+                                                                                                branch)
