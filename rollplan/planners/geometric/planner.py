@@ -50,18 +50,24 @@ from ...result import (
 )
 from ...robot import Robot
 from ..method import Method, renamed_option
-from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
-from .compiled_search import all_roots, shortest_root
+from .c_sources import CERT_TOL as C_CERT_TOL
+from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier, RK8Certifier, end_contact
+from .compiled_search import all_roots, certify_roots, listed_roots, shortest_root
 from .leafmap import panels_for, step_values
 from .refine import SOLVERS, leaf_step, polisher, step_residual
 from .search_constants import NOT_A_ROOT
 
-__all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
+__all__ = ["TOLERANCE", "C_CERTIFIER", "C_POLISH", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner",
+           "plan", "step"]
 
 log = logging.getLogger(__name__)
 
 #: Default tolerance of the certified residual (units of R and rad).
 TOLERANCE = CERTIFICATE_TOLERANCE
+#: Certificate name of the plans of ``all_solutions`` certified by the C certificate (``<prefix>_certify``).
+C_CERTIFIER = "rk8-c"
+#: Solver name of the plans of ``all_solutions`` whose roots the C search polished (Newton on the accurate map).
+C_POLISH = "c-newton"
 #: Most CVODES samples per leaf of :meth:`GeometricPhasePlanner.sample`.
 _MAX_PER_LEAF = 100000
 #: A polished root farther than this from the enumerated one (in a or b [R]) is not taken (the solver
@@ -355,13 +361,18 @@ class GeometricPhasePlanner(Method):
 
     def _solve_compiled_all(self, problem, branch, target, turns, t_start) -> Plan:
         """Every root of every branch (of ``branch`` if given) by the compiled C search
-        (:func:`.compiled_search.all_roots`), each polished and certified here; the certified ones, shortest
+        (:func:`.compiled_search.listed_roots`), each certified (:meth:`_certify_in_c`, or with another certifier
+        or a tolerance below the C certificate's, polished and certified here); the certified ones, shortest
         first."""
         k, steps = problem.k, problem.steps
-        listed = all_roots(target[0], target[1], target[2], steps, k, branch)
+        in_c = isinstance(self.certifier, RK8Certifier) and self.tol >= C_CERT_TOL
+        listed = (listed_roots if in_c else all_roots)(target[0], target[1], target[2], steps, k, branch)
         if not listed:   # the complete search found no root
             raise _no_root(problem, "the complete search found none")
-        found, rejected, _ = self._certify_listed(problem, listed, target, turns)
+        if in_c:
+            found, rejected = self._certify_in_c(problem, listed, target, turns)
+        else:
+            found, rejected, _ = self._certify_listed(problem, listed, target, turns)
         if not found:
             self._raise_if_rejected(problem.describe(), rejected)
             raise _no_root(problem, f"{listed[0].branches} branches searched completely, no root certified")
@@ -371,6 +382,37 @@ class GeometricPhasePlanner(Method):
         elapsed = time.perf_counter() - t_start
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
         return replace(plans[0], alternatives=tuple(plans[1:]))
+
+    def _certify_in_c(self, problem, listed, target, turns) -> tuple:
+        """``(certified, rejected)``: the roots ``listed`` by the C search (polished there by Newton's method on
+        the accurate leaf map) certified by the C certificate (:func:`.compiled_search.certify_roots`: fixed-step
+        RK8 of the whole motion with step doubling), progress reported root by root; ``rejected`` as in
+        :meth:`_certify_listed`."""
+        total = len(listed)
+        label = f"certify (k = {problem.k:g}, {total} roots)"
+        shown = [0]
+
+        def progress(done, total):
+            for i in range(shown[0] + 1, done + 1):
+                report(label, i, total)
+            shown[0] = done
+
+        report(label, 0, total)
+        certs = certify_roots(listed, target[0], target[1], target[2], problem.steps, problem.k, progress)
+        goal_r = problem.scaled(problem.goal)
+        goal = State(goal_r.u_a, goal_r.v_a, target[2])   # psi reduced, as the certificate of a plan
+        found, rejected = [], []
+        for r, c in zip(listed, certs):
+            final_r = State(*c.final, *end_contact(r.b, r.gamma))
+            cert = certify(problem, final_r.scaled(problem.radius), C_CERTIFIER, error_bound=c.bound,
+                           tolerance=self.tol, residual=arrival_residual(final_r, goal))
+            cand = (_Root(r.a, r.b, r.gamma, r.m - turns, r.h, r.eta, r.predicted), cert,
+                    SolverStats(C_POLISH, "ok", 0, 0.0))
+            if cert.passed:
+                found.append(cand)
+            elif self._log_rejected(r, cand, turns):
+                rejected.append(cert.residual + cert.error_bound)
+        return found, rejected
 
     @staticmethod
     def _listed_root(r, target, steps) -> _Root:
