@@ -148,3 +148,16 @@ def test_ctrl_c_during_a_long_c_search_exits_130():
     assert code == 130, err
     assert elapsed < 2.0
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
+def test_ctrl_c_while_a_long_list_is_certified_exits_130_within_a_second():
+    """`plan --all` at k = 12, n = 4 certifies 1864 roots (seconds): its progress shows on stderr, and a SIGINT
+    during the certificates exits 130 within a second (the machine may be loaded: 1.5 s), one line, no
+    traceback."""
+    _require_library()
+    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "12", "--steps", "4", "--all"], 0.5,
+                                              wait_for="certify (k = 12, 1864 roots)")
+    assert code == 130, err
+    assert elapsed < 1.5, elapsed
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
