@@ -3,7 +3,15 @@ docs/design/enumeration.md): the Python planner's plans through it against the n
 (tests/reference_enumerate.py), and its roots
 against the 2-D brute force of tests/test_enumerate.py (scipy's brentq and bounded minimiser on the level set)."""
 
+import fcntl
 import math
+import os
+import pty
+import struct
+import subprocess
+import sys
+import termios
+import threading
 
 import numpy as np
 import pytest
@@ -161,3 +169,40 @@ def test_ctrl_c_while_a_long_list_is_certified_exits_130_within_a_second():
     assert code == 130, err
     assert elapsed < 1.5, elapsed
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+def _run_on_a_terminal(argv, columns=120):
+    """``rollplan argv`` with stderr on a pseudo-terminal of ``columns`` columns: (exit code, stderr text)."""
+    main, side = pty.openpty()
+    fcntl.ioctl(side, termios.TIOCSWINSZ, struct.pack("HHHH", 24, columns, 0, 0))
+    proc = subprocess.Popen([sys.executable, "-m", "rollplan.cli", *argv], stdout=subprocess.DEVNULL, stderr=side)
+    os.close(side)
+    got = []
+
+    def read():
+        while True:
+            try:
+                data = os.read(main, 65536)
+            except OSError:   # the terminal closed with the process
+                return
+            if not data:
+                return
+            got.append(data)
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    code = proc.wait(timeout=600)
+    reader.join(10)
+    os.close(main)
+    return code, b"".join(got).decode(errors="replace")
+
+
+@pytest.mark.slow
+def test_a_long_list_shows_a_progress_bar_on_a_terminal():
+    """`plan --all` at k = 12, n = 4 (seconds of certificates) on a terminal: a bar of the certificates that ends
+    at the count of roots."""
+    _require_library()
+    code, err = _run_on_a_terminal(["plan", "--to", "0", "1", "--k", "12", "--steps", "4", "--all"])
+    assert code == 0, err
+    bars = [line for line in err.replace("\r", "\n").splitlines() if line.startswith("certify (k = 12, 1864 roots)")]
+    assert len(bars) >= 2 and "%|" in bars[0] and "1864/1864" in bars[-1], bars[-3:]
