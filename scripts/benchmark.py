@@ -79,6 +79,10 @@ BUDGET_STEP_EVALS = 20000.0
 BUDGET_PLAN_MS_FOUNDATION = 50.0
 #: Issue 6's budget: a C plan under 1 ms.
 BUDGET_C_PLAN_US = 1000.0
+#: Issue 28's budgets: warm plan median, speed-up over the baseline at equal accuracy, plan_many on 2 cores.
+BUDGET_PLAN_MS_28 = 0.5
+BUDGET_RATIO_28 = 300.0
+BUDGET_MANY_PER_S = 5000.0
 #: Issue 28's budget: `plan --all` at most this many ms per plan listed (k = 12, n = 4).
 BUDGET_ALL_MS_PER_PLAN = 5.0
 #: (target, steps, k) of the --all section (issue 28's case), and of its --quick smoke run.
@@ -179,15 +183,15 @@ def _cold_plan_ms(target, steps, k):
 
 
 def _phases(p, target):
-    """Median wall and CPU times [ms] of the plan's polish (IPOPT from the enumerated root) and certificate
-    (RK8), measured alone on the plan's own root: ``(wall polish, wall certificate, CPU polish, CPU
-    certificate)``; the rest of a warm plan is the enumeration and glue."""
+    """Median wall and CPU times [ms] of the polish and certificate of ``root_solver="ipopt"`` (IPOPT from the
+    enumerated root, the Python RK8 certificate), measured alone on the plan's own root: ``(wall polish, wall
+    certificate, CPU polish, CPU certificate)``; the default plan runs neither (one C call)."""
     from rollplan.planners.geometric.leafmap import panels_for
     from rollplan.planners.geometric.refine import polisher
 
     planner = geometric.default_planner()
     _, eta_m, h_m = _start_near(p, target)
-    solve = polisher(planner.root_solver, panels_for(p.k))
+    solve = polisher("ipopt", panels_for(p.k))
     t_polish, c_polish, _ = _median_times(lambda: solve([p.a, p.b], [p.k, eta_m, h_m], 1e-6, A_MAX), 41)
     t_cert, c_cert, _ = _median_times(lambda: planner.certifier.certify(p.a, p.b, p.k, p.gamma, p.steps), 41)
     return t_polish * 1e3, t_cert * 1e3, c_polish * 1e3, c_cert * 1e3
@@ -204,6 +208,7 @@ def section_plan(ctx):
         p = rollplan.plan(target, steps, k=K)                 # warms the planner, per-k tables, compiled functions
         t_warm, c_warm, ts = _median_times(lambda: rollplan.plan(target, steps, k=K), ctx["repeats"])
         t_newton, _ = _median_time(lambda: rollplan.plan(target, steps, k=K, root_solver="newton"), ctx["repeats"])
+        t_ipopt, _ = _median_time(lambda: rollplan.plan(target, steps, k=K, root_solver="ipopt"), ctx["repeats"])
         t_polish, t_cert, c_polish, c_cert = _phases(p, target)
         x0, eta_m, h_m = _start_near(p, target)
         res = {}
@@ -218,10 +223,10 @@ def section_plan(ctx):
         row = {"target (u_a, v_a, psi)": str(tuple(target)), "n": steps, "m": p.branch,
                "search": p.stats.details["search"],
                "rollplan warm [ms]": t_warm * 1e3, "rollplan warm CPU [ms]": c_warm * 1e3,
-               "of which IPOPT polish [ms] (CPU)": f"{t_polish:.2f} ({c_polish:.2f})",
-               "of which RK8 certificate [ms] (CPU)": f"{t_cert:.2f} ({c_cert:.2f})",
-               "newton warm [ms]": t_newton * 1e3,
-               "IPOPT iterations": p.stats.iterations,
+               "IPOPT polish alone [ms] (CPU)": f"{t_polish:.2f} ({c_polish:.2f})",
+               "Python RK8 certificate alone [ms] (CPU)": f"{t_cert:.2f} ({c_cert:.2f})",
+               "root_solver newton warm [ms]": t_newton * 1e3, "root_solver ipopt warm [ms]": t_ipopt * 1e3,
+               "default root solver": p.stats.method,
                "scipy rtol 1e-12 [ms]": base[1e-12][0] * 1e3, "scipy rtol 1e-13 [ms]": base[1e-13][0] * 1e3,
                "speed-up vs 1e-12": base[1e-12][0] / t_warm, "speed-up vs 1e-13": base[1e-13][0] / t_warm,
                "speed-up vs 1e-13 (CPU)": base[1e-13][1] / c_warm,
@@ -239,12 +244,12 @@ def section_plan(ctx):
     acc = all(r["residual rollplan (CVODES)"] <= max(r["residual scipy 1e-13"], 1e-12) for r in rows)
     notes = [f"k = {K}; warm = median of {ctx['repeats']} calls of rollplan.plan after one warm-up (planner, per-k "
              "tables and compiled functions loaded); scipy = median of "
-             f"{ctx['scipy_repeats']} runs. 'of which' columns: the IPOPT polish and the RK8 certificate timed alone "
-             "on the plan's root (median of 21); the rest of a warm plan is the search of the shortest root (column "
-             "'search': the generated C planner's search through ctypes, planners/geometric/compiled_search.py) "
-             "and Python glue; each phase timed inside "
-             "the plan: "
-             "results/plan_profile.md (scripts/profile_plan.py).",
+             f"{ctx['scipy_repeats']} runs. The default plan is one call of the C planner (search, Newton polish, "
+             "RK8 certificate: planners/geometric/compiled_search.py, certified_plan); the root_solver ipopt and "
+             "newton columns are the Python path (the C search's root polished again, then the Python RK8 "
+             "certificate), measured side by side; 'alone' columns: the IPOPT polish and the Python RK8 certificate "
+             "of that path timed alone on the plan's root (median of 41). Which plans IPOPT changes: "
+             "results/polish_ipopt.md (scripts/polish_ipopt.py).",
              "Residual (CVODES) = |(u_a, v_a, psi, u_o, v_o) - (target, 0, 0)| after n steps by the same CVODES "
              f"verifier ({ctx['verifier']}) for both plans; 'certified residual + bound' is rollplan's own RK8 "
              "certificate (accepted when <= 1e-9).",
@@ -259,7 +264,10 @@ def section_plan(ctx):
              "baseline at equal accuracy: "
              f"{_status(ratio >= BUDGET_RATIO and acc)} (smallest speed-up {ratio:.1f}x wall vs rtol 1e-13, "
              f"{ratio_cpu:.1f}x CPU time; {ratio12:.1f}x vs rtol 1e-12; rollplan residual <= max(scipy's, 1e-12) "
-             f"on every target: {acc})."]
+             f"on every target: {acc}).",
+             f"Issue 28: warm plan <= {BUDGET_PLAN_MS_28:g} ms median: {_status(warm <= BUDGET_PLAN_MS_28)}; "
+             f">= {BUDGET_RATIO_28:g}x the baseline at equal accuracy: "
+             f"{_status(ratio >= BUDGET_RATIO_28 and acc)} ({ratio:.1f}x)."]
     return {"title": "Plan: rollplan.plan against a hand-written scipy baseline", "rows": rows, "notes": notes,
             "raw": raw, "summary": {"median_warm_ms": warm, "median_warm_cpu_ms": warm_cpu, "min_speedup": ratio,
                                     "min_speedup_cpu": ratio_cpu, "min_speedup_vs_rtol_1e-12": ratio12,
@@ -474,7 +482,8 @@ def section_profile(ctx):
               ("enumerate.py", "roots"): "roots of the branches (enumeration)",
               ("planner.py", "_polish"): f"polish ({planner.root_solver})",
               ("certify.py", "certify"): "certificate (RK8, n steps)",
-              ("planner.py", "_certified"): "gamma + certificate"}
+              ("planner.py", "_certified"): "gamma + certificate",
+              ("compiled_search.py", "certified_plan"): "C planner: search, polish, certificate (one call)"}
     plan_line = geometric.GeometricPhasePlanner.solve.__code__.co_firstlineno
     for (file, line, name), (_cc, _nc, _tt, ct, _callers) in st.stats.items():
         base = os.path.basename(file)
@@ -594,6 +603,17 @@ def section_budgets(ctx):
             _status(plan["min_speedup"] >= BUDGET_RATIO and plan["accuracy_ok"]))
     else:
         add("2, 11", "single plan; speed-up vs scipy", "not run", "n/a")
+    if plan:
+        add("28", f"warm plan <= {BUDGET_PLAN_MS_28:g} ms median", f"{plan['median_warm_ms']:.3f} ms wall",
+            _status(plan["median_warm_ms"] <= BUDGET_PLAN_MS_28))
+        add("28", f">= {BUDGET_RATIO_28:g}x faster than scipy at equal accuracy",
+            f"{plan['min_speedup']:.1f}x wall vs scipy rtol 1e-13",
+            _status(plan["min_speedup"] >= BUDGET_RATIO_28 and plan["accuracy_ok"]))
+    many = done.get("section_plan_many", {}).get("summary")
+    if many:
+        add("28", f"plan_many >= {BUDGET_MANY_PER_S:g} certified plans/s on 2 cores, n = 1..3",
+            f"{many['min_2_workers_per_s']:.0f}/s wall, {many['min_idle_2_cores_per_s']:.0f}/s from CPU time",
+            _status(many["min_2_workers_per_s"] >= BUDGET_MANY_PER_S))
     cold = done.get("section_cold", {}).get("summary")
     if cold:
         add("11", f"cold `rollplan plan` <= {BUDGET_COLD_RATIO:g}x the start of Python with casadi, numpy, matplotlib",
@@ -667,6 +687,60 @@ def section_batch(ctx):
              "measures the load, not rollplan. The idle speed-up is estimated from the measured CPU times "
              "(scripts/bench_batch.py): the serial start-up once, the rest shared by the two workers."]
     return {"title": "Batch planning: --jobs 2 against --jobs 1", "rows": rows, "notes": notes, "summary": m}
+
+
+def many_targets(count, seed=28):
+    """Targets of the plan_many section: (u_a, v_a) uniform in the disk of radius 1.2 R, psi in [-1, 1] rad."""
+    rng = np.random.default_rng(seed)
+    r, phi = 1.2 * np.sqrt(rng.uniform(0, 1, count)), rng.uniform(-np.pi, np.pi, count)
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), rng.uniform(-1, 1, count)])
+
+
+def _plan_many_part(job):
+    """One worker's share of the plan_many section: ``(plans certified, CPU time [s])``."""
+    targets, steps = job
+    c = time.process_time()
+    r = rollplan.plan_many(targets, k=K, steps=steps)
+    return int(r.ok.sum()), time.process_time() - c
+
+
+def section_plan_many(ctx):
+    """rollplan.plan_many: certified plans per second with 1 worker (this process) and 2 (forked processes)."""
+    import multiprocessing
+
+    count = 500 if ctx["quick"] else 4000
+    rows = []
+    ctx_fork = multiprocessing.get_context("fork")
+    rollplan.plan_many(many_targets(8), k=K, steps=1)   # the C library and the tables of K, before the fork
+    with ctx_fork.Pool(2) as pool:
+        pool.map(_plan_many_part, [(many_targets(4, seed), 1) for seed in (1, 2)])   # the workers have started
+        for steps in (1, 2, 3):
+            targets = many_targets(count, seed=steps)
+            t = time.perf_counter()
+            ok1, cpu1 = _plan_many_part((targets, steps))
+            t1 = time.perf_counter() - t
+            parts = [(targets[i::8], steps) for i in range(8)]
+            t = time.perf_counter()
+            res = pool.map(_plan_many_part, parts, chunksize=1)
+            t2 = time.perf_counter() - t
+            ok2, cpu2 = sum(r[0] for r in res), sum(r[1] for r in res)
+            assert ok1 == ok2
+            rows.append({"n": steps, "targets": count, "certified": ok1,
+                         "1 worker [plans/s]": count / t1, "2 workers [plans/s]": count / t2,
+                         "speed-up (wall)": t1 / t2, "CPU per plan, 1 worker [us]": cpu1 / count * 1e6,
+                         "idle 2 cores, from CPU time [plans/s]": 2 * count / cpu2})
+    worst = min(r["2 workers [plans/s]"] for r in rows)
+    worst_idle = min(r["idle 2 cores, from CPU time [plans/s]"] for r in rows)
+    notes = [f"k = {K}; targets: (u_a, v_a) uniform in the disk of radius 1.2 R, psi uniform in [-1, 1] rad; every "
+             "plan certified to 1e-9 by the C RK8 certificate (the failures are targets without a one-leg plan). "
+             "1 worker: plan_many in this process; 2 workers: two forked processes, each plan_many on its share "
+             "(the pool started before the timing). The idle estimate divides the targets by the CPU time the "
+             "workers spent, on 2 cores (the machine is shared: wall times measure the load).",
+             f"Budget (issue 28) >= {BUDGET_MANY_PER_S:g} certified plans/s on 2 cores for n = 1..3: "
+             f"{_status(worst >= BUDGET_MANY_PER_S)} wall ({worst:.0f}/s), "
+             f"{_status(worst_idle >= BUDGET_MANY_PER_S)} from CPU time ({worst_idle:.0f}/s)."]
+    return {"title": "Many plans per call: rollplan.plan_many with 1 and 2 workers", "rows": rows, "notes": notes,
+            "summary": {"min_2_workers_per_s": worst, "min_idle_2_cores_per_s": worst_idle}}
 
 
 #: (target, N, guess) of the peer section: a small case from the naive guess, and the comparison's setting
@@ -791,7 +865,7 @@ def section_list_all(ctx):
 #: is shown first in the report.
 SECTIONS = [section_plan, section_cold, section_high_k, section_step_map, section_collocation, section_c_planner,
             section_memory, section_profile,
-            section_batch, section_list_all, section_budgets]
+            section_batch, section_plan_many, section_list_all, section_budgets]
 SECTIONS.insert(SECTIONS.index(section_collocation) + 1, section_peer)
 
 

@@ -1,10 +1,12 @@
 """Where a warm geometric-phase plan spends its time: the phases of rollplan.plan on the benchmark's targets.
 
-    python scripts/profile_plan.py [--repeats 41] [--out-dir results]
+    python scripts/profile_plan.py [--repeats 41] [--root-solver c] [--out-dir results]
 
 Writes ``plan_profile.md`` and ``plan_profile.json``. The targets and k are those of the plan section of
 ``scripts/benchmark.py``. Each phase is timed inside the plan (wall time, mean over the repeats) by
-wrapping the planner's calls: the compiled C search of the shortest root
+wrapping the planner's calls. With the default root solver ``c`` a plan is one call of the C planner
+(:func:`rollplan.planners.geometric.compiled_search.certified_plan`: search, polish and certificate); with
+``--root-solver ipopt`` (or ``newton``) the phases of the Python path: the compiled C search of the shortest root
 (:func:`rollplan.planners.geometric.compiled_search.shortest_root`, the planner's only search); the IPOPT polish of the
 winning root (``GeometricPhasePlanner._polish``), the step's shift for gamma (the compiled leaf-map step)
 and the RK8 certificate; "rest" is the plan's time minus these (problem checks, gamma, the result objects).
@@ -38,7 +40,10 @@ from rollplan.planners.geometric.refine import leaf_residual
 
 from benchmark import TARGETS, K, git_commit
 
-PHASES = ("C search", "polish (IPOPT)", "step for gamma", "certificate (RK8)")
+#: The root solver of the profiled plans (``--root-solver``; the default path is one C call).
+ROOT_SOLVER = ["c"]
+PHASES = ("C planner (search, polish, certificate)", "C search", "polish (IPOPT)", "step for gamma",
+          "certificate (RK8)")
 
 
 def _timed(acc: dict, label: str, fn):
@@ -65,9 +70,10 @@ def _alone(fn, repeats: int) -> tuple[float, float]:
 def in_plan(repeats: int) -> list:
     """Per target: median wall and CPU time of a warm plan and the mean time of each phase inside it [ms]."""
     acc = defaultdict(float)
-    pl = planner.default_planner("ipopt")
-    saved = (planner.leaf_step, planner.shortest_root)
+    pl = planner.default_planner(ROOT_SOLVER[0])
+    saved = (planner.leaf_step, planner.shortest_root, planner.certified_plan)
     planner.shortest_root = _timed(acc, "C search", planner.shortest_root)
+    planner.certified_plan = _timed(acc, "C planner (search, polish, certificate)", planner.certified_plan)
     pl._polish = _timed(acc, "polish (IPOPT)", pl._polish)
     pl.certifier.certify = _timed(acc, "certificate (RK8)", pl.certifier.certify)
     step = planner.leaf_step
@@ -80,12 +86,12 @@ def in_plan(repeats: int) -> list:
     rows = []
     try:
         for target, steps in TARGETS:
-            p = rollplan.plan(target, steps, k=K)
+            p = rollplan.plan(target, steps, k=K, root_solver=ROOT_SOLVER[0])
             acc.clear()
             wall, cpu = [], []
             for _ in range(repeats):
                 t, c = time.perf_counter(), time.process_time()
-                rollplan.plan(target, steps, k=K)
+                rollplan.plan(target, steps, k=K, root_solver=ROOT_SOLVER[0])
                 cpu.append(time.process_time() - c)
                 wall.append(time.perf_counter() - t)
             mean = sum(wall) / repeats
@@ -99,7 +105,7 @@ def in_plan(repeats: int) -> list:
             row["IPOPT iterations"] = p.stats.iterations
             rows.append(row)
     finally:
-        planner.leaf_step, planner.shortest_root = saved
+        planner.leaf_step, planner.shortest_root, planner.certified_plan = saved
         del pl._polish, pl.certifier.certify
     return rows
 
@@ -146,9 +152,11 @@ def _table(rows) -> list:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=41)
+    ap.add_argument("--root-solver", choices=("c", "ipopt", "newton"), default="c")
     ap.add_argument("--out-dir", default="results")
     args = ap.parse_args(argv)
     load = list(os.getloadavg())
+    ROOT_SOLVER[0] = args.root_solver
     plans = in_plan(args.repeats)
     fixed = alone(4 * args.repeats)
     load_end = list(os.getloadavg())
@@ -156,8 +164,8 @@ def main(argv=None) -> int:
     md = ["# Where a warm plan spends its time", "",
           f"- date: {date}; commit `{git_commit()}`; {os.cpu_count()} cores; load average at start "
           f"{', '.join(f'{x:.2f}' for x in load)}, at the end {', '.join(f'{x:.2f}' for x in load_end)}",
-          f"- command: `python scripts/profile_plan.py --repeats {args.repeats}`; k = {K}, the targets of "
-          "scripts/benchmark.py's plan section", "",
+          f"- command: `python scripts/profile_plan.py --repeats {args.repeats} --root-solver {args.root_solver}`; "
+          f"k = {K}, the targets of scripts/benchmark.py's plan section", "",
           "## Phases inside a warm plan", ""] + _table(plans) + [
           "", f"- {args.repeats} warm plans per target after one warm-up; phases: mean wall time inside the plan "
           "(module docstring of scripts/profile_plan.py); 'rest' = mean plan time minus the phases.", "",

@@ -949,7 +949,11 @@ _CHUNK = 64
 class ReferencePlanner(GeometricPhasePlanner):
     """The geometric planner with this numpy search in place of the C search: the same polish and certificate,
     the bounded search for the shortest certified plan, or every root of every branch (``all_solutions``).
-    Plans carry ``details["search"] == "numpy"``."""
+    Plans carry ``details["search"] == "numpy"``. Its roots are polished by IPOPT unless another root solver is
+    given (the planner's default takes the C search's roots as polished)."""
+
+    def __init__(self, root_solver: str = "ipopt", *args, **kwargs) -> None:
+        super().__init__(root_solver, *args, **kwargs)
 
     def _solve(self, problem):
         t_start = time.perf_counter()

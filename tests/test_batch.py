@@ -562,3 +562,43 @@ def test_the_shipped_example_runs(tmp_path, capsys):
     for d in lines[:4]:
         u, v, psi = d["target"]["u_a"], d["target"]["v_a"], d["target"]["psi"]
         assert [d["final"]["u_a"], d["final"]["v_a"], d["final"]["psi"]] == pytest.approx([u, v, psi], abs=1e-9)
+
+
+def test_rows_are_planned_many_per_call_as_one_by_one(tmp_path, monkeypatch):
+    """The planning phase gives the rows of one k and one number of steps to plan_many together (not one call each),
+    and writes the lines plan_row writes for each row alone (solver times aside), failures and a target that needs
+    two legs included."""
+    from rollplan.studies import batch
+    from rollplan.studies.batch import plan_row, read_targets
+
+    rows = ROWS + [("0.1", "0.2", "0.3", "2", "0", "ok"), ("0", "0.0001", "3", "1", "2.5", "two legs")]
+    csv = write_csv(tmp_path / "t.csv", rows)
+    calls = []
+    real = batch.plan_many
+
+    def counting(targets, *args, **kwargs):
+        calls.append(len(targets))
+        return real(targets, *args, **kwargs)
+
+    monkeypatch.setattr(batch, "plan_many", counting)
+    monkeypatch.setattr(batch, "_task_size", lambda rows, jobs: batch.ROWS_PER_TASK)   # one task
+    out = tmp_path / "plans.jsonl"
+    run_batch(csv, out)
+    lines = read_lines(out)
+    # (k 0, n 1): rows 0, 4, 5; (k 0, n 2): rows 1, 6; (k 2.5, n 1): row 7; (k 0, n 0): row 2, refused
+    assert sorted(calls) == [1, 1, 2, 3]
+    alone = [plan_row(i, row) for i, row in enumerate(read_targets(csv))]
+    for d in lines + alone:   # the two-leg search's wall time
+        d.get("solver", {}).get("two_legs", {}).pop("search_s", None)
+    assert _strip_times(lines) == _strip_times(alone)
+    check_lines(lines[:6])
+    assert lines[7]["status"] == "ok"
+
+
+def test_a_short_batch_is_shared_row_by_row():
+    """Tasks hold at most an eighth of each worker's share, so a short batch still runs on every worker and its lines
+    are written as they are planned."""
+    from rollplan.studies.batch import ROWS_PER_TASK, _task_size
+
+    assert _task_size(12, 2) == 1 and _task_size(200, 2) == 12 and _task_size(100000, 2) == ROWS_PER_TASK
+    assert _task_size(0, 1) == 1

@@ -365,7 +365,11 @@ def test_plan_is_a_certified_result(planner):
     x = references.trace(p.a, p.b, p.k, p.gamma, p.steps)
     assert np.abs(np.asarray(c.final[:3]) - x).max() < 1e-10
     assert c.residual == pytest.approx(np.linalg.norm(arrival_error(c.final, problem.goal)), abs=1e-15)
-    assert p.stats.method == "ipopt" and p.stats.status == "Solve_Succeeded" and 0 <= p.stats.iterations <= 3
+    assert p.stats.method == "c" and p.stats.status == "ok"   # the default: search, polish, certificate in C
+    by_ipopt = rollplan.GeometricPhasePlanner(root_solver="ipopt").solve(problem)
+    assert by_ipopt.stats.method == "ipopt" and by_ipopt.stats.status == "Solve_Succeeded"
+    assert 0 <= by_ipopt.stats.iterations <= 3
+    assert (by_ipopt.a, by_ipopt.b, by_ipopt.gamma) == pytest.approx((p.a, p.b, p.gamma), abs=1e-12)
     assert p.stats.time_s > 0
     assert p.stats.details["candidates"] >= p.stats.details["solves"] >= 1
     q = solve(problem, "geometric")
@@ -567,7 +571,7 @@ def test_compiled_all_solutions_report_progress():
 
 
 def test_all_solutions_are_certified_in_c_and_reach_the_goal(monkeypatch):
-    """all_solutions takes every root from the C search and certifies it by the C certificate (rk8-c), neither the
+    """all_solutions takes every root from the C search and certifies it by the C certificate (RK8), neither the
     Python polish nor the Python RK8 certificate runs; each listed plan is certified to 1e-9, and the shortest, two
     more and the longest reach the goal by the reference's DOP853 integration of the paper's equations."""
     from rollplan.planners.geometric import GeometricPhasePlanner
@@ -587,8 +591,8 @@ def test_all_solutions_are_certified_in_c_and_reach_the_goal(monkeypatch):
     assert len(plans) >= 10 and p.stats.details["solves"] == len(plans)
     for q in plans:
         c = q.certificate
-        assert c.method == "rk8-c" and c.passed and c.residual + c.error_bound <= 1e-9 and c.error_bound > 0
-        assert q.stats.method == "c-newton"
+        assert c.method == "rk8" and c.passed and c.residual + c.error_bound <= 1e-9 and c.error_bound > 0
+        assert q.stats.method == "c" and q.stats.status == "ok"
     for q in plans[:3] + plans[-1:]:
         assert reference_error(q)[0] < 1e-9
 
@@ -660,7 +664,7 @@ def test_a_rejected_shortest_root_is_replaced_by_the_next_certified_one_of_the_c
         return root, cert, stats
 
     monkeypatch.setattr(GeometricPhasePlanner, "_certified", reject_the_shortest)
-    p = GeometricPhasePlanner().solve(problem)
+    p = GeometricPhasePlanner(root_solver="ipopt").solve(problem)   # the path that certifies root by root here
     ref = ReferencePlanner().solve(problem)
     assert p.stats.details["search"] == "compiled" and p.certificate.passed
     assert p.a + p.b > shortest.a + shortest.b

@@ -18,8 +18,19 @@ def test_benchmark_script_runs(tmp_path):
     text = (tmp_path / "benchmarks.md").read_text()
     assert "evaluations/s" in text and "commit" in text and "speed-up" in text and "Profile" in text
     assert "## Budgets" in text and "Collocation planner" in text and "C planner" in text
-    assert "load average at start" in text
+    assert "load average at start" in text and "Many plans per call: rollplan.plan_many" in text
+    assert "root_solver ipopt warm [ms]" in text
     assert (tmp_path / "benchmarks.json").stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_polish_ipopt_script_runs(tmp_path):
+    """scripts/polish_ipopt.py writes the table of what IPOPT changes on the C planner's plans."""
+    run_script("polish_ipopt.py", tmp_path, "--per-k", "1")
+    text = (tmp_path / "polish_ipopt.md").read_text()
+    assert "(a, b) changed by IPOPT" in text and "| targets | 7 |" in text
+    report = json.loads((tmp_path / "polish_ipopt.json").read_text())
+    assert report["summary"]["targets"] == 7 and len(report["rows"]) == 7
 
 
 def run_script(name: str, out_dir, *args: str, timeout: float = 900) -> None:

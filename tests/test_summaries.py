@@ -87,6 +87,10 @@ def test_the_solver_line_says_what_happened_in_words():
     planner: the line says the roots were searched exactly and what polishing them took."""
     code, out, err = rollplan("plan", "--to", "0", "1", "--k", "2.5")
     assert code == 0, err
+    line = _line(out, "solver")   # the default: search, polish and certificate in C
+    assert "root polished by Newton on the accurate leaf map and certified, in C" in line
+    code, out, err = rollplan("plan", "--to", "0", "1", "--k", "2.5", "--method", "ipopt")
+    assert code == 0, err
     line = _line(out, "solver")
     assert "Solve_Succeeded" not in line and "root polished by ipopt" in line
     iterations = int(line.split("root polished by ipopt: ", 1)[1].split()[0])

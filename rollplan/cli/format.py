@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from ..planners.geometric.planner import C_POLISH
 from .common import NORM
 
 __all__ = ["num", "fmt_plan", "fmt_all", "fmt_state", "fmt_psi", "fmt_solver", "fmt_composed"]
@@ -75,8 +74,8 @@ def fmt_solver(stats) -> str:
                      "certified or rejected")
     elif "candidates" in d:
         parts.append(f"{d['candidates']} brackets, {d['solves']} solves")
-    if stats.method == C_POLISH:
-        parts.append("roots polished by Newton's method in the C search")
+    if stats.method == "c" and stats.status == "ok":   # one call of the C planner
+        parts.append("root polished by Newton on the accurate leaf map and certified, in C")
         return "; ".join(parts) + f"; {stats.time_s * 1e3:.1f} ms"
     polished = "0 iterations (already at the root)" if n == 0 else f"{n} iteration(s)"
     ok = stats.status in ("Solve_Succeeded", "success", "ok")

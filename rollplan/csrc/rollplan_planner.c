@@ -49,6 +49,7 @@
 #define CERT_DELTA RP_CERT_DELTA
 #define CERT_BASE RP_CERT_BASE
 #define CERT_SAFETY RP_CERT_SAFETY
+#define CERT_ROUNDING RP_CERT_ROUNDING  /* safety factor of the rounding allowance (certify.ROUNDING_FACTOR) */
 #define NPANEL RP_NPANEL                /* panels of each leaf (the curve's) */
 #define NOT_A_ROOT (RP_NOT_A_ROOT * CERT_TOL)  /* a polished root the leaf map misses by more is none (enumerate.NOT_A_ROOT) */
 #define CERT_REFINE 3                  /* at most 3 more doublings when only the bound is too large */
@@ -222,10 +223,12 @@ static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, 
     return 0;
 }
 
-/* The whole n-step motion from rest with mult x s_counts RK8 steps per panel; x in place. Every step of the
- * motion is integrated (from the state the previous one left); only the stage tables of the panels, which
- * depend on the panel's step h alone, are computed once, in the first step. */
-static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2], casadi_real k, casadi_real gamma) {
+/* The whole n-step motion from rest with mult x s_counts RK8 steps per panel; x in place; *psi_scale grows to the
+ * largest |psi| at the end of a leaf. Every step of the motion is integrated (from the state the previous one
+ * left); only the stage tables of the panels, which depend on the panel's step h alone, are computed once, in the
+ * first step. */
+static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2], casadi_real k, casadi_real gamma,
+                  casadi_real *psi_scale) {
     static casadi_real rot[2][NPANEL][2 * NSTAGE];   /* static: not reentrant anyway; keeps the stack small */
     casadi_real h, cg[2];
     int s, leaf, j, nj;
@@ -239,6 +242,7 @@ static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2]
                 if (s == 0) stage_rotations(h, rot[leaf][j]);
                 if (rk8_steps(leaf, x, s_breaks[j], h, nj, rot[leaf][j], ab, k, cg)) return 1;
             }
+            *psi_scale = RP_FMAX(*psi_scale, RP_FABS(x[2]));
         }
     }
     return 0;
@@ -247,7 +251,8 @@ static int motion(casadi_real x[3], int mult, int steps, const casadi_real ab[2]
 int RP_NAME(certify)(casadi_real a, casadi_real b, casadi_real gamma, int steps, casadi_real k, casadi_real u, casadi_real v, casadi_real psi,
                      casadi_real final[3], casadi_real *residual, casadi_real *bound) {
     casadi_real ab[2], xc[3] = {RP_R(0.0), RP_R(0.0), RP_R(0.0)}, xf[3] = {RP_R(0.0), RP_R(0.0), RP_R(0.0)}, w, rate, n;
-    int mult;
+    casadi_real scale = RP_R(0.0), per = RP_R(0.0);
+    int mult, leaf, j;
     if (residual) *residual = INFINITY;
     if (bound) *bound = INFINITY;
     if (!(isfinite(a) && isfinite(b) && isfinite(gamma) && isfinite(u) && isfinite(v) && isfinite(psi))
@@ -257,12 +262,18 @@ int RP_NAME(certify)(casadi_real a, casadi_real b, casadi_real gamma, int steps,
     ab[0] = a;
     ab[1] = b;
     if (counts(ab, k, gamma)) return RP_NOT_CERTIFIED;
-    if (motion(xc, 1, steps, ab, k, gamma) || motion(xf, 2, steps, ab, k, gamma)) return RP_NOT_CERTIFIED;
+    for (leaf = 0; leaf < 2; ++leaf)
+        for (j = 0; j < NPANEL; ++j) per += s_counts[leaf][j];   /* RK8 steps of one figure eight, coarse run */
+    if (motion(xc, 1, steps, ab, k, gamma, &scale) || motion(xf, 2, steps, ab, k, gamma, &scale))
+        return RP_NOT_CERTIFIED;
     for (mult = 2;; mult *= 2) {
         /* step doubling: |x_2N - x_N| / (2^8 - 1) estimates the error of x_2N for an order-8 method; divided
-         * by CERT_SAFETY only, a margin for steps not yet in the asymptotic regime */
+         * by CERT_SAFETY only, a margin for steps not yet in the asymptotic regime; plus the rounding errors of
+         * the finer run, which the difference of two runs does not show: a random walk over its steps, reaching
+         * (u_a, v_a) through psi (certify.rounding_allowance) */
         w = RP_SQRT((xf[0] - xc[0]) * (xf[0] - xc[0]) + (xf[1] - xc[1]) * (xf[1] - xc[1])
-                 + (xf[2] - xc[2]) * (xf[2] - xc[2])) / CERT_SAFETY;
+                 + (xf[2] - xc[2]) * (xf[2] - xc[2])) / CERT_SAFETY
+            + CERT_ROUNDING * REAL_EPS * (RP_R(1.0) + scale) * RP_SQRT(mult * per * steps);
         rate = wrap(xf[2] - psi);
         n = RP_SQRT((xf[0] - u) * (xf[0] - u) + (xf[1] - v) * (xf[1] - v) + rate * rate);
         /* undecided (the miss may be within the integration error, the bound too large for the tolerance):
@@ -272,7 +283,7 @@ int RP_NAME(certify)(casadi_real a, casadi_real b, casadi_real gamma, int steps,
         xc[1] = xf[1];
         xc[2] = xf[2];
         xf[0] = xf[1] = xf[2] = RP_R(0.0);
-        if (motion(xf, 2 * mult, steps, ab, k, gamma)) return RP_NOT_CERTIFIED;
+        if (motion(xf, 2 * mult, steps, ab, k, gamma, &scale)) return RP_NOT_CERTIFIED;
     }
     if (final) {
         final[0] = xf[0];
@@ -1211,9 +1222,11 @@ typedef struct {
 /* The certificate as the search applies it (<prefix>_certify). A test build may define
  * <PREFIX>_TEST_REJECT_BELOW = L: then every plan with a + b < L is rejected (after its certificate ran), which
  * makes the shortest root fail and exercises the search's fallback (tests/test_codegen.py); no other build defines it. */
+static casadi_real s_cert_final[3];   /* the finest run of the last certificate of the search */
+static casadi_real s_plan_final[3];   /* that of the plan plan_with returned (for plan_many) */
 static int search_certify(casadi_real a, casadi_real b, casadi_real gamma, int steps, casadi_real k, casadi_real u,
                           casadi_real v, casadi_real psi, casadi_real *residual, casadi_real *bound) {
-    int status = RP_NAME(certify)(a, b, gamma, steps, k, u, v, psi, NULL, residual, bound);
+    int status = RP_NAME(certify)(a, b, gamma, steps, k, u, v, psi, s_cert_final, residual, bound);
 #ifdef RP_TEST_REJECT_BELOW
     if (a + b < RP_TEST_REJECT_BELOW) status = RP_NOT_CERTIFIED;
 #endif
@@ -1295,6 +1308,9 @@ static int candidate(search_t *S, const branch_t *br, casadi_real x) {
         return 0;
     }
     S->best = a + b;
+    s_plan_final[0] = s_cert_final[0];
+    s_plan_final[1] = s_cert_final[1];
+    s_plan_final[2] = s_cert_final[2];
     S->plan->a = a;
     S->plan->b = b;
     S->plan->gamma = gamma;
@@ -1636,6 +1652,9 @@ int RP_NAME(plan_with)(casadi_real u, casadi_real v, casadi_real psi, int steps,
     if (S.defer && S.best < INFINITY) {
         if (search_certify(plan->a, plan->b, plan->gamma, steps, k, u, v, S.psi_w, &residual, &bound)
             == RP_OK) {
+            s_plan_final[0] = s_cert_final[0];
+            s_plan_final[1] = s_cert_final[1];
+            s_plan_final[2] = s_cert_final[2];
             plan->residual = residual;
             plan->bound = bound;
             return RP_OK;
@@ -1696,6 +1715,19 @@ int RP_NAME(plan_all)(casadi_real u, casadi_real v, casadi_real psi, int steps, 
 
 int RP_NAME(plan)(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k, RP_NAME(plan_t) *plan) {
     return RP_NAME(plan_with)(u, v, psi, steps, k, NULL, plan);
+}
+
+int RP_NAME(plan_many)(int count, const casadi_real *targets, int steps, casadi_real k,
+                       const RP_NAME(options_t) *options, RP_NAME(plan_t) *plans, casadi_real *finals, int *status) {
+    int i, j, certified = !options || options->certify;
+    if (count < 0 || (count > 0 && (targets == NULL || plans == NULL || status == NULL))) return RP_BAD_INPUT;
+    for (i = 0; i < count; ++i) {
+        status[i] = RP_NAME(plan_with)(targets[3 * i], targets[3 * i + 1], targets[3 * i + 2], steps, k, options,
+                                       &plans[i]);
+        if (finals)
+            for (j = 0; j < 3; ++j) finals[3 * i + j] = status[i] == RP_OK && certified ? s_plan_final[j] : NAN;
+    }
+    return RP_OK;
 }
 
 /* ------------------------------------------------------------------ time law (rollplan.execution.timing) */

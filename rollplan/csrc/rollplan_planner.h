@@ -126,6 +126,17 @@ int RP_NAME(plan_with)(casadi_real u, casadi_real v, casadi_real psi, int steps,
                        const RP_NAME(options_t) *options, RP_NAME(plan_t) *plan);
 
 /*
+ * Many plans in one call: for i < count, plans[i] and status[i] of <prefix>_plan_with for the target
+ * targets[3 i .. 3 i + 2] = (u, v, psi), all with the same steps, k and options; finals (may be NULL; else 3 count
+ * entries) receives the final state (u_a, v_a, psi) of the finest run of each returned plan's certificate
+ * (<prefix>_certify; NaN where status[i] is not <PREFIX>_OK or options->certify = 0). Returns <PREFIX>_OK, or
+ * <PREFIX>_BAD_INPUT for count < 0 or a NULL targets, plans or status with count > 0 (then nothing is planned).
+ * Static memory only; not reentrant.
+ */
+int RP_NAME(plan_many)(int count, const casadi_real *targets, int steps, casadi_real k,
+                       const RP_NAME(options_t) *options, RP_NAME(plan_t) *plans, casadi_real *finals, int *status);
+
+/*
  * Every plan: every root of (32)-(33) on every branch (n eta = psi + 2 pi m for every m with |eta_m| at most the
  * range of E on (0, A_MAX]; or on options->branch only), each polished and certified by <prefix>_certify (with
  * options->certify = 0: every root of the leaf map, uncertified), as rollplan's `plan --all` lists them
@@ -149,7 +160,9 @@ int RP_NAME(plan_all)(casadi_real u, casadi_real v, casadi_real psi, int steps, 
  * gets N = ceil(w (RP_CERT_BASE + max|psi'|) / RP_CERT_DELTA) equal steps (psi' sampled at 5 points; it does not
  * depend on the state); the motion is integrated with N and with 2N steps per panel, `bound` is
  * |x_2N - x_N| / RP_CERT_SAFETY (step doubling: the error of x_2N of an order-8 method is about
- * |x_2N - x_N| / 255; dividing by RP_CERT_SAFETY only leaves a margin) and `residual` is
+ * |x_2N - x_N| / 255; dividing by RP_CERT_SAFETY only leaves a margin) plus a rounding allowance
+ * RP_CERT_ROUNDING eps (1 + max |psi|) sqrt(steps of the finer run) (the rounding errors, which the difference of
+ * two runs does not show, add like a random walk and reach (u_a, v_a) through psi), and `residual` is
  * |x_2N - (u, v, psi)| (psi wrapped). While that is undecided (residual - bound <= CERT_TOL <
  * residual + bound), the steps are doubled again (x_2N becomes the coarse run), at most 3 times.
  * `final` (may be NULL) receives the finest run.

@@ -54,12 +54,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import InputError, NoPlanError, OutputError, SolverError, check_choice, check_flag, check_whole
 from ..inputs import parse_number, parse_whole, read_csv, show_path
 from ..io import plan_to_dict, tagged
 from ..outputs import LineWriter, check_writable, claim, write_atomic
 from ..planners import solve
-from ..planners.geometric import SOLVERS, default_planner
+from ..planners.geometric import DEFAULT_ROOT_SOLVER, SOLVERS, default_planner, plan_many
 from ..planners.method import renamed_option
 from ..problem import DEFAULT_K, Problem
 from ..progress import Progress, reporting
@@ -127,7 +129,7 @@ def read_targets(path) -> list:
     return _targets(path).rows
 
 
-def row_key(row: dict, root_solver: str = "ipopt", problem: str | None = None) -> str:
+def row_key(row: dict, root_solver: str = DEFAULT_ROOT_SOLVER, problem: str | None = None) -> str:
     """The content key of a row: SHA-256 of its columns and fields (sorted by column), the root solver,
     and what is wrong with its shape (``problem``), as hex."""
     content = json.dumps({"format": _KEY_FORMAT, "method": root_solver, "row": row, "problem": problem},
@@ -148,7 +150,7 @@ def _parse(row: dict):
     return (vals["u_a"], vals["v_a"], vals["psi"]), steps, vals["k"]
 
 
-def plan_row(index: int, row: dict, root_solver: str = "ipopt", problem: str | None = None) -> dict:
+def plan_row(index: int, row: dict, root_solver: str = DEFAULT_ROOT_SOLVER, problem: str | None = None) -> dict:
     """Plan one row by the method ``"geometric"`` (:func:`rollplan.planners.solve`) with ``root_solver``;
     the JSON object of its output line (never raises for a bad row).
 
@@ -192,10 +194,50 @@ class _Warm:
         default_planner(self.root_solver)
 
 
-def _plan_job(job):
-    index, row, root_solver, problem = job
+#: Most rows per task of the planning phase (:func:`_task_size`): with the default root solver, the rows of a task
+#: that share k and steps are planned by one call of :func:`rollplan.planners.geometric.plan_many`.
+ROWS_PER_TASK = 64
+
+
+def _task_size(rows: int, jobs: int) -> int:
+    """Rows per task: :data:`ROWS_PER_TASK`, at most an eighth of each worker's share (a short batch: row by row)."""
+    return max(1, min(ROWS_PER_TASK, rows // (8 * jobs)))
+
+
+def _plan_task(jobs) -> list:
+    """The output lines of the rows ``jobs`` (a task), in order: with the default root solver, the rows of one k
+    and one number of steps by :func:`~rollplan.planners.geometric.plan_many` (a certified one-leg plan, the
+    plan :func:`plan_row` gives it); every other row (and one without such a plan, which may need two legs, or
+    fails with its own reason) by :func:`plan_row`."""
+    lines = [None] * len(jobs)
     with reporting(None):   # the batch shows its own progress, not the planner's of each row
-        return plan_row(index, row, root_solver, problem)
+        if jobs and jobs[0][2] == DEFAULT_ROOT_SOLVER:
+            groups = {}
+            for j, (_, row, _, problem) in enumerate(jobs):
+                if not problem:
+                    try:
+                        target, steps, k = _parse(row)
+                    except InputError:
+                        continue
+                    groups.setdefault((k, steps), []).append((j, target))
+            for (k, steps), members in groups.items():
+                try:
+                    found = plan_many([t for _, t in members], k=k, steps=steps)
+                except (InputError, SolverError):
+                    continue   # planned row by row below, each line with its own reason
+                for i in np.flatnonzero(found.ok):
+                    j = members[i][0]
+                    index, row, root_solver, problem = jobs[j]
+                    p = found.plan(int(i))
+                    head = {"index": index, "key": row_key(row, root_solver, problem)}
+                    lines[j] = tagged({**head, **plan_to_dict(p, None, include_alternatives=False), "input": row,
+                                       "status": "ok"}, p.problem.unit)
+        return [d if d is not None else plan_row(*job) for d, job in zip(lines, jobs)]
+
+
+def _lost_task(jobs, exc) -> list:
+    """The output lines of a task lost on a cluster."""
+    return [_lost_row(job, exc) for job in jobs]
 
 
 def _batch_line(raw: bytes):
@@ -268,7 +310,7 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
         then ignored); the output is the same.
     root_solver : str
         Root solver of the method ``"geometric"`` (:data:`rollplan.planners.geometric.SOLVERS`; default
-        ``"ipopt"``).
+        ``"c"``: the C planner's search, polish and certificate).
 
     Returns
     -------
@@ -284,7 +326,7 @@ def run_batch(targets, out, jobs: int = 1, resume: bool = False, overwrite: bool
         Ctrl-C; the finished lines stay in ``out``.
     """
     jobs = check_whole("jobs", jobs, 1, MAX_JOBS)
-    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
     root_solver = check_choice(name, root_solver, SOLVERS)
     resume, overwrite = check_flag("resume", resume), check_flag("overwrite", overwrite)
     if resume and overwrite:
@@ -322,10 +364,12 @@ def _run(table, out: Path, executor, resume, overwrite, root_solver, progress) -
     writer = None
     try:
         with executor:   # connects to a scheduler (and checks its workers) before the output is touched
-            results = executor.map(_plan_job, todo, on_error=_lost_row)   # yields in input order
+            size = _task_size(len(todo), executor.jobs)
+            tasks = [todo[i:i + size] for i in range(0, len(todo), size)]
+            results = executor.map(_plan_task, tasks, on_error=_lost_task)   # yields in input order
             if report:
                 report(count, len(rows), failed)
-            for d in results:
+            for d in (d for lines_ in results for d in lines_):
                 if writer is None:   # the output is replaced when its first new line is ready, not before
                     write_atomic(out, (head + _dump(d)).encode(), "output file")
                     writer = LineWriter(out, "output file", sync_every=1 << 30, sync_seconds=FSYNC_INTERVAL)

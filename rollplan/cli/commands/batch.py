@@ -75,7 +75,8 @@ def _batch_arguments(b) -> None:
                         "'rollplan[distributed]'; workers: dask worker ADDRESS --nthreads 1)")
     b.add_argument("--resume", action="store_true", help="keep the lines in --out and plan only the missing rows")
     b.add_argument("--overwrite", action="store_true", help="replace an existing --out")
-    b.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
+    b.add_argument("--method", choices=sorted(geometric.SOLVERS), default=geometric.DEFAULT_ROOT_SOLVER,
+                   help="root solver")
     b.add_argument("--quiet", action="store_true", help="no progress on stderr")
     b.set_defaults(func=cmd_batch)
 

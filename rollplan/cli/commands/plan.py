@@ -56,7 +56,8 @@ def register(sub) -> None:
     p.add_argument("--all", action="store_true", help="also list every other verified solution branch (one leg)")
     p.add_argument("--branch", type=whole, default=None, metavar="M",
                    help="only branch M of n eta = psi + 2 pi M (one leg of figure eights)")
-    p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
+    p.add_argument("--method", choices=sorted(geometric.SOLVERS), default=geometric.DEFAULT_ROOT_SOLVER,
+                   help="root solver")
     p.add_argument("--json", metavar="FILE", help=JSON_HELP.format("the plan"))
     p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere (from below) and the "
                    "plane, and psi along it (with --duration or --timing: omega, rotor rates and torques in time)")

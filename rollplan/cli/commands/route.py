@@ -47,7 +47,8 @@ def register(sub) -> None:
                    help=f"figure eights n {STEPS_HELP} per leg where a row does not say (default 1)")
     add_robot_options(w)
     w.add_argument("--legs", choices=geometric.LEGS, default="fallback", help="as for plan (default fallback)")
-    w.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
+    w.add_argument("--method", choices=sorted(geometric.SOLVERS), default=geometric.DEFAULT_ROOT_SOLVER,
+                   help="root solver")
     w.add_argument("--json", metavar="FILE", help=JSON_HELP.format("the route"))
     w.add_argument("--plot", metavar="FILE.png", help="draw the route's contact path")
     add_timing_options(w)

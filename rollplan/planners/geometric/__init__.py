@@ -7,13 +7,16 @@ constants in :mod:`.search_constants`), :mod:`.refine` (the polish: root solvers
 :mod:`.certify` (independent integration of the whole motion), :mod:`.planner` (the pole-to-pole problem class
 :class:`GeometricPhasePlanner`); full reconfiguration: :mod:`.maneuvers` (approach and departure rolls),
 :mod:`.turn` (turning in place), :mod:`.legs` (two legs), :mod:`.composed` (:class:`ComposedPlanner` and
-:func:`plan`, for any start and goal), :mod:`.route`. Design: docs/design/geometric-planner.md.
+:func:`plan`, for any start and goal), :mod:`.route`, :mod:`.many` (:func:`plan_many`: many targets per
+call). Design: docs/design/geometric-planner.md.
 """
 
 from .composed import LEGS, ComposedPlan, ComposedPlanner, as_composed, plan
+from .many import PlanMany, plan_many
 from .planner import TOLERANCE, GeometricPhasePlanner, Plan, StepResult, default_planner, step
-from .refine import SOLVERS
+from .refine import DEFAULT_ROOT_SOLVER, SOLVERS
 from .route import Route, plan_route
 
-__all__ = ["TOLERANCE", "SOLVERS", "LEGS", "GeometricPhasePlanner", "Plan", "StepResult", "default_planner", "plan",
-           "step", "ComposedPlanner", "ComposedPlan", "as_composed", "Route", "plan_route"]
+__all__ = ["TOLERANCE", "SOLVERS", "DEFAULT_ROOT_SOLVER", "LEGS", "GeometricPhasePlanner", "Plan", "StepResult",
+           "default_planner", "plan", "step", "ComposedPlanner", "ComposedPlan", "as_composed", "Route", "plan_route",
+           "PlanMany", "plan_many"]

@@ -32,6 +32,7 @@ from ...problem import K_MIN, MAX_STEPS
 from ...result import CERTIFICATE_TOLERANCE
 from . import leafmap
 from . import search_constants as sc
+from .certify import ROUNDING_FACTOR
 from .search_constants import K_MONOTONE
 
 __all__ = ["CSRC", "STATIC_FILES", "CONFIG_HEADER", "DEFAULT_K_MAX", "CERT_TOL", "FLOAT_CERT_TOL", "CERT_DELTA",
@@ -146,6 +147,7 @@ def config_values(functions, steps_per_leaf: int, k_max: float, real: str) -> di
         "CERT_DELTA": repr(CERT_DELTA),
         "CERT_BASE": repr(CERT_BASE),
         "CERT_SAFETY": repr(CERT_SAFETY),
+        "CERT_ROUNDING": repr(ROUNDING_FACTOR),
         "STEPS_PER_LEAF": str(int(steps_per_leaf)),
         "NPANEL": str(len(breaks) - 1),
         "BREAKS": ", ".join(repr(float(b)) for b in breaks),

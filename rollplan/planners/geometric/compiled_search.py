@@ -23,6 +23,8 @@ import time
 from functools import lru_cache
 from typing import NamedTuple
 
+import numpy as np
+
 from ... import interrupts
 from ...core.compiled import last_build, no_compiler_reason, shared_library
 from ...errors import SolverError
@@ -30,7 +32,8 @@ from ...problem import K_MAX
 from .c_sources import DEFAULT_K_MAX, generator_files, sources
 
 __all__ = ["PREFIX", "DEFAULT_K_MAX", "UNAVAILABLE", "SearchResult", "ListedRoot", "Certified", "library",
-           "unavailable", "shortest_root", "all_roots", "listed_roots", "certify_roots"]
+           "unavailable", "shortest_root", "all_roots", "listed_roots", "certify_roots", "certified_plan",
+           "certified_plans"]
 
 #: Prefix of the generated C symbols (the code generator's default).
 PREFIX = "rollplan"
@@ -107,6 +110,7 @@ class _Library(NamedTuple):
 
     plan_with: object
     plan_all: object
+    plan_many: object
     certify: object
 
 
@@ -114,6 +118,7 @@ def _load(path: str):
     lib = ctypes.CDLL(path)
     try:
         plan_with, plan_all = getattr(lib, f"{PREFIX}_plan_with"), getattr(lib, f"{PREFIX}_plan_all")
+        plan_many = getattr(lib, f"{PREFIX}_plan_many")
         certify = getattr(lib, f"{PREFIX}_certify")
     except AttributeError as exc:   # not the planner's library: rebuilt
         raise OSError(str(exc)) from exc
@@ -121,9 +126,11 @@ def _load(path: str):
     dp = ctypes.POINTER(ctypes.c_double)
     plan_with.argtypes = [d, d, d, ctypes.c_int, d, opt, plan]
     plan_all.argtypes = [d, d, d, ctypes.c_int, d, opt, plan, ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
+    plan_many.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_int, d, opt, ctypes.c_void_p, ctypes.c_void_p,
+                          ctypes.c_void_p]
     certify.argtypes = [d, d, d, ctypes.c_int, d, d, d, d, dp, dp, dp]
-    plan_with.restype = plan_all.restype = certify.restype = ctypes.c_int
-    return _Library(plan_with, plan_all, certify)
+    plan_with.restype = plan_all.restype = plan_many.restype = certify.restype = ctypes.c_int
+    return _Library(plan_with, plan_all, plan_many, certify)
 
 
 @lru_cache(maxsize=1)
@@ -253,3 +260,60 @@ def certify_roots(roots, u: float, v: float, psi: float, steps: int, k: float, p
         if progress is not None:
             progress(len(out), total)
     return out
+
+
+def _plan_dtype():
+    """The numpy dtype of ``<prefix>_plan_t`` (the layout of :class:`_Plan`)."""
+    dt = np.dtype([(name, {ctypes.c_double: np.float64, ctypes.c_long: np.int_, ctypes.c_int: np.intc}[t])
+                   for name, t in _Plan._fields_], align=True)
+    if dt.itemsize != ctypes.sizeof(_Plan):
+        raise SolverError("the C planner's plan_t does not match its numpy layout", UNAVAILABLE)
+    return dt
+
+
+#: Targets per call of ``<prefix>_plan_many`` from :func:`certified_plans` (a call runs a few ms to ~0.1 s, so
+#: that Ctrl-C acts between calls).
+_CHUNK = 256
+
+
+def certified_plan(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
+    """``(status, plan, final)``: the shortest certified plan for the target ``(u, v, psi)`` [R, rad] by one call
+    of the C planner (search, Newton polish on the accurate leaf map and the RK8 certificate
+    ``<prefix>_certify``): the C status (:data:`OK`, :data:`NO_PLAN` or :data:`NOT_CERTIFIED`),
+    the ``_Plan`` (residual and bound of its certificate; on NOT_CERTIFIED those of the best rejected root) and
+    the certificate's final ``(u_a, v_a, psi)`` (NaN unless OK). SolverError without the library
+    (:func:`unavailable`) or when the search does not complete."""
+    lib = _library()
+    plan, final, status = _Plan(), (ctypes.c_double * 3)(), ctypes.c_int(NO_PLAN)
+    if branch is not None and abs(branch) > 2**31 - 1:   # |eta| beyond the range of E: no root on it
+        return NO_PLAN, plan, (math.nan,) * 3
+    options = _Options(int(branch is not None), 0 if branch is None else int(branch), 1)
+    target = (ctypes.c_double * 3)(u, v, psi)
+    _call(lib.plan_many, k, steps <= _DIRECT_STEPS, 1, target, int(steps), float(k), ctypes.byref(options),
+          ctypes.byref(plan), final, ctypes.byref(status))
+    if status.value not in (OK, NO_PLAN, NOT_CERTIFIED):
+        raise _incomplete(status.value)
+    return status.value, plan, tuple(final)
+
+
+def certified_plans(targets, steps: int, k: float, progress=None):
+    """``(status, plans, finals)`` of many targets (array ``(N, 3)`` of ``(u, v, psi)`` [R, rad]) for one ``steps``
+    and k, by ``<prefix>_plan_many`` (:func:`certified_plan` per target, in chunks of :data:`_CHUNK` targets per
+    call): ``status`` (N,) the C statuses, ``plans`` a structured array (N,) of ``plan_t`` fields, ``finals``
+    (N, 3). ``progress(done, total)`` is called after each chunk."""
+    lib = _library()
+    targets = np.ascontiguousarray(targets, dtype=np.float64).reshape(-1, 3)
+    count = targets.shape[0]
+    plans = np.zeros(count, dtype=_plan_dtype())
+    finals = np.full((count, 3), math.nan)
+    status = np.full(count, NO_PLAN, dtype=np.intc)
+    options = _Options(0, 0, 1)
+    size = plans.dtype.itemsize
+    for start in range(0, count, _CHUNK):
+        n = min(_CHUNK, count - start)
+        _call(lib.plan_many, k, n == 1 and steps <= _DIRECT_STEPS, n, targets[start:].ctypes.data, int(steps),
+              float(k), ctypes.byref(options), plans.ctypes.data + start * size, finals[start:].ctypes.data,
+              status[start:].ctypes.data)
+        if progress is not None:
+            progress(start + n, count)
+    return status, plans, finals

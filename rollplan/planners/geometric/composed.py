@@ -31,7 +31,7 @@ from ..method import Method, renamed_option, with_steps
 from .legs import intermediate_state, second_leg, two_leg_candidates
 from .maneuvers import StraightRoll
 from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
-from .refine import SOLVERS
+from .refine import DEFAULT_ROOT_SOLVER, SOLVERS
 from .turn import CircleTurn, turn_in_place
 
 __all__ = ["LEGS", "IDENTITY_TOL", "ComposedPlan", "ComposedPlanner", "default_composed_planner", "as_composed",
@@ -227,7 +227,7 @@ class ComposedPlanner(Method):
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  legs: str = "fallback", *, steps: int | None = None, all_solutions: bool = False,
                  branch: int | None = None, method: str | None = None) -> None:
-        root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+        root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
         self.legs = check_choice("legs", legs, LEGS)
         check_choice(name, root_solver, SOLVERS)
         self.steps = None if steps is None else check_steps(steps)
@@ -419,7 +419,7 @@ class ComposedPlanner(Method):
 
 
 @lru_cache(maxsize=8)
-def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback") -> ComposedPlanner:
+def default_composed_planner(root_solver: str = DEFAULT_ROOT_SOLVER, legs: str = "fallback") -> ComposedPlanner:
     """The shared composed planner of :func:`plan` for a root solver and a legs policy."""
     return ComposedPlanner(root_solver, legs=legs)
 
@@ -459,7 +459,7 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     legs : str
         ``"fallback"`` (default), ``"shortest"``, ``"one"`` or ``"two"`` (docs/design/composition.md).
     root_solver : str
-        Root solver name from :data:`.refine.SOLVERS` (default ``"ipopt"``).
+        Root solver name from :data:`.refine.SOLVERS` (default ``"c"``: the C planner's search, polish and certificate).
 
     Returns
     -------
@@ -477,7 +477,7 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     SolverError
         The root solver broke down.
     """
-    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
     check_choice(name, root_solver, SOLVERS)
     check_choice("legs", legs, LEGS)
     problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,

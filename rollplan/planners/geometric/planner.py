@@ -50,24 +50,27 @@ from ...result import (
 )
 from ...robot import Robot
 from ..method import Method, renamed_option
-from .c_sources import CERT_TOL as C_CERT_TOL
-from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier, RK8Certifier, end_contact
-from .compiled_search import all_roots, certify_roots, listed_roots, shortest_root
+from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier, end_contact
+from .compiled_search import (
+    NO_PLAN,
+    NOT_CERTIFIED,
+    OK,
+    all_roots,
+    certified_plan,
+    certify_roots,
+    listed_roots,
+    shortest_root,
+)
 from .leafmap import panels_for, step_values
-from .refine import SOLVERS, leaf_step, polisher, step_residual
+from .refine import DEFAULT_ROOT_SOLVER, SOLVERS, leaf_step, polisher, step_residual
 from .search_constants import NOT_A_ROOT
 
-__all__ = ["TOLERANCE", "C_CERTIFIER", "C_POLISH", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner",
-           "plan", "step"]
+__all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
 
 log = logging.getLogger(__name__)
 
 #: Default tolerance of the certified residual (units of R and rad).
 TOLERANCE = CERTIFICATE_TOLERANCE
-#: Certificate name of the plans of ``all_solutions`` certified by the C certificate (``<prefix>_certify``).
-C_CERTIFIER = "rk8-c"
-#: Solver name of the plans of ``all_solutions`` whose roots the C search polished (Newton on the accurate map).
-C_POLISH = "c-newton"
 #: Most CVODES samples per leaf of :meth:`GeometricPhasePlanner.sample`.
 _MAX_PER_LEAF = 100000
 #: A polished root farther than this from the enumerated one (in a or b [R]) is not taken (the solver
@@ -222,9 +225,11 @@ class GeometricPhasePlanner(Method):
     Parameters
     ----------
     root_solver : str
-        Solver of the shooting problem (32)-(33) from :data:`.refine.SOLVERS`: ``"ipopt"`` (the
-        default) or ``"newton"``. It polishes each enumerated root (started there, it needs at most one or
-        two iterations). (Its old name ``method`` still works, with a DeprecationWarning.)
+        Solver of the shooting problem (32)-(33) from :data:`.refine.SOLVERS`: ``"c"`` (the default: the C
+        search's own Newton polish; with the default certifier and tol, search, polish and certificate run in one
+        call of the C planner, :func:`.compiled_search.certified_plan`), ``"ipopt"`` or ``"newton"``, which
+        polish each enumerated root again (started there, they need at most one or two iterations) before the
+        certificate of :mod:`.certify`. (Its old name ``method`` still works, with a DeprecationWarning.)
     nodes : int
         Chebyshev degree per panel of the spectral step map, in [4, 200].
     tol : float
@@ -246,7 +251,7 @@ class GeometricPhasePlanner(Method):
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  certifier: str = DEFAULT_CERTIFIER, compiled_search: bool = True, *, all_solutions: bool = False,
                  branch: int | None = None, method: str | None = None) -> None:
-        root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+        root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
         self.root_solver = check_choice(name, root_solver, SOLVERS)
         self.all_solutions = check_flag("all_solutions", all_solutions)
         self.branch = None if branch is None else check_whole("branch", branch)
@@ -322,6 +327,8 @@ class GeometricPhasePlanner(Method):
                               "motions with a nonzero displacement")
         target = (goal_r.u_a, goal_r.v_a, psi_des)
         solve = self._solve_compiled_all if all_solutions else self._solve_compiled
+        if not all_solutions and self._in_c:
+            solve = self._solve_in_c
         return solve(problem, None if branch is None else branch + turns, target, turns, t_start)
 
     def _raise_if_rejected(self, where: str, rejected: list) -> None:
@@ -331,6 +338,34 @@ class GeometricPhasePlanner(Method):
                               f"their certified residual plus error bound (best {min(rejected):.1e}) exceeds "
                               f"{self.tol:.0e}; "
                               "try more steps")
+
+    @cached_property
+    def _in_c(self) -> bool:
+        """True when one call of the C planner does search, polish and certificate (the default root solver
+        with the default certifier and tolerance, which the C certificate applies)."""
+        return (self.root_solver == DEFAULT_ROOT_SOLVER and type(self.certifier) is CERTIFIERS[DEFAULT_CERTIFIER]
+                and self.tol == CERTIFICATE_TOLERANCE)
+
+    def _solve_in_c(self, problem, branch, target, turns, t_start) -> Plan:
+        """The shortest certified plan (on ``branch`` if given) by one call of the C planner: the search, its
+        Newton polish and its RK8 certificate (:func:`.compiled_search.certified_plan`)."""
+        status, p, final = certified_plan(target[0], target[1], target[2], problem.steps, problem.k, branch)
+        if status == OK:
+            R = problem.radius
+            # the figure eight ends at the pole (u_o = v_o = 0) by construction; the certificate integrates u_a,
+            # v_a, psi
+            cert = Certificate(self.certifier.name, State(final[0] * R, final[1] * R, final[2], 0.0, 0.0),
+                               p.residual, p.bound, self.tol)
+            details = {"candidates": int(p.roots), "solves": 1, "branches": int(p.branches), "roots": int(p.roots),
+                       "search": "compiled"}
+            stats = SolverStats(DEFAULT_ROOT_SOLVER, "ok", 0, time.perf_counter() - t_start, details)
+            return Plan(problem, p.a * R, p.b * R, p.gamma, int(p.m) - turns, p.h * R, p.eta,
+                        2 * np.pi * problem.steps * (p.a + p.b) * R, cert, stats, (), self)
+        if status == NO_PLAN:
+            raise _no_root(problem, f"{p.branches} branches searched completely")
+        if status == NOT_CERTIFIED:
+            self._raise_if_rejected(problem.describe(), [p.residual + p.bound])
+        raise _no_root(problem, f"{p.branches} branches searched completely")
 
     def _solve_compiled(self, problem, branch, target, turns, t_start) -> Plan:
         """The shortest root (on ``branch`` if given) by the compiled C search, polished and certified here; when
@@ -361,11 +396,11 @@ class GeometricPhasePlanner(Method):
 
     def _solve_compiled_all(self, problem, branch, target, turns, t_start) -> Plan:
         """Every root of every branch (of ``branch`` if given) by the compiled C search
-        (:func:`.compiled_search.listed_roots`), each certified (:meth:`_certify_in_c`, or with another certifier
-        or a tolerance below the C certificate's, polished and certified here); the certified ones, shortest
-        first."""
+        (:func:`.compiled_search.listed_roots`), each certified by the C certificate (:meth:`_certify_in_c`) with
+        the default root solver, certifier and tolerance, otherwise polished by the root solver and certified here;
+        the certified ones, shortest first."""
         k, steps = problem.k, problem.steps
-        in_c = isinstance(self.certifier, RK8Certifier) and self.tol >= C_CERT_TOL
+        in_c = self._in_c
         listed = (listed_roots if in_c else all_roots)(target[0], target[1], target[2], steps, k, branch)
         if not listed:   # the complete search found no root
             raise _no_root(problem, "the complete search found none")
@@ -404,10 +439,10 @@ class GeometricPhasePlanner(Method):
         found, rejected = [], []
         for r, c in zip(listed, certs):
             final_r = State(*c.final, *end_contact(r.b, r.gamma))
-            cert = certify(problem, final_r.scaled(problem.radius), C_CERTIFIER, error_bound=c.bound,
+            cert = certify(problem, final_r.scaled(problem.radius), self.certifier.name, error_bound=c.bound,
                            tolerance=self.tol, residual=arrival_residual(final_r, goal))
             cand = (_Root(r.a, r.b, r.gamma, r.m - turns, r.h, r.eta, r.predicted), cert,
-                    SolverStats(C_POLISH, "ok", 0, 0.0))
+                    SolverStats(DEFAULT_ROOT_SOLVER, "ok", 0, 0.0))
             if cert.passed:
                 found.append(cand)
             elif self._log_rejected(r, cand, turns):
@@ -524,7 +559,8 @@ def _contact_coordinates() -> ca.Function:
 
 
 @lru_cache(maxsize=4)
-def default_planner(root_solver: str = "ipopt", certifier: str = DEFAULT_CERTIFIER) -> GeometricPhasePlanner:
+def default_planner(root_solver: str = DEFAULT_ROOT_SOLVER,
+                    certifier: str = DEFAULT_CERTIFIER) -> GeometricPhasePlanner:
     """The shared planner of :func:`plan` and :func:`step` for a root solver and a certifier (built once per
     process)."""
     return GeometricPhasePlanner(root_solver, certifier=certifier)
@@ -559,7 +595,8 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     branch : int, optional
         Only the branch m of ``n eta = psi + 2 pi m`` (psi as given).
     root_solver : str
-        Root solver name from :data:`.refine.SOLVERS` (default ``"ipopt"``).
+        Root solver name from :data:`.refine.SOLVERS` (default ``"c"``: search, polish and certificate in
+        one call of the C planner).
 
     Returns
     -------
@@ -573,7 +610,7 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     NoPlanError
         No certified plan exists in the admissible range ``0 < a, b <= A_MAX R``.
     """
-    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
     check_choice(name, root_solver, SOLVERS)
     problem = Problem(target, k=k, robot=robot, radius=radius, steps=steps)
     return default_planner(root_solver).solve(problem, all_solutions, branch)

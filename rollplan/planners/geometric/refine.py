@@ -3,8 +3,9 @@
 On branch m, (32)-(33) read ``F(ab, par) = (eta(a, b) - eta_m, h(a, b) - h_m) = 0`` with
 ``par = (k, eta_m, h_m)``; :func:`leaf_residual` builds F in CasADi from the leaf map's closed-form turn and
 Gauss-rule displacement (compiled with its Jacobian, one function per panel count). :data:`SOLVERS` holds
-the solvers by name, ``"ipopt"`` (the default) and ``"newton"``; :func:`polisher` gives one on the compiled
-residual of k: the planner's last step before the certificate, started at an enumerated root.
+the solvers by name, ``"c"`` (the default: the C planner's Newton polish), ``"ipopt"`` and ``"newton"``;
+:func:`polisher` gives one on the compiled residual of k: the planner's last step before the certificate,
+started at an enumerated root.
 
 The residual, the solvers' contract and options: docs/design/geometric-planner.md (the polish).
 """
@@ -25,8 +26,8 @@ from ...core.curves import A_MAX
 from . import leafmap
 from .leafmap import gauss_nodes
 
-__all__ = ["SOLVERS", "SOLVER_ERROR_STATUSES", "ROOT_TOL", "step_residual", "leaf_turn", "leaf_displacement",
-           "leaf_residual", "leaf_step", "polisher"]
+__all__ = ["SOLVERS", "DEFAULT_ROOT_SOLVER", "SOLVER_ERROR_STATUSES", "ROOT_TOL", "step_residual", "leaf_turn",
+           "leaf_displacement", "leaf_residual", "leaf_step", "polisher"]
 
 #: Statuses that mean the solver broke (not that a start held no root).
 SOLVER_ERROR_STATUSES = frozenset({"Invalid_Number_Detected", "Error_In_Step_Computation", "Internal_Error",
@@ -186,11 +187,22 @@ def _newton_solver(residual: ca.Function, near_root: bool = False):
     return solve
 
 
+def _c_solver(residual: ca.Function, near_root: bool = False):
+    """The default: Newton on the accurate leaf map, as the C planner polishes its roots. The planner's default
+    path runs the C search, its polish and its certificate in one call; the paths that polish roots one by one
+    here (``all_solutions``, the composed planner's legs) run the same Newton iteration on the compiled residual
+    (:func:`_newton_solver`)."""
+    return _newton_solver(residual, near_root)
+
+
 #: Root solvers for (32)-(33), by name. Contract: ``SOLVERS[name](residual, near_root=False)`` takes a residual
 #: ``F(ab[2], par[3]) -> (2,)`` (``near_root``: every start lies next to a root) and returns
 #: ``solve(x0, par, lbx, ubx) -> (x, status, iterations, ok)``, ``ok`` when x is a candidate root inside
-#: ``[lbx, ubx]`` (the certificate decides); docs/design/geometric-planner.md.
-SOLVERS = {"ipopt": _ipopt_solver, "newton": _newton_solver}
+#: ``[lbx, ubx]`` (the certificate decides); docs/design/geometric-planner.md. ``"c"`` (the default,
+#: :data:`DEFAULT_ROOT_SOLVER`) is the C planner's polish (Newton on the leaf map).
+SOLVERS = {"c": _c_solver, "ipopt": _ipopt_solver, "newton": _newton_solver}
+#: The default root solver: the C planner's search, polish and certificate in one call.
+DEFAULT_ROOT_SOLVER = "c"
 
 
 @lru_cache(maxsize=32)

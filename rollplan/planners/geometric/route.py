@@ -27,7 +27,7 @@ from ...robot import Robot
 from ...waypoints import Waypoint
 from ..method import renamed_option
 from .composed import LEGS, as_composed, certify_path, default_composed_planner, sample_path
-from .refine import SOLVERS
+from .refine import DEFAULT_ROOT_SOLVER, SOLVERS
 
 __all__ = ["Route", "plan_route", "check_legs"]
 
@@ -116,7 +116,7 @@ def plan_route(waypoints, steps: int = 1, k: float | None = None, robot: Robot |
     NoPlanError
         A leg has no plan (the message names it), or the route fails its certificate.
     """
-    root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
+    root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
     if not isinstance(root_solver, str) or root_solver not in SOLVERS:
         raise InputError(f"{name} = {show(root_solver)} is not allowed: choose one of {', '.join(SOLVERS)}")
     return _plan_route(waypoints, steps, k, robot, radius, legs, root_solver, progress)
