@@ -3,6 +3,7 @@ docs/design/enumeration.md): the Python planner's plans through it against the n
 (tests/reference_enumerate.py), and its roots
 against the 2-D brute force of tests/test_enumerate.py (scipy's brentq and bounded minimiser on the level set)."""
 
+import ctypes
 import fcntl
 import math
 import os
@@ -206,3 +207,16 @@ def test_a_long_list_shows_a_progress_bar_on_a_terminal():
     assert code == 0, err
     bars = [line for line in err.replace("\r", "\n").splitlines() if line.startswith("certify (k = 12, 1864 roots)")]
     assert len(bars) >= 2 and "%|" in bars[0] and "1864/1864" in bars[-1], bars[-3:]
+
+
+def test_two_threads_certify_as_one():
+    """certify_roots with two threads (the second on its own instance of the C library, a copy of the file loaded
+    again) gives exactly the certificates of one thread, in the same order."""
+    _require_library()
+    roots = compiled_search.listed_roots(0.3, -0.2, 0.5, 2, 1.5)
+    assert len(roots) >= 10
+    one = compiled_search.certify_roots(roots, 0.3, -0.2, 0.5, 2, 1.5, threads=1)
+    two = compiled_search.certify_roots(roots, 0.3, -0.2, 0.5, 2, 1.5, threads=2)
+    assert two == one and all(c.residual + c.bound <= 1e-9 for c in one)
+    second = compiled_search._second_certify()
+    assert second is not None and second[0]._handle != ctypes.CDLL(compiled_search.library().path)._handle

@@ -18,6 +18,9 @@ from __future__ import annotations
 
 import ctypes
 import math
+import os
+import shutil
+import tempfile
 import threading
 import time
 from functools import lru_cache
@@ -112,6 +115,7 @@ class _Library(NamedTuple):
     plan_all: object
     plan_many: object
     certify: object
+    path: str
 
 
 def _load(path: str):
@@ -130,7 +134,31 @@ def _load(path: str):
                           ctypes.c_void_p]
     certify.argtypes = [d, d, d, ctypes.c_int, d, d, d, d, dp, dp, dp]
     plan_with.restype = plan_all.restype = plan_many.restype = certify.restype = ctypes.c_int
-    return _Library(plan_with, plan_all, plan_many, certify)
+    return _Library(plan_with, plan_all, plan_many, certify, str(path))
+
+
+#: Serializes the calls of the second instance of :func:`_second_certify`.
+_second_lock = threading.Lock()
+
+
+@lru_cache(maxsize=1)
+def _second_certify():
+    """``(library, <prefix>_certify)`` of a second instance of the C library, loaded from a copy of its file (a
+    separate copy in memory: its own static work memory), so that a second thread can certify while the first
+    does; None if it cannot be loaded."""
+    lib = _library()
+    folder = tempfile.mkdtemp(prefix="rollplan-certify-")
+    try:
+        copy = os.path.join(folder, os.path.basename(lib.path))
+        shutil.copyfile(lib.path, copy)
+        second = ctypes.CDLL(copy)   # another file: loaded again, not shared with the first
+        entry = getattr(second, f"{PREFIX}_certify")
+    except (OSError, AttributeError):
+        return None
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)   # the loaded copy stays mapped
+    entry.argtypes, entry.restype = lib.certify.argtypes, lib.certify.restype
+    return second, entry
 
 
 @lru_cache(maxsize=1)
@@ -232,25 +260,43 @@ def listed_roots(u: float, v: float, psi: float, steps: int, k: float, branch: i
 _CHUNK_SECONDS = 0.25
 
 
-def certify_roots(roots, u: float, v: float, psi: float, steps: int, k: float, progress=None) -> list:
+def certify_roots(roots, u: float, v: float, psi: float, steps: int, k: float, progress=None,
+                  threads: int | None = None) -> list:
     """The C certificate (``<prefix>_certify``: the n-step motion integrated by fixed-step RK8 with step doubling,
     independent of the leaf map) of each root of ``roots`` (with ``a``, ``b``, ``gamma``) for the target
     ``(u, v, psi)`` [R, rad] in ``steps`` figure eights at inertia ratio k: a list of :class:`Certified`, in order.
     The roots are certified in chunks of about :data:`_CHUNK_SECONDS`, each by a helper thread
-    (:func:`rollplan.interrupts.call_in_thread`: Ctrl-C acts at once); ``progress(done, total)`` after each."""
+    (:func:`rollplan.interrupts.call_in_thread`: Ctrl-C acts at once); ``progress(done, total)`` after each.
+    With ``threads`` = 2 (the default on two or more cores) each chunk is shared by two threads, the second on a
+    second instance of the library (:func:`_second_certify`); the results do not depend on it."""
     lib = _library()
-    entry = lib.certify
+    if threads is None:
+        threads = 2 if (os.cpu_count() or 1) >= 2 else 1
+    second = _second_certify() if threads >= 2 and len(roots) > 1 else None
     out, total, size = [], len(roots), 4
 
-    def chunk(part):
+    def run(entry, lock, part, got):
         final, residual, bound = (ctypes.c_double * 3)(), ctypes.c_double(), ctypes.c_double()
-        got = []
-        with _lock:
+        with lock:
             for r in part:
                 status = entry(r.a, r.b, r.gamma, steps, k, u, v, psi, final, ctypes.byref(residual),
                                ctypes.byref(bound))
                 got.append(Certified(tuple(final), residual.value, bound.value, status))
-        return got
+
+    def chunk(part):
+        if second is None or len(part) < 2:
+            got = []
+            run(lib.certify, _lock, part, got)
+            return got
+        half = len(part) // 2
+        first, other = [], []
+        helper = threading.Thread(target=run, args=(second[1], _second_lock, part[half:], other), daemon=True)
+        helper.start()
+        run(lib.certify, _lock, part[:half], first)
+        helper.join()
+        if len(other) != len(part) - half:
+            raise SolverError("the second C certificate thread failed", "C certificate")
+        return first + other
 
     while len(out) < total:
         start = time.perf_counter()
