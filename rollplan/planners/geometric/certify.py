@@ -29,7 +29,7 @@ from ...problem import State
 from ...result import CERTIFICATE_TOLERANCE
 
 __all__ = ["CERTIFIERS", "DEFAULT_CERTIFIER", "MAX_STEPS_PER_LEAF", "REFINE_BELOW", "ROUNDING_FACTOR", "grading",
-           "initial_steps", "rounding_allowance", "end_contact", "RK8Certifier", "CvodesCertifier", "certifier"]
+           "initial_steps", "rounding_allowance", "RK8Certifier", "CvodesCertifier", "certifier"]
 
 #: Largest number of RK steps per leaf of the finer of the two integrations.
 MAX_STEPS_PER_LEAF = 1 << 14
@@ -137,12 +137,6 @@ def _end_contact() -> ca.Function:
     return ca.Function("cert_end_contact", [b, gamma], [u, v])
 
 
-def end_contact(b: float, gamma: float) -> tuple:
-    """``(u_o, v_o)`` [rad] of the end point of the figure eight (second leaf of radius ``b``, rotated by gamma):
-    the pole, up to rounding."""
-    return tuple(float(v.nonzeros()[0]) for v in _end_contact().call([b, gamma]))
-
-
 class RK8Certifier:
     """Final state of n traces of the figure eight (a, b) rotated by gamma, with an error bound, by the
     compiled fixed-step RK8 integration with step doubling (docs/design/geometric-planner.md); units of R.
@@ -183,7 +177,7 @@ class RK8Certifier:
             if est <= REFINE_BELOW * tol or 4 * n > MAX_STEPS_PER_LEAF:
                 break
             n *= 2
-        u_o, v_o = end_contact(b, gamma)
+        u_o, v_o = (v.nonzeros()[0] for v in _end_contact().call([b, gamma]))
         return State(float(xf[0]), float(xf[1]), float(xf[2]), u_o, v_o), est, 2 * n
 
     def final(self, a: float, b: float, k: float, gamma: float, steps: int) -> State:

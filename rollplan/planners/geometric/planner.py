@@ -50,7 +50,7 @@ from ...result import (
 )
 from ...robot import Robot
 from ..method import Method, renamed_option
-from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier, end_contact
+from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
 from .compiled_search import (
     NO_PLAN,
     NOT_CERTIFIED,
@@ -434,13 +434,13 @@ class GeometricPhasePlanner(Method):
 
         report(label, 0, total)
         certs = certify_roots(listed, target[0], target[1], target[2], problem.steps, problem.k, progress)
-        goal_r = problem.scaled(problem.goal)
-        goal = State(goal_r.u_a, goal_r.v_a, target[2])   # psi reduced, as the certificate of a plan
+        R = problem.radius
         found, rejected = [], []
         for r, c in zip(listed, certs):
-            final_r = State(*c.final, *end_contact(r.b, r.gamma))
-            cert = certify(problem, final_r.scaled(problem.radius), self.certifier.name, error_bound=c.bound,
-                           tolerance=self.tol, residual=arrival_residual(final_r, goal))
+            # the figure eight ends at the pole (u_o = v_o = 0) by construction; the certificate integrates u_a,
+            # v_a, psi and measures its residual to the target with psi wrapped
+            cert = Certificate(self.certifier.name, State(c.final[0] * R, c.final[1] * R, c.final[2], 0.0, 0.0),
+                               c.residual, c.bound, self.tol)
             cand = (_Root(r.a, r.b, r.gamma, r.m - turns, r.h, r.eta, r.predicted), cert,
                     SolverStats(DEFAULT_ROOT_SOLVER, "ok", 0, 0.0))
             if cert.passed:
