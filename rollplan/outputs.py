@@ -3,9 +3,10 @@
 * :func:`check_writable` -- before any computation: the output is a regular
   file or absent, not read-only, in an existing writable folder, its name fits
   the file system, and it is none of the command's input files.
-* :func:`write_atomic` -- the data goes to a temporary file next to the output,
-  is synced, and replaces the output by one rename: a reader sees the old file
-  or the new one, never a part. A replaced file keeps its permission bits; a
+* :func:`write_atomic` -- the data (bytes, or pieces of bytes written as they
+  come: :func:`json_chunks` streams a long JSON document) goes to a temporary
+  file next to the output, is synced, and replaces the output by one rename: a
+  reader sees the old file or the new one, never a part. A replaced file keeps its permission bits; a
   symlink is written through (its target is replaced, the link stays).
 * :func:`claim` -- a lock per output (``flock`` on a lock file next to it,
   removed on release): a second process that would write the same output is
@@ -47,7 +48,8 @@ from pathlib import Path
 from .errors import InputError, OutputError
 from .inputs import check_path, show_path
 
-__all__ = ["WRITE_FAILURES", "write_all", "check_writable", "write_atomic", "write_json", "check_figure_path",
+__all__ = ["WRITE_FAILURES", "write_all", "check_writable", "write_atomic", "json_chunks", "write_json",
+           "check_figure_path",
            "save_figure", "claim", "LineWriter", "make_folder", "MANIFEST", "check_folder", "write_folder"]
 
 _RANDOM = 8            # characters tempfile adds to a temporary name
@@ -294,19 +296,22 @@ def _sync_folder(folder: Path) -> None:
         os.close(fd)
 
 
-def write_atomic(path, data: bytes, what: str = "output") -> None:
-    """Write ``data`` to ``path`` through a synced temporary file and one atomic rename (module docstring).
+def write_atomic(path, data, what: str = "output") -> None:
+    """Write ``data`` (bytes, or an iterable of bytes written piece by piece as it yields them) to ``path`` through
+    a synced temporary file and one atomic rename (module docstring).
 
     Raises OutputError (one line) if the output cannot be written; the old file
-    is then left as it was.
+    is then left as it was (also when ``data`` raises while it is written).
     """
+    pieces = (data,) if isinstance(data, (bytes, bytearray, memoryview)) else data
     target = check_writable(path, what)
     with claim(path, what=what):
         fd, tmp = -1, None
         try:
             fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=_sibling_stem(target), suffix=_TMP_SUFFIX)
             os.fchmod(fd, _new_mode(target))
-            write_all(fd, data)
+            for piece in pieces:
+                write_all(fd, piece)
             os.fsync(fd)
             os.close(fd)
             fd = -1
@@ -322,9 +327,29 @@ def write_atomic(path, data: bytes, what: str = "output") -> None:
         _sync_folder(target.parent)
 
 
+#: Bytes of JSON text gathered before :func:`json_chunks` yields them.
+JSON_CHUNK = 1 << 16
+
+
+def json_chunks(obj, size: int = JSON_CHUNK):
+    """``obj`` as indented JSON (finite numbers only) and a final newline, in pieces of bytes of about ``size``
+    yielded while it is encoded: together exactly ``json.dumps(obj, indent=1) + "\n"``, never the whole text at
+    once (a list of thousands of plans streams into its file or a pipe)."""
+    gathered, n = [], 0
+    for text in json.JSONEncoder(indent=1, allow_nan=False).iterencode(obj):
+        gathered.append(text)
+        n += len(text)
+        if n >= size:
+            yield "".join(gathered).encode()
+            gathered, n = [], 0
+    gathered.append("\n")
+    yield "".join(gathered).encode()
+
+
 def write_json(path, obj, what: str = "output") -> None:
-    """Write ``obj`` as indented JSON (finite numbers only) with :func:`write_atomic`."""
-    write_atomic(path, (json.dumps(obj, indent=1, allow_nan=False) + "\n").encode(), what)
+    """Write ``obj`` as indented JSON (finite numbers only) with :func:`write_atomic`, streamed
+    (:func:`json_chunks`)."""
+    write_atomic(path, json_chunks(obj), what)
 
 
 def check_figure_path(path, what: str = "figure") -> Path:

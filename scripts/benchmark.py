@@ -15,7 +15,7 @@ with the share of the IPOPT polish and of the RK8 certificate), the cold start o
 `rollplan plan`, plans at high k, the step map, the collocation planner
 (``scripts/bench_collocation.py:measure``), the generated C planner
 (``scripts/bench_codegen.py:measure``; skipped without a C compiler), memory, a
-profile, batches, and the budgets of the issues with their measured values
+profile, batches, `plan --all` per plan listed, and the budgets of the issues with their measured values
 (shown first). ``--only`` reruns some sections and keeps the others from the
 existing ``benchmarks.json`` (each section carries its own date and commit). The
 load average at start is recorded: the machine is shared.
@@ -83,6 +83,11 @@ BUDGET_C_PLAN_US = 1000.0
 BUDGET_PLAN_MS_28 = 0.5
 BUDGET_RATIO_28 = 300.0
 BUDGET_MANY_PER_S = 5000.0
+#: Issue 28's budget: `plan --all` at most this many ms per plan listed (k = 12, n = 4).
+BUDGET_ALL_MS_PER_PLAN = 5.0
+#: (target, steps, k) of the --all section (issue 28's case), and of its --quick smoke run.
+ALL_CASE = ((0.0, 1.0, 0.0), 4, 12.0)
+ALL_CASE_QUICK = ((0.0, 1.0, 0.0), 1, 2.5)
 
 
 # ----------------------------------------------------------------------------- scipy baseline (by hand)
@@ -652,6 +657,15 @@ def section_budgets(ctx):
             _status(worst < BUDGET_C_PLAN_US))
     else:
         add("6", "C plan", f"skipped: {c['skipped']}" if c else "not run", "n/a")
+    listed = done.get("section_list_all", {}).get("summary")
+    if listed:
+        per, case = listed["ms_per_plan"], listed["case"]
+        add("28", f"`plan --all` at k = {ALL_CASE[2]:g}, n = {ALL_CASE[1]} <= {BUDGET_ALL_MS_PER_PLAN:g} ms per plan "
+            "listed", f"{per:.2f} ms wall ({listed['cpu_ms_per_plan']:.2f} ms CPU time) per plan, "
+            f"{listed['plans']} plans at k = {case[4]:g}, n = {case[3]}",
+            _status(per <= BUDGET_ALL_MS_PER_PLAN) if case[3:] == [ALL_CASE[1], ALL_CASE[2]] else "n/a (--quick)")
+    else:
+        add("28", "`plan --all` per plan listed", "not run", "n/a")
     load = ctx["load_average"]
     notes = [f"Measured on a shared machine: load average at start {', '.join(f'{x:.2f}' for x in load or [])} on "
              f"{os.cpu_count()} cores, so timings are pessimistic. Details and the measurements behind each value in "
@@ -838,11 +852,86 @@ def section_compare(ctx):
             "summary": m}
 
 
+def _children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def section_list_all(ctx):
+    """`rollplan plan --all` (issue 28): wall and CPU time of the whole command per plan listed, and, side by side
+    on a sample of the same roots, the C certificate per root against the Python polish and RK8 certificate the
+    list used before."""
+    import tempfile
+
+    from rollplan.core.plane import wrap_exact
+    from rollplan.planners.geometric import compiled_search
+    from rollplan.planners.geometric.certify import RK8Certifier
+    from rollplan.planners.geometric.leafmap import panels_for
+    from rollplan.planners.geometric.refine import polisher
+
+    (u, v, psi), steps, k = ALL_CASE_QUICK if ctx["quick"] else ALL_CASE
+    args = ["plan", "--to", str(u), str(v), "--psi", str(psi), "--steps", str(steps), "--k", str(k), "--all"]
+    exe = shutil.which("rollplan")
+    repeats = 1 if ctx["quick"] else 3
+    wall, cpu, plans = [], [], 0
+    with tempfile.TemporaryDirectory() as tmp:
+        js = str(Path(tmp) / "all.json")
+        cmd = [exe, *args, "--json", js] if exe else [sys.executable, "-m", "rollplan.cli", *args, "--json", js]
+        for _ in range(repeats):
+            c0, t0 = _children_cpu(), time.perf_counter()
+            subprocess.run(cmd, capture_output=True, check=True)
+            wall.append(time.perf_counter() - t0)
+            cpu.append(_children_cpu() - c0)
+            with open(js) as f:
+                plans = 1 + len(json.load(f).get("alternatives", []))
+    roots = compiled_search.listed_roots(u, v, wrap_exact(psi)[0], steps, k)
+    sample = roots[:: max(1, len(roots) // (10 if ctx["quick"] else 60))]
+    rk8, polish = RK8Certifier(), polisher("ipopt", panels_for(k))
+
+    def before():
+        for r in sample:
+            eta = (psi + 2.0 * math.pi * r.m) / steps
+            polish([r.a, r.b], [k, eta, float(target_shift(math.hypot(u, v), eta, steps))], 1e-6, A_MAX)
+            rk8.certify(r.a, r.b, k, r.gamma, steps)
+
+    before()                                  # compiled functions of every step count loaded
+    timed = {}
+    for name, run in (("c", lambda: compiled_search.certify_roots(sample, u, v, psi, steps, k)), ("python", before)):
+        c0, t0 = time.process_time(), time.perf_counter()
+        run()
+        timed[name] = ((time.perf_counter() - t0) / len(sample) * 1e3, (time.process_time() - c0) / len(sample) * 1e3)
+    (c_ms, c_cpu), (py_ms, py_cpu) = timed["c"], timed["python"]
+    per_plan = statistics.median(wall) / plans * 1e3
+    per_plan_cpu = statistics.median(cpu) / plans * 1e3
+    rows = [{"measurement": f"`rollplan {' '.join(args)} --json FILE`, whole command", "plans listed": plans,
+             "median wall [s]": statistics.median(wall), "median CPU [s]": statistics.median(cpu),
+             "wall per plan [ms]": per_plan, "CPU per plan [ms]": per_plan_cpu},
+            {"measurement": f"C certificate per root (rollplan_certify), {len(sample)} of the {len(roots)} roots",
+             "plans listed": "-", "median wall [s]": "-", "median CPU [s]": "-", "wall per plan [ms]": c_ms,
+             "CPU per plan [ms]": c_cpu},
+            {"measurement": "before: IPOPT polish + Python RK8 certificate per root, the same roots",
+             "plans listed": "-", "median wall [s]": "-", "median CPU [s]": "-", "wall per plan [ms]": py_ms,
+             "CPU per plan [ms]": py_cpu}]
+    notes = [f"{repeats} run(s) of the whole command (start-up, C search, certificates, sampling and the streamed JSON "
+             "included); per plan = total time / plans listed. The C certificate and the former per-root work "
+             f"(ratio {py_ms / c_ms:.1f}x wall, {py_cpu / c_cpu:.1f}x CPU time) are timed side by side in this process "
+             f"on every {max(1, len(roots) // (10 if ctx['quick'] else 60))}th root of the list.",
+             f"Budget (issue 28) `plan --all` <= {BUDGET_ALL_MS_PER_PLAN:g} ms per plan listed at k = {ALL_CASE[2]:g}, "
+             f"n = {ALL_CASE[1]} (here k = {k:g}, n = {steps}): "
+             f"{_status(per_plan <= BUDGET_ALL_MS_PER_PLAN) if not ctx['quick'] else 'not judged (--quick)'} "
+             f"({per_plan:.2f} ms wall, {per_plan_cpu:.2f} ms CPU time per plan)."]
+    return {"title": "`plan --all`: time per plan listed", "rows": rows, "notes": notes,
+            "summary": {"case": [u, v, psi, steps, k], "plans": plans, "wall_s": wall, "cpu_s": cpu,
+                        "ms_per_plan": per_plan,
+                        "cpu_ms_per_plan": per_plan_cpu, "c_certificate_ms": c_ms, "c_certificate_cpu_ms": c_cpu,
+                        "python_polish_rk8_ms": py_ms, "python_polish_rk8_cpu_ms": py_cpu}}
+
+
 #: The benchmark, in order. Append new sections here; :func:`section_budgets` reads the others' summaries and
 #: is shown first in the report.
 SECTIONS = [section_plan, section_cold, section_high_k, section_step_map, section_collocation, section_c_planner,
             section_memory, section_profile,
-            section_batch, section_plan_many, section_budgets]
+            section_batch, section_plan_many, section_list_all, section_budgets]
 SECTIONS.insert(SECTIONS.index(section_collocation) + 1, section_peer)
 SECTIONS.insert(SECTIONS.index(section_peer) + 1, section_compare)
 

@@ -3,7 +3,16 @@ docs/design/enumeration.md): the Python planner's plans through it against the n
 (tests/reference_enumerate.py), and its roots
 against the 2-D brute force of tests/test_enumerate.py (scipy's brentq and bounded minimiser on the level set)."""
 
+import ctypes
+import fcntl
 import math
+import os
+import pty
+import struct
+import subprocess
+import sys
+import termios
+import threading
 
 import numpy as np
 import pytest
@@ -148,3 +157,66 @@ def test_ctrl_c_during_a_long_c_search_exits_130():
     assert code == 130, err
     assert elapsed < 2.0
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
+def test_ctrl_c_while_a_long_list_is_certified_exits_130_within_a_second():
+    """`plan --all` at k = 12, n = 4 certifies 1864 roots (seconds): its progress shows on stderr, and a SIGINT
+    during the certificates exits 130 within a second (the machine may be loaded: 1.5 s), one line, no
+    traceback."""
+    _require_library()
+    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "12", "--steps", "4", "--all"], 0.5,
+                                              wait_for="certify (k = 12, 1864 roots)")
+    assert code == 130, err
+    assert elapsed < 1.5, elapsed
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+def _run_on_a_terminal(argv, columns=120):
+    """``rollplan argv`` with stderr on a pseudo-terminal of ``columns`` columns: (exit code, stderr text)."""
+    main, side = pty.openpty()
+    fcntl.ioctl(side, termios.TIOCSWINSZ, struct.pack("HHHH", 24, columns, 0, 0))
+    proc = subprocess.Popen([sys.executable, "-m", "rollplan.cli", *argv], stdout=subprocess.DEVNULL, stderr=side)
+    os.close(side)
+    got = []
+
+    def read():
+        while True:
+            try:
+                data = os.read(main, 65536)
+            except OSError:   # the terminal closed with the process
+                return
+            if not data:
+                return
+            got.append(data)
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    code = proc.wait(timeout=600)
+    reader.join(10)
+    os.close(main)
+    return code, b"".join(got).decode(errors="replace")
+
+
+@pytest.mark.slow
+def test_a_long_list_shows_a_progress_bar_on_a_terminal():
+    """`plan --all` at k = 12, n = 4 (seconds of certificates) on a terminal: a bar of the certificates that ends
+    at the count of roots."""
+    _require_library()
+    code, err = _run_on_a_terminal(["plan", "--to", "0", "1", "--k", "12", "--steps", "4", "--all"])
+    assert code == 0, err
+    bars = [line for line in err.replace("\r", "\n").splitlines() if line.startswith("certify (k = 12, 1864 roots)")]
+    assert len(bars) >= 2 and "%|" in bars[0] and "1864/1864" in bars[-1], bars[-3:]
+
+
+def test_two_threads_certify_as_one():
+    """certify_roots with two threads (the second on its own instance of the C library, a copy of the file loaded
+    again) gives exactly the certificates of one thread, in the same order."""
+    _require_library()
+    roots = compiled_search.listed_roots(0.3, -0.2, 0.5, 2, 1.5)
+    assert len(roots) >= 10
+    one = compiled_search.certify_roots(roots, 0.3, -0.2, 0.5, 2, 1.5, threads=1)
+    two = compiled_search.certify_roots(roots, 0.3, -0.2, 0.5, 2, 1.5, threads=2)
+    assert two == one and all(c.residual + c.bound <= 1e-9 for c in one)
+    second = compiled_search._second_certify()
+    assert second is not None and second[0]._handle != ctypes.CDLL(compiled_search.library().path)._handle

@@ -44,6 +44,30 @@ def test_plan_paper_case_json_and_plot(tmp_path, capsys):
     assert png.stat().st_size > 10000 and png.read_bytes()[:4] == b"\x89PNG"
 
 
+def _without_times(doc):
+    """The plan document without the solver's wall times (which differ from run to run)."""
+    doc["solver"].pop("time_s")
+    for alt in doc["alternatives"]:
+        alt["solver"].pop("time_s")
+    return doc
+
+
+def test_plan_all_json_streams_the_same_document_to_a_file_and_to_stdout(tmp_path):
+    """plan --all --json FILE and --json - (subprocesses): the streamed file is exactly json.dumps of its content
+    (the non-streamed text), and stdout carries the same document (up to the solver's wall times)."""
+    js = tmp_path / "all.json"
+    argv = [sys.executable, "-m", "rollplan.cli", "plan", "--to", "0.3", "-0.2", "--psi", "0.5", "--steps", "2", "--k",
+            "1.5", "--all", "--json"]
+    run_file = subprocess.run([*argv, str(js)], check=False, capture_output=True, text=True, timeout=600)
+    run_out = subprocess.run([*argv, "-"], check=False, capture_output=True, text=True, timeout=600)
+    assert run_file.returncode == run_out.returncode == 0, (run_file.stderr, run_out.stderr)
+    text = js.read_text()
+    doc = json.loads(text)
+    assert text == json.dumps(doc, indent=1) + "\n" and len(doc["alternatives"]) >= 10
+    assert run_out.stdout == json.dumps(json.loads(run_out.stdout), indent=1) + "\n"
+    assert _without_times(json.loads(run_out.stdout)) == _without_times(doc)
+
+
 @pytest.mark.parametrize("argv,ab,k,gamma", [
     (["--a", "0.3", "--b", "0.4", "--k", "2.5"], (0.3, 0.4), 2.5, 0.0),
     (["--a", "0.6", "--b", "0.2", "--k", "5", "--gamma", "0.3"], (0.6, 0.2), 5.0, 0.3),

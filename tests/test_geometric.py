@@ -570,6 +570,60 @@ def test_compiled_all_solutions_report_progress():
     assert mine[0][1] == 0 and mine[-1][1] == mine[-1][2] == p.stats.details["roots"] == len(mine) - 1
 
 
+def test_all_solutions_are_certified_in_c_and_reach_the_goal(monkeypatch):
+    """all_solutions takes every root from the C search and certifies it by the C certificate (RK8), neither the
+    Python polish nor the Python RK8 certificate runs; each listed plan is certified to 1e-9, and the shortest, two
+    more and the longest reach the goal by the reference's DOP853 integration of the paper's equations."""
+    from rollplan.planners.geometric import GeometricPhasePlanner
+    from rollplan.planners.geometric import planner as planner_module
+    from rollplan.planners.geometric.certify import RK8Certifier
+
+    if not _compiled_search_built():
+        pytest.skip("no C compiler: the compiled search is not built")
+
+    def refused(*args, **kwargs):
+        raise AssertionError("the Python polish or RK8 certificate ran for an --all list")
+
+    monkeypatch.setattr(RK8Certifier, "certify", refused)
+    monkeypatch.setattr(planner_module, "polisher", refused)
+    p = GeometricPhasePlanner().solve(Problem((0.3, -0.2, 0.5), k=1.5, steps=2), all_solutions=True)
+    plans = [p, *p.alternatives]
+    assert len(plans) >= 10 and p.stats.details["solves"] == len(plans)
+    for q in plans:
+        c = q.certificate
+        assert c.method == "rk8" and c.passed and c.residual + c.error_bound <= 1e-9 and c.error_bound > 0
+        assert q.stats.method == "c" and q.stats.status == "ok"
+    for q in plans[:3] + plans[-1:]:
+        assert reference_error(q)[0] < 1e-9
+
+
+def test_all_solutions_drop_a_root_the_c_certificate_rejects(monkeypatch, caplog):
+    """A root whose C certificate fails is not listed (a warning names it); when every root fails, NoPlanError
+    names the best certified residual plus bound."""
+    from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search
+    from rollplan.planners.geometric import planner as planner_module
+
+    if not _compiled_search_built():
+        pytest.skip("no C compiler: the compiled search is not built")
+    problem = Problem((0.3, -0.2, 0.5), k=1.5, steps=2)
+    full = GeometricPhasePlanner().solve(problem, all_solutions=True)
+    certify_roots = compiled_search.certify_roots
+    bad = {0}
+
+    def worse(roots, *args, **kwargs):
+        got = certify_roots(roots, *args, **kwargs)
+        return [c._replace(bound=2e-9) if i in bad else c for i, c in enumerate(got)]
+
+    monkeypatch.setattr(planner_module, "certify_roots", worse)
+    p = GeometricPhasePlanner().solve(problem, all_solutions=True)
+    assert [(q.branch, q.a, q.b) for q in (p, *p.alternatives)] == \
+        [(q.branch, q.a, q.b) for q in full.alternatives]
+    assert "rejected: certified residual + bound" in caplog.text
+    bad.update(range(1000))
+    with pytest.raises(NoPlanError, match="best 2.0e-09"):
+        GeometricPhasePlanner().solve(problem, all_solutions=True)
+
+
 def _cli(extra_env, *argv):
     """``rollplan argv`` in a subprocess with ``extra_env`` added to the environment."""
     return subprocess.run([sys.executable, "-m", "rollplan.cli", *argv], check=False, capture_output=True, text=True,

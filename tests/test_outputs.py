@@ -4,6 +4,7 @@ line, clean up after a killed writer, and sync line output in batches."""
 
 import errno
 import json
+import math
 import os
 import stat
 import subprocess
@@ -14,7 +15,16 @@ import pytest
 from conftest import fill, one_line, run
 
 from rollplan.errors import InputError, OutputError
-from rollplan.outputs import LineWriter, check_folder, check_writable, claim, make_folder, write_atomic
+from rollplan.outputs import (
+    LineWriter,
+    check_folder,
+    check_writable,
+    claim,
+    json_chunks,
+    make_folder,
+    write_atomic,
+    write_json,
+)
 
 STEP = ["step", "--a", "0.3", "--k", "2.5", "--json"]
 
@@ -305,3 +315,38 @@ def test_make_folder(tmp_path):
     (tmp_path / "f").write_text("x")
     with pytest.raises(OutputError, match="is a file"):
         make_folder(tmp_path / "f")
+
+
+def test_json_chunks_are_the_text_of_json_dumps_in_pieces():
+    """json_chunks: pieces of about the size asked for, which together are json.dumps(obj, indent=1) and a newline
+    (the non-streamed text, byte for byte)."""
+    obj = {"a": 1.5, "list": [{"x": i / 7, "s": "é\u2192", "n": None, "t": [True, False]} for i in range(500)],
+           "empty": [], "nested": {"k": {}}}
+    pieces = list(json_chunks(obj, size=1000))
+    assert len(pieces) > 10 and all(len(p) < 1200 for p in pieces)
+    assert b"".join(pieces) == (json.dumps(obj, indent=1) + "\n").encode()
+
+
+def test_write_json_streams_into_a_temporary_file_then_renames(tmp_path):
+    """write_atomic writes the pieces of an iterable as they come (the temporary file grows while the output keeps
+    its old content); an error while the pieces are produced (a NaN in the JSON) leaves the old file and no
+    temporary file."""
+    out = tmp_path / "list.json"
+    out.write_text("old\n")
+    seen = []
+
+    def pieces():
+        yield b"x" * 100
+        temporaries = [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+        seen.append((out.read_text(), [p.stat().st_size for p in temporaries]))
+        yield b"y\n"
+
+    write_atomic(out, pieces())
+    assert seen == [("old\n", [100])] and out.read_text() == "x" * 100 + "y\n"
+    obj = {"plans": [{"a": i / 3} for i in range(20000)]}
+    write_json(out, obj)
+    assert out.read_bytes() == (json.dumps(obj, indent=1) + "\n").encode()
+    with pytest.raises(ValueError):
+        write_json(out, {"plans": [{"a": i / 3} for i in range(20000)] + [{"a": math.nan}]})
+    assert out.read_bytes() == (json.dumps(obj, indent=1) + "\n").encode()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["list.json"]

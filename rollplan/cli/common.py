@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 from contextlib import ExitStack
@@ -10,7 +9,7 @@ from contextlib import ExitStack
 from ..errors import InputError
 from ..inputs import show_path
 from ..io import check_figure_path, check_writable, tagged, write_json
-from ..outputs import claim, write_all
+from ..outputs import claim, json_chunks, write_all
 from ..problem import State, check_contact, check_reach
 from ..robot import load_robot
 
@@ -57,16 +56,17 @@ def check_outputs(json=None, figure=None, inputs=()) -> None:
 def emit_json(args, obj, unit: str) -> None:
     """Write ``obj`` (with ``version`` and ``units``) to ``--json FILE``, or to stdout for ``--json -``."""
     doc = tagged(obj, unit)
-    if args.json == "-":
-        text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
+    if args.json == "-":   # streamed, piece by piece as it is encoded
         args.stdout.flush()
         try:
             fd = args.stdout.fileno()
         except (AttributeError, OSError, ValueError):   # a stream without a file descriptor (captured)
-            args.stdout.write(text)
+            for piece in json_chunks(doc):
+                args.stdout.write(piece.decode())
             args.stdout.flush()
         else:   # not through the stream: Python's buffered writer drops the rest of a short write into a pipe
-            write_all(fd, text.encode())
+            for piece in json_chunks(doc):
+                write_all(fd, piece)
     else:
         write_json(args.json, doc)
         print(f"wrote {args.json}")

@@ -5,7 +5,9 @@ functions and ``rollplan_config.h`` of :mod:`.c_sources`; built here for ``0 <= 
 planner accepts) enumerates the roots on one graph per branch over the smaller leaf radius for ``k >= 1/2`` and on
 sigma graphs below (docs/design/enumeration.md), and runs a bounded search for the shortest root.
 :func:`shortest_root` returns its shortest root uncertified, and :func:`all_roots` every root of every branch
-(``<prefix>_plan_all``), for the Python planner to polish and certify. It is the planner's only search: without a
+(``<prefix>_plan_all``), for the Python planner to polish and certify; :func:`listed_roots` gives them with their
+rotation gamma, and :func:`certify_roots` certifies a list of them by the C certificate (``<prefix>_certify``).
+It is the planner's only search: without a
 C compiler (or with ``ROLLPLAN_NO_COMPILE=1``) both raise a :class:`~rollplan.errors.SolverError` whose one line
 says what to install (:func:`unavailable`). The tests check it against a numpy enumeration
 (tests/reference_enumerate.py).
@@ -16,7 +18,11 @@ from __future__ import annotations
 
 import ctypes
 import math
+import os
+import shutil
+import tempfile
 import threading
+import time
 from functools import lru_cache
 from typing import NamedTuple
 
@@ -28,8 +34,9 @@ from ...errors import SolverError
 from ...problem import K_MAX
 from .c_sources import DEFAULT_K_MAX, generator_files, sources
 
-__all__ = ["PREFIX", "DEFAULT_K_MAX", "UNAVAILABLE", "SearchResult", "library", "unavailable", "shortest_root",
-           "all_roots", "certified_plan", "certified_plans"]
+__all__ = ["PREFIX", "DEFAULT_K_MAX", "UNAVAILABLE", "SearchResult", "ListedRoot", "Certified", "library",
+           "unavailable", "shortest_root", "all_roots", "listed_roots", "certify_roots", "certified_plan",
+           "certified_plans"]
 
 #: Prefix of the generated C symbols (the code generator's default).
 PREFIX = "rollplan"
@@ -75,12 +82,40 @@ class SearchResult(NamedTuple):
     roots: int
 
 
+class ListedRoot(NamedTuple):
+    """A root of (32)-(33) listed by the C search (``<prefix>_plan_all`` without its certificate): leaf radii [R],
+    rotation gamma of (31), holonomy eta and shift h of one step, branch m (relative to the psi passed in), the miss
+    of the target predicted by the leaf map, and the branches searched and roots found."""
+
+    a: float
+    b: float
+    gamma: float
+    eta: float
+    h: float
+    m: int
+    predicted: float
+    branches: int
+    roots: int
+
+
+class Certified(NamedTuple):
+    """The C certificate of a root (``<prefix>_certify``): final (u_a, v_a, psi) [R, rad] of its finest run, its
+    residual to the target and the error bound; ``status`` OK or NOT_CERTIFIED (to CERT_TOL)."""
+
+    final: tuple
+    residual: float
+    bound: float
+    status: int
+
+
 class _Library(NamedTuple):
     """The entry points of the compiled C planner (ctypes)."""
 
     plan_with: object
     plan_all: object
     plan_many: object
+    certify: object
+    path: str
 
 
 def _load(path: str):
@@ -88,15 +123,42 @@ def _load(path: str):
     try:
         plan_with, plan_all = getattr(lib, f"{PREFIX}_plan_with"), getattr(lib, f"{PREFIX}_plan_all")
         plan_many = getattr(lib, f"{PREFIX}_plan_many")
+        certify = getattr(lib, f"{PREFIX}_certify")
     except AttributeError as exc:   # not the planner's library: rebuilt
         raise OSError(str(exc)) from exc
     d, opt, plan = ctypes.c_double, ctypes.POINTER(_Options), ctypes.POINTER(_Plan)
+    dp = ctypes.POINTER(ctypes.c_double)
     plan_with.argtypes = [d, d, d, ctypes.c_int, d, opt, plan]
     plan_all.argtypes = [d, d, d, ctypes.c_int, d, opt, plan, ctypes.c_int, ctypes.POINTER(ctypes.c_int)]
     plan_many.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_int, d, opt, ctypes.c_void_p, ctypes.c_void_p,
                           ctypes.c_void_p]
-    plan_with.restype = plan_all.restype = plan_many.restype = ctypes.c_int
-    return _Library(plan_with, plan_all, plan_many)
+    certify.argtypes = [d, d, d, ctypes.c_int, d, d, d, d, dp, dp, dp]
+    plan_with.restype = plan_all.restype = plan_many.restype = certify.restype = ctypes.c_int
+    return _Library(plan_with, plan_all, plan_many, certify, str(path))
+
+
+#: Serializes the calls of the second instance of :func:`_second_certify`.
+_second_lock = threading.Lock()
+
+
+@lru_cache(maxsize=1)
+def _second_certify():
+    """``(library, <prefix>_certify)`` of a second instance of the C library, loaded from a copy of its file (a
+    separate copy in memory: its own static work memory), so that a second thread can certify while the first
+    does; None if it cannot be loaded."""
+    lib = _library()
+    folder = tempfile.mkdtemp(prefix="rollplan-certify-")
+    try:
+        copy = os.path.join(folder, os.path.basename(lib.path))
+        shutil.copyfile(lib.path, copy)
+        second = ctypes.CDLL(copy)   # another file: loaded again, not shared with the first
+        entry = getattr(second, f"{PREFIX}_certify")
+    except (OSError, AttributeError):
+        return None
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)   # the loaded copy stays mapped
+    entry.argtypes, entry.restype = lib.certify.argtypes, lib.certify.restype
+    return second, entry
 
 
 @lru_cache(maxsize=1)
@@ -168,6 +230,12 @@ def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int 
     """Every root of (32)-(33) on every branch (or on ``branch`` only), shortest (a + b) first, by the compiled
     C search (``<prefix>_plan_all``), uncertified: a list of :class:`SearchResult` (empty when there is no root).
     SolverError without the library (:func:`unavailable`) or when the search does not complete."""
+    return [SearchResult(p.a, p.b, p.m, p.branches, p.roots) for p in listed_roots(u, v, psi, steps, k, branch)]
+
+
+def listed_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int | None = None):
+    """:func:`all_roots` with each root's rotation gamma, eta, h and predicted miss: a list of
+    :class:`ListedRoot`, shortest (a + b) first."""
     lib = _library()
     if branch is not None and abs(branch) > 2**31 - 1:   # |eta| beyond the range of E: no root on it
         return []
@@ -184,7 +252,60 @@ def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int 
         return []
     if status != OK:
         raise _incomplete(status)
-    return [SearchResult(p.a, p.b, int(p.m), int(p.branches), int(p.roots)) for p in plans[:count.value]]
+    return [ListedRoot(p.a, p.b, p.gamma, p.eta, p.h, int(p.m), p.predicted, int(p.branches), int(p.roots))
+            for p in plans[:count.value]]
+
+
+#: Seconds of certificates per call of the helper thread of :func:`certify_roots` (Ctrl-C acts at once anyway).
+_CHUNK_SECONDS = 0.25
+
+
+def certify_roots(roots, u: float, v: float, psi: float, steps: int, k: float, progress=None,
+                  threads: int | None = None) -> list:
+    """The C certificate (``<prefix>_certify``: the n-step motion integrated by fixed-step RK8 with step doubling,
+    independent of the leaf map) of each root of ``roots`` (with ``a``, ``b``, ``gamma``) for the target
+    ``(u, v, psi)`` [R, rad] in ``steps`` figure eights at inertia ratio k: a list of :class:`Certified`, in order.
+    The roots are certified in chunks of about :data:`_CHUNK_SECONDS`, each by a helper thread
+    (:func:`rollplan.interrupts.call_in_thread`: Ctrl-C acts at once); ``progress(done, total)`` after each.
+    With ``threads`` = 2 (the default on two or more cores) each chunk is shared by two threads, the second on a
+    second instance of the library (:func:`_second_certify`); the results do not depend on it."""
+    lib = _library()
+    if threads is None:
+        threads = 2 if (os.cpu_count() or 1) >= 2 else 1
+    second = _second_certify() if threads >= 2 and len(roots) > 1 else None
+    out, total, size = [], len(roots), 4
+
+    def run(entry, lock, part, got):
+        final, residual, bound = (ctypes.c_double * 3)(), ctypes.c_double(), ctypes.c_double()
+        with lock:
+            for r in part:
+                status = entry(r.a, r.b, r.gamma, steps, k, u, v, psi, final, ctypes.byref(residual),
+                               ctypes.byref(bound))
+                got.append(Certified(tuple(final), residual.value, bound.value, status))
+
+    def chunk(part):
+        if second is None or len(part) < 2:
+            got = []
+            run(lib.certify, _lock, part, got)
+            return got
+        half = len(part) // 2
+        first, other = [], []
+        helper = threading.Thread(target=run, args=(second[1], _second_lock, part[half:], other), daemon=True)
+        helper.start()
+        run(lib.certify, _lock, part[:half], first)
+        helper.join()
+        if len(other) != len(part) - half:
+            raise SolverError("the second C certificate thread failed", "C certificate")
+        return first + other
+
+    while len(out) < total:
+        start = time.perf_counter()
+        out += interrupts.call_in_thread(chunk, roots[len(out):len(out) + size])
+        spent = time.perf_counter() - start
+        size = max(1, min(4 * size, int(size * _CHUNK_SECONDS / spent) if spent > 0 else 4 * size))
+        if progress is not None:
+            progress(len(out), total)
+    return out
 
 
 def _plan_dtype():

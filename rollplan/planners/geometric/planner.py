@@ -51,7 +51,16 @@ from ...result import (
 from ...robot import Robot
 from ..method import Method, renamed_option
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
-from .compiled_search import NO_PLAN, NOT_CERTIFIED, OK, all_roots, certified_plan, shortest_root
+from .compiled_search import (
+    NO_PLAN,
+    NOT_CERTIFIED,
+    OK,
+    all_roots,
+    certified_plan,
+    certify_roots,
+    listed_roots,
+    shortest_root,
+)
 from .leafmap import panels_for, step_values
 from .refine import DEFAULT_ROOT_SOLVER, SOLVERS, leaf_step, polisher, step_residual
 from .search_constants import NOT_A_ROOT
@@ -387,13 +396,18 @@ class GeometricPhasePlanner(Method):
 
     def _solve_compiled_all(self, problem, branch, target, turns, t_start) -> Plan:
         """Every root of every branch (of ``branch`` if given) by the compiled C search
-        (:func:`.compiled_search.all_roots`), each polished and certified here; the certified ones, shortest
-        first."""
+        (:func:`.compiled_search.listed_roots`), each certified by the C certificate (:meth:`_certify_in_c`) with
+        the default root solver, certifier and tolerance, otherwise polished by the root solver and certified here;
+        the certified ones, shortest first."""
         k, steps = problem.k, problem.steps
-        listed = all_roots(target[0], target[1], target[2], steps, k, branch)
+        in_c = self._in_c
+        listed = (listed_roots if in_c else all_roots)(target[0], target[1], target[2], steps, k, branch)
         if not listed:   # the complete search found no root
             raise _no_root(problem, "the complete search found none")
-        found, rejected, _ = self._certify_listed(problem, listed, target, turns)
+        if in_c:
+            found, rejected = self._certify_in_c(problem, listed, target, turns)
+        else:
+            found, rejected, _ = self._certify_listed(problem, listed, target, turns)
         if not found:
             self._raise_if_rejected(problem.describe(), rejected)
             raise _no_root(problem, f"{listed[0].branches} branches searched completely, no root certified")
@@ -403,6 +417,37 @@ class GeometricPhasePlanner(Method):
         elapsed = time.perf_counter() - t_start
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
         return replace(plans[0], alternatives=tuple(plans[1:]))
+
+    def _certify_in_c(self, problem, listed, target, turns) -> tuple:
+        """``(certified, rejected)``: the roots ``listed`` by the C search (polished there by Newton's method on
+        the accurate leaf map) certified by the C certificate (:func:`.compiled_search.certify_roots`: fixed-step
+        RK8 of the whole motion with step doubling), progress reported root by root; ``rejected`` as in
+        :meth:`_certify_listed`."""
+        total = len(listed)
+        label = f"certify (k = {problem.k:g}, {total} roots)"
+        shown = [0]
+
+        def progress(done, total):
+            for i in range(shown[0] + 1, done + 1):
+                report(label, i, total)
+            shown[0] = done
+
+        report(label, 0, total)
+        certs = certify_roots(listed, target[0], target[1], target[2], problem.steps, problem.k, progress)
+        R = problem.radius
+        found, rejected = [], []
+        for r, c in zip(listed, certs):
+            # the figure eight ends at the pole (u_o = v_o = 0) by construction; the certificate integrates u_a,
+            # v_a, psi and measures its residual to the target with psi wrapped
+            cert = Certificate(self.certifier.name, State(c.final[0] * R, c.final[1] * R, c.final[2], 0.0, 0.0),
+                               c.residual, c.bound, self.tol)
+            cand = (_Root(r.a, r.b, r.gamma, r.m - turns, r.h, r.eta, r.predicted), cert,
+                    SolverStats(DEFAULT_ROOT_SOLVER, "ok", 0, 0.0))
+            if cert.passed:
+                found.append(cand)
+            elif self._log_rejected(r, cand, turns):
+                rejected.append(cert.residual + cert.error_bound)
+        return found, rejected
 
     @staticmethod
     def _listed_root(r, target, steps) -> _Root:
