@@ -15,6 +15,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+import hypothesis
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -47,6 +48,11 @@ def pytest_unconfigure(config):
 
 
 _CACHE = pytest.StashKey[str]()
+
+#: No wall-clock deadline for an example of a property-based test: the machine may be shared, and a deadline then
+#: fails a test whose example waited for a CPU ("Unreliable test timings" on a loaded machine), not a slow one.
+hypothesis.settings.register_profile("rollplan", deadline=None)
+hypothesis.settings.load_profile("rollplan")
 
 
 @pytest.fixture(autouse=True)
