@@ -76,9 +76,14 @@ _WARM_MARKER = "ROLLPLAN_TEST_WARMED_UP"
 
 
 @pytest.fixture(scope="session", autouse=True)
-def _warmed_up():
+def _warmed_up(request):
     """The first test of each process starts once the run's first plan (pytest_configure) has built what a default
-    plan compiles on first use."""
+    plan compiles on first use; in the process that started it, once its thread has ended (a test may count the
+    threads of the process)."""
+    warm = request.config.stash.get(_WARM, None)
+    if warm is not None:
+        warm.join(600)
+        return
     marker = os.environ.get(_WARM_MARKER)
     deadline = time.monotonic() + 600
     while marker and not os.path.exists(marker) and time.monotonic() < deadline:
