@@ -7,9 +7,11 @@ Tiers: ``unit`` is ``pytest -m "not slow"``, ``full`` the whole suite; each runs
 (``pytest -q -n JOBS``) with ``ROLLPLAN_REQUIRE_EMBEDDED=1`` and ``ROLLPLAN_REQUIRE_MUJOCO=1`` as in ``.ci/run``
 (``--no-require`` leaves the environment as it is). Measured per tier: the wall time of the pytest command
 (collection and the workers' start included), its CPU time (user + system of pytest and everything it started),
-the load average at the start and the end (the machine may be shared), the counts of passed, failed and skipped
-tests and each test's duration (setup, call and teardown, from pytest's JUnit XML). A tier not run this time keeps
-its last measurement (read back from suite.json); suite.md is rendered from suite.json alone.
+the load average at the start and the end (the machine may be shared), the counts of passed, failed (errors
+included), errored and skipped tests, the names of the failed and errored tests (with the first line of their
+message) and of the skipped ones (with the reason), and each test's duration (setup, call and teardown, from
+pytest's JUnit XML). A tier not run this time keeps its last measurement (read back from suite.json); suite.md is
+rendered from suite.json alone.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import argparse
 import datetime
 import json
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -33,6 +36,8 @@ TIERS = {"unit": (["-m", "not slow"], 60.0, "under 60 s on 2 cores"),
          "full": ([], 360.0, "under 6 min on 2 cores, idle")}
 SLOWEST = 20
 FILES = 15
+#: at most this many skipped tests are named (all are counted)
+SKIPPED_NAMED = 50
 
 
 def _cpu() -> float:
@@ -41,8 +46,10 @@ def _cpu() -> float:
 
 
 def parse_junit(path) -> list:
-    """``[(node id, seconds, outcome)]`` of every test case of a JUnit XML report written by pytest; outcome is
-    ``passed``, ``failed`` (a failure or an error) or ``skipped``."""
+    """``[(node id, seconds, outcome, message)]`` of every test case of a JUnit XML report written by pytest;
+    outcome is ``passed``, ``failed`` (an assertion or exception in the test), ``error`` (in a fixture's setup or
+    teardown, or a collection error) or ``skipped``; message is the first line of the failure's, error's or skip's
+    message (empty for a pass). A test that failed and then errored in its teardown is ``failed``."""
     cases = []
     for case in ET.parse(path).getroot().iter("testcase"):
         parts = case.get("classname", "").split(".")
@@ -52,10 +59,31 @@ def parse_junit(path) -> list:
         for p in parts[split + 1:]:
             node += "::" + p
         node += "::" + case.get("name", "")
-        tags = {child.tag for child in case}
-        outcome = "failed" if tags & {"failure", "error"} else "skipped" if "skipped" in tags else "passed"
-        cases.append((node, float(case.get("time", 0.0)), outcome))
+        children = {child.tag: child for child in case}
+        outcome = next((o for o, tag in (("failed", "failure"), ("error", "error"), ("skipped", "skipped"))
+                        if tag in children), "passed")
+        message = ""
+        if outcome != "passed":
+            child = children["failure" if outcome == "failed" else outcome]
+            message = next((line.strip() for line in (child.get("message") or child.text or "").splitlines()
+                            if line.strip()), "")
+        cases.append((node, float(case.get("time", 0.0)), outcome, message))
     return cases
+
+
+#: the short summary lines of pytest's ``-ra`` report: ``FAILED node - message`` / ``ERROR node - message``
+_SHORT = re.compile(r"^(FAILED|ERROR) (\S+)(?: - (.*))?$")
+
+
+def failures_in_output(stdout: str) -> list:
+    """``[(node id, outcome, message)]`` named by pytest's short test summary (``-ra``) in ``stdout``: the failed and
+    errored tests when no JUnit XML was written (a crash of the run)."""
+    found = []
+    for line in stdout.splitlines():
+        m = _SHORT.match(line.strip())
+        if m:
+            found.append((m.group(2), "failed" if m.group(1) == "FAILED" else "error", (m.group(3) or "").strip()))
+    return found
 
 
 def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list) -> dict:
@@ -76,8 +104,10 @@ def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list) -> di
     if run.returncode not in (0, 1):
         print(run.stdout[-3000:], run.stderr[-3000:], sep="\n", file=sys.stderr)
     summary = next((line for line in reversed(run.stdout.splitlines()) if line.strip()), "")
+    bad = [[n, o, m] for n, _, o, m in cases if o in ("failed", "error")] if cases else \
+        [list(f) for f in failures_in_output(run.stdout)]
     files = defaultdict(float)
-    for node, seconds, _ in cases:
+    for node, seconds, _, _ in cases:
         files[node.split("::")[0]] += seconds
     commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True, check=False).stdout.strip()
@@ -89,16 +119,26 @@ def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list) -> di
         "exit_status": run.returncode, "summary": summary, "cores": os.cpu_count(), "jobs": jobs,
         "required": require, "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
         "load_start": [round(x, 2) for x in load0], "load_end": [round(x, 2) for x in load1],
-        "tests": len(cases), "passed": sum(o == "passed" for _, _, o in cases),
-        "failed": sum(o == "failed" for _, _, o in cases), "skipped": sum(o == "skipped" for _, _, o in cases),
-        "test_seconds": round(sum(s for _, s, _ in cases), 1),
-        "slowest": [[n, round(s, 2)] for n, s, _ in sorted(cases, key=lambda x: -x[1])[:SLOWEST]],
+        "tests": len(cases), "passed": sum(o == "passed" for _, _, o, _ in cases),
+        "failed": sum(o in ("failed", "error") for _, _, o, _ in cases),
+        "errors": sum(o == "error" for _, _, o, _ in cases),
+        "skipped": sum(o == "skipped" for _, _, o, _ in cases),
+        "failures": bad,
+        "skipped_tests": [[n, m] for n, _, o, m in cases if o == "skipped"][:SKIPPED_NAMED],
+        "test_seconds": round(sum(s for _, s, _, _ in cases), 1),
+        "slowest": [[n, round(s, 2)] for n, s, _, _ in sorted(cases, key=lambda x: -x[1])[:SLOWEST]],
         "files": [[f, round(s, 1)] for f, s in sorted(files.items(), key=lambda x: -x[1])[:FILES]],
     }
 
 
 def _minutes(seconds: float) -> str:
     return f"{int(seconds // 60)} min {seconds % 60:04.1f} s" if seconds >= 60 else f"{seconds:.1f} s"
+
+
+def _cell(text: str, width: int = 200) -> str:
+    """``text`` as one cell of a Markdown table: one line, pipes escaped, at most ``width`` characters."""
+    text = " ".join(text.split()).replace("|", "\\|")
+    return text if len(text) <= width else text[:width - 3] + "..."
 
 
 def render(data: dict) -> str:
@@ -125,6 +165,19 @@ def render(data: dict) -> str:
         m = data.get(tier)
         if not m:
             continue
+        failures = m.get("failures")
+        if failures is None and (m["failed"] or m.get("errors")):
+            lines += ["", f"## Failed and errored tests of the {tier} tier", "", "not recorded by this run"]
+        elif failures:
+            lines += ["", f"## Failed and errored tests of the {tier} tier", "", "| test | outcome | message |",
+                      "|---|---|---|"]
+            lines += [f"| `{n}` | {o} | {_cell(msg)} |" for n, o, msg in failures]
+        if m.get("skipped_tests"):
+            more = m["skipped"] - len(m["skipped_tests"])
+            lines += ["", f"## Skipped tests of the {tier} tier", "", "| test | reason |", "|---|---|"]
+            lines += [f"| `{n}` | {_cell(reason)} |" for n, reason in m["skipped_tests"]]
+            if more > 0:
+                lines.append(f"| and {more} more | |")
         lines += ["", f"## The {len(m['slowest'])} slowest tests of the {tier} tier", "",
                   "Duration: setup, call and teardown of the test (session and module fixtures are paid by the first "
                   "test of a worker that uses them).", "", "| test | s |", "|---|---:|"]

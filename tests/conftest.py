@@ -13,8 +13,11 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
+import time
 from pathlib import Path
 
+import hypothesis
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -34,19 +37,62 @@ def pytest_configure(config):
     folder = tempfile.mkdtemp(prefix="rollplan-test-cache-")
     config.stash[_CACHE] = folder
     os.environ["ROLLPLAN_CACHE_DIR"] = folder
+    if sys.dont_write_bytecode:
+        # PYTHONDONTWRITEBYTECODE: each worker and each command a test starts would compile rollplan's modules from
+        # source again (~0.2 s of CPU per command); Python still reads bytecode that is there, so write it once
+        import compileall
+
+        compileall.compile_dir(str(Path(rollplan.__file__).parent), quiet=2)
     # what a default plan compiles on first use (the C search, the certificate's functions), built once here:
-    # tests that count the lines of a command's output do not see the first use's progress, whichever runs first
-    subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", "--to", "0.5", "0.3", "--psi", "0.4"],
-                   check=False, capture_output=True, timeout=600)
+    # tests that count the lines of a command's output do not see the first use's progress, whichever runs first.
+    # Built while the workers start and collect the tests; each process's first test waits for it (_warmed_up).
+    marker = os.path.join(tempfile.mkdtemp(prefix="rollplan-test-warm-"), "done")
+    os.environ[_WARM_MARKER] = marker
+
+    def warm_up():
+        try:
+            subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", "--to", "0.5", "0.3", "--psi", "0.4"],
+                           check=False, capture_output=True, timeout=600)
+        finally:
+            Path(marker).touch()
+
+    config.stash[_WARM] = threading.Thread(target=warm_up, name="rollplan-test-warm-up", daemon=True)
+    config.stash[_WARM].start()
 
 
 def pytest_unconfigure(config):
+    warm = config.stash.get(_WARM, None)
+    if warm is not None:
+        warm.join(600)
+        shutil.rmtree(os.path.dirname(os.environ.pop(_WARM_MARKER)), ignore_errors=True)
     folder = config.stash.get(_CACHE, None)
     if folder:
         shutil.rmtree(folder, ignore_errors=True)
 
 
 _CACHE = pytest.StashKey[str]()
+_WARM = pytest.StashKey[threading.Thread]()
+_WARM_MARKER = "ROLLPLAN_TEST_WARMED_UP"
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _warmed_up(request):
+    """The first test of each process starts once the run's first plan (pytest_configure) has built what a default
+    plan compiles on first use; in the process that started it, once its thread has ended (a test may count the
+    threads of the process)."""
+    warm = request.config.stash.get(_WARM, None)
+    if warm is not None:
+        warm.join(600)
+        return
+    marker = os.environ.get(_WARM_MARKER)
+    deadline = time.monotonic() + 600
+    while marker and not os.path.exists(marker) and time.monotonic() < deadline:
+        time.sleep(0.05)
+
+#: No wall-clock deadline for an example of a property-based test: the machine may be shared, and a deadline then
+#: fails a test whose example waited for a CPU ("Unreliable test timings" on a loaded machine), not a slow one.
+hypothesis.settings.register_profile("rollplan", deadline=None)
+hypothesis.settings.load_profile("rollplan")
 
 
 @pytest.fixture(autouse=True)

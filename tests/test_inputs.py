@@ -8,7 +8,7 @@ import os
 import threading
 
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rollplan.errors import InputError, check_range, show_limit
@@ -81,6 +81,15 @@ def test_ranges_print_their_limits_exactly():
     assert "(0, 1.5707963267948966)" in str(err.value)
     assert [show_limit(x) for x in (100.0, 0.69, 1e-6, 1e9, 3, -math.inf)] == ["100", "0.69", "1e-06", "1000000000",
                                                                                "3", "-inf"]
+
+
+def test_property_tests_have_no_wall_clock_deadline():
+    """The two property tests below ran with Hypothesis's default deadline (200 ms of wall time per example): on a
+    shared machine an example that waited for a CPU failed the run ("Unreliable test timings"). The suite's
+    profile (conftest.py) has no deadline, and these tests use it."""
+    assert settings.default.deadline is None
+    for test in (test_every_double_round_trips_through_its_repr, test_random_text_is_a_number_or_one_line):
+        assert getattr(test, "_hypothesis_internal_use_settings", settings.default).deadline is None
 
 
 @given(st.floats(allow_nan=False, allow_infinity=False))

@@ -109,13 +109,19 @@ def test_symmetric_figure_eight_has_no_holonomy(fmap, a, k):
     assert abs(sx(fmap, a, a, k)[2]) < 1e-10 * (1 + k)
 
 
+@pytest.fixture(scope="module")
+def leaf_maps():
+    """The step maps of leaf a alone and of leaf b alone of the figure eight."""
+    c = figure_eight()
+    return spectral_step(c, pieces=(0,)), spectral_step(c, pieces=(1,))
+
+
 @settings(max_examples=25, deadline=None)
 @given(st.floats(0.02, A_MAX), st.floats(0.0, 8.0))
-def test_mirror_leaf(a, k):
+def test_mirror_leaf(leaf_maps, a, k):
     """Leaf b alone is the mirror image of leaf a: (u, v, psi) -> (u, -v, -psi)."""
-    c = figure_eight()
-    first = np.array(spectral_step(c, pieces=(0,))([0, 0, 0], [a, a], k, 0)).ravel()
-    second = np.array(spectral_step(c, pieces=(1,))([0, 0, 0], [a, a], k, 0)).ravel()
+    first = np.array(leaf_maps[0]([0, 0, 0], [a, a], k, 0)).ravel()
+    second = np.array(leaf_maps[1]([0, 0, 0], [a, a], k, 0)).ravel()
     assert np.allclose(second, first * [1, -1, -1], atol=1e-11 * (1 + abs(first[2])))
 
 
@@ -151,12 +157,18 @@ def test_rotation_structure_of_curve_ode():
         np.testing.assert_allclose(at, [c * at0[0] + s * at0[1], -s * at0[0] + c * at0[1], at0[2]], atol=1e-12)
 
 
+@pytest.fixture(scope="module")
+def fmap_jacobian(fmap):
+    """d(step)/d(a, b) of ``fmap`` from the origin, gamma = 0, as a function of (a, b) and k: built once (building
+    it for each k took most of the test's time)."""
+    ab, k = ca.MX.sym("ab", 2), ca.MX.sym("k")
+    return ca.Function("J", [ab, k], [ca.jacobian(fmap(ca.DM.zeros(3), ab, k, 0), ab)])
+
+
 @settings(max_examples=15, deadline=None)
 @given(st.floats(0.02, 0.68), st.floats(0.02, 0.68), st.floats(0.0, 5.0), st.sampled_from([0, 1, 2]))
-def test_step_map_jacobian_matches_finite_differences(fmap, a, b, k, row):
-    ab = ca.MX.sym("ab", 2)
-    jac = ca.Function("J", [ab], [ca.jacobian(fmap(ca.DM.zeros(3), ab, k, 0), ab)])
-    j = np.array(jac([a, b]))
+def test_step_map_jacobian_matches_finite_differences(fmap, fmap_jacobian, a, b, k, row):
+    j = np.array(fmap_jacobian([a, b], k))
     eps = 1e-6
     for col, (da, db) in enumerate([(eps, 0), (0, eps)]):
         fd = (sx(fmap, a + da, b + db, k) - sx(fmap, a - da, b - db, k)) / (2 * eps)

@@ -2,6 +2,7 @@
 (it swallows it), that rollplan turns it into KeyboardInterrupt within a second, and that the command exits 130
 with one line, never a traceback, a failed row or another plan."""
 
+import contextlib
 import os
 import random
 import signal
@@ -126,6 +127,12 @@ def fresh_cache_env(folder):
     return {**os.environ, "ROLLPLAN_CACHE_DIR": str(folder)}
 
 
+def moments(seed, low, high, n):
+    """``n`` random moments in [low, high] s, the same in every run (one generator: each draw a new moment)."""
+    rng = random.Random(seed)
+    return [rng.uniform(low, high) for _ in range(n)]
+
+
 def run_and_interrupt(argv, delay, wait_for=None, env=None, sig=signal.SIGINT):
     """Run the command; ``delay`` seconds after its stderr shows ``wait_for`` (or after the start), SIGINT (or
     ``sig``). Returns (exit code, seconds from the signal to the exit, stdout, stderr)."""
@@ -145,7 +152,8 @@ def run_and_interrupt(argv, delay, wait_for=None, env=None, sig=signal.SIGINT):
     reader = threading.Thread(target=read, daemon=True)
     reader.start()
     assert seen.wait(120), "".join(lines)
-    time.sleep(delay)
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        proc.wait(timeout=delay)   # the moment, or the command's end if that comes first (then nothing is sent)
     proc.send_signal(sig)
     t0 = time.perf_counter()
     out = proc.stdout.read()
@@ -169,7 +177,7 @@ def test_ctrl_c_stops_the_solver_loop_with_exit_130(delay, tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("delay", [random.Random(5).uniform(0.3, 3.0) for _ in range(2)])
+@pytest.mark.parametrize("delay", moments(5, 0.3, 3.0, 2))
 def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(delay):
     """Ctrl-C in `compare --intervals 2000` took 24-30 s to act: CasADi's construction of the collocation solver
     (minutes for a large N, one call into C++ that never returns to Python) held it. SIGINT at a random moment
@@ -183,7 +191,7 @@ def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(delay):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("delay", [random.Random(7).uniform(0.0, 90.0) for _ in range(3)])
+@pytest.mark.parametrize("delay", moments(7, 0.0, 90.0, 3))
 def test_ctrl_c_at_any_moment_of_compare_acts_at_once(delay):
     """SIGINT at a random moment of a whole `compare` (construction, GP timing, IPOPT, Gauss-Newton, CVODES
     certification of each start): exit 130 within a few seconds on a loaded machine, or the finished run's 0."""

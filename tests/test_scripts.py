@@ -122,6 +122,42 @@ def test_fails():
 """
 
 
+def test_suite_report_names_failed_errored_and_skipped_tests(tmp_path):
+    """The failed, errored and skipped tests of a run are named from pytest's JUnit XML (a failure in the test is
+    failed, one in a fixture an error) and, when the run wrote no XML, from its -ra summary lines."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+    try:
+        import suite_report
+    finally:
+        sys.path.pop(0)
+    xml = tmp_path / "junit.xml"
+    xml.write_text(
+        '<testsuites><testsuite name="pytest">'
+        '<testcase classname="tests.test_a" name="test_ok" time="0.1"/>'
+        '<testcase classname="tests.test_a" name="test_bad[1]" time="0.2">'
+        '<failure message="AssertionError: assert 1 == 2&#10;more">trace</failure></testcase>'
+        '<testcase classname="tests.test_a.TestC" name="test_fixture" time="0.3">'
+        '<error message="failed on setup with &quot;OSError: disk&quot;">trace</error></testcase>'
+        '<testcase classname="tests.test_a" name="test_skip" time="0.0">'
+        '<skipped type="pytest.skip" message="no compiler">skip</skipped></testcase>'
+        '</testsuite></testsuites>')
+    assert suite_report.parse_junit(xml) == [
+        ("tests/test_a.py::test_ok", 0.1, "passed", ""),
+        ("tests/test_a.py::test_bad[1]", 0.2, "failed", "AssertionError: assert 1 == 2"),
+        ("tests/test_a.py::TestC::test_fixture", 0.3, "error", 'failed on setup with "OSError: disk"'),
+        ("tests/test_a.py::test_skip", 0.0, "skipped", "no compiler")]
+    out = ("....F\n=== short test summary info ===\nFAILED tests/test_a.py::test_bad[1] - assert 1 == 2\n"
+           "ERROR tests/test_b.py::test_c\n1 failed, 1 error, 3 passed in 1.0s\n")
+    assert suite_report.failures_in_output(out) == [("tests/test_a.py::test_bad[1]", "failed", "assert 1 == 2"),
+                                                    ("tests/test_b.py::test_c", "error", "")]
+    assert suite_report.render({"full": {
+        "command": "c", "date": "d", "commit": "x", "tests": 3, "passed": 1, "failed": 2, "errors": 1, "skipped": 0,
+        "wall_s": 1.0, "cpu_s": 1.0, "test_seconds": 1.0, "cores": 2, "jobs": "2", "load_start": [0, 0, 0],
+        "load_end": [0, 0, 0], "slowest": [], "files": [], "skipped_tests": [],
+        "failures": [["tests/test_a.py::test_bad[1]", "failed", "a | b"], ["tests/test_b.py::test_c", "error", ""]],
+    }}).count("| `tests/test_a.py::test_bad[1]` | failed | a \\| b |") == 1
+
+
 @pytest.mark.slow
 def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     """scripts/suite_report.py runs each tier of a small suite whose counts are known (six tests: four pass,
@@ -148,6 +184,12 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     text = (out / "suite.md").read_text()
     assert "| unit |" in text and "| full |" in text and "6 (4, 1, 1)" in text and "5 (3, 1, 1)" in text
     assert "`test_fake.py::test_slow`" in text and "scripts/suite_report.py" in text
+    # the failed test is named, with its message, and so is the skipped one, with its reason
+    for tier in ("unit", "full"):
+        assert [n for n, _, _ in data[tier]["failures"]] == ["test_fake.py::test_fails"]
+        assert data[tier]["failures"][0][1] == "failed" and "assert False" in data[tier]["failures"][0][2]
+        assert data[tier]["skipped_tests"] == [["test_fake.py::test_skipped", "shown as skipped"]]
+    assert "`test_fake.py::test_fails`" in text and "`test_fake.py::test_skipped` | shown as skipped" in text
     (tests / "test_fake.py").write_text(FAKE_TESTS.replace("assert False", "pass"))
     run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tier", "unit", "--tests", str(tests),
                           "--out-dir", str(out)], capture_output=True, text=True, timeout=600, check=False)

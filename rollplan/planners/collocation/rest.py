@@ -266,8 +266,9 @@ class RestToRestPlanner:
         self.point = ca.Function("point", [x, w, par], [xdot, REST_COSTS[cost](xdot, omega, torque, par), omega])
         t0 = time.perf_counter()
         log.info("building the collocation NLP: N = %d, d = %d, cost %s", intervals, degree, cost)
-        nlp, self.path_rows = self.transcription.contact_nlp(self.point, N_PAR)
-        # minutes for a large N, in C++ that never returns to Python: built in a thread, so Ctrl-C acts at once
+        # minutes for a large N, in C++ that never returns to Python or in CasADi calls that swallow SIGINT:
+        # built in a thread, so Ctrl-C acts at once
+        nlp, self.path_rows = interrupts.call_in_thread(self.transcription.contact_nlp, self.point, N_PAR)
         self.ipopt_options = {**ipopt_options(self.tol, self.max_iter), **REST_IPOPT_OPTIONS}
         self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, self.ipopt_options)
         self.build_time_s = time.perf_counter() - t0
