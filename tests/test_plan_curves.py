@@ -121,3 +121,34 @@ def test_best_is_never_longer_than_any_family():
         best = solve(problem, "geometric", curve="best", legs="one")
         assert best.path_length <= min(lengths.values()) + 1e-12
         assert best.curve in lengths and lengths[best.curve] == pytest.approx(best.path_length, abs=1e-12)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("curve", PLANNED)
+def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path):
+    """``rollplan codegen --curve`` (built with -Wall -Wextra -Werror by its Makefile): plan_demo gives the plan of
+    ``plan --curve`` (same branch, a, b, gamma to 1e-8), and that plan reaches the target when the family's figure
+    eight as typed in tests/references.py is integrated by DOP853."""
+    _require_library(curve)
+    out = tmp_path / "c"
+    code, stdout, err = _cli("codegen", "--out", str(out), "--curve", curve, "--k-max", "12")
+    assert code == 0 and f"curve {curve}" in stdout, err
+    assert f"#define RP_FAMILY {compiled_search.C_FAMILIES.index(curve)}" in (out / "rollplan_config.h").read_text()
+    build = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)
+    assert build.returncode == 0, build.stderr
+    for target, steps, k in _targets(12, 4):
+        run_c = subprocess.run([str(out / "plan_demo"), *map(repr, target), str(steps), repr(k)], capture_output=True,
+                               text=True, check=False)
+        try:
+            p = solve(Problem(target, k=k, steps=steps), "geometric", curve=curve)
+        except Exception as exc:   # noqa: BLE001 -- no plan: the C planner says so too
+            assert type(exc).__name__ == "NoPlanError" and run_c.returncode == 3, (exc, run_c.stderr)
+            continue
+        assert run_c.returncode == 0, run_c.stderr
+        a, b, gamma, residual, bound, m = run_c.stdout.split()
+        assert int(m) == p.branch and float(residual) + float(bound) <= 1e-9
+        assert max(abs(float(a) - p.a), abs(float(b) - p.b), abs(wrap(float(gamma) - p.gamma))) < 1e-8
+        x = np.zeros(3)
+        for _ in range(steps):
+            x = references.family_trace(curve, float(a), float(b), k, float(gamma), x)
+        assert max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2]))) < 1e-9
