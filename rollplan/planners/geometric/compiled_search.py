@@ -213,7 +213,7 @@ def check_family_k(curve: str, k: float) -> None:
 
 
 def family_plans(u: float, v: float, psi: float, steps: int, k: float, curve: str, branch: int | None = None,
-                 every: bool = False) -> list:
+                 every: bool = False, certified: bool = True) -> list:
     """Plans for the target ``(u, v, psi)`` [R, rad] in ``steps`` figure eights of the leaf family ``curve`` at
     inertia ratio k (:func:`check_family_k`) by that family's C search, each polished on the family's leaf map and
     certified on board along the family's curve: the shortest certified one (``<prefix>_plan_with``), or with
@@ -224,7 +224,7 @@ def family_plans(u: float, v: float, psi: float, steps: int, k: float, curve: st
     lib = _library(curve)
     if branch is not None and abs(branch) > 2**31 - 1:
         return []
-    options = _Options(int(branch is not None), 0 if branch is None else int(branch), 1)
+    options = _Options(int(branch is not None), 0 if branch is None else int(branch), int(bool(certified)))
     args = (float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options))
     if not every:
         plan = _Plan()
