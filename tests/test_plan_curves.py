@@ -21,7 +21,7 @@ from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search
 import references
 
 #: The families the C search plans with (beside the circles).
-PLANNED = ("viviani",)
+PLANNED = ("viviani", "triangle", "square")
 
 
 def _require_library(curve):
@@ -48,7 +48,7 @@ def test_the_curve_option_is_validated(options, needle):
 
 @pytest.mark.parametrize("curve, goal, k, needle", [
     ("viviani", (0.0, 1.0, 0.0), 0.3, "k = 0.3"),                       # E not monotone below k = 1/2
-    ("triangle", (0.0, 1.0, 0.0), 2.5, "triangle"),                     # not planned yet
+    ("triangle", (0.0, 1.0, 0.0), 0.49, "k = 0.49"),
     ("viviani", (0.0, 1.0, 0.0, 0.2, 0.0), 2.5, "one leg"),             # goal off the pole: composed motions
 ])
 def test_what_a_family_does_not_plan_is_refused_in_one_line(curve, goal, k, needle):
@@ -60,8 +60,8 @@ def test_what_a_family_does_not_plan_is_refused_in_one_line(curve, goal, k, need
 def test_plan_curve_refusals_on_the_command_line(capsys):
     code, _, err = run(capsys, "plan", "--curve", "viviani", "--k", "0.2")
     assert code == 2 and one_line(err) and "k = 0.2" in err and "viviani" in err
-    code, _, err = run(capsys, "plan", "--curve", "square")
-    assert code == 2 and one_line(err) and "square" in err
+    code, _, err = run(capsys, "plan", "--curve", "square", "--from", "0", "0", "0", "0.1", "0")
+    assert code == 2 and one_line(err) and "square" in err and "one leg" in err
 
 
 def _targets(seed, count):
@@ -79,7 +79,8 @@ def _targets(seed, count):
 @pytest.mark.parametrize("curve", PLANNED)
 def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path):
     """``plan --curve --json``: the sampled contact path alone, integrated by scipy (replay, 1e-6), and the figure
-    eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9."""
+    eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9; a
+    polygon's contact path is made of great-circle arcs (each edge's samples on one great circle to 1e-9)."""
     _require_library(curve)
     landed = 0
     for i, (target, steps, k) in enumerate(_targets(26, 6)):
@@ -95,7 +96,15 @@ def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path):
         assert all(s["curve"] == f"figure_eight_{curve}" for s in d["segments"])
         assert d["certificate"]["residual"] + d["certificate"]["error_bound"] <= 1e-9
         tr = d["trajectory"]
-        x = references.replay(np.array(tr["u_o"]), np.array(tr["v_o"]), np.array(tr["segment"]), np.zeros(3), k)[-1]
+        u_o, v_o, segment = np.array(tr["u_o"]), np.array(tr["v_o"]), np.array(tr["segment"])
+        if curve in ("triangle", "square"):   # each edge's samples (and its start) on one great circle
+            pts = references.contact_point(u_o, v_o)
+            for j in range(int(segment.max()) + 1):
+                idx = np.flatnonzero(segment == j)
+                arc = pts[np.r_[idx[0] - 1, idx]]
+                normal = np.cross(arc[0], arc[-1])
+                assert np.max(np.abs(arc @ (normal / np.linalg.norm(normal)))) < 1e-9, j
+        x = references.replay(u_o, v_o, segment, np.zeros(3), k)[-1]
         assert abs(x[0] - target[0]) < 1e-6 and abs(x[1] - target[1]) < 1e-6, (target, x)
         assert abs(wrap(x[2] - target[2])) < 1e-6, (target, x)
         f = d["figure_eight"]

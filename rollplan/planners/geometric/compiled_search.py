@@ -203,10 +203,9 @@ def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int 
 def check_family_k(curve: str, k: float) -> None:
     """InputError unless the C search of the leaf family ``curve`` serves ``k``: the circles every k, another
     family (:data:`.c_sources.C_FAMILIES`) k >= 1/2, where its turn E is strictly decreasing in the leaf's size
-    (docs/design/curve-families.md, (iv)); the polygons are not served yet."""
+    (docs/design/curve-families.md, (iv))."""
     if curve not in C_FAMILIES:
-        raise InputError(f"curve = {curve} is not allowed for planning yet: the C search serves "
-                         f"{', '.join(C_FAMILIES)}")
+        raise InputError(f"curve = {curve!r:.40} is not allowed: choose one of {', '.join(C_FAMILIES)}")
     if curve != "circles" and not k >= K_MONOTONE:
         raise InputError(f"k = {k:g} is not allowed with curve = {curve}: it plans for k >= {K_MONOTONE:g} "
                          "(where the leaf's turn is monotone in its size); use curve = circles")
