@@ -178,8 +178,13 @@ def _brute_family_roots(curve, k, targets, count=240, scan=4000):
     w = np.linspace(1.0, 1.0 / math.sqrt(1.0 - 2.0 * A_MAX * A_MAX), count + 1)
     sizes = np.unique(np.r_[np.linspace(0.0, A_MAX, count // 2 + 1), np.sqrt(0.5 * (1.0 - 1.0 / w**2))])
     sizes = sizes[np.r_[True, np.diff(sizes) > 1e-4]]
-    ends = [np.zeros(3)] + [references.curve_leaf_end(references.family_leaf(curve, a)[0], np.zeros(3), k,
-                                                      rtol=1e-12, atol=1e-14) for a in sizes[1:]]
+    def leaf_end(a):
+        x = np.zeros(3)
+        for piece in references.family_leaf(curve, a):   # a polygon's edges one after the other
+            x = references.curve_leaf_end(piece, x, k, rtol=1e-12, atol=1e-14)
+        return x
+
+    ends = [np.zeros(3)] + [leaf_end(a) for a in sizes[1:]]
     turn = np.array([x[2] for x in ends])
     rho = np.array([(complex(x[0], x[1]) * np.exp(0.5j * x[2])).real for x in ends])
     e_of, rho_of = CubicSpline(sizes, turn), CubicSpline(sizes, rho)
