@@ -114,6 +114,7 @@ def composed_to_dict(plan, traj=None, include_alternatives=True) -> dict:
         "eights_target": {n: float(v) * (R if n != "psi" else 1.0) for n, v in zip(("u_a", "v_a", "psi"), c.target)},
         "intermediate": None if c.intermediate is None else _f(c.intermediate * [R, R, 1.0]),
         "legs": legs,
+        "base": None if getattr(c, "base", None) is None else c.base.as_dict(R),
         "segments": [dict(p.as_dict(), length=p.length * R) for p in c.pieces],
         "final": c.final.as_dict(), "residual": c.residual, "certificate": c.certificate.as_dict(),
         "path_length": c.path_length, "solver": c.stats.as_dict(),

@@ -127,3 +127,12 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     again = json.loads((out / "suite.json").read_text())
     assert again["full"] == data["full"] and (again["unit"]["passed"], again["unit"]["failed"]) == (4, 0)
     assert "6 (4, 1, 1)" in (out / "suite.md").read_text()
+
+
+@pytest.mark.slow
+def test_basepoint_bench_script_runs(tmp_path):
+    run_script("basepoint_bench.py", tmp_path, "--quick")
+    text = (tmp_path / "basepoint.md").read_text()
+    assert "| README example |" in text and "| random 1 |" in text and "DOP853" in text
+    rows = json.loads((tmp_path / "basepoint.json").read_text())["rows"]
+    assert all(r["any_length"] <= r["pole_length"] and r["dop853_residual"] <= 1e-9 for r in rows)
