@@ -235,9 +235,10 @@ def _brute_family_roots(curve, k, targets, count=240, scan=4000):
 @pytest.mark.parametrize("curve", PLANNED)
 @pytest.mark.parametrize("k", [1.5, 6.0])
 def test_c_search_of_the_family_against_a_brute_force(curve, k):
-    """Every root of the family's C search (``plan_all``, uncertified) is one of the brute force's and none is missed
-    (to 1e-6 in a and b: the brute force's splines of 240 DOP853 leaves); its shortest plan (smallest a + b) is the
-    brute force's."""
+    """Every root of the family's C search (``plan_all``, uncertified) is one of the brute force's and none is missed:
+    the same number per branch, one to one within 1e-5 in a and b (the brute force's splines of DOP853 leaves; near
+    A_MAX within 1e-3), and a C root more than 1e-7 from the brute force's is checked by DOP853 on the whole figure
+    eight; its shortest plan (smallest a + b) is the brute force's."""
     _require_library(curve)
     rng = np.random.default_rng(int(10 * k))
     targets = []
@@ -249,14 +250,25 @@ def test_c_search_of_the_family_against_a_brute_force(curve, k):
     for ((u, v, psi), steps), want in zip(targets, brute):
         got = [(r.m, r.a, r.b) for r in compiled_search.family_plans(u, v, float(wrap(psi)), steps, k, curve,
                                                                        every=True, certified=False)]
-        tol = 1e-6
-        missed = [w for w in want if not any(g[0] == w[0] and abs(g[1] - w[1]) < tol and abs(g[2] - w[2]) < tol
-                                             for g in got)]
-        extra = [g for g in got if not any(g[0] == w[0] and abs(g[1] - w[1]) < tol and abs(g[2] - w[2]) < tol
-                                           for w in want)]
-        assert (missed, extra) == ([], []), ((u, v, psi), steps)
+        # one-to-one per branch, in order of a: within 1e-5 where both leaves are below 0.68; nearer A_MAX the
+        # brute force's splines are coarser (a polygon's corners near the equator), so there within 1e-3; a C root
+        # more than 1e-7 from the brute force's must be a root of the figure eight integrated by DOP853 (1e-8)
+        for m in {r[0] for r in want} | {r[0] for r in got}:
+            w = sorted(r for r in want if r[0] == m)
+            g = sorted(r for r in got if r[0] == m)
+            assert len(w) == len(g), ((u, v, psi), steps, m, w, g)
+            for (_, a1, b1), (_, a2, b2) in zip(w, g):
+                tol = 1e-5 if max(a1, b1, a2, b2) < 0.68 else 1e-3
+                assert abs(a1 - a2) < tol and abs(b1 - b2) < tol, ((u, v, psi), steps, m, w, g)
+                if max(abs(a1 - a2), abs(b1 - b2)) > 1e-7:
+                    x = references.family_trace(curve, a2, b2, k)
+                    eta = (float(wrap(psi)) + 2 * math.pi * m) / steps
+                    gain = abs(math.sin(steps * eta / 2) / math.sin(eta / 2))
+                    assert abs(x[2] - eta) < 1e-8 and abs(math.hypot(x[0], x[1]) - math.hypot(u, v) / gain) < 1e-8
         if want:
             best = compiled_search.family_plans(u, v, float(wrap(psi)), steps, k, curve)[0]
-            assert best.a + best.b == pytest.approx(min(a + b for _, a, b in want), abs=1e-6)
+            low = min(want, key=lambda r: r[1] + r[2])
+            tol = 1e-5 if max(low[1], low[2]) < 0.68 else 1e-3
+            assert best.a + best.b == pytest.approx(low[1] + low[2], abs=tol)
             compared += len(want)
     assert compared >= 4

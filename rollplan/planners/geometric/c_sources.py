@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...core import families
 from ...core.c_functions import (
     DEFAULT_PREFIX,
     DEFAULT_STEPS_PER_LEAF,
@@ -88,7 +89,17 @@ def _two_pi_parts() -> dict:
     return {f"TWO_PI_{i + 1}": repr(p) for i, p in enumerate(parts)}
 
 
-def _enumeration_constants(k_max: float) -> dict:
+def _family_table_size(k: float, curve: str) -> int:
+    """Radii of the C planner's table at k for the leaf family ``curve``: :func:`.search_constants.table_radii`'s
+    rule with the family's turn E (:func:`rollplan.core.families.turn`)."""
+    base = np.linspace(0.0, A_MAX, math.ceil(A_MAX / sc.TABLE_STEP) + 1)
+    turn = np.r_[0.0, families.turn(curve, base[1:], k)]   # (E = 0 at the size 0, the pole)
+    parts = np.maximum(np.ceil(np.abs(np.diff(turn)) / sc.TABLE_PHASE),
+                       np.ceil(np.diff((1.0 - 2.0 * base * base) ** -0.5) / sc.TABLE_INV_S))
+    return int(np.maximum(1, parts).sum()) + 1
+
+
+def _enumeration_constants(k_max: float, curve: str = "circles") -> dict:
     """The constants of :mod:`.leafmap` and :mod:`.search_constants` the C planner uses, and the sizes of its static
     tables for ``k <= k_max``."""
     if leafmap.ORDER % 2:
@@ -100,6 +111,8 @@ def _enumeration_constants(k_max: float) -> dict:
     # steps grow with k; below 1/2 |E'| is smaller than at 1/2); the cell of the last radius is one more
     ntable = 1 + max(sc.table_radii(kk, sc.TABLE_STEP, sc.TABLE_PHASE, sc.TABLE_INV_S).size
                      for kk in (K_MIN, K_MONOTONE, k_max))
+    if curve != "circles":   # its E: at least as many radii at every k in [K_MONOTONE, k_max] (E affine in k)
+        ntable = max(ntable, 1 + max(_family_table_size(kk, curve) for kk in (K_MONOTONE, k_max)))
     if ntable >= 2 ** 16:
         raise ValueError(f"the rho table at k_max = {k_max:g} needs {ntable} radii: its buckets hold 16-bit indices")
     return {
@@ -165,7 +178,7 @@ def config_values(functions, steps_per_leaf: int, k_max: float, real: str, curve
         "PHASE": repr(PHASE[curve]),
         "FAMILY_MULT": str(FAMILY_MULT),
         **_two_pi_parts(),
-        **_enumeration_constants(float(k_max)),
+        **_enumeration_constants(float(k_max), curve),
     }
 
 
