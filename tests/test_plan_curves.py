@@ -235,10 +235,10 @@ def _brute_family_roots(curve, k, targets, count=240, scan=4000):
 @pytest.mark.parametrize("curve", PLANNED)
 @pytest.mark.parametrize("k", [1.5, 6.0])
 def test_c_search_of_the_family_against_a_brute_force(curve, k):
-    """Every root of the family's C search (``plan_all``, uncertified) is one of the brute force's and none is missed:
-    the same number per branch, one to one within 1e-5 in a and b (the brute force's splines of DOP853 leaves; near
-    A_MAX within 1e-3), and a C root more than 1e-7 from the brute force's is checked by DOP853 on the whole figure
-    eight; its shortest plan (smallest a + b) is the brute force's."""
+    """No root of the brute force is missed by the family's C search (``plan_all``, uncertified): each within 1e-5 in
+    a and b (the brute force's splines of DOP853 leaves; near A_MAX within 1e-3); every other C root is a root of the
+    figure eight integrated by DOP853 (1e-8: e.g. a close pair the brute force's scan stepped over); the C search's
+    shortest plan (smallest a + b) is the brute force's."""
     _require_library(curve)
     rng = np.random.default_rng(int(10 * k))
     targets = []
@@ -250,21 +250,21 @@ def test_c_search_of_the_family_against_a_brute_force(curve, k):
     for ((u, v, psi), steps), want in zip(targets, brute):
         got = [(r.m, r.a, r.b) for r in compiled_search.family_plans(u, v, float(wrap(psi)), steps, k, curve,
                                                                        every=True, certified=False)]
-        # one-to-one per branch, in order of a: within 1e-5 where both leaves are below 0.68; nearer A_MAX the
-        # brute force's splines are coarser (a polygon's corners near the equator), so there within 1e-3; a C root
-        # more than 1e-7 from the brute force's must be a root of the figure eight integrated by DOP853 (1e-8)
-        for m in {r[0] for r in want} | {r[0] for r in got}:
-            w = sorted(r for r in want if r[0] == m)
-            g = sorted(r for r in got if r[0] == m)
-            assert len(w) == len(g), ((u, v, psi), steps, m, w, g)
-            for (_, a1, b1), (_, a2, b2) in zip(w, g):
-                tol = 1e-5 if max(a1, b1, a2, b2) < 0.68 else 1e-3
-                assert abs(a1 - a2) < tol and abs(b1 - b2) < tol, ((u, v, psi), steps, m, w, g)
-                if max(abs(a1 - a2), abs(b1 - b2)) > 1e-7:
-                    x = references.family_trace(curve, a2, b2, k)
-                    eta = (float(wrap(psi)) + 2 * math.pi * m) / steps
-                    gain = abs(math.sin(steps * eta / 2) / math.sin(eta / 2))
-                    assert abs(x[2] - eta) < 1e-8 and abs(math.hypot(x[0], x[1]) - math.hypot(u, v) / gain) < 1e-8
+        # every brute-force root has its C root (within 1e-5 where both leaves are below 0.68; nearer A_MAX, where
+        # the brute force's splines are coarse, within 1e-3), and every C root that is not within 1e-7 of a brute-force
+        # root (a close pair the scan stepped over, or near A_MAX) is a root of the figure eight integrated by DOP853
+        for m, a1, b1 in want:
+            tol = 1e-5 if max(a1, b1) < 0.68 else 1e-3
+            assert any(r[0] == m and abs(r[1] - a1) < tol and abs(r[2] - b1) < tol for r in got), \
+                ((u, v, psi), steps, (m, a1, b1), got)
+        for m, a2, b2 in got:
+            if any(r[0] == m and abs(r[1] - a2) < 1e-7 and abs(r[2] - b2) < 1e-7 for r in want):
+                continue
+            x = references.family_trace(curve, a2, b2, k)
+            eta = (float(wrap(psi)) + 2 * math.pi * m) / steps
+            gain = abs(math.sin(steps * eta / 2) / math.sin(eta / 2))
+            assert abs(x[2] - eta) < 1e-8 and abs(math.hypot(x[0], x[1]) - math.hypot(u, v) / gain) < 1e-8, \
+                ((u, v, psi), steps, (m, a2, b2))
         if want:
             best = compiled_search.family_plans(u, v, float(wrap(psi)), steps, k, curve)[0]
             low = min(want, key=lambda r: r[1] + r[2])
