@@ -51,6 +51,15 @@
 #define CERT_SAFETY RP_CERT_SAFETY
 #define CERT_ROUNDING RP_CERT_ROUNDING  /* safety factor of the rounding allowance (certify.ROUNDING_FACTOR) */
 #define NPANEL RP_NPANEL                /* panels of each leaf (the curve's) */
+#define FAMILY RP_FAMILY                /* leaf family of this generation (c_sources.C_FAMILIES): 0 circles (35),
+                                           1 the Viviani lobes, 2 the geodesic triangles, 3 the geodesic squares */
+#define FAMILY_CIRCLES 0
+#define FAMILY_VIVIANI 1
+#define FAMILY_TRIANGLE 2
+#define FAMILY_SQUARE 3
+#define PHASE RP_PHASE                  /* the certificate's right sides take cos and sin of PHASE phi */
+#define FAMILY_MULT RP_FAMILY_MULT      /* a family's leaf map integrates the leaf with this many times the
+                                           certificate's RK8 steps */
 #define NOT_A_ROOT (RP_NOT_A_ROOT * CERT_TOL)  /* a polished root the leaf map misses by more is none (enumerate.NOT_A_ROOT) */
 #define CERT_REFINE 3                  /* at most 3 more doublings when only the bound is too large */
 #define CERT_MAX_PANEL_STEPS 2048      /* bounds the certificate's time; k <= K_MAX needs far fewer */
@@ -127,7 +136,7 @@ static int counts(const casadi_real ab[2], casadi_real k, casadi_real gamma) {
         w = s_breaks[j + 1] - s_breaks[j];
         rate[0] = rate[1] = RP_R(0.0);
         for (q = 0; q <= 4; ++q) {
-            phi = s_breaks[j] + RP_R(0.25) * q * w;
+            phi = PHASE * (s_breaks[j] + RP_R(0.25) * q * w);
             cp[0] = RP_COS(phi);
             cp[1] = RP_SIN(phi);
             for (leaf = 0; leaf < 2; ++leaf) {
@@ -185,8 +194,8 @@ static const casadi_real s_rk8_c[NSTAGE] = {RP_RK8_C};
 static void stage_rotations(casadi_real h, casadi_real rot[2 * NSTAGE]) {
     int j;
     for (j = 0; j < NSTAGE; ++j) {
-        rot[j] = RP_COS(s_rk8_c[j] * h);
-        rot[NSTAGE + j] = RP_SIN(s_rk8_c[j] * h);
+        rot[j] = RP_COS(PHASE * s_rk8_c[j] * h);
+        rot[NSTAGE + j] = RP_SIN(PHASE * s_rk8_c[j] * h);
     }
 }
 
@@ -200,8 +209,8 @@ static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, 
     int q, j;
     for (q = 0; q < n; ++q) {
         t = t0 + q * h;
-        ct = RP_COS(t);
-        st = RP_SIN(t);
+        ct = RP_COS(PHASE * t);
+        st = RP_SIN(PHASE * t);
         for (j = 0; j < NSTAGE; ++j) {
             cs[j] = ct * rot[j] - st * rot[NSTAGE + j];
             sn[j] = st * rot[j] + ct * rot[NSTAGE + j];
@@ -337,9 +346,83 @@ static void consts(casadi_real r, casadi_real *c, casadi_real *s, casadi_real *r
     *rho = r * r / (*c * *c + *s);
 }
 
-/* Turn of psi over the +y leaf, E(r, k) = 2 pi r^2 / (1 + c) - 4 pi k c r^2 / (s (1 + s)) (leafmap.turn). */
+/* Turn E(r, k) of the Viviani lobe of size r and dE/dr (families.turn, docs/design/curve-families.md):
+ *   E = 4 asin r - 4 r c - k B,  B = (2 sqrt 2 c / s) atan(sqrt 2 r / s) - 4 r c,
+ *   dE/dr = 8 r^2 / c - k (2 sqrt 2 r atan(sqrt 2 r / s) / (c s^3) + 4 c / s^2 - 4 (c^2 - r^2) / c). */
+static casadi_real viviani_turn(casadi_real r, casadi_real k, casadi_real *dr) {
+    const casadi_real sq2 = RP_R(1.41421356237309504880);
+    casadi_real c = RP_SQRT(RP_R(1.0) - r * r), s = RP_SQRT(RP_R(1.0) - RP_R(2.0) * r * r), at = RP_ATAN(sq2 * r / s);
+    if (dr)
+        *dr = RP_R(8.0) * r * r / c
+              - k * (RP_R(2.0) * sq2 * r * at / (c * s * s * s) + RP_R(4.0) * c / (s * s) - RP_R(4.0) * (c * c - r * r) / c);
+    return RP_R(4.0) * RP_ASIN(r) - RP_R(4.0) * r * c - k * (RP_R(2.0) * sq2 * c / s * at - RP_R(4.0) * r * c);
+}
+
+/* Unit vector at polar distance sigma from the south pole in the direction beta from +y towards +x. */
+static void polar(casadi_real sigma, casadi_real beta, casadi_real p[3]) {
+    p[0] = RP_SIN(sigma) * RP_SIN(beta);
+    p[1] = RP_SIN(sigma) * RP_COS(beta);
+    p[2] = -RP_COS(sigma);
+}
+
+/* One edge's part of the turn of a polygon leaf (families._edge_terms): on the great circle whose nearest point to
+ * the pole is at distance p in direction theta_n, [x - asin(cos p sin x) - k tan p asinh(sin p tan x)] between the
+ * edge's end directions x (from theta_n). */
+static casadi_real edge_term(const casadi_real a[3], const casadi_real b[3], casadi_real k) {
+    casadi_real n[3], nh, tp, sp, cp, th, x, y, q, out = RP_R(0.0);
+    int i;
+    n[0] = a[1] * b[2] - a[2] * b[1];
+    n[1] = a[2] * b[0] - a[0] * b[2];
+    n[2] = a[0] * b[1] - a[1] * b[0];
+    if (n[2] < RP_R(0.0)) for (i = 0; i < 3; ++i) n[i] = -n[i];
+    nh = RP_HYPOT(n[0], n[1]);
+    tp = n[2] / nh;
+    cp = RP_R(1.0) / RP_SQRT(RP_R(1.0) + tp * tp);
+    sp = tp * cp;
+    th = RP_ATAN2(n[1], n[0]);
+    for (i = 0; i < 2; ++i) {
+        x = wrap(RP_ATAN2(i ? b[1] : a[1], i ? b[0] : a[0]) - th);
+        y = sp * RP_TAN(x);
+        q = RP_LOG(RP_FABS(y) + RP_SQRT(RP_R(1.0) + y * y));          /* asinh |y| */
+        q = x - RP_ASIN(cp * RP_SIN(x)) - k * tp * (y < RP_R(0.0) ? -q : q);
+        out += i ? q : -q;
+    }
+    return out;
+}
+
+/* Turn E(r, k) of the polygon leaf of size r (families.turn): the triangle with apex 60 degrees and legs 2 asin r, or
+ * the rhombus with 90 degrees at the pole, its far corner at 2 asin r and its side corners at atan(sqrt 2 tan(D/2));
+ * the radial edges add nothing. */
+static casadi_real polygon_turn(casadi_real r, casadi_real k) {
+    casadi_real d = RP_R(2.0) * RP_ASIN(r), v1[3], v2[3], v3[3], l;
+    if (!(r > RP_R(0.0))) return RP_R(0.0);                     /* the leaf of size 0 is the pole */
+    if (FAMILY == FAMILY_TRIANGLE) {
+        polar(d, PI / RP_R(6.0), v1);
+        polar(d, -PI / RP_R(6.0), v2);
+        return edge_term(v1, v2, k);
+    }
+    l = RP_ATAN(RP_R(1.41421356237309504880) * r / RP_SQRT(RP_R(1.0) - r * r));
+    polar(l, PI / RP_R(4.0), v1);
+    polar(d, RP_R(0.0), v2);
+    polar(l, -PI / RP_R(4.0), v3);
+    return edge_term(v1, v2, k) + edge_term(v2, v3, k);
+}
+
+/* dE/dr of a polygon leaf: the fourth-order central difference of polygon_turn with step min(1e-3, r / 4)
+ * (E is smooth in r on (0, A_MAX], even at 0). */
+static casadi_real polygon_turn_dr(casadi_real r, casadi_real k) {
+    casadi_real h = r / RP_R(4.0) < RP_R(1e-3) ? r / RP_R(4.0) : RP_R(1e-3);
+    if (!(r > RP_R(0.0))) return RP_R(0.0);
+    return (RP_R(8.0) * (polygon_turn(r + h, k) - polygon_turn(r - h, k))
+            - (polygon_turn(r + RP_R(2.0) * h, k) - polygon_turn(r - RP_R(2.0) * h, k))) / (RP_R(12.0) * h);
+}
+
+/* Turn of psi over the +y leaf, E(r, k) = 2 pi r^2 / (1 + c) - 4 pi k c r^2 / (s (1 + s)) (leafmap.turn); another
+ * family's closed form (viviani_turn, polygon_turn). */
 static casadi_real turn(casadi_real r, casadi_real k) {
     casadi_real c, s, rho;
+    if (FAMILY == FAMILY_VIVIANI) return viviani_turn(r, k, NULL);
+    if (FAMILY >= FAMILY_TRIANGLE) return polygon_turn(r, k);
     consts(r, &c, &s, &rho);
     return TWO_PI * r * r / (RP_R(1.0) + c) - RP_R(2.0) * TWO_PI * k * c * r * r / (s * (RP_R(1.0) + s));
 }
@@ -347,6 +430,11 @@ static casadi_real turn(casadi_real r, casadi_real k) {
 /* dE/dr = (2 pi r / c) (1 - k (1 + s^-3)) (leafmap.turn_dr). */
 static casadi_real turn_dr(casadi_real r, casadi_real k) {
     casadi_real c, s, rho;
+    if (FAMILY == FAMILY_VIVIANI) {
+        viviani_turn(r, k, &c);
+        return c;
+    }
+    if (FAMILY >= FAMILY_TRIANGLE) return polygon_turn_dr(r, k);
     consts(r, &c, &s, &rho);
     return TWO_PI * r / c * (RP_R(1.0) - k * (RP_R(1.0) + RP_R(1.0) / (s * s * s)));
 }
@@ -354,6 +442,11 @@ static casadi_real turn_dr(casadi_real r, casadi_real k) {
 /* E(r, k) and dE/dr (turn and turn_dr from one evaluation of c and s). */
 static casadi_real turn_and_dr(casadi_real r, casadi_real k, casadi_real *dr) {
     casadi_real c, s, rho;
+    if (FAMILY == FAMILY_VIVIANI) return viviani_turn(r, k, dr);
+    if (FAMILY >= FAMILY_TRIANGLE) {
+        *dr = polygon_turn_dr(r, k);
+        return polygon_turn(r, k);
+    }
     consts(r, &c, &s, &rho);
     *dr = TWO_PI * r / c * (RP_R(1.0) - k * (RP_R(1.0) + RP_R(1.0) / (s * s * s)));
     return TWO_PI * r * r / (RP_R(1.0) + c) - RP_R(2.0) * TWO_PI * k * c * r * r / (s * (RP_R(1.0) + s));
@@ -384,6 +477,8 @@ static void bracket(casadi_real x, int turn, int *lo, int *hi) {
  * dE/du = (pi / c) (1 - k (1 + s^-3))) from a start interpolated in the table of the last k (cubic Hermite in E
  * with the tabulated du/dE, linear where that is not finite or leaves the cell), bisecting whenever a step leaves
  * the bracket. */
+static casadi_real family_inverse(casadi_real e, casadi_real k);
+
 static casadi_real turn_inverse(casadi_real e, casadi_real k) {
     const casadi_real umax = A_MAX * A_MAX;
     casadi_real lo = RP_R(0.0), hi = umax, u, f, df, c, s, nxt, w, t;
@@ -391,6 +486,7 @@ static casadi_real turn_inverse(casadi_real e, casadi_real k) {
     if (!(e <= RP_R(0.0) && e >= s_e_min)) return NAN;
     if (e >= RP_R(0.0)) return RP_R(0.0);
     if (e <= s_e_min) return A_MAX;
+    if (FAMILY != FAMILY_CIRCLES) return family_inverse(e, k);
     if (s_nt > 1) {
         bracket(e, 1, &i0, &i1);
         lo = s_tr[i0] * s_tr[i0];
@@ -422,6 +518,35 @@ static casadi_real turn_inverse(casadi_real e, casadi_real k) {
     return RP_SQRT(u);
 }
 
+/* Another family's turn inverse (k >= K_MONOTONE, E decreasing, e inside (E(A_MAX), 0)): safeguarded Newton in r on
+ * the closed form from the table's linear interpolation in E, bisecting whenever a step leaves the bracket. */
+static casadi_real family_inverse(casadi_real e, casadi_real k) {
+    casadi_real lo = RP_R(0.0), hi = A_MAX, r, f, df, nxt;
+    int it, i0, i1;
+    if (s_nt > 1) {
+        bracket(e, 1, &i0, &i1);
+        lo = s_tr[i0];
+        hi = s_tr[i1];
+        r = lo + (hi - lo) * (e - s_te[i0]) / (s_te[i1] - s_te[i0]);
+        if (!(r >= lo && r <= hi)) r = RP_R(0.5) * (lo + hi);
+    } else {
+        r = RP_R(0.5) * A_MAX;
+    }
+    for (it = 0; it < 200; ++it) {
+        f = turn_and_dr(r, k, &df) - e;
+        if (RP_FABS(f) <= RP_R(4e-16) * (RP_R(1.0) + RP_FABS(e)) * (RP_R(1.0) + k)) break;
+        if (f > RP_R(0.0)) lo = r; else hi = r;                   /* E decreasing */
+        nxt = r - f / df;
+        if (!isfinite(nxt) || nxt <= lo || nxt >= hi) nxt = RP_R(0.5) * (lo + hi);
+        if (RP_FABS(nxt - r) <= RP_R(1e-16) * nxt || hi - lo <= RP_R(1e-16) * hi) {
+            r = nxt;
+            break;
+        }
+        r = nxt;
+    }
+    return r;
+}
+
 /* Displacement d = u_a + i v_a of the +y leaf of radius r from zero (leafmap.displacement):
  *   d = r int_0^{2 pi} phi'(chi) exp(i [(1 - k) c phi(chi) + (k c / s) chi]) d chi,
  *   phi(chi) = chi + 2 atan(rho sin chi / (1 - rho cos chi)), phi'(chi) = (1 - rho^2) / (1 - 2 rho cos chi + rho^2),
@@ -435,6 +560,41 @@ static struct {
     int has_dd;
 } s_memo[MEMO];
 static int s_memo_next = 0, s_memo_used = 0;
+
+/* Another family's displacement: the +y leaf of size r integrated from zero by the generated RK8 steps of its curve
+ * ODE (28)-(30) with FAMILY_MULT times the certificate's steps per panel (counts() at r, kept for the neighbours);
+ * with dd (not NULL) also dd/dr by the difference quotient of r + dr and max(r - dr, 0). Returns 0 on success. */
+static int family_displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_real dd[2]) {
+    static casadi_real rot[2 * NSTAGE];
+    const casadi_real cg[2] = {RP_R(1.0), RP_R(0.0)};
+    casadi_real ab[2], x[3], h, step = RP_R(1e-5), lo[2] = {RP_R(0.0), RP_R(0.0)}, at[3];
+    int j, n, q, pass;
+    at[0] = r;
+    at[1] = r + step;
+    at[2] = r > step ? r - step : RP_R(0.0);
+    ab[0] = ab[1] = r > step ? r : step;
+    if (counts(ab, k, RP_R(0.0))) return 1;
+    for (pass = 0; pass < (dd ? 3 : 1); ++pass) {
+        ab[0] = ab[1] = at[pass];
+        x[0] = x[1] = x[2] = RP_R(0.0);
+        for (j = 0; j < NPANEL && at[pass] > RP_R(0.0); ++j) {   /* (the leaf of size 0 stays at the pole) */
+            n = FAMILY_MULT * s_counts[0][j];
+            h = (s_breaks[j + 1] - s_breaks[j]) / n;
+            stage_rotations(h, rot);
+            if (rk8_steps(0, x, s_breaks[j], h, n, rot, ab, k, cg)) return 1;
+        }
+        if (pass == 0) {
+            d[0] = x[0];
+            d[1] = x[1];
+        } else if (pass == 1) {
+            lo[0] = x[0];
+            lo[1] = x[1];
+        } else {
+            for (q = 0; q < 2; ++q) dd[q] = (lo[q] - x[q]) / (at[1] - at[2]);
+        }
+    }
+    return 0;
+}
 
 static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_real dd[2]) {
     casadi_real c, s, rho, br = RP_R(0.0), bi = RP_R(0.0), tr = RP_R(0.0), ti = RP_R(0.0), c_r = RP_R(0.0), s_r = RP_R(0.0), g, rho_r = RP_R(0.0);
@@ -451,6 +611,13 @@ static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_
             }
             return;
         }
+    }
+    if (FAMILY != FAMILY_CIRCLES) {
+        if (family_displacement(r, k, d, dd)) {
+            d[0] = d[1] = NAN;
+            if (dd) dd[0] = dd[1] = NAN;
+        }
+        goto keep;
     }
     consts(r, &c, &s, &rho);
     if (dd) {
@@ -500,6 +667,7 @@ static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_
         dd[0] = fr + r * (tr + ct * qr - st * qi);
         dd[1] = fi + r * (ti + st * qr + ct * qi);
     }
+keep:
     j = s_memo_next;
     s_memo_next = (s_memo_next + 1) % MEMO;
     if (s_memo_used < MEMO) ++s_memo_used;
@@ -646,6 +814,7 @@ static int prepare(casadi_real k) {
         re = RP_SQRT(RP_R(1.0) - s_tr[i] * s_tr[i]);                 /* c and s of consts(); du/dE = 1 / (dE/du) */
         rr = RP_SQRT(RP_R(1.0) - RP_R(2.0) * s_tr[i] * s_tr[i]);
         s_tdu[i] = re / (PI * (RP_R(1.0) - k * (RP_R(1.0) + RP_R(1.0) / (rr * rr * rr))));
+        if (FAMILY != FAMILY_CIRCLES) s_tdu[i] = RP_R(2.0) * s_tr[i] / turn_dr(s_tr[i], k);   /* (not used) */
         if (!(isfinite(s_trho[i]) && isfinite(s_tdrho[i]))) return 1;
     }
     s_rscale = NTABLE / A_MAX;
@@ -1614,7 +1783,7 @@ static void search(search_t *S, const RP_NAME(options_t) *options, casadi_real h
  * table of k prepared, BAD_INPUT or NO_CONVERGENCE otherwise. */
 static int start_search(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k, casadi_real *h_des) {
     if (!(isfinite(u) && isfinite(v) && isfinite(psi)) || !(RP_FABS(psi) <= PSI_MAX) || !(k >= K_MIN && k <= K_MAX)
-        || steps < 1 || steps > MAX_STEPS)
+        || steps < 1 || steps > MAX_STEPS || (FAMILY != FAMILY_CIRCLES && !(k >= K_MONOTONE)))
         return RP_BAD_INPUT;
     *h_des = RP_HYPOT(u, v);
     if (!(*h_des > RP_R(0.0))) return RP_BAD_INPUT;

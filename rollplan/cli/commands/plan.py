@@ -63,7 +63,8 @@ def cmd_plan(args) -> int:
     stage(args, "plan", "planning")
     problem = Problem(goal, start=args.start, k=k, robot=robot, radius=args.radius)
     p = solve(problem, "geometric", root_solver=args.method, legs=args.legs, steps=args.steps, all_solutions=args.all,
-              branch=args.branch, base=args.base, refine=args.refine)
+              branch=args.branch, base=args.base, refine=args.refine,
+              curve=args.curve)
     refined = p
     if isinstance(p, RefinedPlan):
         p = p.unrefined
@@ -120,6 +121,11 @@ def register(sub) -> None:
                         "warm-started by the plan and straight lines; the plan is kept, with a note, when that is not "
                         "shorter or not certified (seconds; not with --all, --duration, --timing, --plot, "
                         "--timing-plot)")
+    p.add_argument("--curve", choices=geometric.CURVE_CHOICES, default="circles",
+                   help="leaf family of the figure eight: circles (default), viviani, triangle, square (these for "
+                        "k >= 0.5), or best: the shortest certified plan over the families "
+                        "(docs/design/curve-families.md); other than circles, one leg from rest at the origin to a "
+                        "goal at the pole")
     p.add_argument("--json", metavar="FILE", help=JSON_HELP.format("the plan"))
     p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere (from below) and the "
                    "plane, and psi along it (with --duration or --timing: omega, rotor rates and torques in time)")

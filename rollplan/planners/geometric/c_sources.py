@@ -16,16 +16,20 @@ from pathlib import Path
 
 import numpy as np
 
+from ...core import families
 from ...core.c_functions import (
     DEFAULT_PREFIX,
     DEFAULT_STEPS_PER_LEAF,
     MATH_FUNCTIONS,
+    PHASE,
     RK8_STAGES,
+    c_curve,
     generated_functions,
     model_code,
     to_float,
 )
-from ...core.curves import A_MAX, figure_eight
+from ...core.curves import A_MAX
+from ...core.families import FAMILIES
 from ...core.integrate import DOP853_C
 from ...errors import show_limit
 from ...problem import K_MIN, MAX_STEPS
@@ -36,7 +40,8 @@ from .certify import ROUNDING_FACTOR
 from .search_constants import K_MONOTONE
 
 __all__ = ["CSRC", "STATIC_FILES", "CONFIG_HEADER", "DEFAULT_K_MAX", "CERT_TOL", "FLOAT_CERT_TOL", "CERT_DELTA",
-           "CERT_BASE", "CERT_SAFETY", "PSI_MAX", "static_sources", "config_values", "accuracy", "config_header",
+           "CERT_BASE", "CERT_SAFETY", "PSI_MAX", "C_FAMILIES",
+           "FAMILY_MULT", "static_sources", "config_values", "accuracy", "config_header",
            "sources", "generator_files"]
 
 #: The package folder of the static C sources.
@@ -59,6 +64,10 @@ CERT_BASE = 2.0
 CERT_SAFETY = 16.0
 #: Largest |psi| [rad] the C planner accepts (its reduction modulo 2 pi is exact up to it).
 PSI_MAX = 1e6
+#: The leaf families the C search serves, in the order of their index RP_FAMILY (every family).
+C_FAMILIES = FAMILIES
+#: A family's leaf map (other than the circles') integrates the leaf with this many times the certificate's steps.
+FAMILY_MULT = 4
 #: 2 pi to 50 digits.
 _TWO_PI_DIGITS = "6.2831853071795864769252867665590057683943387987502"
 
@@ -81,7 +90,17 @@ def _two_pi_parts() -> dict:
     return {f"TWO_PI_{i + 1}": repr(p) for i, p in enumerate(parts)}
 
 
-def _enumeration_constants(k_max: float) -> dict:
+def _family_table_size(k: float, curve: str) -> int:
+    """Radii of the C planner's table at k for the leaf family ``curve``: :func:`.search_constants.table_radii`'s
+    rule with the family's turn E (:func:`rollplan.core.families.turn`)."""
+    base = np.linspace(0.0, A_MAX, math.ceil(A_MAX / sc.TABLE_STEP) + 1)
+    turn = np.r_[0.0, families.turn(curve, base[1:], k)]   # (E = 0 at the size 0, the pole)
+    parts = np.maximum(np.ceil(np.abs(np.diff(turn)) / sc.TABLE_PHASE),
+                       np.ceil(np.diff((1.0 - 2.0 * base * base) ** -0.5) / sc.TABLE_INV_S))
+    return int(np.maximum(1, parts).sum()) + 1
+
+
+def _enumeration_constants(k_max: float, curve: str = "circles") -> dict:
     """The constants of :mod:`.leafmap` and :mod:`.search_constants` the C planner uses, and the sizes of its static
     tables for ``k <= k_max``."""
     if leafmap.ORDER % 2:
@@ -93,6 +112,8 @@ def _enumeration_constants(k_max: float) -> dict:
     # steps grow with k; below 1/2 |E'| is smaller than at 1/2); the cell of the last radius is one more
     ntable = 1 + max(sc.table_radii(kk, sc.TABLE_STEP, sc.TABLE_PHASE, sc.TABLE_INV_S).size
                      for kk in (K_MIN, K_MONOTONE, k_max))
+    if curve != "circles":   # its E: at least as many radii at every k in [K_MONOTONE, k_max] (E affine in k)
+        ntable = max(ntable, 1 + max(_family_table_size(kk, curve) for kk in (K_MONOTONE, k_max)))
     if ntable >= 2 ** 16:
         raise ValueError(f"the rho table at k_max = {k_max:g} needs {ntable} radii: its buckets hold 16-bit indices")
     return {
@@ -120,14 +141,16 @@ def _enumeration_constants(k_max: float) -> dict:
     }
 
 
-def config_values(functions, steps_per_leaf: int, k_max: float, real: str) -> dict:
+def config_values(functions, steps_per_leaf: int, k_max: float, real: str, curve: str = "circles") -> dict:
     """``{NAME: C text}`` of every value ``rollplan_config.h`` defines as ``RP_NAME``, for the model functions
     ``functions`` (:func:`~rollplan.core.c_functions.generated_functions`, in that order), the planner's
-    ``k_max`` and ``casadi_real`` = ``real`` (``"double"`` or ``"float"``)."""
+    ``k_max``, ``casadi_real`` = ``real`` (``"double"`` or ``"float"``) and the leaf family ``curve`` (one of
+    :data:`C_FAMILIES`)."""
     sizes = {name: max(int(getattr(f, name)()) for f in functions[3:])
              for name in ("sz_arg", "sz_res", "sz_iw", "sz_w")}
-    breaks = figure_eight().pieces[0].breaks
-    if any(tuple(piece.breaks) != tuple(breaks) for piece in figure_eight().pieces):
+    eight = c_curve(curve)
+    breaks = eight.pieces[0].breaks
+    if len(eight.pieces) != 2 or any(tuple(piece.breaks) != tuple(breaks) for piece in eight.pieces):
         raise ValueError("the C certificate assumes the leaves share their panels")
     double = real == "double"
     return {
@@ -153,8 +176,11 @@ def config_values(functions, steps_per_leaf: int, k_max: float, real: str) -> di
         "BREAKS": ", ".join(repr(float(b)) for b in breaks),
         "RK8_STAGES": str(RK8_STAGES),
         "RK8_C": ", ".join(repr(float(c)) for c in DOP853_C),
+        "FAMILY": str(C_FAMILIES.index(curve)),
+        "PHASE": repr(PHASE[curve]),
+        "FAMILY_MULT": str(FAMILY_MULT),
         **_two_pi_parts(),
-        **_enumeration_constants(float(k_max)),
+        **_enumeration_constants(float(k_max), curve),
     }
 
 
@@ -201,15 +227,16 @@ def config_header(values: dict, prefix: str = DEFAULT_PREFIX, real: str = "doubl
 
 
 def sources(prefix: str = DEFAULT_PREFIX, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF,
-            k_max: float = DEFAULT_K_MAX, real: str = "double", functions=None) -> dict:
+            k_max: float = DEFAULT_K_MAX, real: str = "double", functions=None, curve: str = "circles") -> dict:
     """``{file name: text}`` of the C planner library: ``<prefix>_model.c`` and ``.h`` (the model functions,
     ``functions`` or :func:`~rollplan.core.c_functions.generated_functions`), ``rollplan_config.h`` and the static
     sources. Generated in this process (CasADi's CodeGenerator); no check of ``k_max`` (``rollplan.codegen``
-    checks the step map's accuracy up to it)."""
+    checks the step map's accuracy up to it). ``curve``: the leaf family (:data:`C_FAMILIES`) of the search's leaf
+    map and of the model functions (the certificate integrates that family's figure eight)."""
     if functions is None:
-        functions = generated_functions(steps_per_leaf, prefix)
+        functions = generated_functions(steps_per_leaf, prefix, curve)
     model_c, model_h = model_code(functions, prefix, real)
-    values = config_values(functions, steps_per_leaf, k_max, real)
+    values = config_values(functions, steps_per_leaf, k_max, real, curve)
     return {f"{prefix}_model.c": model_c, f"{prefix}_model.h": model_h,
             CONFIG_HEADER: config_header(values, prefix, real), **static_sources()}
 

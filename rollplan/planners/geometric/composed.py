@@ -42,7 +42,7 @@ from .basepoint import (
 )
 from .legs import intermediate_state, second_leg, two_leg_candidates
 from .maneuvers import StraightRoll
-from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
+from .planner import CURVE_CHOICES, TOLERANCE, GeometricPhasePlanner, Plan, default_planner
 from .refine import DEFAULT_ROOT_SOLVER, SOLVERS
 from .turn import CircleTurn, turn_in_place
 
@@ -253,6 +253,10 @@ class ComposedPlanner(Method):
     refine : bool
         Polish the plan into a shorter certified motion (:func:`rollplan.planners.refined.refine`): a
         :class:`~rollplan.planners.refined.RefinedPlan`, or the plan with a note in ``stats.details["refine"]``.
+    curve : str
+        Leaf family of the figure eight (:data:`.planner.CURVE_CHOICES`): ``"circles"`` (the default) plans any
+        start and goal; another family, or ``"best"`` (the shortest certified plan over all families), plans one leg
+        from rest at the origin to a goal at the pole with ``base="pole"`` (an InputError for other problems).
     """
 
     name = "geometric"
@@ -260,7 +264,7 @@ class ComposedPlanner(Method):
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  legs: str = "fallback", *, steps: int | None = None, all_solutions: bool = False,
                  branch: int | None = None, method: str | None = None, base: str = "pole",
-                 refine: bool = False) -> None:
+                 refine: bool = False, curve: str = "circles") -> None:
         self.base = check_choice("base", base, BASES)
         root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
         self.legs = check_choice("legs", legs, LEGS)
@@ -271,8 +275,10 @@ class ComposedPlanner(Method):
         if self.refine and self.all_solutions:
             raise InputError("refine and all_solutions do not combine: the polish returns one motion")
         self.branch = self._check_branch(branch)
-        default = nodes == DEFAULT_NODES and tol == TOLERANCE
-        self.planner = default_planner(root_solver) if default else GeometricPhasePlanner(root_solver, nodes, tol)
+        self.curve = check_choice("curve", curve, CURVE_CHOICES)
+        default = nodes == DEFAULT_NODES and tol == TOLERANCE and self.curve == "circles"
+        self.planner = default_planner(root_solver) if default else GeometricPhasePlanner(root_solver, nodes, tol,
+                                                                                          curve=self.curve)
         self.root_solver = root_solver
         self.tol = self.planner.tol
 
@@ -300,6 +306,10 @@ class ComposedPlanner(Method):
         problem = super()._check(problem)
         problem = with_steps(problem, self.steps)
         check_reach(problem.start, problem.goal, problem.radius)
+        if self.curve != "circles" and (not _pole_to_pole(problem) or self.legs == "two" or self.base != "pole"):
+            raise InputError(f"curve = {self.curve} plans one leg of figure eights from rest at the origin to a goal "
+                             "at the pole (legs one, fallback or shortest; base pole); use curve = circles for other "
+                             "problems")
         return problem
 
     def _leg(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
@@ -401,7 +411,7 @@ class ComposedPlanner(Method):
         t0 = time.perf_counter()
         all_solutions, branch = self.all_solutions, self.branch
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
-        one_only = self.legs == "one" or branch is not None
+        one_only = self.legs == "one" or branch is not None or self.curve != "circles"
         if _pole_to_pole(problem) and self.legs != "two" and math.hypot(goal.u_a, goal.v_a) > IDENTITY_TOL:
             try:
                 found = self._leg(problem, all_solutions, branch)
@@ -409,7 +419,7 @@ class ComposedPlanner(Method):
                 if one_only:
                     raise
                 return self._composed(problem, t0, False, None, "two")   # one leg has just failed
-            if self.legs == "shortest":
+            if self.legs == "shortest" and self.curve == "circles":
                 try:
                     other = self._composed(problem, t0, False, None, "two")
                 except NoPlanError:
@@ -556,7 +566,8 @@ def default_composed_planner(root_solver: str = DEFAULT_ROOT_SOLVER, legs: str =
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
          all_solutions: bool = False, method: str | None = None, branch: int | None = None, start=None,
-         legs: str = "fallback", *, root_solver: str | None = None, base: str = "pole", refine: bool = False):
+         legs: str = "fallback", *, root_solver: str | None = None, base: str = "pole", refine: bool = False,
+         curve: str = "circles"):
     """Plan an exact, dynamically realizable motion from ``start`` to ``target``, any two states.
 
     From rest at the origin to a goal at the south pole this is the paper's
@@ -596,6 +607,9 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     refine : bool
         Polish the plan into a shorter certified motion (:mod:`rollplan.planners.refined`): a
         :class:`~rollplan.planners.refined.RefinedPlan`, or the plan with a note in ``stats.details["refine"]``.
+    curve : str
+        Leaf family of the figure eight from :data:`.planner.CURVE_CHOICES` (default ``"circles"``; see
+        :class:`ComposedPlanner`).
 
     Returns
     -------
@@ -619,5 +633,8 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     check_choice("base", base, BASES)
     problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
                       steps=steps)
-    return default_composed_planner(root_solver, legs, base, check_flag("refine", refine)).solve(problem, all_solutions,
-                                                                                                branch)
+    refine = check_flag("refine", refine)
+    if check_choice("curve", curve, CURVE_CHOICES) != "circles":
+        return ComposedPlanner(root_solver, legs=legs, base=base, refine=refine, curve=curve).solve(
+            problem, all_solutions, branch)
+    return default_composed_planner(root_solver, legs, base, refine).solve(problem, all_solutions, branch)
