@@ -23,14 +23,22 @@ import casadi as ca
 import numpy as np
 
 from .. import interrupts
-from . import model
+from . import families, model
 from .curves import Piece, figure_eight, great_circle, rotated_point
 from .integrate import CvodesIntegrator
 
-__all__ = ["CURVES", "CurvePiece", "figure_eight_pieces", "allocate_samples", "PathIntegrator"]
+__all__ = ["CURVES", "family_curve", "CurvePiece", "figure_eight_pieces", "allocate_samples", "PathIntegrator"]
 
-#: The curves a path can be made of, by name.
-CURVES = {"figure_eight": figure_eight(), "great_circle": great_circle()}
+
+def family_curve(family: str) -> str:
+    """Name in :data:`CURVES` of the figure eight of leaf family ``family`` (:data:`.families.FAMILIES`)."""
+    return "figure_eight" if family == "circles" else f"figure_eight_{family}"
+
+
+#: The curves a path can be made of, by name: the figure eight of circles (35), that of each other leaf family
+#: (:func:`family_curve`, :mod:`.families`) and the great circle of a roll.
+CURVES = {"figure_eight": figure_eight(), "great_circle": great_circle(),
+          **{family_curve(name): families.figure_eight(name) for name in families.FAMILIES if name != "circles"}}
 
 
 @dataclass(frozen=True)
@@ -86,10 +94,13 @@ class CurvePiece:
                 "params": [float(v) for v in self.params], "gamma": float(self.gamma), "length": self.length}
 
 
-def figure_eight_pieces(a: float, b: float, gamma: float, steps: int, kind: str = "leaf") -> list:
-    """The ``2 steps`` leaves of ``steps`` traces of the figure eight (a, b) rotated by gamma (units of R)."""
-    params = (float(a), float(b))
-    return [CurvePiece("figure_eight", i, params, float(gamma), kind) for _ in range(steps) for i in (0, 1)]
+def figure_eight_pieces(a: float, b: float, gamma: float, steps: int, kind: str = "leaf",
+                        family: str = "circles") -> list:
+    """The pieces of ``steps`` traces of the figure eight (a, b) of leaf family ``family`` rotated by gamma (units
+    of R): ``2 steps`` leaves, a polygon's leaf one piece per edge."""
+    params, name = (float(a), float(b)), family_curve(family)
+    count = len(CURVES[name].pieces)
+    return [CurvePiece(name, i, params, float(gamma), kind) for _ in range(steps) for i in range(count)]
 
 
 def allocate_samples(lengths, samples: int) -> np.ndarray:
@@ -107,7 +118,7 @@ def allocate_samples(lengths, samples: int) -> np.ndarray:
     return counts
 
 
-@lru_cache(maxsize=8)
+@lru_cache(maxsize=32)
 def _contact_function(curve: str, index: int) -> ca.Function:
     """``(phi, params, gamma) -> (u_o, v_o)`` of a curve's piece, (24)-(25)."""
     phi, gamma = ca.SX.sym("phi"), ca.SX.sym("gamma")
