@@ -120,7 +120,8 @@ def composed_to_dict(plan, traj=None, include_alternatives=True) -> dict:
     }
     if len(c.legs) == 1 and c.turn is None:
         leg = legs[0]
-        d.update({"figure_eight": {"a": leg["a"], "b": leg["b"], "gamma": leg["gamma"]},
+        d.update({"figure_eight": {"a": leg["a"], "b": leg["b"], "gamma": leg["gamma"],
+                                   "curve": getattr(c.legs[0], "curve", "circles")},
                   "step": {"h": leg["h"], "eta": leg["eta"]}, "branch": leg["branch"]})
     if traj is not None:
         d["trajectory"] = traj.as_dict()

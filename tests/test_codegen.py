@@ -568,7 +568,8 @@ def _package_csrc():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("argv", [(), ("--real", "float"), ("--prefix", "rp_2", "--k-max", "2.5")])
+@pytest.mark.parametrize("argv", [(), ("--real", "float"), ("--prefix", "rp_2", "--k-max", "2.5"),
+                                  ("--curve", "viviani")])
 def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv):
     """One copy of the C search: the files that `rollplan codegen` writes for it are byte for byte the files of the
     installed package, for a double and a float build and another prefix (what varies by generation is in the

@@ -16,7 +16,7 @@ def fmt_plan(p, unit) -> str:
     f = p.final
     lines = [
         f"  figure eight  a = {num(p.a)} {unit}   b = {num(p.b)} {unit}   gamma = {num(p.gamma)} rad"
-        f"   (branch m = {p.branch})",
+        f"   (branch m = {p.branch}{'' if p.curve == 'circles' else f', curve {p.curve}'})",
         f"  one step      h = {num(p.h)} {unit}   eta = {num(p.eta)} rad",
         f"  path length   {num(p.path_length)} {unit}",
         f"  final         u_a = {num(f.u_a)} {unit}  v_a = {num(f.v_a)} {unit}  psi = {fmt_psi(f.psi)}"

@@ -20,6 +20,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from ..core import families
 from ..core.c_functions import (
     DEFAULT_PREFIX,
     DEFAULT_STEPS_PER_LEAF,
@@ -33,11 +34,12 @@ from ..core.c_functions import (
     step_functions,
     to_float,
 )
-from ..core.curves import A_MAX, figure_eight
+from ..core.curves import A_MAX
 from ..core.integrate import piece_rhs, rk8_step
-from ..errors import InputError, check_flag, show
+from ..errors import InputError, check_choice, check_flag, show
 from ..outputs import check_folder, write_folder
 from ..planners.geometric.c_sources import (
+    C_FAMILIES,
     CERT_BASE,
     CERT_TOL,
     CONFIG_HEADER,
@@ -116,14 +118,16 @@ class GeneratedCode:
     work_doubles: int
 
 
-def rk8_trace(ab, k: float, gamma: float = 0.0, delta: float = 0.1, x0=(0.0, 0.0, 0.0)) -> np.ndarray:
+def rk8_trace(ab, k: float, gamma: float = 0.0, delta: float = 0.1, x0=(0.0, 0.0, 0.0),
+              curve: str = "circles") -> np.ndarray:
     """(u_a, v_a, psi) after one trace of the figure eight by fixed RK8 steps, as the C certificate does it.
 
     Each panel of a leaf gets ``ceil(w (CERT_BASE + max |psi'|) / delta)`` equal steps (``max |psi'|`` over five
     points of the panel; psi' of (30) does not depend on the state). The C certificate uses
     ``delta = CERT_DELTA`` and step doubling; :func:`generate` uses a small ``delta`` to check the step map.
+    ``curve``: the leaf family (:data:`rollplan.core.families.FAMILIES`).
     """
-    curve = figure_eight()
+    curve = families.figure_eight(curve)
     x = np.asarray(x0, float)
     p = np.asarray(ab, float)
     for i, piece in enumerate(curve.pieces):
@@ -151,29 +155,30 @@ _CHECK_LEAVES = ((A_MAX, A_MAX), (A_MAX, 0.05), (0.05, A_MAX))
 
 
 @lru_cache(maxsize=32)
-def _fine_trace(ab: tuple, k: float) -> tuple:
-    return tuple(rk8_trace(ab, k))
+def _fine_trace(ab: tuple, k: float, curve: str = "circles") -> tuple:
+    return tuple(rk8_trace(ab, k, curve=curve))
 
 
-def _step_map_error(k_max: float, step: ca.Function) -> float:
+def _step_map_error(k_max: float, step: ca.Function, curve: str = "circles") -> float:
     """Largest error of the step map ``step`` against fine RK8 traces (:func:`rk8_trace`) at the corners of the
     admissible box, ``a, b in {0.05, A_MAX}``, for ``k in {0, k_max / 2, k_max}``."""
     worst = 0.0
     for k in (0.0, 0.5 * k_max, k_max):
         for ab in _CHECK_LEAVES:
             shift, eta, _ = (np.array(v).ravel() for v in step(ab, k))
-            worst = max(worst, float(np.max(np.abs(np.concatenate([shift, eta]) - np.array(_fine_trace(ab, k))))))
+            worst = max(worst, float(np.max(np.abs(np.concatenate([shift, eta])
+                                                   - np.array(_fine_trace(ab, k, curve))))))
     return worst
 
 
-def _check_k_max(k_max, steps_per_leaf: int, step: ca.Function) -> float:
+def _check_k_max(k_max, steps_per_leaf: int, step: ca.Function, curve: str = "circles") -> float:
     """``k_max`` as a float if the step map is accurate to STEP_MAP_TOL up to it; InputError otherwise.
 
     The step map's error grows with k and with the leaf radii (the turn rate psi' peaks as the leaf
     nears the singular equator); it is measured by :func:`_step_map_error`.
     """
     k_max = _valid_k_max(k_max)
-    worst = _step_map_error(k_max, step)
+    worst = _step_map_error(k_max, step, curve)
     if not worst <= STEP_MAP_TOL:
         raise InputError(f"k_max = {k_max:g} is not allowed with {steps_per_leaf} steps per leaf: the step map "
                          f"is off by {worst:.1e} (more than {STEP_MAP_TOL:g}) near A_MAX; give more steps per leaf "
@@ -181,13 +186,13 @@ def _check_k_max(k_max, steps_per_leaf: int, step: ca.Function) -> float:
     return k_max
 
 
-def auto_steps_per_leaf(k_max) -> int:
+def auto_steps_per_leaf(k_max, curve: str = "circles") -> int:
     """The smallest of :data:`AUTO_STEPS_PER_LEAF` whose step map is accurate to STEP_MAP_TOL up to ``k_max`` (the
     check of :func:`_check_k_max`); InputError naming the cap when none is."""
     k_max = _valid_k_max(k_max)
     worst = math.inf
     for steps_per_leaf in AUTO_STEPS_PER_LEAF:
-        worst = _step_map_error(k_max, step_functions(steps_per_leaf)[0])
+        worst = _step_map_error(k_max, step_functions(steps_per_leaf, curve=curve)[0], curve)
         if worst <= STEP_MAP_TOL:
             return steps_per_leaf
     raise InputError(f"k_max = {k_max:g} is not allowed: even the largest automatic size, {AUTO_STEPS_PER_LEAF[-1]} "
@@ -227,7 +232,8 @@ def _template(name: str) -> str:
 
 
 def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX,
-             k_max: float = DEFAULT_K_MAX, real: str = "double", overwrite: bool = False) -> GeneratedCode:
+             k_max: float = DEFAULT_K_MAX, real: str = "double", overwrite: bool = False,
+             curve: str = "circles") -> GeneratedCode:
     """Write the C99 library, ``plan_demo.c`` and a ``Makefile`` into folder ``out``.
 
     Parameters
@@ -250,6 +256,10 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     overwrite : bool
         Write into an existing folder that holds other files too, replacing those of the names written
         (the others are kept).
+    curve : str
+        Leaf family of the figure eight (:data:`rollplan.planners.geometric.c_sources.C_FAMILIES`): the search's
+        leaf map and the model functions (certificate, step map, time law) of that family; the static C files are
+        the same for every family, ``rollplan_config.h`` says which (``RP_FAMILY``).
 
     Returns
     -------
@@ -257,14 +267,16 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     """
     prefix = _check_prefix(prefix)
     real = _check_real(real)
+    if check_choice("curve", curve, families.FAMILIES) not in C_FAMILIES:
+        raise InputError(f"curve = {curve} is not allowed for the C planner yet: it serves {', '.join(C_FAMILIES)}")
     out = check_folder(out, overwrite=check_flag("overwrite", overwrite))   # refused before any work
     if isinstance(steps_per_leaf, str) and steps_per_leaf == "auto":
-        steps_per_leaf = auto_steps_per_leaf(k_max)                     # refused before anything is written
-    leaf_degree(steps_per_leaf, len(figure_eight().pieces[0].breaks) - 1)   # refused before anything is written
-    funcs = generated_functions(steps_per_leaf, prefix)
-    k_max = _check_k_max(k_max, steps_per_leaf, funcs[3])              # refused before anything is written
-    library = sources(prefix, steps_per_leaf, k_max, real, functions=funcs)
-    values = config_values(funcs, steps_per_leaf, k_max, real)
+        steps_per_leaf = auto_steps_per_leaf(k_max, curve)              # refused before anything is written
+    leaf_degree(steps_per_leaf, len(families.figure_eight(curve).pieces[0].breaks) - 1)   # refused before writing
+    funcs = generated_functions(steps_per_leaf, prefix, curve)
+    k_max = _check_k_max(k_max, steps_per_leaf, funcs[3], curve)       # refused before anything is written
+    library = sources(prefix, steps_per_leaf, k_max, real, functions=funcs, curve=curve)
+    values = config_values(funcs, steps_per_leaf, k_max, real, curve)
     subs = {
         "@PREFIX@": prefix,
         "@PREFIX_UPPER@": prefix.upper(),

@@ -18,8 +18,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, OutputError
-from . import model
-from .curves import figure_eight
+from . import families, model
 from .integrate import (
     DOP853_C,
     check_heading_structure,
@@ -33,6 +32,7 @@ from .integrate import (
 from .rewrite import algebraic
 
 __all__ = [
+    "PHASE",
     "DEFAULT_STEPS_PER_LEAF",
     "DEFAULT_PREFIX",
     "MAX_STEPS_PER_LEAF",
@@ -140,7 +140,8 @@ def leaf_function(curve, index: int, degree: int, name: str, jacobian: bool = Fa
                        ["x0", "r", "k"], ["x_end", "jac_x0", "jac_r"])
 
 
-def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX):
+def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX,
+                   curve: str = "circles"):
     """The step map of one figure-eight trace and its Jacobian, eqs. (28)-(31), (35).
 
     Returns
@@ -155,7 +156,7 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
         (column-major). It is assembled by the chain rule from the leaves'
         Jacobians, so each leaf is differentiated in its own radius only.
     """
-    curve = figure_eight()
+    curve = families.figure_eight(curve)
     degree = leaf_degree(steps_per_leaf, len(curve.pieces[0].breaks) - 1)
     ab, k = ca.MX.sym("ab", 2), ca.MX.sym("k")
     x = ca.MX.zeros(3)
@@ -174,7 +175,26 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
     return step, step_jac
 
 
-def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
+#: The C certificate's phase of each leaf family: its generated right sides take cos and sin of ``PHASE * phi``
+#: (the Viviani lobe has ``sin(phi / 2)``: it is written in the half angle).
+PHASE = {"circles": 1.0, "viviani": 0.5}
+
+
+def _half_angle_rhs(curve, index: int) -> ca.Function:
+    """(28)-(30) along leaf ``index`` of the Viviani figure eight per unit phi, as a function of the half angle
+    ``t = phi / 2``: the lobe written in ``cos t``, ``sin t`` (:func:`.families.viviani_point` with
+    ``sin phi = 2 sin t cos t``, ``sin^2(phi / 2) = sin^2 t``), its rates in t halved."""
+    t, params, k, gamma, x = ca.SX.sym("phi"), ca.SX.sym("p", 2), ca.SX.sym("k"), ca.SX.sym("gamma"), ca.SX.sym("x", 3)
+    a, side = params[index], (1.0, -1.0)[index]
+    c = ca.sqrt(1 - a * a)
+    st, ct = ca.sin(t), ca.cos(t)
+    point = model.rot_z(gamma) @ ca.vertcat(2 * a * a * st * ct, side * 2 * a * c * st, -(1 - 2 * a * a * st * st))
+    rhs, psi = model.curve_rhs(point, t, k)
+    rhs = 0.5 * ca.substitute(rhs, psi, x[2])
+    return ca.Function(f"rhs{index}", [t, x, params, k, gamma], [rhs], ["phi", "x", "p", "k", "gamma"], ["xdot"])
+
+
+def certificate_functions(prefix: str = DEFAULT_PREFIX, curve: str = "circles") -> list:
     """The curve ODE (28)-(30) and one RK8 step of it, per leaf, for the on-board certificate.
 
     Returns
@@ -195,8 +215,9 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
     relies on, no quadrature), so its result is independent of the planner's. The functions are written in
     :func:`algebraic` form (no trigonometric function of an inverse trigonometric result).
     """
-    curve = figure_eight()
-    rhs = [piece_rhs(curve, i) for i in range(len(curve.pieces))]
+    half = PHASE[curve] != 1.0
+    curve = families.figure_eight(curve)
+    rhs = [_half_angle_rhs(curve, i) if half else piece_rhs(curve, i) for i in range(len(curve.pieces))]
     named = [algebraic(ca.Function(f"{prefix}_rhs{i}", f.sx_in(), f.call(f.sx_in()), f.name_in(), f.name_out()))
              for i, f in enumerate(rhs)]
     steps = []
@@ -216,7 +237,7 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX) -> list:
     return named + steps + rates
 
 
-def motion_functions(prefix: str = DEFAULT_PREFIX) -> list:
+def motion_functions(prefix: str = DEFAULT_PREFIX, curve: str = "circles") -> list:
     """What the C time law needs along each leaf, per unit of the leaf's parameter phi.
 
     Returns
@@ -229,7 +250,7 @@ def motion_functions(prefix: str = DEFAULT_PREFIX) -> list:
         then ``<prefix>_rk8x_<i>(x[5], t, h, p[2], k, gamma, jxx, jzz, jr) -> x_next[5]``, one RK8 step of it.
         All in :func:`algebraic` form.
     """
-    curve = figure_eight()
+    curve = families.figure_eight(curve)
     pieces, steps = [], []
     for i in range(len(curve.pieces)):
         f = curve_piece_function(curve, i)
@@ -246,10 +267,12 @@ def motion_functions(prefix: str = DEFAULT_PREFIX) -> list:
     return pieces + steps
 
 
-def generated_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX) -> list:
-    """Every function that :func:`generate` writes to C, in order (the symbolic twins)."""
-    return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix), *certificate_functions(prefix),
-            *motion_functions(prefix)]
+def generated_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DEFAULT_PREFIX,
+                        curve: str = "circles") -> list:
+    """Every function that :func:`generate` writes to C, in order (the symbolic twins), along the figure eight of
+    the leaf family ``curve`` (:data:`rollplan.core.families.FAMILIES`; one piece per leaf: circles, viviani)."""
+    return [*model_functions(prefix), *step_functions(steps_per_leaf, prefix, curve),
+            *certificate_functions(prefix, curve), *motion_functions(prefix, curve)]
 
 
 

@@ -50,6 +50,12 @@
 #define CERT_BASE RP_CERT_BASE
 #define CERT_SAFETY RP_CERT_SAFETY
 #define NPANEL RP_NPANEL                /* panels of each leaf (the curve's) */
+#define FAMILY RP_FAMILY                /* leaf family of this generation: 0 circles (35), 1 the Viviani lobes */
+#define FAMILY_CIRCLES 0
+#define FAMILY_VIVIANI 1
+#define PHASE RP_PHASE                  /* the certificate's right sides take cos and sin of PHASE phi */
+#define FAMILY_MULT RP_FAMILY_MULT      /* a family's leaf map integrates the leaf with this many times the
+                                           certificate's RK8 steps */
 #define NOT_A_ROOT (RP_NOT_A_ROOT * CERT_TOL)  /* a polished root the leaf map misses by more is none (enumerate.NOT_A_ROOT) */
 #define CERT_REFINE 3                  /* at most 3 more doublings when only the bound is too large */
 #define CERT_MAX_PANEL_STEPS 2048      /* bounds the certificate's time; k <= K_MAX needs far fewer */
@@ -126,7 +132,7 @@ static int counts(const casadi_real ab[2], casadi_real k, casadi_real gamma) {
         w = s_breaks[j + 1] - s_breaks[j];
         rate[0] = rate[1] = RP_R(0.0);
         for (q = 0; q <= 4; ++q) {
-            phi = s_breaks[j] + RP_R(0.25) * q * w;
+            phi = PHASE * (s_breaks[j] + RP_R(0.25) * q * w);
             cp[0] = RP_COS(phi);
             cp[1] = RP_SIN(phi);
             for (leaf = 0; leaf < 2; ++leaf) {
@@ -184,8 +190,8 @@ static const casadi_real s_rk8_c[NSTAGE] = {RP_RK8_C};
 static void stage_rotations(casadi_real h, casadi_real rot[2 * NSTAGE]) {
     int j;
     for (j = 0; j < NSTAGE; ++j) {
-        rot[j] = RP_COS(s_rk8_c[j] * h);
-        rot[NSTAGE + j] = RP_SIN(s_rk8_c[j] * h);
+        rot[j] = RP_COS(PHASE * s_rk8_c[j] * h);
+        rot[NSTAGE + j] = RP_SIN(PHASE * s_rk8_c[j] * h);
     }
 }
 
@@ -199,8 +205,8 @@ static int rk8_steps(int leaf, casadi_real x[3], casadi_real t0, casadi_real h, 
     int q, j;
     for (q = 0; q < n; ++q) {
         t = t0 + q * h;
-        ct = RP_COS(t);
-        st = RP_SIN(t);
+        ct = RP_COS(PHASE * t);
+        st = RP_SIN(PHASE * t);
         for (j = 0; j < NSTAGE; ++j) {
             cs[j] = ct * rot[j] - st * rot[NSTAGE + j];
             sn[j] = st * rot[j] + ct * rot[NSTAGE + j];
@@ -326,9 +332,23 @@ static void consts(casadi_real r, casadi_real *c, casadi_real *s, casadi_real *r
     *rho = r * r / (*c * *c + *s);
 }
 
-/* Turn of psi over the +y leaf, E(r, k) = 2 pi r^2 / (1 + c) - 4 pi k c r^2 / (s (1 + s)) (leafmap.turn). */
+/* Turn E(r, k) of the Viviani lobe of size r and dE/dr (families.turn, docs/design/curve-families.md):
+ *   E = 4 asin r - 4 r c - k B,  B = (2 sqrt 2 c / s) atan(sqrt 2 r / s) - 4 r c,
+ *   dE/dr = 8 r^2 / c - k (2 sqrt 2 r atan(sqrt 2 r / s) / (c s^3) + 4 c / s^2 - 4 (c^2 - r^2) / c). */
+static casadi_real viviani_turn(casadi_real r, casadi_real k, casadi_real *dr) {
+    const casadi_real sq2 = RP_R(1.41421356237309504880);
+    casadi_real c = RP_SQRT(RP_R(1.0) - r * r), s = RP_SQRT(RP_R(1.0) - RP_R(2.0) * r * r), at = RP_ATAN(sq2 * r / s);
+    if (dr)
+        *dr = RP_R(8.0) * r * r / c
+              - k * (RP_R(2.0) * sq2 * r * at / (c * s * s * s) + RP_R(4.0) * c / (s * s) - RP_R(4.0) * (c * c - r * r) / c);
+    return RP_R(4.0) * RP_ASIN(r) - RP_R(4.0) * r * c - k * (RP_R(2.0) * sq2 * c / s * at - RP_R(4.0) * r * c);
+}
+
+/* Turn of psi over the +y leaf, E(r, k) = 2 pi r^2 / (1 + c) - 4 pi k c r^2 / (s (1 + s)) (leafmap.turn); another
+ * family's closed form (viviani_turn). */
 static casadi_real turn(casadi_real r, casadi_real k) {
     casadi_real c, s, rho;
+    if (FAMILY == FAMILY_VIVIANI) return viviani_turn(r, k, NULL);
     consts(r, &c, &s, &rho);
     return TWO_PI * r * r / (RP_R(1.0) + c) - RP_R(2.0) * TWO_PI * k * c * r * r / (s * (RP_R(1.0) + s));
 }
@@ -336,6 +356,10 @@ static casadi_real turn(casadi_real r, casadi_real k) {
 /* dE/dr = (2 pi r / c) (1 - k (1 + s^-3)) (leafmap.turn_dr). */
 static casadi_real turn_dr(casadi_real r, casadi_real k) {
     casadi_real c, s, rho;
+    if (FAMILY == FAMILY_VIVIANI) {
+        viviani_turn(r, k, &c);
+        return c;
+    }
     consts(r, &c, &s, &rho);
     return TWO_PI * r / c * (RP_R(1.0) - k * (RP_R(1.0) + RP_R(1.0) / (s * s * s)));
 }
@@ -343,6 +367,7 @@ static casadi_real turn_dr(casadi_real r, casadi_real k) {
 /* E(r, k) and dE/dr (turn and turn_dr from one evaluation of c and s). */
 static casadi_real turn_and_dr(casadi_real r, casadi_real k, casadi_real *dr) {
     casadi_real c, s, rho;
+    if (FAMILY == FAMILY_VIVIANI) return viviani_turn(r, k, dr);
     consts(r, &c, &s, &rho);
     *dr = TWO_PI * r / c * (RP_R(1.0) - k * (RP_R(1.0) + RP_R(1.0) / (s * s * s)));
     return TWO_PI * r * r / (RP_R(1.0) + c) - RP_R(2.0) * TWO_PI * k * c * r * r / (s * (RP_R(1.0) + s));
@@ -373,6 +398,8 @@ static void bracket(casadi_real x, int turn, int *lo, int *hi) {
  * dE/du = (pi / c) (1 - k (1 + s^-3))) from a start interpolated in the table of the last k (cubic Hermite in E
  * with the tabulated du/dE, linear where that is not finite or leaves the cell), bisecting whenever a step leaves
  * the bracket. */
+static casadi_real family_inverse(casadi_real e, casadi_real k);
+
 static casadi_real turn_inverse(casadi_real e, casadi_real k) {
     const casadi_real umax = A_MAX * A_MAX;
     casadi_real lo = RP_R(0.0), hi = umax, u, f, df, c, s, nxt, w, t;
@@ -380,6 +407,7 @@ static casadi_real turn_inverse(casadi_real e, casadi_real k) {
     if (!(e <= RP_R(0.0) && e >= s_e_min)) return NAN;
     if (e >= RP_R(0.0)) return RP_R(0.0);
     if (e <= s_e_min) return A_MAX;
+    if (FAMILY != FAMILY_CIRCLES) return family_inverse(e, k);
     if (s_nt > 1) {
         bracket(e, 1, &i0, &i1);
         lo = s_tr[i0] * s_tr[i0];
@@ -411,6 +439,35 @@ static casadi_real turn_inverse(casadi_real e, casadi_real k) {
     return RP_SQRT(u);
 }
 
+/* Another family's turn inverse (k >= K_MONOTONE, E decreasing, e inside (E(A_MAX), 0)): safeguarded Newton in r on
+ * the closed form from the table's linear interpolation in E, bisecting whenever a step leaves the bracket. */
+static casadi_real family_inverse(casadi_real e, casadi_real k) {
+    casadi_real lo = RP_R(0.0), hi = A_MAX, r, f, df, nxt;
+    int it, i0, i1;
+    if (s_nt > 1) {
+        bracket(e, 1, &i0, &i1);
+        lo = s_tr[i0];
+        hi = s_tr[i1];
+        r = lo + (hi - lo) * (e - s_te[i0]) / (s_te[i1] - s_te[i0]);
+        if (!(r >= lo && r <= hi)) r = RP_R(0.5) * (lo + hi);
+    } else {
+        r = RP_R(0.5) * A_MAX;
+    }
+    for (it = 0; it < 200; ++it) {
+        f = turn_and_dr(r, k, &df) - e;
+        if (RP_FABS(f) <= RP_R(4e-16) * (RP_R(1.0) + RP_FABS(e)) * (RP_R(1.0) + k)) break;
+        if (f > RP_R(0.0)) lo = r; else hi = r;                   /* E decreasing */
+        nxt = r - f / df;
+        if (!isfinite(nxt) || nxt <= lo || nxt >= hi) nxt = RP_R(0.5) * (lo + hi);
+        if (RP_FABS(nxt - r) <= RP_R(1e-16) * nxt || hi - lo <= RP_R(1e-16) * hi) {
+            r = nxt;
+            break;
+        }
+        r = nxt;
+    }
+    return r;
+}
+
 /* Displacement d = u_a + i v_a of the +y leaf of radius r from zero (leafmap.displacement):
  *   d = r int_0^{2 pi} phi'(chi) exp(i [(1 - k) c phi(chi) + (k c / s) chi]) d chi,
  *   phi(chi) = chi + 2 atan(rho sin chi / (1 - rho cos chi)), phi'(chi) = (1 - rho^2) / (1 - 2 rho cos chi + rho^2),
@@ -424,6 +481,41 @@ static struct {
     int has_dd;
 } s_memo[MEMO];
 static int s_memo_next = 0, s_memo_used = 0;
+
+/* Another family's displacement: the +y leaf of size r integrated from zero by the generated RK8 steps of its curve
+ * ODE (28)-(30) with FAMILY_MULT times the certificate's steps per panel (counts() at r, kept for the neighbours);
+ * with dd (not NULL) also dd/dr by the difference quotient of r + dr and max(r - dr, 0). Returns 0 on success. */
+static int family_displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_real dd[2]) {
+    static casadi_real rot[2 * NSTAGE];
+    const casadi_real cg[2] = {RP_R(1.0), RP_R(0.0)};
+    casadi_real ab[2], x[3], h, step = RP_R(1e-5), lo[2] = {RP_R(0.0), RP_R(0.0)}, at[3];
+    int j, n, q, pass;
+    at[0] = r;
+    at[1] = r + step;
+    at[2] = r > step ? r - step : RP_R(0.0);
+    ab[0] = ab[1] = r > step ? r : step;
+    if (counts(ab, k, RP_R(0.0))) return 1;
+    for (pass = 0; pass < (dd ? 3 : 1); ++pass) {
+        ab[0] = ab[1] = at[pass];
+        x[0] = x[1] = x[2] = RP_R(0.0);
+        for (j = 0; j < NPANEL; ++j) {
+            n = FAMILY_MULT * s_counts[0][j];
+            h = (s_breaks[j + 1] - s_breaks[j]) / n;
+            stage_rotations(h, rot);
+            if (rk8_steps(0, x, s_breaks[j], h, n, rot, ab, k, cg)) return 1;
+        }
+        if (pass == 0) {
+            d[0] = x[0];
+            d[1] = x[1];
+        } else if (pass == 1) {
+            lo[0] = x[0];
+            lo[1] = x[1];
+        } else {
+            for (q = 0; q < 2; ++q) dd[q] = (lo[q] - x[q]) / (at[1] - at[2]);
+        }
+    }
+    return 0;
+}
 
 static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_real dd[2]) {
     casadi_real c, s, rho, br = RP_R(0.0), bi = RP_R(0.0), tr = RP_R(0.0), ti = RP_R(0.0), c_r = RP_R(0.0), s_r = RP_R(0.0), g, rho_r = RP_R(0.0);
@@ -440,6 +532,13 @@ static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_
             }
             return;
         }
+    }
+    if (FAMILY != FAMILY_CIRCLES) {
+        if (family_displacement(r, k, d, dd)) {
+            d[0] = d[1] = NAN;
+            if (dd) dd[0] = dd[1] = NAN;
+        }
+        goto keep;
     }
     consts(r, &c, &s, &rho);
     if (dd) {
@@ -489,6 +588,7 @@ static void displacement(casadi_real r, casadi_real k, casadi_real d[2], casadi_
         dd[0] = fr + r * (tr + ct * qr - st * qi);
         dd[1] = fi + r * (ti + st * qr + ct * qi);
     }
+keep:
     j = s_memo_next;
     s_memo_next = (s_memo_next + 1) % MEMO;
     if (s_memo_used < MEMO) ++s_memo_used;
@@ -635,6 +735,7 @@ static int prepare(casadi_real k) {
         re = RP_SQRT(RP_R(1.0) - s_tr[i] * s_tr[i]);                 /* c and s of consts(); du/dE = 1 / (dE/du) */
         rr = RP_SQRT(RP_R(1.0) - RP_R(2.0) * s_tr[i] * s_tr[i]);
         s_tdu[i] = re / (PI * (RP_R(1.0) - k * (RP_R(1.0) + RP_R(1.0) / (rr * rr * rr))));
+        if (FAMILY != FAMILY_CIRCLES) s_tdu[i] = RP_R(2.0) * s_tr[i] / turn_dr(s_tr[i], k);   /* (not used) */
         if (!(isfinite(s_trho[i]) && isfinite(s_tdrho[i]))) return 1;
     }
     s_rscale = NTABLE / A_MAX;
@@ -1598,7 +1699,7 @@ static void search(search_t *S, const RP_NAME(options_t) *options, casadi_real h
  * table of k prepared, BAD_INPUT or NO_CONVERGENCE otherwise. */
 static int start_search(casadi_real u, casadi_real v, casadi_real psi, int steps, casadi_real k, casadi_real *h_des) {
     if (!(isfinite(u) && isfinite(v) && isfinite(psi)) || !(RP_FABS(psi) <= PSI_MAX) || !(k >= K_MIN && k <= K_MAX)
-        || steps < 1 || steps > MAX_STEPS)
+        || steps < 1 || steps > MAX_STEPS || (FAMILY != FAMILY_CIRCLES && !(k >= K_MONOTONE)))
         return RP_BAD_INPUT;
     *h_des = RP_HYPOT(u, v);
     if (!(*h_des > RP_R(0.0))) return RP_BAD_INPUT;

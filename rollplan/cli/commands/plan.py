@@ -18,7 +18,7 @@ def cmd_plan(args) -> int:
     stage(args, "plan", "planning")
     problem = Problem(goal, start=args.start, k=k, robot=robot, radius=args.radius)
     p = solve(problem, "geometric", root_solver=args.method, legs=args.legs, steps=args.steps, all_solutions=args.all,
-              branch=args.branch)
+              branch=args.branch, curve=args.curve)
     unit = p.problem.unit
     g = p.goal
     composed = not isinstance(p, geometric.Plan)   # the paper's one-leg plan has a summary of its own
@@ -57,6 +57,11 @@ def register(sub) -> None:
     p.add_argument("--branch", type=whole, default=None, metavar="M",
                    help="only branch M of n eta = psi + 2 pi M (one leg of figure eights)")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
+    p.add_argument("--curve", choices=geometric.CURVE_CHOICES, default="circles",
+                   help="leaf family of the figure eight: circles (default), viviani (k >= 0.5; triangle and square "
+                        "are not planned yet), or best: the shortest certified plan over the families "
+                        "(docs/design/curve-families.md); other than circles, one leg from rest at the origin to a "
+                        "goal at the pole")
     p.add_argument("--json", metavar="FILE", help=JSON_HELP.format("the plan"))
     p.add_argument("--plot", metavar="FILE.png", help="draw the contact path on the sphere (from below) and the "
                    "plane, and psi along it (with --duration or --timing: omega, rotor rates and torques in time)")

@@ -11,9 +11,10 @@ constants in :mod:`.search_constants`), :mod:`.refine` (the polish: root solvers
 """
 
 from .composed import LEGS, ComposedPlan, ComposedPlanner, as_composed, plan
-from .planner import TOLERANCE, GeometricPhasePlanner, Plan, StepResult, default_planner, step
+from .planner import CURVE_CHOICES, TOLERANCE, GeometricPhasePlanner, Plan, StepResult, default_planner, step
 from .refine import SOLVERS
 from .route import Route, plan_route
 
-__all__ = ["TOLERANCE", "SOLVERS", "LEGS", "GeometricPhasePlanner", "Plan", "StepResult", "default_planner", "plan",
+__all__ = ["TOLERANCE", "CURVE_CHOICES", "SOLVERS",
+           "LEGS", "GeometricPhasePlanner", "Plan", "StepResult", "default_planner", "plan",
            "step", "ComposedPlanner", "ComposedPlan", "as_composed", "Route", "plan_route"]

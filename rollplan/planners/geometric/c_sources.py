@@ -16,16 +16,18 @@ from pathlib import Path
 
 import numpy as np
 
+from ...core import families
 from ...core.c_functions import (
     DEFAULT_PREFIX,
     DEFAULT_STEPS_PER_LEAF,
     MATH_FUNCTIONS,
+    PHASE,
     RK8_STAGES,
     generated_functions,
     model_code,
     to_float,
 )
-from ...core.curves import A_MAX, figure_eight
+from ...core.curves import A_MAX
 from ...core.integrate import DOP853_C
 from ...errors import show_limit
 from ...problem import K_MIN, MAX_STEPS
@@ -35,7 +37,8 @@ from . import search_constants as sc
 from .search_constants import K_MONOTONE
 
 __all__ = ["CSRC", "STATIC_FILES", "CONFIG_HEADER", "DEFAULT_K_MAX", "CERT_TOL", "FLOAT_CERT_TOL", "CERT_DELTA",
-           "CERT_BASE", "CERT_SAFETY", "PSI_MAX", "static_sources", "config_values", "accuracy", "config_header",
+           "CERT_BASE", "CERT_SAFETY", "PSI_MAX", "C_FAMILIES",
+           "FAMILY_MULT", "static_sources", "config_values", "accuracy", "config_header",
            "sources", "generator_files"]
 
 #: The package folder of the static C sources.
@@ -58,6 +61,10 @@ CERT_BASE = 2.0
 CERT_SAFETY = 16.0
 #: Largest |psi| [rad] the C planner accepts (its reduction modulo 2 pi is exact up to it).
 PSI_MAX = 1e6
+#: The leaf families the C search serves (their index is RP_FAMILY): those with one piece per leaf.
+C_FAMILIES = ("circles", "viviani")
+#: A family's leaf map (other than the circles') integrates the leaf with this many times the certificate's steps.
+FAMILY_MULT = 4
 #: 2 pi to 50 digits.
 _TWO_PI_DIGITS = "6.2831853071795864769252867665590057683943387987502"
 
@@ -119,14 +126,16 @@ def _enumeration_constants(k_max: float) -> dict:
     }
 
 
-def config_values(functions, steps_per_leaf: int, k_max: float, real: str) -> dict:
+def config_values(functions, steps_per_leaf: int, k_max: float, real: str, curve: str = "circles") -> dict:
     """``{NAME: C text}`` of every value ``rollplan_config.h`` defines as ``RP_NAME``, for the model functions
     ``functions`` (:func:`~rollplan.core.c_functions.generated_functions`, in that order), the planner's
-    ``k_max`` and ``casadi_real`` = ``real`` (``"double"`` or ``"float"``)."""
+    ``k_max``, ``casadi_real`` = ``real`` (``"double"`` or ``"float"``) and the leaf family ``curve`` (one of
+    :data:`C_FAMILIES`)."""
     sizes = {name: max(int(getattr(f, name)()) for f in functions[3:])
              for name in ("sz_arg", "sz_res", "sz_iw", "sz_w")}
-    breaks = figure_eight().pieces[0].breaks
-    if any(tuple(piece.breaks) != tuple(breaks) for piece in figure_eight().pieces):
+    eight = families.figure_eight(curve)
+    breaks = eight.pieces[0].breaks
+    if len(eight.pieces) != 2 or any(tuple(piece.breaks) != tuple(breaks) for piece in eight.pieces):
         raise ValueError("the C certificate assumes the leaves share their panels")
     double = real == "double"
     return {
@@ -151,6 +160,9 @@ def config_values(functions, steps_per_leaf: int, k_max: float, real: str) -> di
         "BREAKS": ", ".join(repr(float(b)) for b in breaks),
         "RK8_STAGES": str(RK8_STAGES),
         "RK8_C": ", ".join(repr(float(c)) for c in DOP853_C),
+        "FAMILY": str(C_FAMILIES.index(curve)),
+        "PHASE": repr(PHASE[curve]),
+        "FAMILY_MULT": str(FAMILY_MULT),
         **_two_pi_parts(),
         **_enumeration_constants(float(k_max)),
     }
@@ -199,15 +211,16 @@ def config_header(values: dict, prefix: str = DEFAULT_PREFIX, real: str = "doubl
 
 
 def sources(prefix: str = DEFAULT_PREFIX, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF,
-            k_max: float = DEFAULT_K_MAX, real: str = "double", functions=None) -> dict:
+            k_max: float = DEFAULT_K_MAX, real: str = "double", functions=None, curve: str = "circles") -> dict:
     """``{file name: text}`` of the C planner library: ``<prefix>_model.c`` and ``.h`` (the model functions,
     ``functions`` or :func:`~rollplan.core.c_functions.generated_functions`), ``rollplan_config.h`` and the static
     sources. Generated in this process (CasADi's CodeGenerator); no check of ``k_max`` (``rollplan.codegen``
-    checks the step map's accuracy up to it)."""
+    checks the step map's accuracy up to it). ``curve``: the leaf family (:data:`C_FAMILIES`) of the search's leaf
+    map and of the model functions (the certificate integrates that family's figure eight)."""
     if functions is None:
-        functions = generated_functions(steps_per_leaf, prefix)
+        functions = generated_functions(steps_per_leaf, prefix, curve)
     model_c, model_h = model_code(functions, prefix, real)
-    values = config_values(functions, steps_per_leaf, k_max, real)
+    values = config_values(functions, steps_per_leaf, k_max, real, curve)
     return {f"{prefix}_model.c": model_c, f"{prefix}_model.h": model_h,
             CONFIG_HEADER: config_header(values, prefix, real), **static_sources()}
 

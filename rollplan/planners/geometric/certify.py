@@ -19,7 +19,7 @@ import casadi as ca
 import numpy as np
 
 from ...core import compiled as _compiled_mod
-from ...core import curves, integrate, model
+from ...core import curves, families, integrate, model
 from ...core.compiled import compiled_lazy
 from ...core.curves import circle_point, figure_eight, rotated_point
 from ...core.integrate import CvodesIntegrator, rk8_step
@@ -186,12 +186,14 @@ class RK8Certifier:
 
 
 class CvodesCertifier:
-    """Final state of n traces of the figure eight (a, b) rotated by gamma, by CVODES (units of R)."""
+    """Final state of n traces of the figure eight (a, b) rotated by gamma, by CVODES (units of R); ``curve`` the
+    leaf family (:data:`rollplan.core.families.FAMILIES`; its figure eight piece by piece)."""
 
     name = "cvodes"
 
-    def __init__(self, reltol: float = 3e-15, abstol: float = 1e-16) -> None:
-        self.curve = figure_eight()
+    def __init__(self, reltol: float = 3e-15, abstol: float = 1e-16, curve: str = "circles") -> None:
+        self.family = curve
+        self.curve = figure_eight() if curve == "circles" else families.figure_eight(curve)
         self.integrator = CvodesIntegrator(self.curve, reltol=reltol, abstol=abstol)
         self._ints = None
 

@@ -22,12 +22,14 @@ from typing import NamedTuple
 
 from ... import interrupts
 from ...core.compiled import last_build, no_compiler_reason, shared_library
-from ...errors import SolverError
+from ...core.families import FAMILIES
+from ...errors import InputError, SolverError
 from ...problem import K_MAX
-from .c_sources import DEFAULT_K_MAX, generator_files, sources
+from .c_sources import C_FAMILIES, DEFAULT_K_MAX, generator_files, sources
+from .search_constants import K_MONOTONE
 
-__all__ = ["PREFIX", "DEFAULT_K_MAX", "UNAVAILABLE", "SearchResult", "library", "unavailable", "shortest_root",
-           "all_roots"]
+__all__ = ["PREFIX", "DEFAULT_K_MAX", "UNAVAILABLE", "SearchResult", "FamilyPlan", "library", "unavailable",
+           "shortest_root", "all_roots", "check_family_k", "family_plans"]
 
 #: Prefix of the generated C symbols (the code generator's default).
 PREFIX = "rollplan"
@@ -73,6 +75,21 @@ class SearchResult(NamedTuple):
     roots: int
 
 
+class FamilyPlan(NamedTuple):
+    """A plan of the C search of a leaf family, certified on board: leaf sizes [R], rotation gamma, branch m
+    (relative to the psi passed in), shift of one step, the leaf map's predicted miss, and the branches searched
+    and roots tried."""
+
+    a: float
+    b: float
+    gamma: float
+    m: int
+    h: float
+    predicted: float
+    branches: int
+    roots: int
+
+
 class _Library(NamedTuple):
     """The entry points of the compiled C planner (ctypes)."""
 
@@ -93,13 +110,15 @@ def _load(path: str):
     return _Library(plan_with, plan_all)
 
 
-@lru_cache(maxsize=1)
-def library():
-    """``<prefix>_plan_with`` and ``<prefix>_plan_all`` of the compiled C planner (ctypes), built on first use;
-    None without it. Its tables are sized for every k the planner accepts (``k_max = K_MAX``); its step map
-    ``<prefix>_step_eval``, which the search does not use, has the default size (accurate up to k = 5)."""
+@lru_cache(maxsize=len(FAMILIES))
+def library(curve: str = "circles"):
+    """``<prefix>_plan_with`` and ``<prefix>_plan_all`` of the compiled C planner (ctypes) of the leaf family
+    ``curve`` (:data:`.c_sources.C_FAMILIES`), built on first use; None without it. Its tables are sized for every
+    k the planner accepts (``k_max = K_MAX``); its step map ``<prefix>_step_eval``, which the search does not use,
+    has the default size (accurate up to k = 5)."""
     # a build (seconds) runs in a helper thread: CasADi's code generation would swallow a Ctrl-C
-    lib = interrupts.call_in_thread(shared_library, "c_planner_search", lambda: sources(PREFIX, k_max=K_MAX), _load,
+    name = "c_planner_search" if curve == "circles" else f"c_planner_search_{curve}"
+    lib = interrupts.call_in_thread(shared_library, name, lambda: sources(PREFIX, k_max=K_MAX, curve=curve), _load,
                                     "no C search", memo=generator_files())
     if lib is None:
         _why[0] = last_build().get("reason") or no_compiler_reason()
@@ -112,9 +131,9 @@ def unavailable() -> SolverError:
                        UNAVAILABLE)
 
 
-def _library():
+def _library(curve: str = "circles"):
     """:func:`library`, or the :func:`unavailable` error."""
-    lib = library()
+    lib = library(curve)
     if lib is None:
         raise unavailable()
     return lib
@@ -133,9 +152,9 @@ def _call(entry, k: float, direct: bool, *args) -> int:
         with _lock:
             return entry(*args)
 
-    short = direct and k == _last_k[0] and k <= DEFAULT_K_MAX
+    short = direct and (entry, k) == _last_k[0] and k <= DEFAULT_K_MAX
     status = locked() if short else interrupts.call_in_thread(locked)
-    _last_k[0] = k
+    _last_k[0] = (entry, k)
     return status
 
 
@@ -179,3 +198,49 @@ def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int 
     if status != OK:
         raise _incomplete(status)
     return [SearchResult(p.a, p.b, int(p.m), int(p.branches), int(p.roots)) for p in plans[:count.value]]
+
+
+def check_family_k(curve: str, k: float) -> None:
+    """InputError unless the C search of the leaf family ``curve`` serves ``k``: the circles every k, another
+    family (:data:`.c_sources.C_FAMILIES`) k >= 1/2, where its turn E is strictly decreasing in the leaf's size
+    (docs/design/curve-families.md, (iv)); the polygons are not served yet."""
+    if curve not in C_FAMILIES:
+        raise InputError(f"curve = {curve} is not allowed for planning yet: the C search serves "
+                         f"{', '.join(C_FAMILIES)}")
+    if curve != "circles" and not k >= K_MONOTONE:
+        raise InputError(f"k = {k:g} is not allowed with curve = {curve}: it plans for k >= {K_MONOTONE:g} "
+                         "(where the leaf's turn is monotone in its size); use curve = circles")
+
+
+def family_plans(u: float, v: float, psi: float, steps: int, k: float, curve: str, branch: int | None = None,
+                 every: bool = False) -> list:
+    """Plans for the target ``(u, v, psi)`` [R, rad] in ``steps`` figure eights of the leaf family ``curve`` at
+    inertia ratio k (:func:`check_family_k`) by that family's C search, each polished on the family's leaf map and
+    certified on board along the family's curve: the shortest certified one (``<prefix>_plan_with``), or with
+    ``every`` every certified root of every branch (``<prefix>_plan_all``), shortest first; on ``branch`` only if
+    given. A list of :class:`FamilyPlan` (empty: no certified plan). SolverError without the library or when the
+    search does not complete."""
+    check_family_k(curve, k)
+    lib = _library(curve)
+    if branch is not None and abs(branch) > 2**31 - 1:
+        return []
+    options = _Options(int(branch is not None), 0 if branch is None else int(branch), 1)
+    args = (float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options))
+    if not every:
+        plan = _Plan()
+        status = _call(lib.plan_with, k, steps <= _DIRECT_STEPS, *args, ctypes.byref(plan))
+        plans = [plan]
+    else:
+        capacity, count = _FIRST_CAPACITY, ctypes.c_int(0)
+        while True:
+            buffer = (_Plan * capacity)()
+            status = _call(lib.plan_all, k, False, *args, buffer, capacity, ctypes.byref(count))
+            if status != TOO_MANY or count.value <= capacity:
+                break
+            capacity = count.value
+        plans = buffer[:count.value]
+    if status in (NO_PLAN, NOT_CERTIFIED):
+        return []
+    if status != OK:
+        raise _incomplete(status)
+    return [FamilyPlan(p.a, p.b, p.gamma, int(p.m), p.h, p.predicted, int(p.branches), int(p.roots)) for p in plans]

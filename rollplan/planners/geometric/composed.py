@@ -30,7 +30,7 @@ from ...robot import Robot
 from ..method import Method, renamed_option, with_steps
 from .legs import intermediate_state, second_leg, two_leg_candidates
 from .maneuvers import StraightRoll
-from .planner import TOLERANCE, GeometricPhasePlanner, Plan, default_planner
+from .planner import CURVE_CHOICES, TOLERANCE, GeometricPhasePlanner, Plan, default_planner
 from .refine import SOLVERS
 from .turn import CircleTurn, turn_in_place
 
@@ -220,21 +220,27 @@ class ComposedPlanner(Method):
         Also return the other certified branches of one leg in ``alternatives``.
     branch : int or None
         Only the branch m of ``n eta = psi + 2 pi m`` of one leg (no fallback to two legs).
+    curve : str
+        Leaf family of the figure eight (:data:`.planner.CURVE_CHOICES`): ``"circles"`` (the default) plans any
+        start and goal; another family, or ``"best"`` (the shortest certified plan over all families), plans one leg
+        from rest at the origin to a goal at the pole (an InputError for other problems).
     """
 
     name = "geometric"
 
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  legs: str = "fallback", *, steps: int | None = None, all_solutions: bool = False,
-                 branch: int | None = None, method: str | None = None) -> None:
+                 branch: int | None = None, method: str | None = None, curve: str = "circles") -> None:
         root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
         self.legs = check_choice("legs", legs, LEGS)
         check_choice(name, root_solver, SOLVERS)
         self.steps = None if steps is None else check_steps(steps)
         self.all_solutions = check_flag("all_solutions", all_solutions)
         self.branch = self._check_branch(branch)
-        default = nodes == DEFAULT_NODES and tol == TOLERANCE
-        self.planner = default_planner(root_solver) if default else GeometricPhasePlanner(root_solver, nodes, tol)
+        self.curve = check_choice("curve", curve, CURVE_CHOICES)
+        default = nodes == DEFAULT_NODES and tol == TOLERANCE and self.curve == "circles"
+        self.planner = default_planner(root_solver) if default else GeometricPhasePlanner(root_solver, nodes, tol,
+                                                                                          curve=self.curve)
         self.root_solver = root_solver
         self.tol = self.planner.tol
 
@@ -262,6 +268,9 @@ class ComposedPlanner(Method):
         problem = super()._check(problem)
         problem = with_steps(problem, self.steps)
         check_reach(problem.start, problem.goal, problem.radius)
+        if self.curve != "circles" and (not _pole_to_pole(problem) or self.legs == "two"):
+            raise InputError(f"curve = {self.curve} plans one leg of figure eights from rest at the origin to a goal "
+                             "at the pole (legs one, fallback or shortest); use curve = circles for other problems")
         return problem
 
     def _leg(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
@@ -272,7 +281,7 @@ class ComposedPlanner(Method):
         t0 = time.perf_counter()
         all_solutions, branch = self.all_solutions, self.branch
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
-        one_only = self.legs == "one" or branch is not None
+        one_only = self.legs == "one" or branch is not None or self.curve != "circles"
         if _pole_to_pole(problem) and self.legs != "two" and math.hypot(goal.u_a, goal.v_a) > IDENTITY_TOL:
             try:
                 found = self._leg(problem, all_solutions, branch)
@@ -280,7 +289,7 @@ class ComposedPlanner(Method):
                 if one_only:
                     raise
                 return self._composed(problem, t0, False, None, "two")   # one leg has just failed
-            if self.legs == "shortest":
+            if self.legs == "shortest" and self.curve == "circles":
                 try:
                     other = self._composed(problem, t0, False, None, "two")
                 except NoPlanError:
@@ -426,7 +435,7 @@ def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback")
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
          all_solutions: bool = False, method: str | None = None, branch: int | None = None, start=None,
-         legs: str = "fallback", *, root_solver: str | None = None):
+         legs: str = "fallback", *, root_solver: str | None = None, curve: str = "circles"):
     """Plan an exact, dynamically realizable motion from ``start`` to ``target``, any two states.
 
     From rest at the origin to a goal at the south pole this is the paper's
@@ -460,6 +469,9 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
         ``"fallback"`` (default), ``"shortest"``, ``"one"`` or ``"two"`` (docs/design/composition.md).
     root_solver : str
         Root solver name from :data:`.refine.SOLVERS` (default ``"ipopt"``).
+    curve : str
+        Leaf family of the figure eight from :data:`.planner.CURVE_CHOICES` (default ``"circles"``; see
+        :class:`ComposedPlanner`).
 
     Returns
     -------
@@ -482,4 +494,6 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     check_choice("legs", legs, LEGS)
     problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
                       steps=steps)
+    if check_choice("curve", curve, CURVE_CHOICES) != "circles":
+        return ComposedPlanner(root_solver, legs=legs, curve=curve).solve(problem, all_solutions, branch)
     return default_composed_planner(root_solver, legs).solve(problem, all_solutions, branch)

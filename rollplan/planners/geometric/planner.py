@@ -23,8 +23,8 @@ from typing import NamedTuple
 import casadi as ca
 import numpy as np
 
-from ...core import model
-from ...core.curves import A_MAX, figure_eight, rotated_point
+from ...core import families, model
+from ...core.curves import A_MAX, rotated_point
 from ...core.integrate import DEFAULT_NODES, spectral_step
 from ...core.paths import figure_eight_pieces
 from ...core.plane import n_step_sum, target_shift, wrap, wrap_exact
@@ -51,17 +51,21 @@ from ...result import (
 from ...robot import Robot
 from ..method import Method, renamed_option
 from .certify import CERTIFIERS, DEFAULT_CERTIFIER, CvodesCertifier
-from .compiled_search import all_roots, shortest_root
+from .compiled_search import all_roots, check_family_k, family_plans, shortest_root
 from .leafmap import panels_for, step_values
 from .refine import SOLVERS, leaf_step, polisher, step_residual
 from .search_constants import NOT_A_ROOT
 
-__all__ = ["TOLERANCE", "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
+__all__ = ["TOLERANCE", "CURVE_CHOICES",
+           "StepResult", "Plan", "GeometricPhasePlanner", "default_planner", "plan", "step"]
 
 log = logging.getLogger(__name__)
 
 #: Default tolerance of the certified residual (units of R and rad).
 TOLERANCE = CERTIFICATE_TOLERANCE
+#: The ``curve`` option of the planner: a leaf family of :data:`rollplan.core.families.FAMILIES`, or ``"best"``
+#: (the shortest certified plan over all of them).
+CURVE_CHOICES = (*families.FAMILIES, "best")
 #: Most CVODES samples per leaf of :meth:`GeometricPhasePlanner.sample`.
 _MAX_PER_LEAF = 100000
 #: A polished root farther than this from the enumerated one (in a or b [R]) is not taken (the solver
@@ -133,8 +137,8 @@ class Plan(CertifiedMotion):
     eta : float
         Holonomy angle of one step [rad].
     path_length : float
-        Contact path length ``2 pi n (a + b)`` [length unit] (equal on the
-        sphere and on the plane).
+        Contact path length ``n (L(a) + L(b))`` [length unit] (equal on the sphere and on the plane), L the
+        length of a leaf of the family (``2 pi a`` for circles, :func:`rollplan.core.families.leaf_length`).
     certificate : Certificate
         Independent integration of all n steps (:mod:`.certify`) and its residual.
     stats : SolverStats
@@ -149,6 +153,8 @@ class Plan(CertifiedMotion):
         ``(self,)``: the plan is its own only leg.
     mode : str
         ``"one"``: one leg of figure eights (as :attr:`.composed.ComposedPlan.mode`).
+    curve : str
+        Leaf family of the figure eight (:data:`rollplan.core.families.FAMILIES`; ``"circles"`` is the paper's).
     """
 
     method = "geometric"
@@ -166,6 +172,7 @@ class Plan(CertifiedMotion):
     stats: SolverStats
     alternatives: tuple = ()
     _planner: GeometricPhasePlanner = field(default=None, repr=False, compare=False)
+    curve: str = "circles"
 
     @property
     def steps(self) -> int:
@@ -174,7 +181,7 @@ class Plan(CertifiedMotion):
     @property
     def pieces(self) -> tuple:
         R = self.radius
-        return tuple(figure_eight_pieces(self.a / R, self.b / R, self.gamma, self.steps))
+        return tuple(figure_eight_pieces(self.a / R, self.b / R, self.gamma, self.steps, family=self.curve))
 
     @property
     def legs(self) -> tuple:
@@ -184,14 +191,14 @@ class Plan(CertifiedMotion):
         """The plan sampled by CVODES, ``samples`` samples in all: the start, then the leaves' samples, spread
         evenly over the 2n leaves (the first leaves one more when they do not divide evenly), each leaf's last at
         its end; ``segment`` numbers the leaves. (``samples_per_leaf=q``, deprecated, is ``samples = 1 + 2 n q``.)"""
-        leaves = len(self._planner.curve.pieces) * self.steps
+        leaves = len(self._planner.family_planner(self.curve).curve.pieces) * self.steps
         if samples_per_leaf is not None:
             warnings.warn("sample(samples_per_leaf=q) is deprecated: use sample(samples) with the samples in all, "
                           "1 + 2 n q", DeprecationWarning, stacklevel=2)
             samples = 1 + leaves * check_whole("samples_per_leaf", samples_per_leaf, 1, _MAX_PER_LEAF)
         samples = check_whole("samples", samples, leaves + 1, 1 + leaves * _MAX_PER_LEAF)
         per = -(-(samples - 1) // leaves)
-        traj = self._planner.sample(self, per)
+        traj = self._planner.family_planner(self.curve).sample(self, per)
         base, extra = divmod(samples - 1, leaves)
         idx = [0]
         for j in range(leaves):
@@ -233,13 +240,17 @@ class GeometricPhasePlanner(Method):
         Also return the other certified branches in ``Plan.alternatives``.
     branch : int or None
         Only the branch m of ``n eta = psi + 2 pi m`` (psi as given).
+    curve : str
+        Leaf family of the figure eight from :data:`CURVE_CHOICES`: ``"circles"`` (the default, the paper's
+        (35)), ``"viviani"``, ``"triangle"``, ``"square"`` (docs/design/curve-families.md), or ``"best"``: the
+        shortest certified plan (contact path length) over every family.
     """
 
     name = "geometric"
 
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  certifier: str = DEFAULT_CERTIFIER, compiled_search: bool = True, *, all_solutions: bool = False,
-                 branch: int | None = None, method: str | None = None) -> None:
+                 branch: int | None = None, method: str | None = None, curve: str = "circles") -> None:
         root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
         self.root_solver = check_choice(name, root_solver, SOLVERS)
         self.all_solutions = check_flag("all_solutions", all_solutions)
@@ -250,8 +261,10 @@ class GeometricPhasePlanner(Method):
         self.compiled_search = True
         self.tol = check_range("tol", tol, 0.0, 1e-3, low_open=True)
         self.nodes = check_whole("nodes", nodes, 4, 200)
-        self.curve = figure_eight()
-        self.certifier = CERTIFIERS[check_choice("certifier", certifier, CERTIFIERS)]()
+        self.family = check_choice("curve", curve, CURVE_CHOICES)
+        self.curve = families.figure_eight("circles" if self.family == "best" else self.family)
+        self.certifier_name = check_choice("certifier", certifier, CERTIFIERS)
+        self.certifier = CERTIFIERS[self.certifier_name]()
 
     @property
     def method(self) -> str:
@@ -261,8 +274,21 @@ class GeometricPhasePlanner(Method):
 
     @cached_property
     def cvodes(self) -> CvodesCertifier:
-        """The CVODES integration that samples plans (:meth:`sample`)."""
-        return self.certifier if isinstance(self.certifier, CvodesCertifier) else CvodesCertifier()
+        """The CVODES integration that samples plans (:meth:`sample`) along the family's figure eight."""
+        if isinstance(self.certifier, CvodesCertifier) and self.family in ("circles", "best"):
+            return self.certifier
+        return CvodesCertifier(curve="circles" if self.family == "best" else self.family)
+
+    def family_planner(self, family: str) -> GeometricPhasePlanner:
+        """The planner with the same options for the leaf family ``family`` (``self`` for its own)."""
+        if family == self.family:
+            return self
+        cache = self.__dict__.setdefault("_family_planners", {})
+        if family not in cache:
+            cache[family] = GeometricPhasePlanner(self.root_solver, self.nodes, self.tol, self.certifier_name,
+                                                  all_solutions=self.all_solutions, branch=self.branch,
+                                                  curve=family)
+        return cache[family]
 
     # -- the spectral step map (atlas, benchmarks; not used by solve) --------------------
     @cached_property
@@ -305,6 +331,8 @@ class GeometricPhasePlanner(Method):
         return problem
 
     def _solve(self, problem: Problem) -> Plan:
+        if self.family == "best":
+            return self._solve_best(problem)
         t_start = time.perf_counter()
         all_solutions, branch = self.all_solutions, self.branch
         goal_r = problem.scaled(problem.goal)
@@ -315,8 +343,63 @@ class GeometricPhasePlanner(Method):
             raise NoPlanError(f"no plan for {where}: the target is the start point, and rollplan plans "
                               "motions with a nonzero displacement")
         target = (goal_r.u_a, goal_r.v_a, psi_des)
+        if self.family != "circles":
+            check_family_k(self.family, problem.k)
+            return self._solve_family(problem, None if branch is None else branch + turns, target, turns, t_start)
         solve = self._solve_compiled_all if all_solutions else self._solve_compiled
         return solve(problem, None if branch is None else branch + turns, target, turns, t_start)
+
+    def _solve_best(self, problem: Problem) -> Plan:
+        """The shortest certified plan (contact path length) over every leaf family (ties: the first family of
+        :data:`rollplan.core.families.FAMILIES`); NoPlanError naming each family's reason when none has one."""
+        found, reasons = [], []
+        for family in families.FAMILIES:
+            planner = self.family_planner(family)
+            try:
+                if family != "circles":
+                    check_family_k(family, problem.k)
+                found.append(planner._solve(problem))
+            except (NoPlanError, InputError) as exc:
+                reasons.append(f"{family}: {exc}")
+        if not found:
+            raise NoPlanError(f"no plan for {problem.describe()} with any curve family ({'; '.join(reasons)})")
+        return min(found, key=lambda p: p.path_length)
+
+    def _solve_family(self, problem, branch, target, turns, t_start) -> Plan:
+        """A leaf family other than the circles: the C search of the family (:mod:`.compiled_search`) polishes
+        its roots on the family's leaf map and certifies them on board, shortest first; each plan it returns is
+        certified again here by CVODES along the family's curve (:class:`.certify.CvodesCertifier`)."""
+        k, steps = problem.k, problem.steps
+        listed = family_plans(target[0], target[1], target[2], steps, k, self.family, branch, self.all_solutions)
+        found, rejected = [], []
+        for r in listed:
+            cand = self._certified_family(problem, r, r.m - turns, target)
+            if cand[1].passed:
+                found.append(cand)
+                if not self.all_solutions:
+                    break
+            else:
+                rejected.append(cand[1].residual + cand[1].error_bound)
+        if not found:
+            self._raise_if_rejected(problem.describe(), rejected)
+            raise _no_root(problem, f"curve {self.family}, the certified search of the C planner found none")
+        details = {"candidates": len(listed), "solves": len(found),
+                   "branches": listed[0].branches if listed else 0, "roots": len(listed), "search": "compiled",
+                   "curve": self.family}
+        elapsed = time.perf_counter() - t_start
+        plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
+        return replace(plans[0], alternatives=tuple(plans[1:]))
+
+    def _certified_family(self, problem, r, m, target_r):
+        """The C search's certified plan ``r`` of the family certified again by CVODES: a tuple for :meth:`_plan`."""
+        final_r = self.cvodes.final(r.a, r.b, problem.k, r.gamma, problem.steps)
+        goal_r = problem.scaled(problem.goal)
+        residual = arrival_residual(final_r, State(goal_r.u_a, goal_r.v_a, target_r[2]))
+        cert = certify(problem, final_r.scaled(problem.radius), self.cvodes.name, error_bound=0.0,
+                       tolerance=self.tol, residual=residual)
+        stats = SolverStats(f"c-{self.family}", "polished in C", 0, 0.0)
+        eta = (target_r[2] + 2.0 * math.pi * r.m) / problem.steps
+        return _Root(r.a, r.b, r.gamma, m, r.h, eta, r.predicted), cert, stats
 
     def _raise_if_rejected(self, where: str, rejected: list) -> None:
         """NoPlanError naming the best certified residual when roots were found but none certified."""
@@ -441,8 +524,13 @@ class GeometricPhasePlanner(Method):
     def _plan(self, problem, cand, stats) -> Plan:
         root, cert = cand[0], cand[1]
         R = problem.radius
-        return Plan(problem, root.a * R, root.b * R, root.gamma, root.m, root.h * R, root.eta,
-                    2 * np.pi * problem.steps * (root.a + root.b) * R, cert, stats, (), self)
+        if self.family == "circles":
+            length = 2 * np.pi * problem.steps * (root.a + root.b)
+        else:
+            length = problem.steps * (families.leaf_length(self.family, root.a)
+                                      + families.leaf_length(self.family, root.b))
+        return Plan(problem, root.a * R, root.b * R, root.gamma, root.m, root.h * R, root.eta, length * R, cert,
+                    stats, (), self, self.family)
 
     # -- sampling -------------------------------------------------------------------
     def sample(self, p: Plan, samples_per_leaf: int = 200) -> Trajectory:

@@ -1,0 +1,154 @@
+"""Planning with the leaf families of the figure eight (``plan --curve``, the ``curve`` option of the method
+``geometric``; docs/design/curve-families.md): the option's refusals, plans on random targets checked by an
+independent integration of the sampled contact path of ``plan --json`` (scipy's DOP853 on (15), (16), (20),
+``references.replay``) and of the figure eight as typed in tests/references.py, and ``--curve best``."""
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from conftest import one_line, run
+
+from rollplan import InputError, Problem
+from rollplan.core import compiled
+from rollplan.core.plane import wrap
+from rollplan.planners import solve
+from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search
+
+import references
+
+#: The families the C search plans with (beside the circles).
+PLANNED = ("viviani",)
+
+
+def _require_library(curve):
+    if compiled.compiler_command() is None:
+        pytest.skip("no C compiler: the compiled search is not built")
+    assert compiled_search.library(curve) is not None, compiled.last_build()
+
+
+def _cli(*argv):
+    """``rollplan argv`` in a separate process: (exit code, stdout, stderr)."""
+    r = subprocess.run([sys.executable, "-m", "rollplan.cli", *argv], capture_output=True, text=True, timeout=600,
+                       check=False)
+    return r.returncode, r.stdout, r.stderr
+
+
+@pytest.mark.parametrize("options, needle", [
+    (dict(curve="hexagon"), "curve"), (dict(curve="Viviani"), "curve"), (dict(curve=["viviani"]), "curve"),
+])
+def test_the_curve_option_is_validated(options, needle):
+    with pytest.raises(InputError, match=needle) as err:
+        GeometricPhasePlanner(**options)
+    assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("curve, goal, k, needle", [
+    ("viviani", (0.0, 1.0, 0.0), 0.3, "k = 0.3"),                       # E not monotone below k = 1/2
+    ("triangle", (0.0, 1.0, 0.0), 2.5, "triangle"),                     # not planned yet
+    ("viviani", (0.0, 1.0, 0.0, 0.2, 0.0), 2.5, "one leg"),             # goal off the pole: composed motions
+])
+def test_what_a_family_does_not_plan_is_refused_in_one_line(curve, goal, k, needle):
+    with pytest.raises(InputError, match=needle) as err:
+        solve(Problem(goal, k=k), "geometric", curve=curve)
+    assert "\n" not in str(err.value)
+
+
+def test_plan_curve_refusals_on_the_command_line(capsys):
+    code, _, err = run(capsys, "plan", "--curve", "viviani", "--k", "0.2")
+    assert code == 2 and one_line(err) and "k = 0.2" in err and "viviani" in err
+    code, _, err = run(capsys, "plan", "--curve", "square")
+    assert code == 2 and one_line(err) and "square" in err
+
+
+def _targets(seed, count):
+    """Hidden targets: k in [1, 12], n in 1..4, psi anywhere in (-pi, pi], |(u, v)| up to 1.5 R."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(count):
+        r, th = rng.uniform(0.05, 1.5), rng.uniform(-math.pi, math.pi)
+        out.append(((r * math.cos(th), r * math.sin(th), rng.uniform(-math.pi, math.pi)), int(rng.integers(1, 5)),
+                    float(rng.uniform(1.0, 12.0))))
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("curve", PLANNED)
+def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path):
+    """``plan --curve --json``: the sampled contact path alone, integrated by scipy (replay, 1e-6), and the figure
+    eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9."""
+    _require_library(curve)
+    landed = 0
+    for i, (target, steps, k) in enumerate(_targets(26, 6)):
+        out = tmp_path / f"p{i}.json"
+        code, stdout, err = _cli("plan", "--curve", curve, "--to", repr(target[0]), repr(target[1]), "--psi",
+                                 repr(target[2]), "--steps", str(steps), "--k", repr(k), "--json", str(out))
+        if code == 3:   # no plan: refused honestly (exit 3, one line)
+            assert one_line(err), err
+            continue
+        assert code == 0, err
+        d = json.loads(out.read_text())
+        assert d["figure_eight"]["curve"] == curve
+        assert all(s["curve"] == f"figure_eight_{curve}" for s in d["segments"])
+        assert d["certificate"]["residual"] + d["certificate"]["error_bound"] <= 1e-9
+        tr = d["trajectory"]
+        x = references.replay(np.array(tr["u_o"]), np.array(tr["v_o"]), np.array(tr["segment"]), np.zeros(3), k)[-1]
+        assert abs(x[0] - target[0]) < 1e-6 and abs(x[1] - target[1]) < 1e-6, (target, x)
+        assert abs(wrap(x[2] - target[2])) < 1e-6, (target, x)
+        f = d["figure_eight"]
+        x = np.zeros(3)
+        for _ in range(steps):
+            x = references.family_trace(curve, f["a"], f["b"], k, f["gamma"], x)
+        assert max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2]))) < 1e-9
+        landed += 1
+    assert landed >= 4
+
+
+@pytest.mark.slow
+def test_best_is_never_longer_than_any_family():
+    """``curve="best"``: the shortest certified plan over the families, never longer than any single family's."""
+    for target, steps, k in _targets(7, 3):
+        problem = Problem(target, k=k, steps=steps)
+        lengths = {}
+        for curve in ("circles", *PLANNED):
+            try:
+                lengths[curve] = solve(problem, "geometric", curve=curve, legs="one").path_length
+            except Exception as exc:   # noqa: BLE001 -- a family without a plan
+                assert type(exc).__name__ == "NoPlanError", exc
+        best = solve(problem, "geometric", curve="best", legs="one")
+        assert best.path_length <= min(lengths.values()) + 1e-12
+        assert best.curve in lengths and lengths[best.curve] == pytest.approx(best.path_length, abs=1e-12)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("curve", PLANNED)
+def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path):
+    """``rollplan codegen --curve`` (built with -Wall -Wextra -Werror by its Makefile): plan_demo gives the plan of
+    ``plan --curve`` (same branch, a, b, gamma to 1e-8), and that plan reaches the target when the family's figure
+    eight as typed in tests/references.py is integrated by DOP853."""
+    _require_library(curve)
+    out = tmp_path / "c"
+    code, stdout, err = _cli("codegen", "--out", str(out), "--curve", curve, "--k-max", "12")
+    assert code == 0 and f"curve {curve}" in stdout, err
+    assert f"#define RP_FAMILY {compiled_search.C_FAMILIES.index(curve)}" in (out / "rollplan_config.h").read_text()
+    build = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)
+    assert build.returncode == 0, build.stderr
+    for target, steps, k in _targets(12, 4):
+        run_c = subprocess.run([str(out / "plan_demo"), *map(repr, target), str(steps), repr(k)], capture_output=True,
+                               text=True, check=False)
+        try:
+            p = solve(Problem(target, k=k, steps=steps), "geometric", curve=curve)
+        except Exception as exc:   # noqa: BLE001 -- no plan: the C planner says so too
+            assert type(exc).__name__ == "NoPlanError" and run_c.returncode == 3, (exc, run_c.stderr)
+            continue
+        assert run_c.returncode == 0, run_c.stderr
+        a, b, gamma, residual, bound, m = run_c.stdout.split()
+        assert int(m) == p.branch and float(residual) + float(bound) <= 1e-9
+        assert max(abs(float(a) - p.a), abs(float(b) - p.b), abs(wrap(float(gamma) - p.gamma))) < 1e-8
+        x = np.zeros(3)
+        for _ in range(steps):
+            x = references.family_trace(curve, float(a), float(b), k, float(gamma), x)
+        assert max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2]))) < 1e-9
