@@ -295,3 +295,20 @@ def test_torque_closed_loop_under_noise_leaves_the_frictionless_robot_at_rest(se
     peak = np.abs(ex.series.rotor_rates).max()
     assert np.abs(ex.series.rotor_rates[ends]).max() < 1e-7 * peak
     assert all(d["friction"] == [0.0, 0.0] for d in ex.estimates[1:])
+
+
+def test_closed_loop_runs_a_viviani_plan_whole_then_corrects():
+    """A plan of Viviani lobes, closed loop: applied whole (no re-plan in another family), then corrected by
+    figure eights of circles onto the goal; its applied rates replayed by DOP853 on the printed equations."""
+    p = rollplan.plan(GOAL, 2, robot=MODEL, curve="viviani")
+    assert p.curve == "viviani"
+    ol = execute(p, MODEL, REAL, 2.5, closed_loop=False)
+    cl = execute(p, MODEL, REAL, 2.5)
+    assert ol.arrival_error > 0.05 and cl.arrival_error < 1e-6
+    assert cl.segments[0]["applied"] == "all" and cl.segments[0]["figure_eights_left"] == 2
+    assert all(seg["mode"] == "correction" for seg in cl.segments[1:])
+    t, rates = cl.series.time, cl.series.rotor_rates
+    f = references.rotor_driven_rhs(REAL.j_xx, REAL.j_zz, REAL.rotor_inertia_axial, REAL.radius,
+                                    CubicSpline(t, rates, axis=0))
+    sol = solve_ivp(f, (t[0], t[-1]), np.zeros(5), method="DOP853", rtol=1e-11, atol=1e-14)
+    assert np.abs(sol.y[:, -1] - np.array(cl.final)).max() < 1e-6 * REAL.radius
