@@ -142,3 +142,21 @@ def test_rotor_rates_of_every_family_drive_the_printed_equations_to_the_end(name
     assert np.hypot(final[0] / R - end[0], final[1] / R - end[1]) < 1e-6
     assert abs(references.wrap(final[2] - end[2])) < 1e-6
     assert np.abs(final[3:]).max() < 1e-6
+
+
+@pytest.mark.parametrize("name, a, b", (("triangle", 0.4, 0.3), ("viviani", 0.4, 0.3)))
+def test_optimal_timing_rests_at_corners_and_nears_the_cauchy_schwarz_bound(name, a, b):
+    """The int|omega|^2-optimal rest-to-rest timing of a path with corners (it refused them before): at rest at
+    every corner (the typed polygon's vertices; the Viviani eight's unequal lobes), and its cost, measured on the
+    exact path, between the bound (int |W| ds)^2 / T of every timing and 3 % above it (N = 300)."""
+    from rollplan.execution.optimal_timing import optimal_timing, timed_samples, timing_bound
+    from rollplan.measures import measure
+
+    path = _path(name, a, b)
+    prof = optimal_timing(path, 2.0, "angular_velocity", 300)
+    corners = _vertices(name, a, b)[0] if name == "triangle" else path.joints
+    peak = np.abs(prof.evaluate(np.linspace(0.0, 2.0, 2001))[1]).max()
+    assert np.abs(_speed_where(prof, corners)).max() < 1e-6 * peak   # sqrt(2 s'' ds) of the bisection
+    cost = measure(timed_samples(path, prof))["angular_velocity"]
+    bound = timing_bound(path, 2.0, "angular_velocity")
+    assert bound <= cost <= 1.03 * bound

@@ -385,6 +385,18 @@ class ContactPath:
             angles[rows] = x[:, 3:5]
         return PathSample(s, seg, W, G, A, B, state, angles)
 
+    def stretches(self) -> list:
+        """The path cut at its corners: one :class:`ContactPath` per stretch between corners (the path itself
+        when it has none), each starting at the state where the previous one ends."""
+        cuts = [0, *(np.nonzero(self.corners)[0] + 1), len(self.pieces)]
+        if len(cuts) == 2:
+            return [self]
+        out = []
+        for i, j in zip(cuts[:-1], cuts[1:]):
+            start = self._x0[i, :3] + np.array([0.0, 0.0, 2 * np.pi * self._turns])
+            out.append(ContactPath(self.pieces[i:j], self.robot, start))
+        return out
+
     def continuous_passages(self) -> np.ndarray:
         """For every joint: can a motion pass it at a speed ``s' > 0`` with both torques continuous?
 
