@@ -373,3 +373,22 @@ def test_multistart_corrects_only_the_best_start_and_keeps_the_best_certified_op
     brute = [measure(planner.finish(nlp).motion)["angular_velocity"] for planner, nlp in solved]
     assert c.collocation.costs["angular_velocity"] == pytest.approx(min(brute), rel=1e-12)
     assert c.result.stats.details["nlp_objective"] == min(nlp.objective for _, nlp in solved)
+
+
+@pytest.mark.slow
+def test_cli_compare_curve_times_the_familys_plan(tmp_path, capsys):
+    """compare --curve viviani: the GP side is the Viviani plan (its figure eight integrated by DOP853 along the
+    typed lobes, printed (28)-(30), lands on the target) timed over the horizon; JSON and summary name the family."""
+    js = tmp_path / "c.json"
+    rc = main(["compare", "--to", "0.5", "0.3", "--psi", "0.4", "--k", "2.5", "--intervals", "20",
+               "--branches", "1", "--curve", "viviani", "--json", str(js)])
+    assert rc == 0, capsys.readouterr().err
+    assert "curve viviani" in capsys.readouterr().out
+    d = json.loads(js.read_text())
+    fe = d["details"]["geometric_phase"]["figure_eight"]
+    assert fe["curve"] == "viviani"
+    end = references.family_trace("viviani", fe["a"], fe["b"], 2.5, fe["gamma"])
+    assert end[:2] == pytest.approx([0.5, 0.3], abs=1e-9)
+    assert (end[2] - 0.4) / (2 * math.pi) == pytest.approx(round((end[2] - 0.4) / (2 * math.pi)), abs=1e-9)
+    tr = d["geometric_phase"]["trajectory"]
+    assert tr["u_a"][-1] == pytest.approx(0.5, abs=1e-6) and tr["v_a"][-1] == pytest.approx(0.3, abs=1e-6)
