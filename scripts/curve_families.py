@@ -31,6 +31,7 @@ import datetime
 import math
 import sys
 import time
+import warnings
 from dataclasses import replace
 from pathlib import Path
 
@@ -157,7 +158,9 @@ class FamilySearch:
                     return np.full(3, 1e3)
                 return self.final(z[0], z[1], z[2], n) - want
 
-            z = fsolve(eqs, [a, b, gamma], xtol=1e-14)   # "no progress" at rounding level is fine: certified below
+            with warnings.catch_warnings():   # "no progress" at rounding level is fine: certified below
+                warnings.simplefilter("ignore", RuntimeWarning)
+                z = fsolve(eqs, [a, b, gamma], xtol=1e-14)
             if not (0 < z[0] <= A_MAX and 0 < z[1] <= A_MAX):
                 continue
             pieces = figure_eight_pieces(z[0], z[1], z[2], n, family=self.name)
@@ -172,19 +175,19 @@ _SEARCHES: dict = {}
 
 
 def shortest_plan(name, target, n, robot):
-    """``(pieces, a, b, source, residual)`` of a family's shortest plan (units of R)."""
+    """``(pieces, a, b, gamma, source, residual)`` of a family's shortest plan (units of R)."""
     R = robot.radius
     try:
         p = rollplan.plan(tuple(np.multiply(target, (R, R, 1.0))), n, robot=robot, curve=name)
-        return list(p.pieces), p.a / R, p.b / R, "planner", p.residual
+        return list(p.pieces), p.a / R, p.b / R, p.gamma, "planner", p.residual
     except InputError as exc:
         if "not allowed for planning yet" not in str(exc):
             raise
     key = (name, robot.k)
     if key not in _SEARCHES:
         _SEARCHES[key] = FamilySearch(name, robot.k)
-    pieces, a, b, _, _, res = _SEARCHES[key].solve(target, n)
-    return pieces, a, b, "search", res
+    pieces, a, b, gamma, _, res = _SEARCHES[key].solve(target, n)
+    return pieces, a, b, gamma, "search", res
 
 
 def measure_plan(pieces, robot):
@@ -204,12 +207,12 @@ def row(target, n, k):
     for name in families.FAMILIES:
         t0 = time.perf_counter()
         try:
-            pieces, a, b, source, res = shortest_plan(name, target, n, robot)
+            pieces, a, b, gamma, source, res = shortest_plan(name, target, n, robot)
         except (NoPlanError, InputError) as exc:
             out["families"][name] = {"error": str(exc).splitlines()[0]}
             continue
         m = measure_plan(pieces, robot)
-        out["families"][name] = {"a": a, "b": b, "source": source, "residual": res, **m,
+        out["families"][name] = {"a": a, "b": b, "gamma": gamma, "source": source, "residual": res, **m,
                                  "time_s": time.perf_counter() - t0}
     return out
 
