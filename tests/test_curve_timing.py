@@ -160,3 +160,20 @@ def test_optimal_timing_rests_at_corners_and_nears_the_cauchy_schwarz_bound(name
     cost = measure(timed_samples(path, prof))["angular_velocity"]
     bound = timing_bound(path, 2.0, "angular_velocity")
     assert bound <= cost <= 1.03 * bound
+
+
+@pytest.mark.slow
+def test_a_viviani_plan_runs_nonstop_and_its_rates_land_on_the_goal():
+    """A plan of the public planner with curve viviani and psi = 0 (equal lobes): timed by nonstop-min-jerk its
+    torques never step (no listed break), and its rotor rates alone, replayed by scipy on the printed equations,
+    land on the plan's goal (1e-6 R)."""
+    from rollplan.execution.actuation import actuate, torque_breaks
+
+    p = rollplan.plan((0.0, 0.08, 0.0), 1, robot=ROBOT, curve="viviani")
+    assert p.curve == "viviani" and p.a == pytest.approx(p.b, rel=1e-9)
+    m = actuate(p, ROBOT, None, 4, "nonstop-min-jerk")
+    assert torque_breaks(m)[0].size == 0 and m.rest_indices.tolist() == [0, m.series.time.size - 1]
+    keys = ("radius", "mass_total", "mass_shell", "rotor_inertia_axial", "rotor_inertia_transverse")
+    final = references.rotor_drive({k: getattr(ROBOT, k) for k in keys}, m.series.time, m.series.rotor_rates)[-1]
+    g, R = p.goal, ROBOT.radius
+    assert np.hypot(final[0] - g.u_a, final[1] - g.v_a) / R < 1e-6 and abs(references.wrap(final[2] - g.psi)) < 1e-6
