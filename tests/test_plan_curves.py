@@ -21,7 +21,7 @@ from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search
 import references
 
 #: The families the C search plans with (beside the circles).
-PLANNED = ("viviani",)
+PLANNED = ("viviani", "triangle", "square")
 
 
 def _require_library(curve):
@@ -48,7 +48,7 @@ def test_the_curve_option_is_validated(options, needle):
 
 @pytest.mark.parametrize("curve, goal, k, needle", [
     ("viviani", (0.0, 1.0, 0.0), 0.3, "k = 0.3"),                       # E not monotone below k = 1/2
-    ("triangle", (0.0, 1.0, 0.0), 2.5, "triangle"),                     # not planned yet
+    ("triangle", (0.0, 1.0, 0.0), 0.49, "k = 0.49"),
     ("viviani", (0.0, 1.0, 0.0, 0.2, 0.0), 2.5, "one leg"),             # goal off the pole: composed motions
 ])
 def test_what_a_family_does_not_plan_is_refused_in_one_line(curve, goal, k, needle):
@@ -60,8 +60,8 @@ def test_what_a_family_does_not_plan_is_refused_in_one_line(curve, goal, k, need
 def test_plan_curve_refusals_on_the_command_line(capsys):
     code, _, err = run(capsys, "plan", "--curve", "viviani", "--k", "0.2")
     assert code == 2 and one_line(err) and "k = 0.2" in err and "viviani" in err
-    code, _, err = run(capsys, "plan", "--curve", "square")
-    assert code == 2 and one_line(err) and "square" in err
+    code, _, err = run(capsys, "plan", "--curve", "square", "--from", "0", "0", "0", "0.1", "0")
+    assert code == 2 and one_line(err) and "square" in err and "one leg" in err
 
 
 def _targets(seed, count):
@@ -79,7 +79,8 @@ def _targets(seed, count):
 @pytest.mark.parametrize("curve", PLANNED)
 def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path):
     """``plan --curve --json``: the sampled contact path alone, integrated by scipy (replay, 1e-6), and the figure
-    eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9."""
+    eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9; a
+    polygon's contact path is made of great-circle arcs (each edge's samples on one great circle to 1e-9)."""
     _require_library(curve)
     landed = 0
     for i, (target, steps, k) in enumerate(_targets(26, 6)):
@@ -95,7 +96,15 @@ def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path):
         assert all(s["curve"] == f"figure_eight_{curve}" for s in d["segments"])
         assert d["certificate"]["residual"] + d["certificate"]["error_bound"] <= 1e-9
         tr = d["trajectory"]
-        x = references.replay(np.array(tr["u_o"]), np.array(tr["v_o"]), np.array(tr["segment"]), np.zeros(3), k)[-1]
+        u_o, v_o, segment = np.array(tr["u_o"]), np.array(tr["v_o"]), np.array(tr["segment"])
+        if curve in ("triangle", "square"):   # each edge's samples (and its start) on one great circle
+            pts = references.contact_point(u_o, v_o)
+            for j in range(int(segment.max()) + 1):
+                idx = np.flatnonzero(segment == j)
+                arc = pts[np.r_[idx[0] - 1, idx]]
+                normal = np.cross(arc[0], arc[-1])
+                assert np.max(np.abs(arc @ (normal / np.linalg.norm(normal)))) < 1e-9, j
+        x = references.replay(u_o, v_o, segment, np.zeros(3), k)[-1]
         assert abs(x[0] - target[0]) < 1e-6 and abs(x[1] - target[1]) < 1e-6, (target, x)
         assert abs(wrap(x[2] - target[2])) < 1e-6, (target, x)
         f = d["figure_eight"]
@@ -152,3 +161,102 @@ def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path):
         for _ in range(steps):
             x = references.family_trace(curve, float(a), float(b), k, float(gamma), x)
         assert max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2]))) < 1e-9
+
+
+def _brute_family_roots(curve, k, targets, count=240, scan=4000):
+    """Every root (m, a, b) of (32)-(33) for each target ``((u, v, psi), steps)`` with the leaves of ``curve``, by a
+    brute force independent of the planner: each leaf of a grid of about 1.5 ``count`` sizes (graded towards A_MAX)
+    integrated by DOP853 along the curve as typed in tests/references.py (``curve_leaf_end``), its turn E and
+    ``rho = Re(exp(i E / 2) d)`` splined in the size, every branch m scanned at ``scan`` points of a for sign changes of
+    ``h(a, b(a))^2 - h_m^2`` (``b(a) = E^-1(E(a) - eta_m)``, structure (i) and (iii)), each root by brentq."""
+    from scipy.interpolate import CubicSpline
+    from scipy.optimize import brentq
+
+    from rollplan.core.curves import A_MAX
+
+    # uniform in a, and in 1 / sqrt(1 - 2 a^2) towards the singular equator, where the leaf's rates grow
+    w = np.linspace(1.0, 1.0 / math.sqrt(1.0 - 2.0 * A_MAX * A_MAX), count + 1)
+    sizes = np.unique(np.r_[np.linspace(0.0, A_MAX, count // 2 + 1), np.sqrt(0.5 * (1.0 - 1.0 / w**2))])
+    sizes = sizes[np.r_[True, np.diff(sizes) > 1e-4]]
+    def leaf_end(a):
+        x = np.zeros(3)
+        for piece in references.family_leaf(curve, a):   # a polygon's edges one after the other
+            x = references.curve_leaf_end(piece, x, k, rtol=1e-12, atol=1e-14)
+        return x
+
+    ends = [np.zeros(3)] + [leaf_end(a) for a in sizes[1:]]
+    turn = np.array([x[2] for x in ends])
+    rho = np.array([(complex(x[0], x[1]) * np.exp(0.5j * x[2])).real for x in ends])
+    e_of, rho_of = CubicSpline(sizes, turn), CubicSpline(sizes, rho)
+    e_min = float(turn[-1])
+    assert np.all(np.diff(turn) < 0)   # (iv): E decreasing in the size for k >= 1/2
+    fine = np.linspace(0.0, A_MAX, 200001)
+    fine_e = e_of(fine)
+
+    def size_of(e):
+        """E^-1 on the spline: the fine table's linear inverse and two Newton steps (vectorised)."""
+        r = np.interp(-np.asarray(e, float), -fine_e, fine)
+        for _ in range(2):
+            slope = e_of(r, 1)
+            r = np.clip(np.where(slope < 0, r - (e_of(r) - e) / np.where(slope < 0, slope, -1.0), r), 0.0, A_MAX)
+        return r
+
+    out = []
+    for (u, v, psi), steps in targets:
+        psi = float(wrap(psi))
+        h_des, lam, roots = math.hypot(u, v), -e_min, []
+        m_lo, m_hi = math.ceil((-steps * lam - psi) / (2 * math.pi)), math.floor((steps * lam - psi) / (2 * math.pi))
+        for m in range(m_lo, m_hi + 1):
+            eta = (psi + 2 * math.pi * m) / steps
+            gain = abs(math.sin(steps * eta / 2) / math.sin(eta / 2)) if abs(math.sin(eta / 2)) > 1e-12 else steps
+            if gain < 1e-12:
+                continue
+            h_m = h_des / gain
+            lo_e, hi_e = max(e_min, e_min + eta), min(0.0, eta)
+            if lo_e >= hi_e:
+                continue
+            a_lo, a_hi = float(size_of(hi_e)), float(size_of(lo_e))
+
+            def g(a, eta=eta, h_m=h_m):
+                b = size_of(e_of(a) - eta)
+                ra, rb = rho_of(a), rho_of(b)
+                return ra * ra + rb * rb + 2 * ra * rb * math.cos(eta / 2) - h_m * h_m
+
+            grid = np.linspace(a_lo, a_hi, scan)
+            f = g(grid)
+            for i in np.nonzero(np.sign(f[:-1]) * np.sign(f[1:]) < 0)[0]:
+                a = brentq(lambda x: float(g(x)), grid[i], grid[i + 1], xtol=1e-14)
+                roots.append((m, a, float(size_of(e_of(a) - eta))))
+        out.append(roots)
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("curve", PLANNED)
+@pytest.mark.parametrize("k", [1.5, 6.0])
+def test_c_search_of_the_family_against_a_brute_force(curve, k):
+    """Every root of the family's C search (``plan_all``, uncertified) is one of the brute force's and none is missed
+    (to 1e-6 in a and b: the brute force's splines of 240 DOP853 leaves); its shortest plan (smallest a + b) is the
+    brute force's."""
+    _require_library(curve)
+    rng = np.random.default_rng(int(10 * k))
+    targets = []
+    for _ in range(4):
+        r, th = rng.uniform(0.05, 1.2), rng.uniform(-math.pi, math.pi)
+        targets.append(((r * math.cos(th), r * math.sin(th), rng.uniform(-math.pi, math.pi)), int(rng.integers(1, 3))))
+    brute = _brute_family_roots(curve, k, targets)
+    compared = 0
+    for ((u, v, psi), steps), want in zip(targets, brute):
+        got = [(r.m, r.a, r.b) for r in compiled_search.family_plans(u, v, float(wrap(psi)), steps, k, curve,
+                                                                       every=True, certified=False)]
+        tol = 1e-6
+        missed = [w for w in want if not any(g[0] == w[0] and abs(g[1] - w[1]) < tol and abs(g[2] - w[2]) < tol
+                                             for g in got)]
+        extra = [g for g in got if not any(g[0] == w[0] and abs(g[1] - w[1]) < tol and abs(g[2] - w[2]) < tol
+                                           for w in want)]
+        assert (missed, extra) == ([], []), ((u, v, psi), steps)
+        if want:
+            best = compiled_search.family_plans(u, v, float(wrap(psi)), steps, k, curve)[0]
+            assert best.a + best.b == pytest.approx(min(a + b for _, a, b in want), abs=1e-6)
+            compared += len(want)
+    assert compared >= 4

@@ -25,6 +25,7 @@ from ..core.c_functions import (
     DEFAULT_PREFIX,
     DEFAULT_STEPS_PER_LEAF,
     MAX_STEPS_PER_LEAF,
+    c_curve,
     certificate_functions,
     generated_functions,
     leaf_degree,
@@ -267,12 +268,11 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     """
     prefix = _check_prefix(prefix)
     real = _check_real(real)
-    if check_choice("curve", curve, families.FAMILIES) not in C_FAMILIES:
-        raise InputError(f"curve = {curve} is not allowed for the C planner yet: it serves {', '.join(C_FAMILIES)}")
+    check_choice("curve", curve, C_FAMILIES)
     out = check_folder(out, overwrite=check_flag("overwrite", overwrite))   # refused before any work
     if isinstance(steps_per_leaf, str) and steps_per_leaf == "auto":
         steps_per_leaf = auto_steps_per_leaf(k_max, curve)              # refused before anything is written
-    leaf_degree(steps_per_leaf, len(families.figure_eight(curve).pieces[0].breaks) - 1)   # refused before writing
+    leaf_degree(steps_per_leaf, len(c_curve(curve).pieces[0].breaks) - 1)   # refused before anything is written
     funcs = generated_functions(steps_per_leaf, prefix, curve)
     k_max = _check_k_max(k_max, steps_per_leaf, funcs[3], curve)       # refused before anything is written
     library = sources(prefix, steps_per_leaf, k_max, real, functions=funcs, curve=curve)

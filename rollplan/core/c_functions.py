@@ -19,6 +19,7 @@ import numpy as np
 
 from ..errors import InputError, OutputError
 from . import families, model
+from .curves import Curve, Piece
 from .integrate import (
     DOP853_C,
     check_heading_structure,
@@ -33,6 +34,9 @@ from .rewrite import algebraic
 
 __all__ = [
     "PHASE",
+    "POLYGON_PANELS",
+    "half_angle_leaf",
+    "c_curve",
     "DEFAULT_STEPS_PER_LEAF",
     "DEFAULT_PREFIX",
     "MAX_STEPS_PER_LEAF",
@@ -156,7 +160,7 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
         (column-major). It is assembled by the chain rule from the leaves'
         Jacobians, so each leaf is differentiated in its own radius only.
     """
-    curve = families.figure_eight(curve)
+    curve = c_curve(curve)
     degree = leaf_degree(steps_per_leaf, len(curve.pieces[0].breaks) - 1)
     ab, k = ca.MX.sym("ab", 2), ca.MX.sym("k")
     x = ca.MX.zeros(3)
@@ -176,19 +180,70 @@ def step_functions(steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = D
 
 
 #: The C certificate's phase of each leaf family: its generated right sides take cos and sin of ``PHASE * phi``
-#: (the Viviani lobe has ``sin(phi / 2)``: it is written in the half angle).
-PHASE = {"circles": 1.0, "viviani": 0.5}
+#: (the Viviani lobe has ``sin(phi / 2)``, a polygon leaf is one piece in the half angle: :func:`half_angle_leaf`).
+PHASE = {"circles": 1.0, "viviani": 0.5, "triangle": 0.5, "square": 0.5}
+#: Panels of a polygon leaf in the C planner (spread over its edges): a divisor of every automatic step-map size.
+POLYGON_PANELS = 20
+
+
+def half_angle_leaf(curve: str, t, a, side: float = 1.0):
+    """Point (3,) of the leaf of family ``curve`` (not circles) of size ``a`` on ``side`` at the half angle
+    ``t = phi / 2`` in [0, pi], written with ``cos t`` and ``sin t`` only (the C certificate's form).
+
+    Viviani: :func:`.families.viviani_point` with ``sin phi = 2 sin t cos t``, ``sin^2(phi / 2) = sin^2 t``. A
+    polygon of N edges is one piece: edge j (``cos t`` between ``cos((j + 1) pi / N)`` and ``cos(j pi / N)``) is
+    the great-circle arc ``normalize((1 - w) S_j + w S_{j+1})`` between its corners
+    (:func:`.families.polygon_vertices`),
+    ``w = (1 - (-1)^j T_N(cos t)) / 2`` (``T_N`` Chebyshev's polynomial, ``cos(N t)``): the same edges as
+    :func:`.families.figure_eight`, traced at a speed that vanishes at every corner, so the right side (28)-(30),
+    linear in the speed, is zero and continuous there whichever edge a rounded ``cos t`` selects."""
+    st, ct = ca.sin(t), ca.cos(t)
+    if curve == "viviani":
+        c = ca.sqrt(1 - a * a)
+        return ca.vertcat(2 * a * a * st * ct, side * 2 * a * c * st, -(1 - 2 * a * a * st * st))
+    corners = [ca.vertcat(*v) for v in ((0.0, 0.0, -1.0), *families.polygon_vertices(curve, a, side),
+                                        (0.0, 0.0, -1.0))]
+    n = len(corners) - 1
+    cheb = {3: 4 * ct**3 - 3 * ct, 4: 8 * ct**4 - 8 * ct**2 + 1}[n]
+
+    def edge(j):
+        w = (1 - (-1) ** j * cheb) / 2
+        q = (1 - w) * corners[j] + w * corners[j + 1]
+        return q / ca.norm_2(q)
+
+    point = edge(n - 1)
+    for j in reversed(range(n - 1)):
+        point = ca.if_else(ct > np.cos((j + 1) * np.pi / n), edge(j), point)
+    return point
+
+
+def c_curve(curve: str):
+    """The figure eight of family ``curve`` as the C planner integrates it, one piece per leaf (parameters
+    ``(a, b)``, phi in [0, 2 pi]): the circles' and the Viviani lobes' of :func:`.families.figure_eight`; a polygon's
+    edges as one piece (:func:`half_angle_leaf` at ``t = phi / 2``), :data:`POLYGON_PANELS` panels spread over the
+    edges, graded towards the corners."""
+    if curve in ("circles", "viviani"):
+        return families.figure_eight(curve)
+    edges = families.pieces_per_leaf(curve)
+    breaks = [0.0]
+    for j in range(edges):
+        panels = POLYGON_PANELS // edges + (j < POLYGON_PANELS % edges)
+        tau = 0.5 * (1 - np.cos(np.pi * np.arange(1, panels + 1) / panels))
+        breaks += list(2 * (j + tau) * np.pi / edges)
+    breaks[-1] = 2 * np.pi
+
+    def leaf(index, side):
+        return Piece(lambda phi, p: half_angle_leaf(curve, phi / 2, p[index], side), tuple(breaks),
+                              lambda p: families.leaf_length(curve, float(np.atleast_1d(p)[index])))
+
+    return Curve(pieces=(leaf(0, 1.0), leaf(1, -1.0)), param_names=("a", "b"))
 
 
 def _half_angle_rhs(curve, index: int) -> ca.Function:
-    """(28)-(30) along leaf ``index`` of the Viviani figure eight per unit phi, as a function of the half angle
-    ``t = phi / 2``: the lobe written in ``cos t``, ``sin t`` (:func:`.families.viviani_point` with
-    ``sin phi = 2 sin t cos t``, ``sin^2(phi / 2) = sin^2 t``), its rates in t halved."""
+    """(28)-(30) along leaf ``index`` of the figure eight of family ``curve`` per unit phi, as a function of the
+    half angle ``t = phi / 2`` (:func:`half_angle_leaf`): its rates in t halved."""
     t, params, k, gamma, x = ca.SX.sym("phi"), ca.SX.sym("p", 2), ca.SX.sym("k"), ca.SX.sym("gamma"), ca.SX.sym("x", 3)
-    a, side = params[index], (1.0, -1.0)[index]
-    c = ca.sqrt(1 - a * a)
-    st, ct = ca.sin(t), ca.cos(t)
-    point = model.rot_z(gamma) @ ca.vertcat(2 * a * a * st * ct, side * 2 * a * c * st, -(1 - 2 * a * a * st * st))
+    point = model.rot_z(gamma) @ half_angle_leaf(curve, t, params[index], (1.0, -1.0)[index])
     rhs, psi = model.curve_rhs(point, t, k)
     rhs = 0.5 * ca.substitute(rhs, psi, x[2])
     return ca.Function(f"rhs{index}", [t, x, params, k, gamma], [rhs], ["phi", "x", "p", "k", "gamma"], ["xdot"])
@@ -215,9 +270,8 @@ def certificate_functions(prefix: str = DEFAULT_PREFIX, curve: str = "circles") 
     relies on, no quadrature), so its result is independent of the planner's. The functions are written in
     :func:`algebraic` form (no trigonometric function of an inverse trigonometric result).
     """
-    half = PHASE[curve] != 1.0
-    curve = families.figure_eight(curve)
-    rhs = [_half_angle_rhs(curve, i) if half else piece_rhs(curve, i) for i in range(len(curve.pieces))]
+    rhs = [_half_angle_rhs(curve, i) if PHASE[curve] != 1.0 else piece_rhs(families.figure_eight(curve), i)
+           for i in range(2)]
     named = [algebraic(ca.Function(f"{prefix}_rhs{i}", f.sx_in(), f.call(f.sx_in()), f.name_in(), f.name_out()))
              for i, f in enumerate(rhs)]
     steps = []
@@ -250,7 +304,7 @@ def motion_functions(prefix: str = DEFAULT_PREFIX, curve: str = "circles") -> li
         then ``<prefix>_rk8x_<i>(x[5], t, h, p[2], k, gamma, jxx, jzz, jr) -> x_next[5]``, one RK8 step of it.
         All in :func:`algebraic` form.
     """
-    curve = families.figure_eight(curve)
+    curve = c_curve(curve)
     pieces, steps = [], []
     for i in range(len(curve.pieces)):
         f = curve_piece_function(curve, i)

@@ -50,9 +50,12 @@
 #define CERT_BASE RP_CERT_BASE
 #define CERT_SAFETY RP_CERT_SAFETY
 #define NPANEL RP_NPANEL                /* panels of each leaf (the curve's) */
-#define FAMILY RP_FAMILY                /* leaf family of this generation: 0 circles (35), 1 the Viviani lobes */
+#define FAMILY RP_FAMILY                /* leaf family of this generation (c_sources.C_FAMILIES): 0 circles (35),
+                                           1 the Viviani lobes, 2 the geodesic triangles, 3 the geodesic squares */
 #define FAMILY_CIRCLES 0
 #define FAMILY_VIVIANI 1
+#define FAMILY_TRIANGLE 2
+#define FAMILY_SQUARE 3
 #define PHASE RP_PHASE                  /* the certificate's right sides take cos and sin of PHASE phi */
 #define FAMILY_MULT RP_FAMILY_MULT      /* a family's leaf map integrates the leaf with this many times the
                                            certificate's RK8 steps */
@@ -344,11 +347,71 @@ static casadi_real viviani_turn(casadi_real r, casadi_real k, casadi_real *dr) {
     return RP_R(4.0) * RP_ASIN(r) - RP_R(4.0) * r * c - k * (RP_R(2.0) * sq2 * c / s * at - RP_R(4.0) * r * c);
 }
 
+/* Unit vector at polar distance sigma from the south pole in the direction beta from +y towards +x. */
+static void polar(casadi_real sigma, casadi_real beta, casadi_real p[3]) {
+    p[0] = RP_SIN(sigma) * RP_SIN(beta);
+    p[1] = RP_SIN(sigma) * RP_COS(beta);
+    p[2] = -RP_COS(sigma);
+}
+
+/* One edge's part of the turn of a polygon leaf (families._edge_terms): on the great circle whose nearest point to
+ * the pole is at distance p in direction theta_n, [x - asin(cos p sin x) - k tan p asinh(sin p tan x)] between the
+ * edge's end directions x (from theta_n). */
+static casadi_real edge_term(const casadi_real a[3], const casadi_real b[3], casadi_real k) {
+    casadi_real n[3], nh, tp, sp, cp, th, x, y, q, out = RP_R(0.0);
+    int i;
+    n[0] = a[1] * b[2] - a[2] * b[1];
+    n[1] = a[2] * b[0] - a[0] * b[2];
+    n[2] = a[0] * b[1] - a[1] * b[0];
+    if (n[2] < RP_R(0.0)) for (i = 0; i < 3; ++i) n[i] = -n[i];
+    nh = RP_HYPOT(n[0], n[1]);
+    tp = n[2] / nh;
+    cp = RP_R(1.0) / RP_SQRT(RP_R(1.0) + tp * tp);
+    sp = tp * cp;
+    th = RP_ATAN2(n[1], n[0]);
+    for (i = 0; i < 2; ++i) {
+        x = wrap(RP_ATAN2(i ? b[1] : a[1], i ? b[0] : a[0]) - th);
+        y = sp * RP_TAN(x);
+        q = RP_LOG(RP_FABS(y) + RP_SQRT(RP_R(1.0) + y * y));          /* asinh |y| */
+        q = x - RP_ASIN(cp * RP_SIN(x)) - k * tp * (y < RP_R(0.0) ? -q : q);
+        out += i ? q : -q;
+    }
+    return out;
+}
+
+/* Turn E(r, k) of the polygon leaf of size r (families.turn): the triangle with apex 60 degrees and legs 2 asin r, or
+ * the rhombus with 90 degrees at the pole, its far corner at 2 asin r and its side corners at atan(sqrt 2 tan(D/2));
+ * the radial edges add nothing. */
+static casadi_real polygon_turn(casadi_real r, casadi_real k) {
+    casadi_real d = RP_R(2.0) * RP_ASIN(r), v1[3], v2[3], v3[3], l;
+    if (!(r > RP_R(0.0))) return RP_R(0.0);                     /* the leaf of size 0 is the pole */
+    if (FAMILY == FAMILY_TRIANGLE) {
+        polar(d, PI / RP_R(6.0), v1);
+        polar(d, -PI / RP_R(6.0), v2);
+        return edge_term(v1, v2, k);
+    }
+    l = RP_ATAN(RP_R(1.41421356237309504880) * r / RP_SQRT(RP_R(1.0) - r * r));
+    polar(l, PI / RP_R(4.0), v1);
+    polar(d, RP_R(0.0), v2);
+    polar(l, -PI / RP_R(4.0), v3);
+    return edge_term(v1, v2, k) + edge_term(v2, v3, k);
+}
+
+/* dE/dr of a polygon leaf: the fourth-order central difference of polygon_turn with step min(1e-3, r / 4)
+ * (E is smooth in r on (0, A_MAX], even at 0). */
+static casadi_real polygon_turn_dr(casadi_real r, casadi_real k) {
+    casadi_real h = r / RP_R(4.0) < RP_R(1e-3) ? r / RP_R(4.0) : RP_R(1e-3);
+    if (!(r > RP_R(0.0))) return RP_R(0.0);
+    return (RP_R(8.0) * (polygon_turn(r + h, k) - polygon_turn(r - h, k))
+            - (polygon_turn(r + RP_R(2.0) * h, k) - polygon_turn(r - RP_R(2.0) * h, k))) / (RP_R(12.0) * h);
+}
+
 /* Turn of psi over the +y leaf, E(r, k) = 2 pi r^2 / (1 + c) - 4 pi k c r^2 / (s (1 + s)) (leafmap.turn); another
- * family's closed form (viviani_turn). */
+ * family's closed form (viviani_turn, polygon_turn). */
 static casadi_real turn(casadi_real r, casadi_real k) {
     casadi_real c, s, rho;
     if (FAMILY == FAMILY_VIVIANI) return viviani_turn(r, k, NULL);
+    if (FAMILY >= FAMILY_TRIANGLE) return polygon_turn(r, k);
     consts(r, &c, &s, &rho);
     return TWO_PI * r * r / (RP_R(1.0) + c) - RP_R(2.0) * TWO_PI * k * c * r * r / (s * (RP_R(1.0) + s));
 }
@@ -360,6 +423,7 @@ static casadi_real turn_dr(casadi_real r, casadi_real k) {
         viviani_turn(r, k, &c);
         return c;
     }
+    if (FAMILY >= FAMILY_TRIANGLE) return polygon_turn_dr(r, k);
     consts(r, &c, &s, &rho);
     return TWO_PI * r / c * (RP_R(1.0) - k * (RP_R(1.0) + RP_R(1.0) / (s * s * s)));
 }
@@ -368,6 +432,10 @@ static casadi_real turn_dr(casadi_real r, casadi_real k) {
 static casadi_real turn_and_dr(casadi_real r, casadi_real k, casadi_real *dr) {
     casadi_real c, s, rho;
     if (FAMILY == FAMILY_VIVIANI) return viviani_turn(r, k, dr);
+    if (FAMILY >= FAMILY_TRIANGLE) {
+        *dr = polygon_turn_dr(r, k);
+        return polygon_turn(r, k);
+    }
     consts(r, &c, &s, &rho);
     *dr = TWO_PI * r / c * (RP_R(1.0) - k * (RP_R(1.0) + RP_R(1.0) / (s * s * s)));
     return TWO_PI * r * r / (RP_R(1.0) + c) - RP_R(2.0) * TWO_PI * k * c * r * r / (s * (RP_R(1.0) + s));
@@ -498,7 +566,7 @@ static int family_displacement(casadi_real r, casadi_real k, casadi_real d[2], c
     for (pass = 0; pass < (dd ? 3 : 1); ++pass) {
         ab[0] = ab[1] = at[pass];
         x[0] = x[1] = x[2] = RP_R(0.0);
-        for (j = 0; j < NPANEL; ++j) {
+        for (j = 0; j < NPANEL && at[pass] > RP_R(0.0); ++j) {   /* (the leaf of size 0 stays at the pole) */
             n = FAMILY_MULT * s_counts[0][j];
             h = (s_breaks[j + 1] - s_breaks[j]) / n;
             stage_rotations(h, rot);

@@ -58,6 +58,6 @@ def register(sub) -> None:
     c.add_argument("--real", choices=("double", "float"), default="double",
                    help="C number type: float for single-precision FPUs (plans certified to 1e-4 only)")
     c.add_argument("--curve", choices=families.FAMILIES, default="circles",
-                   help="leaf family of the figure eight the C planner plans with: circles (default) or viviani "
-                        "(triangle and square are not served yet; docs/design/curve-families.md)")
+                   help="leaf family of the figure eight the C planner plans with: circles (default), viviani, "
+                        "triangle or square (docs/design/curve-families.md)")
     c.set_defaults(func=cmd_codegen)

@@ -58,8 +58,8 @@ def register(sub) -> None:
                    help="only branch M of n eta = psi + 2 pi M (one leg of figure eights)")
     p.add_argument("--method", choices=sorted(geometric.SOLVERS), default="ipopt", help="root solver")
     p.add_argument("--curve", choices=geometric.CURVE_CHOICES, default="circles",
-                   help="leaf family of the figure eight: circles (default), viviani (k >= 0.5; triangle and square "
-                        "are not planned yet), or best: the shortest certified plan over the families "
+                   help="leaf family of the figure eight: circles (default), viviani, triangle, square (these for "
+                        "k >= 0.5), or best: the shortest certified plan over the families "
                         "(docs/design/curve-families.md); other than circles, one leg from rest at the origin to a "
                         "goal at the pole")
     p.add_argument("--json", metavar="FILE", help=JSON_HELP.format("the plan"))

@@ -16,18 +16,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ...core import families
 from ...core.c_functions import (
     DEFAULT_PREFIX,
     DEFAULT_STEPS_PER_LEAF,
     MATH_FUNCTIONS,
     PHASE,
     RK8_STAGES,
+    c_curve,
     generated_functions,
     model_code,
     to_float,
 )
 from ...core.curves import A_MAX
+from ...core.families import FAMILIES
 from ...core.integrate import DOP853_C
 from ...errors import show_limit
 from ...problem import K_MIN, MAX_STEPS
@@ -61,8 +62,8 @@ CERT_BASE = 2.0
 CERT_SAFETY = 16.0
 #: Largest |psi| [rad] the C planner accepts (its reduction modulo 2 pi is exact up to it).
 PSI_MAX = 1e6
-#: The leaf families the C search serves (their index is RP_FAMILY): those with one piece per leaf.
-C_FAMILIES = ("circles", "viviani")
+#: The leaf families the C search serves, in the order of their index RP_FAMILY (every family).
+C_FAMILIES = FAMILIES
 #: A family's leaf map (other than the circles') integrates the leaf with this many times the certificate's steps.
 FAMILY_MULT = 4
 #: 2 pi to 50 digits.
@@ -133,7 +134,7 @@ def config_values(functions, steps_per_leaf: int, k_max: float, real: str, curve
     :data:`C_FAMILIES`)."""
     sizes = {name: max(int(getattr(f, name)()) for f in functions[3:])
              for name in ("sz_arg", "sz_res", "sz_iw", "sz_w")}
-    eight = families.figure_eight(curve)
+    eight = c_curve(curve)
     breaks = eight.pieces[0].breaks
     if len(eight.pieces) != 2 or any(tuple(piece.breaks) != tuple(breaks) for piece in eight.pieces):
         raise ValueError("the C certificate assumes the leaves share their panels")

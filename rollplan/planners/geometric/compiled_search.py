@@ -203,17 +203,16 @@ def all_roots(u: float, v: float, psi: float, steps: int, k: float, branch: int 
 def check_family_k(curve: str, k: float) -> None:
     """InputError unless the C search of the leaf family ``curve`` serves ``k``: the circles every k, another
     family (:data:`.c_sources.C_FAMILIES`) k >= 1/2, where its turn E is strictly decreasing in the leaf's size
-    (docs/design/curve-families.md, (iv)); the polygons are not served yet."""
+    (docs/design/curve-families.md, (iv))."""
     if curve not in C_FAMILIES:
-        raise InputError(f"curve = {curve} is not allowed for planning yet: the C search serves "
-                         f"{', '.join(C_FAMILIES)}")
+        raise InputError(f"curve = {curve!r:.40} is not allowed: choose one of {', '.join(C_FAMILIES)}")
     if curve != "circles" and not k >= K_MONOTONE:
         raise InputError(f"k = {k:g} is not allowed with curve = {curve}: it plans for k >= {K_MONOTONE:g} "
                          "(where the leaf's turn is monotone in its size); use curve = circles")
 
 
 def family_plans(u: float, v: float, psi: float, steps: int, k: float, curve: str, branch: int | None = None,
-                 every: bool = False) -> list:
+                 every: bool = False, certified: bool = True) -> list:
     """Plans for the target ``(u, v, psi)`` [R, rad] in ``steps`` figure eights of the leaf family ``curve`` at
     inertia ratio k (:func:`check_family_k`) by that family's C search, each polished on the family's leaf map and
     certified on board along the family's curve: the shortest certified one (``<prefix>_plan_with``), or with
@@ -224,7 +223,7 @@ def family_plans(u: float, v: float, psi: float, steps: int, k: float, curve: st
     lib = _library(curve)
     if branch is not None and abs(branch) > 2**31 - 1:
         return []
-    options = _Options(int(branch is not None), 0 if branch is None else int(branch), 1)
+    options = _Options(int(branch is not None), 0 if branch is None else int(branch), int(bool(certified)))
     args = (float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options))
     if not every:
         plan = _Plan()

@@ -366,9 +366,13 @@ class GeometricPhasePlanner(Method):
         return min(found, key=lambda p: p.path_length)
 
     def _solve_family(self, problem, branch, target, turns, t_start) -> Plan:
-        """A leaf family other than the circles: the C search of the family (:mod:`.compiled_search`) polishes
-        its roots on the family's leaf map and certifies them on board, shortest first; each plan it returns is
-        certified again here by CVODES along the family's curve (:class:`.certify.CvodesCertifier`)."""
+        """A leaf family other than the circles: the C search of the family (:mod:`.compiled_search`, complete
+        enumeration for k >= 1/2) polishes its roots on the family's leaf map and certifies them on board; the plan
+        is its certified root of smallest a + b (with ``all_solutions``: every certified root, sorted by contact path
+        length), each certified again here by CVODES along the family's curve (:class:`.certify.CvodesCertifier`).
+        The contact path length ``L(a) + L(b)`` of a non-circular leaf is increasing but not linear in its size, so
+        the plan of smallest a + b is the shortest contact path unless another root has nearly the same a + b
+        (docs/design/curve-families.md)."""
         k, steps = problem.k, problem.steps
         listed = family_plans(target[0], target[1], target[2], steps, k, self.family, branch, self.all_solutions)
         found, rejected = [], []
@@ -388,6 +392,7 @@ class GeometricPhasePlanner(Method):
                    "curve": self.family}
         elapsed = time.perf_counter() - t_start
         plans = [self._plan(problem, cand, replace(cand[2], time_s=elapsed, details=details)) for cand in found]
+        plans.sort(key=lambda p: p.path_length)   # every root (all_solutions): the shortest contact path first
         return replace(plans[0], alternatives=tuple(plans[1:]))
 
     def _certified_family(self, problem, r, m, target_r):
