@@ -21,13 +21,14 @@ certified by an independent CVODES integration to 1e-9); the table says which ro
 
 Run from the repository root:
 
-    python scripts/curve_families.py [--quick] [--out-dir results]
+    python scripts/curve_families.py [--quick] [--out-dir results] [--from-json results/curve_families.json]
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import math
 import sys
 import time
@@ -254,12 +255,14 @@ def to_markdown(rep) -> str:
           "Ratios to the circles' plan of the same row (geometric mean over the rows where both have a plan), and "
           "how often the family is the shortest / the fastest (least T_min) / the smoothest (least "
           "int|omega|^2):", "",
-          "| family | rows | L / circles | int\\|omega\\|^2 / circles | T_min / circles | shortest | fastest | "
-          "smoothest | non-stop with continuous torques |", "|---|---|---|---|---|---|---|---|---|"]
+          "| family | rows | L / circles | int\\|omega\\|^2 / circles | T_min / circles | peak rate / circles | "
+          "shortest | fastest | smoothest | non-stop with continuous torques |", "|" + "---|" * 10]
     for name, s in rep["summary"].items():
         L.append(f"| {name} | {s['rows']} | {_fmt(s['length'])} | {_fmt(s['omega2'])} | {_fmt(s['t_min'])} | "
-                 f"{s['shortest']} | {s['fastest']} | {s['smoothest']} | {s['nonstop']} of {s['rows']} |")
-    L += ["", "## Conclusions", "", *rep["conclusions"], ""]
+                 f"{_fmt(s['peak_rate'])} | {s['shortest']} | {s['fastest']} | {s['smoothest']} | "
+                 f"{s['nonstop']} of {s['rows']} |")
+    L += ["", "## Conclusions", "", *rep["conclusions"], "", "## Which family should a robot use, when", "",
+          *advice(rep), ""]
     src = sorted({f.get("source") for r in rep["rows"] for f in r["families"].values() if "source" in f})
     if "search" in src:
         L += ["## How the plans were found", "",
@@ -278,7 +281,7 @@ def summarise(rep):
     out = {}
     rows = rep["rows"]
     for name in families.FAMILIES:
-        ratios = {"length": [], "omega2": [], "t_min": []}
+        ratios = {"length": [], "omega2": [], "t_min": [], "peak_rate": []}
         cnt = {"rows": 0, "shortest": 0, "fastest": 0, "smoothest": 0, "nonstop": 0}
         for r in rows:
             f, c = r["families"].get(name, {}), r["families"].get("circles", {})
@@ -290,7 +293,8 @@ def summarise(rep):
             for key, col in (("shortest", "path_length"), ("fastest", "t_min"), ("smoothest", "omega2")):
                 cnt[key] += min(ok, key=lambda n: ok[n][col]) == name
             if "error" not in c and c:
-                for key, col in (("length", "path_length"), ("omega2", "omega2"), ("t_min", "t_min")):
+                for key, col in (("length", "path_length"), ("omega2", "omega2"), ("t_min", "t_min"),
+                                 ("peak_rate", "peak_rate")):
                     ratios[key].append(f[col] / c[col])
         out[name] = {**cnt, **{k: (float(np.exp(np.mean(np.log(v)))) if v else None) for k, v in ratios.items()}}
     return out
@@ -308,6 +312,9 @@ def conclude(summary) -> list:
         f"{n} {s[n]['omega2']:.3g}x" for n in order) + " the circles'.")
     order = sorted((n for n in s if s[n]["length"] is not None), key=lambda n: s[n]["length"])
     lines.append("- **Path length**: " + ", ".join(f"{n} {s[n]['length']:.3g}x" for n in order) + " the circles'.")
+    order = sorted((n for n in s if s[n]["peak_rate"] is not None), key=lambda n: s[n]["peak_rate"])
+    lines.append("- **Peak rotor rate** of the time-optimal law (the torque limit binds in every row): " + ", ".join(
+        f"{n} {s[n]['peak_rate']:.3g}x" for n in order) + " the circles'.")
     lines.append(f"- **Non-stop with continuous torques**: viviani in {s['viviani']['nonstop']} of "
                  f"{s['viviani']['rows']} rows (exactly its plans with equal lobes, a = b: one analytic curve), "
                  "never the circles (their curvature flips sign at the pole: the torques step unless the robot "
@@ -315,11 +322,61 @@ def conclude(summary) -> list:
     return lines
 
 
+def _label(r):
+    return f"({', '.join(format(v, 'g') for v in r['target'])}), n = {r['steps']}, k = {r['k']:.3g}"
+
+
+def advice(rep) -> list:
+    """The recommendation, with the rows that qualify it (from the report's numbers)."""
+    s, rows = rep["summary"], rep["rows"]
+    ok = lambda r, n: "error" not in r["families"].get(n, {"error": 1})  # noqa: E731
+    worse = [_label(r) for r in rows if ok(r, "viviani") and ok(r, "circles")
+             and r["families"]["viviani"]["t_min"] > r["families"]["circles"]["t_min"]]
+    disagree = [_label(r) for r in rows if all(ok(r, n) for n in r["families"])
+                and min(r["families"], key=lambda n: r["families"][n]["path_length"])
+                != min(r["families"], key=lambda n: r["families"][n]["t_min"])]
+    over = [f"{_label(r)} {n} ({f['peak_torque'] / BASE.max_rotor_torque - 1:.1%})" for r in rows
+            for n, f in r["families"].items() if "error" not in f
+            and f["peak_torque"] > BASE.max_rotor_torque * (1 + 1e-3)]
+    v = s["viviani"]
+    rates = ", ".join(f"{n} {s[n]['peak_rate']:.2g}x" for n in s if n != "circles" and s[n]["peak_rate"])
+    out = [f"- **Viviani lobes by default.** The shortest plan in {v['shortest']} of {v['rows']} rows, the fastest "
+           f"within the motors' limits in {v['fastest']}, the least int|omega|^2 in {v['smoothest']} "
+           f"({v['omega2']:.2g}x the circles' on average). For a target without a net turn (psi = 0, so a = b) it "
+           "is the only figure eight a robot can run without stopping and with continuous torques "
+           "(`--timing nonstop-min-jerk` or `smooth-cruise` then have no torque step at all).",
+           "- **Not always when the figure eight must turn psi.** A Viviani lobe holds little area for its size "
+           "(its turn E ~ (1 - 2k)(8/3) a^3 against pi a^2 for a circle), so a turn per step needs unequal lobes "
+           "(which meet at corners where the robot stops) or large ones (long and slow). Rows where the circles' "
+           "plan is faster: "
+           + ("; ".join(worse) if worse else "none") + ".",
+           f"- **Circles when the rotor-rate limit binds.** Their time-optimal motions need the lowest rotor rates "
+           f"(the others {rates} the "
+           "circles'): with slow motors (a small max_rotor_rate) the circles are the safe choice.",
+           f"- **Polygons for straight rolls.** Triangle and square plans are straight rolls along great circles "
+           f"(checkable with a ruler on the floor) and pass the pole without a stop, but must stop at every vertex: "
+           f"{s['triangle']['t_min']:.3g}x (triangle) and {s['square']['t_min']:.3g}x (square) the circles' "
+           "time-optimal duration. Of the two, the triangle is faster (fewer stops).",
+           "- **`--curve best` picks the shortest contact path**, which is not always the fastest motion; rows "
+           "where the shortest family is not the fastest: " + ("; ".join(disagree) if disagree else "none") + ".",
+           ]
+    if over:
+        out.append("- **A finding for the time-optimal law**: on these plans its torques, sampled densely "
+                   "(`unit_peaks`), exceed max_rotor_torque between the law's check points: " + "; ".join(over) +
+                   ". The law checks 16 points per grid interval and both sides of every joint; where the "
+                   "excess comes from was not investigated here (an issue to file).")
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the paper's case at one k (smoke test)")
     ap.add_argument("--out-dir", default="results")
+    ap.add_argument("--from-json", metavar="FILE", help="write the report and figure again from a run's JSON")
     args = ap.parse_args(argv)
+    if args.from_json:
+        rep = json.loads(Path(args.from_json).read_text())
+        return write(rep, Path(args.out_dir))
     cases = [(PAPER[0], PAPER[1], 2.5)] + [(t, n, k) for k in KS for t, n in TARGETS if (t, n) != PAPER or
                                           k != 2.5]
     if args.quick:
@@ -335,9 +392,12 @@ def main(argv=None):
     except KeyboardInterrupt:
         print("interrupted: nothing written", file=sys.stderr)
         return 130
+    return write(rep, Path(args.out_dir))
+
+
+def write(rep, out: Path) -> int:
     rep["summary"] = summarise(rep)
     rep["conclusions"] = conclude(rep["summary"])
-    out = Path(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / "curve_families.md", to_markdown(rep).encode())
     write_json(out / "curve_families.json", tagged(rep, "R"))
