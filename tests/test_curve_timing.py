@@ -177,3 +177,32 @@ def test_a_viviani_plan_runs_nonstop_and_its_rates_land_on_the_goal():
     final = references.rotor_drive({k: getattr(ROBOT, k) for k in keys}, m.series.time, m.series.rotor_rates)[-1]
     g, R = p.goal, ROBOT.radius
     assert np.hypot(final[0] - g.u_a, final[1] - g.v_a) / R < 1e-6 and abs(references.wrap(final[2] - g.psi)) < 1e-6
+
+
+def test_time_optimal_torques_at_a_corner_are_measured_on_the_side_the_robot_is_on():
+    """At rest on a corner s is flat, so times just after the rest had s at the corner to rounding and were measured
+    with the piece before's A (which jumps there) times the s'' of the piece after: unit_peaks reported 19 % over
+    the torque limit on this Viviani eight of unequal lobes. Brute force: the torques a moment (1e-7 s) before and
+    after each rest, each with its own side's coefficients, stay within the limit; so do unit_peaks and the
+    sampled motion's torques."""
+    from rollplan.execution.timing import unit_peaks
+
+    robot = replace(rollplan.Robot(radius=0.1, mass_total=0.466, mass_shell=0.4, rotor_inertia_axial=2e-4,
+                                   rotor_inertia_transverse=1.2e-4), max_rotor_rate=300.0, max_rotor_torque=0.05)
+    path = ContactPath.of_pieces(figure_eight_pieces(0.5970596258653416, 0.24846765587697633, 0.4369411340147731, 2,
+                                                     family="viviani"), robot)
+    assert path.corners.all()
+    prof = LAWS["time-optimal"].profile(path, Limits.of(robot))
+    limit = robot.max_rotor_torque
+    for sj in path.joints:
+        lo, hi = 0.0, prof.duration
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if prof.evaluate(mid)[0][0] < sj else (lo, mid)
+        for dt, side in ((-1e-7, "left"), (1e-7, "right")):
+            s, sd, sdd = prof.evaluate(hi + dt)
+            _, A, B = path.coefficients(s, side)
+            assert np.abs(A * sdd[:, None] + B * sd[:, None] ** 2).max() <= limit * (1 + 1e-4)
+    assert unit_peaks(path, prof)[1] <= limit * (1 + 1e-4)
+    m = sample_motion(path, prof, 4, per_piece=LAWS["time-optimal"].samples_per_piece)
+    assert np.abs(m.series.rotor_torques).max() <= limit * (1 + 1e-4)
