@@ -114,14 +114,15 @@ def composed_to_dict(plan, traj=None, include_alternatives=True) -> dict:
         "eights_target": {n: float(v) * (R if n != "psi" else 1.0) for n, v in zip(("u_a", "v_a", "psi"), c.target)},
         "intermediate": None if c.intermediate is None else _f(c.intermediate * [R, R, 1.0]),
         "legs": legs,
+        "base": None if getattr(c, "base", None) is None else c.base.as_dict(R),
         "segments": [dict(p.as_dict(), length=p.length * R) for p in c.pieces],
         "final": c.final.as_dict(), "residual": c.residual, "certificate": c.certificate.as_dict(),
         "path_length": c.path_length, "solver": c.stats.as_dict(),
     }
     if len(c.legs) == 1 and c.turn is None:
         leg = legs[0]
-        d.update({"figure_eight": {"a": leg["a"], "b": leg["b"], "gamma": leg["gamma"],
-                                   "curve": getattr(c.legs[0], "curve", "circles")},
+        d.update({"figure_eight": {"a": leg["a"], "b": leg["b"], "gamma": leg["gamma"]},
+                  "curve": getattr(c.legs[0], "curve", "circles"),
                   "step": {"h": leg["h"], "eta": leg["eta"]}, "branch": leg["branch"]})
     if traj is not None:
         d["trajectory"] = traj.as_dict()

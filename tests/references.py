@@ -580,12 +580,49 @@ def polar_contact(sigma, beta):
 def piece_path(piece):
     """The contact path of a piece of a composed plan and its parameter span, typed here from the piece's
     ``curve`` name, ``index``, ``params`` and ``gamma`` alone: the great circle (``"great_circle"``,
-    polar angle from params[0] to params[1], direction gamma) or a circle (35) of the figure eight
-    (``"figure_eight"``: radius params[index], side +y for index 0, -y for 1) rotated by gamma (31)."""
+    polar angle from params[0] to params[1], direction gamma), a circle (35) of the figure eight
+    (``"figure_eight"``: radius params[index], side +y for index 0, -y for 1) rotated by gamma (31), the same
+    carried to a base point (``"based_figure_eight"``, :func:`based_circle_path`) or a great-circle arc between
+    two points (``"arc"``, :func:`geodesic`)."""
     if piece.curve == "great_circle":
         return great_circle_path(piece.gamma, *piece.params), 1.0
+    if piece.curve == "based_figure_eight":   # (a, b, sigma, orientation), beta = gamma
+        a, b, sigma, orientation = piece.params
+        r, side = (a, 1.0) if piece.index == 0 else (b, -1.0)
+        return based_circle_path(r, side, sigma, orientation, piece.gamma), 2 * np.pi
+    if piece.curve == "arc":   # great-circle arc between (sigma_0, beta_0) and (sigma_1, beta_1)
+        g = geodesic(_unit_polar(*piece.params[:2]), _unit_polar(*piece.params[2:]))
+        return (lambda t: chart_rates(*g(t))), 2 * np.pi
     assert piece.curve == "figure_eight", piece.curve
     return circle_path(piece.params[piece.index], 1.0 if piece.index == 0 else -1.0, piece.gamma), 2 * np.pi
+
+
+def based_circle_path(a, side, sigma, orientation, beta, mirror=False):
+    """The circle (35) of radius a (side +1: +y, -1: -y) turned by ``orientation`` about OZ, carried by Ry(-sigma)
+    (the pole to polar angle sigma towards +x), then turned by beta about OZ: a closed contact path, t in
+    [0, 2 pi], from and to its base point. ``mirror`` reflects it in the plane y = 0."""
+    m = np.diag([1.0, -1.0 if mirror else 1.0, 1.0]) @ _rz(beta) @ _ry(-sigma)
+
+    def path(t):
+        p, dp = circle(a, t, side, orientation)
+        return chart_rates(m @ p, m @ dp)
+
+    return path
+
+
+def based_eight(a, b, sigma, orientation, beta, k, steps=1, x0=(0.0, 0.0, 0.0), mirror=False):
+    """(u_a, v_a, psi) after ``steps`` figure eights (circle a on +y, then b on -y) at the base point
+    (sigma, beta) turned by ``orientation`` (:func:`based_circle_path`), by DOP853 on (15), (16), (20)."""
+    x = np.asarray(x0, float)
+    for _ in range(steps):
+        for r, side in ((a, 1.0), (b, -1.0)):
+            x = integrate_contact_path(based_circle_path(r, side, sigma, orientation, beta, mirror), x,
+                                       (0.0, 2 * np.pi), k).y[:, -1]
+    return x
+
+
+def _unit_polar(sigma, beta):
+    return np.array([np.sin(sigma) * np.cos(beta), np.sin(sigma) * np.sin(beta), -np.cos(sigma)])
 
 
 def composed_final(pieces, start, k):

@@ -82,6 +82,7 @@ for _c in ("plan", "compare"):
     _numbers(_c, "--psi")
     _wholes(_c, "--steps", (["0"], None), (["1001"], None), ([LONG], None))
 _wholes("route", "--steps", (["0"], None), (["1001"], None))
+_cases("plan", "--base", (["middle"], None), (["x" * 500], None))
 for _c in ("plan", "route"):
     _cases(_c, "--legs", (["three"], None), (["x" * 500], None))
     _cases(_c, "--method", (["IPOPT"], None))
@@ -102,6 +103,7 @@ _cases("step", "--curve", (["hexagon"], None), (["Viviani"], None), (["x" * 500]
 _cases("atlas", "--curve", (["hexagon"], None), (["Circles"], None))
 _cases("plan", "--curve", (["hexagon"], None), (["Viviani"], None), (["x" * 500], None))
 _cases("compare", "--curve", (["hexagon"], None), (["Viviani"], None))
+_cases("codegen", "--curve", (["hexagon"], None), (["Triangle"], None))
 _cases("reproduce", "--out", (["w.csv"], "w.csv"), (["w.csv/x"], "w.csv"))
 _cases("simulate", "--robot", (["missing.toml"], "robot file"), (["bad.toml"], "robot file"))
 _cases("simulate", "--json", (["notdir/x.json"], "notdir"), (["plan.json"], "plan.json"))
@@ -364,6 +366,15 @@ def test_samples_are_checked_before_planning(tmp_path):
     naming --samples. Now a --samples too small for the plan is refused first, naming --samples."""
     code, out, err = cli(tmp_path, "plan", "--steps", "1000", "--samples", "2000", "--json", "f.json")
     assert code == 2 and one_line(err) and "--samples 2000" in err and ">= 4003" in err, err
+    assert out == "" and not (tmp_path / "f.json").exists()
+
+
+def test_samples_cover_the_pieces_of_base_any(tmp_path):
+    """With --base any a plan of one leg may have n + 1 figure eights between two rolls: 2 (n + 1) + 2 pieces,
+    more than --legs one allows at the pole; a --samples too small for it is refused before planning."""
+    code, out, err = cli(tmp_path, "plan", "--from", "0", "0", "0", "0.5", "-0.3", "--to", "0.8", "0.2", "--contact",
+                         "-0.4", "0.4", "--legs", "one", "--base", "any", "--samples", "6", "--json", "f.json")
+    assert code == 2 and one_line(err) and "--samples 6" in err and ">= 7" in err, err
     assert out == "" and not (tmp_path / "f.json").exists()
 
 

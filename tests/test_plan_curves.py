@@ -92,7 +92,7 @@ def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path):
             continue
         assert code == 0, err
         d = json.loads(out.read_text())
-        assert d["figure_eight"]["curve"] == curve
+        assert d["curve"] == curve
         assert all(s["curve"] == f"figure_eight_{curve}" for s in d["segments"])
         assert d["certificate"]["residual"] + d["certificate"]["error_bound"] <= 1e-9
         tr = d["trajectory"]

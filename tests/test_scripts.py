@@ -152,3 +152,12 @@ def test_curve_families_script_runs_and_its_plans_land(tmp_path):
     assert row["families"]["viviani"]["nonstop_continuous"] and not row["families"]["circles"]["nonstop_continuous"]
     if "search" in {f["source"] for f in row["families"].values()}:
         assert "## How the plans were found" in text
+
+
+@pytest.mark.slow
+def test_basepoint_bench_script_runs(tmp_path):
+    run_script("basepoint_bench.py", tmp_path, "--quick")
+    text = (tmp_path / "basepoint.md").read_text()
+    assert "| README example |" in text and "| random 1 |" in text and "DOP853" in text
+    rows = json.loads((tmp_path / "basepoint.json").read_text())["rows"]
+    assert all(r["any_length"] <= r["pole_length"] and r["dop853_residual"] <= 1e-9 for r in rows)

@@ -68,6 +68,9 @@ def fmt_solver(stats) -> str:
         return "none needed: the rolls alone, in closed form"
     if stats.method == "brentq":
         return f"circles of the turn by a scalar root (brentq); {stats.time_s * 1e3:.1f} ms"
+    if d.get("mode") == "based":
+        return (f"{d['screened']} base point(s) screened by the pole search, {len(d['bases'])} solved locally by "
+                f"{stats.method} ({stats.status}; not a complete search); {stats.time_s * 1e3:.1f} ms")
     parts = []
     if "branches" in d:
         parts.append(f"exact search of (32)-(33): {d['branches']} branch(es) searched, {d['roots']} root(s) "
@@ -85,7 +88,8 @@ def fmt_composed(p, unit) -> str:
     R = p.radius
     what = {"empty": "the start is the goal: no motion", "rolls": "the approach and departure rolls alone",
             "one": "one leg of figure eights", "turn": "turn in place by pairs of equal circles",
-            "two": "two legs of figure eights through an intermediate pole state"}[p.mode]
+            "two": "two legs of figure eights through an intermediate pole state",
+            "based": "one leg of figure eights at a base point off the pole, between great-circle rolls"}[p.mode]
     lines = [f"  mode          {p.mode}: {what}"]
     if p.approach is not None:
         lines.append(f"  approach      roll of {num(p.approach.sigma * R)} {unit} to the pole along the great circle "
@@ -98,6 +102,11 @@ def fmt_composed(p, unit) -> str:
         s = R / leg.radius
         lines.append(f"  leg {i}         {leg.steps} x figure eight a = {num(leg.a * s)} {unit}   b = {num(leg.b * s)} "
                      f"{unit}   gamma = {num(leg.gamma)} rad   (branch m = {leg.branch})")
+    if getattr(p, "base", None) is not None:
+        e = p.base
+        lines.append(f"  base point    {num(e.sigma)} rad from the pole (direction beta = {num(e.beta)} rad); "
+                     f"{e.steps} x figure eight a = {num(e.a * R)} {unit}   b = {num(e.b * R)} {unit}   "
+                     f"orientation = {num(e.orientation)} rad ({e.guarantee})")
     if p.turn is not None:
         tr = p.turn
         lines.append(f"  turn          {tr.steps} pair(s) of circles b = {num(tr.b * R)} {unit} "

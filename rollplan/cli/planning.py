@@ -109,7 +109,8 @@ def plan_inputs(args, inputs=(), samples=True):
     check_timing_outputs(args, inputs)
     check_steps(args.steps)
     if samples:
-        check_samples(args, most_pieces(args.legs, args.steps))
+        based = 2 * (args.steps + 1) + 2 if getattr(args, "base", "pole") == "any" else 0   # rolls, steps + 1 eights
+        check_samples(args, max(most_pieces(args.legs, args.steps), based))
     k, robot = k_or_robot(args)
     return k, _robot_for_duration(args, k, robot)
 

@@ -26,7 +26,8 @@ import numpy as np
 
 from . import model
 
-__all__ = ["A_MAX", "Piece", "Curve", "circle_point", "figure_eight", "great_circle_point", "great_circle"]
+__all__ = ["A_MAX", "Piece", "Curve", "circle_point", "figure_eight", "great_circle_point", "great_circle",
+           "polar_point", "based_figure_eight", "arc"]
 
 #: Largest admissible circle radius, in units of R (R/sqrt(2) ~ 0.7071 is singular).
 A_MAX = 0.69
@@ -117,6 +118,61 @@ def great_circle() -> Curve:
                       length=lambda p: abs(p[1] - p[0])),),
         param_names=("sigma_0", "sigma_1"),
     )
+
+
+def polar_point(sigma, beta):
+    """Point of the unit sphere at angular distance ``sigma`` from the south pole in the direction ``beta``
+    of the body x-y plane: ``(sin sigma cos beta, sin sigma sin beta, -cos sigma)``."""
+    return ca.vertcat(ca.sin(sigma) * ca.cos(beta), ca.sin(sigma) * ca.sin(beta), -ca.cos(sigma))
+
+
+def _based_circle(side):
+    def point(phi, p):   # p = (a, b, sigma, orientation); gamma (31) = beta, the direction of the base point
+        a = p[0] if side > 0 else p[1]
+        return model.rot_y(-p[2]) @ (model.rot_z(p[3]) @ circle_point(a, phi, side))
+    return point
+
+
+def based_figure_eight() -> Curve:
+    """The figure eight (a, b) turned by an orientation about its base, carried to a base point off the pole.
+
+    Parameters ``(a, b, sigma, orientation)``: the figure eight of :func:`figure_eight` rotated by the
+    orientation about OZ, then by ``sigma`` about OY so that its base (the pole) moves to the point at
+    angular distance sigma from the pole towards +x; rotated by gamma = beta about OZ (31), its base is
+    :func:`polar_point` ``(sigma, beta)``. Each leaf starts and ends at the base; ``sigma = 0`` is the
+    figure eight of :func:`figure_eight` rotated by ``beta + orientation`` (docs/design/basepoint.md).
+    """
+    return Curve(
+        pieces=(Piece(_based_circle(1.0), _CIRCLE_BREAKS, lambda p: 2.0 * np.pi * p[0]),
+                Piece(_based_circle(-1.0), _CIRCLE_BREAKS, lambda p: 2.0 * np.pi * p[1])),
+        param_names=("a", "b", "sigma", "orientation"),
+    )
+
+
+def _arc_angle(p):
+    """Angle between the ends of an :func:`arc` (numeric parameters), by atan2 (accurate for short arcs)."""
+    e0 = np.array([np.sin(p[0]) * np.cos(p[1]), np.sin(p[0]) * np.sin(p[1]), -np.cos(p[0])])
+    e1 = np.array([np.sin(p[2]) * np.cos(p[3]), np.sin(p[2]) * np.sin(p[3]), -np.cos(p[2])])
+    return float(np.arctan2(np.linalg.norm(np.cross(e0, e1)), float(e0 @ e1)))
+
+
+def _arc_point(phi, p):
+    e0, e1 = polar_point(p[0], p[1]), polar_point(p[2], p[3])
+    cross = ca.cross(e0, e1)
+    angle = ca.atan2(ca.norm_2(cross), ca.dot(e0, e1))
+    axis = cross / ca.norm_2(cross)
+    t = angle * phi / (2.0 * np.pi)
+    return ca.cos(t) * e0 + ca.sin(t) * ca.cross(axis, e0)   # e0 turned about the arc's axis (Rodrigues)
+
+
+def arc() -> Curve:
+    """The shorter arc of the great circle between two points of the sphere, traced at constant speed.
+
+    Parameters ``(sigma_0, beta_0, sigma_1, beta_1)``: the ends as :func:`polar_point`; the ends must be
+    distinct and not antipodal. Its length is the angle between them. Use gamma = 0.
+    """
+    return Curve(pieces=(Piece(_arc_point, length=_arc_angle),), param_names=("sigma_0", "beta_0", "sigma_1",
+                                                                          "beta_1"))
 
 
 def rotated_point(piece: Piece, phi, params, gamma):

@@ -24,7 +24,7 @@ import numpy as np
 
 from .. import interrupts
 from . import families, model
-from .curves import Piece, figure_eight, great_circle, rotated_point
+from .curves import Piece, arc, based_figure_eight, figure_eight, great_circle, rotated_point
 from .integrate import CvodesIntegrator
 
 __all__ = ["CURVES", "family_curve", "CurvePiece", "figure_eight_pieces", "allocate_samples", "PathIntegrator"]
@@ -36,8 +36,9 @@ def family_curve(family: str) -> str:
 
 
 #: The curves a path can be made of, by name: the figure eight of circles (35), that of each other leaf family
-#: (:func:`family_curve`, :mod:`.families`) and the great circle of a roll.
-CURVES = {"figure_eight": figure_eight(), "great_circle": great_circle(),
+#: (:func:`family_curve`, :mod:`.families`) the great circle of a roll, the figure eight at a base point and an arc.
+CURVES = {"figure_eight": figure_eight(), "great_circle": great_circle(), "based_figure_eight": based_figure_eight(),
+          "arc": arc(),
           **{family_curve(name): families.figure_eight(name) for name in families.FAMILIES if name != "circles"}}
 
 

@@ -18,7 +18,7 @@ def cmd_plan(args) -> int:
     stage(args, "plan", "planning")
     problem = Problem(goal, start=args.start, k=k, robot=robot, radius=args.radius)
     p = solve(problem, "geometric", root_solver=args.method, legs=args.legs, steps=args.steps, all_solutions=args.all,
-              branch=args.branch, curve=args.curve)
+              branch=args.branch, base=args.base, curve=args.curve)
     unit = p.problem.unit
     g = p.goal
     composed = not isinstance(p, geometric.Plan)   # the paper's one-leg plan has a summary of its own
@@ -53,6 +53,10 @@ def register(sub) -> None:
     p.add_argument("--legs", choices=geometric.LEGS, default="fallback",
                    help="figure eights: one leg, with a turn in place or two legs only where one leg has no plan "
                         "(fallback, default); also search two legs and keep the shorter (shortest); one; two")
+    p.add_argument("--base", choices=geometric.BASES, default="pole",
+                   help="where the figure eights are traced: at the south pole (pole, default); or also at base "
+                        "points between the start and goal contact points, keeping the shorter plan (any; slower: "
+                        "seconds)")
     p.add_argument("--all", action="store_true", help="also list every other verified solution branch (one leg)")
     p.add_argument("--branch", type=whole, default=None, metavar="M",
                    help="only branch M of n eta = psi + 2 pi M (one leg of figure eights)")

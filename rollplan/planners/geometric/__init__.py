@@ -6,15 +6,15 @@ Pieces: :mod:`.leafmap` (the accurate leaf map: closed-form turn, Gauss-rule dis
 constants in :mod:`.search_constants`), :mod:`.refine` (the polish: root solvers by name),
 :mod:`.certify` (independent integration of the whole motion), :mod:`.planner` (the pole-to-pole problem class
 :class:`GeometricPhasePlanner`); full reconfiguration: :mod:`.maneuvers` (approach and departure rolls),
-:mod:`.turn` (turning in place), :mod:`.legs` (two legs), :mod:`.composed` (:class:`ComposedPlanner` and
-:func:`plan`, for any start and goal), :mod:`.route`. Design: docs/design/geometric-planner.md.
+:mod:`.turn` (turning in place), :mod:`.legs` (two legs), :mod:`.basepoint` (figure eights off the pole),
+:mod:`.composed` (:class:`ComposedPlanner` and :func:`plan`, for any start and goal), :mod:`.route`.
+Design: docs/design/geometric-planner.md.
 """
 
-from .composed import LEGS, ComposedPlan, ComposedPlanner, as_composed, plan
+from .composed import BASES, LEGS, ComposedPlan, ComposedPlanner, as_composed, plan
 from .planner import CURVE_CHOICES, TOLERANCE, GeometricPhasePlanner, Plan, StepResult, default_planner, step
 from .refine import SOLVERS
 from .route import Route, plan_route
 
-__all__ = ["TOLERANCE", "CURVE_CHOICES", "SOLVERS",
-           "LEGS", "GeometricPhasePlanner", "Plan", "StepResult", "default_planner", "plan",
-           "step", "ComposedPlanner", "ComposedPlan", "as_composed", "Route", "plan_route"]
+__all__ = ["TOLERANCE", "CURVE_CHOICES", "SOLVERS", "LEGS", "BASES", "GeometricPhasePlanner", "Plan", "StepResult",
+           "default_planner", "plan", "step", "ComposedPlanner", "ComposedPlan", "as_composed", "Route", "plan_route"]

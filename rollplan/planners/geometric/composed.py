@@ -6,7 +6,8 @@ place, :mod:`.turn`; or two legs, :mod:`.legs`), and a departure roll. By the co
 :mod:`rollplan.core.plane` the figure eights must realize, from zero, ``g_F = g_A^-1 * start^-1 * goal * g_B^-1``
 (F), with ``g_A``, ``g_B`` the rolls' closed-form elements; the whole motion is then certified by one CVODES
 integration from the start state (:func:`certify_path`). ``legs=`` (:data:`LEGS`) chooses between one and two
-legs: ``"fallback"`` (default), ``"shortest"``, ``"one"``, ``"two"``.
+legs: ``"fallback"`` (default), ``"shortest"``, ``"one"``, ``"two"``. ``base="any"`` (:data:`BASES`) also tries one leg
+of figure eights at base points off the pole (:mod:`.basepoint`) and keeps the shorter certified plan.
 
 Derivation, the singular set, the choice of the legs: docs/design/composition.md.
 """
@@ -28,17 +29,38 @@ from ...problem import Problem, State, arrival_residual, check_reach, check_step
 from ...result import DEFAULT_SAMPLES, Certificate, CertifiedMotion, SolverStats, Trajectory, certify
 from ...robot import Robot
 from ..method import Method, renamed_option, with_steps
+from .basepoint import (
+    LEAF_MIN,
+    BasedLeg,
+    arc_element,
+    arc_piece,
+    base_of,
+    beside,
+    leaf_bound,
+    move_base,
+    solve_leg,
+)
 from .legs import intermediate_state, second_leg, two_leg_candidates
 from .maneuvers import StraightRoll
 from .planner import CURVE_CHOICES, TOLERANCE, GeometricPhasePlanner, Plan, default_planner
 from .refine import SOLVERS
 from .turn import CircleTurn, turn_in_place
 
-__all__ = ["LEGS", "IDENTITY_TOL", "ComposedPlan", "ComposedPlanner", "default_composed_planner", "as_composed",
+__all__ = ["LEGS", "BASES", "BASE_FRACTIONS", "BASE_OFFSETS", "BASE_SOLVES", "BASE_MOVES", "IDENTITY_TOL",
+           "ComposedPlan", "ComposedPlanner", "default_composed_planner", "as_composed",
            "certify_path", "sample_path", "plan"]
 
 #: Policies for the legs of figure eights (docs/design/composition.md).
 LEGS = ("fallback", "shortest", "one", "two")
+#: Where the figure eights may be traced: ``"pole"`` (the south pole only) or ``"any"`` (docs/design/basepoint.md).
+BASES = ("pole", "any")
+#: Base points screened by ``base="any"`` besides the pole: fractions of the great-circle arc from the start
+#: contact point (0) to the goal contact point (1), and offsets [rad] perpendicular to it (:func:`.basepoint.beside`).
+BASE_FRACTIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
+BASE_OFFSETS = (-0.6, -0.3, 0.0, 0.3, 0.6)
+#: How many screened base points get the local solve, and how many of their solutions the moved base point.
+BASE_SOLVES = 3
+BASE_MOVES = 2
 #: A figure-eight target this close to zero (units of R and rad) is no motion at all.
 IDENTITY_TOL = 1e-12
 
@@ -142,6 +164,8 @@ class ComposedPlan(CertifiedMotion):
         Contact path length [length unit].
     alternatives : tuple of ComposedPlan
         With ``all_solutions`` and one leg: the plans through the other certified branches.
+    base : BasedLeg or None
+        Mode ``"based"``: the figure eights at their base point (:class:`.basepoint.BasedLeg`).
     """
 
     method = "geometric"
@@ -159,6 +183,7 @@ class ComposedPlan(CertifiedMotion):
     stats: SolverStats
     path_length: float
     alternatives: tuple = ()
+    base: BasedLeg | None = None
 
     @property
     def steps(self) -> int:
@@ -220,17 +245,24 @@ class ComposedPlanner(Method):
         Also return the other certified branches of one leg in ``alternatives``.
     branch : int or None
         Only the branch m of ``n eta = psi + 2 pi m`` of one leg (no fallback to two legs).
+    base : str
+        ``"pole"`` (default): figure eights at the south pole only. ``"any"``: also one leg of figure eights at
+        the base points of :data:`BASE_FRACTIONS` along the great-circle arc from the start contact point to the
+        goal contact point (local solves, :mod:`.basepoint`); the shorter certified plan is kept, so it is never
+        longer than the ``"pole"`` plan. Slower (about a second warm per plan).
     curve : str
         Leaf family of the figure eight (:data:`.planner.CURVE_CHOICES`): ``"circles"`` (the default) plans any
         start and goal; another family, or ``"best"`` (the shortest certified plan over all families), plans one leg
-        from rest at the origin to a goal at the pole (an InputError for other problems).
+        from rest at the origin to a goal at the pole with ``base="pole"`` (an InputError for other problems).
     """
 
     name = "geometric"
 
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  legs: str = "fallback", *, steps: int | None = None, all_solutions: bool = False,
-                 branch: int | None = None, method: str | None = None, curve: str = "circles") -> None:
+                 branch: int | None = None, method: str | None = None, base: str = "pole",
+                 curve: str = "circles") -> None:
+        self.base = check_choice("base", base, BASES)
         root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
         self.legs = check_choice("legs", legs, LEGS)
         check_choice(name, root_solver, SOLVERS)
@@ -268,9 +300,10 @@ class ComposedPlanner(Method):
         problem = super()._check(problem)
         problem = with_steps(problem, self.steps)
         check_reach(problem.start, problem.goal, problem.radius)
-        if self.curve != "circles" and (not _pole_to_pole(problem) or self.legs == "two"):
+        if self.curve != "circles" and (not _pole_to_pole(problem) or self.legs == "two" or self.base != "pole"):
             raise InputError(f"curve = {self.curve} plans one leg of figure eights from rest at the origin to a goal "
-                             "at the pole (legs one, fallback or shortest); use curve = circles for other problems")
+                             "at the pole (legs one, fallback or shortest; base pole); use curve = circles for other "
+                             "problems")
         return problem
 
     def _leg(self, problem: Problem, all_solutions: bool = False, branch: int | None = None):
@@ -278,6 +311,89 @@ class ComposedPlanner(Method):
         return self.planner.solve(problem, all_solutions, branch)
 
     def _solve(self, problem: Problem):
+        if self.base == "pole" or self.branch is not None:
+            return self._solve_pole(problem)
+        t0 = time.perf_counter()
+        try:
+            pole = self._solve_pole(problem)
+        except NoPlanError:
+            based = self._based(problem, t0, math.inf)
+            if based is None:
+                raise
+            return based
+        based = self._based(problem, t0, pole.path_length)
+        return based if based is not None else pole
+
+    def _based(self, problem: Problem, t0: float, bound: float) -> ComposedPlan | None:
+        """The shortest certified plan with one leg of figure eights at a base point off the pole shorter than
+        ``bound`` [length unit], or None (docs/design/basepoint.md).
+
+        Every base point of :data:`BASE_FRACTIONS` x :data:`BASE_OFFSETS` with ``steps`` and ``steps + 1``
+        figure eights is screened by the length of the pole plan for its target (the complete pole search); the
+        :data:`BASE_SOLVES` best get the local solve at that base point, the :data:`BASE_MOVES` shortest of those
+        the joint local solve that moves the base point too (:func:`.basepoint.move_base`); the results are
+        certified shortest first.
+        """
+        start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
+        k, R = problem.k, problem.radius
+        if arrival_residual(start, goal) <= IDENTITY_TOL:
+            return None
+        cs, cg = base_of(start.u_o, start.v_o), base_of(goal.u_o, goal.v_o)
+        move = relative(start[:3], goal[:3])
+        screened, seen = [], set()
+        for f in BASE_FRACTIONS:
+            for d in BASE_OFFSETS:
+                cb = beside(cs, cg, f, d)
+                key = (round(cb[0], 12), round(math.cos(cb[1]), 12), round(math.sin(cb[1]), 12))
+                if cb[0] == 0.0 or key in seen or leaf_bound(cb[0]) <= 10 * LEAF_MIN:
+                    continue
+                seen.add(key)
+                first, last = arc_piece(cs, cb, "approach"), arc_piece(cb, cg, "departure")
+                rolls = sum(p.length for p in (first, last) if p is not None)
+                if rolls * R >= bound:
+                    continue
+                target = compose(compose(inverse(arc_element(first, k)), move), inverse(arc_element(last, k)))
+                for n in (problem.steps, problem.steps + 1):
+                    try:
+                        carried = self._leg(Problem(tuple(target), k=k, steps=n))
+                    except NoPlanError:
+                        continue
+                    screened.append((rolls + carried.path_length / carried.radius, f, d, n, cb, first, last,
+                                     target, carried))
+        screened.sort(key=lambda c: c[0])
+        found, tried = [], []
+        for _, f, d, n, cb, first, last, target, carried in screened[:BASE_SOLVES]:
+            a0, b0 = carried.a / carried.radius, carried.b / carried.radius
+            guesses = [(a0, b0, carried.gamma - cb[1])] + [(a0, b0, o) for o in
+                                                           np.linspace(-math.pi, math.pi, 4, endpoint=False)]
+            leg = solve_leg(target, cb, k, n, guesses)
+            rolls = sum(p.length for p in (first, last) if p is not None)
+            tried.append({"fraction": f, "offset": d, "steps": n, "found": leg is not None})
+            if leg is not None:
+                found.append((rolls + leg.length, f, d, first, leg, last, target))
+        found.sort(key=lambda c: c[0])
+        for _, f, d, _, leg, _, target in found[:BASE_MOVES]:
+            moved = move_base(start, goal, cs, cg, k, leg)
+            if moved is not None:
+                leg, length = moved
+                first, last = arc_piece(cs, (leg.sigma, leg.beta), "approach"), arc_piece((leg.sigma, leg.beta), cg,
+                                                                                       "departure")
+                found.append((length, f, d, first, leg, last, target))
+        for length, f, d, first, leg, last, target in sorted(found, key=lambda c: c[0]):
+            if length * R >= bound:
+                break
+            pieces = tuple(p for p in [first, *leg.pieces(), last] if p is not None)
+            cert, _ = certify_path(problem, pieces, self.tol)
+            if not cert.passed:
+                continue
+            stats = SolverStats("ipopt", leg.guarantee, 0, time.perf_counter() - t0,
+                                {"mode": "based", "fraction": f, "offset": d, "screened": len(screened),
+                                 "bases": tried})
+            return ComposedPlan(problem, "based", None, None, np.asarray(target, float), (), None, None, pieces,
+                                cert, stats, sum(p.length for p in pieces) * R, base=leg)
+        return None
+
+    def _solve_pole(self, problem: Problem):
         t0 = time.perf_counter()
         all_solutions, branch = self.all_solutions, self.branch
         start, goal = _reduced(problem, "start")[0], _reduced(problem, "goal")[0]
@@ -428,14 +544,14 @@ class ComposedPlanner(Method):
 
 
 @lru_cache(maxsize=8)
-def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback") -> ComposedPlanner:
-    """The shared composed planner of :func:`plan` for a root solver and a legs policy."""
-    return ComposedPlanner(root_solver, legs=legs)
+def default_composed_planner(root_solver: str = "ipopt", legs: str = "fallback", base: str = "pole") -> ComposedPlanner:
+    """The shared composed planner of :func:`plan` for a root solver, a legs policy and a base policy."""
+    return ComposedPlanner(root_solver, legs=legs, base=base)
 
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
          all_solutions: bool = False, method: str | None = None, branch: int | None = None, start=None,
-         legs: str = "fallback", *, root_solver: str | None = None, curve: str = "circles"):
+         legs: str = "fallback", *, root_solver: str | None = None, base: str = "pole", curve: str = "circles"):
     """Plan an exact, dynamically realizable motion from ``start`` to ``target``, any two states.
 
     From rest at the origin to a goal at the south pole this is the paper's
@@ -469,6 +585,9 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
         ``"fallback"`` (default), ``"shortest"``, ``"one"`` or ``"two"`` (docs/design/composition.md).
     root_solver : str
         Root solver name from :data:`.refine.SOLVERS` (default ``"ipopt"``).
+    base : str
+        ``"pole"`` (default) or ``"any"``: also figure eights at base points off the pole, the shorter plan kept
+        (:class:`ComposedPlanner`).
     curve : str
         Leaf family of the figure eight from :data:`.planner.CURVE_CHOICES` (default ``"circles"``; see
         :class:`ComposedPlanner`).
@@ -492,8 +611,9 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     root_solver, name = renamed_option("method", method, "root_solver", root_solver, "ipopt")
     check_choice(name, root_solver, SOLVERS)
     check_choice("legs", legs, LEGS)
+    check_choice("base", base, BASES)
     problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
                       steps=steps)
     if check_choice("curve", curve, CURVE_CHOICES) != "circles":
-        return ComposedPlanner(root_solver, legs=legs, curve=curve).solve(problem, all_solutions, branch)
-    return default_composed_planner(root_solver, legs).solve(problem, all_solutions, branch)
+        return ComposedPlanner(root_solver, legs=legs, base=base, curve=curve).solve(problem, all_solutions, branch)
+    return default_composed_planner(root_solver, legs, base).solve(problem, all_solutions, branch)
