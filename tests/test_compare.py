@@ -445,3 +445,22 @@ def test_twin_solver_solves_the_same_nlp_alone_and_at_the_same_time():
     for r in out.values():
         assert r.iterations == alone.iterations and r.status == alone.status
         assert np.abs(r.x - alone.x).max() <= 1e-12
+
+
+@pytest.mark.slow
+def test_cli_compare_curve_times_the_familys_plan(tmp_path, capsys):
+    """compare --curve viviani: the GP side is the Viviani plan (its figure eight integrated by DOP853 along the
+    typed lobes, printed (28)-(30), lands on the target) timed over the horizon; JSON and summary name the family."""
+    js = tmp_path / "c.json"
+    rc = main(["compare", "--to", "0.5", "0.3", "--psi", "0.4", "--k", "2.5", "--intervals", "20",
+               "--branches", "1", "--curve", "viviani", "--json", str(js)])
+    assert rc == 0, capsys.readouterr().err
+    assert "curve viviani" in capsys.readouterr().out
+    d = json.loads(js.read_text())
+    fe = d["details"]["geometric_phase"]["figure_eight"]
+    assert fe["curve"] == "viviani"
+    end = references.family_trace("viviani", fe["a"], fe["b"], 2.5, fe["gamma"])
+    assert end[:2] == pytest.approx([0.5, 0.3], abs=1e-9)
+    assert (end[2] - 0.4) / (2 * math.pi) == pytest.approx(round((end[2] - 0.4) / (2 * math.pi)), abs=1e-9)
+    tr = d["geometric_phase"]["trajectory"]
+    assert tr["u_a"][-1] == pytest.approx(0.5, abs=1e-6) and tr["v_a"][-1] == pytest.approx(0.3, abs=1e-6)

@@ -295,3 +295,42 @@ def test_torque_closed_loop_under_noise_leaves_the_frictionless_robot_at_rest(se
     peak = np.abs(ex.series.rotor_rates).max()
     assert np.abs(ex.series.rotor_rates[ends]).max() < 1e-7 * peak
     assert all(d["friction"] == [0.0, 0.0] for d in ex.estimates[1:])
+
+
+def test_closed_loop_runs_a_viviani_plan_whole_then_corrects():
+    """A plan of Viviani lobes, closed loop: applied whole (no re-plan in another family), then corrected by
+    figure eights of circles onto the goal; its applied rates replayed by DOP853 on the printed equations."""
+    p = rollplan.plan(GOAL, 2, robot=MODEL, curve="viviani")
+    assert p.curve == "viviani"
+    ol = execute(p, MODEL, REAL, 2.5, closed_loop=False)
+    cl = execute(p, MODEL, REAL, 2.5)
+    assert ol.arrival_error > 0.05 and cl.arrival_error < 1e-6
+    assert cl.segments[0]["applied"] == "all" and cl.segments[0]["figure_eights_left"] == 2
+    assert all(seg["mode"] == "correction" for seg in cl.segments[1:])
+    t, rates = cl.series.time, cl.series.rotor_rates
+    f = references.rotor_driven_rhs(REAL.j_xx, REAL.j_zz, REAL.rotor_inertia_axial, REAL.radius,
+                                    CubicSpline(t, rates, axis=0))
+    sol = solve_ivp(f, (t[0], t[-1]), np.zeros(5), method="DOP853", rtol=1e-11, atol=1e-14)
+    assert np.abs(sol.y[:, -1] - np.array(cl.final)).max() < 1e-6 * REAL.radius
+
+
+@pytest.mark.slow
+def test_cli_closed_loop_runs_a_triangle_plan_file_whole_then_corrects(tmp_path, capsys):
+    """A plan file of geodesic triangles (an edge per segment): the closed loop cut it after its second edge, taking
+    that for the end of the first figure eight, and re-planned with circles from a state off the pole; the file's
+    motion is applied whole, then corrected onto the goal."""
+    model, real = _robot_toml(tmp_path / "model.toml", MODEL), _robot_toml(tmp_path / "real.toml", REAL)
+    f, out = str(tmp_path / "plan.json"), str(tmp_path / "cl.json")
+    assert main(["plan", "--robot", model, "--to", "0.1", "0.12", "--psi", "0.4", "--steps", "2", "--duration", "12",
+                 "--curve", "triangle", "--json", f]) == 0
+    assert main(["simulate", f, "--robot", real, "--closed-loop", "--json", out]) == 0
+    data = json.loads(Path(out).read_text())
+    assert data["segments"][0]["applied"] == "all"
+    assert all(s["mode"] == "correction" for s in data["segments"][1:])
+    assert data["arrival_error"] <= max(1e-3, 0.05 * data["open_loop_arrival_error"])
+    t, rates = np.array(data["time"]), np.array(data["rotor_rates"])
+    rhs = references.rotor_driven_rhs(REAL.j_xx, REAL.j_zz, REAL.rotor_inertia_axial, REAL.radius,
+                                      CubicSpline(t, rates, axis=0))
+    sol = solve_ivp(rhs, (t[0], t[-1]), np.zeros(5), method="DOP853", rtol=1e-11, atol=1e-14)
+    final = np.array([data["final"][n] for n in rollplan.STATE_NAMES])
+    assert np.abs(sol.y[:, -1] - final).max() < 1e-6 * REAL.radius

@@ -178,3 +178,28 @@ def test_atlas_contours_leave_the_crowded_corner_to_the_colours(atlases):
             for segs in cs.allsegs:
                 for seg in segs:
                     assert len(seg) == 0 or np.max(seg) <= limit + step   # b, a of every point of the line
+
+
+def test_curve_families_figure_draws_what_the_report_holds():
+    """Every family's value of every row is a marker of the family's colour at that value, filled exactly where the
+    report says a non-stop timing with continuous torques exists; a family without a plan draws nothing."""
+    from rollplan.plots.colors import FAMILY
+    from rollplan.plots.curve_families import plot_curve_families
+
+    def fam(x, nonstop):
+        return {"path_length": x, "omega2": 10 * x, "t_min": x / 2, "nonstop_continuous": nonstop}
+
+    report = {"rows": [{"target": [0, 1, 0], "steps": 1, "k": 2.5,
+                        "families": {"circles": fam(3.0, False), "viviani": fam(2.5, True), "triangle": fam(4.0, False),
+                                     "square": {"error": "no plan"}}},
+                       {"target": [0.5, 0.3, 0.4], "steps": 2, "k": 10.0,
+                        "families": {"circles": fam(5.0, False), "viviani": fam(6.0, False),
+                                     "triangle": fam(7.0, False), "square": fam(8.0, False)}}]}
+    fig = plot_curve_families(report)
+    for ax, key in zip(fig.axes, ("path_length", "omega2", "t_min")):
+        drawn = {(ln.get_color(), round(float(ln.get_ydata()[0]), 9), ln.get_markerfacecolor() != "white")
+                 for ln in ax.get_lines()}
+        expect = {(FAMILY[n], round(f[key], 9), f["nonstop_continuous"]) for r in report["rows"]
+                  for n, f in r["families"].items() if "error" not in f}
+        assert drawn == expect
+    assert "k=10" in fig.axes[-1].get_xticklabels()[1].get_text()

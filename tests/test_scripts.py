@@ -200,6 +200,31 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
 
 
 @pytest.mark.slow
+def test_curve_families_script_runs_and_its_plans_land(tmp_path):
+    """The study's quick run (the paper's case): every family's plan, from the planner or the script's own search,
+    lands on the target when its figure eight is integrated by DOP853 along the leaves typed in tests/references.py
+    (the printed (28)-(30)); the report names how each plan was found and what was concluded."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import references
+
+    run_script("curve_families.py", tmp_path, "--quick", timeout=1800)
+    text = (tmp_path / "curve_families.md").read_text()
+    assert "## Summary over the grid" in text and "## Conclusions" in text and "Non-stop with continuous" in text
+    assert (tmp_path / "curve_families.png").stat().st_size > 1000
+    rep = json.loads((tmp_path / "curve_families.json").read_text())
+    (row,) = rep["rows"]
+    assert set(row["families"]) == {"circles", "viviani", "triangle", "square"}
+    for name, f in row["families"].items():
+        end = references.family_trace(name, f["a"], f["b"], row["k"], f["gamma"])
+        assert abs(end[0] - 0.0) < 1e-8 and abs(end[1] - 1.0) < 1e-8, name
+        assert abs(references.wrap(end[2])) < 1e-8, name
+        assert f["source"] in ("planner", "search") and f["path_length"] > 0
+    assert row["families"]["viviani"]["nonstop_continuous"] and not row["families"]["circles"]["nonstop_continuous"]
+    if "search" in {f["source"] for f in row["families"].values()}:
+        assert "## How the plans were found" in text
+
+
+@pytest.mark.slow
 def test_basepoint_bench_script_runs(tmp_path):
     run_script("basepoint_bench.py", tmp_path, "--quick")
     text = (tmp_path / "basepoint.md").read_text()

@@ -96,7 +96,7 @@ from ..timeseries import TimeSeries
 from .limits import Limits
 from .path import ContactPath, plan_pieces
 from .plants import RotorSimulation, simulate_rotors
-from .timing import TimeLaw, TimeProfile, get_law, joint_times
+from .timing import TimeLaw, TimeProfile, get_law, joint_times, resting_sides
 
 __all__ = ["Actuation", "actuate", "sample_motion", "samples_per_piece", "certify_motion", "torque_breaks",
            "motion_samples", "TORQUE_STEP", "DEFAULT_SAMPLES",
@@ -215,6 +215,11 @@ def sample_motion(path: ContactPath, profile: TimeProfile, samples: int, goal=No
     s[0], s[-1] = 0.0, path.length
     sd[0] = sd[-1] = 0.0
     ps = path.evaluate(np.clip(s, 0.0, path.length), "left")
+    flip = resting_sides(path, ps.s, sdd)
+    if flip.any():   # at rest on a corner, leaving it: the piece after's coefficients (s'' is that piece's)
+        after = path.evaluate(ps.s[flip], "right")
+        for name in ("W", "G", "A", "B"):
+            getattr(ps, name)[flip] = getattr(after, name)
     R = path.robot.radius
     state = ps.state * np.array([R, R, 1.0, 1.0, 1.0])
     rates = ps.G * sd[:, None]

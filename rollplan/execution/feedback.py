@@ -37,6 +37,9 @@ Closed loop (``closed_loop=True``)
     n = 1 gets feedback too. :func:`execute_samples` runs the same loop from a motion given as
     samples (a plan file's: its own rates or torques first, then re-plans and corrections timed by
     the file's law); plans that are not figure eights (turns, routes) run whole, then the corrections.
+    A plan of another leaf family than the circles (``Plan.curve``; any family runs on every plant)
+    also runs whole, then the corrections: the planner plans such a family from rest at the origin
+    only, and a re-plan from a measured state would not be of that family.
 
 The estimated robot reproduces the real one exactly where the plant can tell: the rate-driven
 motion depends only on ``Jxx/J_r`` and ``Jzz/J_r`` (divide (11) by J_r), so with rates the estimate
@@ -372,7 +375,8 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
     m = _timer(timing, piece_duration, samples_per_piece)(plan, model_robot)
     first = _as_samples(m, (p.kind for p in pieces))
     return execute_samples(first, plan.problem.start, plan.goal, plan.steps, model_robot, real_robot, piece_duration,
-                           plant=plant, closed_loop=closed_loop, disturbances=disturbances,
+                           replan=getattr(plan, "curve", "circles") == "circles", plant=plant,
+                           closed_loop=closed_loop, disturbances=disturbances,
                            samples_per_piece=samples_per_piece, window=window, estimate_friction=estimate_friction,
                            rest_readings=rest_readings, servo_gain=servo_gain, mujoco_model=mujoco_model,
                            progress=progress, timing=timing, tolerance=tolerance, corrections=corrections)
@@ -411,7 +415,8 @@ def _timer(timing, piece_duration: float, samples_per_piece: int):
 
 
 def execute_samples(first: Samples, start: State, goal: State, steps: int, model_robot: Robot, real_robot: Robot,
-                    piece_duration: float, *, plant: str = "rates", closed_loop: bool = True, disturbances=(),
+                    piece_duration: float, *, replan: bool = True, plant: str = "rates", closed_loop: bool = True,
+                    disturbances=(),
                     samples_per_piece: int = DEFAULT_SAMPLES_PER_PIECE, window: int = DEFAULT_WINDOW,
                     estimate_friction: bool = True, rest_readings: int = 0, servo_gain: float = 0.0,
                     mujoco_model=None, progress=None, timing: str = "min-jerk", tolerance: float = DEFAULT_TOLERANCE,
@@ -424,8 +429,11 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
     in all); after the last, correcting motions (:func:`rollplan.plan` of one figure eight from the
     measured state to ``goal``, with the estimated robot) follow while the measured arrival error exceeds
     ``tolerance``, at most ``corrections``. Every re-plan and correction is timed by ``timing``,
-    ``piece_duration`` a piece (or the law's shortest duration within the limits, if longer). The other
-    parameters are those of :func:`execute`.
+    ``piece_duration`` a piece (or the law's shortest duration within the limits, if longer). ``replan=False``
+    applies ``first`` whole also in the closed loop, then corrects: :func:`execute` passes it for a plan of a
+    leaf family other than the circles, which plans from rest at the origin only, so a re-plan from a measured
+    state is not of that family (the corrections are figure eights of circles). The other parameters are
+    those of :func:`execute`.
     """
     from ..planners import solve
 
@@ -481,7 +489,7 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
     motion, kinds, j, mode = first, tuple(first.kinds), 0, "file"
     label = "closed loop, figure eights" if closed_loop else "open loop"
     while True:
-        cut = _first_eight_end(motion, kinds) if closed_loop and j < steps - 1 else None
+        cut = _first_eight_end(motion, kinds) if closed_loop and replan and j < steps - 1 else None
         end = motion.time.size - 1 if cut is None else cut
         estimates.append(_estimate_dict(robot_est, friction, ctl.friction_estimate))
         ctl.apply(motion, end, {"figure_eights_left": steps - j, "mode": mode, "k": robot_est.k,

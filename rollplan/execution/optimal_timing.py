@@ -26,8 +26,13 @@ Time scaling. Every cost is homogeneous in T (``s(t) = s_1(t / T)`` scales the f
 ``1 / T``, the torque energy by ``1 / T^3``), so the timing is found for T = 1 and scaled exactly
 (the NLP's tolerances then mean the same for every T).
 
-Paths with corners (where every motion must rest) are refused: the comparison times one leg of
-figure eights, whose joints are smooth.
+Corners. A path with corners (where every motion must rest: a polygon's vertices, a Viviani figure
+eight of unequal lobes) is timed stretch by stretch (:meth:`ContactPath.stretches`), each rest to
+rest. A cost homogeneous of degree p in 1/T (p = 1 for the first two costs, 3 for the torque energy)
+is ``c_i / T_i^p`` on stretch i, with ``c_i`` its optimum over a unit duration; the split of T that
+minimises the sum is ``T_i = T c_i^(1/(p+1)) / sum_j c_j^(1/(p+1))`` (Lagrange), and the total
+``(sum_i c_i^(1/(p+1)))^(p+1) / T^p``. Each stretch gets intervals in proportion to its length (at
+least 4). The bound above still holds (a rest only adds cost).
 """
 
 from __future__ import annotations
@@ -55,9 +60,6 @@ TIMING_COSTS = ("path_energy", "angular_velocity", "rotor_energy")
 def _check(path, horizon, cost):
     if not isinstance(path, ContactPath):
         raise InputError(f"path = {path!r:.60} is not allowed: give a ContactPath")
-    if np.any(path.corners):
-        raise InputError("a path with corners (where every motion must rest) is not allowed: optimal_timing "
-                         "times paths with smooth joints (one leg of figure eights)")
     return check_range("horizon", horizon, 0.0, 1e6, low_open=True)
 
 
@@ -95,20 +97,46 @@ def optimal_timing(path: ContactPath, horizon: float, cost: str, intervals: int 
     Returns
     -------
     TimeProfile
-        Piecewise quadratic ``s(t)`` on ``intervals`` equal intervals, law ``"optimal-<cost>"``.
+        Piecewise quadratic ``s(t)`` on ``intervals`` equal intervals, law ``"optimal-<cost>"``; on a path with
+        corners, on about ``intervals`` intervals, equal within each stretch (module docstring, "Corners").
 
     Raises
     ------
     InputError
-        Bad input or a path with corners.
+        Bad input.
     SolverError
         IPOPT failed.
     """
     cost = cost_key(cost, TIMING_COSTS)
     T = _check(path, horizon, cost)
-    horizon = 1.0    # solved in normalized time t / T, scaled exactly at the end (module docstring)
     N = check_whole("intervals", intervals, 2, 100000)
-    s_tab, _, ps = _table(path, check_whole("nodes", nodes, 4, 10**7))
+    nodes = check_whole("nodes", nodes, 4, 10**7)
+    parts = path.stretches()
+    if len(parts) == 1:
+        S_, V_, A_, _ = _unit_timing(path, cost, N, nodes, tol)
+        coeffs = np.column_stack([S_[:-1], V_[:-1] / T, A_ / (2 * T ** 2)])
+        return TimeProfile(np.arange(N + 1) / N * T, coeffs, f"optimal-{cost}", path.length)
+    degree = 3 if cost == "rotor_energy" else 1
+    units = [_unit_timing(q, cost, max(4, round(N * q.length / path.length)), max(4, round(nodes * q.length /
+                                                                                                path.length)), tol)
+             for q in parts]
+    weights = np.array([max(u[3], 0.0) ** (1.0 / (degree + 1)) for u in units])
+    shares = weights / weights.sum() if weights.sum() > 0 else np.array([q.length for q in parts]) / path.length
+    breaks, coeffs, t0, s0 = [], [], 0.0, 0.0
+    for (S_, V_, A_, _), share, q in zip(units, shares, parts):
+        Ti, n = T * share, A_.size
+        breaks.append(t0 + np.arange(n) / n * Ti)
+        coeffs.append(np.column_stack([s0 + S_[:-1], V_[:-1] / Ti, A_ / (2 * Ti ** 2)]))
+        t0, s0 = t0 + Ti, s0 + q.length
+    breaks = np.concatenate([*breaks, [T]])
+    return TimeProfile(breaks, np.vstack(coeffs), f"optimal-{cost}", path.length)
+
+
+def _unit_timing(path: ContactPath, cost: str, N: int, nodes: int, tol: float) -> tuple:
+    """``(S, V, A, cost)`` of the optimal rest-to-rest timing of a path without corners over a unit duration
+    on N equal intervals (nodes of s, s' and the intervals' s'')."""
+    horizon = 1.0    # solved in normalized time t / T, scaled exactly by the caller (module docstring)
+    s_tab, _, ps = _table(path, nodes)
     L, h = path.length, horizon / N
     jr = path.robot.rotor_inertia_axial
     if cost == "angular_velocity":
@@ -158,9 +186,7 @@ def optimal_timing(path: ContactPath, horizon: float, cost: str, intervals: int 
         raise SolverError(f"IPOPT did not find the optimal timing ({cost}, N = {N}): {st['return_status']}",
                           str(st["return_status"]))
     x = np.array(sol["x"]).ravel()
-    S_, V_, A_ = x[: N + 1], x[N + 1: 2 * N + 2], x[2 * N + 2:]
-    coeffs = np.column_stack([S_[:-1], V_[:-1] / T, A_ / (2 * T ** 2)])
-    return TimeProfile(np.arange(N + 1) * h * T, coeffs, f"optimal-{cost}", L)
+    return x[: N + 1], x[N + 1: 2 * N + 2], x[2 * N + 2:], float(sol["f"])
 
 
 @lru_cache(maxsize=1)

@@ -52,14 +52,28 @@ Plans of any start and goal
 ---------------------------
 A composed plan (:mod:`rollplan.planners.geometric.composed`: approach roll, figure
 eights, turns in place, legs, departure roll) and a route give their contact path as
-pieces of the named curves of :data:`rollplan.core.paths.CURVES`, each traced at
-constant speed over ``phi in [0, 2 pi]``; :meth:`ContactPath.of_plan` makes every one a
-:class:`ArcLengthPiece` with ``c_j = length_j / (2 pi)`` (the leaf radius for a circle,
-``|sigma_1 - sigma_0| / (2 pi)`` for a roll along a great circle), so s is the contact arc
-length on every piece, and starts the path at the plan's start state. The joints where a
+pieces of the named curves of :data:`rollplan.core.paths.CURVES`, each traced over
+``phi in [0, 2 pi]``; :meth:`ContactPath.of_plan` makes every one a :class:`ArcLengthPiece`
+with ``c_j = length_j / (2 pi)`` (the leaf radius for a circle, ``|sigma_1 - sigma_0| / (2 pi)``
+for a roll along a great circle), and starts the path at the plan's start state. On a piece
+traced at constant speed (circles, rolls, the edges of a geodesic polygon) s is the contact arc
+length; a Viviani lobe is not (``|p'(phi)|^2 = a^2 (1 - c^2 sin^2(phi/2))``), so there s is
+proportional to phi, equal to the arc length at the lobe's ends and over the whole path. The joints where a
 roll meets a figure eight, where the direction gamma changes between two legs or two
 circles of a turn, or where a route turns back, are corners by the test on ``W`` above:
-every law rests there. psi of the start is reduced exactly to [-pi, pi]
+every law rests there.
+
+Leaf families (:mod:`rollplan.core.families`, docs/design/curve-families.md): the vertices of a
+figure eight of geodesic polygons are declared corners (:data:`CORNER_CURVES`; the W test finds
+them too). Its pole is no corner: the edge that ends a leaf and the edge that starts the next lie
+on one great circle through the pole (the leaves' edges there point along ``+-30`` degrees (triangle)
+or ``+-45`` degrees (square) from the leaf's axis, mirrored by the next leaf), and the geodesic
+curvature is zero on both, so ``B`` is continuous too: a polygon's figure eight is straight rolls
+that stop only at the vertices. A Viviani figure eight
+of equal lobes is one analytic curve through its double point, traced by phi at the same scale on
+both lobes, so W and also B are continuous there: a non-stop law passes it with continuous
+torques. Lobes of different sizes meet at the angle ``asin a - asin b``: a corner by the W test.
+psi of the start is reduced exactly to [-pi, pi]
 (:func:`rollplan.core.plane.wrap_exact`) for the integration and the whole turns are
 added back to the states reported, so a start psi of any size costs no accuracy.
 """
@@ -74,20 +88,27 @@ import casadi as ca
 import numpy as np
 
 from .. import interrupts
+from ..core import families
 from ..core.integrate import curve_piece_function
-from ..core.paths import CURVES
+from ..core.paths import CURVES, family_curve
 from ..core.plane import wrap_exact
 from ..errors import InputError
 from ..planners.geometric.composed import as_composed
 from ..robot import Robot
 
-__all__ = ["SMOOTH_JOINT_RTOL", "curve_piece_function", "piece_function", "leaf_function", "ArcLengthPiece",
-           "PathSample", "PathGrid", "ContactPath", "plan_pieces"]
+__all__ = ["SMOOTH_JOINT_RTOL", "CORNER_CURVES", "curve_piece_function", "piece_function", "leaf_function",
+           "ArcLengthPiece", "PathSample", "PathGrid", "ContactPath", "plan_pieces", "arc_length_pieces"]
 
 #: A joint is smooth when omega per unit s' (``W``) agrees on its two sides to this fraction of its size.
 SMOOTH_JOINT_RTOL = 1e-8
 
 _CVODES = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 200000}
+
+#: Curves of :data:`rollplan.core.paths.CURVES` with vertices, and their pieces per leaf: the figure eights of the
+#: geodesic polygons. Every piece of a leaf but its first starts at a vertex (a corner); at the pole the edge
+#: that ends a leaf and the one that starts the next lie on one great circle (a smooth joint).
+CORNER_CURVES = {family_curve(name): families.pieces_per_leaf(name) for name in families.FAMILIES
+                 if families.pieces_per_leaf(name) > 1}
 
 
 @lru_cache(maxsize=16)
@@ -273,6 +294,14 @@ class ContactPath:
             raise InputError("the plan is the empty motion (its start is its goal): it has no contact path")
         return cls(pieces, robot, start)
 
+    @classmethod
+    def of_pieces(cls, pieces, robot: Robot, start=(0.0, 0.0, 0.0)) -> ContactPath:
+        """The path of a sequence of :class:`rollplan.core.paths.CurvePiece` (units of R) from ``start``
+        ``(u_a, v_a, psi)`` [R, rad], e.g. ``figure_eight_pieces(a, b, gamma, n, family=NAME)``."""
+        if not isinstance(robot, Robot):
+            raise InputError(f"robot = {robot!r:.60} is not allowed: give a rollplan.Robot")
+        return cls(arc_length_pieces(pieces), robot, start)
+
     # ------------------------------------------------------------------ internals
     def _parameters(self, piece: ArcLengthPiece) -> np.ndarray:
         r = self.robot
@@ -356,6 +385,43 @@ class ContactPath:
             angles[rows] = x[:, 3:5]
         return PathSample(s, seg, W, G, A, B, state, angles)
 
+    def stretches(self) -> list:
+        """The path cut at its corners: one :class:`ContactPath` per stretch between corners (the path itself
+        when it has none), each starting at the state where the previous one ends."""
+        cuts = [0, *(np.nonzero(self.corners)[0] + 1), len(self.pieces)]
+        if len(cuts) == 2:
+            return [self]
+        out = []
+        for i, j in zip(cuts[:-1], cuts[1:]):
+            start = self._x0[i, :3] + np.array([0.0, 0.0, 2 * np.pi * self._turns])
+            out.append(ContactPath(self.pieces[i:j], self.robot, start))
+        return out
+
+    def continuous_passages(self) -> np.ndarray:
+        """For every joint: can a motion pass it at a speed ``s' > 0`` with both torques continuous?
+
+        Not at a corner. At a smooth joint the torques ``A s'' + B s'^2`` stay continuous iff one step of s''
+        cancels the step of ``B`` for both rotors: ``A_i ds'' + dB_i s'^2 = 0``, i.e. ``dB = 0`` (to
+        :data:`SMOOTH_JOINT_RTOL` of the path's largest ``|B|``) or ``dB`` parallel to ``A``.
+        """
+        joints = self.joints
+        if not joints.size:
+            return np.zeros(0, bool)
+        left, right = self.evaluate(joints, "left"), self.evaluate(joints, "right")
+        grid = self.grid(8 * len(self.pieces))
+        scale = max(float(np.abs(grid.B_left).max()), float(np.abs(grid.B_right).max()), 1e-300)
+        dB = right.B - left.B
+        size = np.linalg.norm(dB, axis=1)
+        cross = np.abs(dB[:, 0] * left.A[:, 1] - dB[:, 1] * left.A[:, 0])
+        parallel = cross <= SMOOTH_JOINT_RTOL * size * np.linalg.norm(left.A, axis=1)
+        return ~self.corners & ((size <= SMOOTH_JOINT_RTOL * scale) | parallel)
+
+    @property
+    def nonstop_continuous(self) -> bool:
+        """A non-stop timing with continuous torques exists: no corner, and every joint passable with continuous
+        torques (:meth:`continuous_passages`; then ``nonstop-min-jerk`` is one when ``B`` is continuous)."""
+        return bool(np.all(self.continuous_passages()))
+
     def coefficients(self, s, side: str = "left"):
         """``(G, A, B)`` at the values ``s`` (see :meth:`evaluate`)."""
         ps = self.evaluate(s, side)
@@ -412,7 +478,14 @@ def plan_pieces(plan, robot: Robot) -> tuple[list, tuple]:
     if not math.isclose(plan.radius, robot.radius, rel_tol=1e-12, abs_tol=0.0):
         raise InputError(f"the plan's radius = {plan.radius!r} differs from the robot's radius = {robot.radius!r}")
     composed = as_composed(plan)
-    pieces = [ArcLengthPiece(piece_function(p.curve, p.index), tuple(float(v) for v in p.params), float(p.gamma),
-                        2 * np.pi, p.length / (2 * np.pi)) for p in composed.pieces]
     start = composed.problem.scaled(composed.problem.start)
-    return pieces, (start.u_a, start.v_a, start.psi)
+    return arc_length_pieces(composed.pieces), (start.u_a, start.v_a, start.psi)
+
+
+def arc_length_pieces(pieces) -> list:
+    """:class:`ArcLengthPiece` objects of :class:`rollplan.core.paths.CurvePiece` objects: each over
+    ``phi in [0, 2 pi]`` with the scale ``length / (2 pi)``; a piece of a polygon's figure eight
+    (:data:`CORNER_CURVES`) that starts at a vertex is declared a corner."""
+    return [ArcLengthPiece(piece_function(p.curve, p.index), tuple(float(v) for v in p.params), float(p.gamma),
+                           2 * np.pi, p.length / (2 * np.pi), p.index % CORNER_CURVES.get(p.curve, 1) != 0)
+            for p in pieces]

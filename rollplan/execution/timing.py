@@ -86,7 +86,7 @@ from .topp import GridProfile, maximum_velocity_curve, solve_topp
 
 __all__ = ["MIN_JERK", "DURATION_RANGE", "NO_LIMITS", "TOPP_INTERVALS", "CHECK_POINTS", "TimingPath", "TimeProfile",
            "TimeLaw", "ScaledLaw", "MinJerk", "NonstopMinJerk", "SmoothCruise", "TimeOptimal", "LAWS", "register",
-           "get_law", "unit_peaks", "peak_utilisation", "joint_times", "velocity_limit", "round_up"]
+           "get_law", "unit_peaks", "peak_utilisation", "joint_times", "velocity_limit", "round_up", "resting_sides"]
 
 log = logging.getLogger(__name__)
 
@@ -228,9 +228,28 @@ def _at_breaks(profile: TimeProfile, t: np.ndarray, side: str):
     return t, np.clip(k, 0, b.size - 2)
 
 
+def resting_sides(path: TimingPath, s, s_ddot, side: str = "left") -> np.ndarray:
+    """Which samples must take the path's other one-sided coefficients than ``side``: those at rest on a corner
+    (s within ``1e-12 L``, where the path takes the joint's value) that leave it (``s'' > 0``: the piece after)
+    while ``side`` is "left", or arrive (``s'' < 0``: the piece before) while it is "right".
+
+    Near a corner a resting motion's s is flat, so samples a little after the rest have s at the corner to rounding
+    and would pair the piece before's coefficients (``A`` jumps at a corner) with the s'' of the piece after."""
+    corners = np.asarray(path.starts, float)[1:-1][np.asarray(path.corners, bool)]
+    s = np.atleast_1d(np.asarray(s, float))
+    if not corners.size:
+        return np.zeros(s.size, bool)
+    near = np.abs(s[:, None] - corners[None, :]).min(axis=1) <= 1e-12 * path.length
+    return near & ((np.asarray(s_ddot) > 0) if side == "left" else (np.asarray(s_ddot) < 0))
+
+
 def _rates_torques(path: TimingPath, profile: TimeProfile, t, side: str = "left", piece=None):
     s, sd, sdd = profile.evaluate(t, piece)
-    G, A, B = path.coefficients(np.clip(s, 0.0, path.length), side)
+    s = np.clip(s, 0.0, path.length)
+    G, A, B = path.coefficients(s, side)
+    flip = resting_sides(path, s, sdd, side)
+    if flip.any():
+        G[flip], A[flip], B[flip] = path.coefficients(s[flip], "right" if side == "left" else "left")
     return G * sd[:, None], A * sdd[:, None] + B * sd[:, None] ** 2
 
 

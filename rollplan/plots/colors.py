@@ -16,6 +16,8 @@
                               slate grey, the circles of a turn in place dark khaki and violet red
 ``LAW``, ``LIMIT``            timing laws: min-jerk navy, nonstop-min-jerk teal, smooth-cruise
                               goldenrod, time-optimal black; the motors' limits dim grey
+``FAMILY``                    leaf families: circles saddle brown, viviani medium sea green,
+                              triangle steel blue, square orchid
 ============================  ===========================================================
 
 Every figure that uses a colour names it in a legend (or a colour bar for maps).
@@ -25,7 +27,7 @@ from __future__ import annotations
 
 __all__ = ["LEAF", "LEAF_LABELS", "PLANNER", "PLANNER_LABELS", "ROTOR", "ROTOR_LABELS", "AXIS_N3", "OMEGA",
            "OMEGA_LABELS", "PLANNED", "SIMULATED", "MARK", "REST",
-           "COMPUTED", "PRINTED", "PIECE", "PIECE_LABELS", "TURN", "TURN_LABELS", "LAW", "LIMIT"]
+           "COMPUTED", "PRINTED", "PIECE", "PIECE_LABELS", "TURN", "TURN_LABELS", "LAW", "LIMIT", "FAMILY"]
 
 LEAF = ("tab:red", "tab:blue")
 LEAF_LABELS = ("1st half-step (leaf a)", "2nd half-step (leaf b)")
@@ -53,3 +55,5 @@ TURN_LABELS = ("turn in place, 1st circle", "turn in place, 2nd circle")
 LAW = {"min-jerk": "navy", "nonstop-min-jerk": "teal", "smooth-cruise": "goldenrod", "time-optimal": "black"}
 #: Motor limits (dashed) and the maximum velocity curve in the timing figures.
 LIMIT = "dimgray"
+#: Leaf families of the figure eight (rollplan.core.families.FAMILIES).
+FAMILY = {"circles": "saddlebrown", "viviani": "mediumseagreen", "triangle": "steelblue", "square": "orchid"}

@@ -6,14 +6,17 @@ independent CVODES integration of (28)-(30). The targets file is read by
 :func:`rollplan.inputs.read_csv` and its numbers by
 :func:`rollplan.inputs.parse_number` (the rules of the command line). It is CSV
 with a header; columns ``u_a, v_a`` are required, ``psi`` (default 0), ``steps``
-(default 1) and ``k`` (default :data:`~rollplan.problem.DEFAULT_K`, the paper's
-case) are optional, and an empty cell takes the default too; more columns are
+(default 1), ``k`` (default :data:`~rollplan.problem.DEFAULT_K`, the paper's
+case) and ``curve`` (the leaf family of the row's figure eight, one of
+:data:`~rollplan.planners.geometric.CURVE_CHOICES`; default ``circles``) are
+optional, and an empty cell takes the default too; more columns are
 carried along. Blank lines and lines starting with ``#`` are skipped (they are
 not data rows). The output is JSON Lines, one object per row, in input order:
 
 * a plan: :func:`rollplan.io.plan_to_dict` (no trajectory, no alternatives)
-  plus ``"index"`` (0-based data row), ``"key"``, ``"input"`` (the row as
-  read), ``"status": "ok"``, and ``"version"`` and ``"units"`` (:func:`rollplan.io.tagged`);
+  plus ``"curve"`` (the plan's family; for ``best`` the one chosen), ``"index"`` (0-based data row),
+  ``"key"``, ``"input"`` (the row as read), ``"status": "ok"``, and ``"version"`` and ``"units"``
+  (:func:`rollplan.io.tagged`);
 * a failure: ``"index"``, ``"key"``, ``"input"``, ``"status": "failed"``,
   ``"error"`` (the exception's class name) and ``"reason"`` (its one-line message).
 
@@ -61,7 +64,7 @@ from ..inputs import parse_number, parse_whole, read_csv, show_path
 from ..io import plan_to_dict, tagged
 from ..outputs import LineWriter, check_writable, claim, write_atomic
 from ..planners import solve
-from ..planners.geometric import DEFAULT_ROOT_SOLVER, SOLVERS, default_planner, plan_many
+from ..planners.geometric import CURVE_CHOICES, DEFAULT_ROOT_SOLVER, SOLVERS, default_planner, plan_many
 from ..planners.method import renamed_option
 from ..problem import DEFAULT_K, Problem
 from ..progress import Progress, reporting
@@ -74,11 +77,11 @@ __all__ = ["COLUMNS", "REQUIRED", "DEFAULTS", "FSYNC_INTERVAL", "MAX_TARGETS_BYT
 log = logging.getLogger(__name__)
 
 #: Columns of a targets file, in order.
-COLUMNS = ("u_a", "v_a", "psi", "steps", "k")
+COLUMNS = ("u_a", "v_a", "psi", "steps", "k", "curve")
 #: Columns a targets file must have.
 REQUIRED = ("u_a", "v_a")
 #: Values of the optional columns when a column is missing or a cell is empty.
-DEFAULTS = {"psi": "0", "steps": "1", "k": repr(DEFAULT_K)}
+DEFAULTS = {"psi": "0", "steps": "1", "k": repr(DEFAULT_K), "curve": "circles"}
 #: Largest targets file read.
 MAX_TARGETS_BYTES = 1 << 28
 #: Seconds between two fsyncs of the output (each line reaches the file at once; fsync guards against a crash
@@ -138,7 +141,7 @@ def row_key(row: dict, root_solver: str = DEFAULT_ROOT_SOLVER, problem: str | No
 
 
 def _parse(row: dict):
-    """(target, steps, k) from a row (missing or empty optional cells take :data:`DEFAULTS`);
+    """(target, steps, k, curve) from a row (missing or empty optional cells take :data:`DEFAULTS`);
     InputError naming the bad value."""
     value = lambda name: row.get(name) or DEFAULTS.get(name)  # noqa: E731
     vals = {}
@@ -147,7 +150,8 @@ def _parse(row: dict):
             raise InputError(f"{name} is missing")
         vals[name] = parse_number(value(name), name)
     steps = parse_whole(value("steps"), "steps")
-    return (vals["u_a"], vals["v_a"], vals["psi"]), steps, vals["k"]
+    curve = check_choice("curve", value("curve"), CURVE_CHOICES)
+    return (vals["u_a"], vals["v_a"], vals["psi"]), steps, vals["k"], curve
 
 
 def plan_row(index: int, row: dict, root_solver: str = DEFAULT_ROOT_SOLVER, problem: str | None = None) -> dict:
@@ -161,9 +165,11 @@ def plan_row(index: int, row: dict, root_solver: str = DEFAULT_ROOT_SOLVER, prob
     try:
         if problem:
             raise InputError(problem)
-        target, steps, k = _parse(row)
-        p = solve(Problem(target, k=k, steps=steps), "geometric", root_solver=root_solver)
+        target, steps, k, curve = _parse(row)
+        options = {"curve": curve} if curve != "circles" else {}
+        p = solve(Problem(target, k=k, steps=steps), "geometric", root_solver=root_solver, **options)
         out = plan_to_dict(p, None, include_alternatives=False)
+        out = {"curve": getattr(p, "curve", "circles"), **out}
         return tagged({**head, **out, "input": row, "status": "ok"}, p.problem.unit)
     except (InputError, NoPlanError, SolverError) as exc:
         return _failed(head, row, exc)
@@ -216,9 +222,11 @@ def _plan_task(jobs) -> list:
             for j, (_, row, _, problem) in enumerate(jobs):
                 if not problem:
                     try:
-                        target, steps, k = _parse(row)
+                        target, steps, k, curve = _parse(row)
                     except InputError:
                         continue
+                    if curve != "circles":
+                        continue   # another leaf family: row by row
                     groups.setdefault((k, steps), []).append((j, target))
             for (k, steps), members in groups.items():
                 try:
@@ -230,8 +238,8 @@ def _plan_task(jobs) -> list:
                     index, row, root_solver, problem = jobs[j]
                     p = found.plan(int(i))
                     head = {"index": index, "key": row_key(row, root_solver, problem)}
-                    lines[j] = tagged({**head, **plan_to_dict(p, None, include_alternatives=False), "input": row,
-                                       "status": "ok"}, p.problem.unit)
+                    lines[j] = tagged({**head, "curve": "circles", **plan_to_dict(p, None, include_alternatives=False),
+                                       "input": row, "status": "ok"}, p.problem.unit)
         return [d if d is not None else plan_row(*job) for d, job in zip(lines, jobs)]
 
 

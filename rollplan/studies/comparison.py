@@ -41,7 +41,7 @@ from functools import partial
 import numpy as np
 
 from .. import interrupts
-from ..errors import InputError, NoPlanError, SolverError, check_range, check_whole
+from ..errors import InputError, NoPlanError, SolverError, check_choice, check_range, check_whole
 from ..execution.actuation import actuate
 from ..execution.optimal_timing import contact_rates, optimal_timing, timed_samples, timing_bound
 from ..execution.path import ContactPath
@@ -56,7 +56,7 @@ from ..planners.collocation.rest import (
     naive_guess,
 )
 from ..planners.collocation.transcription import Guess
-from ..planners.geometric import Plan
+from ..planners.geometric import CURVE_CHOICES, Plan
 from ..problem import K_MAX, Problem
 from ..progress import report
 from ..robot import Robot
@@ -211,12 +211,14 @@ def _planner(intervals, degree, scheme, cost, contact_bound) -> RestToRestPlanne
     return METHODS["rest_to_rest"](**_nlp_options(intervals, degree, scheme, cost, contact_bound)).planner
 
 
-def _branches(problem: Problem, robot: Robot, contact_bound: float, wanted: int) -> list:
+def _branches(problem: Problem, robot: Robot, contact_bound: float, wanted: int, curve: str = "circles") -> list:
     """Up to ``wanted`` certified GP branches of one leg whose leaves stay within the bound: the planner's
-    (the shortest), then its neighbours ``m +- 1, m +- 2, ...`` (at most ``2 wanted + 2`` branches tried)."""
+    (the shortest), then its neighbours ``m +- 1, m +- 2, ...`` (at most ``2 wanted + 2`` branches tried), of the
+    leaf family ``curve`` (for ``best``: the branches of the family of the shortest plan)."""
     amax = leaf_radius_bound(contact_bound) * problem.radius
     gp_problem = Problem(problem.goal, robot=robot, radius=problem.radius, steps=problem.steps)
-    gp_plan = lambda **kw: solve(gp_problem, "geometric", legs="one", **kw)  # noqa: E731
+    options = {} if curve == "circles" else {"curve": curve}
+    gp_plan = lambda **kw: solve(gp_problem, "geometric", legs="one", **{**options, **kw})  # noqa: E731
     try:
         first = gp_plan()
     except NoPlanError as exc:
@@ -226,6 +228,8 @@ def _branches(problem: Problem, robot: Robot, contact_bound: float, wanted: int)
                           f"{'the start itself' if not first.pieces else 'a ' + first.mode + ' motion'}); "
                           "the comparison needs one")
     found = [first]
+    if curve == "best":
+        options = {"curve": first.curve}
     for d in range(1, wanted + 2):
         for m in (first.branch - d, first.branch + d):
             try:
@@ -273,7 +277,7 @@ def _turns(p, problem: Problem) -> int:
 
 
 def branch_guess(problem: Problem, planner: RestToRestPlanner, horizon: float = 1.0,
-                 robot: Robot | None = None) -> tuple[Guess, int]:
+                 robot: Robot | None = None, curve: str = "circles") -> tuple[Guess, int]:
     """The warm start ``gp0:m`` of :func:`compare` for ``planner``: the shortest GP branch within its contact
     bound, timed by the rest-to-rest timing of its cost, as a guess of its transcription; and m.
 
@@ -282,7 +286,7 @@ def branch_guess(problem: Problem, planner: RestToRestPlanner, horizon: float = 
     InputError, NoPlanError
     """
     rob = _robot(problem, robot)
-    p = _branches(problem, rob, planner.contact_bound, 1)[0]
+    p = _branches(problem, rob, planner.contact_bound, 1, check_choice("curve", curve, CURVE_CHOICES))[0]
     _, motion = _timed(p, rob, horizon, planner)
     m = _turns(p, problem)
     return guess_from_samples(planner.transcription, *_warm_samples(motion, problem.radius), f"gp0:{m}"), m
@@ -292,7 +296,7 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
             radius: float | None = None, horizon: float = 1.0, cost: str = "angular_velocity",
             intervals: int = 100, degree: int = 3, scheme: str = "legendre",
             contact_bound: float = CONTACT_BOUND, branches: int = 2, naive: bool = True,
-            workers: int | None = None) -> Comparison:
+            workers: int | None = None, curve: str = "circles") -> Comparison:
     """Solve one problem by both methods, fairly (module docstring), and measure both.
 
     Parameters
@@ -319,6 +323,9 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     workers : int or None
         Starts solved at the same time, each worker with its own IPOPT solver of the one NLP (None:
         :func:`multistart_workers`).
+    curve : str
+        Leaf family of the GP plan (:data:`rollplan.planners.geometric.CURVE_CHOICES`; ``best``: the family of the
+        shortest plan). Its timing rests at the path's corners (a polygon's vertices).
 
     Raises
     ------
@@ -339,11 +346,12 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     horizon = check_horizon(horizon)
     branches = check_whole("branches", branches, 1, 100)
     workers = multistart_workers() if workers is None else check_whole("workers", workers, 1, 64)
+    curve = check_choice("curve", curve, CURVE_CHOICES)
     rob = _robot(problem, robot)
     check_intervals(intervals)
     nlp = _nlp_options(intervals, degree, scheme, MINIMISED_COSTS[cost], contact_bound)
     t0 = time.perf_counter()
-    gp_plans = _branches(problem, rob, contact_bound, branches)   # no plan: said before the NLP is built
+    gp_plans = _branches(problem, rob, contact_bound, branches, curve)   # no plan: said before the NLP is built
     gp_time = time.perf_counter() - t0
     report("compare", 0, 3, stage="building the collocation NLP")
     planner = _planner(**nlp)   # checks N, d, scheme, bound
@@ -479,7 +487,8 @@ def comparison_to_dict(c: Comparison) -> dict:
         # the JSON keys of the sides (kept): "geometric_phase" is the method "geometric"
         "geometric_phase": _side(c, c.gp), "collocation": _side(c, c.collocation),
         "details": {
-            "geometric_phase": {"costs": c.gp.costs, "figure_eight": {"a": p.a, "b": p.b, "gamma": p.gamma},
+            "geometric_phase": {"costs": c.gp.costs, "figure_eight": {"a": p.a, "b": p.b, "gamma": p.gamma,
+                                                                                 "curve": p.curve},
                                 "branch": p.branch, "timing_bound": c.bound},
             "collocation": {"costs": c.collocation.costs, "turns": r.turns, "guess": r.guess,
                             "intervals": r.transcription.intervals, "degree": r.transcription.degree,

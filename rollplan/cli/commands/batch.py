@@ -13,7 +13,8 @@ from ..common import EXIT_INTERRUPTED, EXIT_NOPLAN, EXIT_OK, EXIT_SOLVER, EXIT_S
 
 _BATCH_EPILOG = """\
 TARGETS.csv: a header, then one target per line; columns u_a, v_a (required), psi (default 0),
-steps (default 1), k (default 2.5); an empty cell takes the default; more columns are carried into
+steps (default 1), k (default 2.5), curve (the leaf family: circles, viviani, triangle, square or best;
+default circles; echoed as "curve" in the output); an empty cell takes the default; more columns are carried into
 the output; blank lines and lines starting with # are skipped. Example:
 
   # u_a, v_a in units of R, psi in rad

@@ -20,7 +20,8 @@ def cmd_compare(args) -> int:
     k, robot = k_or_robot(args)
     check_target(args, robot)
     c = comparison.compare((args.to[0], args.to[1], args.psi), args.steps, k, robot, args.radius, args.horizon,
-                           args.cost, args.intervals, args.degree, args.scheme, args.contact_bound, args.branches)
+                           args.cost, args.intervals, args.degree, args.scheme, args.contact_bound, args.branches,
+                           curve=args.curve)
     p, r, prob = c.plan, c.result, c.problem
     unit = prob.unit
     g, tr = prob.goal, r.transcription
@@ -29,7 +30,7 @@ def cmd_compare(args) -> int:
           f"{num(g.psi)} rad), "
           f"cost {c.cost}, contact bound {num(c.contact_bound)} rad, rest to rest")
     print(f"  geometric phase: {prob.steps} figure eight(s), a = {num(p.a)} {unit}, b = {num(p.b)} {unit}, "
-          f"gamma = {num(p.gamma)} rad, "
+          f"gamma = {num(p.gamma)} rad, {'' if p.curve == 'circles' else f'curve {p.curve}, '}"
           f"branch {p.branch}, optimal timing ({len(c.branches)} branch(es) timed)")
     wins = sum(s.status == "ok" for s in c.starts)
     print(f"  collocation: contact accelerations, {tr.scheme} d = {tr.degree}, N = {tr.intervals}, best of "
@@ -63,12 +64,16 @@ def cmd_compare(args) -> int:
 def _compare_arguments(c) -> None:
     from ...planners import collocation
     from ...planners.collocation.rest import HORIZON_RANGE, MAX_INTERVALS, MEMORY_GB, MIN_INTERVALS
+    from ...planners.geometric import CURVE_CHOICES
     from ...studies.comparison import COMPARED_COSTS, CONTACT_BOUND
 
     k_help = ("inertia ratio k in (1, %g] (default %g; without --robot the torques are those of a robot with this k, "
               "and every robot has k > 1 by eq. 14)" % (K_MAX, DEFAULT_K))
     add_target_options(c, to_default=None, steps_help=f"figure eights n {STEPS_HELP} of the geometric plan (default 1)",
                         k_help=k_help)
+    c.add_argument("--curve", choices=CURVE_CHOICES, default="circles",
+                   help="leaf family of the geometric plan (default circles; best: the family of the shortest plan; "
+                        "its timing rests at the path's corners)")
     c.add_argument("--cost", choices=COMPARED_COSTS, default="angular_velocity",
                    help="the cost compared, minimised by both (default angular_velocity; rotor_energy needs --robot)")
     c.add_argument("--horizon", type=number, default=1.0,

@@ -78,8 +78,10 @@ def _simulate_executed(args, rp, robot, plant=None, **engine) -> int:
     timing = rp.timing or "min-jerk"
     common = {"plant": plant, "disturbances": dist, "timing": timing, "rest_readings": args.average,
               "tolerance": args.tolerance, "corrections": args.corrections, "progress": report}
-    runs = [execute_samples(first, rp.start, rp.goal, steps, rp.robot, robot, piece, closed_loop=closed, **common,
-                           **engine)
+    segments = rp.data.get("segments") if isinstance(rp.data.get("segments"), list) else []
+    families = {p.get("curve") for p in segments if isinstance(p, dict)} - {None, "figure_eight", "great_circle"}
+    runs = [execute_samples(first, rp.start, rp.goal, steps, rp.robot, robot, piece, closed_loop=closed,
+                            replan=not families, **common, **engine)
             for closed in (False, True)[:1 + bool(args.closed_loop)]]
     opened, run = runs[0], runs[-1]
     f, g, e = run.final, rp.goal, run.error
