@@ -359,13 +359,16 @@ def test_workers_die_with_the_parent(tmp_path, sig):
     """SIGKILL or SIGTERM of `batch --jobs 2` (the parent only) left its forked workers alive, later printing
     BrokenPipeError tracebacks. Now no worker outlives the parent by more than a few seconds and none prints;
     SIGTERM stops the run as Ctrl-C does: exit 143, one line, the finished lines kept (whole lines only)."""
-    csv_path, out = write_csv(tmp_path / "t.csv", SLOW_ROWS), tmp_path / "out.jsonl"
+    # rows of many steps at high k, polished and certified in Python (--method ipopt): a second or more each
+    rows = [(f"{0.05 * i:.2f}", "0.8", "2.5", "20", f"{40 + 4 * i}", f"r{i}") for i in range(16)]
+    csv_path, out = write_csv(tmp_path / "t.csv", rows), tmp_path / "out.jsonl"
     err_path = tmp_path / "err.txt"
-    cache = tmp_path / "cache"   # no leaf table on disk: every row (a new k) takes seconds
+    cache = tmp_path / "cache"
     cache.mkdir()
     with open(err_path, "w") as err_file:
         proc = subprocess.Popen([sys.executable, "-m", "rollplan.cli", "batch", str(csv_path), "--out", str(out),
-                                 "--quiet", "--jobs", "2"], stdout=subprocess.DEVNULL, stderr=err_file,
+                                 "--quiet", "--jobs", "2", "--method", "ipopt"], stdout=subprocess.DEVNULL,
+                                stderr=err_file,
                                 start_new_session=True, env={**os.environ, "ROLLPLAN_CACHE_DIR": str(cache)})
     try:
         t0 = time.perf_counter()

@@ -8,6 +8,7 @@ import fcntl
 import math
 import os
 import pty
+import re
 import struct
 import subprocess
 import sys
@@ -165,8 +166,8 @@ def test_ctrl_c_while_a_long_list_is_certified_exits_130_within_a_second():
     during the certificates exits 130 within a second (the machine may be loaded: 1.5 s), one line, no
     traceback."""
     _require_library()
-    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "12", "--steps", "4", "--all"], 0.5,
-                                              wait_for="certify (k = 12, 1864 roots)")
+    code, elapsed, _, err = run_and_interrupt(["-v", "plan", "--to", "0", "1", "--k", "12", "--steps", "4", "--all"],
+                                              0.5, wait_for="certifying 1864 roots in C")
     assert code == 130, err
     assert elapsed < 1.5, elapsed
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
@@ -200,13 +201,16 @@ def _run_on_a_terminal(argv, columns=120):
 
 @pytest.mark.slow
 def test_a_long_list_shows_a_progress_bar_on_a_terminal():
-    """`plan --all` at k = 12, n = 4 (seconds of certificates) on a terminal: a bar of the certificates that ends
-    at the count of roots."""
+    """`plan --all` at k = 16, n = 5 (several seconds of certificates, longer than the 5 s before a bar shows) on a
+    terminal: a bar of the certificates that ends at the count of roots."""
     _require_library()
-    code, err = _run_on_a_terminal(["plan", "--to", "0", "1", "--k", "12", "--steps", "4", "--all"])
+    code, err = _run_on_a_terminal(["plan", "--to", "0", "1", "--k", "16", "--steps", "5", "--all"])
     assert code == 0, err
-    bars = [line for line in err.replace("\r", "\n").splitlines() if line.startswith("certify (k = 12, 1864 roots)")]
-    assert len(bars) >= 2 and "%|" in bars[0] and "1864/1864" in bars[-1], bars[-3:]
+    listed = re.search(r"all plans: (\d+)", err) or re.search(r"certify \(k = 16, (\d+) roots\)", err)
+    assert listed, err[-2000:]
+    n = listed.group(1)
+    bars = [line for line in err.replace("\r", "\n").splitlines() if line.startswith(f"certify (k = 16, {n} roots)")]
+    assert len(bars) >= 2 and "%|" in bars[0] and f"{n}/{n}" in bars[-1], bars[-3:]
 
 
 def test_two_threads_certify_as_one():

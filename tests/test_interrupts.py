@@ -322,7 +322,7 @@ def test_ctrl_c_while_the_multistart_workers_solve_exits_at_once():
     waits for them and takes Ctrl-C: exit 130 within a second (two on a loaded machine), one line, the workers
     left to the process's end."""
     code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3"], 0.3,
-                                              wait_for="collocation from")
+                                              wait_for="worker(s)")
     assert code == 130, err
     assert elapsed < 2.0, (elapsed, err)
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"

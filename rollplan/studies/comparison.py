@@ -31,6 +31,7 @@ timed GP branch I (the first ``branches`` admissible branches, shortest first) w
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import threading
@@ -66,6 +67,8 @@ __all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "MINIMISED_COSTS", "SIDE_KEYS", "T
            "Comparison", "MAX_WORKERS", "multistart_workers",
            "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict",
            "MinimumTime", "minimum_time"]
+
+log = logging.getLogger(__name__)
 
 #: Default contact bound of both planners: largest polar angle of the contact point [rad] (80 deg).
 CONTACT_BOUND = math.radians(80.0)
@@ -429,6 +432,7 @@ def _multistart(planner, problem, robot, horizon, jobs, total, workers):
             out = []
             done.append((i, _run(solver, problem, robot, make_guess(), horizon, m, start_cost, out, name), out))
 
+    log.info("solving %d starts with %d worker(s)", len(jobs), workers)
     if workers == 1:
         finished = work(True)
     else:

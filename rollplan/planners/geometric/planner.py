@@ -523,6 +523,7 @@ class GeometricPhasePlanner(Method):
             shown[0] = done
 
         report(label, 0, total)
+        log.info("certifying %d roots in C", total)
         certs = certify_roots(listed, target[0], target[1], target[2], problem.steps, problem.k, progress)
         R = problem.radius
         found, rejected = [], []
