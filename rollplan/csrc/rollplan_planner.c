@@ -479,10 +479,36 @@ static void bracket(casadi_real x, int turn, int *lo, int *hi) {
  * the bracket. */
 static casadi_real family_inverse(casadi_real e, casadi_real k);
 
+/* The root x in [lo, hi] of g(x, k) = e for g decreasing in x (a leaf's turn), by Newton's method from x with its
+ * derivative, bisecting whenever a step leaves the bracket; it stops at the rounding level of g (leafmap.turn_inverse)
+ * or when the step or the bracket is below xtol relative. */
+static casadi_real decreasing_root(casadi_real (*g)(casadi_real, casadi_real, casadi_real *), casadi_real e,
+                                   casadi_real k, casadi_real x, casadi_real lo, casadi_real hi, casadi_real xtol) {
+    casadi_real f, df, nxt;
+    int it;
+    for (it = 0; it < 200; ++it) {
+        f = g(x, k, &df) - e;
+        if (RP_FABS(f) <= RP_R(4e-16) * (RP_R(1.0) + RP_FABS(e)) * (RP_R(1.0) + k)) break;
+        if (f > RP_R(0.0)) lo = x; else hi = x;                   /* g decreasing: the root is to the right of x if f > 0 */
+        nxt = x - f / df;
+        if (!isfinite(nxt) || nxt <= lo || nxt >= hi) nxt = RP_R(0.5) * (lo + hi);
+        if (RP_FABS(nxt - x) <= xtol * nxt || hi - lo <= xtol * hi) return nxt;
+        x = nxt;
+    }
+    return x;
+}
+
+/* The circle's turn E as a function of u = r^2 (the closed form of turn()), and dE/du. */
+static casadi_real turn_of_u(casadi_real u, casadi_real k, casadi_real *du) {
+    casadi_real c = RP_SQRT(RP_R(1.0) - u), s = RP_SQRT(RP_R(1.0) - RP_R(2.0) * u);
+    *du = PI / c * (RP_R(1.0) - k * (RP_R(1.0) + RP_R(1.0) / (s * s * s)));
+    return TWO_PI * u / (RP_R(1.0) + c) - RP_R(2.0) * TWO_PI * k * c * u / (s * (RP_R(1.0) + s));
+}
+
 static casadi_real turn_inverse(casadi_real e, casadi_real k) {
     const casadi_real umax = A_MAX * A_MAX;
-    casadi_real lo = RP_R(0.0), hi = umax, u, f, df, c, s, nxt, w, t;
-    int it, i0, i1;
+    casadi_real lo = RP_R(0.0), hi = umax, u, w, t;
+    int i0, i1;
     if (!(e <= RP_R(0.0) && e >= s_e_min)) return NAN;
     if (e >= RP_R(0.0)) return RP_R(0.0);
     if (e <= s_e_min) return A_MAX;
@@ -500,29 +526,14 @@ static casadi_real turn_inverse(casadi_real e, casadi_real k) {
     } else {
         u = umax * e / s_e_min;
     }
-    for (it = 0; it < 200; ++it) {
-        c = RP_SQRT(RP_R(1.0) - u);
-        s = RP_SQRT(RP_R(1.0) - RP_R(2.0) * u);
-        f = TWO_PI * u / (RP_R(1.0) + c) - RP_R(2.0) * TWO_PI * k * c * u / (s * (RP_R(1.0) + s)) - e;
-        if (RP_FABS(f) <= RP_R(4e-16) * (RP_R(1.0) + RP_FABS(e)) * (RP_R(1.0) + k)) break;    /* rounding level (leafmap.turn_inverse) */
-        if (f > RP_R(0.0)) lo = u; else hi = u;                   /* E decreasing: the root is to the right of u if f > 0 */
-        df = PI / c * (RP_R(1.0) - k * (RP_R(1.0) + RP_R(1.0) / (s * s * s)));
-        nxt = u - f / df;
-        if (!isfinite(nxt) || nxt <= lo || nxt >= hi) nxt = RP_R(0.5) * (lo + hi);
-        if (RP_FABS(nxt - u) <= RP_R(1e-15) * nxt || hi - lo <= RP_R(1e-15) * hi) {
-            u = nxt;
-            break;
-        }
-        u = nxt;
-    }
-    return RP_SQRT(u);
+    return RP_SQRT(decreasing_root(turn_of_u, e, k, u, lo, hi, RP_R(1e-15)));
 }
 
 /* Another family's turn inverse (k >= K_MONOTONE, E decreasing, e inside (E(A_MAX), 0)): safeguarded Newton in r on
  * the closed form from the table's linear interpolation in E, bisecting whenever a step leaves the bracket. */
 static casadi_real family_inverse(casadi_real e, casadi_real k) {
-    casadi_real lo = RP_R(0.0), hi = A_MAX, r, f, df, nxt;
-    int it, i0, i1;
+    casadi_real lo = RP_R(0.0), hi = A_MAX, r;
+    int i0, i1;
     if (s_nt > 1) {
         bracket(e, 1, &i0, &i1);
         lo = s_tr[i0];
@@ -532,19 +543,7 @@ static casadi_real family_inverse(casadi_real e, casadi_real k) {
     } else {
         r = RP_R(0.5) * A_MAX;
     }
-    for (it = 0; it < 200; ++it) {
-        f = turn_and_dr(r, k, &df) - e;
-        if (RP_FABS(f) <= RP_R(4e-16) * (RP_R(1.0) + RP_FABS(e)) * (RP_R(1.0) + k)) break;
-        if (f > RP_R(0.0)) lo = r; else hi = r;                   /* E decreasing */
-        nxt = r - f / df;
-        if (!isfinite(nxt) || nxt <= lo || nxt >= hi) nxt = RP_R(0.5) * (lo + hi);
-        if (RP_FABS(nxt - r) <= RP_R(1e-16) * nxt || hi - lo <= RP_R(1e-16) * hi) {
-            r = nxt;
-            break;
-        }
-        r = nxt;
-    }
-    return r;
+    return decreasing_root(turn_and_dr, e, k, r, lo, hi, RP_R(1e-16));
 }
 
 /* Displacement d = u_a + i v_a of the +y leaf of radius r from zero (leafmap.displacement):
