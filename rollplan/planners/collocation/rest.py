@@ -33,6 +33,7 @@ from ...robot import Robot
 from ...timeseries import TimeSeries
 from ..method import Method
 from .costs import N_PAR
+from .rest_nlp import RestTranscription
 from .transcription import (
     CollocationRun,
     Guess,
@@ -225,7 +226,7 @@ class NlpSolution:
 
 
 class RestToRestPlanner:
-    """The rest-to-rest collocation NLP (docs/design/collocation.md), built once; IPOPT solves it.
+    """The rest-to-rest collocation NLP (docs/design/collocation.md, :mod:`.rest_nlp`), built once; IPOPT solves it.
 
     Parameters
     ----------
@@ -245,6 +246,11 @@ class RestToRestPlanner:
 
     Attributes
     ----------
+    transcription : Transcription
+        The grid (nx = 7, nu = 2): the layout of guesses.
+    rest_transcription : RestTranscription
+        The NLP's decision vector and equations: the transcription with the closed-form states (u_o, v_o and
+        the contact rates at the collocation points) and the accelerations eliminated (:mod:`.rest_nlp`).
     ipopt_options : dict
         The options of its IPOPT solver (:func:`.transcription.ipopt_options` and :data:`REST_IPOPT_OPTIONS`).
     """
@@ -268,7 +274,8 @@ class RestToRestPlanner:
         log.info("building the collocation NLP: N = %d, d = %d, cost %s", intervals, degree, cost)
         # minutes for a large N, in C++ that never returns to Python or in CasADi calls that swallow SIGINT:
         # built in a thread, so Ctrl-C acts at once
-        nlp, self.path_rows = interrupts.call_in_thread(self.transcription.contact_nlp, self.point, N_PAR)
+        self.rest_transcription = RestTranscription(self.transcription)
+        nlp, self.path_rows = interrupts.call_in_thread(self.rest_transcription.contact_nlp, self.point, N_PAR)
         self.ipopt_options = {**ipopt_options(self.tol, self.max_iter), **REST_IPOPT_OPTIONS}
         self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, self.ipopt_options)
         self.build_time_s = time.perf_counter() - t0
@@ -343,7 +350,8 @@ class RestToRestPlanner:
             raise InputError(f"robot has k = {robot.k:.12g}, the problem k = {problem.k:.12g}")
         par = rest_parameters(problem.k, 1.0, robot)      # normalized time (docs/design/collocation.md)
         where = f"rest-to-rest N = {tr.intervals}, d = {tr.degree}, cost {self.cost}, {guess.name} guess, m = {turns}"
-        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, self.contact_bound, self.path_rows)
+        x0, lbx, ubx, lbg, ubg = self.rest_transcription.contact_bounds(guess, start, final, self.contact_bound,
+                                                                        self.path_rows)
         v, f, status, iters, solve_time = self._ipopt(x0, lbx, ubx, lbg, ubg, par, where, 0)
         return NlpSolution(problem, guess, float(horizon), int(turns), robot, start, final, par, where, v,
                            f * horizon ** COST_POWERS[self.cost], status, iters, solve_time)
@@ -377,14 +385,14 @@ class RestToRestPlanner:
             nlp.iterations, nlp.solve_time_s
         bound = c
         for _ in range(BACKOFF_TRIES):
-            controls, objective = correct(tr.unpack(v)[2], start, final, par, self.cost, where)
+            controls, objective = correct(self.rest_transcription.unpack(v)[2], start, final, par, self.cost, where)
             motion, end_rates = certify(controls, start, problem, 1.0, self.samples_per_interval, nlp.robot, True)
             excess = polar_angles(motion).max() - c
             if excess <= 0.0:
                 break
             # the bound holds at the collocation points only: back it off (warm-started)
             bound -= BACKOFF_FACTOR * excess
-            _, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, bound, self.path_rows)
+            _, lbx, ubx, lbg, ubg = self.rest_transcription.contact_bounds(guess, start, final, bound, self.path_rows)
             v, f, status, iters, dt = self._ipopt(np.clip(v, lbx, ubx), lbx, ubx, lbg, ubg, par, where, iters)
             solve_time += dt
         else:
