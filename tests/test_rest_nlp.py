@@ -74,7 +74,7 @@ def test_reduced_solution_solves_the_full_transcription(scheme, degree):
     planner = RestToRestPlanner(8, degree, scheme)
     problem = Problem((0.5, 0.3, 0.4), k=K)
     nlp = planner.solve_nlp(problem, naive_guess(planner.transcription, *planner.boundary(problem, 0)))
-    states, colloc, controls = planner.rest_transcription.unpack(nlp.x)
+    states, colloc, controls = planner.transcription.unpack(nlp.x)
     full, rows = planner.transcription.contact_nlp(planner.point, N_PAR)
     F = ca.Function("full", [full["x"], full["p"]], [full["f"], full["g"]])
     f, g = F(planner.transcription.pack(Guess(states, colloc, controls, "reduced")), rest_parameters(K, 1.0))
@@ -96,7 +96,22 @@ def test_correction_at_an_optimum_whose_end_jacobian_is_singular():
     planner = RestToRestPlanner(8, 3, cost="path_energy")
     start, final = planner.boundary(problem, 0)
     nlp = planner.solve_nlp(problem, naive_guess(planner.transcription, start, final))
-    controls, _ = correct(planner.rest_transcription.unpack(nlp.x)[2], start, final, nlp.par, "path_energy")
+    controls, _ = correct(planner.transcription.unpack(nlp.x)[2], start, final, nlp.par, "path_energy")
     y, rates = references.rest_path_final(controls, 1.0, K)
     assert np.abs(y - final[:3]).max() < TOLERANCE and np.abs(rates).max() < TOLERANCE
     assert planner.finish(nlp).residual < TOLERANCE
+
+
+def test_decision_vectors_convert_both_ways():
+    """``unpack`` (all intervals at once) gives each interval's closed forms (:meth:`stages`), ``pack`` inverts it,
+    and the full transcription's layout (``full``, ``reduced``) round-trips exactly."""
+    rt = RestTranscription(Transcription(5, 3, nx=7, nu=2))
+    v = np.random.default_rng(0).normal(size=7 + 5 * rt.block)
+    states, colloc, controls = rt.unpack(v, horizon=2.0)
+    for i in range(5):
+        uv, rates, _, a = rt.stages(states[i], states[i + 1][5:7], 2.0 / 5)
+        np.testing.assert_allclose(colloc[i][:, 3:], np.hstack([uv, rates]), rtol=1e-14)
+        np.testing.assert_allclose(controls[i], a, rtol=1e-14)
+    np.testing.assert_array_equal(rt.pack(Guess(states, colloc, controls, "v")), v)
+    np.testing.assert_array_equal(rt.reduced(rt.full(v)), v)
+    assert rt.full(v).size == 7 + 5 * (7 * 3 + 2 + 7)

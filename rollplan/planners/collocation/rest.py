@@ -200,7 +200,8 @@ class NlpSolution:
     where : str
         The problem and start, for messages.
     x : ndarray
-        The NLP's solution vector.
+        The NLP's solution in the decision vector of the full transcription (``transcription.unpack`` gives its
+        states, collocation states and accelerations; the NLP solved is :attr:`RestToRestPlanner.rest_transcription`'s).
     objective : float
         The NLP's optimal value scaled to ``horizon`` (the ``nlp_objective`` of the finished result).
     status : str
@@ -357,7 +358,8 @@ class RestToRestPlanner:
                            f * horizon ** COST_POWERS[self.cost], status, iters, solve_time)
 
     def _ipopt(self, x0, lbx, ubx, lbg, ubg, par, where: str, iters: int):
-        """One IPOPT solve: ``(x, f, status, iters + its iterations, wall time)``; SolverError if it failed."""
+        """One IPOPT solve from ``x0`` (the NLP's decision vector): ``(x in the full transcription's layout, f,
+        status, iters + its iterations, wall time)``; SolverError if it failed."""
         t0 = time.perf_counter()
         sol = interrupts.call(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
         solve_time = time.perf_counter() - t0
@@ -367,7 +369,7 @@ class RestToRestPlanner:
         if not st["success"]:
             raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {status} after {iters} "
                               "iterations; hint: warm-start from a geometric-phase plan", status)
-        return np.array(sol["x"]).ravel(), float(sol["f"]), status, iters, solve_time
+        return self.rest_transcription.full(np.array(sol["x"]).ravel()), float(sol["f"]), status, iters, solve_time
 
     def finish(self, nlp: NlpSolution) -> RestResult:
         """The second stage of :meth:`solve`: the Newton correction and the CVODES certificate of ``nlp`` (a
@@ -385,7 +387,7 @@ class RestToRestPlanner:
             nlp.iterations, nlp.solve_time_s
         bound = c
         for _ in range(BACKOFF_TRIES):
-            controls, objective = correct(self.rest_transcription.unpack(v)[2], start, final, par, self.cost, where)
+            controls, objective = correct(tr.unpack(v)[2], start, final, par, self.cost, where)
             motion, end_rates = certify(controls, start, problem, 1.0, self.samples_per_interval, nlp.robot, True)
             excess = polar_angles(motion).max() - c
             if excess <= 0.0:
@@ -393,7 +395,8 @@ class RestToRestPlanner:
             # the bound holds at the collocation points only: back it off (warm-started)
             bound -= BACKOFF_FACTOR * excess
             _, lbx, ubx, lbg, ubg = self.rest_transcription.contact_bounds(guess, start, final, bound, self.path_rows)
-            v, f, status, iters, dt = self._ipopt(np.clip(v, lbx, ubx), lbx, ubx, lbg, ubg, par, where, iters)
+            v, f, status, iters, dt = self._ipopt(np.clip(self.rest_transcription.reduced(v), lbx, ubx), lbx, ubx,
+                                                  lbg, ubg, par, where, iters)
             solve_time += dt
         else:
             raise SolverError(f"the collocation solution ({where}) leaves the contact bound {c:.6g} rad between "

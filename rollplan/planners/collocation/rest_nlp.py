@@ -125,26 +125,31 @@ class RestTranscription:
     def pack(self, guess: Guess) -> np.ndarray:
         """The decision vector of a guess (its collocation values of u_o, v_o and the rates, and its accelerations,
         are not unknowns)."""
-        out = [guess.states[0]]
-        for i in range(self.transcription.intervals):
-            out += [np.asarray(guess.colloc[i])[:, :N_FREE].ravel(), guess.states[i + 1]]
-        return np.concatenate(out)
+        N, d = self.transcription.intervals, self.transcription.degree
+        states = np.asarray(guess.states, float)
+        free = np.asarray(guess.colloc, float)[:, :, :N_FREE].reshape(N, N_FREE * d)
+        return np.concatenate([states[0], np.hstack([free, states[1:]]).ravel()])
 
     def unpack(self, v: np.ndarray, horizon: float = 1.0):
         """``(states (N + 1, 7), colloc (N, d, 7), controls (N, 2))`` of a decision vector, the eliminated values
         by the closed forms; ``horizon`` the T of the NLP's parameters (1 in normalized time)."""
         tr = self.transcription
-        N, d, blk = tr.intervals, tr.degree, self.block
+        N, d = tr.intervals, tr.degree
         v = np.asarray(v, float)
-        states, colloc, controls = np.zeros((N + 1, 7)), np.zeros((N, d, 7)), np.zeros((N, 2))
-        states[0] = v[:7]
-        H = horizon / N
-        for i in range(N):
-            b = v[7 + i * blk: 7 + (i + 1) * blk]
-            states[i + 1] = b[N_FREE * d:]
-            uv, rates, _, controls[i] = self.stages(states[i], states[i + 1][5:7], H)
-            colloc[i] = np.hstack([b[: N_FREE * d].reshape(d, N_FREE), uv, rates])
-        return states, colloc, controls
+        blocks = v[7:].reshape(N, self.block)
+        states = np.vstack([v[:7], blocks[:, N_FREE * d:]])
+        uv, rates, _, a = self.stages(states[:-1].T, states[1:, 5:7].T, horizon / N)
+        linear = np.stack([np.vstack([u, r]).T for u, r in zip(uv, rates)], axis=1)     # (N, d, 4)
+        colloc = np.concatenate([blocks[:, :N_FREE * d].reshape(N, d, N_FREE), linear], axis=2)
+        return states, colloc, a.T
+
+    def full(self, v: np.ndarray) -> np.ndarray:
+        """The decision vector ``v`` of this NLP as that of the full transcription (normalized time)."""
+        return self.transcription.pack(Guess(*self.unpack(v), ""))
+
+    def reduced(self, x: np.ndarray) -> np.ndarray:
+        """A decision vector ``x`` of the full transcription as that of this NLP (:meth:`full`'s inverse)."""
+        return self.pack(Guess(*self.transcription.unpack(x), ""))
 
     def contact_bounds(self, guess: Guess, start, final, contact_bound: float, path_rows):
         """``(x0, lbx, ubx, lbg, ubg)`` of the NLP of :meth:`contact_nlp`: ``start``, ``final`` fixed,
