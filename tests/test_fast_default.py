@@ -8,11 +8,10 @@ turns m = -1, 0, 1; not the project's collocation), and DOP853 along the sampled
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from conftest import one_line, run
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -111,28 +110,23 @@ def test_the_default_is_never_longer_than_the_pole_plan(pair):
         assert lands_on_goal(p) <= 1e-7
 
 
-def _plan(tmp_path, *argv):
-    return subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", *argv], capture_output=True, text=True,
-                          cwd=tmp_path, timeout=300)
-
-
-def test_plan_command_polishes_by_default_and_plans_the_figure_eights_with_polish_off(tmp_path):
+def test_plan_command_polishes_by_default_and_plans_the_figure_eights_with_polish_off(tmp_path, capsys):
     start, goal, k = README_PAIR
-    argv = ["--from", *map(str, start), "--to", str(goal[0]), str(goal[1]), "--psi", str(goal[2]), "--contact",
-            *map(str, goal[3:]), "--k", str(k)]
-    proc = _plan(tmp_path, *argv, "--json", "d.json")
-    assert proc.returncode == 0, proc.stderr
-    assert "fast polish" in proc.stdout and "refined       path length" in proc.stdout
+    argv = ["plan", "--from", *map(str, start), "--to", str(goal[0]), str(goal[1]), "--psi", str(goal[2]),
+            "--contact", *map(str, goal[3:]), "--k", str(k)]
+    code, out, err = run(capsys, *argv, "--json", str(tmp_path / "d.json"))
+    assert code == 0, err
+    assert "fast polish" in out and "refined       path length" in out
     d = json.loads((tmp_path / "d.json").read_text())
     assert d["mode"] == "refined" and d["refined"]["intervals"] == FAST_INTERVALS and d["residual"] <= 1e-9
     assert d["unrefined"]["mode"] == "one" and d["unrefined_length"] == d["unrefined"]["path_length"]
     assert d["path_length"] < d["unrefined_length"]
-    proc = _plan(tmp_path, *argv, "--polish", "off", "--json", "e.json")
-    assert proc.returncode == 0, proc.stderr
+    code, out, err = run(capsys, *argv, "--polish", "off", "--json", str(tmp_path / "e.json"))
+    assert code == 0, err
     e = json.loads((tmp_path / "e.json").read_text())
     assert e["mode"] == "one" and "refined" not in e and e["path_length"] == d["unrefined_length"]
     # the outputs of closed-form pieces plan the figure eights; asked with the polish, one line and exit 2
-    proc = _plan(tmp_path, *argv, "--plot", "p.png")
-    assert proc.returncode == 0 and (tmp_path / "p.png").exists() and "refined" not in proc.stdout
-    proc = _plan(tmp_path, *argv, "--polish", "fast", "--duration", "5")
-    assert proc.returncode == 2 and proc.stderr.count("\n") == 1 and "--polish fast" in proc.stderr
+    code, out, err = run(capsys, *argv, "--plot", str(tmp_path / "p.png"))
+    assert code == 0 and (tmp_path / "p.png").exists() and "refined" not in out, err
+    code, out, err = run(capsys, *argv, "--polish", "fast", "--duration", "5")
+    assert code == 2 and one_line(err) and "--polish fast does not combine with --duration" in err
