@@ -280,7 +280,7 @@ def main(argv=None) -> int:
     data = {"load_average_at_start": os.getloadavg()[0], "rolls": rolls(args.quick), "pairs": random_pairs(args.quick),
             "turns": turns(args.quick), "route": route(), "optimal_control": against_optimal_control(args.quick),
             "default_random": default_against_reference(args.quick)}
-    fig_plan = rollplan.plan((0.0, 0.0, 1.5, -0.4, 0.4), k=2.5, start=(0.0, 0.0, 0.0, 0.5, -0.3))
+    fig_plan = rollplan.plan((0.0, 0.0, 1.5, -0.4, 0.4), k=2.5, start=(0.0, 0.0, 0.0, 0.5, -0.3), polish="off")
     data["figure"] = {"mode": fig_plan.mode, "length": fig_plan.path_length, "residual": fig_plan.residual,
                       "lengths": fig_plan.lengths()}
     data["replay"] = [{"samples": n, **dict(zip(("max_error", "end_error"), replay(fig_plan, n)))}

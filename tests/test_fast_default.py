@@ -130,3 +130,19 @@ def test_plan_command_polishes_by_default_and_plans_the_figure_eights_with_polis
     assert code == 0 and (tmp_path / "p.png").exists() and "refined" not in out, err
     code, out, err = run(capsys, *argv, "--polish", "fast", "--duration", "5")
     assert code == 2 and one_line(err) and "--polish fast does not combine with --duration" in err
+
+
+@pytest.mark.slow
+def test_the_benchmark_measures_the_warm_default_with_its_budget(tmp_path):
+    """The warm time of the default is measured by scripts/bench_default.py through scripts/benchmark.py (a
+    section and a budget row), per pair with the stages where the time goes."""
+    from test_scripts import run_script
+
+    run_script("benchmark.py", tmp_path, "--quick", "--only", "fast_default", "budgets")
+    report = json.loads((tmp_path / "benchmarks.json").read_text())
+    sections = {sec["function"]: sec for sec in report["sections"]}
+    summary = sections["section_fast_default"]["summary"]
+    assert summary["budget_ms"] == 100.0 and summary["median_one_leg_ms"] > 0 and summary["median_one_leg_cpu_ms"] > 0
+    rows = sections["section_fast_default"]["rows"]
+    assert rows and all(r["IPOPT [ms]"] > 0 and r["correction + certificate [ms]"] > 0 for r in rows)
+    assert any("default plan between full states" in row["budget"] for row in sections["section_budgets"]["rows"])
