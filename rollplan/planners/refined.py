@@ -12,8 +12,9 @@ the plan itself, with the reason in ``stats.details["refine"]``.
 
 The fast polish (:func:`fast_polish`, ``polish="fast"``: the default of :func:`rollplan.plan` between full states)
 solves the same problem on :data:`FAST_INTERVALS` intervals from the straight line on the turns :data:`FAST_TURNS`
-alone, corrects the controls by Newton steps whose residual is the CVODES integration itself (the Jacobian from
-RK4, :data:`RK4_SUBSTEPS` steps per interval) and certifies the result like the polish.
+alone (run rest to rest, :func:`line_guess`), corrects the controls by Newton steps whose residual is the CVODES
+integration itself (first on RK4, the Jacobian from RK4) and certifies the result like the polish, the contact bound
+backed off when the certified motion leaves it.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from ..timeseries import TimeSeries
 
 __all__ = ["INTERVALS", "CONTACT_BOUND", "LINE_TURNS", "FAST_INTERVALS", "FAST_DEGREE", "FAST_TURNS", "RK4_SUBSTEPS",
            "RK4_JACOBIAN_SUBSTEPS", "CORRECTION_STEPS", "CORRECTION_TOL", "CVODES_CORRECTION_TOL", "RefinedPlan",
-           "warm_samples", "refine", "fast_polish"]
+           "warm_samples", "line_guess", "refine", "fast_polish"]
 
 #: Intervals N of the polish's collocation (piecewise-constant contact accelerations).
 INTERVALS = 60
@@ -139,6 +140,32 @@ def _turns(plan) -> int:
     return round((plan.final.psi - plan.goal.psi) / (2.0 * math.pi))
 
 
+def _rest_law(tau):
+    """``(s, ds/dtau)`` of the rest-to-rest time law ``s(tau) = tau - sin(2 pi tau) / (2 pi)`` on [0, 1]."""
+    tau = np.asarray(tau, float)
+    return tau - np.sin(2.0 * np.pi * tau) / (2.0 * np.pi), 1.0 - np.cos(2.0 * np.pi * tau)
+
+
+def line_guess(tr, start, final, name: str):
+    """The straight line in the state from ``start`` to ``final`` (7,: at rest) run rest to rest by
+    :func:`_rest_law`: a :class:`~.collocation.transcription.Guess` of the transcription ``tr`` (normalized time),
+    the contact rates the law's, the accelerations their differences over each interval."""
+    from .collocation.transcription import Guess
+
+    start, final = np.asarray(start, float), np.asarray(final, float)
+    d = final - start
+
+    def states(tau):
+        s, ds = _rest_law(tau)
+        x = start + s[..., None] * d
+        x[..., 5:7] = ds[..., None] * d[3:5]
+        return x
+
+    starts, tc = tr.grid()
+    nodes = states(np.append(starts, 1.0))
+    return Guess(nodes, states(tc), np.diff(nodes[:, 5:7], axis=0) * tr.intervals, name)
+
+
 def warm_samples(plan, samples: int = 3000) -> tuple[np.ndarray, np.ndarray]:
     """``(t, x7)`` of ``plan``'s contact path on the horizon [0, 1], units of R: every piece run rest to rest
     (``s(tau) = tau - sin(2 pi tau) / (2 pi)`` of its length, the contact rates zero at its ends) in a time
@@ -148,7 +175,7 @@ def warm_samples(plan, samples: int = 3000) -> tuple[np.ndarray, np.ndarray]:
     st = tr.state / np.array([R, R, 1.0, 1.0, 1.0])
     seg = tr.segment
     tau_tab = np.linspace(0.0, 1.0, 2001)
-    f_tab = tau_tab - np.sin(2.0 * np.pi * tau_tab) / (2.0 * np.pi)
+    f_tab = _rest_law(tau_tab)[0]
     blocks = []
     for j in range(int(seg.max()) + 1):
         idx = np.flatnonzero(seg == j)
@@ -366,7 +393,7 @@ def fast_polish(plan, intervals: int = FAST_INTERVALS, contact_bound: float = CO
     tried, best, best_length = [], None, math.inf
     for m in FAST_TURNS:
         start, final = planner.boundary(problem, m)
-        guess = replace(rest.naive_guess(tr, start, final), name=f"line:{m}")
+        guess = line_guess(tr, start, final, f"line:{m}")
         x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, contact_bound, planner.path_rows)
         entry = {"start": guess.name, "turns": m, "iterations": 0, "solve_time_s": 0.0}
         tried.append(entry)
