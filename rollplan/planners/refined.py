@@ -397,19 +397,28 @@ def fast_polish(plan, intervals: int = FAST_INTERVALS, contact_bound: float = CO
         x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, contact_bound, planner.path_rows)
         entry = {"start": guess.name, "turns": m, "iterations": 0, "solve_time_s": 0.0}
         tried.append(entry)
-        bound = contact_bound
+        bound, ok = contact_bound, False
         for _ in range(rest.BACKOFF_TRIES):
             t0 = time.perf_counter()
-            sol = interrupts.call(solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
+            try:
+                sol = interrupts.call(solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
+            except RuntimeError as exc:   # e.g. an evaluation error in CasADi
+                entry["status"] = f"Error: {exc}"[:200]
+                break
             st = solver.stats()
             entry.update(status=str(st["return_status"]), iterations=entry["iterations"] + int(st["iter_count"]),
                          solve_time_s=entry["solve_time_s"] + time.perf_counter() - t0)
             if not st["success"]:
                 break
             v = np.array(sol["x"]).ravel()
-            controls, motion, rates, size, energy = _corrected(tr.unpack(v)[2], start, final, problem, par)
+            try:
+                controls, motion, rates, size, energy = _corrected(tr.unpack(v)[2], start, final, problem, par)
+            except (RuntimeError, SolverError):   # an integration that fails: no motion from this start
+                entry["status"] = "Correction_Failed"
+                break
             excess = float(rest.polar_angles(motion).max()) - contact_bound
             if excess <= 0.0:
+                ok = True
                 break
             # the bound holds at the collocation points only: back it off (warm-started)
             bound -= rest.BACKOFF_FACTOR * excess
@@ -417,7 +426,7 @@ def fast_polish(plan, intervals: int = FAST_INTERVALS, contact_bound: float = CO
             x0 = np.clip(v, lbx, ubx)
         else:
             entry["status"] = "Bound_Violated"
-        if entry["status"] in ("Bound_Violated",) or not st["success"]:
+        if not ok:
             continue
         fin = State(*motion.state[-1])
         cert = certificate_of(problem, fin, "cvodes", residual=max(problem.residual(fin), float(np.abs(rates).max())))
@@ -428,8 +437,8 @@ def fast_polish(plan, intervals: int = FAST_INTERVALS, contact_bound: float = CO
             continue
         stats = SolverStats("ipopt", entry["status"], entry["iterations"], entry["solve_time_s"],
                             {"nlp_objective": float(sol["f"]), "backed_off_bound": bound})
-        run = rest.RestResult(problem, "path_energy", tr, 1.0, m, guess.name, contact_bound, controls, energy, motion,
-                         cert, stats)
+        run = rest.RestResult(problem, "path_energy", tr, 1.0, m, guess.name, contact_bound, controls, energy,
+                              motion, cert, stats)
         length = integrate_samples(motion.time, np.hypot(motion.velocity[:, 0], motion.velocity[:, 1]))
         if length < best_length:
             best, best_length = run, length
