@@ -278,8 +278,11 @@ def _fast_nlp(intervals: int, degree: int, contact_bound: float):
 
     planner = RestToRestMethod(intervals=intervals, degree=degree, cost="path_energy",
                                contact_bound=contact_bound).planner
-    solver = interrupts.call_in_thread(ca.nlpsol, "fast_polish", "ipopt", planner.solver.oracle(),
-                                       {**planner.ipopt_options, **FAST_IPOPT_OPTIONS})
+    s = planner.solver
+    shared = {"grad_f": s.get_function("nlp_grad_f"), "jac_g": s.get_function("nlp_jac_g"),
+              "hess_lag": s.get_function("nlp_hess_l")}   # the planner's derivatives, not built again
+    solver = interrupts.call_in_thread(ca.nlpsol, "fast_polish", "ipopt", s.oracle(),
+                                       {**planner.ipopt_options, **FAST_IPOPT_OPTIONS, **shared})
     return planner, solver
 
 
