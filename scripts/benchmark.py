@@ -15,7 +15,8 @@ with the share of the IPOPT polish and of the RK8 certificate), the cold start o
 `rollplan plan`, plans at high k, the step map, the collocation planner
 (``scripts/bench_collocation.py:measure``), the generated C planner
 (``scripts/bench_codegen.py:measure``; skipped without a C compiler), memory, a
-profile, batches, `plan --all` per plan listed, and the budgets of the issues with their measured values
+profile, batches, `plan --all` per plan listed, the default plan between full states
+(``scripts/bench_default.py:measure``), and the budgets of the issues with their measured values
 (shown first). ``--only`` reruns some sections and keeps the others from the
 existing ``benchmarks.json`` (each section carries its own date and commit). The
 load average at start is recorded: the machine is shared.
@@ -529,6 +530,29 @@ def section_collocation(ctx):
             "summary": {k: v for k, v in res.items() if k != "rows"}}
 
 
+def section_fast_default(ctx):
+    """The default plan between full states (issue 25): the pole plan and its fast polish, warm
+    (``scripts/bench_default.py``)."""
+    import bench_default
+
+    res = bench_default.measure(2 if ctx["quick"] else 5, 3 if ctx["quick"] else 12)
+    rows = [{"k": r["k"], "pole plan": f"{r['pole_mode']}, {r['pole']:.4f} R", "pole [ms]": r["pole_ms"],
+             "default [R]": r["default"], "polished": r["polished"], "default [ms]": r["ms"],
+             "default CPU [ms]": r["cpu_ms"], "of which pole plan [ms]": r["stage_pole_ms"],
+             "IPOPT [ms]": r["stage_ipopt_ms"], "correction + certificate [ms]": r["stage_correction_certificate_ms"]}
+            for r in res["rows"]]
+    notes = [f"rollplan.plan between full states (the issue's two pairs and random pairs: contact points up to 60 deg "
+             f"from the pole, k in [1.5, 8]): the pole plan, then the fast polish (rest-to-rest collocation, N = 8, "
+             f"from the straight line; Newton correction; CVODES certificate), the shorter certified kept. Median of "
+             f"{res['repeats']} warm solves per pair; the stages are those of the last solve (wall).",
+             f"Budget (issue 25) warm default <= {res['budget_ms']:g} ms for one leg: "
+             f"{'MET' if res['met'] else 'MISSED'} (median over the one-leg pairs {res['median_one_leg_ms']:.1f} ms "
+             f"wall, {res['median_one_leg_cpu_ms']:.1f} ms CPU; the pole plan alone "
+             f"{res['median_pole_one_leg_ms']:.1f} ms)."]
+    return {"title": "Default plan between full states (issue 25)", "rows": rows, "notes": notes,
+            "summary": {k: v for k, v in res.items() if k != "rows"}}
+
+
 def section_c_planner(ctx):
     """The generated C planner: microseconds per plan (new k, same k) and code size (scripts/bench_codegen.py)."""
     title = "C planner (generated C, rollplan.codegen)"
@@ -649,6 +673,13 @@ def section_budgets(ctx):
                                                                                        <= comp["budget_s"]))
     else:
         add("28", "compare wall time", "not run", "n/a")
+    fast = done.get("section_fast_default", {}).get("summary")
+    if fast:
+        add("25", f"default plan between full states, warm, one leg <= {fast['budget_ms']:g} ms median",
+            f"{fast['median_one_leg_ms']:.1f} ms wall ({fast['median_one_leg_cpu_ms']:.1f} ms CPU time)",
+            _status(fast["met"]))
+    else:
+        add("25", "default plan between full states", "not run", "n/a")
     c = done.get("section_c_planner", {}).get("summary")
     if c and "skipped" not in c:
         worst = max(c["c_us_per_plan"], c["c_us_per_plan_same_k"])
@@ -934,6 +965,7 @@ SECTIONS = [section_plan, section_cold, section_high_k, section_step_map, sectio
             section_batch, section_plan_many, section_list_all, section_budgets]
 SECTIONS.insert(SECTIONS.index(section_collocation) + 1, section_peer)
 SECTIONS.insert(SECTIONS.index(section_peer) + 1, section_compare)
+SECTIONS.insert(SECTIONS.index(section_list_all) + 1, section_fast_default)
 
 
 # ----------------------------------------------------------------------------- report

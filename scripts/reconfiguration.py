@@ -175,16 +175,36 @@ def timed(f):
     return out, time.perf_counter() - t0
 
 
-def against_optimal_control(quick):
-    """Lengths and times of the pole plan, base="any", refine=True and the optimal-control reference."""
-    rng = np.random.default_rng(25)
-    pairs = list(ISSUE_PAIRS[:1] if quick else ISSUE_PAIRS)
-    for _ in range(0 if quick else 5):
+def random_full_pairs(seed, count):
+    """``count`` random (start, goal, k): positions in [-1, 1]^2 R, psi in [-pi, pi], both contact points up to
+    60 deg from the pole, k in [1.5, 8]."""
+    rng = np.random.default_rng(seed)
+    pairs = []
+    for _ in range(count):
         start = (*rng.uniform(-1.0, 1.0, 2), rng.uniform(-np.pi, np.pi),
                  *contact_at(rng.uniform(0, math.radians(60.0)), rng.uniform(-np.pi, np.pi)))
         goal = (*rng.uniform(-1.0, 1.0, 2), rng.uniform(-np.pi, np.pi),
                 *contact_at(rng.uniform(0, math.radians(60.0)), rng.uniform(-np.pi, np.pi)))
         pairs.append((tuple(float(v) for v in start), tuple(float(v) for v in goal), float(rng.uniform(1.5, 8.0))))
+    return pairs
+
+
+def warm_default(problem):
+    """The new default (``polish="fast"``) of ``problem``, and its wall time: the median of three solves (after one
+    that builds what it needs)."""
+    fast = ComposedPlanner(polish="fast")
+    fast.solve(problem)
+    times = []
+    for _ in range(3):
+        q, dt = timed(lambda: fast.solve(problem))
+        times.append(dt)
+    return q, float(np.median(times))
+
+
+def against_optimal_control(quick):
+    """Lengths and times of the pole plan, the new default, base="any", refine=True and the optimal-control
+    reference."""
+    pairs = list(ISSUE_PAIRS[:1] if quick else ISSUE_PAIRS) + random_full_pairs(25, 0 if quick else 5)
     pole, based, refined = ComposedPlanner(), ComposedPlanner(base="any"), ComposedPlanner(refine=True)
     pole.solve(Problem((0.0, 1.0, 0.0), k=2.5))   # build once
     rows = []
@@ -193,6 +213,8 @@ def against_optimal_control(quick):
         row = {"start": start, "goal": goal, "k": k}
         p, row["pole_time_s"] = timed(lambda: pole.solve(problem))
         row["pole"] = p.path_length
+        q, row["default_time_s"] = warm_default(problem)
+        row.update(default=q.path_length, default_polished=q.mode == "refined", default_certificate=q.residual)
         try:
             q, row["based_time_s"] = timed(lambda: based.solve(problem))
             row.update(based=q.path_length, based_mode=q.mode)
@@ -209,8 +231,32 @@ def against_optimal_control(quick):
             start, goal, k, turns=(-1, 0, 1) if quick else (-2, -1, 0, 1, 2)))
         row.update(ocp=best, ocp_turns={str(m): v for m, v in per_turn.items()})
         rows.append(row)
-        print(f"optimal control pair {i}: pole {row['pole']:.4f}, any base {row.get('based', float('nan')):.4f}, "
-              f"refined {row['refine']:.4f}, reference {best:.4f}", file=sys.stderr)
+        print(f"optimal control pair {i}: pole {row['pole']:.4f}, default {row['default']:.4f}, any base "
+              f"{row.get('based', float('nan')):.4f}, refined {row['refine']:.4f}, reference {best:.4f}",
+              file=sys.stderr)
+    return rows
+
+
+def default_against_reference(quick):
+    """The new default against the pole plan and the optimal-control reference on more random pairs."""
+    rows = []
+    pole = ComposedPlanner()
+    for i, (start, goal, k) in enumerate(random_full_pairs(2525, 2 if quick else 24)):
+        problem = Problem(goal, start=start, k=k)
+        row = {"start": start, "goal": goal, "k": k}
+        p, row["pole_time_s"] = timed(lambda: pole.solve(problem))
+        q, row["default_time_s"] = warm_default(problem)
+        row.update(pole=p.path_length, pole_mode=p.mode, default=q.path_length, polished=q.mode == "refined",
+                   certificate=q.residual)
+        if q.mode == "refined":
+            tr = q.sample(4001)
+            out = ref.replay(tr.u_o, tr.v_o, tr.segment, tr.state[0, :3], k)
+            row["replay"] = residual(np.r_[out[-1], tr.state[-1, 3:]], problem.goal)
+        (row["ocp"], _), row["ocp_time_s"] = timed(lambda: ref.optimal_control_length(
+            start, goal, k, turns=(-1, 0, 1) if quick else (-2, -1, 0, 1, 2)))
+        rows.append(row)
+        print(f"random pair {i}: pole {row['pole']:.4f}, default {row['default']:.4f} ({row['default_time_s']:.3f} s), "
+              f"reference {row['ocp']:.4f}", file=sys.stderr)
     return rows
 
 
@@ -232,8 +278,9 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     data = {"load_average_at_start": os.getloadavg()[0], "rolls": rolls(args.quick), "pairs": random_pairs(args.quick),
-            "turns": turns(args.quick), "route": route(), "optimal_control": against_optimal_control(args.quick)}
-    fig_plan = rollplan.plan((0.0, 0.0, 1.5, -0.4, 0.4), k=2.5, start=(0.0, 0.0, 0.0, 0.5, -0.3))
+            "turns": turns(args.quick), "route": route(), "optimal_control": against_optimal_control(args.quick),
+            "default_random": default_against_reference(args.quick)}
+    fig_plan = rollplan.plan((0.0, 0.0, 1.5, -0.4, 0.4), k=2.5, start=(0.0, 0.0, 0.0, 0.5, -0.3), polish="off")
     data["figure"] = {"mode": fig_plan.mode, "length": fig_plan.path_length, "residual": fig_plan.residual,
                       "lengths": fig_plan.lengths()}
     data["replay"] = [{"samples": n, **dict(zip(("max_error", "end_error"), replay(fig_plan, n)))}
@@ -296,8 +343,10 @@ def report(d) -> str:
           f"whole route, worst waypoint {r['dop853_worst_waypoint']:.1e}; {r['time_s']:.2f} s."]
     oc = d["optimal_control"]
     L += ["", "## Lengths against optimal control", "",
-          "Contact path lengths [R] and wall times [s] of: today's default (*pole*: every leg of figure eights at "
-          "the south pole), one leg at any base point along the arc from the start to the goal contact point "
+          "Contact path lengths [R] and wall times [s] of: the pole plan (*pole*, `polish=\"off\"`: every leg of "
+          "figure eights at the south pole), the new default (*default*: `rollplan.plan`, the pole plan and the fast "
+          "polish, N = 8 from the straight line, the shorter certified kept; time: the median of three warm "
+          "solves), one leg at any base point along the arc from the start to the goal contact point "
           "(`base=\"any\"`), `--refine` (`refine=True`: the rest-to-rest collocation warm-started by the default "
           "plan and by straight lines, N = 60, polar angle <= 80 deg, certified by CVODES), and a multi-start "
           "optimal-control reference "
@@ -306,15 +355,18 @@ def report(d) -> str:
           f"m in {{{', '.join(oc[0]['ocp_turns'])}}} of psi, the shortest kept). Pairs 1 and 2 are the issue's; the "
           "others random (seed 25): positions in [-1, 1]^2 R, psi in [-pi, pi], both contact points up to 60 deg "
           "from the pole, k in [1.5, 8]. *ratio* is the length over the reference's.", "",
-          "| pair | k | pole [R] | time | any base [R] | time | --refine [R] | time | reference [R] | time | "
-          "pole ratio | any-base ratio | --refine ratio | --refine certificate | --refine DOP853 replay |",
-          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+          "| pair | k | pole [R] | time | default [R] | time | any base [R] | time | --refine [R] | time | "
+          "reference [R] | time | pole ratio | default ratio | any-base ratio | --refine ratio | --refine certificate "
+          "| --refine DOP853 replay |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for i, r in enumerate(oc, 1):
         b = r.get("based", float("nan"))
-        L.append(f"| {i} | {r['k']:.3g} | {r['pole']:.4f} | {r['pole_time_s']:.2f} | {b:.4f} | "
+        L.append(f"| {i} | {r['k']:.3g} | {r['pole']:.4f} | {r['pole_time_s']:.2f} | {r['default']:.4f}"
+                 f"{'' if r['default_polished'] else ' (pole)'} | {r['default_time_s']:.3f} | {b:.4f} | "
                  f"{r.get('based_time_s', float('nan')):.2f} | {r['refine']:.4f}{'' if r['refined'] else ' (kept)'} | "
                  f"{r['refine_time_s']:.1f} | {r['ocp']:.4f} | {r['ocp_time_s']:.1f} | {r['pole'] / r['ocp']:.3f} | "
-                 f"{b / r['ocp']:.3f} | {r['refine'] / r['ocp']:.3f} | {r['refine_certificate']:.1e} | "
+                 f"{r['default'] / r['ocp']:.3f} | {b / r['ocp']:.3f} | {r['refine'] / r['ocp']:.3f} | "
+                 f"{r['refine_certificate']:.1e} | "
                  f"{r.get('refine_replay', float('nan')):.1e} |")
     worst = max(r["refine"] / r["ocp"] for r in oc)
     L += ["", f"* `--refine` is at most {worst:.3f} x the reference's length over these pairs; it takes "
@@ -326,6 +378,24 @@ def report(d) -> str:
     notes = [f"pair {i}: {r['refine_note']}" for i, r in enumerate(oc, 1) if not r["refined"]]
     if notes:
         L += ["* kept (not refined): " + "; ".join(notes)]
+    dr = d["default_random"]
+    ratios = np.array([r["default"] / r["ocp"] for r in dr])
+    one = [r["default_time_s"] for r in dr if r["pole_mode"] == "one"]
+    L += ["", "### The new default on more random pairs", "",
+          f"{len(dr)} pairs (seed 2525, drawn as above): the pole plan, the new default and the reference. The default "
+          f"is at most {ratios.max():.3f} x the reference's length (median {np.median(ratios):.3f} x), never longer "
+          f"than the pole plan ({sum(r['default'] <= r['pole'] for r in dr)} of {len(dr)}); polished "
+          f"{sum(r['polished'] for r in dr)} of {len(dr)}; worst certificate "
+          f"{max(r['certificate'] for r in dr):.1e}, worst DOP853 replay of the polished motions "
+          f"{max((r['replay'] for r in dr if 'replay' in r), default=float('nan')):.1e}. Warm time of the default "
+          f"(median of three solves per pair): median {np.median([r['default_time_s'] for r in dr]):.3f} s, max "
+          f"{max(r['default_time_s'] for r in dr):.3f} s; over the {len(one)} pairs whose pole plan is one leg, "
+          f"median {np.median(one) if one else float('nan'):.3f} s.", "",
+          "| pair | k | pole [R] | pole mode | default [R] | time [s] | reference [R] | default ratio | pole ratio |",
+          "|---|---|---|---|---|---|---|---|---|"]
+    L += [f"| {i} | {r['k']:.3g} | {r['pole']:.4f} | {r['pole_mode']} | {r['default']:.4f}"
+          f"{'' if r['polished'] else ' (pole)'} | {r['default_time_s']:.3f} | {r['ocp']:.4f} | "
+          f"{r['default'] / r['ocp']:.3f} | {r['pole'] / r['ocp']:.3f} |" for i, r in enumerate(dr, 1)]
     f = d["figure"]
     L += ["", "## The figure and the trajectory replay", "",
           "`composed.png`: contact (0.5, -0.3) to (-0.4, 0.4), psi 0 to 1.5 at the same plane point, k = 2.5: "

@@ -214,7 +214,7 @@ def test_cli_plan_base_any(capsys, tmp_path):
     from conftest import run
 
     argv = ["plan", "--from", "0.3", "-0.2", "0.5", "-0.3", "0.2", "--to", "-0.5", "0.6", "--psi", "-0.7",
-            "--contact", "0.35", "0.25", "--k", "4"]
+            "--contact", "0.35", "0.25", "--k", "4", "--polish", "off"]
     lengths = {}
     for base in ("pole", "any"):
         out = tmp_path / f"{base}.json"

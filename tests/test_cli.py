@@ -636,7 +636,7 @@ def test_composed_figure_colours_follow_the_convention():
     from rollplan.plots.common import segments
     from rollplan.plots.composed import piece_runs, plot_composed
 
-    p = plan((0.05, 0.07, 0.8, 0.0, 0.0), 1, k=2.5, start=(0.0, 0.0, 0.0, 0.3, -0.2))
+    p = plan((0.05, 0.07, 0.8, 0.0, 0.0), 1, k=2.5, start=(0.0, 0.0, 0.0, 0.3, -0.2), polish="off")
     traj = p.sample(800)
     runs = piece_runs(p, traj)
     kinds = [p.pieces[j].kind for _, _, j in segments(traj)]

@@ -144,7 +144,8 @@ def number_text(draw, low, high):
        legs=st.sampled_from([None, None, "one", "fallback", "two"]))
 def test_plan_arguments(tmp_path_factory, u, v, psi, steps, k, radius, method, start, contact, legs):
     out = tmp_path_factory.mktemp("plan") / "p.json"
-    argv = ["plan", "--to", u, v, f"--psi={psi}", "--steps", steps, "--method", method, "--json", str(out)]
+    argv = ["plan", "--to", u, v, f"--psi={psi}", "--steps", steps, "--method", method, "--json", str(out),
+            "--polish", "off"]
     if start is not None:
         argv += ["--from", *start]
     if contact is not None:

@@ -83,6 +83,7 @@ for _c in ("plan", "compare"):
     _wholes(_c, "--steps", (["0"], None), (["1001"], None), ([LONG], None))
 _wholes("route", "--steps", (["0"], None), (["1001"], None))
 _cases("plan", "--base", (["middle"], None), (["x" * 500], None))
+_cases("plan", "--polish", (["slow"], None), (["x" * 500], None))
 for _c in ("plan", "route"):
     _cases(_c, "--legs", (["three"], None), (["x" * 500], None))
     _cases(_c, "--method", (["IPOPT"], None))

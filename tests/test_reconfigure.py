@@ -120,8 +120,9 @@ def test_more_random_start_goal_pairs(planner, seed):
 
 
 def test_radius_scales_lengths():
-    p1 = rollplan.plan((0.3, 0.5, 0.2, 0.1, -0.2), k=2.5, start=(0.1, 0.0, 0.0, -0.3, 0.1))
-    p2 = rollplan.plan((0.6, 1.0, 0.2, 0.1, -0.2), k=2.5, start=(0.2, 0.0, 0.0, -0.3, 0.1), radius=2.0)
+    p1 = rollplan.plan((0.3, 0.5, 0.2, 0.1, -0.2), k=2.5, start=(0.1, 0.0, 0.0, -0.3, 0.1), polish="off")
+    p2 = rollplan.plan((0.6, 1.0, 0.2, 0.1, -0.2), k=2.5, start=(0.2, 0.0, 0.0, -0.3, 0.1), radius=2.0,
+                       polish="off")
     assert p2.path_length == pytest.approx(2 * p1.path_length, rel=1e-12)
     assert p2.final[:2] == pytest.approx(2 * np.array(p1.final[:2]), abs=1e-9)
     assert reference_residual(p2) < TOL
@@ -361,7 +362,7 @@ def test_json_trajectory_replays_to_the_goal(tmp_path, capsys, goal, start, step
     out = tmp_path / "p.json"
     argv = ["plan", "--from", *map(str, start), "--to", str(goal[0]), str(goal[1]), "--psi", str(goal[2]),
             "--contact", str(goal[3]), str(goal[4]), "--steps", str(steps), "--k", str(k), "--json", str(out),
-            "--samples", "801"]
+            "--samples", "801", "--polish", "off"]
     assert main(argv) == 0
     d = json.loads(out.read_text())
     tr = d["trajectory"]
@@ -388,7 +389,7 @@ def timed():
     from rollplan.execution.actuation import actuate
 
     robot = rollplan.default_robot()
-    p = rollplan.plan((0.05, 0.02, 0.8, 0.3, -0.2), robot=robot, start=(0.01, -0.02, 0.4, -0.5, 0.6))
+    p = rollplan.plan((0.05, 0.02, 0.8, 0.3, -0.2), robot=robot, start=(0.01, -0.02, 0.4, -0.5, 0.6), polish="off")
     return p, actuate(p, robot, 12.0, 2000), robot
 
 
@@ -439,7 +440,7 @@ def test_a_composed_plan_timed_time_optimally_is_driven_onto_the_goal_by_its_rot
                 np.array([0.0, 0.0, 1.0]))   # the figure eights must turn in place by 1 rad
     g = compose(g, StraightRoll.make(*contact, "departure").element())
     goal = np.array([g[0] * R, g[1] * R, g[2], *contact])
-    p = rollplan.plan(tuple(goal), robot=robot, start=tuple(start))
+    p = rollplan.plan(tuple(goal), robot=robot, start=tuple(start), polish="off")
     assert p.mode == "turn" and [q.kind for q in p.pieces] == ["approach", "turn", "turn", "departure"]
     m = actuate(p, robot, None, 2000, "time-optimal")
     assert m.duration == m.minimum_duration and m.timing == "time-optimal"
@@ -480,7 +481,7 @@ def test_collocation_refuses_a_start_beyond_its_contact_bound_clearly():
 def test_collocation_warm_started_from_a_composed_plan():
     """Start and goal off the pole: the warm start is the composed geometric plan; the optimum is certified."""
     problem = Problem((0.3, 0.2, 0.5, 0.2, -0.1), start=(0.0, 0.0, 0.0, -0.2, 0.3), k=2.5)
-    warm = rollplan.plan(problem.goal, k=2.5, start=problem.start)
+    warm = rollplan.plan(problem.goal, k=2.5, start=problem.start, polish="off")
     r = rollplan.collocate(problem.goal, k=2.5, start=problem.start, intervals=60, warm_start=warm)
     assert r.certificate.passed and r.residual < 1e-6 and r.turns == warm.turns
     assert r.path_length <= warm.path_length * (1 + 1e-6)

@@ -15,16 +15,26 @@ from ..format import fmt_all, fmt_composed, fmt_plan, fmt_solver, fmt_state, num
 from ..planning import add_timing_options, plan_inputs, stage, write_results
 
 
-def _check_refine(args) -> None:
-    """--refine returns one motion in time: it does not combine with --all, timing or plots."""
-    if not args.refine:
-        return
-    other = [flag for flag, given in (("--all", args.all), ("--duration", args.duration is not None),
-                                      ("--timing", args.timing is not None), ("--plot", args.plot is not None),
-                                      ("--timing-plot", args.timing_plot is not None)) if given]
-    if other:
+def _pieces_flags(args) -> list:
+    """The flags given that need the plan's closed-form pieces."""
+    return [flag for flag, given in (("--all", args.all), ("--duration", args.duration is not None),
+                                     ("--timing", args.timing is not None), ("--plot", args.plot is not None),
+                                     ("--timing-plot", args.timing_plot is not None)) if given]
+
+
+def _check_refine(args) -> str:
+    """--refine and --polish fast return one motion in time: they do not combine with --all, timing or plots.
+    Returns the polish to plan with: ``"fast"`` by default, ``"off"`` when those flags are given."""
+    other = _pieces_flags(args)
+    if args.refine and other:
         raise InputError(f"--refine does not combine with {other[0]}: the polished motion is one certified motion "
                          "in time, not closed-form pieces (plan without --refine for it)")
+    if args.polish == "fast" and other:
+        raise InputError(f"--polish fast does not combine with {other[0]}: the polished motion is one certified "
+                         "motion in time, not closed-form pieces (use --polish off for it)")
+    if args.polish is None:
+        return "off" if other else "fast"
+    return args.polish
 
 
 def _print_refined(p, unit) -> None:
@@ -33,9 +43,10 @@ def _print_refined(p, unit) -> None:
         print(f"  refined       none, the plan is kept ({p.stats.details.get('refine', '')})")
         return
     det = p.stats.details
+    starts = "from the straight line (fast polish)" if det.get("polish") == "fast" else \
+        "warm-started by the plan and straight lines"
     print(f"  refined       path length {num(p.path_length)} {unit} (unrefined {num(p.unrefined_length)} {unit}; "
-          f"{p.path_length / p.unrefined_length:.3f} x): minimum-path-length collocation warm-started by the plan "
-          "and straight lines, "
+          f"{p.path_length / p.unrefined_length:.3f} x): minimum-path-length collocation {starts}, "
           f"{det['intervals']} intervals of constant contact accelerations, polar angle <= "
           f"{num(round(math.degrees(det['contact_bound']), 6))} deg")
     print(f"  final         {fmt_state(p.final, unit, wrapped=True)}")
@@ -56,7 +67,7 @@ def _write_refined(args, p, unit) -> None:
 
 
 def cmd_plan(args) -> int:
-    _check_refine(args)
+    polish = _check_refine(args)
     k, robot = plan_inputs(args)
     check_target(args, robot, args.start, args.contact)
     goal = (args.to[0], args.to[1], args.psi, args.contact[0], args.contact[1])
@@ -64,7 +75,7 @@ def cmd_plan(args) -> int:
     problem = Problem(goal, start=args.start, k=k, robot=robot, radius=args.radius)
     p = solve(problem, "geometric", root_solver=args.method, legs=args.legs, steps=args.steps, all_solutions=args.all,
               branch=args.branch, base=args.base, refine=args.refine,
-              curve=args.curve)
+              curve=args.curve, polish=polish)
     refined = p
     if isinstance(p, RefinedPlan):
         p = p.unrefined
@@ -82,7 +93,7 @@ def cmd_plan(args) -> int:
     print(f"  solver        {fmt_solver(p.stats)}")
     if args.all:
         print(fmt_all(p, unit))
-    if args.refine:
+    if args.refine or isinstance(refined, RefinedPlan) or "refine" in refined.stats.details:
         _print_refined(refined, unit)
         _write_refined(args, refined, unit)
     else:
@@ -121,6 +132,11 @@ def register(sub) -> None:
                         "warm-started by the plan and straight lines; the plan is kept, with a note, when that is not "
                         "shorter or not certified (seconds; not with --all, --duration, --timing, --plot, "
                         "--timing-plot)")
+    p.add_argument("--polish", choices=geometric.POLISHES, default=None,
+                   help="between full states (start or goal contact point off the south pole): fast (the default "
+                        "unless --all, --duration, --timing, --plot or --timing-plot is given) replaces the plan by a "
+                        "minimum-path-length optimal-control solve on 8 intervals from the straight line, certified "
+                        "the same way, when that is shorter (tens of ms); off: the figure-eight plan itself")
     p.add_argument("--curve", choices=geometric.CURVE_CHOICES, default="circles",
                    help="leaf family of the figure eight: circles (default), viviani, triangle, square (these for "
                         "k >= 0.5), or best: the shortest certified plan over the families "

@@ -11,12 +11,12 @@ constants in :mod:`.search_constants`), :mod:`.refine` (the polish: root solvers
 (:func:`plan_many`: many targets per call). Design: docs/design/geometric-planner.md.
 """
 
-from .composed import BASES, LEGS, ComposedPlan, ComposedPlanner, as_composed, plan
+from .composed import BASES, LEGS, POLISHES, ComposedPlan, ComposedPlanner, as_composed, plan
 from .many import PlanMany, plan_many
 from .planner import CURVE_CHOICES, TOLERANCE, GeometricPhasePlanner, Plan, StepResult, default_planner, step
 from .refine import DEFAULT_ROOT_SOLVER, SOLVERS
 from .route import Route, plan_route
 
-__all__ = ["TOLERANCE", "CURVE_CHOICES", "SOLVERS", "DEFAULT_ROOT_SOLVER", "LEGS", "BASES", "GeometricPhasePlanner",
-           "Plan", "StepResult", "default_planner", "plan", "step", "ComposedPlanner", "ComposedPlan", "as_composed",
-           "Route", "plan_route", "PlanMany", "plan_many"]
+__all__ = ["TOLERANCE", "CURVE_CHOICES", "SOLVERS", "DEFAULT_ROOT_SOLVER", "LEGS", "BASES", "POLISHES",
+           "GeometricPhasePlanner", "Plan", "StepResult", "default_planner", "plan", "step", "ComposedPlanner",
+           "ComposedPlan", "as_composed", "Route", "plan_route", "PlanMany", "plan_many"]

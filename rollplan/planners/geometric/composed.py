@@ -8,6 +8,8 @@ place, :mod:`.turn`; or two legs, :mod:`.legs`), and a departure roll. By the co
 integration from the start state (:func:`certify_path`). ``legs=`` (:data:`LEGS`) chooses between one and two
 legs: ``"fallback"`` (default), ``"shortest"``, ``"one"``, ``"two"``. ``base="any"`` (:data:`BASES`) also tries one leg
 of figure eights at base points off the pole (:mod:`.basepoint`) and keeps the shorter certified plan.
+``polish="fast"`` (:data:`POLISHES`; the default of :func:`plan`) replaces a plan between full states by the fast
+polish of :mod:`rollplan.planners.refined` when that is certified and shorter.
 
 Derivation, the singular set, the choice of the legs: docs/design/composition.md.
 """
@@ -46,7 +48,7 @@ from .planner import CURVE_CHOICES, TOLERANCE, GeometricPhasePlanner, Plan, defa
 from .refine import DEFAULT_ROOT_SOLVER, SOLVERS
 from .turn import CircleTurn, turn_in_place
 
-__all__ = ["LEGS", "BASES", "BASE_FRACTIONS", "BASE_OFFSETS", "BASE_SOLVES", "BASE_MOVES", "IDENTITY_TOL",
+__all__ = ["LEGS", "BASES", "POLISHES", "BASE_FRACTIONS", "BASE_OFFSETS", "BASE_SOLVES", "BASE_MOVES", "IDENTITY_TOL",
            "ComposedPlan", "ComposedPlanner", "default_composed_planner", "as_composed",
            "certify_path", "sample_path", "plan"]
 
@@ -54,6 +56,9 @@ __all__ = ["LEGS", "BASES", "BASE_FRACTIONS", "BASE_OFFSETS", "BASE_SOLVES", "BA
 LEGS = ("fallback", "shortest", "one", "two")
 #: Where the figure eights may be traced: ``"pole"`` (the south pole only) or ``"any"`` (docs/design/basepoint.md).
 BASES = ("pole", "any")
+#: The polish of a plan between full states: ``"fast"`` (:func:`rollplan.planners.refined.fast_polish`, the shorter
+#: certified motion kept) or ``"off"`` (the figure-eight plan itself).
+POLISHES = ("fast", "off")
 #: Base points screened by ``base="any"`` besides the pole: fractions of the great-circle arc from the start
 #: contact point (0) to the goal contact point (1), and offsets [rad] perpendicular to it (:func:`.basepoint.beside`).
 BASE_FRACTIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -211,6 +216,11 @@ def _pole_to_pole(problem: Problem) -> bool:
     return tuple(problem.start) == tuple(State()) and problem.goal.at_pole
 
 
+def _full_state(problem: Problem) -> bool:
+    """The start or the goal contact point off the south pole."""
+    return not (problem.start.at_pole and problem.goal.at_pole)
+
+
 def as_composed(result) -> ComposedPlan:
     """A geometric-phase :class:`Plan` as a one-leg :class:`ComposedPlan` (its pieces and certificate);
     another geometric-phase result (a composed plan, a route) is returned as it is."""
@@ -253,6 +263,11 @@ class ComposedPlanner(Method):
     refine : bool
         Polish the plan into a shorter certified motion (:func:`rollplan.planners.refined.refine`): a
         :class:`~rollplan.planners.refined.RefinedPlan`, or the plan with a note in ``stats.details["refine"]``.
+    polish : str
+        ``"off"`` (default here): the figure-eight plan. ``"fast"`` (the default of :func:`plan`): between full states
+        (the start or goal contact point off the pole), the fast polish (:func:`rollplan.planners.refined.fast_polish`),
+        kept when certified and shorter; not with ``all_solutions`` or ``branch``, and ``refine`` (the full polish)
+        takes its place.
     curve : str
         Leaf family of the figure eight (:data:`.planner.CURVE_CHOICES`): ``"circles"`` (the default) plans any
         start and goal; another family, or ``"best"`` (the shortest certified plan over all families), plans one leg
@@ -264,8 +279,9 @@ class ComposedPlanner(Method):
     def __init__(self, root_solver: str | None = None, nodes: int = DEFAULT_NODES, tol: float = TOLERANCE,
                  legs: str = "fallback", *, steps: int | None = None, all_solutions: bool = False,
                  branch: int | None = None, method: str | None = None, base: str = "pole",
-                 refine: bool = False, curve: str = "circles") -> None:
+                 refine: bool = False, curve: str = "circles", polish: str = "off") -> None:
         self.base = check_choice("base", base, BASES)
+        self.polish = check_choice("polish", polish, POLISHES)
         root_solver, name = renamed_option("method", method, "root_solver", root_solver, DEFAULT_ROOT_SOLVER)
         self.legs = check_choice("legs", legs, LEGS)
         check_choice(name, root_solver, SOLVERS)
@@ -318,11 +334,15 @@ class ComposedPlanner(Method):
 
     def _solve(self, problem: Problem):
         found = self._geometric(problem)
-        if not self.refine:
-            return found
-        from ..refined import refine
+        if self.refine:
+            from ..refined import refine
 
-        return refine(found)
+            return refine(found)
+        if self.polish == "fast" and _full_state(problem) and not self.all_solutions and self.branch is None:
+            from ..refined import fast_polish
+
+            return fast_polish(found)
+        return found
 
     def _geometric(self, problem: Problem):
         if self.base == "pole" or self.branch is not None:
@@ -559,22 +579,25 @@ class ComposedPlanner(Method):
 
 @lru_cache(maxsize=8)
 def default_composed_planner(root_solver: str = DEFAULT_ROOT_SOLVER, legs: str = "fallback", base: str = "pole",
-                             refine: bool = False) -> ComposedPlanner:
-    """The shared composed planner of :func:`plan` for a root solver, a legs policy, a base policy and the polish."""
-    return ComposedPlanner(root_solver, legs=legs, base=base, refine=refine)
+                             refine: bool = False, polish: str = "off") -> ComposedPlanner:
+    """The shared composed planner of :func:`plan` for a root solver, a legs policy, a base policy and the polishes."""
+    return ComposedPlanner(root_solver, legs=legs, base=base, refine=refine, polish=polish)
 
 
 def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = None, radius: float | None = None,
          all_solutions: bool = False, method: str | None = None, branch: int | None = None, start=None,
          legs: str = "fallback", *, root_solver: str | None = None, base: str = "pole", refine: bool = False,
-         curve: str = "circles"):
+         curve: str = "circles", polish: str = "fast"):
     """Plan an exact, dynamically realizable motion from ``start`` to ``target``, any two states.
 
     From rest at the origin to a goal at the south pole this is the paper's
     planner (:meth:`GeometricPhasePlanner.solve`): ``steps`` traces of a figure
     eight. Otherwise (a start or goal off the pole, a turn in place, a target
     one leg cannot reach) a composed motion: approach roll, figure eights for
-    the target (F), departure roll (docs/design/composition.md).
+    the target (F), departure roll (docs/design/composition.md). Between full
+    states (the start or goal contact point off the pole) that plan is then
+    polished by default (``polish="fast"``): a short rest-to-rest motion of the
+    same model, certified the same way, replaces it when it is shorter.
 
     Parameters
     ----------
@@ -610,12 +633,18 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     curve : str
         Leaf family of the figure eight from :data:`.planner.CURVE_CHOICES` (default ``"circles"``; see
         :class:`ComposedPlanner`).
+    polish : str
+        ``"fast"`` (default): between full states, the fast polish (:func:`rollplan.planners.refined.fast_polish`)
+        replaces the plan when certified and shorter (a :class:`~rollplan.planners.refined.RefinedPlan` with
+        ``stats.details["polish"] == "fast"``; otherwise the plan, the reason in ``stats.details["refine"]``); not
+        applied with ``all_solutions`` or ``branch``. ``"off"``: the figure-eight plan.
 
     Returns
     -------
     PlanResult
         A :class:`Plan` for the paper's problem when one leg serves it, else a
-        :class:`ComposedPlan`; both satisfy :class:`rollplan.result.PlanResult` with the same surface
+        :class:`ComposedPlan` (a :class:`~rollplan.planners.refined.RefinedPlan` when polished); all satisfy
+        :class:`rollplan.result.PlanResult` with the same surface
         (``pieces``, ``legs``, ``mode``, ``alternatives``, ``sample(samples)``).
 
     Raises
@@ -631,10 +660,11 @@ def plan(target, steps: int = 1, k: float | None = None, robot: Robot | None = N
     check_choice(name, root_solver, SOLVERS)
     check_choice("legs", legs, LEGS)
     check_choice("base", base, BASES)
+    check_choice("polish", polish, POLISHES)
     problem = Problem(target, start=start if start is not None else State(), k=k, robot=robot, radius=radius,
                       steps=steps)
     refine = check_flag("refine", refine)
     if check_choice("curve", curve, CURVE_CHOICES) != "circles":
-        return ComposedPlanner(root_solver, legs=legs, base=base, refine=refine, curve=curve).solve(
+        return ComposedPlanner(root_solver, legs=legs, base=base, refine=refine, curve=curve, polish=polish).solve(
             problem, all_solutions, branch)
-    return default_composed_planner(root_solver, legs, base, refine).solve(problem, all_solutions, branch)
+    return default_composed_planner(root_solver, legs, base, refine, polish).solve(problem, all_solutions, branch)

@@ -1,0 +1,149 @@
+"""The default plan between full states (issue 25): the pole plan and its fast polish, the shorter certified kept.
+
+The independent references: :func:`references.optimal_control_length` (the minimum-path-length optimal-control
+problem typed from the printed (15), (16), (20), multiple shooting with RK4, IPOPT from straight lines on the
+turns m = -1, 0, 1; not the project's collocation), and DOP853 along the sampled contact coordinates alone
+(:func:`references.replay`), which must land on the goal.
+"""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from conftest import one_line, run
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import rollplan
+from rollplan.errors import InputError
+from rollplan.planners import geometric
+from rollplan.planners.refined import FAST_INTERVALS, RefinedPlan
+
+import references as ref
+
+README_PAIR = ((0.0, 0.0, 0.0, 0.5, -0.3), (0.8, 0.2, 1.0, -0.4, 0.4), 2.5)
+PAIRS = [README_PAIR,
+         ((0.3, -0.2, 0.5, -0.3, 0.2), (-0.5, 0.6, -0.7, 0.35, 0.25), 4.0),
+         ((0.1, 0.2, -0.4, 0.6, -0.5), (0.9, -0.3, 0.8, -0.2, 0.7), 8.0)]
+
+
+def lands_on_goal(p):
+    """|end - goal| of (15), (16), (20) by DOP853 along splines of the sampled contact coordinates of ``p`` (8001
+    samples: the splines' own error stays well below the tolerance of the tests)."""
+    traj = p.sample(8001)
+    out = ref.replay(traj.u_o, traj.v_o, traj.segment, traj.state[0, :3], p.k)
+    d = np.r_[out[-1], traj.state[-1, 3:]] - np.asarray(p.goal, float)
+    d[2] = ref.wrap(d[2])
+    return float(np.linalg.norm(d))
+
+
+def test_the_default_between_full_states_is_the_certified_fast_polish_of_the_pole_plan():
+    start, goal, k = README_PAIR
+    p = rollplan.plan(goal, k=k, start=start)
+    pole = rollplan.plan(goal, k=k, start=start, polish="off")
+    assert isinstance(p, RefinedPlan) and p.stats.details["polish"] == "fast"
+    assert p.collocation.transcription.intervals == FAST_INTERVALS
+    assert pole.mode == "one" and [q.kind for q in pole.pieces] == ["approach", "leaf", "leaf", "departure"]
+    assert p.unrefined_length == pytest.approx(pole.path_length, rel=1e-12)
+    assert p.path_length < 0.5 * pole.path_length
+    assert p.certificate.method == "cvodes" and p.residual <= 1e-9
+    assert lands_on_goal(p) <= 1e-7
+    # the length is the sampled path's own
+    assert p.path_length == pytest.approx(p.sample(None).path_length(), rel=1e-3)
+
+
+def test_goals_at_the_pole_from_rest_at_the_origin_keep_the_geometric_phase_plan():
+    p, q = rollplan.plan((0.4, 0.3, 0.5), k=2.5), rollplan.plan((0.4, 0.3, 0.5), k=2.5, polish="off")
+    assert isinstance(p, geometric.Plan) and (p.a, p.b, p.gamma) == (q.a, q.b, q.gamma)
+    assert "refine" not in p.stats.details
+
+
+def test_a_polish_outside_the_contact_bound_keeps_the_pole_plan_with_a_note():
+    """A start 85 deg from the pole is beyond the polish's 80 deg: the pole plan, with the reason."""
+    start = (0.0, 0.0, 0.0, *ref.polar_contact(math.radians(85.0), 0.3))
+    p = rollplan.plan((0.3, 0.2, 0.5, 0.1, -0.1), k=2.5, start=start)
+    assert p.mode != "refined" and p.pieces and p.residual <= 1e-9
+    assert p.stats.details["refine"].startswith("not polished")
+
+
+def test_polish_is_checked():
+    with pytest.raises(InputError, match="polish"):
+        rollplan.plan((0.3, 0.2, 0.5, 0.1, -0.1), k=2.5, polish="slow")
+    with pytest.raises(InputError, match="polish"):
+        geometric.ComposedPlanner(polish=True)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("start, goal, k", PAIRS)
+def test_the_default_is_within_1_5x_of_an_independent_optimal_control_solve(start, goal, k):
+    p = rollplan.plan(goal, k=k, start=start)
+    assert isinstance(p, RefinedPlan) and p.residual <= 1e-9
+    reference = ref.optimal_control_length(start, goal, k)[0]
+    assert math.isfinite(reference)
+    assert p.path_length <= 1.5 * reference
+    assert lands_on_goal(p) <= 1e-7
+
+
+def _contact(draw):
+    return ref.polar_contact(draw(st.floats(0.0, math.radians(60.0))), draw(st.floats(-math.pi, math.pi)))
+
+
+@st.composite
+def full_pairs(draw):
+    xy = st.floats(-1.0, 1.0)
+    psi = st.floats(-math.pi, math.pi)
+    start = (draw(xy), draw(xy), draw(psi), *_contact(draw))
+    goal = (draw(xy), draw(xy), draw(psi), *_contact(draw))
+    return start, goal, draw(st.floats(1.5, 8.0))
+
+
+@pytest.mark.slow
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(pair=full_pairs())
+def test_the_default_is_never_longer_than_the_pole_plan(pair):
+    start, goal, k = pair
+    p = rollplan.plan(goal, k=k, start=start)
+    pole = rollplan.plan(goal, k=k, start=start, polish="off")
+    assert p.path_length <= pole.path_length
+    assert p.residual <= 1e-9
+    if isinstance(p, RefinedPlan):
+        assert lands_on_goal(p) <= 1e-7
+
+
+def test_plan_command_polishes_by_default_and_plans_the_figure_eights_with_polish_off(tmp_path, capsys):
+    start, goal, k = README_PAIR
+    argv = ["plan", "--from", *map(str, start), "--to", str(goal[0]), str(goal[1]), "--psi", str(goal[2]),
+            "--contact", *map(str, goal[3:]), "--k", str(k)]
+    code, out, err = run(capsys, *argv, "--json", str(tmp_path / "d.json"))
+    assert code == 0, err
+    assert "fast polish" in out and "refined       path length" in out
+    d = json.loads((tmp_path / "d.json").read_text())
+    assert d["mode"] == "refined" and d["refined"]["intervals"] == FAST_INTERVALS and d["residual"] <= 1e-9
+    assert d["unrefined"]["mode"] == "one" and d["unrefined_length"] == d["unrefined"]["path_length"]
+    assert d["path_length"] < d["unrefined_length"]
+    code, out, err = run(capsys, *argv, "--polish", "off", "--json", str(tmp_path / "e.json"))
+    assert code == 0, err
+    e = json.loads((tmp_path / "e.json").read_text())
+    assert e["mode"] == "one" and "refined" not in e and e["path_length"] == d["unrefined_length"]
+    # the outputs of closed-form pieces plan the figure eights; asked with the polish, one line and exit 2
+    code, out, err = run(capsys, *argv, "--plot", str(tmp_path / "p.png"))
+    assert code == 0 and (tmp_path / "p.png").exists() and "refined" not in out, err
+    code, out, err = run(capsys, *argv, "--polish", "fast", "--duration", "5")
+    assert code == 2 and one_line(err) and "--polish fast does not combine with --duration" in err
+
+
+@pytest.mark.slow
+def test_the_benchmark_measures_the_warm_default_with_its_budget(tmp_path):
+    """The warm time of the default is measured by scripts/bench_default.py through scripts/benchmark.py (a
+    section and a budget row), per pair with the stages where the time goes."""
+    from test_scripts import run_script
+
+    run_script("benchmark.py", tmp_path, "--quick", "--only", "fast_default", "budgets")
+    report = json.loads((tmp_path / "benchmarks.json").read_text())
+    sections = {sec["function"]: sec for sec in report["sections"]}
+    summary = sections["section_fast_default"]["summary"]
+    assert summary["budget_ms"] == 100.0 and summary["median_one_leg_ms"] > 0 and summary["median_one_leg_cpu_ms"] > 0
+    rows = sections["section_fast_default"]["rows"]
+    assert rows and all(r["IPOPT [ms]"] > 0 and r["correction + certificate [ms]"] > 0 for r in rows)
+    assert any("default plan between full states" in row["budget"] for row in sections["section_budgets"]["rows"])
