@@ -391,13 +391,13 @@ def fast_polish(plan, intervals: int = FAST_INTERVALS, contact_bound: float = CO
         planner.boundary(problem, 0)
     except InputError as exc:
         return _unrefined(plan, f"not polished: {exc}")
-    tr = planner.transcription
+    tr, rt = planner.transcription, planner.rest_transcription   # rt: the layout IPOPT solves
     par = rest.rest_parameters(problem.k, 1.0, problem.robot)
     tried, best, best_length = [], None, math.inf
     for m in FAST_TURNS:
         start, final = planner.boundary(problem, m)
         guess = line_guess(tr, start, final, f"line:{m}")
-        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, contact_bound, planner.path_rows)
+        x0, lbx, ubx, lbg, ubg = rt.contact_bounds(guess, start, final, contact_bound, planner.path_rows)
         entry = {"start": guess.name, "turns": m, "iterations": 0, "solve_time_s": 0.0}
         tried.append(entry)
         bound, ok = contact_bound, False
@@ -415,7 +415,8 @@ def fast_polish(plan, intervals: int = FAST_INTERVALS, contact_bound: float = CO
                 break
             v = np.array(sol["x"]).ravel()
             try:
-                controls, motion, rates, size, energy = _corrected(tr.unpack(v)[2], start, final, problem, par)
+                controls, motion, rates, size, energy = _corrected(tr.unpack(rt.full(v))[2], start, final, problem,
+                                                                   par)
             except (RuntimeError, SolverError):   # an integration that fails: no motion from this start
                 entry["status"] = "Correction_Failed"
                 break
@@ -425,7 +426,7 @@ def fast_polish(plan, intervals: int = FAST_INTERVALS, contact_bound: float = CO
                 break
             # the bound holds at the collocation points only: back it off (warm-started)
             bound -= rest.BACKOFF_FACTOR * excess
-            _, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, bound, planner.path_rows)
+            _, lbx, ubx, lbg, ubg = rt.contact_bounds(guess, start, final, bound, planner.path_rows)
             x0 = np.clip(v, lbx, ubx)
         else:
             entry["status"] = "Bound_Violated"
