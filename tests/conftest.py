@@ -22,6 +22,12 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+#: PYTHONDONTWRITEBYTECODE: pytest would rewrite the asserts of every test module again in every worker of every run
+#: (~6 s of CPU per worker); it reads the rewritten bytecode that is there, so this process writes it (once; the
+#: commands a test starts still inherit the setting from the environment).
+_NO_BYTECODE = sys.dont_write_bytecode
+sys.dont_write_bytecode = False
+
 import rollplan  # noqa: E402
 from rollplan.planners.geometric import GeometricPhasePlanner  # noqa: E402
 
@@ -37,7 +43,7 @@ def pytest_configure(config):
     folder = tempfile.mkdtemp(prefix="rollplan-test-cache-")
     config.stash[_CACHE] = folder
     os.environ["ROLLPLAN_CACHE_DIR"] = folder
-    if sys.dont_write_bytecode:
+    if _NO_BYTECODE:
         # PYTHONDONTWRITEBYTECODE: each worker and each command a test starts would compile rollplan's modules from
         # source again (~0.2 s of CPU per command); Python still reads bytecode that is there, so write it once
         import compileall
