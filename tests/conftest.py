@@ -15,6 +15,7 @@ import sys
 import tempfile
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import hypothesis
@@ -223,14 +224,42 @@ def full_disk(tmp_path):
         subprocess.run(["umount", str(disk)], check=False)
 
 
-def run(capsys, *argv):
-    """``rollplan argv`` in this process: (exit code, stdout, stderr)."""
+#: The warnings that Python's default filters do not show (outside ``__main__``).
+_HIDDEN_WARNINGS = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
+
+
+def run(capsys, *argv, cwd=None):
+    """``rollplan argv`` in this process, in the folder ``cwd`` (default: this one): (exit code, stdout, stderr)
+    as a separate process gives them (``capsys``, or ``capfd`` to see what C code writes to the descriptors too).
+    An exception that escapes the command fails the test as a traceback would; the environment, the working folder
+    and the open matplotlib figures are as they were before. For what needs a process of its own (start-up, signals,
+    a traceback of the interpreter, the environment read at import), start one."""
     from rollplan.cli import main
 
+    argv = [str(a) for a in argv]
+    env, here = dict(os.environ), os.getcwd()
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    figures = set(pyplot.get_fignums()) if pyplot else set()
     try:
-        code = main(list(argv))
-    except SystemExit as exc:  # argparse's own checks
-        code = exc.code
+        if cwd is not None:
+            os.chdir(cwd)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                code = main(argv)
+            except SystemExit as exc:  # argparse's own checks
+                code = 0 if exc.code is None else exc.code
+        for w in caught:   # on stderr, as a separate process shows them (Python's default filters)
+            if not issubclass(w.category, _HIDDEN_WARNINGS):
+                sys.stderr.write(warnings.formatwarning(w.message, w.category, w.filename, w.lineno))
+    finally:
+        os.chdir(here)
+        if os.environ != env:
+            os.environ.clear()
+            os.environ.update(env)
+        pyplot = sys.modules.get("matplotlib.pyplot")
+        for number in set(pyplot.get_fignums()) - figures if pyplot else ():
+            pyplot.close(number)
     out, err = capsys.readouterr()
     return code, out, err
 
