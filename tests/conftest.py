@@ -249,8 +249,11 @@ def run(capsys, *argv, cwd=None):
                 code = main(argv)
             except SystemExit as exc:  # argparse's own checks
                 code = 0 if exc.code is None else exc.code
-        for w in caught:   # on stderr, as a separate process shows them (Python's default filters)
-            if not issubclass(w.category, _HIDDEN_WARNINGS):
+        shown = set()
+        for w in caught:   # on stderr, as a separate process shows them (Python's default filters: once a place)
+            place = (str(w.message), w.category, w.filename, w.lineno)
+            if not issubclass(w.category, _HIDDEN_WARNINGS) and place not in shown:
+                shown.add(place)
                 sys.stderr.write(warnings.formatwarning(w.message, w.category, w.filename, w.lineno))
     finally:
         os.chdir(here)
