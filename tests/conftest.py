@@ -15,12 +15,19 @@ import sys
 import tempfile
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import hypothesis
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+#: PYTHONDONTWRITEBYTECODE: pytest would rewrite the asserts of every test module again in every worker of every run
+#: (~6 s of CPU per worker); it reads the rewritten bytecode that is there, so this process writes it (once; the
+#: commands a test starts still inherit the setting from the environment).
+_NO_BYTECODE = sys.dont_write_bytecode
+sys.dont_write_bytecode = False
 
 import rollplan  # noqa: E402
 from rollplan.planners.geometric import GeometricPhasePlanner  # noqa: E402
@@ -37,7 +44,7 @@ def pytest_configure(config):
     folder = tempfile.mkdtemp(prefix="rollplan-test-cache-")
     config.stash[_CACHE] = folder
     os.environ["ROLLPLAN_CACHE_DIR"] = folder
-    if sys.dont_write_bytecode:
+    if _NO_BYTECODE:
         # PYTHONDONTWRITEBYTECODE: each worker and each command a test starts would compile rollplan's modules from
         # source again (~0.2 s of CPU per command); Python still reads bytecode that is there, so write it once
         import compileall
@@ -217,14 +224,45 @@ def full_disk(tmp_path):
         subprocess.run(["umount", str(disk)], check=False)
 
 
-def run(capsys, *argv):
-    """``rollplan argv`` in this process: (exit code, stdout, stderr)."""
+#: The warnings that Python's default filters do not show (outside ``__main__``).
+_HIDDEN_WARNINGS = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
+
+
+def run(capsys, *argv, cwd=None):
+    """``rollplan argv`` in this process, in the folder ``cwd`` (default: this one): (exit code, stdout, stderr)
+    as a separate process gives them (``capsys``, or ``capfd`` to see what C code writes to the descriptors too).
+    An exception that escapes the command fails the test as a traceback would; the environment, the working folder
+    and the open matplotlib figures are as they were before. For what needs a process of its own (start-up, signals,
+    a traceback of the interpreter, the environment read at import), start one."""
     from rollplan.cli import main
 
+    argv = [str(a) for a in argv]
+    env, here = dict(os.environ), os.getcwd()
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    figures = set(pyplot.get_fignums()) if pyplot else set()
     try:
-        code = main(list(argv))
-    except SystemExit as exc:  # argparse's own checks
-        code = exc.code
+        if cwd is not None:
+            os.chdir(cwd)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                code = main(argv)
+            except SystemExit as exc:  # argparse's own checks
+                code = 0 if exc.code is None else exc.code
+        shown = set()
+        for w in caught:   # on stderr, as a separate process shows them (Python's default filters: once a place)
+            place = (str(w.message), w.category, w.filename, w.lineno)
+            if not issubclass(w.category, _HIDDEN_WARNINGS) and place not in shown:
+                shown.add(place)
+                sys.stderr.write(warnings.formatwarning(w.message, w.category, w.filename, w.lineno))
+    finally:
+        os.chdir(here)
+        if os.environ != env:
+            os.environ.clear()
+            os.environ.update(env)
+        pyplot = sys.modules.get("matplotlib.pyplot")
+        for number in set(pyplot.get_fignums()) - figures if pyplot else ():
+            pyplot.close(number)
     out, err = capsys.readouterr()
     return code, out, err
 

@@ -52,20 +52,19 @@ def _without_times(doc):
     return doc
 
 
-def test_plan_all_json_streams_the_same_document_to_a_file_and_to_stdout(tmp_path):
-    """plan --all --json FILE and --json - (subprocesses): the streamed file is exactly json.dumps of its content
-    (the non-streamed text), and stdout carries the same document (up to the solver's wall times)."""
+def test_plan_all_json_streams_the_same_document_to_a_file_and_to_stdout(tmp_path, capfd):
+    """plan --all --json FILE and --json -: the streamed file is exactly json.dumps of its content (the
+    non-streamed text), and stdout carries the same document (up to the solver's wall times)."""
     js = tmp_path / "all.json"
-    argv = [sys.executable, "-m", "rollplan.cli", "plan", "--to", "0.3", "-0.2", "--psi", "0.5", "--steps", "2", "--k",
-            "1.5", "--all", "--json"]
-    run_file = subprocess.run([*argv, str(js)], check=False, capture_output=True, text=True, timeout=600)
-    run_out = subprocess.run([*argv, "-"], check=False, capture_output=True, text=True, timeout=600)
-    assert run_file.returncode == run_out.returncode == 0, (run_file.stderr, run_out.stderr)
+    argv = ["plan", "--to", "0.3", "-0.2", "--psi", "0.5", "--steps", "2", "--k", "1.5", "--all", "--json"]
+    code_file, _, err_file = run(capfd, *argv, js)
+    code_out, stdout, err_out = run(capfd, *argv, "-")
+    assert code_file == code_out == 0, (err_file, err_out)
     text = js.read_text()
     doc = json.loads(text)
     assert text == json.dumps(doc, indent=1) + "\n" and len(doc["alternatives"]) >= 10
-    assert run_out.stdout == json.dumps(json.loads(run_out.stdout), indent=1) + "\n"
-    assert _without_times(json.loads(run_out.stdout)) == _without_times(doc)
+    assert stdout == json.dumps(json.loads(stdout), indent=1) + "\n"
+    assert _without_times(json.loads(stdout)) == _without_times(doc)
 
 
 @pytest.mark.parametrize("argv,ab,k,gamma", [
@@ -519,14 +518,13 @@ def test_batch_out_dash_is_refused_not_a_file_named_dash(capsys, tmp_path, monke
     assert not (tmp_path / "-").exists()
 
 
-def test_version():
+def test_version(capsys):
     from importlib.metadata import version
 
     import rollplan
 
-    r = subprocess.run([sys.executable, "-m", "rollplan.cli", "--version"], check=True, capture_output=True,
-                       text=True, timeout=120)
-    assert r.stdout.strip() == f"rollplan {rollplan.__version__}" == f"rollplan {version('rollplan')}"
+    code, out, _ = run(capsys, "--version")
+    assert code == 0 and out.strip() == f"rollplan {rollplan.__version__}" == f"rollplan {version('rollplan')}"
 
 
 def test_bare_command_prints_usage(capsys):

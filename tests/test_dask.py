@@ -6,22 +6,26 @@ import json
 
 import numpy as np
 import pytest
+from test_batch import _strip_times, check_lines, write_csv
 
-distributed = pytest.importorskip("distributed")
-
-from test_batch import _strip_times, check_lines, write_csv  # noqa: E402
-
-from rollplan import cli  # noqa: E402
-from rollplan.errors import InputError  # noqa: E402
-from rollplan.studies import executor  # noqa: E402
-from rollplan.studies.atlas import compute_atlas, compute_atlases  # noqa: E402
-from rollplan.studies.batch import read_output, run_batch  # noqa: E402
+from rollplan import cli
+from rollplan.errors import InputError
+from rollplan.studies import executor
+from rollplan.studies.atlas import compute_atlas, compute_atlases
+from rollplan.studies.batch import read_output, run_batch
 
 pytestmark = pytest.mark.slow
 
 
+@pytest.fixture(scope="module", autouse=True)
+def distributed():
+    """Dask distributed (every test here skips without it), imported when a test of this module runs: not by a
+    run that only collects the module (the unit tier, -m "not slow")."""
+    return pytest.importorskip("distributed")
+
+
 @pytest.fixture(scope="module")
-def cluster():
+def cluster(distributed):
     """Two worker processes with one thread each, on this machine. A task is lost (KilledWorker) the first
     time its worker dies instead of the fourth (Dask's default), so the lost-task test restarts one worker,
     not three."""
@@ -79,7 +83,7 @@ def test_a_lost_task_is_a_failed_row(tmp_path, cluster):
     assert results[1][:2] == ("failed", 2) and results[1][2] == "KilledWorker"
 
 
-def test_a_lost_scheduler_fails_the_run_not_the_rows(tmp_path):
+def test_a_lost_scheduler_fails_the_run_not_the_rows(tmp_path, distributed):
     """When the scheduler went away mid-run, every pending row was written as failed ('scheduler-connection-lost')
     and --resume never planned them again; now the run stops with ExecutorError (the CLI: exit 4, finished lines
     kept for --resume) and no row is recorded as failed."""

@@ -11,7 +11,7 @@ from dataclasses import replace
 import casadi as ca
 import numpy as np
 import pytest
-from conftest import one_line
+from conftest import one_line, run
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from scipy.integrate import solve_ivp
@@ -630,14 +630,14 @@ def _cli(extra_env, *argv):
                           env={**os.environ, **extra_env}, timeout=600)
 
 
-def test_cli_all_lists_the_plans_of_the_numpy_search():
-    """rollplan plan --all (the C search, in a subprocess): the count and plans (m, a, b, gamma as printed) of the
-    numpy reference search."""
+def test_cli_all_lists_the_plans_of_the_numpy_search(capfd):
+    """rollplan plan --all (the C search): the count and plans (m, a, b, gamma as printed) of the numpy reference
+    search."""
     if not _compiled_search_built():
         pytest.skip("no C compiler: the compiled search is not built")
-    run = _cli({}, "plan", "--to", "0.3", "-0.2", "--psi", "0.5", "--steps", "2", "--k", "1.5", "--all")
-    assert run.returncode == 0, run.stderr
-    lines = run.stdout.split("all plans:")[1].splitlines()
+    code, out, err = run(capfd, "plan", "--to", "0.3", "-0.2", "--psi", "0.5", "--steps", "2", "--k", "1.5", "--all")
+    assert code == 0, err
+    lines = out.split("all plans:")[1].splitlines()
     count, plans = int(lines[0].split()[0]), [tuple(float(x) for x in line.split()[:4]) for line in lines[2:]]
     ref = ReferencePlanner().solve(Problem((0.3, -0.2, 0.5), k=1.5, steps=2), all_solutions=True)
     ref_plans = [(q.branch, q.a, q.b, q.gamma) for q in (ref, *ref.alternatives)]

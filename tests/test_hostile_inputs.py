@@ -4,16 +4,13 @@ naming the flag or the file, no traceback, no output written.
 
 The flags are enumerated from the parser itself (:func:`rollplan.cli.build_parser`): a flag without a case in
 :data:`FLAG_CASES` fails :func:`test_every_flag_of_every_command_has_a_case`. The refusals come before any
-planning, so the cases run in this process; the regressions of the issue's findings run the command in a
-subprocess.
+planning, so the cases and the regressions of the issue's findings run the command in this process.
 """
 
 import argparse
 import json
 import math
 import os
-import subprocess
-import sys
 
 import pytest
 from conftest import one_line, run
@@ -316,76 +313,70 @@ def test_long_values_are_shortened_in_every_message(capsys, folder):
         assert max(len(word) for word in err.replace("'", " ").split()) <= SHOW_WIDTH, err
 
 
-# ----------------------------------------------------------------------------- the findings, in a subprocess
+# ----------------------------------------------------------------------------- the findings, run as the command
 
 
-def cli(cwd, *argv):
-    """``rollplan argv`` in a separate process: (exit code, stdout, stderr)."""
-    r = subprocess.run([sys.executable, "-m", "rollplan.cli", *argv], capture_output=True, text=True, timeout=600,
-                       check=False, cwd=cwd)
-    return r.returncode, r.stdout, r.stderr
-
-
-def test_an_unclosed_quote_in_a_targets_file_is_refused(tmp_path):
+def test_an_unclosed_quote_in_a_targets_file_is_refused(tmp_path, capfd):
     """An unclosed quote swallowed every later row: batch planned one target of two and exited 0."""
     (tmp_path / "t.csv").write_text('u_a,v_a,psi,note\n0,1,0,"open\n0.5,0.3,0.4,x\n')
-    code, _, err = cli(tmp_path, "batch", "t.csv", "--out", "o.jsonl", "--jobs", "1")
+    code, _, err = run(capfd, "batch", "t.csv", "--out", "o.jsonl", "--jobs", "1", cwd=tmp_path)
     assert code == 2 and one_line(err) and "'t.csv', line 2" in err and "quote" in err, err
     assert not (tmp_path / "o.jsonl").exists()
 
 
-def test_an_unclosed_quote_in_a_waypoints_file_is_refused(tmp_path):
+def test_an_unclosed_quote_in_a_waypoints_file_is_refused(tmp_path, capfd):
     """`1,0,0,"a` on row 3 took the way home into its label: a 1-leg route, exit 0."""
     (tmp_path / "w.csv").write_text('u_a,v_a,psi,label\n0,0,0,home\n1,0,0,"a\n0,0,0,back\n')
-    code, out, err = cli(tmp_path, "route", "w.csv", "--json", "r.json")
+    code, out, err = run(capfd, "route", "w.csv", "--json", "r.json", cwd=tmp_path)
     assert code == 2 and one_line(err) and "'w.csv', line 3" in err and "quote" in err, err
     assert not (tmp_path / "r.json").exists()
 
 
 @pytest.mark.parametrize("branch", [" 1", "1\n", "\u0661", "\uff11", "1_0", "1" * 101])
-def test_branch_is_read_by_the_number_parser(tmp_path, branch):
+def test_branch_is_read_by_the_number_parser(tmp_path, capfd, branch):
     """`plan --branch` read int(): spaces, a newline, Arabic-Indic and full-width digits, 1_0 and a 101-digit
     number were taken."""
-    code, _, err = cli(tmp_path, "plan", "--branch", branch)
+    code, _, err = run(capfd, "plan", "--branch", branch, cwd=tmp_path)
     assert code == 2 and one_line(err) and "--branch" in err, err
 
 
-def test_a_target_beyond_reach_is_refused_before_planning(tmp_path):
+def test_a_target_beyond_reach_is_refused_before_planning(tmp_path, capfd):
     """`plan --to 1e200 0` searched on inf/NaN (six numpy warnings) before exit 3."""
-    code, out, err = cli(tmp_path, "plan", "--to", "1e200", "0")
+    code, out, err = run(capfd, "plan", "--to", "1e200", "0", cwd=tmp_path)
     assert code == 2 and one_line(err) and "--to" in err and "17345 R" in err, err
     assert "Warning" not in err and out == ""
 
 
-def test_radius_has_the_limits_of_a_robot_file(tmp_path):
+def test_radius_has_the_limits_of_a_robot_file(tmp_path, capfd):
     """`--radius 5e-324` exited 3, "overflows"; a robot file's radius is held to [1e-6, 1000] m."""
     for radius in ("5e-324", "2000"):
-        code, _, err = cli(tmp_path, "plan", "--radius", radius)
+        code, _, err = run(capfd, "plan", "--radius", radius, cwd=tmp_path)
         assert code == 2 and one_line(err) and "--radius" in err and "[1e-06, 1000] m" in err, err
 
 
-def test_samples_are_checked_before_planning(tmp_path):
+def test_samples_are_checked_before_planning(tmp_path, capfd):
     """`plan --steps 1000 --json f.json` planned, printed the summary, then refused "samples = 2000" without
     naming --samples. Now a --samples too small for the plan is refused first, naming --samples."""
-    code, out, err = cli(tmp_path, "plan", "--steps", "1000", "--samples", "2000", "--json", "f.json")
+    code, out, err = run(capfd, "plan", "--steps", "1000", "--samples", "2000", "--json", "f.json", cwd=tmp_path)
     assert code == 2 and one_line(err) and "--samples 2000" in err and ">= 4003" in err, err
     assert out == "" and not (tmp_path / "f.json").exists()
 
 
-def test_samples_cover_the_pieces_of_base_any(tmp_path):
+def test_samples_cover_the_pieces_of_base_any(tmp_path, capfd):
     """With --base any a plan of one leg may have n + 1 figure eights between two rolls: 2 (n + 1) + 2 pieces,
     more than --legs one allows at the pole; a --samples too small for it is refused before planning."""
-    code, out, err = cli(tmp_path, "plan", "--from", "0", "0", "0", "0.5", "-0.3", "--to", "0.8", "0.2", "--contact",
-                         "-0.4", "0.4", "--legs", "one", "--base", "any", "--samples", "6", "--json", "f.json")
+    code, out, err = run(capfd, "plan", "--from", "0", "0", "0", "0.5", "-0.3", "--to", "0.8", "0.2", "--contact",
+                         "-0.4", "0.4", "--legs", "one", "--base", "any", "--samples", "6", "--json", "f.json",
+                         cwd=tmp_path)
     assert code == 2 and one_line(err) and "--samples 6" in err and ">= 7" in err, err
     assert out == "" and not (tmp_path / "f.json").exists()
 
 
 @pytest.mark.slow
-def test_default_samples_serve_the_largest_steps(tmp_path):
+def test_default_samples_serve_the_largest_steps(tmp_path, capfd):
     """The default --samples serves --steps 1000 (2000 did not: a plan of 1000 figure eights has 2000 pieces,
     2001 piece ends): the JSON has a sample at every piece end, and the last is the target asked for."""
-    code, out, err = cli(tmp_path, "plan", "--to", "0", "1", "--steps", "1000", "--json", "f.json")
+    code, out, err = run(capfd, "plan", "--to", "0", "1", "--steps", "1000", "--json", "f.json", cwd=tmp_path)
     assert code == 0, err
     d = json.loads((tmp_path / "f.json").read_text())
     t = d["trajectory"]
@@ -393,9 +384,9 @@ def test_default_samples_serve_the_largest_steps(tmp_path):
     assert abs(t["u_a"][-1] - 0.0) < 1e-9 and abs(t["v_a"][-1] - 1.0) < 1e-9   # the target asked for
 
 
-def test_long_values_are_shortened(tmp_path):
+def test_long_values_are_shortened(tmp_path, capfd):
     """"steps = 1000000000000..." was printed in full."""
-    code, _, err = cli(tmp_path, "plan", "--steps", "1" + "0" * 90)
+    code, _, err = run(capfd, "plan", "--steps", "1" + "0" * 90, cwd=tmp_path)
     assert code == 2 and one_line(err) and "--steps" in err and "..." in err, err
     assert "0" * SHOW_WIDTH not in err
 
@@ -410,7 +401,7 @@ def test_a_plan_file_duration_is_named_as_the_file_says(tmp_path, capsys):
     d = json.loads((tmp_path / "plan.json").read_text())
     d["duration"] = -10.0
     (tmp_path / "bad.json").write_text(json.dumps(d))
-    code, _, err = cli(tmp_path, "simulate", "bad.json", "--closed-loop")
+    code, _, err = run(capsys, "simulate", "bad.json", "--closed-loop", cwd=tmp_path)
     assert code == 2 and one_line(err) and "'bad.json'" in err and "'duration' = -10.0" in err, err
     assert "piece_duration" not in err
 

@@ -3,6 +3,7 @@ import cycles between rollplan's modules, and no module imports another module's
 Checked on the source (ast), and by importing every module in a fresh interpreter in dependency order."""
 
 import ast
+import functools
 import subprocess
 import sys
 from graphlib import CycleError, TopologicalSorter
@@ -23,12 +24,19 @@ def _module_name(path: Path) -> str:
 MODULES = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
 
 
+@functools.cache
+def _tree(name: str) -> ast.Module:
+    """The syntax tree of a module's source, parsed once per process (the checks only read it)."""
+    path = MODULES[name]
+    return ast.parse(path.read_text(encoding="utf-8"), str(path))
+
+
 def _imports(name: str):
     """``(target module, imported name or None, line)`` of every import statement of a module, at any
     depth (imports inside functions count too), relative imports resolved."""
     path = MODULES[name]
     package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
-    yield from _imports_of(ast.parse(path.read_text(encoding="utf-8"), str(path)), package)
+    yield from _imports_of(_tree(name), package)
 
 
 def _imports_of(tree, package):
@@ -124,8 +132,8 @@ def test_no_hidden_upward_dependency_through_code_in_strings():
     """Code written into a string and run elsewhere (``python -c``) imports too: an upward import there is
     listed in SUBPROCESS_IMPORTS, or it is an error."""
     found = set()
-    for name, path in MODULES.items():
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+    for name in MODULES:
+        for node in ast.walk(_tree(name)):
             text = _string(node)
             if text is not None and "import" in text:
                 try:
