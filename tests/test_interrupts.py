@@ -205,6 +205,18 @@ def test_ctrl_c_at_any_moment_of_compare_acts_at_once(delay):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("delay", [0.2, 0.6])
+def test_ctrl_c_while_compare_screens_its_starts_acts_at_once(delay):
+    """The default `compare` first solves every start on a coarse grid, by two workers: SIGINT during that
+    screening exits 130 within a second or two (the machine may be loaded), one line, no traceback."""
+    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3"], delay,
+                                              wait_for="screening")
+    assert code == 130, err
+    assert elapsed < 3.0, (delay, elapsed, err)
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+@pytest.mark.slow
 def test_sigterm_stops_the_solver_loop_with_exit_143(tmp_path):
     """SIGTERM killed the command at once, leaving its workers and temporaries; now, once the command runs (here:
     while it builds its leaf table), it stops as for Ctrl-C, also inside the solvers (recorded like SIGINT, see
