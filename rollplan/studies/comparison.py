@@ -284,11 +284,11 @@ def _robot(problem: Problem, robot: Robot | None) -> Robot:
                  rotor_inertia_transverse=rob.rotor_inertia_transverse * radius ** 2)
 
 
-def _timed(p, robot: Robot, horizon: float, planner: RestToRestPlanner):
+def _timed(p, robot: Robot, horizon: float, planner: RestToRestPlanner, intervals: int | None = None):
     """``(path, motion)``: the GP plan ``p``'s path timed by the rest-to-rest timing minimising the planner's cost on
-    its N intervals, sampled like the planner's certified motions."""
+    its N intervals (or ``intervals``), sampled like the planner's certified motions."""
     path = ContactPath.of_plan(p, robot)
-    timing = optimal_timing(path, horizon, planner.cost, planner.transcription.intervals)
+    timing = optimal_timing(path, horizon, planner.cost, intervals or planner.transcription.intervals)
     return path, timed_samples(path, timing, planner.samples_per_interval)
 
 
@@ -378,13 +378,18 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     gp_plans = _branches(problem, rob, contact_bound, branches, curve)   # no plan: said before the NLP is built
     gp_time = time.perf_counter() - t0
     report("compare", 0, 3, stage="building the collocation NLP")
-    planner = _planner(**nlp)   # checks N, d, scheme, bound
+    screened = screen is not False and intervals >= 2 * SCREEN_INTERVALS
+    if screened:    # the coarse NLP (it checks d, scheme, bound); the full one built meanwhile, in a thread
+        planner = _planner(**{**nlp, "intervals": SCREEN_INTERVALS})
+        full = interrupts.start_in_thread(_planner, **nlp)
+    else:
+        planner = _planner(**nlp)   # checks N, d, scheme, bound
 
     t0 = time.perf_counter()
     timed = []
     report("compare", 1, 3, stage="timing the geometric-phase branches")
     for p in gp_plans:
-        path, motion = _timed(p, rob, horizon, planner)
+        path, motion = _timed(p, rob, horizon, planner, intervals)
         timed.append((p, Side(motion, measure(motion), p.residual, 0.0), path))
     gp_time += time.perf_counter() - t0
     best_gp = min(range(len(timed)), key=lambda i: timed[i][1].costs[cost])
@@ -406,13 +411,13 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
             for name, m, t, x7, start_cost in candidates]
     jobs += [(f"naive:{m}", m, partial(naive_guess, start=a, final=b), None)
              for m in naive_turns for a, b in [planner.boundary(problem, m)]]
-    screened = screen is not False and intervals >= 2 * SCREEN_INTERVALS
     total = 3 + len(jobs) * (2 if screened else 1)
     if screened:
-        starts, results = _screened(planner, _planner(SCREEN_INTERVALS, degree, scheme, MINIMISED_COSTS[cost],
-                                                      contact_bound), problem, rob, horizon, jobs, total, workers)
+        starts, results = _screened(full, planner, problem, rob, horizon, jobs, total, workers)
+        planner = full()
     else:
-        starts, results = _multistart(planner, problem, rob, horizon, jobs, (2, total, ""), workers)
+        starts, outs = _multistart(planner, problem, rob, horizon, jobs, (2, total, ""), workers)
+        results = [(s.name, r) for s, r in zip(starts, outs) if r is not None]
     report("compare", total - 1, total, stage="correcting and certifying the best optimum")
     best, starts = _finish_best(planner, results, starts)
     coll_time = time.perf_counter() - t1
@@ -437,35 +442,41 @@ def multistart_workers() -> int:
     return max(1, min(cores, MAX_WORKERS))
 
 
-def _screened(planner, coarse, problem, robot, horizon, jobs, total, workers):
+def _screened(full, coarse, problem, robot, horizon, jobs, total, workers):
     """The multistart of ``jobs`` screened on the coarse grid of ``coarse`` (module docstring): ``(starts,
-    results)`` as :func:`_multistart`'s, the results those of the full grid."""
+    results)`` as :func:`_multistart`'s, the results those of the full grid (the planner ``full()``). The first
+    start is solved on the full grid with the screening, by the first worker once ``full()`` is built."""
     log.info("screening %d starts on the coarse grid of N = %d", len(jobs), coarse.transcription.intervals)
-    cstarts, cresults = _multistart(coarse, problem, robot, horizon, jobs, (2, total, " on the coarse grid"),
-                                    workers)
-    found = dict(cresults)
+    both, outs = _multistart(coarse, problem, robot, horizon, [(*jobs[0], full), *jobs],
+                             (1, total, " on the coarse grid"), workers)
+    fine, cstarts, found = {jobs[0][0]: (both[0], outs[0])}, both[1:], {}
+    for s, r in zip(cstarts, outs[1:]):
+        if r is not None:
+            found[s.name] = r
     least = min((r.objective for r in found.values()), default=None)
-    chosen, fine_jobs = [], []
-    for i, (name, m, make_guess, start_cost) in enumerate(jobs):
+    chosen, fine_jobs = [jobs[0][0]], []
+    for name, m, make_guess, start_cost in jobs[1:]:
         r = found.get(name)
-        if i > 0:
-            if r is None or r.objective > least + SCREEN_MARGIN * abs(least):
-                continue
-            if any(found[c].turns == m and abs(found[c].objective - r.objective) <= SCREEN_SAME * abs(r.objective)
-                   for c in chosen if c in found):
-                continue
-            if "->" in name or name.startswith("naive"):
-                make_guess = partial(_refined_guess, r, coarse.transcription)
+        if r is None or r.objective > least + SCREEN_MARGIN * abs(least):
+            continue
+        if any(found[c].turns == m and abs(found[c].objective - r.objective) <= SCREEN_SAME * abs(r.objective)
+               for c in chosen if c in found):
+            continue
+        if "->" in name or name.startswith("naive"):
+            make_guess = partial(_refined_guess, r, coarse.transcription)
         chosen.append(name)
-        fine_jobs.append((name, m, make_guess, start_cost))
-    fstarts, results = _multistart(planner, problem, robot, horizon, fine_jobs, (2 + len(jobs), total, ""), workers)
-    fine = {s.name: s for s in fstarts}
-    starts = []
+        fine_jobs.append((name, m, make_guess, start_cost, full))
+    if fine_jobs:
+        more, outs = _multistart(coarse, problem, robot, horizon, fine_jobs, (2 + len(jobs), total, ""), workers)
+        fine.update((s.name, (s, r)) for s, r in zip(more, outs))
+    starts, results = [], []
     for s in cstarts:
         coarse_cost = found[s.name].objective if s.name in found else None
         if s.name in fine:
-            f = fine[s.name]
+            f, r = fine[s.name]
             starts.append(replace(f, solve_time_s=f.solve_time_s + s.solve_time_s, coarse_cost=coarse_cost))
+            if r is not None:
+                results.append((s.name, r))
         elif coarse_cost is None:
             starts.append(s)
         else:
@@ -486,28 +497,31 @@ def _refined_guess(nlp, coarse_tr, tr) -> Guess:
 
 
 def _multistart(planner, problem, robot, horizon, jobs, progress, workers):
-    """IPOPT from every start of ``jobs`` (``(name, turns, make guess of a transcription, start cost)``), by
-    ``workers`` at once (the first with ``planner``'s solver, the others with its twins): ``(starts, results)`` in
-    the order of ``jobs`` (see :func:`_run`). ``progress``: the step of the first start, the total and what follows
-    each start's name in the progress."""
+    """IPOPT from every start of ``jobs`` (``(name, turns, make guess of a transcription, start cost)``, and
+    optionally a function returning the planner of that start instead of ``planner``), by ``workers`` at once
+    (the first with the planners' own solvers, the others with twins): ``(starts, solutions)`` in the order of
+    ``jobs``, each solution the :class:`NlpSolution` or None (see :func:`_run`). ``progress``: the step of the
+    first start, the total and what follows each start's name in the progress."""
     first, total, where = progress
     pending, lock = iter(range(len(jobs))), threading.Lock()
     workers = min(workers, len(jobs))
 
     def work(own):
-        solver, done = None, []
+        solvers, done = {}, []
         while True:
             with lock:
                 i = next(pending, None)
             if i is None:
                 return done
-            if solver is None:     # a twin is built only by a worker that gets a start
-                solver = planner if own else planner.twin()
-            name, m, make_guess, start_cost = jobs[i]
-            report("compare", first + i, total, stage=f"collocation from {name}{where}")
+            name, m, make_guess, start_cost, *which = jobs[i]
+            base = which[0]() if which else planner
+            if id(base) not in solvers:     # a twin is built only by a worker that gets a start of that planner
+                solvers[id(base)] = base if own else base.twin()
+            solver = solvers[id(base)]
+            report("compare", first + i, total, stage=f"collocation from {name}{'' if which else where}")
             out = []
-            done.append((i, _run(solver, problem, robot, make_guess(tr=solver.transcription), horizon, m, start_cost,
-                                 out, name), out))
+            start = _run(solver, problem, robot, make_guess(tr=solver.transcription), horizon, m, start_cost, out, name)
+            done.append((i, start, out[0][1] if out else None))
 
     log.info("solving %d starts with %d worker(s)", len(jobs), workers)
     if workers == 1:
@@ -516,7 +530,7 @@ def _multistart(planner, problem, robot, horizon, jobs, progress, workers):
         finished = [d for w in interrupts.call_in_threads([partial(work, w == 0) for w in range(workers)])
                     for d in w]
     finished.sort(key=lambda item: item[0])
-    return [start for _, start, _ in finished], [r for _, _, out in finished for r in out]
+    return [start for _, start, _ in finished], [r for _, _, r in finished]
 
 
 def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:
