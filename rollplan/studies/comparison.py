@@ -412,14 +412,15 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     jobs += [(f"naive:{m}", m, partial(naive_guess, start=a, final=b), None)
              for m in naive_turns for a, b in [planner.boundary(problem, m)]]
     total = 3 + len(jobs) * (2 if screened else 1)
+    finished = {}
     if screened:
-        starts, results = _screened(full, planner, problem, rob, horizon, jobs, total, workers)
+        starts, results = _screened(full, planner, problem, rob, horizon, jobs, total, workers, finished)
         planner = full()
     else:
         starts, outs = _multistart(planner, problem, rob, horizon, jobs, (2, total, ""), workers)
         results = [(s.name, r) for s, r in zip(starts, outs) if r is not None]
     report("compare", total - 1, total, stage="correcting and certifying the best optimum")
-    best, starts = _finish_best(planner, results, starts)
+    best, starts = _finish_best(planner, results, starts, finished)
     coll_time = time.perf_counter() - t1
     report("compare", total, total, stage="done")
     if best is None:
@@ -442,13 +443,14 @@ def multistart_workers() -> int:
     return max(1, min(cores, MAX_WORKERS))
 
 
-def _screened(full, coarse, problem, robot, horizon, jobs, total, workers):
+def _screened(full, coarse, problem, robot, horizon, jobs, total, workers, finished):
     """The multistart of ``jobs`` screened on the coarse grid of ``coarse`` (module docstring): ``(starts,
     results)`` as :func:`_multistart`'s, the results those of the full grid (the planner ``full()``). The first
-    start is solved on the full grid with the screening, by the first worker once ``full()`` is built."""
+    start is solved on the full grid, and finished into ``finished``, with the screening, by a worker once
+    ``full()`` is built."""
     log.info("screening %d starts on the coarse grid of N = %d", len(jobs), coarse.transcription.intervals)
     both, outs = _multistart(coarse, problem, robot, horizon, [(*jobs[0], full), *jobs],
-                             (1, total, " on the coarse grid"), workers)
+                             (1, total, " on the coarse grid"), workers, finished)
     fine, cstarts, found = {jobs[0][0]: (both[0], outs[0])}, both[1:], {}
     for s, r in zip(cstarts, outs[1:]):
         if r is not None:
@@ -496,12 +498,13 @@ def _refined_guess(nlp, coarse_tr, tr) -> Guess:
     return guess_from_samples(tr, t[order] * nlp.horizon, x7, nlp.guess.name)
 
 
-def _multistart(planner, problem, robot, horizon, jobs, progress, workers):
+def _multistart(planner, problem, robot, horizon, jobs, progress, workers, finished=None):
     """IPOPT from every start of ``jobs`` (``(name, turns, make guess of a transcription, start cost)``, and
     optionally a function returning the planner of that start instead of ``planner``), by ``workers`` at once
     (the first with the planners' own solvers, the others with twins): ``(starts, solutions)`` in the order of
     ``jobs``, each solution the :class:`NlpSolution` or None (see :func:`_run`). ``progress``: the step of the
-    first start, the total and what follows each start's name in the progress."""
+    first start, the total and what follows each start's name in the progress. With a dict ``finished``, the
+    starts with their own planner are also finished (corrected and certified): their outcomes by name."""
     first, total, where = progress
     pending, lock = iter(range(len(jobs))), threading.Lock()
     workers = min(workers, len(jobs))
@@ -522,6 +525,11 @@ def _multistart(planner, problem, robot, horizon, jobs, progress, workers):
             out = []
             start = _run(solver, problem, robot, make_guess(tr=solver.transcription), horizon, m, start_cost, out, name)
             done.append((i, start, out[0][1] if out else None))
+            if out and finished is not None and which:
+                try:
+                    finished[name] = interrupts.call(solver.finish, out[0][1])
+                except SolverError as exc:
+                    finished[name] = exc
 
     log.info("solving %d starts with %d worker(s)", len(jobs), workers)
     if workers == 1:
@@ -547,16 +555,20 @@ def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, na
     return Start(name, turns, "ok", r.objective, start_cost, r.solve_time_s)
 
 
-def _finish_best(planner, results, starts):
+def _finish_best(planner, results, starts, finished=None):
     """Correct and certify the converged starts in the order of their NLP optima until one passes:
     ``(RestResult or None, starts)`` with that start's cost measured on its certified motion and every start
-    that failed the correction or the certificate marked with its status."""
+    that failed the correction or the certificate marked with its status. ``finished``: the outcomes (RestResult
+    or SolverError) of starts already finished, by name."""
     by_name = {s.name: i for i, s in enumerate(starts)}
     starts = list(starts)
+    finished = finished or {}
     for name, nlp in sorted(results, key=lambda item: item[1].objective):
         i = by_name[name]
         try:
-            best = interrupts.call(planner.finish, nlp)
+            best = finished.get(name) or interrupts.call(planner.finish, nlp)
+            if isinstance(best, SolverError):
+                raise best
         except SolverError as exc:
             starts[i] = replace(starts[i], status=exc.status, cost=None)
             continue
