@@ -474,7 +474,7 @@ def test_screened_multistart_keeps_the_optimum_of_the_full_multistart(target, mo
     every start solved on the full grid (screen=False) keeps the same certified optimum, with the same turns; no
     start screened out reaches a better full-grid optimum."""
     from rollplan.planners.collocation import rest
-    from rollplan.studies.comparison import SCREEN_INTERVALS
+    from rollplan.studies.comparison import SCREEN_INTERVALS, comparison_to_dict
 
     solved, real_nlp = [], rest.RestToRestPlanner.solve_nlp
     monkeypatch.setattr(rest.RestToRestPlanner, "solve_nlp", lambda self, problem, guess, *a: solved.append(
@@ -490,6 +490,8 @@ def test_screened_multistart_keeps_the_optimum_of_the_full_multistart(target, mo
     by_name = {s.name: s for s in full.starts}
     out = [s for s in screened.starts if s.status == "Screened_Out"]
     assert out and all(s.coarse_cost is not None and s.cost is None for s in out)
+    listed = comparison_to_dict(screened)["details"]["starts"]
+    assert [d["coarse_cost"] for d in listed] == [s.coarse_cost for s in screened.starts]
     least = full.result.stats.details["nlp_objective"]     # the other starts' costs are their NLP optima
     for s in out:
         assert by_name[s.name].cost is None or by_name[s.name].cost >= least * (1 - 1e-6)

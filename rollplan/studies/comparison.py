@@ -28,7 +28,7 @@ timed GP branch I (the first ``branches`` admissible branches, shortest first) w
 ``gpI:m->m2`` the best GP branch's motion with psi bent linearly in time to end at ``m2`` turns
 (the nearest other m and m = 0); ``naive:m`` the straight line at rest.
 
-Screening (N >= 2 :data:`SCREEN_INTERVALS`): every start is first solved on the coarse grid of
+Screening (N >= :data:`SCREEN_FROM`): every start is first solved on the coarse grid of
 :data:`SCREEN_INTERVALS` intervals; on the full grid are solved ``gp0`` (from its timed GP branch, always) and each
 other start whose coarse optimum is within :data:`SCREEN_MARGIN` of the least coarse optimum and not that of an
 earlier start (the same turns, the same coarse optimum to :data:`SCREEN_SAME`), warm-started from its coarse
@@ -70,8 +70,8 @@ from ..robot import Robot
 from ..timeseries import TimeSeries
 
 __all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "MINIMISED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side",
-           "Comparison", "MAX_WORKERS", "SCREEN_INTERVALS", "SCREEN_MARGIN", "SCREEN_SAME", "multistart_workers",
-           "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict",
+           "Comparison", "MAX_WORKERS", "SCREEN_FROM", "SCREEN_INTERVALS", "SCREEN_MARGIN", "SCREEN_SAME",
+           "multistart_workers", "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict",
            "MinimumTime", "minimum_time"]
 
 log = logging.getLogger(__name__)
@@ -87,11 +87,13 @@ MINIMISED_COSTS = {"path_length": "path_energy", "angular_velocity": "angular_ve
                    "rotor_energy": "rotor_energy"}
 #: Most starts of the multistart solved at the same time (:func:`multistart_workers`).
 MAX_WORKERS = 2
-#: Intervals of the coarse grid on which the starts are screened (module docstring); only for N >= twice this.
-SCREEN_INTERVALS = 20
+#: Intervals of the coarse grid on which the starts are screened (module docstring).
+SCREEN_INTERVALS = 10
+#: Least N of the full grid for which the starts are screened.
+SCREEN_FROM = 40
 #: A screened start is solved on the full grid when its coarse optimum is at most ``1 + SCREEN_MARGIN`` times the
-#: least coarse optimum (the coarse optima exceed the full grid's by a few percent: the optimum converges at first
-#: order in N from above).
+#: least coarse optimum (the coarse optima exceed the full grid's by about 10 %: the optimum converges at first order
+#: in N from above).
 SCREEN_MARGIN = 0.2
 #: Relative difference below which two coarse optima of the same turns are the same optimum.
 SCREEN_SAME = 1e-6
@@ -348,7 +350,7 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
         Leaf family of the GP plan (:data:`rollplan.planners.geometric.CURVE_CHOICES`; ``best``: the family of the
         shortest plan). Its timing rests at the path's corners (a polygon's vertices).
     screen : bool
-        Screen the starts on the coarse grid when N >= 2 :data:`SCREEN_INTERVALS` (module docstring); False: every
+        Screen the starts on the coarse grid when N >= :data:`SCREEN_FROM` (module docstring); False: every
         start solved on the full grid.
 
     Raises
@@ -378,7 +380,7 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     gp_plans = _branches(problem, rob, contact_bound, branches, curve)   # no plan: said before the NLP is built
     gp_time = time.perf_counter() - t0
     report("compare", 0, 3, stage="building the collocation NLP")
-    screened = screen is not False and intervals >= 2 * SCREEN_INTERVALS
+    screened = screen is not False and intervals >= SCREEN_FROM
     if screened:    # the coarse NLP (it checks d, scheme, bound); the full one built meanwhile, in a thread
         planner = _planner(**{**nlp, "intervals": SCREEN_INTERVALS})
         full = interrupts.start_in_thread(_planner, **nlp)
