@@ -961,26 +961,34 @@ static void sigma_radii(casadi_real p, const branch_t *br, casadi_real k, casadi
     *b_out = clip(br->kap * (p - a), br->b_lo, br->b_hi);
 }
 
+/* g = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta / 2) - h^2 of the branch br at the radii (a, b), and its
+ * derivative along the graph whose radii move as (da, db); rho from the table (accurate = 0) or from the accurate
+ * map (accurate = 1). */
+static void level_values(casadi_real a, casadi_real b, casadi_real da, casadi_real db, const branch_t *br,
+                         casadi_real k, int accurate, casadi_real *g, casadi_real *dg) {
+    casadi_real ra, rb, pa, pb, c = br->c_half;
+    if (accurate) {
+        signed_length(a, k, &ra, &pa);
+        signed_length(b, k, &rb, &pb);
+    } else {
+        rho_lookup(a, &ra, &pa);
+        rho_lookup(b, &rb, &pb);
+    }
+    *g = ra * ra + rb * rb + RP_R(2.0) * c * ra * rb - br->h * br->h;
+    *dg = RP_R(2.0) * (ra + c * rb) * pa * da + RP_R(2.0) * (rb + c * ra) * pb * db;
+}
+
 /* (g, g', a, b) at sigma = p on the sigma graph br (_SigmaGraphs._values): rho of the table (accurate = 0) or of the
  * accurate map (1); g as in branch_values, g' with da/dsigma and db/dsigma. */
 static void sigma_values(casadi_real p, const branch_t *br, casadi_real k, int accurate, casadi_real *g,
                          casadi_real *dg, casadi_real *a, casadi_real *b) {
-    casadi_real ra, rb, pa, pb, ea, eb, den, da, db, c = br->c_half;
+    casadi_real ea, eb, den;
     sigma_radii(p, br, k, a, b);
-    if (accurate) {
-        signed_length(*a, k, &ra, &pa);
-        signed_length(*b, k, &rb, &pb);
-    } else {
-        rho_lookup(*a, &ra, &pa);
-        rho_lookup(*b, &rb, &pb);
-    }
     ea = turn_dr(*a, k);
     eb = turn_dr(*b, k);
     den = eb + br->kap * ea;
-    da = den != RP_R(0.0) ? eb / den : RP_R(0.5);
-    db = den != RP_R(0.0) ? ea / den : RP_R(0.5) * br->kap;
-    *g = ra * ra + rb * rb + RP_R(2.0) * c * ra * rb - br->h * br->h;
-    *dg = RP_R(2.0) * (ra + c * rb) * pa * da + RP_R(2.0) * (rb + c * ra) * pb * db;
+    level_values(*a, *b, den != RP_R(0.0) ? eb / den : RP_R(0.5), den != RP_R(0.0) ? ea / den : RP_R(0.5) * br->kap,
+                 br, k, accurate, g, dg);
 }
 
 /* The sigma graphs of the branch br (eta, h and c_half set) into gr, one per rectangle of pieces whose curve is
@@ -1046,7 +1054,7 @@ static casadi_real other(casadi_real x, casadi_real e, casadi_real k) {
  * rho from the table (accurate = 0) or from the accurate map (accurate = 1). */
 static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int accurate, casadi_real *g,
                           casadi_real *dg, casadi_real *a, casadi_real *b) {
-    casadi_real y = x, dy = RP_R(1.0), ex, dex, da, db, ra, rb, pa, pb, c;
+    casadi_real y = x, dy = RP_R(1.0), ex, dex, da, db;
     if (br->kap) {
         sigma_values(x, br, k, accurate, g, dg, a, b);
         return;
@@ -1069,16 +1077,7 @@ static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int 
         da = dy;
         db = RP_R(1.0);
     }
-    if (accurate) {
-        signed_length(*a, k, &ra, &pa);
-        signed_length(*b, k, &rb, &pb);
-    } else {
-        rho_lookup(*a, &ra, &pa);
-        rho_lookup(*b, &rb, &pb);
-    }
-    c = br->c_half;
-    *g = ra * ra + rb * rb + RP_R(2.0) * c * ra * rb - br->h * br->h;
-    *dg = RP_R(2.0) * (ra + c * rb) * pa * da + RP_R(2.0) * (rb + c * ra) * pb * db;
+    level_values(*a, *b, da, db, br, k, accurate, g, dg);
 }
 
 static casadi_real gval(casadi_real x, const branch_t *br, casadi_real k, casadi_real *dg) {

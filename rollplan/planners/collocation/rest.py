@@ -33,6 +33,7 @@ from ...robot import Robot
 from ...timeseries import TimeSeries
 from ..method import Method
 from .costs import N_PAR
+from .rest_nlp import RestTranscription
 from .transcription import (
     CollocationRun,
     Guess,
@@ -199,7 +200,8 @@ class NlpSolution:
     where : str
         The problem and start, for messages.
     x : ndarray
-        The NLP's solution vector.
+        The NLP's solution in the decision vector of the full transcription (``transcription.unpack`` gives its
+        states, collocation states and accelerations; the NLP solved is :attr:`RestToRestPlanner.rest_transcription`'s).
     objective : float
         The NLP's optimal value scaled to ``horizon`` (the ``nlp_objective`` of the finished result).
     status : str
@@ -225,7 +227,7 @@ class NlpSolution:
 
 
 class RestToRestPlanner:
-    """The rest-to-rest collocation NLP (docs/design/collocation.md), built once; IPOPT solves it.
+    """The rest-to-rest collocation NLP (docs/design/collocation.md, :mod:`.rest_nlp`), built once; IPOPT solves it.
 
     Parameters
     ----------
@@ -245,6 +247,11 @@ class RestToRestPlanner:
 
     Attributes
     ----------
+    transcription : Transcription
+        The grid (nx = 7, nu = 2): the layout of guesses.
+    rest_transcription : RestTranscription
+        The NLP's decision vector and equations: the transcription with the closed-form states (u_o, v_o and
+        the contact rates at the collocation points) and the accelerations eliminated (:mod:`.rest_nlp`).
     ipopt_options : dict
         The options of its IPOPT solver (:func:`.transcription.ipopt_options` and :data:`REST_IPOPT_OPTIONS`).
     """
@@ -268,7 +275,8 @@ class RestToRestPlanner:
         log.info("building the collocation NLP: N = %d, d = %d, cost %s", intervals, degree, cost)
         # minutes for a large N, in C++ that never returns to Python or in CasADi calls that swallow SIGINT:
         # built in a thread, so Ctrl-C acts at once
-        nlp, self.path_rows = interrupts.call_in_thread(self.transcription.contact_nlp, self.point, N_PAR)
+        self.rest_transcription = RestTranscription(self.transcription)
+        nlp, self.path_rows = interrupts.call_in_thread(self.rest_transcription.contact_nlp, self.point, N_PAR)
         self.ipopt_options = {**ipopt_options(self.tol, self.max_iter), **REST_IPOPT_OPTIONS}
         self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, self.ipopt_options)
         self.build_time_s = time.perf_counter() - t0
@@ -343,13 +351,15 @@ class RestToRestPlanner:
             raise InputError(f"robot has k = {robot.k:.12g}, the problem k = {problem.k:.12g}")
         par = rest_parameters(problem.k, 1.0, robot)      # normalized time (docs/design/collocation.md)
         where = f"rest-to-rest N = {tr.intervals}, d = {tr.degree}, cost {self.cost}, {guess.name} guess, m = {turns}"
-        x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, self.contact_bound, self.path_rows)
+        x0, lbx, ubx, lbg, ubg = self.rest_transcription.contact_bounds(guess, start, final, self.contact_bound,
+                                                                        self.path_rows)
         v, f, status, iters, solve_time = self._ipopt(x0, lbx, ubx, lbg, ubg, par, where, 0)
         return NlpSolution(problem, guess, float(horizon), int(turns), robot, start, final, par, where, v,
                            f * horizon ** COST_POWERS[self.cost], status, iters, solve_time)
 
     def _ipopt(self, x0, lbx, ubx, lbg, ubg, par, where: str, iters: int):
-        """One IPOPT solve: ``(x, f, status, iters + its iterations, wall time)``; SolverError if it failed."""
+        """One IPOPT solve from ``x0`` (the NLP's decision vector): ``(x in the full transcription's layout, f,
+        status, iters + its iterations, wall time)``; SolverError if it failed."""
         t0 = time.perf_counter()
         sol = interrupts.call(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
         solve_time = time.perf_counter() - t0
@@ -359,7 +369,7 @@ class RestToRestPlanner:
         if not st["success"]:
             raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {status} after {iters} "
                               "iterations; hint: warm-start from a geometric-phase plan", status)
-        return np.array(sol["x"]).ravel(), float(sol["f"]), status, iters, solve_time
+        return self.rest_transcription.full(np.array(sol["x"]).ravel()), float(sol["f"]), status, iters, solve_time
 
     def finish(self, nlp: NlpSolution) -> RestResult:
         """The second stage of :meth:`solve`: the Newton correction and the CVODES certificate of ``nlp`` (a
@@ -384,8 +394,9 @@ class RestToRestPlanner:
                 break
             # the bound holds at the collocation points only: back it off (warm-started)
             bound -= BACKOFF_FACTOR * excess
-            _, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, bound, self.path_rows)
-            v, f, status, iters, dt = self._ipopt(np.clip(v, lbx, ubx), lbx, ubx, lbg, ubg, par, where, iters)
+            _, lbx, ubx, lbg, ubg = self.rest_transcription.contact_bounds(guess, start, final, bound, self.path_rows)
+            v, f, status, iters, dt = self._ipopt(np.clip(self.rest_transcription.reduced(v), lbx, ubx), lbx, ubx,
+                                                  lbg, ubg, par, where, iters)
             solve_time += dt
         else:
             raise SolverError(f"the collocation solution ({where}) leaves the contact bound {c:.6g} rad between "

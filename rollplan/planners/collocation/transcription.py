@@ -29,6 +29,9 @@ __all__ = ["SCHEMES", "Guess", "Transcription", "CollocationRun", "ipopt_options
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
 SCHEMES = ("legendre", "radau")
+#: Relative cut-off of the singular values of the end-state Jacobian in a Gauss-Newton step (:func:`gauss_newton`):
+#: directions in which the controls move the end state less than this times the most are not followed.
+GN_RCOND = 1e-9
 
 
 def ipopt_options(tol: float, max_iter: int) -> dict:
@@ -57,7 +60,9 @@ def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float
 
     ``step`` is a :func:`sensitivity_step`; the motion runs from ``start`` through the N intervals of length
     ``1 / N`` with ``controls`` (N, nu) and parameters ``par``. Each step solves ``J d = -(x(1) - final)`` for the
-    least-norm ``d`` (J the nx x (N nu) Jacobian of the end state, chained from the intervals' sensitivities) and
+    least-norm ``d`` (J the nx x (N nu) Jacobian of the end state, chained from the intervals' sensitivities; its
+    singular values below :data:`GN_RCOND` times the largest taken as zero, so that a nearly singular J at a
+    degenerate optimum does not give a huge step) and
     sets ``controls += lambda d`` with the first of ``lambda = 1, 1/2, ..., 1/8`` that lowers the largest end
     error (a step whose integration fails counts as not lowering it), until that error is at most ``goal_tol``,
     no step lowers it, or after ``max_steps`` steps. ``plain``, the same :func:`sensitivity_step` without
@@ -97,7 +102,7 @@ def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float
         for i in range(N - 1, -1, -1):
             J[:, nu * i: nu * (i + 1)] = M @ B[i]
             M = M @ A[i]
-        d = np.linalg.lstsq(J, final - x, rcond=None)[0].reshape(N, nu)
+        d = np.linalg.lstsq(J, final - x, rcond=GN_RCOND)[0].reshape(N, nu)
         for lam in (1.0, 0.5, 0.25, 0.125):
             trial = run(a + lam * d, False)
             if trial[0] < size:

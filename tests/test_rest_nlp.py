@@ -1,0 +1,117 @@
+"""The rest-to-rest NLP with its closed-form states eliminated (rollplan.planners.collocation.rest_nlp).
+
+Independent references: scipy's solve_ivp of ``r' = a, u' = r`` (the closed forms at the collocation points),
+the midpoint and implicit Euler rules written out (degree 1), the full transcription's equations
+(``Transcription.contact_nlp`` with nx = 7, every state a collocation unknown) at the reduced NLP's solution,
+and DOP853 on the printed (15), (16), (20) (``references.rest_path_final``) for the corrected controls.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from rollplan import Problem
+from rollplan.planners.collocation.rest import (
+    N_PAR,
+    TOLERANCE,
+    RestToRestPlanner,
+    correct,
+    naive_guess,
+    rest_parameters,
+)
+from rollplan.planners.collocation.rest_nlp import RestTranscription
+from rollplan.planners.collocation.transcription import Guess, Transcription
+from rollplan.planners.geometric.maneuvers import StraightRoll
+
+import references
+
+K = 2.5
+X0 = np.array([0.1, -0.2, 0.3, 0.25, -0.15, 0.7, -0.4])
+R1 = np.array([-0.9, 1.3])
+H = 0.37
+
+
+@pytest.mark.parametrize("scheme", ["legendre", "radau"])
+@pytest.mark.parametrize("degree", [2, 3, 4])
+def test_closed_forms_are_the_motion_of_a_constant_acceleration(scheme, degree):
+    """For d >= 2 the eliminated values at the collocation points and the interval's end are those of the exact
+    motion ``r' = a, (u_o, v_o)' = r`` (scipy), ``a = (r1 - r0) / H``."""
+    rt = RestTranscription(Transcription(4, degree, scheme, nx=7, nu=2))
+    uv, rates, uv_end, a = rt.stages(X0, R1, H)
+    np.testing.assert_allclose(a, (R1 - X0[5:7]) / H, rtol=1e-14)
+    sol = solve_ivp(lambda t, y: np.concatenate([y[2:], a]), (0.0, H), np.concatenate([X0[3:5], X0[5:7]]),
+                    method="DOP853", rtol=1e-13, atol=1e-14, dense_output=True)
+    pts = np.asarray(ca.collocation_points(degree, scheme))
+    for j, s in enumerate(pts):
+        np.testing.assert_allclose(np.concatenate([uv[j], rates[j]]), sol.sol(s * H), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(uv_end, sol.y[:2, -1], rtol=0, atol=1e-12)
+
+
+def test_degree_one_closed_forms_are_the_midpoint_and_implicit_euler_rules():
+    """With one point the collocation is the midpoint rule (Gauss) or implicit Euler (Radau), not the exact
+    quadratic: the elimination keeps the collocation's own values."""
+    r0 = X0[5:7]
+    uv, rates, end, _ = RestTranscription(Transcription(4, 1, "legendre", nx=7, nu=2)).stages(X0, R1, H)
+    mid = (r0 + R1) / 2
+    np.testing.assert_allclose(rates[0], mid, rtol=1e-14)
+    np.testing.assert_allclose(uv[0], X0[3:5] + H / 2 * mid, rtol=1e-14)
+    np.testing.assert_allclose(end, X0[3:5] + H * mid, rtol=1e-14)
+    uv, rates, end, _ = RestTranscription(Transcription(4, 1, "radau", nx=7, nu=2)).stages(X0, R1, H)
+    np.testing.assert_allclose(rates[0], R1, rtol=1e-14)
+    np.testing.assert_allclose(uv[0], X0[3:5] + H * R1, rtol=1e-14)
+    np.testing.assert_allclose(end, X0[3:5] + H * R1, rtol=1e-14)
+
+
+@pytest.mark.parametrize("scheme, degree", [("legendre", 3), ("radau", 2)])
+def test_reduced_solution_solves_the_full_transcription(scheme, degree):
+    """The reduced NLP's optimum, unpacked (the eliminated values by the closed forms), meets every equation of
+    the full transcription (every state a collocation unknown) and its contact bound, with the same cost."""
+    planner = RestToRestPlanner(8, degree, scheme)
+    problem = Problem((0.5, 0.3, 0.4), k=K)
+    nlp = planner.solve_nlp(problem, naive_guess(planner.transcription, *planner.boundary(problem, 0)))
+    states, colloc, controls = planner.transcription.unpack(nlp.x)
+    full, rows = planner.transcription.contact_nlp(planner.point, N_PAR)
+    F = ca.Function("full", [full["x"], full["p"]], [full["f"], full["g"]])
+    f, g = F(planner.transcription.pack(Guess(states, colloc, controls, "reduced")), rest_parameters(K, 1.0))
+    g = np.asarray(g).ravel()
+    assert np.abs(g[~rows]).max() < 1e-10
+    assert g[rows].min() >= math.cos(planner.contact_bound) - 1e-12
+    assert float(f) == pytest.approx(nlp.objective, rel=1e-13)
+    np.testing.assert_allclose(states[[0, -1]], np.array(planner.boundary(problem, 0)), atol=0)
+    assert np.abs(colloc[:, :, 3:5]).max() <= planner.contact_bound
+
+
+def test_correction_at_an_optimum_whose_end_jacobian_is_singular():
+    """From the straight line, N = 8, the NLP of a straight roll reaches an optimum where the controls cannot move
+    the end state in one direction (the smallest singular value of the end-state Jacobian below 1e-9 of the largest):
+    Gauss-Newton ignores that direction instead of taking a huge step, and its controls reach the goal at rest
+    (DOP853 on the printed equations)."""
+    u, v = 0.3, -0.2
+    problem = Problem((*StraightRoll.make(u, v, "departure").element(), u, v), k=K)
+    planner = RestToRestPlanner(8, 3, cost="path_energy")
+    start, final = planner.boundary(problem, 0)
+    nlp = planner.solve_nlp(problem, naive_guess(planner.transcription, start, final))
+    controls, _ = correct(planner.transcription.unpack(nlp.x)[2], start, final, nlp.par, "path_energy")
+    y, rates = references.rest_path_final(controls, 1.0, K)
+    assert np.abs(y - final[:3]).max() < TOLERANCE and np.abs(rates).max() < TOLERANCE
+    assert planner.finish(nlp).residual < TOLERANCE
+
+
+def test_decision_vectors_convert_both_ways():
+    """``unpack`` (all intervals at once) gives each interval's closed forms (:meth:`stages`), ``pack`` inverts it,
+    and the full transcription's layout (``full``, ``reduced``) round-trips exactly."""
+    rt = RestTranscription(Transcription(5, 3, nx=7, nu=2))
+    v = np.random.default_rng(0).normal(size=7 + 5 * rt.block)
+    states, colloc, controls = rt.unpack(v, horizon=2.0)
+    for i in range(5):
+        uv, rates, _, a = rt.stages(states[i], states[i + 1][5:7], 2.0 / 5)
+        np.testing.assert_allclose(colloc[i][:, 3:], np.hstack([uv, rates]), rtol=1e-14)
+        np.testing.assert_allclose(controls[i], a, rtol=1e-14)
+    np.testing.assert_array_equal(rt.pack(Guess(states, colloc, controls, "v")), v)
+    np.testing.assert_array_equal(rt.reduced(rt.full(v)), v)
+    assert rt.full(v).size == 7 + 5 * (7 * 3 + 2 + 7)
