@@ -852,7 +852,8 @@ def section_peer(ctx):
 BUDGET_PEER_SPEEDUP = 1.5
 #: Issue 28: wall time of the default ``rollplan compare`` on an idle machine [s].
 BUDGET_COMPARE_S = 3.0
-#: The command timed by :func:`section_compare` (the default comparison: N = 100, d = 3, 2 branches, 6 starts).
+#: The command timed by :func:`section_compare` (the default comparison: N = 100, d = 3, 2 branches, 5 starts
+#: screened on 10 intervals).
 COMPARE_ARGS = ["compare", "--to", "0.5", "0.3"]
 
 

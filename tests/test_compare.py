@@ -464,3 +464,34 @@ def test_cli_compare_curve_times_the_familys_plan(tmp_path, capsys):
     assert (end[2] - 0.4) / (2 * math.pi) == pytest.approx(round((end[2] - 0.4) / (2 * math.pi)), abs=1e-9)
     tr = d["geometric_phase"]["trajectory"]
     assert tr["u_a"][-1] == pytest.approx(0.5, abs=1e-6) and tr["v_a"][-1] == pytest.approx(0.3, abs=1e-6)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("target", [(0.5, 0.3, 0.4), (0.2, 0.1, 2.0)])
+def test_screened_multistart_keeps_the_optimum_of_the_full_multistart(target, monkeypatch):
+    """Every start was solved on the full grid, the hard ones for up to 150 IPOPT iterations each. Now the starts
+    are screened on the coarse grid and only gp0 and the promising ones solved on the full grid. The brute force:
+    every start solved on the full grid (screen=False) keeps the same certified optimum, with the same turns; no
+    start screened out reaches a better full-grid optimum."""
+    from rollplan.planners.collocation import rest
+    from rollplan.studies.comparison import SCREEN_INTERVALS, comparison_to_dict
+
+    solved, real_nlp = [], rest.RestToRestPlanner.solve_nlp
+    monkeypatch.setattr(rest.RestToRestPlanner, "solve_nlp", lambda self, problem, guess, *a: solved.append(
+        (self.transcription.intervals, guess.name)) or real_nlp(self, problem, guess, *a))
+    screened = compare(target, 1, k=K, intervals=40)
+    fine = [name for n, name in solved if n == 40]
+    assert len([name for n, name in solved if n == SCREEN_INTERVALS]) == len(screened.starts)
+    assert 1 <= len(fine) < len(screened.starts) and fine[0] == screened.starts[0].name
+    full = compare(target, 1, k=K, intervals=40, screen=False)
+    kept = full.collocation.costs["angular_velocity"]
+    assert screened.collocation.costs["angular_velocity"] == pytest.approx(kept, rel=1e-9)
+    assert screened.result.turns == full.result.turns and screened.collocation.residual <= 1e-9
+    by_name = {s.name: s for s in full.starts}
+    out = [s for s in screened.starts if s.status == "Screened_Out"]
+    assert out and all(s.coarse_cost is not None and s.cost is None for s in out)
+    listed = comparison_to_dict(screened)["details"]["starts"]
+    assert [d["coarse_cost"] for d in listed] == [s.coarse_cost for s in screened.starts]
+    least = full.result.stats.details["nlp_objective"]     # the other starts' costs are their NLP optima
+    for s in out:
+        assert by_name[s.name].cost is None or by_name[s.name].cost >= least * (1 - 1e-6)

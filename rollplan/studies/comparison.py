@@ -27,6 +27,12 @@ Starts of the multistart (each a :class:`Start`): ``gpI:m`` the collocation warm
 timed GP branch I (the first ``branches`` admissible branches, shortest first) with its m whole turns;
 ``gpI:m->m2`` the best GP branch's motion with psi bent linearly in time to end at ``m2`` turns
 (the nearest other m and m = 0); ``naive:m`` the straight line at rest.
+
+Screening (N >= :data:`SCREEN_FROM`): every start is first solved on the coarse grid of
+:data:`SCREEN_INTERVALS` intervals; on the full grid are solved ``gp0`` (from its timed GP branch, always) and each
+other start whose coarse optimum is within :data:`SCREEN_MARGIN` of the least coarse optimum and not that of an
+earlier start (the same turns, the same coarse optimum to :data:`SCREEN_SAME`), warm-started from its coarse
+solution (a ``gpI:m`` start from its GP branch). The others are marked ``"Screened_Out"``.
 """
 
 from __future__ import annotations
@@ -64,8 +70,8 @@ from ..robot import Robot
 from ..timeseries import TimeSeries
 
 __all__ = ["CONTACT_BOUND", "COMPARED_COSTS", "MINIMISED_COSTS", "SIDE_KEYS", "TRAJECTORY_KEYS", "Start", "Side",
-           "Comparison", "MAX_WORKERS", "multistart_workers",
-           "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict",
+           "Comparison", "MAX_WORKERS", "SCREEN_FROM", "SCREEN_INTERVALS", "SCREEN_MARGIN", "SCREEN_SAME",
+           "multistart_workers", "leaf_radius_bound", "robot_for_k", "branch_guess", "compare", "comparison_to_dict",
            "MinimumTime", "minimum_time"]
 
 log = logging.getLogger(__name__)
@@ -81,6 +87,16 @@ MINIMISED_COSTS = {"path_length": "path_energy", "angular_velocity": "angular_ve
                    "rotor_energy": "rotor_energy"}
 #: Most starts of the multistart solved at the same time (:func:`multistart_workers`).
 MAX_WORKERS = 2
+#: Intervals of the coarse grid on which the starts are screened (module docstring).
+SCREEN_INTERVALS = 10
+#: Least N of the full grid for which the starts are screened.
+SCREEN_FROM = 40
+#: A screened start is solved on the full grid when its coarse optimum is at most ``1 + SCREEN_MARGIN`` times the
+#: least coarse optimum (the coarse optima exceed the full grid's by about 10 %: the optimum converges at first order
+#: in N from above).
+SCREEN_MARGIN = 0.2
+#: Relative difference below which two coarse optima of the same turns are the same optimum.
+SCREEN_SAME = 1e-6
 #: Keys of each side in the JSON of ``rollplan compare --json``.
 SIDE_KEYS = ("path_length", "effort", "residual", "solve_time_s", "contact_bound", "trajectory")
 #: Columns of each side's trajectory in that JSON.
@@ -124,7 +140,10 @@ class Start:
     start_cost : float or None
         The same cost of the timed GP branch it started from (``gpI:m`` starts only).
     solve_time_s : float
-        IPOPT's time [s].
+        IPOPT's time [s] (on both grids when screened).
+    coarse_cost : float or None
+        Its optimum on the coarse grid of the screening (module docstring); None when not screened or it failed
+        there.
     """
 
     name: str
@@ -133,6 +152,7 @@ class Start:
     cost: float | None
     start_cost: float | None
     solve_time_s: float
+    coarse_cost: float | None = None
 
 
 @dataclass(frozen=True)
@@ -266,11 +286,11 @@ def _robot(problem: Problem, robot: Robot | None) -> Robot:
                  rotor_inertia_transverse=rob.rotor_inertia_transverse * radius ** 2)
 
 
-def _timed(p, robot: Robot, horizon: float, planner: RestToRestPlanner):
+def _timed(p, robot: Robot, horizon: float, planner: RestToRestPlanner, intervals: int | None = None):
     """``(path, motion)``: the GP plan ``p``'s path timed by the rest-to-rest timing minimising the planner's cost on
-    its N intervals, sampled like the planner's certified motions."""
+    its N intervals (or ``intervals``), sampled like the planner's certified motions."""
     path = ContactPath.of_plan(p, robot)
-    timing = optimal_timing(path, horizon, planner.cost, planner.transcription.intervals)
+    timing = optimal_timing(path, horizon, planner.cost, intervals or planner.transcription.intervals)
     return path, timed_samples(path, timing, planner.samples_per_interval)
 
 
@@ -299,7 +319,7 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
             radius: float | None = None, horizon: float = 1.0, cost: str = "angular_velocity",
             intervals: int = 100, degree: int = 3, scheme: str = "legendre",
             contact_bound: float = CONTACT_BOUND, branches: int = 2, naive: bool = True,
-            workers: int | None = None, curve: str = "circles") -> Comparison:
+            workers: int | None = None, curve: str = "circles", screen: bool = True) -> Comparison:
     """Solve one problem by both methods, fairly (module docstring), and measure both.
 
     Parameters
@@ -329,6 +349,9 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     curve : str
         Leaf family of the GP plan (:data:`rollplan.planners.geometric.CURVE_CHOICES`; ``best``: the family of the
         shortest plan). Its timing rests at the path's corners (a polygon's vertices).
+    screen : bool
+        Screen the starts on the coarse grid when N >= :data:`SCREEN_FROM` (module docstring); False: every
+        start solved on the full grid.
 
     Raises
     ------
@@ -357,13 +380,18 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     gp_plans = _branches(problem, rob, contact_bound, branches, curve)   # no plan: said before the NLP is built
     gp_time = time.perf_counter() - t0
     report("compare", 0, 3, stage="building the collocation NLP")
-    planner = _planner(**nlp)   # checks N, d, scheme, bound
+    screened = screen is not False and intervals >= SCREEN_FROM
+    if screened:    # the full NLP built in a thread, meanwhile the coarse one (it checks d, scheme, bound)
+        full = interrupts.start_in_thread(_planner, **nlp)
+        planner = _planner(**{**nlp, "intervals": SCREEN_INTERVALS})
+    else:
+        planner = _planner(**nlp)   # checks N, d, scheme, bound
 
     t0 = time.perf_counter()
     timed = []
     report("compare", 1, 3, stage="timing the geometric-phase branches")
     for p in gp_plans:
-        path, motion = _timed(p, rob, horizon, planner)
+        path, motion = _timed(p, rob, horizon, planner, intervals)
         timed.append((p, Side(motion, measure(motion), p.residual, 0.0), path))
     gp_time += time.perf_counter() - t0
     best_gp = min(range(len(timed)), key=lambda i: timed[i][1].costs[cost])
@@ -371,7 +399,6 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     gp_side = Side(gp_side.motion, gp_side.costs, gp_side.residual, gp_time)
 
     turns_of = lambda q: _turns(q, problem)  # noqa: E731
-    tr = planner.transcription
     candidates = [(f"gp{i}:{turns_of(p)}", turns_of(p), *_warm_samples(side.motion, problem.radius),
                    side.costs[cost]) for i, (p, side, _) in enumerate(timed)]
     m0 = turns_of(plan)
@@ -382,13 +409,20 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
         candidates.append((f"gp{best_gp}:{m0}->{m2}", m2, t_best, x2, None))
     t1 = time.perf_counter()
     naive_turns = sorted({m0, 0}, key=abs) if naive else []
-    total = 3 + len(candidates) + len(naive_turns)
-    jobs = [(name, m, partial(guess_from_samples, tr, t, x7, name), start_cost)
+    jobs = [(name, m, partial(guess_from_samples, t=t, x7=x7, name=name), start_cost)
             for name, m, t, x7, start_cost in candidates]
-    jobs += [(f"naive:{m}", m, partial(naive_guess, tr, *planner.boundary(problem, m)), None) for m in naive_turns]
-    starts, results = _multistart(planner, problem, rob, horizon, jobs, total, workers)
+    jobs += [(f"naive:{m}", m, partial(naive_guess, start=a, final=b), None)
+             for m in naive_turns for a, b in [planner.boundary(problem, m)]]
+    total = 3 + len(jobs) * (2 if screened else 1)
+    finished = {}
+    if screened:
+        starts, results = _screened(full, planner, problem, rob, horizon, jobs, total, workers, finished)
+        planner = full()
+    else:
+        starts, outs = _multistart(planner, problem, rob, horizon, jobs, (2, total, ""), workers)
+        results = [(s.name, r) for s, r in zip(starts, outs) if r is not None]
     report("compare", total - 1, total, stage="correcting and certifying the best optimum")
-    best, starts = _finish_best(planner, results, starts)
+    best, starts = _finish_best(planner, results, starts, finished)
     coll_time = time.perf_counter() - t1
     report("compare", total, total, stage="done")
     if best is None:
@@ -411,26 +445,93 @@ def multistart_workers() -> int:
     return max(1, min(cores, MAX_WORKERS))
 
 
-def _multistart(planner, problem, robot, horizon, jobs, total, workers):
-    """IPOPT from every start of ``jobs`` (``(name, turns, make guess, start cost)``), by ``workers`` at once
-    (the first with ``planner``'s solver, the others with its twins): ``(starts, results)`` in the order of
-    ``jobs`` (see :func:`_run`)."""
+def _screened(full, coarse, problem, robot, horizon, jobs, total, workers, finished):
+    """The multistart of ``jobs`` screened on the coarse grid of ``coarse`` (module docstring): ``(starts,
+    results)`` as :func:`_multistart`'s, the results those of the full grid (the planner ``full()``). The first
+    start is solved on the full grid, and finished into ``finished``, with the screening, by a worker once
+    ``full()`` is built."""
+    log.info("screening %d starts on the coarse grid of N = %d", len(jobs), coarse.transcription.intervals)
+    both, outs = _multistart(coarse, problem, robot, horizon, [(*jobs[0], full), *jobs],
+                             (1, total, " on the coarse grid"), workers, finished)
+    fine, cstarts, found = {jobs[0][0]: (both[0], outs[0])}, both[1:], {}
+    for s, r in zip(cstarts, outs[1:]):
+        if r is not None:
+            found[s.name] = r
+    least = min((r.objective for r in found.values()), default=None)
+    chosen, fine_jobs = [jobs[0][0]], []
+    for name, m, make_guess, start_cost in jobs[1:]:
+        r = found.get(name)
+        if r is None or r.objective > least + SCREEN_MARGIN * abs(least):
+            continue
+        if any(found[c].turns == m and abs(found[c].objective - r.objective) <= SCREEN_SAME * abs(r.objective)
+               for c in chosen if c in found):
+            continue
+        if "->" in name or name.startswith("naive"):
+            make_guess = partial(_refined_guess, r, coarse.transcription)
+        chosen.append(name)
+        fine_jobs.append((name, m, make_guess, start_cost, full))
+    if fine_jobs:
+        more, outs = _multistart(coarse, problem, robot, horizon, fine_jobs, (2 + len(jobs), total, ""), workers)
+        fine.update((s.name, (s, r)) for s, r in zip(more, outs))
+    starts, results = [], []
+    for s in cstarts:
+        coarse_cost = found[s.name].objective if s.name in found else None
+        if s.name in fine:
+            f, r = fine[s.name]
+            starts.append(replace(f, solve_time_s=f.solve_time_s + s.solve_time_s, coarse_cost=coarse_cost))
+            if r is not None:
+                results.append((s.name, r))
+        elif coarse_cost is None:
+            starts.append(s)
+        else:
+            starts.append(replace(s, status="Screened_Out", cost=None, coarse_cost=coarse_cost))
+    return starts, results
+
+
+def _refined_guess(nlp, coarse_tr, tr) -> Guess:
+    """A guess on ``tr`` following the coarse solution ``nlp`` (its states at the interval ends and the collocation
+    points, in time over its horizon)."""
+    states, colloc, _ = coarse_tr.unpack(nlp.x)
+    starts, tc = coarse_tr.grid()
+    t = np.concatenate([np.append(starts, 1.0), tc.ravel()])
+    x7 = np.concatenate([states, colloc.reshape(-1, states.shape[1])])
+    order = np.argsort(t, kind="stable")
+    x7 = x7[order] / np.array([1.0] * 5 + [nlp.horizon] * 2)
+    return guess_from_samples(tr, t[order] * nlp.horizon, x7, nlp.guess.name)
+
+
+def _multistart(planner, problem, robot, horizon, jobs, progress, workers, finished=None):
+    """IPOPT from every start of ``jobs`` (``(name, turns, make guess of a transcription, start cost)``, and
+    optionally a function returning the planner of that start instead of ``planner``), by ``workers`` at once
+    (the first with the planners' own solvers, the others with twins): ``(starts, solutions)`` in the order of
+    ``jobs``, each solution the :class:`NlpSolution` or None (see :func:`_run`). ``progress``: the step of the
+    first start, the total and what follows each start's name in the progress. With a dict ``finished``, the
+    starts with their own planner are also finished (corrected and certified): their outcomes by name."""
+    first, total, where = progress
     pending, lock = iter(range(len(jobs))), threading.Lock()
     workers = min(workers, len(jobs))
 
     def work(own):
-        solver, done = None, []
+        solvers, done = {}, []
         while True:
             with lock:
                 i = next(pending, None)
             if i is None:
                 return done
-            if solver is None:     # a twin is built only by a worker that gets a start
-                solver = planner if own else planner.twin()
-            name, m, make_guess, start_cost = jobs[i]
-            report("compare", 2 + i, total, stage=f"collocation from {name}")
+            name, m, make_guess, start_cost, *which = jobs[i]
+            base = which[0]() if which else planner
+            if id(base) not in solvers:     # a twin is built only by a worker that gets a start of that planner
+                solvers[id(base)] = base if own else base.twin()
+            solver = solvers[id(base)]
+            report("compare", first + i, total, stage=f"collocation from {name}{'' if which else where}")
             out = []
-            done.append((i, _run(solver, problem, robot, make_guess(), horizon, m, start_cost, out, name), out))
+            start = _run(solver, problem, robot, make_guess(tr=solver.transcription), horizon, m, start_cost, out, name)
+            done.append((i, start, out[0][1] if out else None))
+            if out and finished is not None and which:
+                try:
+                    finished[name] = interrupts.call(solver.finish, out[0][1])
+                except SolverError as exc:
+                    finished[name] = exc
 
     log.info("solving %d starts with %d worker(s)", len(jobs), workers)
     if workers == 1:
@@ -439,7 +540,7 @@ def _multistart(planner, problem, robot, horizon, jobs, total, workers):
         finished = [d for w in interrupts.call_in_threads([partial(work, w == 0) for w in range(workers)])
                     for d in w]
     finished.sort(key=lambda item: item[0])
-    return [start for _, start, _ in finished], [r for _, _, out in finished for r in out]
+    return [start for _, start, _ in finished], [r for _, _, r in finished]
 
 
 def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, name=None) -> Start:
@@ -456,16 +557,20 @@ def _run(planner, problem, robot, guess, horizon, turns, start_cost, results, na
     return Start(name, turns, "ok", r.objective, start_cost, r.solve_time_s)
 
 
-def _finish_best(planner, results, starts):
+def _finish_best(planner, results, starts, finished=None):
     """Correct and certify the converged starts in the order of their NLP optima until one passes:
     ``(RestResult or None, starts)`` with that start's cost measured on its certified motion and every start
-    that failed the correction or the certificate marked with its status."""
+    that failed the correction or the certificate marked with its status. ``finished``: the outcomes (RestResult
+    or SolverError) of starts already finished, by name."""
     by_name = {s.name: i for i, s in enumerate(starts)}
     starts = list(starts)
+    finished = finished or {}
     for name, nlp in sorted(results, key=lambda item: item[1].objective):
         i = by_name[name]
         try:
-            best = interrupts.call(planner.finish, nlp)
+            best = finished.get(name) or interrupts.call(planner.finish, nlp)
+            if isinstance(best, SolverError):
+                raise best
         except SolverError as exc:
             starts[i] = replace(starts[i], status=exc.status, cost=None)
             continue
@@ -498,7 +603,8 @@ def comparison_to_dict(c: Comparison) -> dict:
                             "intervals": r.transcription.intervals, "degree": r.transcription.degree,
                             "scheme": r.transcription.scheme, "iterations": r.stats.iterations},
             "starts": [{"name": s.name, "turns": s.turns, "status": s.status, "cost": s.cost,
-                        "start_cost": s.start_cost, "solve_time_s": s.solve_time_s} for s in c.starts],
+                        "start_cost": s.start_cost, "solve_time_s": s.solve_time_s, "coarse_cost": s.coarse_cost}
+                       for s in c.starts],
         },
     }
 
