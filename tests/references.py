@@ -27,7 +27,8 @@ corrected and said so), and is what the tests compare rollplan's symbolic model 
 * :func:`contact_point` -- (1); :func:`rolling_18_19` -- (18), (19);
   :func:`rates_15_16_20` -- (15), (16), (20) for any contact path;
   :func:`chart_rates` -- (24)-(27);
-  :func:`integrate_contact_path` -- (15), (16), (20) along a contact path given in time, by DOP853;
+  :func:`integrate_contact_path` -- (15), (16), (20) along a contact path given in time, by DOP853
+  (:func:`integrate_contact_paths`: many paths as one system);
   :func:`great_circle_path`, :func:`circle_path`, :func:`chart_path` -- contact paths typed here;
   :func:`polar_contact` -- (u_o, v_o) of a point given by polar angle and direction;
   :func:`composed_final` -- a composed motion integrated along its pieces (read from their curve names and
@@ -265,12 +266,13 @@ def curve_rhs(point, dpoint, psi, k, radius=1.0):
     """(28)-(30) as printed, with c_u, c_v of (26): rates of (u_a, v_a, psi) for a contact point
     ``point = (x, y, z)`` moving at ``dpoint`` per unit curve parameter.
 
-    (29) is printed with ``v^2`` under the root; it is ``y^2`` as in (28) (a misprint).
+    (29) is printed with ``v^2`` under the root; it is ``y^2`` as in (28) (a misprint). ``point`` and ``dpoint``
+    may also be of shape (3, N) (N curves at once; then ``psi`` is of shape (N,)).
     """
     x, y, z = point
     s = np.sqrt(radius**2 - y**2)
-    p = np.array([z, 0.0, -x]) @ dpoint
-    q = np.array([-x * y / s, s, -y * z / s]) @ dpoint
+    p = z * dpoint[0] - x * dpoint[2]                                   # (z, 0, -x) . dpoint
+    q = -x * y / s * dpoint[0] + s * dpoint[1] - y * z / s * dpoint[2]  # (-x y / s, s, -y z / s) . dpoint
     return np.array([
         -np.cos(psi) / s * p + np.sin(psi) / radius * q,
         np.sin(psi) / s * p + np.cos(psi) / radius * q,
@@ -501,12 +503,14 @@ def contact_point(u_o, v_o):
 
 
 def chart_rates(point, dpoint):
-    """``(u_o, v_o, u_o', v_o')`` of a point moving on the unit sphere at ``dpoint``: (24)-(27) as printed."""
+    """``(u_o, v_o, u_o', v_o')`` of a point moving on the unit sphere at ``dpoint``: (24)-(27) as printed (also for
+    N points at once, of shape (3, N))."""
     x, y, z = point
     s = np.sqrt(1 - y * y)
     v, u = np.arcsin(y), np.arctan2(-x / s, -z / s)                            # (24), (25)
-    c_u, c_v = np.array([z, 0.0, -x]), np.array([-x * y / s, s, -y * z / s])   # (26)
-    return u, v, c_u @ dpoint / (s * s), c_v @ dpoint                          # (27)
+    c_u_dot = z * dpoint[0] - x * dpoint[2]                                    # (26): c_u = (z, 0, -x)
+    c_v_dot = -x * y / s * dpoint[0] + s * dpoint[1] - y * z / s * dpoint[2]   # c_v = (-x y / s, s, -y z / s)
+    return u, v, c_u_dot / (s * s), c_v_dot                                    # (27)
 
 
 def integrate_contact_path(path, x0, t_span, k, t_eval=None, rtol=1e-13, atol=1e-14):
@@ -517,6 +521,21 @@ def integrate_contact_path(path, x0, t_span, k, t_eval=None, rtol=1e-13, atol=1e
                     method="DOP853", rtol=rtol, atol=atol, t_eval=t_eval)
     assert sol.success, sol.message
     return sol
+
+
+def integrate_contact_paths(path, x0, t_span, k, rtol=1e-13, atol=1e-14):
+    """:func:`integrate_contact_path` for N paths at once (``path(t)`` gives arrays of shape (N,), ``x0`` of shape
+    (3, N)): the N copies of (15), (16), (20) as one system for DOP853, both tolerances divided by sqrt(3 N) (scipy
+    controls a root mean square over the components). Returns the final states, shape (3, N)."""
+    x0 = np.asarray(x0, float)
+    scale = np.sqrt(x0.size)
+
+    def f(t, flat):
+        return rates_15_16_20(flat.reshape(3, -1)[2], *path(t), k).ravel()
+
+    sol = solve_ivp(f, t_span, x0.ravel(), method="DOP853", rtol=rtol / scale, atol=atol / scale)
+    assert sol.success, sol.message
+    return sol.y[:, -1].reshape(x0.shape)
 
 
 def rest_path_final(acc, T, k):
@@ -716,15 +735,16 @@ def polygon_corners(name, a, side=1.0):
 
 def geodesic(p, q):
     """Great-circle arc from unit p to unit q over t in [0, 2 pi], constant speed: p turned about the axis
-    p x q by Rodrigues' formula; a curve for :func:`curve_leaf_end`."""
-    axis = np.cross(p, q)
-    angle = np.arctan2(np.linalg.norm(axis), p @ q)
-    axis = axis / np.linalg.norm(axis)
+    p x q by Rodrigues' formula; a curve for :func:`curve_leaf_end`. p and q may also be of shape (3, N): N arcs."""
+    axis = np.cross(p, q, axis=0)
+    angle = np.arctan2(np.linalg.norm(axis, axis=0), np.sum(p * q, axis=0))
+    axis = axis / np.linalg.norm(axis, axis=0)
 
     def curve(t):
         s = angle * t / (2 * np.pi)
-        point = p * np.cos(s) + np.cross(axis, p) * np.sin(s) + axis * (axis @ p) * (1 - np.cos(s))
-        dpoint = (-p * np.sin(s) + np.cross(axis, p) * np.cos(s) + axis * (axis @ p) * np.sin(s)) * angle / (2 * np.pi)
+        across, along = np.cross(axis, p, axis=0), axis * np.sum(axis * p, axis=0)
+        point = p * np.cos(s) + across * np.sin(s) + along * (1 - np.cos(s))
+        dpoint = (-p * np.sin(s) + across * np.cos(s) + along * np.sin(s)) * angle / (2 * np.pi)
         return point, dpoint
 
     return curve
@@ -739,6 +759,48 @@ def family_leaf(name, a, side=1.0):
         return [viviani(a, side)]
     corners = polygon_corners(name, a, side)
     return [geodesic(p, q) for p, q in zip(corners, corners[1:])]
+
+
+def family_leaves(name, sizes, side=1.0):
+    """The leaves of family ``name`` for every size of the 1-D array ``sizes`` at once: a list of curves (one per
+    smooth piece, as :func:`family_leaf`), each giving points and rates of shape (3, len(sizes))."""
+    sizes = np.asarray(sizes, float)
+    if name == "circles":
+        return [lambda t: circle(sizes, t, side)]
+    if name == "viviani":
+        return [viviani(sizes, side)]
+    corners = [polygon_corners(name, a, side) for a in sizes]
+    stacked = [np.stack([c[j] for c in corners], axis=1) for j in range(len(corners[0]))]
+    return [geodesic(p, q) for p, q in zip(stacked, stacked[1:])]
+
+
+def curve_leaf_ends(curve, x0, k, span=2 * np.pi, rtol=1e-13, atol=1e-14):
+    """:func:`curve_leaf_end` for N curves at once (``curve(phi)`` gives shape (3, N), ``x0`` of shape (3, N)):
+    the N copies of (28)-(30) as one system for DOP853. scipy controls a root mean square over the components of
+    the scaled error estimates, so both tolerances are divided by sqrt(3 N) (rtol not below scipy's floor, 100
+    machine epsilons): check the result against :func:`curve_leaf_end` at a few of the curves."""
+    x0 = np.asarray(x0, float)
+    scale = np.sqrt(x0.size)
+    rtol = max(rtol / scale, 100 * np.finfo(float).eps) * scale
+
+    def f(t, flat):
+        x = flat.reshape(3, -1)
+        return curve_rhs(*curve(t), x[2], k).ravel()
+
+    sol = solve_ivp(f, (0.0, span), x0.ravel(), method="DOP853", rtol=rtol / scale, atol=atol / scale)
+    assert sol.success, sol.message
+    return sol.y[:, -1].reshape(x0.shape)
+
+
+def family_traces(name, a, b, k):
+    """:func:`family_trace` (gamma = 0, from zero) for the figure eights of the 1-D arrays of sizes ``a`` and ``b`` at
+    once (:func:`family_leaves`, :func:`curve_leaf_ends`): the final states, shape (3, len(a))."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    x = np.zeros((3, a.size))
+    for sizes, side in ((a, 1.0), (b, -1.0)):
+        for piece in family_leaves(name, sizes, side):
+            x = curve_leaf_ends(piece, x, k)
+    return x
 
 
 def family_trace(name, a, b, k, gamma=0.0, x0=(0.0, 0.0, 0.0)):

@@ -6,13 +6,13 @@ the printed equations (``tests/references.py``) over the accepted domain, up to 
 
 Enumeration (the numpy reference of the C search, ``tests/reference_enumerate.py``) against a brute force of
 its own: for each branch m, a dense scan in the first leaf radius a (uniform in the turn E(a) and in a, ten times
-finer than the planner's grid), b from ``E(b) = E(a) - eta_m`` by scipy's brentq on the closed form,
-h from the complex step map (not the rho form the planner uses), every sign change refined by
-brentq and every local minimum of ``|h^2 - h_m^2|`` checked for a close pair by scipy's bounded
-minimiser. For every k (E not monotone below 1/2) a 2-D brute force scans the level set
-``E(a) - E(b) = eta_m`` both over a and over b, on monotone pieces of E found numerically (a dense
-scan and scipy's bounded minimiser), with the same refinement. Plans are certified by DOP853 over
-all n steps.
+finer than the planner's grid), b from ``E(b) = E(a) - eta_m`` by bisection on the closed form, h from the
+complex step map (not the rho form the planner uses), every sign change refined by bisection and every local
+minimum of ``|h^2 - h_m^2|`` checked for a close pair by golden-section search (each on all intervals of the
+branch at once), a close pair's two roots by brentq. For every k (E not monotone below 1/2) a 2-D brute force
+scans the level set ``E(a) - E(b) = eta_m`` both over a and over b, on monotone pieces of E found numerically (a
+dense scan and scipy's bounded minimiser), refined by brentq and scipy's bounded minimiser. Plans are certified
+by DOP853 over all n steps.
 """
 
 import json
@@ -145,20 +145,56 @@ def _brute_branch(eta, h_m, k, samples_per_rad, min_samples):
     grid, bs = grid[ok], bs[ok]
     shift, _ = leafmap.step_values(grid, bs, k)
     f = np.abs(shift) ** 2 - h_m * h_m
-    roots = [brentq(_g, grid[i], grid[i + 1], args=(eta, h_m, k), xtol=1e-15, rtol=1e-15)
-             for i in np.nonzero(np.sign(f[:-1]) * np.sign(f[1:]) < 0)[0]]
+
+    def g(a):   # _g for an array of a
+        return np.abs(leafmap.step_values(a, _b_of(a, eta, k), k)[0]) ** 2 - h_m * h_m
+
+    changes = np.nonzero(np.sign(f[:-1]) * np.sign(f[1:]) < 0)[0]
+    roots = list(_bisect(g, grid[changes], grid[changes + 1]))
     # local minima of |f| without a sign change: a close pair or a tangency inside one interval
     af = np.abs(f)
-    for i in np.nonzero((af[1:-1] < af[:-2]) & (af[1:-1] < af[2:]))[0] + 1:
-        if f[i - 1] * f[i] <= 0 or f[i] * f[i + 1] <= 0:
-            continue
-        sign = float(np.sign(f[i]))
-        res = minimize_scalar(lambda a, s=sign: s * _g(a, eta, h_m, k), bounds=(grid[i - 1], grid[i + 1]),
-                              method="bounded", options={"xatol": 1e-14})
-        if np.sign(_g(res.x, eta, h_m, k)) != sign:
-            roots.append(brentq(_g, grid[i - 1], res.x, args=(eta, h_m, k), xtol=1e-15, rtol=1e-15))
-            roots.append(brentq(_g, res.x, grid[i + 1], args=(eta, h_m, k), xtol=1e-15, rtol=1e-15))
+    low = np.nonzero((af[1:-1] < af[:-2]) & (af[1:-1] < af[2:]))[0] + 1
+    low = low[(f[low - 1] * f[low] > 0) & (f[low] * f[low + 1] > 0)]
+    sign = np.sign(f[low])
+    lowest = _golden_minimum(lambda a: sign * g(a), grid[low - 1], grid[low + 1])
+    for i in np.nonzero(np.sign(g(lowest)) != sign)[0]:
+        roots.append(brentq(_g, grid[low[i] - 1], lowest[i], args=(eta, h_m, k), xtol=1e-15, rtol=1e-15))
+        roots.append(brentq(_g, lowest[i], grid[low[i] + 1], args=(eta, h_m, k), xtol=1e-15, rtol=1e-15))
     return roots
+
+
+def _bisect(f, lo, hi, halvings=60):
+    """The root in each bracket [lo_i, hi_i] of a sign change of the vectorised f, all brackets halved together
+    (60 halvings: far below the spacing of doubles for the brute force's brackets)."""
+    lo, hi = np.array(lo, float), np.array(hi, float)
+    if lo.size == 0:
+        return lo
+    f_lo = f(lo)
+    for _ in range(halvings):
+        mid = 0.5 * (lo + hi)
+        f_mid = f(mid)
+        right = np.sign(f_mid) == np.sign(f_lo)   # the sign change is in [mid, hi]
+        lo, f_lo, hi = np.where(right, mid, lo), np.where(right, f_mid, f_lo), np.where(right, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+def _golden_minimum(f, lo, hi, steps=90):
+    """A local minimum of the vectorised f in each interval [lo_i, hi_i], by golden-section search on all intervals
+    together (90 steps shrink them by 0.618^90 < 1e-18)."""
+    lo, hi = np.array(lo, float), np.array(hi, float)
+    if lo.size == 0:
+        return lo
+    inv = (math.sqrt(5.0) - 1.0) / 2.0
+    c, d = hi - inv * (hi - lo), lo + inv * (hi - lo)
+    f_c, f_d = f(c), f(d)
+    for _ in range(steps):
+        left = f_c < f_d   # the minimum is in [lo, d]: d becomes the old c
+        lo, hi = np.where(left, lo, c), np.where(left, d, hi)
+        new = np.where(left, hi - inv * (hi - lo), lo + inv * (hi - lo))
+        f_new = f(new)
+        c, f_c, d, f_d = (np.where(left, new, d), np.where(left, f_new, f_d),
+                          np.where(left, c, new), np.where(left, f_c, f_new))
+    return 0.5 * (lo + hi)
 
 
 def _brute_roots(target, steps, k, branches=None, samples_per_rad=40, min_samples=4000):
@@ -236,6 +272,9 @@ def test_close_pair_hidden_by_the_table_is_found_on_the_accurate_map():
     got = sorted(r.a for r in en.roots(en.branches(k, eta, 1, h, 0), k) if abs(r.a - res.x) < 1e-3)
     assert len(got) == 2 and got[1] - got[0] > 1e-8
     np.testing.assert_allclose(got, brute, rtol=0, atol=1e-10)
+    # the dense scan of the brute force steps over the pair: its minimum search finds it
+    scanned = sorted(a for a in _brute_branch(eta, h, k, 40, 4000) if abs(a - res.x) < 1e-3)
+    np.testing.assert_allclose(scanned, brute, rtol=0, atol=1e-10)
 
 
 def test_first_root_behind_a_tangency_at_the_end_of_the_graph():

@@ -166,7 +166,8 @@ def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path):
 def _brute_family_roots(curve, k, targets, count=240, scan=4000):
     """Every root (m, a, b) of (32)-(33) for each target ``((u, v, psi), steps)`` with the leaves of ``curve``, by a
     brute force independent of the planner: each leaf of a grid of about 1.5 ``count`` sizes (graded towards A_MAX)
-    integrated by DOP853 along the curve as typed in tests/references.py (``curve_leaf_end``), its turn E and
+    integrated by DOP853 along the curve as typed in tests/references.py (all sizes as one system,
+    ``curve_leaf_ends``, checked against ``curve_leaf_end`` leaf by leaf at two sizes), its turn E and
     ``rho = Re(exp(i E / 2) d)`` splined in the size, every branch m scanned at ``scan`` points of a for sign changes of
     ``h(a, b(a))^2 - h_m^2`` (``b(a) = E^-1(E(a) - eta_m)``, structure (i) and (iii)), each root by brentq."""
     from scipy.interpolate import CubicSpline
@@ -178,15 +179,16 @@ def _brute_family_roots(curve, k, targets, count=240, scan=4000):
     w = np.linspace(1.0, 1.0 / math.sqrt(1.0 - 2.0 * A_MAX * A_MAX), count + 1)
     sizes = np.unique(np.r_[np.linspace(0.0, A_MAX, count // 2 + 1), np.sqrt(0.5 * (1.0 - 1.0 / w**2))])
     sizes = sizes[np.r_[True, np.diff(sizes) > 1e-4]]
-    def leaf_end(a):
+    ends = np.zeros((3, len(sizes)))
+    for piece in references.family_leaves(curve, sizes[1:]):   # a polygon's edges one after the other
+        ends[:, 1:] = references.curve_leaf_ends(piece, ends[:, 1:], k, rtol=1e-12, atol=1e-14)
+    for i in (len(sizes) // 2, len(sizes) - 1):   # the one system against DOP853 on the leaf alone
         x = np.zeros(3)
-        for piece in references.family_leaf(curve, a):   # a polygon's edges one after the other
+        for piece in references.family_leaf(curve, sizes[i]):
             x = references.curve_leaf_end(piece, x, k, rtol=1e-12, atol=1e-14)
-        return x
-
-    ends = [np.zeros(3)] + [leaf_end(a) for a in sizes[1:]]
-    turn = np.array([x[2] for x in ends])
-    rho = np.array([(complex(x[0], x[1]) * np.exp(0.5j * x[2])).real for x in ends])
+        assert np.abs(x - ends[:, i]).max() < 1e-10, (sizes[i], x, ends[:, i])
+    turn = ends[2]
+    rho = ((ends[0] + 1j * ends[1]) * np.exp(0.5j * ends[2])).real
     e_of, rho_of = CubicSpline(sizes, turn), CubicSpline(sizes, rho)
     e_min = float(turn[-1])
     assert np.all(np.diff(turn) < 0)   # (iv): E decreasing in the size for k >= 1/2
@@ -237,8 +239,8 @@ def _brute_family_roots(curve, k, targets, count=240, scan=4000):
 def test_c_search_of_the_family_against_a_brute_force(curve, k):
     """No root of the brute force is missed by the family's C search (``plan_all``, uncertified): each with both sizes
     below 0.68 within 1e-5 in a and b (the brute force's splines of DOP853 leaves); every other C root is a root of the
-    figure eight integrated by DOP853 (1e-8: e.g. a close pair the brute force's scan stepped over); the C search's
-    shortest plan (smallest a + b) is the brute force's."""
+    figure eight integrated by DOP853 (1e-8: e.g. a close pair the brute force's scan stepped over; all such figure
+    eights as one system, ``family_traces``); the C search's shortest plan (smallest a + b) is the brute force's."""
     _require_library(curve)
     rng = np.random.default_rng(int(10 * k))
     targets = []
@@ -246,7 +248,7 @@ def test_c_search_of_the_family_against_a_brute_force(curve, k):
         r, th = rng.uniform(0.05, 1.2), rng.uniform(-math.pi, math.pi)
         targets.append(((r * math.cos(th), r * math.sin(th), rng.uniform(-math.pi, math.pi)), int(rng.integers(1, 3))))
     brute = _brute_family_roots(curve, k, targets)
-    compared = 0
+    compared, unmatched = 0, []
     for ((u, v, psi), steps), want in zip(targets, brute):
         got = [(r.m, r.a, r.b) for r in compiled_search.family_plans(u, v, float(wrap(psi)), steps, k, curve,
                                                                        every=True, certified=False)]
@@ -261,13 +263,8 @@ def test_c_search_of_the_family_against_a_brute_force(curve, k):
             assert any(r[0] == m and abs(r[1] - a1) < tol and abs(r[2] - b1) < tol for r in got), \
                 ((u, v, psi), steps, (m, a1, b1), got)
         for m, a2, b2 in got:
-            if any(r[0] == m and abs(r[1] - a2) < 1e-7 and abs(r[2] - b2) < 1e-7 for r in want):
-                continue
-            x = references.family_trace(curve, a2, b2, k)
-            eta = (float(wrap(psi)) + 2 * math.pi * m) / steps
-            gain = abs(math.sin(steps * eta / 2) / math.sin(eta / 2))
-            assert abs(x[2] - eta) < 1e-8 and abs(math.hypot(x[0], x[1]) - math.hypot(u, v) / gain) < 1e-8, \
-                ((u, v, psi), steps, (m, a2, b2))
+            if not any(r[0] == m and abs(r[1] - a2) < 1e-7 and abs(r[2] - b2) < 1e-7 for r in want):
+                unmatched.append(((u, v, psi), steps, (m, a2, b2)))
         if want:
             best = compiled_search.family_plans(u, v, float(wrap(psi)), steps, k, curve)[0]
             low = min(want, key=lambda r: r[1] + r[2])
@@ -275,3 +272,13 @@ def test_c_search_of_the_family_against_a_brute_force(curve, k):
             assert best.a + best.b == pytest.approx(low[1] + low[2], abs=tol)
             compared += len(want)
     assert compared >= 4
+    if unmatched:   # all figure eights as one DOP853 system, checked against DOP853 alone at two of them
+        ends = references.family_traces(curve, [r[2][1] for r in unmatched], [r[2][2] for r in unmatched], k)
+        for i in {0, int(np.argmax([max(r[2][1:]) for r in unmatched]))}:
+            alone = references.family_trace(curve, *unmatched[i][2][1:], k)
+            assert np.abs(alone - ends[:, i]).max() < 1e-10, (unmatched[i], alone, ends[:, i])
+    for ((u, v, psi), steps, (m, a2, b2)), x in zip(unmatched, ends.T if unmatched else []):
+        eta = (float(wrap(psi)) + 2 * math.pi * m) / steps
+        gain = abs(math.sin(steps * eta / 2) / math.sin(eta / 2))
+        assert abs(x[2] - eta) < 1e-8 and abs(math.hypot(x[0], x[1]) - math.hypot(u, v) / gain) < 1e-8, \
+            ((u, v, psi), steps, (m, a2, b2))

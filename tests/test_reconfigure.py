@@ -197,13 +197,17 @@ _HOLONOMY: dict = {}
 
 def circle_holonomy(k, i):
     """eta_1(b) at HOLONOMY_GRID[i]: psi after one -y circle (35) of radius b from zero, by DOP853 on the
-    printed equations (computed once per k and grid point, in order of b)."""
-    eta = _HOLONOMY.setdefault(k, [])
-    while len(eta) <= i:
-        r = HOLONOMY_GRID[len(eta)]
-        eta.append(ref.integrate_contact_path(ref.circle_path(r, -1.0, 0.0), np.zeros(3), (0, 2 * np.pi), k,
-                                              rtol=1e-9, atol=1e-11).y[2, -1])
-    return eta[i]
+    printed equations (the whole grid as one system, once per k; two radii checked against the circle alone)."""
+    if k not in _HOLONOMY:
+        grid = HOLONOMY_GRID
+        ends = ref.integrate_contact_paths(ref.circle_path(grid, -1.0, 0.0), np.zeros((3, grid.size)),
+                                           (0, 2 * np.pi), k, rtol=1e-9, atol=1e-11)
+        for j in (grid.size // 2, grid.size - 1):
+            alone = ref.integrate_contact_path(ref.circle_path(grid[j], -1.0, 0.0), np.zeros(3), (0, 2 * np.pi), k,
+                                               rtol=1e-9, atol=1e-11).y[2, -1]
+            assert abs(alone - ends[2, j]) < 1e-7, (k, grid[j], alone, ends[2, j])
+        _HOLONOMY[k] = ends[2]
+    return _HOLONOMY[k][i]
 
 
 @pytest.mark.slow
@@ -211,8 +215,7 @@ def circle_holonomy(k, i):
                                          (-2.0, 0.0, 1), (1.0, 0.0, 2), (1.0, 10.0, 2)])
 def test_the_turn_is_the_smallest_circle_of_a_brute_force(psi, k, steps):
     """Brute force: the first crossing of eta_1(b) (DOP853 on a uniform grid, walked up from the smallest b)
-    with any level +-(psi + 2 pi m)/(2n); its b must be the turn's, to the grid spacing. (The grid beyond the
-    first crossing cannot hold a smaller b, so it is not integrated.)"""
+    with any level +-(psi + 2 pi m)/(2n); its b must be the turn's, to the grid spacing."""
     b = HOLONOMY_GRID
     m = np.arange(-200, 201)
     levels = np.concatenate([sign * (psi + 2 * np.pi * m) / (2 * steps) for sign in (1.0, -1.0)])
