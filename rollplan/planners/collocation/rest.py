@@ -488,7 +488,7 @@ def _interval_integrator(per: int) -> ca.Function:
     x, acc, par, h = ca.SX.sym("x", 7), ca.SX.sym("a", 2), ca.SX.sym("par", N_PAR), ca.SX.sym("h")
     xdot = motion_function()(x, acc, par)[0]
     grid = list(np.arange(1, per + 1) / per)
-    opts = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 100000}
+    opts = {"abstol": 1e-15, "reltol": 1e-14, "max_num_steps": 100000}
     return ca.integrator("rest_cert", "cvodes", {"x": x, "p": ca.vertcat(acc, par, h), "ode": h * xdot},
                          0.0, grid, opts)
 
