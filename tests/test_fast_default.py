@@ -147,3 +147,66 @@ def test_the_benchmark_measures_the_warm_default_with_its_budget(tmp_path):
     rows = sections["section_fast_default"]["rows"]
     assert rows and all(r["IPOPT [ms]"] > 0 and r["correction + certificate [ms]"] > 0 for r in rows)
     assert any("default plan between full states" in row["budget"] for row in sections["section_budgets"]["rows"])
+
+
+def printed_end(controls, start, k):
+    """The 7-state end (u_a, v_a, psi, u_o, v_o and their rates) of the piecewise-constant contact accelerations
+    ``controls`` (N, 2) on [0, 1] from ``start`` at rest, (15), (16), (20) as printed, by DOP853 interval by
+    interval (rtol 1e-13)."""
+    from scipy.integrate import solve_ivp
+
+    def rhs(t, x, a):
+        return np.r_[ref.rates_15_16_20(x[2], x[3], x[4], x[5], x[6], k), x[5], x[6], a]
+
+    x, n = np.r_[start, 0.0, 0.0], len(controls)
+    for j, a in enumerate(controls):
+        x = solve_ivp(rhs, (j / n, (j + 1) / n), x, method="DOP853", rtol=1e-13, atol=1e-14, args=(a,)).y[:, -1]
+    return x
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("index", [14, 20])
+def test_the_certificate_bounds_the_arrival_error_of_an_independent_integration(index):
+    """Random pairs (contacts <= 60 deg, k 1.5-8) where the certificate's integration once understated the
+    arrival error: the polished controls driven through the printed equations by DOP853 land within the
+    certificate's tolerance."""
+    rng = np.random.default_rng(1)
+    start, goal, k = [random_pair(rng) for _ in range(index + 1)][index]
+    p = rollplan.plan(goal, k=k, start=start)
+    assert isinstance(p, RefinedPlan) and p.residual <= 1e-9
+    x = printed_end(p.collocation.controls, start, k)
+    d = np.r_[x[:5] - np.asarray(goal), x[5:]]
+    d[2] = ref.wrap(d[2])
+    assert np.linalg.norm(d) <= 1e-9
+
+
+def random_pair(rng):
+    """A start and a goal state with contact points up to 60 deg from the pole, and k in [1.5, 8]."""
+    def contact():
+        return ref.polar_contact(rng.uniform(0.0, math.radians(60.0)), rng.uniform(-math.pi, math.pi))
+    s = (rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-math.pi, math.pi), *contact())
+    g = (rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-math.pi, math.pi), *contact())
+    return s, g, rng.uniform(1.5, 8.0)
+
+
+@pytest.mark.parametrize("turns", [1, -1, 3])
+def test_the_goal_psi_written_with_whole_turns_is_the_same_goal(turns):
+    """psi is an angle: the goal written with whole extra turns is the same state and gets the same plan."""
+    start, goal, k = README_PAIR
+    p = rollplan.plan(goal, k=k, start=start)
+    q = rollplan.plan((*goal[:2], goal[2] + 2 * math.pi * turns, *goal[3:]), k=k, start=start)
+    assert isinstance(q, RefinedPlan) and q.residual <= 1e-9
+    assert q.path_length == pytest.approx(p.path_length, rel=1e-9)
+
+
+@pytest.mark.slow
+def test_a_failed_straight_line_start_is_followed_by_the_next_turns():
+    """A pair (contacts <= 60 deg, k 1.5-8) whose straight line on the nearest turns leaves IPOPT at its
+    iteration limit: the next turns' start is polished, within 1.5x the optimal-control reference."""
+    start = (-0.6055624633100081, 0.8636908465283903, -1.6091457902698765, -0.028978531792153237,
+             -0.15127563737285094)
+    goal = (-0.3205512453029373, -0.5497680146812769, 0.22818299173369105, 0.8098385281061004, -0.6328620916643164)
+    k = 4.198569983741798
+    p = rollplan.plan(goal, k=k, start=start)
+    assert isinstance(p, RefinedPlan) and p.residual <= 1e-9
+    assert p.path_length <= 1.5 * ref.optimal_control_length(start, goal, k)[0]

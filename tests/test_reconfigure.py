@@ -481,10 +481,12 @@ def test_collocation_refuses_a_start_beyond_its_contact_bound_clearly():
 
 
 @pytest.mark.slow
-def test_collocation_warm_started_from_a_composed_plan():
-    """Start and goal off the pole: the warm start is the composed geometric plan; the optimum is certified."""
+@pytest.mark.parametrize("polish", ["fast", "off"])
+def test_collocation_warm_started_from_a_composed_plan(polish):
+    """Start and goal off the pole: the warm start is the plan (polished by default, or the composed geometric
+    plan); the optimum is certified."""
     problem = Problem((0.3, 0.2, 0.5, 0.2, -0.1), start=(0.0, 0.0, 0.0, -0.2, 0.3), k=2.5)
-    warm = rollplan.plan(problem.goal, k=2.5, start=problem.start, polish="off")
+    warm = rollplan.plan(problem.goal, k=2.5, start=problem.start, polish=polish)
     r = rollplan.collocate(problem.goal, k=2.5, start=problem.start, intervals=60, warm_start=warm)
     assert r.certificate.passed and r.residual < 1e-6 and r.turns == warm.turns
     assert r.path_length <= warm.path_length * (1 + 1e-6)

@@ -11,10 +11,11 @@ shortest certified motion is returned as a :class:`RefinedPlan` when it is short
 the plan itself, with the reason in ``stats.details["refine"]``.
 
 The fast polish (:func:`fast_polish`, ``polish="fast"``: the default of :func:`rollplan.plan` between full states)
-solves the same problem on :data:`FAST_INTERVALS` intervals from the straight line on the turns :data:`FAST_TURNS`
-alone (run rest to rest, :func:`line_guess`), corrects the controls by Newton steps whose residual is the CVODES
-integration itself (first on RK4, the Jacobian from RK4) and certifies the result like the polish, the contact bound
-backed off when the certified motion leaves it.
+solves the same problem on :data:`FAST_INTERVALS` intervals from the straight line (run rest to rest,
+:func:`line_guess`) on the whole turns of psi that bring the goal's psi nearest the start's, or on one turn more or
+less where that start is not certified (:data:`FAST_TURNS`), corrects the controls by Newton steps whose residual is
+the CVODES integration itself (first on RK4, the Jacobian from RK4) and certifies the result like the polish, the
+contact bound backed off when the certified motion leaves it.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import casadi as ca
 import numpy as np
 
 from .. import interrupts
+from ..core.plane import wrap_exact
 from ..errors import InputError, SolverError
 from ..problem import Problem, State
 from ..progress import report
@@ -50,8 +52,9 @@ MIN_GAIN = 1e-6
 #: Intervals N of the fast polish (``polish="fast"``) and the degree d of its collocation polynomials.
 FAST_INTERVALS = 8
 FAST_DEGREE = 3
-#: Whole turns m of psi of the fast polish's straight-line start.
-FAST_TURNS = (0,)
+#: Whole turns of psi of the fast polish's straight-line starts, relative to the turns m0 that bring the goal's psi
+#: nearest the start's, tried in this order until one is certified (the goal's psi may be written with any turns).
+FAST_TURNS = (0, -1, 1)
 #: IPOPT options of the fast polish beyond those of the collocation NLP: the start and goal are kept as
 #: constraints rather than removed from the NLP (fewer iterations on the small NLP).
 FAST_IPOPT_OPTIONS = {"ipopt.fixed_variable_treatment": "make_constraint"}
@@ -394,7 +397,11 @@ def fast_polish(plan, intervals: int = FAST_INTERVALS, contact_bound: float = CO
     tr, rt = planner.transcription, planner.rest_transcription   # rt: the layout IPOPT solves
     par = rest.rest_parameters(problem.k, 1.0, problem.robot)
     tried, best, best_length = [], None, math.inf
-    for m in FAST_TURNS:
+    start, final = planner.boundary(problem, 0)
+    m0 = -wrap_exact(float(final[2] - start[2]))[1]
+    for m in (m0 + dm for dm in FAST_TURNS):
+        if best is not None:   # the first certified start is kept
+            break
         start, final = planner.boundary(problem, m)
         guess = line_guess(tr, start, final, f"line:{m}")
         x0, lbx, ubx, lbg, ubg = rt.contact_bounds(guess, start, final, contact_bound, planner.path_rows)

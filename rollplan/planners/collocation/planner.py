@@ -207,8 +207,9 @@ def _warm_guess(planner: CollocationPlanner, problem: Problem, start, final, hor
     """
     p = as_composed(warm_start)
     tr = planner.transcription
-    per_piece = max(200, math.ceil(2 * tr.intervals * tr.degree / max(len(p.pieces), 1)))
-    traj = p.sample(len(p.pieces) * per_piece + 1)
+    pieces = max(len(p.pieces), 1)   # a polished plan is one motion without closed-form pieces
+    per_piece = max(200, math.ceil(2 * tr.intervals * tr.degree / pieces))
+    traj = p.sample(pieces * per_piece + 1)
     if traj.s[-1] == 0.0:   # the empty motion: stay at the start
         return _naive_guess(planner, problem, start, final, horizon, None)
     tau = traj.s / traj.s[-1]
