@@ -110,7 +110,7 @@ def random_pairs(quick):
     fallback, shortest = ComposedPlanner(), ComposedPlanner(legs="shortest")
     fallback.solve(Problem((0.0, 1.0, 0.0), k=2.5))   # build once
     rows = []
-    for i in range(6 if quick else 30):
+    for i in range(3 if quick else 30):
         start = (*rng.uniform(-1.5, 1.5, 2), rng.uniform(-4, 4),
                  *contact_at(rng.uniform(0, SIGMA_MAX), rng.uniform(-np.pi, np.pi)))
         goal = (*rng.uniform(-1.5, 1.5, 2), rng.uniform(-4, 4),

@@ -175,11 +175,12 @@ def test_rotor_rates_alone_reach_the_target(name, profiles, path, plan):
 
 @pytest.mark.slow
 def test_time_optimal_rates_drive_the_printed_equations_onto_the_target(profiles, path, plan):
-    """The same with scipy's DOP853 on the printed (2), (6)-(10), (11) and scipy's not-a-knot spline."""
+    """The same with scipy's DOP853 on the printed (2), (6)-(10), (11) and scipy's not-a-knot spline (rtol 1e-9:
+    its final state is within 1e-7 of rtol 1e-11's, 100 times below the tolerance, at a third of the cost)."""
     m = sample_motion(path, profiles["time-optimal"], 2000, plan.goal, 3000)
     f = references.rotor_driven_rhs(ROBOT.j_xx, ROBOT.j_zz, ROBOT.rotor_inertia_axial, ROBOT.radius,
                                     CubicSpline(m.series.time, m.series.rotor_rates, bc_type="not-a-knot"))
-    sol = solve_ivp(f, (0, m.duration), np.zeros(5), method="DOP853", rtol=1e-11, atol=1e-13)
+    sol = solve_ivp(f, (0, m.duration), np.zeros(5), method="DOP853", rtol=1e-9, atol=1e-11)
     g = plan.goal
     err = np.hypot(sol.y[0, -1] - g.u_a, sol.y[1, -1] - g.v_a) / ROBOT.radius
     assert err < 1e-5 and abs(references.wrap(sol.y[2, -1] - g.psi)) < 1e-5
