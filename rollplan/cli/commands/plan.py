@@ -136,7 +136,7 @@ def register(sub) -> None:
                    help="between full states (start or goal contact point off the south pole): fast (the default "
                         "unless --all, --duration, --timing, --plot or --timing-plot is given) replaces the plan by a "
                         "minimum-path-length optimal-control solve on 8 intervals from the straight line, certified "
-                        "the same way, when that is shorter (tens of ms); off: the figure-eight plan itself")
+                        "the same way, when that is shorter (about 0.1 s warm); off: the figure-eight plan itself")
     p.add_argument("--curve", choices=geometric.CURVE_CHOICES, default="circles",
                    help="leaf family of the figure eight: circles (default), viviani, triangle, square (these for "
                         "k >= 0.5), or best: the shortest certified plan over the families "
