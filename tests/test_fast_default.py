@@ -131,6 +131,13 @@ def test_plan_command_polishes_by_default_and_plans_the_figure_eights_with_polis
     assert code == 0 and (tmp_path / "p.png").exists() and "refined" not in out, err
     code, out, err = run(capsys, *argv, "--polish", "fast", "--duration", "5")
     assert code == 2 and one_line(err) and "--polish fast does not combine with --duration" in err
+    # one branch of the figure eights is the pole plan of that branch, never silently polished away
+    code, out, err = run(capsys, *argv, "--branch", "-1", "--json", str(tmp_path / "b.json"))
+    assert code == 0 and "refined" not in out, err
+    b = json.loads((tmp_path / "b.json").read_text())
+    assert b["mode"] == "one" and "refined" not in b
+    code, out, err = run(capsys, *argv, "--polish", "fast", "--branch", "-1")
+    assert code == 2 and one_line(err) and "--polish fast does not combine with --branch" in err
 
 
 @pytest.mark.slow

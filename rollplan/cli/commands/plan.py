@@ -23,12 +23,15 @@ def _pieces_flags(args) -> list:
 
 
 def _check_refine(args) -> str:
-    """--refine and --polish fast return one motion in time: they do not combine with --all, timing or plots.
-    Returns the polish to plan with: ``"fast"`` by default, ``"off"`` when those flags are given."""
+    """--refine and --polish fast return one motion in time: they do not combine with --all, timing or plots
+    (--polish fast not with --branch either). Returns the polish to plan with: ``"fast"`` by default, ``"off"``
+    when those flags are given."""
     other = _pieces_flags(args)
     if args.refine and other:
         raise InputError(f"--refine does not combine with {other[0]}: the polished motion is one certified motion "
                          "in time, not closed-form pieces (plan without --refine for it)")
+    if args.branch is not None:   # one branch of the figure eights: a plan of closed-form pieces too
+        other.append("--branch")
     if args.polish == "fast" and other:
         raise InputError(f"--polish fast does not combine with {other[0]}: the polished motion is one certified "
                          "motion in time, not closed-form pieces (use --polish off for it)")
