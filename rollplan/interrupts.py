@@ -55,7 +55,7 @@ import sys
 import threading
 from contextlib import contextmanager
 
-__all__ = ["call", "call_in_thread", "start_in_thread", "call_in_threads", "abandoned", "Terminated",
+__all__ = ["call", "call_in_thread", "call_in_threads", "abandoned", "Terminated",
            "terminate_as_interrupt", "guard_start_up", "cli_follows", "end_start_up", "forget_unhandled", "settle"]
 
 
@@ -183,35 +183,6 @@ def call_in_thread(function, *args, **kwargs):
     if "error" in box:
         raise box["error"]
     return box["result"]
-
-
-def start_in_thread(function, *args, **kwargs):
-    """``function(*args, **kwargs)`` started by a helper thread (a daemon, as in :func:`call_in_thread`) while this
-    thread goes on with other work: returns ``wait()``, which waits for it and returns its result (or raises its
-    error). Waited for in the main thread, Ctrl-C acts at once as in :func:`call_in_thread`."""
-    box = {}
-
-    def run():
-        try:
-            box["result"] = function(*args, **kwargs)
-        except BaseException as exc:  # noqa: BLE001 -- passed to the waiting thread
-            box["error"] = exc
-
-    helper = threading.Thread(target=contextvars.copy_context().run, args=(run,), name=_HELPER, daemon=True)
-    helper.start()
-
-    def wait():
-        try:
-            while helper.is_alive():
-                helper.join(0.2)
-        except KeyboardInterrupt:
-            _State.abandoned = True
-            raise
-        if "error" in box:
-            raise box["error"]
-        return box["result"]
-
-    return wait
 
 
 def call_in_threads(functions) -> list:

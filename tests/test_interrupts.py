@@ -78,18 +78,6 @@ def test_interrupts_call_raises_keyboard_interrupt_within_a_second(make):
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored
 
 
-def test_start_in_thread_works_while_the_caller_goes_on():
-    """compare builds its full-grid NLP in a helper thread while it screens the starts: start_in_thread returns at
-    once (the helper waits for the caller here), and its wait() gives the result or raises the helper's error."""
-    gate = threading.Event()
-    wait = interrupts.start_in_thread(lambda x: gate.wait(10) and 2 * x, 21)
-    gate.set()
-    assert wait() == 42 and wait() == 42
-    fail = interrupts.start_in_thread(lambda: 1 / 0)
-    with pytest.raises(ZeroDivisionError):
-        fail()
-
-
 def test_interrupts_call_drops_casadis_warning_about_the_swallowed_interrupt(capsys):
     """Ctrl-C inside IPOPT printed CasADi's 'WARNING("KeyboardInterruptException")' line before the command's own
     'rollplan: interrupted': two lines. interrupts.call drops that warning and passes all other text on."""

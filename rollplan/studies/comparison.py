@@ -381,8 +381,9 @@ def compare(target, steps: int = 1, k: float | None = None, robot: Robot | None 
     gp_time = time.perf_counter() - t0
     report("compare", 0, 3, stage="building the collocation NLP")
     screened = screen is not False and intervals >= SCREEN_FROM
-    if screened:    # the full NLP built in a thread, meanwhile the coarse one (it checks d, scheme, bound)
-        full = interrupts.start_in_thread(_planner, **nlp)
+    if screened:    # one NLP built at a time: CasADi's symbolics are not thread-safe (its evaluation is)
+        full_planner = interrupts.call_in_thread(_planner, **nlp)   # checks N, d, scheme, bound
+        full = lambda: full_planner   # noqa: E731
         planner = _planner(**{**nlp, "intervals": SCREEN_INTERVALS})
     else:
         planner = _planner(**nlp)   # checks N, d, scheme, bound
