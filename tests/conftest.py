@@ -34,16 +34,60 @@ from rollplan.planners.geometric import GeometricPhasePlanner  # noqa: E402
 
 import references  # noqa: E402
 
+#: Set (to anything) for a run whose compiled functions and C libraries are all built anew, in a new and empty
+#: cache directory removed at the end, instead of the run-to-run build cache (:func:`_build_cache`).
+FRESH_CACHE = "ROLLPLAN_TEST_FRESH_CACHE"
+#: How many build caches (one per content of the package) are kept; the least recently used go first.
+_KEEP_BUILD_CACHES = 3
+
+
+def _package_digest(package=None) -> str:
+    """SHA-256 of every file of the rollplan package (or of the folder ``package``: paths and bytes, bytecode
+    excluded) and of the versions of Python, CasADi and numpy: two runs with the same digest build the same compiled
+    functions and libraries."""
+    import hashlib
+
+    import casadi
+    import numpy
+
+    h = hashlib.sha256(f"{sys.version}|{casadi.__version__}|{numpy.__version__}".encode())
+    package = Path(package or Path(rollplan.__file__).parent)
+    for path in sorted(package.rglob("*")):
+        if path.is_file() and "__pycache__" not in path.parts:
+            h.update(str(path.relative_to(package)).encode() + b"\0" + path.read_bytes() + b"\0")
+    return h.hexdigest()[:20]
+
+
+def _build_cache(config) -> Path | None:
+    """The cache directory this run shares with earlier runs of the same package content (``.pytest_cache``),
+    so that a developer's second run loads the C libraries and compiled functions the first one built. It is
+    keyed by :func:`_package_digest`, not only by the keys of rollplan's own cache: any change to the package
+    (a source, a template, a C file) gives a new, empty directory, so a run never loads what another content
+    built. None (a fresh directory instead) with :data:`FRESH_CACHE` set or pytest's cache disabled."""
+    if os.environ.get(FRESH_CACHE) or getattr(config, "cache", None) is None:
+        return None
+    root = config.cache.mkdir("rollplan-build")
+    root.chmod(0o700)
+    folder = root / _package_digest()
+    folder.mkdir(mode=0o700, exist_ok=True)
+    os.utime(folder)
+    for old in sorted((p for p in root.iterdir() if p.is_dir()), key=lambda p: p.stat().st_mtime)[:-_KEEP_BUILD_CACHES]:
+        shutil.rmtree(old, ignore_errors=True)
+    return folder
+
 
 def pytest_configure(config):
-    """The test run gets its own cache directory (compiled functions, leaf tables), new and empty, so that
-    the code path of a run does not depend on what the user's cache holds. Made once by the controlling
-    process; pytest-xdist's workers and every subprocess of a test inherit it through the environment."""
+    """The test run gets a cache directory (compiled functions, C libraries) that the user's cache does not feed:
+    the run-to-run build cache of this package content (:func:`_build_cache`), or with :data:`FRESH_CACHE` a new
+    and empty one. Made once by the controlling process; pytest-xdist's workers and every subprocess of a test
+    inherit it through the environment."""
     if os.environ.get("PYTEST_XDIST_WORKER"):
         return
-    folder = tempfile.mkdtemp(prefix="rollplan-test-cache-")
-    config.stash[_CACHE] = folder
-    os.environ["ROLLPLAN_CACHE_DIR"] = folder
+    folder = _build_cache(config)
+    if folder is None:
+        folder = tempfile.mkdtemp(prefix="rollplan-test-cache-")
+        config.stash[_CACHE] = folder
+    os.environ["ROLLPLAN_CACHE_DIR"] = str(folder)
     if _NO_BYTECODE:
         # PYTHONDONTWRITEBYTECODE: each worker and each command a test starts would compile rollplan's modules from
         # source again (~0.2 s of CPU per command); Python still reads bytecode that is there, so write it once

@@ -317,13 +317,39 @@ def test_the_c_search_is_generated_again_only_when_the_code_that_writes_it_chang
 
 
 def test_the_test_run_has_its_own_cache_directory():
-    """conftest gives the run a new cache folder: not the user's, and the same in every worker and subprocess."""
+    """conftest gives the run a cache folder that is not the user's: the build cache of this package content, or
+    a new one with ROLLPLAN_TEST_FRESH_CACHE; the same in every worker and subprocess."""
+    import conftest
+
     folder = cmod.cache_dir()
-    assert folder.name.startswith("rollplan-test-cache-")
+    if os.environ.get(conftest.FRESH_CACHE):
+        assert folder.name.startswith("rollplan-test-cache-")
+    else:
+        assert folder.name == conftest._package_digest() and folder.parent.name == "rollplan-build"
     assert folder != Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "rollplan"
     run = subprocess.run([sys.executable, "-c", "from rollplan.core.compiled import cache_dir; print(cache_dir())"],
                          capture_output=True, text=True, check=True, timeout=120)
     assert run.stdout.strip() == str(folder)
+
+
+def test_the_build_cache_of_the_tests_changes_with_any_byte_of_the_package(tmp_path):
+    """The run-to-run build cache is keyed by every file of the package: a copy has the same key, a copy with one
+    byte changed in a C source, a header or a Python module has another (so no run loads what another content
+    built)."""
+    import conftest
+
+    package = Path(cmod.__file__).parents[1]
+    copy = tmp_path / "rollplan"
+    shutil.copytree(package, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    same = conftest._package_digest(copy)
+    assert same == conftest._package_digest(package)
+    seen = {same}
+    for path in (next(copy.rglob("*.c")), copy / "core" / "model.py", next(copy.rglob("*.h"))):
+        original = path.read_bytes()
+        path.write_bytes(original[:-1] + bytes([original[-1] ^ 1]))
+        seen.add(conftest._package_digest(copy))
+        path.write_bytes(original)
+    assert len(seen) == 4 and conftest._package_digest(copy) == same
 
 
 # ----------------------------------------------------------------------------- a cache other users can write
