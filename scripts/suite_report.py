@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Run the test suite by tier and write results/suite.md (and suite.json) from that measurement.
 
-    python scripts/suite_report.py [--tier unit] [--tier full] [--jobs auto] [--out-dir results]
+    python scripts/suite_report.py [--tier unit] [--tier full] [--warm] [--jobs auto] [--out-dir results]
 
 Tiers: ``unit`` is ``pytest -m "not slow"``, ``full`` the whole suite; each runs as the README's test command
 (``pytest -q -n JOBS``) with ``ROLLPLAN_REQUIRE_EMBEDDED=1`` and ``ROLLPLAN_REQUIRE_MUJOCO=1`` as in ``.ci/run``
@@ -12,6 +12,11 @@ included), errored and skipped tests, the names of the failed and errored tests 
 message) and of the skipped ones (with the reason), and each test's duration (setup, call and teardown, from
 pytest's JUnit XML). A tier not run this time keeps its last measurement (read back from suite.json); suite.md is
 rendered from suite.json alone.
+
+Build cache: by default a tier is measured cold, every C library and compiled function built anew in a fresh cache
+directory (as on a clean clone). With ``--warm`` it is measured as a developer's next run is: an unmeasured run
+first fills the tests' build cache of this package content (tests/conftest.py), then the measured run loads from
+it. Cold and warm measurements are kept apart (``unit`` and ``unit, warm cache``).
 """
 
 from __future__ import annotations
@@ -86,16 +91,25 @@ def failures_in_output(stdout: str) -> list:
     return found
 
 
-def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list) -> dict:
-    """Run one tier; its measurement as a dict (see the module docstring)."""
+#: the suffix of the key of a measurement with a warm build cache (``--warm``)
+WARM = ", warm cache"
+
+
+def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list, warm: bool = False) -> dict:
+    """Run one tier, cold or with a warm build cache (module docstring); its measurement as a dict."""
     select, _, _ = TIERS[tier]
     env = dict(os.environ)
     if require:
         env.update(ROLLPLAN_REQUIRE_EMBEDDED="1", ROLLPLAN_REQUIRE_MUJOCO="1")
+    env.pop("ROLLPLAN_TEST_FRESH_CACHE", None)
+    if not warm:
+        env["ROLLPLAN_TEST_FRESH_CACHE"] = "1"
     with tempfile.TemporaryDirectory() as tmp:
         xml = Path(tmp) / "junit.xml"
-        cmd = [sys.executable, "-m", "pytest", "-q", "-n", jobs, "-p", "no:cacheprovider", *select,
-               f"--junitxml={xml}", *extra, tests]
+        cmd = [sys.executable, "-m", "pytest", "-q", "-n", jobs, *select, f"--junitxml={xml}", *extra, tests]
+        if warm:
+            print(f"{tier}: filling the build cache (unmeasured run)", file=sys.stderr)
+            subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, check=False)
         load0, start = os.getloadavg(), datetime.datetime.now(datetime.timezone.utc)
         c, t = _cpu(), time.perf_counter()
         run = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, check=False)
@@ -114,6 +128,7 @@ def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list) -> di
     dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
                            capture_output=True, text=True, check=False).stdout.strip()
     return {
+        "cache": "warm" if warm else "fresh",
         "command": " ".join(["python -m pytest -q -n", jobs, *(f'-m "{s}"' for s in select[1:]), tests, *extra]),
         "date": f"{start:%Y-%m-%d %H:%M UTC}", "commit": commit + ("+" if dirty else ""),
         "exit_status": run.returncode, "summary": summary, "cores": os.cpu_count(), "jobs": jobs,
@@ -141,27 +156,35 @@ def _cell(text: str, width: int = 200) -> str:
     return text if len(text) <= width else text[:width - 3] + "..."
 
 
+def _rows(data: dict) -> list:
+    """``[(key, TIERS entry)]``: each tier cold, then with a warm cache where measured."""
+    return [(tier + suffix, spec) for tier, spec in TIERS.items() for suffix in ("", WARM)
+            if not suffix or tier + suffix in data]
+
+
 def render(data: dict) -> str:
     """results/suite.md from the measurements of suite.json."""
     lines = ["# Duration of the test suite", "",
              "Written by `python scripts/suite_report.py` from its own run of each tier (do not edit by hand): the "
-             "wall time of the pytest command, collection and the workers' start included. The machine may be "
+             "wall time of the pytest command, collection and the workers' start included; cold (every C library and "
+             "compiled function built anew, as on a clean clone) unless the tier says warm cache (a developer's next "
+             "run: loaded from the build cache an earlier run of the same package content filled). The machine may be "
              "shared: the load average at the start and the end is given, and the CPU time (user + system of pytest "
              "and every process it started) depends less on the load than the wall time.", "",
              "| tier | command | date, commit | tests (passed, failed, skipped) | wall time | budget | CPU time | "
              "sum of test durations | cores, workers | load average at start, end (1 min) |",
              "|---|---|---|---:|---:|---|---:|---:|---|---|"]
-    for tier, (_, budget, what) in TIERS.items():
-        m = data.get(tier)
+    for key, (_, budget, what) in _rows(data):
+        m = data.get(key)
         if not m:
-            lines.append(f"| {tier} | not run by this script yet | | | | {what} | | | | |")
+            lines.append(f"| {key} | not run by this script yet | | | | {what} | | | | |")
             continue
         verdict = "within" if m["wall_s"] <= budget else "over"
-        lines.append(f"| {tier} | `{m['command']}` | {m['date']}, `{m['commit']}` | {m['tests']} ({m['passed']}, "
+        lines.append(f"| {key} | `{m['command']}` | {m['date']}, `{m['commit']}` | {m['tests']} ({m['passed']}, "
                      f"{m['failed']}, {m['skipped']}) | **{_minutes(m['wall_s'])}** | {verdict} ({what}) | "
                      f"{_minutes(m['cpu_s'])} | {_minutes(m['test_seconds'])} | {m['cores']}, {m['jobs']} | "
                      f"{m['load_start'][0]:.2f}, {m['load_end'][0]:.2f} |")
-    for tier in TIERS:
+    for tier, _ in _rows(data):
         m = data.get(tier)
         if not m:
             continue
@@ -190,6 +213,8 @@ def render(data: dict) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tier", action="append", choices=list(TIERS), help="tier to run (repeatable; default: both)")
+    ap.add_argument("--warm", action="store_true",
+                    help="measure with the build cache an unmeasured first run fills (default: cold)")
     ap.add_argument("--jobs", default="auto", help="pytest-xdist workers (-n), default auto")
     ap.add_argument("--out-dir", default=str(ROOT / "results"))
     ap.add_argument("--tests", default="tests", help="the folder (or file) of tests, default tests")
@@ -202,9 +227,10 @@ def main(argv=None) -> int:
     data = json.loads(store.read_text()) if store.exists() else {}
     status = 0
     for tier in args.tier or list(TIERS):
-        m = run_tier(tier, args.jobs, args.tests, not args.no_require, args.pytest_args)
-        print(f"{tier}: {m['summary']} in {m['wall_s']} s", file=sys.stderr)
-        data[tier] = m
+        m = run_tier(tier, args.jobs, args.tests, not args.no_require, args.pytest_args, warm=args.warm)
+        key = tier + (WARM if args.warm else "")
+        print(f"{key}: {m['summary']} in {m['wall_s']} s", file=sys.stderr)
+        data[key] = m
         status = status or m["exit_status"]
     from rollplan.outputs import write_atomic, write_json
 

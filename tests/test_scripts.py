@@ -231,3 +231,29 @@ def test_basepoint_bench_script_runs(tmp_path):
     assert "| README example |" in text and "| random 1 |" in text and "DOP853" in text
     rows = json.loads((tmp_path / "basepoint.json").read_text())["rows"]
     assert all(r["any_length"] <= r["pole_length"] and r["dop853_residual"] <= 1e-9 for r in rows)
+
+
+@pytest.mark.slow
+def test_suite_report_measures_cold_by_default_and_warm_after_a_filling_run(tmp_path):
+    """A tier is measured cold (the tests' build cache off: ROLLPLAN_TEST_FRESH_CACHE set for the run) unless
+    ``--warm``: then an unmeasured run comes first and both runs keep the build cache; the two measurements are
+    kept under their own keys and both shown."""
+    tests = tmp_path / "fake"
+    tests.mkdir()
+    (tests / "pytest.ini").write_text("[pytest]\nmarkers =\n    slow: slow\n")
+    log = tmp_path / "log"
+    (tests / "test_env.py").write_text(
+        "import os\n\ndef test_env():\n"
+        f"    open({str(log)!r}, 'a').write(repr(os.environ.get('ROLLPLAN_TEST_FRESH_CACHE')) + '\\n')\n")
+    script = Path(__file__).resolve().parent.parent / "scripts" / "suite_report.py"
+    out = tmp_path / "out"
+    base = [sys.executable, str(script), "--jobs", "0", "--tier", "unit", "--tests", str(tests), "--out-dir", str(out)]
+    env = {**os.environ, "ROLLPLAN_TEST_FRESH_CACHE": "1"}
+    for extra in ([], ["--warm"]):
+        run = subprocess.run(base + extra, capture_output=True, text=True, timeout=600, check=False, env=env)
+        assert run.returncode == 0, run.stderr
+    assert log.read_text().splitlines() == ["'1'", "None", "None"]
+    data = json.loads((out / "suite.json").read_text())
+    assert (data["unit"]["cache"], data["unit, warm cache"]["cache"]) == ("fresh", "warm")
+    text = (out / "suite.md").read_text()
+    assert "| unit |" in text and "| unit, warm cache |" in text
