@@ -53,6 +53,29 @@ def test_the_default_between_full_states_is_the_certified_fast_polish_of_the_pol
     assert p.path_length == pytest.approx(p.sample(None).path_length(), rel=1e-3)
 
 
+def test_the_fast_polish_is_finished_like_the_polish_and_names_its_own_starts(monkeypatch):
+    """The fast polish corrects, certifies and backs off through the rest-to-rest planner's ``finish`` (the loop of
+    the full polish), with the correction on fixed steps; its controls reach the goal at rest by DOP853 on the
+    printed equations. Its straight-line starts are named apart from the full polish's ``line:m``."""
+    from rollplan.planners.collocation.rest import RestToRestPlanner
+    from rollplan.planners.refined import FIXED_STEPS
+
+    finished = []
+    real = RestToRestPlanner.finish
+    monkeypatch.setattr(RestToRestPlanner, "finish",
+                        lambda self, nlp, *a: finished.append((nlp.guess.name, a)) or real(self, nlp, *a))
+    start, goal, k = README_PAIR
+    p = rollplan.plan(goal, k=k, start=start)
+    assert isinstance(p, RefinedPlan) and finished == [(p.collocation.guess, (FIXED_STEPS,))]
+    starts = p.stats.details["starts"]
+    assert [s["start"] for s in starts] == [f"fast-line:{p.turns}"] == [p.collocation.guess]
+    assert starts[0]["correction_error"] <= 1e-9 and starts[0]["residual"] == p.residual
+    x = printed_end(p.collocation.controls, start, k)
+    d = np.r_[x[:5] - np.asarray(goal), x[5:]]
+    d[2] = ref.wrap(d[2])
+    assert np.linalg.norm(d) <= 1e-9
+
+
 def test_goals_at_the_pole_from_rest_at_the_origin_keep_the_geometric_phase_plan():
     p, q = rollplan.plan((0.4, 0.3, 0.5), k=2.5), rollplan.plan((0.4, 0.3, 0.5), k=2.5, polish="off")
     assert isinstance(p, geometric.Plan) and (p.a, p.b, p.gamma) == (q.a, q.b, q.gamma)

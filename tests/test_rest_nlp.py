@@ -115,3 +115,68 @@ def test_decision_vectors_convert_both_ways():
     np.testing.assert_array_equal(rt.pack(Guess(states, colloc, controls, "v")), v)
     np.testing.assert_array_equal(rt.reduced(rt.full(v)), v)
     assert rt.full(v).size == 7 + 5 * (7 * 3 + 2 + 7)
+
+
+def _test_ode():
+    """x1' = w - x2, x2' = x1^2 + x1 x2 (nonlinear: a single step of the eighth-order formula over an interval of
+    1/2 misses the end by far more than 1e-10), the quadrature x1^2."""
+    x, w, par = ca.SX.sym("x", 2), ca.SX.sym("w", 1), ca.SX.sym("par", 1)
+    return x, w, par, ca.vertcat(w - x[1], x[0] ** 2 + x[0] * x[1]), x[0] ** 2
+
+
+def _scipy_end(controls, x0):
+    """End state and quadrature of :func:`_test_ode` by DOP853 (rtol 1e-13), interval by interval on [0, 1]."""
+    def rhs(t, z, wi):
+        return [wi - z[1], z[0] ** 2 + z[0] * z[1], z[0] ** 2]
+
+    z, n = np.r_[x0, 0.0], len(controls)
+    for j, wi in enumerate(np.ravel(controls)):
+        z = solve_ivp(rhs, (j / n, (j + 1) / n), z, method="DOP853", rtol=1e-13, atol=1e-14, args=(wi,)).y[:, -1]
+    return z[:2], z[2]
+
+
+def test_fixed_step_integrates_like_dop853_and_differentiates_its_own_end():
+    """``fixed_step`` has the inputs and outputs of ``sensitivity_step``: its end and quadrature converge to DOP853's
+    (order 8: 16 steps per interval to 1e-12), its Jacobians are those of its end (central differences)."""
+    from rollplan.planners.collocation.transcription import fixed_step
+
+    x, w, par, xdot, quad = _test_ode()
+    x0, wi, h = np.array([0.3, -0.2]), 0.7, 0.5
+    xe, qe = _scipy_end([wi], x0)
+    fine, coarse = fixed_step("t", x, w, par, xdot, quad, 16), fixed_step("t", x, w, par, xdot, quad, 1, False)
+    p = np.array([wi, 0.0, 1.0])
+    out = fine(x0=x0, p=p)
+    assert np.abs(np.array(out["xf"]).ravel() - xe).max() <= 1e-12 and abs(float(out["qf"]) - qe) <= 1e-12
+    assert set(coarse.name_out()) == {"xf", "qf"}
+    assert np.abs(np.array(coarse(x0=x0, p=p)["xf"]).ravel() - xe).max() > 1e-10
+    plain = fixed_step("t", x, w, par, xdot, quad, 16, False)
+    p = np.array([wi, 0.0, h])
+    jx, jp = np.array(out["jac_xf_x0"]), np.array(fine(x0=x0, p=p)["jac_xf_p"])
+    eps = 1e-6
+    for i in range(2):
+        d = np.eye(2)[i] * eps
+        fd = (np.array(plain(x0=x0 + d, p=np.array([wi, 0.0, 1.0]))["xf"]) -
+              np.array(plain(x0=x0 - d, p=np.array([wi, 0.0, 1.0]))["xf"])).ravel() / (2 * eps)
+        np.testing.assert_allclose(jx[:, i], fd, atol=1e-8)
+    fd = (np.array(plain(x0=x0, p=p + [eps, 0, 0])["xf"]) - np.array(plain(x0=x0, p=p - [eps, 0, 0])["xf"])).ravel()
+    np.testing.assert_allclose(jp[:, 0], fd / (2 * eps), atol=1e-8)
+
+
+def test_gauss_newton_meets_the_goal_of_its_plain_integration_with_a_coarser_jacobian():
+    """With ``plain`` a finer integration than ``step`` (here CVODES, and one step of the eighth-order formula per
+    interval for the sensitivities), the end error and the quadrature are the plain integration's: the corrected
+    controls reach the goal by DOP853, though the coarse integration of those controls misses it."""
+    from rollplan.planners.collocation.transcription import fixed_step, gauss_newton, sensitivity_step
+
+    x, w, par, xdot, quad = _test_ode()
+    coarse = fixed_step("gn", x, w, par, xdot, quad, 1)
+    plain = sensitivity_step("gn", x, w, par, xdot, quad, False)
+    N, x0, final = 2, np.array([0.3, -0.2]), np.array([0.9, 0.4])
+    a, q, size, first = gauss_newton(coarse, np.zeros((N, 1)), x0, final, np.zeros(1), 1e-12, 8, plain)
+    end, quadrature = _scipy_end(a, x0)
+    assert first > 0.1 and size <= 1e-12
+    assert np.abs(end - final).max() <= 1e-10 and abs(q - quadrature) <= 1e-10
+    y = x0
+    for ai in a:
+        y = np.array(coarse(x0=y, p=np.array([ai[0], 0.0, 1.0 / N]))["xf"]).ravel()
+    assert np.abs(y - final).max() > 1e-9

@@ -13,9 +13,9 @@ the plan itself, with the reason in ``stats.details["refine"]``.
 The fast polish (:func:`fast_polish`, ``polish="fast"``: the default of :func:`rollplan.plan` between full states)
 solves the same problem on :data:`FAST_INTERVALS` intervals from the straight line (run rest to rest,
 :func:`line_guess`) on the whole turns of psi that bring the goal's psi nearest the start's, or on one turn more or
-less where that start is not certified (:data:`FAST_TURNS`), corrects the controls by Newton steps whose residual is
-the CVODES integration itself (first on RK4, the Jacobian from RK4) and certifies the result like the polish, the
-contact bound backed off when the certified motion leaves it.
+less where that start is not certified (:data:`FAST_TURNS`), and finishes it like the polish
+(:meth:`.collocation.rest.RestToRestPlanner.finish`: Newton correction, CVODES certificate, the contact bound backed
+off when the certified motion leaves it), the correction integrated by fixed steps (:data:`FIXED_STEPS`).
 """
 
 from __future__ import annotations
@@ -25,21 +25,18 @@ import time
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 
 from .. import interrupts
 from ..core.plane import wrap_exact
 from ..errors import InputError, SolverError
-from ..problem import Problem, State
+from ..problem import Problem
 from ..progress import report
 from ..result import DEFAULT_SAMPLES, Certificate, CertifiedMotion, SolverStats, Trajectory
-from ..result import certify as certificate_of
 from ..timeseries import TimeSeries
 
-__all__ = ["INTERVALS", "CONTACT_BOUND", "LINE_TURNS", "FAST_INTERVALS", "FAST_DEGREE", "FAST_TURNS", "RK4_SUBSTEPS",
-           "RK4_JACOBIAN_SUBSTEPS", "CORRECTION_STEPS", "CORRECTION_TOL", "CVODES_CORRECTION_TOL", "RefinedPlan",
-           "warm_samples", "line_guess", "refine", "fast_polish"]
+__all__ = ["INTERVALS", "CONTACT_BOUND", "LINE_TURNS", "FAST_INTERVALS", "FAST_DEGREE", "FAST_TURNS", "FIXED_STEPS",
+           "RefinedPlan", "warm_samples", "line_guess", "refine", "fast_polish"]
 
 #: Intervals N of the polish's collocation (piecewise-constant contact accelerations).
 INTERVALS = 60
@@ -58,16 +55,9 @@ FAST_TURNS = (0, -1, 1)
 #: IPOPT options of the fast polish beyond those of the collocation NLP: the start and goal are kept as
 #: constraints rather than removed from the NLP (fewer iterations on the small NLP).
 FAST_IPOPT_OPTIONS = {"ipopt.fixed_variable_treatment": "make_constraint"}
-#: RK4 steps per interval of the fast polish's Newton correction: of its end state, and of its Jacobian.
-RK4_SUBSTEPS = 16
-RK4_JACOBIAN_SUBSTEPS = 4
-#: Most Newton steps of each stage of the fast polish's correction, and the largest end error [R, rad] that ends
-#: it: on the RK4 end, and on the CVODES end (a tenth of the certificate's tolerance).
-CORRECTION_STEPS = 6
-CORRECTION_TOL = 1e-13
-CVODES_CORRECTION_TOL = 1e-10
-#: CVODES samples per interval of the fast polish's motion.
-FAST_SAMPLES_PER_INTERVAL = 8
+#: Steps per interval of the eighth-order formula that integrate the fast polish's Newton correction: of the end
+#: state, and of its Jacobian (:func:`.collocation.rest.correct`); the CVODES certificate checks the result.
+FIXED_STEPS = (16, 2)
 
 
 @dataclass(frozen=True)
@@ -275,193 +265,71 @@ def refine(plan, intervals: int = INTERVALS, contact_bound: float = CONTACT_BOUN
 
 
 @lru_cache(maxsize=4)
-def _fast_nlp(intervals: int, degree: int, contact_bound: float):
-    """The rest-to-rest collocation of the fast polish and its IPOPT solver (built once per N, d and bound)."""
+def _fast_planner(intervals: int, degree: int, contact_bound: float):
+    """The rest-to-rest collocation of the fast polish with its own IPOPT solver (:data:`FAST_IPOPT_OPTIONS`;
+    built once per N, d and bound)."""
     from .collocation.rest import RestToRestMethod
 
     planner = RestToRestMethod(intervals=intervals, degree=degree, cost="path_energy",
                                contact_bound=contact_bound).planner
-    s = planner.solver
-    shared = {"grad_f": s.get_function("nlp_grad_f"), "jac_g": s.get_function("nlp_jac_g"),
-              "hess_lag": s.get_function("nlp_hess_l")}   # the planner's derivatives, not built again
-    solver = interrupts.call_in_thread(ca.nlpsol, "fast_polish", "ipopt", s.oracle(),
-                                       {**planner.ipopt_options, **FAST_IPOPT_OPTIONS, **shared})
-    return planner, solver
-
-
-@lru_cache(maxsize=4)
-def _rk4_step(substeps: int, jacobians: bool) -> ca.Function:
-    """``(x[7], a[2], par, h) -> (x(h), path energy[, d x(h) / d x, d x(h) / d a])``: ``substeps`` RK4 steps of the
-    7-state ODE with the contact accelerations ``a`` over a time ``h``."""
-    from .collocation.costs import N_PAR
-    from .collocation.rest import motion_function
-
-    f = motion_function()
-    x0, acc, par, h = ca.SX.sym("x0", 7), ca.SX.sym("a", 2), ca.SX.sym("par", N_PAR), ca.SX.sym("h")
-    dt = h / substeps
-
-    def rhs(z):
-        xdot = f(z, acc, par)[0]
-        return xdot, xdot[0] ** 2 + xdot[1] ** 2
-
-    x, energy = x0, 0.0
-    for _ in range(substeps):
-        k1, e1 = rhs(x)
-        k2, e2 = rhs(x + dt / 2 * k1)
-        k3, e3 = rhs(x + dt / 2 * k2)
-        k4, e4 = rhs(x + dt * k3)
-        x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        energy = energy + dt / 6 * (e1 + 2 * e2 + 2 * e3 + e4)
-    out = [x, energy] + ([ca.jacobian(x, x0), ca.jacobian(x, acc)] if jacobians else [])
-    return ca.Function("fast_polish_step", [x0, acc, par, h], out)
-
-
-def _rk4_end(controls, start, par):
-    """``(x(1), path energy)`` of :func:`_rk4_run` with :data:`RK4_SUBSTEPS` and twice as many steps per interval,
-    extrapolated (Richardson: the error of RK4 is of order 4 in the step)."""
-    coarse, fine = _rk4_run(controls, start, par, substeps=RK4_SUBSTEPS), _rk4_run(controls, start, par,
-                                                                                  substeps=2 * RK4_SUBSTEPS)
-    return tuple(f + (f - c) / 15.0 for c, f in zip(coarse, fine))
-
-
-def _rk4_run(controls, start, par, jacobian: bool = False, substeps: int = RK4_SUBSTEPS):
-    """RK4 of the 7-state ODE from ``start`` with ``controls`` (N, 2) on N equal intervals of [0, 1], ``substeps``
-    steps per interval: ``(x(1), path energy)``, or with ``jacobian`` ``d x(1) / d controls`` (7, 2N)
-    (:data:`RK4_JACOBIAN_SUBSTEPS` steps per interval)."""
-    N = controls.shape[0]
-    step = _rk4_step(RK4_JACOBIAN_SUBSTEPS if jacobian else substeps, jacobian)
-    x, energy, blocks = np.asarray(start, float), 0.0, []
-    for a in controls:
-        out = step(x, a, par, 1.0 / N)
-        x, energy = np.array(out[0]).ravel(), energy + float(out[1])
-        if jacobian:
-            A = np.array(out[2])
-            blocks = [A @ B for B in blocks] + [np.array(out[3])]
-    return np.hstack(blocks) if jacobian else (x, energy)
-
-
-def _newton(a, residual, jacobian, steps: int, tol: float):
-    """Least-norm Newton steps ``a -= J^+ r`` while the largest end error ``|r|`` falls: ``(a, r, |r|, out)`` of
-    the best, ``out`` what ``residual(a) -> (r, out)`` returned with it; ``J = jacobian(a)``."""
-    best = None
-    for _ in range(steps + 1):
-        r, out = residual(a)
-        size = float(np.abs(r).max())
-        if best is not None and not size < best[2]:
-            break
-        best = (a, r, size, out)
-        if size <= tol:
-            break
-        a = a - np.linalg.lstsq(jacobian(a), r, rcond=None)[0].reshape(a.shape)
-    return best
-
-
-def _corrected(controls, start, final, problem, par):
-    """The controls (N, 2) corrected until the CVODES motion from ``start`` ends at ``final`` (7,: the goal at rest,
-    units of R): Newton steps on the RK4 end (:func:`_rk4_end`) to :data:`CORRECTION_TOL` first, then with the
-    CVODES end as the residual (the Jacobian of RK4) to :data:`CVODES_CORRECTION_TOL`. Returns ``(controls, motion,
-    end rates, end error, RK4 energy)``."""
-    from .collocation.rest import certify
-
-    R = problem.radius
-    jacobian = lambda a: _rk4_run(a, start, par, True)   # noqa: E731
-
-    def rk4_end(a):
-        return _rk4_end(a, start, par)[0] - final, None
-
-    def cvodes_end(a):
-        motion, rates = interrupts.call(certify, a, start, problem, 1.0, FAST_SAMPLES_PER_INTERVAL, None, True)
-        return np.r_[motion.state[-1] / np.array([R, R, 1.0, 1.0, 1.0]), rates] - final, (motion, rates)
-
-    a = _newton(np.array(controls, float), rk4_end, jacobian, CORRECTION_STEPS, CORRECTION_TOL)[0]
-    a, _, size, (motion, rates) = _newton(a, cvodes_end, jacobian, CORRECTION_STEPS, CVODES_CORRECTION_TOL)
-    return a, motion, rates, size, _rk4_end(a, start, par)[1]
+    return planner.twin(FAST_IPOPT_OPTIONS)
 
 
 def fast_polish(plan, intervals: int = FAST_INTERVALS, contact_bound: float = CONTACT_BOUND):
     """The fast polish of the certified geometric ``plan`` (module docstring): a :class:`RefinedPlan`
     (``stats.details["polish"]`` is ``"fast"``) when its certified motion is shorter than ``plan``, else ``plan``
     with the reason in ``stats.details["refine"]``. Ctrl-C stops it (KeyboardInterrupt)."""
-    from ..measures import integrate_samples
-    from .collocation import rest
-
     t_start = time.perf_counter()
     problem = plan.problem
     if not plan.pieces:
         return _unrefined(plan, "not polished: the plan has no motion to shorten")
-    planner, solver = _fast_nlp(intervals, FAST_DEGREE, contact_bound)
+    planner = _fast_planner(intervals, FAST_DEGREE, contact_bound)
     try:
-        planner.boundary(problem, 0)
+        start, final = planner.boundary(problem, 0)
     except InputError as exc:
         return _unrefined(plan, f"not polished: {exc}")
-    tr, rt = planner.transcription, planner.rest_transcription   # rt: the layout IPOPT solves
-    par = rest.rest_parameters(problem.k, 1.0, problem.robot)
-    tried, best, best_length = [], None, math.inf
-    start, final = planner.boundary(problem, 0)
+    tr = planner.transcription
+    tried, best = [], None
     m0 = -wrap_exact(float(final[2] - start[2]))[1]
     for m in (m0 + dm for dm in FAST_TURNS):
-        if best is not None:   # the first certified start is kept
-            break
-        start, final = planner.boundary(problem, m)
-        guess = line_guess(tr, start, final, f"line:{m}")
-        x0, lbx, ubx, lbg, ubg = rt.contact_bounds(guess, start, final, contact_bound, planner.path_rows)
+        guess = line_guess(tr, *planner.boundary(problem, m), f"fast-line:{m}")
         entry = {"start": guess.name, "turns": m, "iterations": 0, "solve_time_s": 0.0}
         tried.append(entry)
-        bound, ok = contact_bound, False
-        for _ in range(rest.BACKOFF_TRIES):
-            t0 = time.perf_counter()
-            try:
-                sol = interrupts.call(solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
-            except RuntimeError as exc:   # e.g. an evaluation error in CasADi
-                entry["status"] = f"Error: {exc}"[:200]
-                break
-            st = solver.stats()
-            entry.update(status=str(st["return_status"]), iterations=entry["iterations"] + int(st["iter_count"]),
-                         solve_time_s=entry["solve_time_s"] + time.perf_counter() - t0)
-            if not st["success"]:
-                break
-            v = np.array(sol["x"]).ravel()
-            try:
-                controls, motion, rates, size, energy = _corrected(tr.unpack(rt.full(v))[2], start, final, problem,
-                                                                   par)
-            except (RuntimeError, SolverError):   # an integration that fails: no motion from this start
-                entry["status"] = "Correction_Failed"
-                break
-            excess = float(rest.polar_angles(motion).max()) - contact_bound
-            if excess <= 0.0:
-                ok = True
-                break
-            # the bound holds at the collocation points only: back it off (warm-started)
-            bound -= rest.BACKOFF_FACTOR * excess
-            _, lbx, ubx, lbg, ubg = rt.contact_bounds(guess, start, final, bound, planner.path_rows)
-            x0 = np.clip(v, lbx, ubx)
-        else:
-            entry["status"] = "Bound_Violated"
-        if not ok:
+        t0 = time.perf_counter()
+        try:
+            nlp = interrupts.call(planner.solve_nlp, problem, guess, 1.0, m)
+        except SolverError as exc:   # IPOPT failed: its statistics are those of this solve
+            entry.update(status=exc.status, iterations=int(planner.solver.stats()["iter_count"]),
+                         solve_time_s=time.perf_counter() - t0)
             continue
-        fin = State(*motion.state[-1])
-        cert = certificate_of(problem, fin, "cvodes", residual=max(problem.residual(fin), float(np.abs(rates).max())))
-        entry.update(nlp_objective=float(sol["f"]), correction_error=size, residual=cert.residual,
-                     backed_off_bound=bound)
-        if not cert.passed:
-            entry["status"] = "Verification_Failed"
+        except RuntimeError as exc:   # e.g. an evaluation error in CasADi
+            entry.update(status=f"Error: {exc}"[:200], solve_time_s=time.perf_counter() - t0)
             continue
-        stats = SolverStats("ipopt", entry["status"], entry["iterations"], entry["solve_time_s"],
-                            {"nlp_objective": float(sol["f"]), "backed_off_bound": bound})
-        run = rest.RestResult(problem, "path_energy", tr, 1.0, m, guess.name, contact_bound, controls, energy,
-                              motion, cert, stats)
-        length = integrate_samples(motion.time, np.hypot(motion.velocity[:, 0], motion.velocity[:, 1]))
-        if length < best_length:
-            best, best_length = run, length
+        entry.update(status=nlp.status, iterations=nlp.iterations, solve_time_s=nlp.solve_time_s,
+                     nlp_objective=nlp.objective)
+        try:
+            run = interrupts.call(planner.finish, nlp, FIXED_STEPS)
+        except SolverError as exc:
+            entry["status"] = exc.status
+            continue
+        except RuntimeError:   # an integration that fails: no motion from this start
+            entry["status"] = "Correction_Failed"
+            continue
+        det = run.stats.details
+        entry.update(status=run.stats.status, iterations=run.stats.iterations, solve_time_s=run.stats.time_s,
+                     nlp_objective=det["nlp_objective"], correction_error=det["correction_error"],
+                     residual=run.certificate.residual, backed_off_bound=det["backed_off_bound"])
+        best = run   # the first certified start is kept
+        break
     elapsed = time.perf_counter() - t_start
     details = {"polish": "fast", "unrefined_length": plan.path_length, "unrefined_time_s": plan.stats.time_s,
                "refine_time_s": elapsed, "intervals": intervals, "contact_bound": contact_bound, "starts": tried}
     if best is None:
         why = ", ".join(f"{s['start']}: {s['status']}" for s in tried)
         return _unrefined(plan, f"not polished: no start of the fast polish was certified ({why})")
-    if not best_length < plan.path_length * (1.0 - MIN_GAIN):
-        return _unrefined(plan, f"not polished: the fast polish's certified motion ({best_length:.6g}) is not "
+    if not best.path_length < plan.path_length * (1.0 - MIN_GAIN):
+        return _unrefined(plan, f"not polished: the fast polish's certified motion ({best.path_length:.6g}) is not "
                                 f"shorter than the plan ({plan.path_length:.6g})")
     stats = SolverStats("ipopt", best.stats.status, best.stats.iterations, plan.stats.time_s + elapsed,
                         {**details, "turns": best.turns})
-    return RefinedPlan(problem, plan, best, best.certificate, stats, best_length)
+    return RefinedPlan(problem, plan, best, best.certificate, stats, best.path_length)

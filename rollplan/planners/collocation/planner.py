@@ -33,6 +33,7 @@ from ..geometric.composed import as_composed, default_composed_planner
 from ..method import Method, with_steps
 from .costs import COSTS, N_PAR, Cost
 from .transcription import (
+    CORRECTION_TOL,
     SCHEMES,
     CollocationRun,
     Guess,
@@ -56,8 +57,6 @@ CONTACT_BOUND = math.radians(75.0)
 SMOOTHING = 1e-4
 #: Default largest certified residual of a returned solution (units of R, rad), as for the geometric planner.
 TOLERANCE = CERTIFICATE_TOLERANCE
-#: Target of the Gauss-Newton correction of the controls: largest end-state error.
-CORRECTION_TOL = 1e-12
 #: Least number of intervals: 2N contact rates for the 5 end conditions.
 MIN_INTERVALS = 3
 

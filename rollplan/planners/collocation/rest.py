@@ -35,10 +35,12 @@ from ..method import Method
 from .costs import N_PAR
 from .rest_nlp import RestTranscription
 from .transcription import (
+    CORRECTION_TOL,
     CollocationRun,
     Guess,
     Transcription,
     check_contact_bound,
+    fixed_step,
     gauss_newton,
     ipopt_options,
     sensitivity_step,
@@ -62,8 +64,6 @@ REST_COSTS = {
 
 #: Largest certified residual (units of R, rad; the final rates in rad per horizon) of a returned solution.
 TOLERANCE = CERTIFICATE_TOLERANCE
-#: Target of the Gauss-Newton correction: largest end-condition error of the corrected controls.
-CORRECTION_TOL = 1e-12
 #: Least number of intervals: 2N controls for the 7 end conditions (docs/design/collocation.md).
 MIN_INTERVALS = 4
 #: Most intervals: the NLP is built symbolically and its memory (construction, IPOPT) grows with N; up to this
@@ -281,15 +281,17 @@ class RestToRestPlanner:
         self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, self.ipopt_options)
         self.build_time_s = time.perf_counter() - t0
 
-    def twin(self) -> RestToRestPlanner:
+    def twin(self, options: dict | None = None) -> RestToRestPlanner:
         """This planner with its own IPOPT solver of the same NLP, its derivatives shared (not built again): for
-        solves in another thread at the same time (a solver's statistics are those of its last call)."""
+        solves in another thread at the same time (a solver's statistics are those of its last call), or with
+        other IPOPT ``options`` (added to :attr:`ipopt_options`)."""
         s = self.solver
         shared = {"grad_f": s.get_function("nlp_grad_f"), "jac_g": s.get_function("nlp_jac_g"),
                   "hess_lag": s.get_function("nlp_hess_l")}
         other = copy.copy(self)
+        other.ipopt_options = {**self.ipopt_options, **(options or {})}
         other.solver = interrupts.call_in_thread(ca.nlpsol, s.name(), "ipopt", s.oracle(),
-                                                 {**self.ipopt_options, **shared})
+                                                 {**other.ipopt_options, **shared})
         return other
 
     def boundary(self, problem: Problem, turns: int) -> tuple[np.ndarray, np.ndarray]:
@@ -371,10 +373,10 @@ class RestToRestPlanner:
                               "iterations; hint: warm-start from a geometric-phase plan", status)
         return self.rest_transcription.full(np.array(sol["x"]).ravel()), float(sol["f"]), status, iters, solve_time
 
-    def finish(self, nlp: NlpSolution) -> RestResult:
+    def finish(self, nlp: NlpSolution, fixed_steps: tuple[int, int] | None = None) -> RestResult:
         """The second stage of :meth:`solve`: the Newton correction and the CVODES certificate of ``nlp`` (a
         :meth:`solve_nlp` of this planner), the contact bound backed off and the NLP solved again (warm-started)
-        when the samples leave it.
+        when the samples leave it. ``fixed_steps``: the correction's integration (:func:`correct`).
 
         Raises
         ------
@@ -387,7 +389,7 @@ class RestToRestPlanner:
             nlp.iterations, nlp.solve_time_s
         bound = c
         for _ in range(BACKOFF_TRIES):
-            controls, objective = correct(tr.unpack(v)[2], start, final, par, self.cost, where)
+            controls, objective = correct(tr.unpack(v)[2], start, final, par, self.cost, where, fixed_steps)
             motion, end_rates = certify(controls, start, problem, 1.0, self.samples_per_interval, nlp.robot, True)
             excess = polar_angles(motion).max() - c
             if excess <= 0.0:
@@ -402,12 +404,14 @@ class RestToRestPlanner:
             raise SolverError(f"the collocation solution ({where}) leaves the contact bound {c:.6g} rad between "
                               f"collocation points by {excess:.2e} rad after {BACKOFF_TRIES} backed-off solves; "
                               "hint: raise N", "Bound_Violated")
+        end = np.r_[motion.state[-1] / np.array([problem.radius] * 2 + [1.0] * 3), end_rates] - final
         motion = scaled_motion(motion, horizon)
         cert = _certificate(problem, State(*motion.state[-1]), end_rates, where)
         scale = horizon ** COST_POWERS[self.cost]
         stats = SolverStats("ipopt", status, iters, solve_time, {"build_time_s": self.build_time_s,
-                                                                 "backed_off_bound": bound,
-                                                                 "nlp_objective": f * scale})
+                                                                 "backed_off_bound": float(bound),
+                                                                 "nlp_objective": f * scale,
+                                                                 "correction_error": float(np.abs(end).max())})
         return RestResult(problem, self.cost, tr, horizon, nlp.turns, guess.name, c,
                           controls / horizon ** 2, objective * scale, motion, cert, stats)
 
@@ -447,21 +451,27 @@ def polar_angles(motion: TimeSeries) -> np.ndarray:
     return np.arccos(np.clip(np.cos(motion.state[:, 3]) * np.cos(motion.state[:, 4]), -1.0, 1.0))
 
 
-@lru_cache(maxsize=8)
-def _newton_step(cost: str, jacobians: bool = True) -> ca.Function:
-    """:func:`.transcription.sensitivity_step` of the 7-state ODE, the quadrature the cost ``cost`` (0 for a
-    name not in :data:`REST_COSTS`, e.g. minimum time)."""
+@lru_cache(maxsize=16)
+def _newton_step(cost: str, jacobians: bool = True, substeps: int | None = None) -> ca.Function:
+    """:func:`.transcription.sensitivity_step` of the 7-state ODE (with ``substeps``, its
+    :func:`.transcription.fixed_step`), the quadrature the cost ``cost`` (0 for a name not in :data:`REST_COSTS`,
+    e.g. minimum time)."""
     x, acc, par = ca.SX.sym("x", 7), ca.SX.sym("a", 2), ca.SX.sym("par", N_PAR)
     xdot, omega, _, torque = motion_function()(x, acc, par)
     quad = REST_COSTS[cost](xdot, omega, torque, par) if cost in REST_COSTS else ca.SX(0.0)
+    if substeps is not None:
+        return fixed_step("rest_newton", x, acc, par, xdot, quad, substeps, jacobians)
     return sensitivity_step("rest_newton", x, acc, par, xdot, quad, jacobians)
 
 
-def correct(controls, start, final, par, cost: str = "path_energy", where: str = "rest-to-rest"):
+def correct(controls, start, final, par, cost: str = "path_energy", where: str = "rest-to-rest",
+            fixed_steps: tuple[int, int] | None = None):
     """Minimum-norm Gauss-Newton correction (:func:`.transcription.gauss_newton`) of piecewise-constant
     accelerations in normalized time (T = 1), through CVODES with sensitivities, until the motion from ``start``
-    (7,) ends at ``final`` (7,: the goal at rest) to :data:`CORRECTION_TOL`. ``par`` are :func:`rest_parameters`
-    with T = 1.
+    (7,) ends at ``final`` (7,: the goal at rest) to :data:`.transcription.CORRECTION_TOL`. ``par`` are
+    :func:`rest_parameters` with T = 1. With ``fixed_steps = (n, m)`` the motion is integrated instead by ``n``
+    steps per interval of the eighth-order formula (:func:`.transcription.fixed_step`), the Jacobian by ``m``: a
+    cheaper correction, for few intervals, that the CVODES certificate (:func:`certify`) checks like any other.
 
     Returns
     -------
@@ -474,8 +484,9 @@ def correct(controls, start, final, par, cost: str = "path_energy", where: str =
     SolverError
         ``"Correction_Failed"``: the end conditions are not met to :data:`TOLERANCE` after the steps.
     """
-    a, q, size, _ = gauss_newton(_newton_step(cost), controls, start, final, par, CORRECTION_TOL, _NEWTON_STEPS,
-                                 _newton_step(cost, False))
+    n, m = fixed_steps if fixed_steps is not None else (None, None)
+    a, q, size, _ = gauss_newton(_newton_step(cost, True, m), controls, start, final, par, CORRECTION_TOL,
+                                 _NEWTON_STEPS, _newton_step(cost, False, n))
     if not size <= TOLERANCE:
         raise SolverError(f"the Newton correction of the collocation solution ({where}) leaves an end-condition "
                           f"error of {size:.2e} > {TOLERANCE:.0e}; hint: raise N or d", "Correction_Failed")

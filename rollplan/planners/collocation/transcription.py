@@ -20,18 +20,22 @@ import numpy as np
 
 from ... import interrupts
 from ...core import model
+from ...core.integrate import rk8_formula
 from ...errors import InputError, check_choice, check_whole
 from ...problem import Problem
 from ...result import CertifiedMotion
 
-__all__ = ["SCHEMES", "Guess", "Transcription", "CollocationRun", "ipopt_options", "check_contact_bound",
-           "sensitivity_step", "gauss_newton"]
+__all__ = ["SCHEMES", "CORRECTION_TOL", "Guess", "Transcription", "CollocationRun", "ipopt_options",
+           "check_contact_bound", "sensitivity_step", "fixed_step", "gauss_newton"]
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
 SCHEMES = ("legendre", "radau")
 #: Relative cut-off of the singular values of the end-state Jacobian in a Gauss-Newton step (:func:`gauss_newton`):
 #: directions in which the controls move the end state less than this times the most are not followed.
 GN_RCOND = 1e-9
+#: Target of the Gauss-Newton correction of every collocation solution: largest end-condition error of the corrected
+#: controls (units of R, rad).
+CORRECTION_TOL = 1e-12
 
 
 def ipopt_options(tol: float, max_iter: int) -> dict:
@@ -53,8 +57,27 @@ def sensitivity_step(name: str, x, w, par, xdot, quad, jacobians: bool = True) -
     return F.factory(name + "_step", ["x0", "p"], outputs)
 
 
-def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float = 1e-12, max_steps: int = 8,
-                 plain: ca.Function | None = None):
+def fixed_step(name: str, x, w, par, xdot, quad, substeps: int, jacobians: bool = True) -> ca.Function:
+    """:func:`sensitivity_step`'s function (the same inputs and outputs) by ``substeps`` equal steps of the
+    eighth-order formula of DOP853 (:func:`rollplan.core.integrate.rk8_formula`) instead of CVODES: a cheaper,
+    fixed-step integration of the same ODE, its quadrature carried as an extra state."""
+    h = ca.SX.sym("h")
+    n = x.numel()
+    rhs = ca.Function("rhs", [x, w, par, h], [ca.vertcat(h * xdot, h * quad)])
+    x0 = ca.SX.sym("x0", n)
+    z = ca.vertcat(x0, 0.0)
+    for _ in range(substeps):
+        z = rk8_formula(z, 1.0 / substeps, lambda s, zs: rhs(zs[:n], w, par, h))
+    xf, qf = z[:n], z[n]
+    p = ca.vertcat(w, par, h)
+    outputs = {"xf": xf, "qf": qf}
+    if jacobians:
+        outputs.update(jac_xf_x0=ca.jacobian(xf, x0), jac_xf_p=ca.jacobian(xf, p))
+    return ca.Function(name + "_step", [x0, p], list(outputs.values()), ["x0", "p"], list(outputs))
+
+
+def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float = CORRECTION_TOL,
+                 max_steps: int = 8, plain: ca.Function | None = None):
     """Minimum-norm Gauss-Newton correction of piecewise-constant controls so that the integrated motion ends
     at ``final``.
 
@@ -65,10 +88,13 @@ def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float
     degenerate optimum does not give a huge step) and
     sets ``controls += lambda d`` with the first of ``lambda = 1, 1/2, ..., 1/8`` that lowers the largest end
     error (a step whose integration fails counts as not lowering it), until that error is at most ``goal_tol``,
-    no step lowers it, or after ``max_steps`` steps. ``plain``, the same :func:`sensitivity_step` without
-    jacobians, integrates the trials: the sensitivities are then computed only where a step is taken (not for
-    the controls that end the correction). Returns ``(controls, quadrature, end error)`` of the last
-    (best) controls and the end error of the given controls (``inf`` where an integration failed).
+    no step lowers it, or after ``max_steps`` steps. ``plain``, a step function without jacobians, integrates
+    the given controls and the trials and gives the end error and the quadrature; ``step`` then gives only the
+    sensitivities, computed only where a step is taken (not for the controls that end the correction). ``plain``
+    may be the same :func:`sensitivity_step` without jacobians, or another integration of the same ODE (e.g. a
+    :func:`fixed_step` with more steps than the ``step`` of the Jacobian). Returns ``(controls, quadrature, end
+    error)`` of the last (best) controls and the end error of the given controls (``inf`` where an integration
+    failed).
     """
     a = np.array(controls, float)
     N, nu = a.shape
@@ -97,7 +123,9 @@ def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float
         if size <= goal_tol or not math.isfinite(size):
             break
         if not A:
-            size, x, q, A, B = run(a)
+            ok, _, _, A, B = run(a)
+            if not math.isfinite(ok):
+                break
         J, M = np.zeros((nx, nu * N)), np.eye(nx)
         for i in range(N - 1, -1, -1):
             J[:, nu * i: nu * (i + 1)] = M @ B[i]
