@@ -108,6 +108,34 @@ def test_polygon_edges_are_great_circle_arcs_and_the_shape_is_fixed(name):
         assert apex == pytest.approx(np.pi / 2, abs=1e-13) and np.ptp(sides) < 1e-12
 
 
+@pytest.mark.parametrize("name", ("triangle", "square"))
+def test_c_polygon_leaf_is_its_edges_and_evaluates_one_edge_per_point(name):
+    """The C planner's polygon leaf (``half_angle_leaf``, one piece in the half angle t): at every t its point is on
+    the great-circle arc of the edge j with t in [j pi / N, (j + 1) pi / N] between the corners of
+    tests/references.py, on either side; and its point and d/dt normalize one edge only (one square root; the square's
+    side corners add one), not every edge (the cost of the C search's leaf map and certificate)."""
+    from rollplan.core.c_functions import half_angle_leaf
+
+    t, a = ca.SX.sym("t"), ca.SX.sym("a")
+    edges = families.pieces_per_leaf(name)
+    for side in (1.0, -1.0):
+        point = half_angle_leaf(name, t, a, side)
+        for expr in (point, ca.jacobian(point, t)):
+            f = ca.Function("f", [t, a], [expr])
+            assert [f.instruction_id(j) for j in range(f.n_instructions())].count(ca.OP_SQRT) == 1 + (name == "square")
+        f = ca.Function("f", [t, a], [point])
+        for size in (0.2, 0.69):
+            corners = references.polygon_corners(name, size, side)
+            for j in range(edges):
+                for tt in np.linspace(j, j + 1, 9)[1:-1] * np.pi / edges:
+                    x = np.array(f(tt, size)).ravel()
+                    normal = np.cross(corners[j], corners[j + 1])
+                    assert abs(x @ normal) < 1e-13 * np.linalg.norm(normal) and abs(x @ x - 1) < 1e-14
+                    arc = np.arccos(np.clip(corners[j] @ corners[j + 1], -1, 1))
+                    assert np.arccos(np.clip(x @ corners[j], -1, 1)) + np.arccos(np.clip(x @ corners[j + 1], -1, 1)) \
+                        == pytest.approx(arc, abs=1e-7)
+
+
 @pytest.mark.parametrize("name", NAMES)
 def test_leaf_length_against_arc_length_quadrature(name):
     for a in (0.1, 0.69):

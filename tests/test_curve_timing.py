@@ -48,15 +48,15 @@ def _vertices(name, a, b, gamma=GAMMA):
 
 
 def _speed_where(prof, s_values, iterations=200):
-    """s' of a profile where s(t) first reaches each value (bisection on the nondecreasing s(t))."""
-    out = []
-    for target in s_values:
-        lo, hi = 0.0, prof.duration
-        for _ in range(iterations):
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if prof.evaluate(mid)[0][0] < target else (lo, mid)
-        out.append(prof.evaluate(hi)[1][0])
-    return np.array(out)
+    """s' of a profile where s(t) first reaches each value (bisection on the nondecreasing s(t), every value at
+    once)."""
+    target = np.asarray(s_values, float)
+    lo, hi = np.zeros(target.size), np.full(target.size, prof.duration)
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        below = prof.evaluate(mid)[0] < target
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    return prof.evaluate(hi)[1]
 
 
 @pytest.mark.parametrize("name", ("triangle", "square"))

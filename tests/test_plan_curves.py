@@ -6,7 +6,6 @@ independent integration of the sampled contact path of ``plan --json`` (scipy's 
 import json
 import math
 import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -28,13 +27,6 @@ def _require_library(curve):
     if compiled.compiler_command() is None:
         pytest.skip("no C compiler: the compiled search is not built")
     assert compiled_search.library(curve) is not None, compiled.last_build()
-
-
-def _cli(*argv):
-    """``rollplan argv`` in a separate process: (exit code, stdout, stderr)."""
-    r = subprocess.run([sys.executable, "-m", "rollplan.cli", *argv], capture_output=True, text=True, timeout=600,
-                       check=False)
-    return r.returncode, r.stdout, r.stderr
 
 
 @pytest.mark.parametrize("options, needle", [
@@ -77,7 +69,7 @@ def _targets(seed, count):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("curve", PLANNED)
-def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path):
+def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path, capsys):
     """``plan --curve --json``: the sampled contact path alone, integrated by scipy (replay, 1e-6), and the figure
     eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9; a
     polygon's contact path is made of great-circle arcs (each edge's samples on one great circle to 1e-9)."""
@@ -85,7 +77,7 @@ def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path):
     landed = 0
     for i, (target, steps, k) in enumerate(_targets(26, 6)):
         out = tmp_path / f"p{i}.json"
-        code, stdout, err = _cli("plan", "--curve", curve, "--to", repr(target[0]), repr(target[1]), "--psi",
+        code, stdout, err = run(capsys, "plan", "--curve", curve, "--to", repr(target[0]), repr(target[1]), "--psi",
                                  repr(target[2]), "--steps", str(steps), "--k", repr(k), "--json", str(out))
         if code == 3:   # no plan: refused honestly (exit 3, one line)
             assert one_line(err), err
@@ -134,13 +126,13 @@ def test_best_is_never_longer_than_any_family():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("curve", PLANNED)
-def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path):
+def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path, capsys):
     """``rollplan codegen --curve`` (built with -Wall -Wextra -Werror by its Makefile): plan_demo gives the plan of
     ``plan --curve`` (same branch, a, b, gamma to 1e-8), and that plan reaches the target when the family's figure
     eight as typed in tests/references.py is integrated by DOP853."""
     _require_library(curve)
     out = tmp_path / "c"
-    code, stdout, err = _cli("codegen", "--out", str(out), "--curve", curve, "--k-max", "12")
+    code, stdout, err = run(capsys, "codegen", "--out", str(out), "--curve", curve, "--k-max", "12")
     assert code == 0 and f"curve {curve}" in stdout, err
     assert f"#define RP_FAMILY {compiled_search.C_FAMILIES.index(curve)}" in (out / "rollplan_config.h").read_text()
     build = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)

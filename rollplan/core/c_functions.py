@@ -205,16 +205,16 @@ def half_angle_leaf(curve: str, t, a, side: float = 1.0):
                                         (0.0, 0.0, -1.0))]
     n = len(corners) - 1
     cheb = {3: 4 * ct**3 - 3 * ct, 4: 8 * ct**4 - 8 * ct**2 + 1}[n]
-
-    def edge(j):
-        w = (1 - (-1) ** j * cheb) / 2
-        q = (1 - w) * corners[j] + w * corners[j + 1]
-        return q / ca.norm_2(q)
-
-    point = edge(n - 1)
+    # the edge's corners and sign (-1)^j are chosen first, so that one edge, not every edge, is evaluated (and
+    # differentiated) per point
+    start, end, sign = corners[n - 1], corners[n], float((-1) ** (n - 1))
     for j in reversed(range(n - 1)):
-        point = ca.if_else(ct > np.cos((j + 1) * np.pi / n), edge(j), point)
-    return point
+        on = ct > np.cos((j + 1) * np.pi / n)
+        start, end = ca.if_else(on, corners[j], start), ca.if_else(on, corners[j + 1], end)
+        sign = ca.if_else(on, float((-1) ** j), sign)
+    w = (1 - sign * cheb) / 2
+    q = (1 - w) * start + w * end
+    return q / ca.norm_2(q)
 
 
 def c_curve(curve: str):
