@@ -197,8 +197,20 @@ def _golden_minimum(f, lo, hi, steps=90):
     return 0.5 * (lo + hi)
 
 
+#: The brute force's roots by its arguments: a target scanned by two tests is scanned once per process.
+_BRUTE_ROOTS: dict = {}
+
+
 def _brute_roots(target, steps, k, branches=None, samples_per_rad=40, min_samples=4000):
     """All (m, a, b) solving (32)-(33) by a dense scan in a (see the module docstring)."""
+    key = (tuple(map(float, target)), int(steps), float(k), None if branches is None else tuple(branches),
+           samples_per_rad, min_samples)
+    if key not in _BRUTE_ROOTS:
+        _BRUTE_ROOTS[key] = tuple(_scan_roots(target, steps, k, branches, samples_per_rad, min_samples))
+    return list(_BRUTE_ROOTS[key])
+
+
+def _scan_roots(target, steps, k, branches, samples_per_rad, min_samples):
     u, v, psi = target
     psi = float(wrap(psi))
     h_des = math.hypot(u, v)
