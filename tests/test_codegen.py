@@ -8,12 +8,12 @@ import math
 import re
 import shutil
 import subprocess
-import sys
 
 import casadi as ca
 import numpy as np
 import pytest
 from conftest import one_line
+from conftest import run as run_cli
 from scipy.optimize import brentq, minimize_scalar
 from test_enumerate import _b_of, _g
 
@@ -567,9 +567,10 @@ def test_cli_codegen(tmp_path, capsys):
     assert "not allowed" in capsys.readouterr().err
 
 
-def _codegen(*argv):
-    return subprocess.run([sys.executable, "-m", "rollplan.cli", "codegen", *argv], capture_output=True, text=True,
-                          timeout=600, check=False)
+def _codegen(capsys, *argv):
+    """``rollplan codegen argv`` in this process (:func:`conftest.run`), as a finished process."""
+    code, out, err = run_cli(capsys, "codegen", *argv)
+    return subprocess.CompletedProcess(("rollplan", "codegen", *argv), code, out, err)
 
 
 def _contents(folder):
@@ -587,7 +588,7 @@ def _package_csrc():
 @pytest.mark.slow
 @pytest.mark.parametrize("argv", [(), ("--real", "float"), ("--prefix", "rp_2", "--k-max", "2.5"),
                                   ("--curve", "viviani")])
-def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv, request):
+def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv, request, capsys):
     """One copy of the C search: the files that `rollplan codegen` writes for it are byte for byte the files of the
     installed package, for a double and a float build and another prefix (what varies by generation is in the
     generated rollplan_config.h, which has no template token left); the build compiles them as they are. The
@@ -600,7 +601,7 @@ def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv, request):
         out = request.getfixturevalue(prebuilt).out
     else:
         out = tmp_path / "c"
-        r = _codegen("--out", str(out), *argv)
+        r = _codegen(capsys, "--out", str(out), *argv)
         assert r.returncode == 0, r.stderr
     for name, data in package.items():
         assert (out / name).read_bytes() == data, name
@@ -617,7 +618,7 @@ def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv, request):
 
 
 @pytest.mark.slow
-def test_codegen_never_overwrites_files_it_did_not_write(tmp_path):
+def test_codegen_never_overwrites_files_it_did_not_write(tmp_path, capsys):
     """`codegen --out DIR` replaced the user's Makefile and plan_demo.c in DIR without asking. Now a folder that
     holds files codegen did not write (or wrote and were changed since) is refused in one line naming it and
     --overwrite; with --overwrite the files of codegen's names are replaced and the others kept. A folder codegen
@@ -627,25 +628,25 @@ def test_codegen_never_overwrites_files_it_did_not_write(tmp_path):
     (user / "Makefile").write_text("all:\n\techo mine\n")
     (user / "plan_demo.c").write_text("int main(void) { return 0; }\n")
     before = _contents(user)
-    r = _codegen("--out", str(user))
+    r = _codegen(capsys, "--out", str(user))
     assert r.returncode == 2 and one_line(r.stderr), r.stderr
     assert show_path(user) in r.stderr and "--overwrite" in r.stderr and "Makefile" in r.stderr
     assert _contents(user) == before
     (user / "notes.txt").write_text("keep me\n")
-    r = _codegen("--out", str(user), "--overwrite")
+    r = _codegen(capsys, "--out", str(user), "--overwrite")
     assert r.returncode == 0, r.stderr
     assert "Builds the generated C99 planner" in (user / "Makefile").read_text()
     assert (user / "notes.txt").read_text() == "keep me\n" and (user / "rollplan_model.c").exists()
 
     fresh = tmp_path / "fresh"
-    assert _codegen("--out", str(fresh)).returncode == 0
+    assert _codegen(capsys, "--out", str(fresh)).returncode == 0
     (fresh / "plan_demo").write_bytes(b"\x7fELF")            # what `make` leaves
     (fresh / "build" / "arm-m7").mkdir(parents=True)
-    r = _codegen("--out", str(fresh), "--real", "float")
+    r = _codegen(capsys, "--out", str(fresh), "--real", "float")
     assert r.returncode == 0, r.stderr
     assert "#define casadi_real float" in (fresh / "rollplan_model.h").read_text()   # generated again
     (fresh / "plan_demo.c").write_text("/* edited */\n")
-    r = _codegen("--out", str(fresh))
+    r = _codegen(capsys, "--out", str(fresh))
     assert r.returncode == 2 and one_line(r.stderr) and "plan_demo.c" in r.stderr, r.stderr
     assert (fresh / "plan_demo.c").read_text() == "/* edited */\n"
 
