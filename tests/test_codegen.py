@@ -8,12 +8,12 @@ import math
 import re
 import shutil
 import subprocess
-import sys
 
 import casadi as ca
 import numpy as np
 import pytest
 from conftest import one_line
+from conftest import run as run_cli
 from scipy.optimize import brentq, minimize_scalar
 from test_enumerate import _b_of, _g
 
@@ -359,9 +359,10 @@ def _reference_all(target):
     return [best, *best.alternatives]
 
 
-def _check_all(built, target, checked=3):
+def _check_all(built, target, checked=3, traced=None):
     """``plan_demo --all``: as many plans as the numpy search lists, each the same (branch and (a, b, gamma) to
-    1e-8), sorted by a + b; the first ``checked`` and the last integrated by DOP853 on the printed equations."""
+    1e-8), sorted by a + b; the first ``checked`` and the last integrated by DOP853 on the printed equations
+    (or, given a list ``traced``, put there as ``(target, plan)`` for :func:`_check_traced`)."""
     u, v, psi, n, k = target
     run = demo(built, "--all", *(repr(float(x)) for x in (u, v, psi)), n, repr(float(k)))
     want = _reference_all(target)
@@ -376,11 +377,21 @@ def _check_all(built, target, checked=3):
     # paired by branch and radii (plans of nearly equal length may come in either order)
     for c, q in zip(sorted(got, key=lambda c: (c[5], c[0], c[1])), sorted(want, key=lambda q: (q.branch, q.a, q.b))):
         assert _same_plan(c, q), (target, c, (q.a, q.b, q.gamma, q.branch))
+    mine = []
     for a, b, gamma, residual, bound, _ in got[:checked] + got[-1:]:
         assert residual + bound <= CERT_TOL
-        x = references.trace(a, b, k, gamma, n)
-        assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) < 1e-9 + 1e-11 * n
+        mine.append((target, (a, b, k, gamma, n)))
+    if traced is None:
+        _check_traced(mine)
+    else:
+        traced.extend(mine)
     return count
+
+
+def _check_traced(traced):
+    """Each ``(target, plan)`` lands on its target when integrated by DOP853 (all at once, :func:`_traces`)."""
+    for ((u, v, psi, n, _), plan), x in zip(traced, _traces([p for _, p in traced])):
+        assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) < 1e-9 + 1e-11 * n, (u, v, psi, plan)
 
 
 @pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 2, 1.5), (0.0, 1.0, 0.0, 1, 0.5),
@@ -399,12 +410,13 @@ def test_plan_demo_all_lists_the_plans_of_python_all(built, target):
 def test_plan_demo_all_random_targets_match_python(built):
     """Random targets, k in [1/2, K_MAX], n in 1..4: the same list of plans as the numpy search."""
     rng = np.random.default_rng(12)
-    listed = 0
+    listed, traced = 0, []
     for _ in range(8):
         u, v = rng.uniform(-1.5, 1.5, 2)
         target = (float(u), float(v), float(rng.uniform(-4, 4)), int(rng.integers(1, 5)),
                   float(rng.uniform(0.5, DEFAULT_K_MAX)))
-        listed += _check_all(built, target, checked=1) > 0
+        listed += _check_all(built, target, checked=1, traced=traced) > 0
+    _check_traced(traced)
     assert listed >= 6
 
 
@@ -555,9 +567,10 @@ def test_cli_codegen(tmp_path, capsys):
     assert "not allowed" in capsys.readouterr().err
 
 
-def _codegen(*argv):
-    return subprocess.run([sys.executable, "-m", "rollplan.cli", "codegen", *argv], capture_output=True, text=True,
-                          timeout=600, check=False)
+def _codegen(capsys, *argv):
+    """``rollplan codegen argv`` in this process (:func:`conftest.run`), as a finished process."""
+    code, out, err = run_cli(capsys, "codegen", *argv)
+    return subprocess.CompletedProcess(("rollplan", "codegen", *argv), code, out, err)
 
 
 def _contents(folder):
@@ -575,30 +588,37 @@ def _package_csrc():
 @pytest.mark.slow
 @pytest.mark.parametrize("argv", [(), ("--real", "float"), ("--prefix", "rp_2", "--k-max", "2.5"),
                                   ("--curve", "viviani")])
-def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv):
+def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv, request, capsys):
     """One copy of the C search: the files that `rollplan codegen` writes for it are byte for byte the files of the
     installed package, for a double and a float build and another prefix (what varies by generation is in the
-    generated rollplan_config.h, which has no template token left); the build compiles them as they are."""
+    generated rollplan_config.h, which has no template token left); the build compiles them as they are. The
+    default and the float generation are the module's builds (codegen.generate, which `rollplan codegen` calls with
+    its options): their plan_demo is made by the same Makefile rule."""
     package = _package_csrc()
     assert {"rollplan_planner.c", "rollplan_planner.h"} <= set(package)
-    out = tmp_path / "c"
-    r = _codegen("--out", str(out), *argv)
-    assert r.returncode == 0, r.stderr
+    prebuilt = {(): "built", ("--real", "float"): "built_float"}.get(argv)
+    if prebuilt:
+        out = request.getfixturevalue(prebuilt).out
+    else:
+        out = tmp_path / "c"
+        r = _codegen(capsys, "--out", str(out), *argv)
+        assert r.returncode == 0, r.stderr
     for name, data in package.items():
         assert (out / name).read_bytes() == data, name
         assert b"@" not in re.sub(rb"/\*.*?\*/", b"", data, flags=re.S), name   # no template token in the code
     config = (out / "rollplan_config.h").read_text()
     prefix = argv[argv.index("--prefix") + 1] if "--prefix" in argv else "rollplan"
     assert f"#define RP_NAME(x) {prefix}_##x" in config and "@" not in config
-    run = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)
-    assert run.returncode == 0, run.stderr
+    if not prebuilt:
+        run = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)
+        assert run.returncode == 0, run.stderr
     run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], capture_output=True, text=True,
                          check=False)
     assert run.returncode == 0 and len(run.stdout.split()) == 6, run.stderr
 
 
 @pytest.mark.slow
-def test_codegen_never_overwrites_files_it_did_not_write(tmp_path):
+def test_codegen_never_overwrites_files_it_did_not_write(tmp_path, capsys):
     """`codegen --out DIR` replaced the user's Makefile and plan_demo.c in DIR without asking. Now a folder that
     holds files codegen did not write (or wrote and were changed since) is refused in one line naming it and
     --overwrite; with --overwrite the files of codegen's names are replaced and the others kept. A folder codegen
@@ -608,25 +628,25 @@ def test_codegen_never_overwrites_files_it_did_not_write(tmp_path):
     (user / "Makefile").write_text("all:\n\techo mine\n")
     (user / "plan_demo.c").write_text("int main(void) { return 0; }\n")
     before = _contents(user)
-    r = _codegen("--out", str(user))
+    r = _codegen(capsys, "--out", str(user))
     assert r.returncode == 2 and one_line(r.stderr), r.stderr
     assert show_path(user) in r.stderr and "--overwrite" in r.stderr and "Makefile" in r.stderr
     assert _contents(user) == before
     (user / "notes.txt").write_text("keep me\n")
-    r = _codegen("--out", str(user), "--overwrite")
+    r = _codegen(capsys, "--out", str(user), "--overwrite")
     assert r.returncode == 0, r.stderr
     assert "Builds the generated C99 planner" in (user / "Makefile").read_text()
     assert (user / "notes.txt").read_text() == "keep me\n" and (user / "rollplan_model.c").exists()
 
     fresh = tmp_path / "fresh"
-    assert _codegen("--out", str(fresh)).returncode == 0
+    assert _codegen(capsys, "--out", str(fresh)).returncode == 0
     (fresh / "plan_demo").write_bytes(b"\x7fELF")            # what `make` leaves
     (fresh / "build" / "arm-m7").mkdir(parents=True)
-    r = _codegen("--out", str(fresh), "--real", "float")
+    r = _codegen(capsys, "--out", str(fresh), "--real", "float")
     assert r.returncode == 0, r.stderr
     assert "#define casadi_real float" in (fresh / "rollplan_model.h").read_text()   # generated again
     (fresh / "plan_demo.c").write_text("/* edited */\n")
-    r = _codegen("--out", str(fresh))
+    r = _codegen(capsys, "--out", str(fresh))
     assert r.returncode == 2 and one_line(r.stderr) and "plan_demo.c" in r.stderr, r.stderr
     assert (fresh / "plan_demo.c").read_text() == "/* edited */\n"
 
@@ -769,9 +789,10 @@ def _fuzz_inputs(rng, count, many_steps):
 
 def _fuzz(built, seed, count, many_steps, tol=CERT_TOL):
     """No wrong plan with exit 0: every plan the C planner returns lands within the tolerance when
-    integrated by DOP853 on the printed equations; every other outcome is a documented status."""
+    integrated by DOP853 on the printed equations (all plans at once, :func:`_traces`); every other outcome is a
+    documented status."""
     rng = np.random.default_rng(seed)
-    outcomes = []
+    outcomes, planned = [], []
     for u, v, psi, steps, k in _fuzz_inputs(rng, count, many_steps):
         run = demo(built, repr(u), repr(v), repr(psi), steps, repr(k))
         assert run.returncode in (0, 2, 3, 4, 5), (u, v, psi, steps, k, run.stderr)
@@ -781,10 +802,60 @@ def _fuzz(built, seed, count, many_steps, tol=CERT_TOL):
             continue
         a, b, gamma, residual, bound, _ = _parse(run)
         assert 0 < a <= A_MAX and 0 < b <= A_MAX and residual + bound <= tol
-        x = references.trace(a, b, k, gamma, steps)
+        planned.append(((u, v, psi, steps, k), (a, b, k, gamma, steps)))
+    for ((u, v, psi, steps, k), _), x in zip(planned, _traces([p for _, p in planned])):
         miss = np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)])
         assert miss <= tol + 1e-11 * steps, (u, v, psi, steps, k, miss)
     return outcomes
+
+
+def _traces(plans):
+    """:func:`references.trace` of many plans ``(a, b, k, gamma, steps)`` at once: leaf by leaf, the figure eights
+    of every plan that has that step as one DOP853 system (:func:`references.curve_leaf_ends`; fewer than
+    :data:`_BATCHED` one by one), checked against :func:`references.trace` by
+    test_traces_are_the_trace_of_each_plan. Final states, shape (len(plans), 3)."""
+    if not plans:
+        return np.zeros((0, 3))
+    a, b, k, gamma, steps = (np.array(c, float) for c in zip(*plans))
+    x = np.zeros((3, a.size))
+    for j in range(int(steps.max())):
+        on = np.nonzero(steps > j)[0]
+        for r, side in ((a, 1.0), (b, -1.0)):
+            if on.size < _BATCHED:
+                for i in on:
+                    x[:, i] = references.leaf_end(r[i], side, k[i], gamma[i], x[:, i])
+            else:
+                x[:, on] = references.curve_leaf_ends(_rotated_circles(r[on], side, gamma[on]), x[:, on], k[on])
+    return x.T
+
+
+#: Fewer plans than this are traced one by one (a call of the batched right side costs that of a few alone).
+_BATCHED = 4
+
+
+def _rotated_circles(r, side, gamma):
+    """The circles (35) of radii ``r`` on ``side``, each turned by its own gamma (31): a curve for
+    :func:`references.curve_leaf_ends`."""
+    cg, sg = np.cos(gamma), np.sin(gamma)
+    d = np.sqrt(1.0 - r * r)
+    ad, aa, dd = side * r * d, r * r, d * d   # (35): x = a sin phi, y = side a d (1 - cos phi)
+
+    def curve(phi):
+        s, c = math.sin(phi), math.cos(phi)
+        x, y, dx, dy = r * s, ad * (1.0 - c), r * c, ad * s
+        return (np.array([cg * x - sg * y, sg * x + cg * y, -aa * c - dd]),
+                np.array([cg * dx - sg * dy, sg * dx + cg * dy, aa * s]))
+
+    return curve
+
+
+def test_traces_are_the_trace_of_each_plan():
+    """The batched DOP853 traces of the fuzz tests against DOP853 plan by plan (other steps, k, gamma, radii)."""
+    plans = [(0.3, 0.2, 2.5, 0.7, 1), (0.69, 0.05, DEFAULT_K_MAX, -2.0, 2), (0.1, 0.6, 0.3, 3.0, 2),
+             (0.45, 0.45, 0.0, 0.0, 1), (0.2, 0.65, 1.5, 1.0, 1), (0.6, 0.3, 4.0, -1.0, 1), (0.01, 0.02, 0.5, 0.2, 1)]
+    for plan, x in zip(plans, _traces(plans)):
+        alone = references.trace(*plan)
+        assert np.abs(x - alone).max() < 1e-11, (plan, x, alone)
 
 
 def test_fuzz_no_wrong_plan_with_exit_0(built):

@@ -17,6 +17,7 @@ by DOP853 over all n steps.
 
 import json
 import math
+from functools import cache
 
 import numpy as np
 import pytest
@@ -37,6 +38,22 @@ import references
 wrap = references.wrap
 
 
+@cache
+def _leaf_end(r, side, k, gamma=0.0, x0=(0.0, 0.0, 0.0)):
+    """references.leaf_end kept by its arguments: a leaf that several tests integrate by DOP853 (1.6 s at
+    (A_MAX, K_MAX)) is integrated once per process."""
+    return tuple(references.leaf_end(r, side, k, gamma, x0))
+
+
+def _trace(a, b, k, gamma=0.0, steps=1):
+    """references.trace by the same DOP853 calls, through :func:`_leaf_end`."""
+    x = (0.0, 0.0, 0.0)
+    for _ in range(steps):
+        for r, side in ((a, 1.0), (b, -1.0)):
+            x = _leaf_end(r, side, k, gamma, x)
+    return np.array(x)
+
+
 # ----------------------------------------------------------------------------- leaf map
 
 
@@ -45,7 +62,7 @@ wrap = references.wrap
                                  pytest.param(A_MAX, K_MAX, marks=pytest.mark.slow), (0.2, 0.3)])
 def test_leaf_turn_and_displacement_against_dop853(r, k):
     """E(r, k) in closed form and d(r, k) by the Gauss rule against DOP853 on the printed (28)-(30)."""
-    ref = references.leaf_end(r, 1.0, k)
+    ref = _leaf_end(r, 1.0, k)
     d = complex(leafmap.displacement(r, k)[0])
     assert abs(float(leafmap.turn(r, k)) - ref[2]) < 1e-10
     assert abs(d - complex(ref[0], ref[1])) < 1e-10
@@ -76,7 +93,7 @@ def test_displacement_derivative_against_differences():
 def test_symmetry_exp_half_turn_times_displacement_is_real():
     """The leaf's mirror symmetry: exp(i E / 2) d is real, checked on DOP853's leaf ends."""
     for r, k in ((0.2, 2.5), (0.6, 5.0), (A_MAX, 20.0)):
-        ref = references.leaf_end(r, 1.0, k)
+        ref = _leaf_end(r, 1.0, k)
         assert abs((complex(ref[0], ref[1]) * np.exp(0.5j * ref[2])).imag) < 1e-10
     r = np.linspace(0.001, A_MAX, 400)
     for k in (0.0, 2.5, 40.0):
@@ -91,7 +108,7 @@ def test_symmetry_exp_half_turn_times_displacement_is_real():
                                          (0.45, 0.2, 0.0, 1.0), (0.6, 0.3, 0.25, 0.0)])
 def test_step_against_dop853_over_the_domain(a, b, k, gamma):
     s = rollplan.step(a, b, k=k, gamma=gamma)
-    ref = references.trace(a, b, k, gamma, 1)
+    ref = _trace(a, b, k, gamma, 1)
     assert np.abs(np.r_[s.shift, s.eta] - ref).max() < 1e-10
     assert s.h == pytest.approx(math.hypot(ref[0], ref[1]), abs=1e-10)
 
@@ -197,8 +214,20 @@ def _golden_minimum(f, lo, hi, steps=90):
     return 0.5 * (lo + hi)
 
 
+#: The brute force's roots by its arguments: a target scanned by two tests is scanned once per process.
+_BRUTE_ROOTS: dict = {}
+
+
 def _brute_roots(target, steps, k, branches=None, samples_per_rad=40, min_samples=4000):
     """All (m, a, b) solving (32)-(33) by a dense scan in a (see the module docstring)."""
+    key = (tuple(map(float, target)), int(steps), float(k), None if branches is None else tuple(branches),
+           samples_per_rad, min_samples)
+    if key not in _BRUTE_ROOTS:
+        _BRUTE_ROOTS[key] = tuple(_scan_roots(target, steps, k, branches, samples_per_rad, min_samples))
+    return list(_BRUTE_ROOTS[key])
+
+
+def _scan_roots(target, steps, k, branches, samples_per_rad, min_samples):
     u, v, psi = target
     psi = float(wrap(psi))
     h_des = math.hypot(u, v)
@@ -379,7 +408,7 @@ def _cli(capsys, *args):
 def test_cli_step_at_the_corner_of_the_domain_and_beyond(capsys):
     """`rollplan step --a 0.69 --k 100` prints the DOP853 shift; k above K_MAX is refused (exit 2)."""
     code, out, _ = _cli(capsys, "step", "--a", "0.69", "--k", "100", "--json", "-")   # full precision: JSON
-    ref = references.trace(A_MAX, A_MAX, K_MAX)
+    ref = _trace(A_MAX, A_MAX, K_MAX)
     final = json.loads(out)["final"]
     assert code == 0 and abs(final["u_a"] - ref[0]) < 1e-10 and abs(final["v_a"] - ref[1]) < 1e-10
     code, _, err = _cli(capsys, "step", "--a", "0.3", "--k", "100.5")

@@ -426,7 +426,8 @@ def test_a_composed_plan_timed_time_optimally_is_driven_onto_the_goal_by_its_rot
     """Start off the pole, a turn in place, a goal off the pole, timed by the time-optimal law within the motors'
     limits: the motion rests at the start, the goal and every corner of the contact path, stays within the
     limits with one of them active, and its rotor rates alone (scipy's not-a-knot spline) drive the printed
-    (2), (6)-(10), (11) by DOP853 from the start state onto the goal to 1e-5 R."""
+    (2), (6)-(10), (11) by DOP853 from the start state onto the goal to 1e-5 R (rtol 1e-9: its final state is
+    within 1.1e-7 of rtol 1e-11's, 90 times below the tolerance, at a quarter of the cost)."""
     from dataclasses import replace
 
     from scipy.integrate import solve_ivp
@@ -455,7 +456,7 @@ def test_a_composed_plan_timed_time_optimally_is_driven_onto_the_goal_by_its_rot
     np.testing.assert_allclose(m.series.state[0], start, atol=1e-15)
     f = ref.rotor_driven_rhs(robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, R,
                              CubicSpline(m.series.time, m.series.rotor_rates, bc_type="not-a-knot"))
-    sol = solve_ivp(f, (0.0, m.duration), start, method="DOP853", rtol=1e-11, atol=1e-13)
+    sol = solve_ivp(f, (0.0, m.duration), start, method="DOP853", rtol=1e-9, atol=1e-11)
     err = sol.y[:, -1] - goal
     err[2] = ref.wrap(err[2])
     assert np.hypot(err[0], err[1]) / R < 1e-5 and np.abs(err[2:]).max() < 1e-5
