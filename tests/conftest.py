@@ -8,6 +8,7 @@ That rollplan's symbolic model agrees with the printed equations is tested on it
 """
 
 import contextlib
+import functools
 import os
 import shutil
 import subprocess
@@ -272,12 +273,23 @@ def full_disk(tmp_path):
 _HIDDEN_WARNINGS = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
 
 
+@functools.cache
+def _parser():
+    """The command's parser, built once per process: it holds no state between two parses (``parse_args`` makes a
+    new namespace each time) and reads no environment, and building it costs ~7 ms, the most of a refused input."""
+    from rollplan.cli import build_parser
+
+    return build_parser()
+
+
 def run(capsys, *argv, cwd=None):
     """``rollplan argv`` in this process, in the folder ``cwd`` (default: this one): (exit code, stdout, stderr)
     as a separate process gives them (``capsys``, or ``capfd`` to see what C code writes to the descriptors too).
     An exception that escapes the command fails the test as a traceback would; the environment, the working folder
     and the open matplotlib figures are as they were before. For what needs a process of its own (start-up, signals,
     a traceback of the interpreter, the environment read at import), start one."""
+    from unittest import mock
+
     from rollplan.cli import main
 
     argv = [str(a) for a in argv]
@@ -290,7 +302,8 @@ def run(capsys, *argv, cwd=None):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             try:
-                code = main(argv)
+                with mock.patch.object(sys.modules["rollplan.cli.run"], "build_parser", _parser):
+                    code = main(argv)
             except SystemExit as exc:  # argparse's own checks
                 code = 0 if exc.code is None else exc.code
         shown = set()
