@@ -7,6 +7,7 @@ That rollplan's symbolic model agrees with the printed equations is tested on it
 ``tests/test_model.py`` and ``tests/test_integrate.py``.
 """
 
+import ast
 import contextlib
 import functools
 import os
@@ -322,6 +323,16 @@ def run(capsys, *argv, cwd=None):
             pyplot.close(number)
     out, err = capsys.readouterr()
     return code, out, err
+
+
+@functools.cache
+def _parsed(path: Path):
+    return ast.parse(path.read_text(encoding="utf-8"), str(path))
+
+
+def package_tree(path) -> ast.Module:
+    """The syntax tree of a source file of the package, parsed once per process for every test that reads it."""
+    return _parsed(Path(path).resolve())
 
 
 def one_line(err):
