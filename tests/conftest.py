@@ -20,16 +20,17 @@ import time
 import warnings
 from pathlib import Path
 
-import hypothesis
-import pytest
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
 #: PYTHONDONTWRITEBYTECODE: pytest would rewrite the asserts of every test module again in every worker of every run
-#: (~6 s of CPU per worker); it reads the rewritten bytecode that is there, so this process writes it (once; the
-#: commands a test starts still inherit the setting from the environment).
+#: (~6 s of CPU per worker), and of the hypothesis package too (a pytest plugin: ~0.8 s per process); it reads the
+#: rewritten bytecode that is there, so this process writes it (once; the commands a test starts still inherit the
+#: setting from the environment). Set before hypothesis is imported.
 _NO_BYTECODE = sys.dont_write_bytecode
 sys.dont_write_bytecode = False
+
+import hypothesis  # noqa: E402
+import pytest  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import rollplan  # noqa: E402
 from rollplan.planners.geometric import GeometricPhasePlanner  # noqa: E402
