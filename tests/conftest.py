@@ -7,7 +7,9 @@ That rollplan's symbolic model agrees with the printed equations is tested on it
 ``tests/test_model.py`` and ``tests/test_integrate.py``.
 """
 
+import ast
 import contextlib
+import functools
 import os
 import shutil
 import subprocess
@@ -18,16 +20,17 @@ import time
 import warnings
 from pathlib import Path
 
-import hypothesis
-import pytest
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
 #: PYTHONDONTWRITEBYTECODE: pytest would rewrite the asserts of every test module again in every worker of every run
-#: (~6 s of CPU per worker); it reads the rewritten bytecode that is there, so this process writes it (once; the
-#: commands a test starts still inherit the setting from the environment).
+#: (~6 s of CPU per worker), and of the hypothesis package too (a pytest plugin: ~0.8 s per process); it reads the
+#: rewritten bytecode that is there, so this process writes it (once; the commands a test starts still inherit the
+#: setting from the environment). Set before hypothesis is imported.
 _NO_BYTECODE = sys.dont_write_bytecode
 sys.dont_write_bytecode = False
+
+import hypothesis  # noqa: E402
+import pytest  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import rollplan  # noqa: E402
 from rollplan.planners.geometric import GeometricPhasePlanner  # noqa: E402
@@ -272,12 +275,23 @@ def full_disk(tmp_path):
 _HIDDEN_WARNINGS = (DeprecationWarning, PendingDeprecationWarning, ImportWarning, ResourceWarning)
 
 
+@functools.cache
+def _parser():
+    """The command's parser, built once per process: it holds no state between two parses (``parse_args`` makes a
+    new namespace each time) and reads no environment, and building it costs ~7 ms, the most of a refused input."""
+    from rollplan.cli import build_parser
+
+    return build_parser()
+
+
 def run(capsys, *argv, cwd=None):
     """``rollplan argv`` in this process, in the folder ``cwd`` (default: this one): (exit code, stdout, stderr)
     as a separate process gives them (``capsys``, or ``capfd`` to see what C code writes to the descriptors too).
     An exception that escapes the command fails the test as a traceback would; the environment, the working folder
     and the open matplotlib figures are as they were before. For what needs a process of its own (start-up, signals,
     a traceback of the interpreter, the environment read at import), start one."""
+    from unittest import mock
+
     from rollplan.cli import main
 
     argv = [str(a) for a in argv]
@@ -290,7 +304,8 @@ def run(capsys, *argv, cwd=None):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             try:
-                code = main(argv)
+                with mock.patch.object(sys.modules["rollplan.cli.run"], "build_parser", _parser):
+                    code = main(argv)
             except SystemExit as exc:  # argparse's own checks
                 code = 0 if exc.code is None else exc.code
         shown = set()
@@ -309,6 +324,16 @@ def run(capsys, *argv, cwd=None):
             pyplot.close(number)
     out, err = capsys.readouterr()
     return code, out, err
+
+
+@functools.cache
+def _parsed(path: Path):
+    return ast.parse(path.read_text(encoding="utf-8"), str(path))
+
+
+def package_tree(path) -> ast.Module:
+    """The syntax tree of a source file of the package, parsed once per process for every test that reads it."""
+    return _parsed(Path(path).resolve())
 
 
 def one_line(err):

@@ -739,10 +739,10 @@ def geodesic(p, q):
     axis = np.cross(p, q, axis=0)
     angle = np.arctan2(np.linalg.norm(axis, axis=0), np.sum(p * q, axis=0))
     axis = axis / np.linalg.norm(axis, axis=0)
+    across, along = np.cross(axis, p, axis=0), axis * np.sum(axis * p, axis=0)
 
     def curve(t):
         s = angle * t / (2 * np.pi)
-        across, along = np.cross(axis, p, axis=0), axis * np.sum(axis * p, axis=0)
         point = p * np.cos(s) + across * np.sin(s) + along * (1 - np.cos(s))
         dpoint = (-p * np.sin(s) + across * np.cos(s) + along * np.sin(s)) * angle / (2 * np.pi)
         return point, dpoint

@@ -10,6 +10,7 @@ from graphlib import CycleError, TopologicalSorter
 from pathlib import Path
 
 import pytest
+from conftest import package_tree
 
 import rollplan
 
@@ -27,8 +28,7 @@ MODULES = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
 @functools.cache
 def _tree(name: str) -> ast.Module:
     """The syntax tree of a module's source, parsed once per process (the checks only read it)."""
-    path = MODULES[name]
-    return ast.parse(path.read_text(encoding="utf-8"), str(path))
+    return package_tree(MODULES[name])
 
 
 def _imports(name: str):

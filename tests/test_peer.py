@@ -6,6 +6,7 @@ rockit is in the test extra: these tests run in CI (a skipped peer would leave t
 
 from __future__ import annotations
 
+import functools
 import sys
 
 import numpy as np
@@ -21,13 +22,20 @@ import references
 K = 2.5
 
 
+@functools.cache
+def _comparison(scheme, degree):
+    """The peer comparison of the rest-to-rest problem of these tests, 16 intervals, each side solved twice (the
+    optimum is the first solve's, corrected and certified): made once per process for the tests that read it."""
+    return peer_rest_to_rest(Problem((-0.4, 0.4, 1.0), k=K), "naive", intervals=16, degree=degree, scheme=scheme,
+                             repeats=1)
+
+
 @pytest.mark.parametrize("scheme, degree", [("legendre", 3), pytest.param("radau", 4, marks=pytest.mark.slow)])
 def test_rockit_and_rollplan_have_the_same_optimum(scheme, degree):
     """Same OCP, same transcription class, same guess: the optima agree to 1e-6 (relative), the controls too,
     and rockit's controls (Newton-corrected), integrated by scipy's DOP853 on the printed (15), (16), (20),
     reach the goal at rest."""
-    problem = Problem((-0.4, 0.4, 1.0), k=K)
-    c = peer_rest_to_rest(problem, "naive", intervals=16, degree=degree, scheme=scheme, repeats=0)
+    c = _comparison(scheme, degree)
     assert c.relative_difference < 1e-6
     assert c.control_difference < 1e-4
     # the peer's controls, Newton-corrected, are its own certified plan: integrated by DOP853 on the printed
@@ -72,7 +80,7 @@ def test_peer_times_both_solves_in_cpu_time_too():
     """On a loaded machine the wall times of one run swing by 2x and their ratio with them: the comparison now
     measures the CPU time of every timed solve of both sides as well (the process's time: rockit's Python
     bookkeeping counts, rollplan's correction does not, as in the wall times)."""
-    c = peer_rest_to_rest(Problem((-0.4, 0.4, 1.0), k=K), "naive", intervals=16, repeats=1)
+    c = _comparison("legendre", 3)
     assert len(c.solve_cpu_s) == 2 and len(c.peer.solve_cpu_s) == 1 and len(c.solve_s) == 2
     row = c.row()
     assert 0.0 < row["solve_cpu_median_s"] < float("inf") and 0.0 < row["peer_solve_cpu_median_s"] < float("inf")

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import package_tree
 
 import rollplan
 from rollplan.errors import InputError
@@ -25,7 +26,7 @@ OLD_NAMES = {"TimedMotion", "Motion", "Simulation", "PlantRun", "Execution", "Pa
 
 @functools.lru_cache(maxsize=1)
 def _trees():
-    return [(path, ast.parse(path.read_text(encoding="utf-8"), str(path))) for path in sorted(PACKAGE.rglob("*.py"))]
+    return [(path, package_tree(path)) for path in sorted(PACKAGE.rglob("*.py"))]
 
 
 def test_the_old_record_names_are_gone_from_the_package():
