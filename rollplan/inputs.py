@@ -41,6 +41,7 @@ import os
 import re
 import stat
 from dataclasses import dataclass
+from itertools import chain
 
 from .errors import InputError, check_range, check_whole, show
 
@@ -194,18 +195,34 @@ def read_text(path, what: str = "file", max_bytes: int = 1 << 20) -> str:
     return text
 
 
-def depth(value) -> int:
-    """Nesting depth of lists and dicts in ``value`` (a scalar has depth 0), without recursion."""
-    deepest, stack = 0, [(value, 0)]
+def _scan(value) -> tuple[int, bool]:
+    """Nesting depth of lists and dicts in ``value`` (a scalar has depth 0) and whether every float in it is
+    finite, without recursion; lists of numbers (and lists of rows of numbers) are checked at C speed."""
+    deepest, finite, stack = 0, True, [(value, 0)]
     while stack:
         item, level = stack.pop()
         if isinstance(item, dict):
             item = list(item.values())
-        if isinstance(item, list):
-            level += 1
-            deepest = max(deepest, level)
+        if not isinstance(item, list):
+            finite = finite and not (type(item) is float and not math.isfinite(item))
+            continue
+        level += 1
+        kinds = set(map(type, item))
+        if kinds == {list}:    # a table: its rows as one list when they hold numbers only
+            flat = list(chain.from_iterable(item))
+            if set(map(type, flat)) <= {float, int}:
+                level, item, kinds = level + 1, flat, set(map(type, flat))
+        deepest = max(deepest, level)
+        floats = item if kinds == {float} else [v for v in item if type(v) is float] if float in kinds else ()
+        finite = finite and all(map(math.isfinite, floats))
+        if any(issubclass(t, (list, dict)) for t in kinds):
             stack.extend((v, level) for v in item if isinstance(v, (list, dict)))
-    return deepest
+    return deepest, finite
+
+
+def depth(value) -> int:
+    """Nesting depth of lists and dicts in ``value`` (a scalar has depth 0), without recursion."""
+    return _scan(value)[0]
 
 
 def _check_depth(value, where: str):
@@ -255,6 +272,16 @@ def load_json(path, what: str = "JSON file", max_bytes: int = 1 << 29):
     :data:`MAX_DEPTH` deep, integers of at most :data:`MAX_INT_DIGITS` digits."""
     text = read_text(path, what, max_bytes)
     where = f"{what} {show_path(path)}"
+    try:
+        # floats parsed by json's C scanner, then checked finite in one pass with the depth; any problem is
+        # reported by the exact parse below (it names the number that is too large, the first error in the text)
+        data = json.loads(text, parse_int=_json_int, parse_constant=_json_constant)
+    except (InputError, ValueError, RecursionError, MemoryError):
+        pass
+    else:
+        deepest, finite = _scan(data)
+        if finite and deepest <= MAX_DEPTH:
+            return data
     try:
         data = json.loads(text, parse_int=_json_int, parse_float=_json_float, parse_constant=_json_constant)
     except InputError as exc:

@@ -4,6 +4,7 @@ Usage::
 
     python scripts/embedded_report.py               # writes results/embedded.md and results/embedded.json
     python scripts/embedded_report.py --no-host     # without the host timing (scripts/bench_codegen.py)
+    python scripts/embedded_report.py --quick --no-host --out-dir /tmp/e   # the paper's case only: a check
 
 Generates the planner in double and in float (``rollplan codegen --real float``), cross-compiles both
 with the generated Makefile (Cortex-M7 with a double FPU on QEMU's mps2-an500, Cortex-M4F with a
@@ -89,14 +90,14 @@ def sizes(out: Path) -> dict:
     return res
 
 
-def instructions(out: Path, prefix: str) -> dict:
+def instructions(out: Path, prefix: str, targets=TARGETS) -> dict:
     """Instructions per plan on each board for every target (first plan, plan, certificate)."""
     (out / "bench_fw.c").write_text(_BENCH_FW.replace("@PREFIX@", prefix))
     res = {}
     for t, machine in BOARDS.items():
         make(out, f"build/{t}/bench_fw.elf")
         rows = []
-        for target in TARGETS:
+        for target in targets:
             semi = ",".join(["enable=on", "target=native", "arg=bench_fw", *(f"arg={x!r}" for x in target)])
             run = subprocess.run(["timeout", "-k", "5", "300", "qemu-system-arm", "-M", machine, "-icount", "shift=0",
                                   "-nographic", "-monitor", "none", "-serial", "none", "-semihosting-config", semi,
@@ -182,6 +183,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out-dir", default="results", help="folder of embedded.md and embedded.json")
     ap.add_argument("--no-host", action="store_true", help="skip the host timing")
+    ap.add_argument("--quick", action="store_true",
+                    help="count the instructions of the paper's case only (of the first of TARGETS), to check "
+                         "that the script runs")
     args = ap.parse_args()
     load = Path("/proc/loadavg").read_text().split()[0] if Path("/proc/loadavg").exists() else "?"
     data = {"versions": versions(), "steps_per_leaf": codegen.DEFAULT_STEPS_PER_LEAF, "k_max": codegen.DEFAULT_K_MAX,
@@ -191,7 +195,8 @@ def main() -> None:
             out = Path(tmp) / real
             g = codegen.generate(out, real=real)
             make(out, "-j2", "plan_demo", "arm-m7", "arm-m4f")
-            data[real] = {"sizes": sizes(out), "instructions": instructions(out, g.prefix)}
+            data[real] = {"sizes": sizes(out),
+                          "instructions": instructions(out, g.prefix, TARGETS[:1] if args.quick else TARGETS)}
             print(f"{real}: {data[real]['sizes']}", file=sys.stderr)
     if not args.no_host:
         data["host"] = bench_codegen.measure(reps=20, python=True)

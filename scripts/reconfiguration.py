@@ -110,7 +110,7 @@ def random_pairs(quick):
     fallback, shortest = ComposedPlanner(), ComposedPlanner(legs="shortest")
     fallback.solve(Problem((0.0, 1.0, 0.0), k=2.5))   # build once
     rows = []
-    for i in range(3 if quick else 30):
+    for i in range(2 if quick else 30):
         start = (*rng.uniform(-1.5, 1.5, 2), rng.uniform(-4, 4),
                  *contact_at(rng.uniform(0, SIGMA_MAX), rng.uniform(-np.pi, np.pi)))
         goal = (*rng.uniform(-1.5, 1.5, 2), rng.uniform(-4, 4),
@@ -241,7 +241,7 @@ def default_against_reference(quick):
     """The new default against the pole plan and the optimal-control reference on more random pairs."""
     rows = []
     pole = ComposedPlanner()
-    for i, (start, goal, k) in enumerate(random_full_pairs(2525, 2 if quick else 24)):
+    for i, (start, goal, k) in enumerate(random_full_pairs(2525, 1 if quick else 24)):
         problem = Problem(goal, start=start, k=k)
         row = {"start": start, "goal": goal, "k": k}
         p, row["pole_time_s"] = timed(lambda: pole.solve(problem))

@@ -86,6 +86,32 @@ def test_the_animation_of_100_frames_stays_under_1_5_mb(tmp_path):
     assert np.all(first[:5] == 255) == np.all(middle[:5] == 255)   # the static parts are unchanged
 
 
+@pytest.mark.slow
+def test_the_animation_draws_only_what_moves_and_shows_the_same_frames(tmp_path):
+    """Each frame is the figure's still parts drawn once with the moving artists drawn over them: the frames are
+    those of matplotlib drawing every frame whole (but for a few pixels where the cursor crosses an axis line)."""
+    from PIL import Image
+
+    from rollplan.plots.animation import make_animation
+
+    robot = rollplan.default_robot()
+    p = rollplan.plan((0.05, 0.1, 1.0), robot=robot)
+    m = actuate(p, robot, 10.0)
+    sim = rollplan.simulate_rotors(robot, m.series.time, m.series.rotor_rates, p.goal)
+    frames = {}
+    for blit in (True, False):
+        make_animation(sim.series, robot, p.goal, tmp_path / f"{blit}.gif", 6, 20, dpi=60, blit=blit)
+        im = Image.open(tmp_path / f"{blit}.gif")
+        frames[blit] = []
+        for i in range(im.n_frames):
+            im.seek(i)
+            frames[blit].append(np.asarray(im.convert("RGB"), int))
+    assert len(frames[True]) == len(frames[False]) == 6
+    assert np.any(frames[True][0] != frames[True][3])   # it moves
+    for fast, whole in zip(frames[True], frames[False]):
+        assert np.count_nonzero(np.any(fast != whole, axis=2)) <= 8
+
+
 def test_spikes_are_clipped_to_a_robust_range_and_marked():
     """End spikes of +-1000 flattened the compare torque panels: the y-range keeps the bulk of the samples
     (amplitude 100 here), the spikes are marked by triangles on the edge and their values are written."""

@@ -17,6 +17,7 @@ per test is 30, or ROLLPLAN_FUZZ_EXAMPLES.
 
 import contextlib
 import csv
+import functools
 import io
 import json
 import math
@@ -365,9 +366,24 @@ class Mutated:
         return f"Mutated({self.kind} {self.detail}, {len(self.raw)} bytes)"
 
 
+@functools.lru_cache(maxsize=2)
+def plan_data(path):
+    """The plan file's value, read once, and each of its top-level values as ``json.dumps`` writes it."""
+    data = json.loads(path.read_text())
+    return data, {key: json.dumps(value) for key, value in data.items()}
+
+
+def dumps_plan(data, path) -> str:
+    """``json.dumps(data)`` for a shallow copy of the plan file's value: the values it shares are not written
+    again."""
+    base, texts = plan_data(path)
+    return "{" + ", ".join(f"{json.dumps(key)}: {texts[key] if base.get(key) is value else json.dumps(value)}"
+                           for key, value in data.items()) + "}"
+
+
 @st.composite
 def plan_file(draw, path):
-    data = json.loads(path.read_text())
+    data = dict(plan_data(path)[0])   # the values changed below are replaced, never changed in place
     kind = draw(st.sampled_from(["same", "drop", "replace", "robot", "scale", "text", "text"]))
     if kind == "drop":
         del data[draw(st.sampled_from(["time", "rotor_rates", "robot", "target", "start", "goal"]))]
@@ -375,12 +391,12 @@ def plan_file(draw, path):
         data[draw(st.sampled_from(["time", "rotor_rates", "robot", "target", "start", "goal"]))] = draw(json_value())
     elif kind == "robot":
         key = draw(st.sampled_from([*ROBOT_KEYS, *LIMIT_KEYS, "k", "colour"]))
-        data["robot"][key] = draw(json_value())
+        data["robot"] = {**data["robot"], key: draw(json_value())}
     elif kind == "scale":
         factor = 10.0 ** draw(st.integers(-300, 300))
         data["rotor_rates"] = [[r * factor for r in row] for row in data["rotor_rates"]]
         data["time"] = [t * draw(st.sampled_from([1.0, factor])) for t in data["time"]]
-    raw = json.dumps(data)
+    raw = dumps_plan(data, path)
     if kind == "text":
         edit = draw(st.sampled_from(["truncate", "nan", "huge", "int", "deep", "bom", "latin1"]))
         if edit == "truncate":
@@ -417,13 +433,62 @@ def test_plan_files(tmp_path_factory, plan_json, data, command):
         assert all(math.isfinite(v) for v in sim["final"].values())
         if kind == "same":
             assert sim["arrival_error"] < 1e-6
-            d = json.loads(raw)
+            d = plan_data(plan_json)[0]   # what raw holds
             x0 = [d["start"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")]
             t = np.asarray(d["time"])
             keep = np.r_[True, np.diff(t) > 0]   # a time given twice is a step of the torques: the rates once
             ref = references.rotor_drive(d["robot"], t[keep], np.asarray(d["rotor_rates"])[keep], x0)
             # two cubic splines through the same samples, two integrators: agree far below the 1e-6 tolerance
             assert np.allclose([sim["final"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")], ref[-1], atol=1e-8)
+
+
+def json_text_value():
+    """JSON values as text: nested lists (tables of rows among them) and objects of numbers (some too large for a
+    double), strings, booleans and null."""
+    number = st.one_of(st.floats(allow_nan=False, allow_infinity=False).map(repr), st.integers(-10**6, 10**6).map(str),
+                       st.sampled_from(["1e400", "-2.5e308", "1e-400", "2e308", "0.5"]))
+    scalar = st.one_of(number, number, st.sampled_from(['"x"', "true", "null"]))
+    row = st.lists(number, max_size=4).map(lambda xs: "[" + ", ".join(xs) + "]")
+    return st.recursive(st.one_of(scalar, row), lambda inner: st.one_of(
+        st.lists(inner, max_size=4).map(lambda xs: "[" + ", ".join(xs) + "]"),
+        st.lists(row, max_size=4).map(lambda xs: "[" + ", ".join(xs) + "]"),
+        st.dictionaries(st.sampled_from("abc"), inner, max_size=3).map(
+            lambda d: "{" + ", ".join(f'"{k}": {v}' for k, v in d.items()) + "}")), max_leaves=40)
+
+
+def text_depth(text: str) -> int:
+    """Deepest nesting of brackets and braces in a JSON text without strings holding them."""
+    deepest = level = 0
+    for ch in text:
+        level += ch in "[{"
+        level -= ch in "]}"
+        deepest = max(deepest, level)
+    return deepest
+
+
+@FUZZ
+@given(text=json_text_value(), wrap=st.integers(0, 34))
+def test_plan_json_numbers_and_depth(tmp_path_factory, text, wrap):
+    """The JSON reader of plan files takes a value if and only if every number is finite as a double and it is
+    nested at most MAX_DEPTH deep; the value is what Python's json module reads; a refusal names the first
+    number too large."""
+    from rollplan.errors import InputError
+    from rollplan.inputs import MAX_DEPTH, load_json
+
+    text = "[" * wrap + text + "]" * wrap
+    path = tmp_path_factory.mktemp("json") / "p.json"
+    path.write_text(text)
+    numbers = []
+    json.loads(text, parse_float=numbers.append, parse_int=lambda s: 0)
+    large = [x for x in numbers if math.isinf(float(x))]
+    if large:
+        with pytest.raises(InputError, match=f"the number '{large[0]}' is too large for a double"):
+            load_json(path, "plan file")
+    elif text_depth(text) > MAX_DEPTH:
+        with pytest.raises(InputError, match="nested too deeply"):
+            load_json(path, "plan file")
+    else:
+        assert load_json(path, "plan file") == json.loads(text)
 
 
 # ----------------------------------------------------------------------------- route waypoint files

@@ -93,10 +93,16 @@ def test_closed_loop_script_runs(tmp_path):
 @pytest.mark.skipif(any(shutil.which(t) is None for t in ("arm-none-eabi-gcc", "qemu-system-arm", "make", "cc"))
                     and os.environ.get("ROLLPLAN_REQUIRE_EMBEDDED") != "1", reason="needs the ARM toolchain and QEMU")
 def test_embedded_report_script_runs(tmp_path):
-    run_script("embedded_report.py", tmp_path, "--no-host", timeout=1800)
+    run_script("embedded_report.py", tmp_path, "--no-host", "--quick", timeout=1800)
     text = (tmp_path / "embedded.md").read_text()
     assert "| double | m7 (mps2-an500) |" in text and "| float | m4f (mps2-an386) |" in text
     assert "Instructions per plan" in text and (tmp_path / "embedded.json").stat().st_size > 0
+    data = json.loads((tmp_path / "embedded.json").read_text())
+    for real in ("double", "float"):   # the paper's case counted on each board, a plan found (status 0)
+        for board in ("m7", "m4f"):
+            (row,) = data[real]["instructions"][board]
+            assert row["target"] == [0.0, 1.0, 0.0, 1, 2.5] and row["status"] == 0
+            assert 0 < row["certificate"] < row["plan"] < row["first_plan"]
 
 
 FAKE_TESTS = """import time

@@ -34,13 +34,13 @@ GIF_COLOURS = 64
 
 
 def make_animation(motion, robot, goal, out, frames: int = 100, fps: int = 20, progress=None,
-                   dpi: float | None = None) -> None:
+                   dpi: float | None = None, blit: bool = True) -> None:
     """Write a GIF of the sphere rolling (see module docstring) to ``out`` atomically.
 
     ``motion`` is a :class:`~rollplan.timeseries.TimeSeries` with ``rotor_rates`` (the state in
     :class:`~rollplan.problem.State` order, [m, rad]); ``goal`` (u_a, v_a, ...) [m];
     ``progress(label, done, total)`` is called after each frame written; ``dpi`` scales the frames
-    (default: matplotlib's).
+    (default: matplotlib's); ``blit=False`` draws every frame whole (slower, the same picture).
     """
     from matplotlib.lines import Line2D
 
@@ -83,7 +83,7 @@ def make_animation(motion, robot, goal, out, frames: int = 100, fps: int = 20, p
                 Line2D([], [], color=SIMULATED, linewidth=1.0, linestyle="--", label="simulated contact path, shell"),
                 Line2D([], [], color=MARK, marker="o", markersize=4, linestyle="", label="start"),
                 Line2D([], [], color=MARK, marker="*", markersize=10, linestyle="", label="target")]
-    ax.legend(handles=handles, loc="upper left", fontsize=7, bbox_to_anchor=(-0.12, 0.93))
+    legend = ax.legend(handles=handles, loc="upper left", fontsize=7, bbox_to_anchor=(-0.12, 0.93))
     stamp = fig.text(0.27, 0.985, "", ha="center", va="top", fontsize=11, family="monospace",
                      bbox={"boxstyle": "round,pad=0.3", "fc": "white", "ec": "0.6"})
 
@@ -94,7 +94,7 @@ def make_animation(motion, robot, goal, out, frames: int = 100, fps: int = 20, p
     ax2.set_ylabel("rotor rate [rad/s]")
     ax2.set_title("rotor rates (cursor: the frame's time)")
     ax2.grid(True, alpha=0.3)
-    ax2.legend(handles=ax2.get_legend_handles_labels()[0] + [Line2D([], [], color=MARK, linewidth=1,
+    legend2 = ax2.legend(handles=ax2.get_legend_handles_labels()[0] + [Line2D([], [], color=MARK, linewidth=1,
                                                                     label="time of the frame")],
                loc="upper right", fontsize=8)
     fig.tight_layout()
@@ -114,16 +114,18 @@ def make_animation(motion, robot, goal, out, frames: int = 100, fps: int = 20, p
         on_shell.set_data_3d(c[0], c[1], c[2])
         cursor.set_xdata([t[i], t[i]])
         stamp.set_text(f"sphere rolling under its rotors, t = {t[i]:{width}.2f} s of {time[-1]:.2f} s")
-        return shell + axes + [path, on_shell, cursor, stamp]
+        return shell + axes + [path, on_shell, legend, cursor, legend2, stamp]   # drawn in this order
 
-    write_atomic(out, _gif(fig, update, frames, fps, dpi, progress))
+    write_atomic(out, _gif(fig, update, frames, fps, dpi, progress, blit))
     log.info("wrote %d frames to %s", frames, out)
 
 
-def _gif(fig, update, frames: int, fps: int, dpi, progress) -> bytes:
+def _gif(fig, update, frames: int, fps: int, dpi, progress, blit: bool = True) -> bytes:
     """The frames ``update(i)`` draws, as a GIF: one palette of :data:`GIF_COLOURS` colours for every frame,
     without dithering, so that what does not move is the same pixels in every frame and each frame after
-    the first stores only the rectangle that changed."""
+    the first stores only the rectangle that changed. ``update(i)`` returns the artists it changed and those
+    to be drawn over them, in drawing order: with ``blit`` the rest of the figure is drawn once, and each frame
+    is that picture with these artists drawn on it (the view of the axes must not change between frames)."""
     import io
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -132,10 +134,20 @@ def _gif(fig, update, frames: int, fps: int, dpi, progress) -> bytes:
     canvas = FigureCanvasAgg(fig)
     if dpi is not None:
         fig.set_dpi(dpi)
+    moving = update(0) if blit else []
+    for artist in moving:
+        artist.set_animated(True)
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
     palette, coded, previous = None, [], None
     for i in range(frames):
         update(i)
-        canvas.draw()
+        if blit:
+            canvas.restore_region(background)
+            for artist in moving:
+                fig.draw_artist(artist)
+        else:
+            canvas.draw()
         image = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba()).convert("RGB")
         if palette is None:   # the first frame has every colour of the figure (the moving parts too)
             palette = image.quantize(GIF_COLOURS - 1, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
