@@ -381,6 +381,31 @@ def run_rates(robot: Robot, t, rates, x0=None, disturbances=(), segment: int = 0
     return PlantResponse("rates", series, measure(m.state, d, robot.radius, segment), rates)
 
 
+def _linear_input(t, y) -> ca.Function:
+    """Linear interpolation through ``(t, y)`` (N, m), a step at a time given twice: ``f(t) -> (m,)``.
+
+    The steps are taken out: ``f = g + J`` with ``g`` continuous (CasADi's linear interpolant through the
+    distinct times) and ``J`` the sum of the steps at or before ``t``. The interpolant keeps its data: an
+    evaluation costs a binary search, not a copy of every sample.
+    """
+    new = np.r_[True, np.diff(t) != 0]              # first row of each distinct time
+    tk, left = t[new], y[new]
+    right = y[np.r_[new[1:], True]]                 # last row of each distinct time: the value from there on
+    right[-1] = left[-1]                            # the end: the value the last interval reaches
+    jump = right - left
+    jump[0] = 0.0                                   # no step at the start: the first interval's value holds
+    steps = np.nonzero(np.abs(jump).max(axis=1) > 0)[0]
+    cum = np.cumsum(jump, axis=0)
+    tt = ca.MX.sym("t")
+    expr = ca.interpolant("input", "linear", [tk], (right - cum).ravel(order="C"))(tt)
+    if steps.size:
+        # the number of steps at or before t, then the sum of those steps
+        count = ca.low(ca.DM(np.r_[-np.inf, tk[steps], np.inf]), tt)
+        sums = np.vstack([np.zeros(jump.shape[1]), cum[steps]])
+        expr += ca.interpolant("steps", "linear", [np.arange(steps.size + 1.0)], sums.ravel(order="C"))(count)
+    return ca.Function("input", [tt], [expr])
+
+
 def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Function:
     """``f(t) -> (m,)`` through the samples ``(t, y)``: splines split at the sample indices ``breaks``, or linear.
 
@@ -390,15 +415,7 @@ def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Functio
     """
     t, y = np.asarray(t, float), np.asarray(y, float)
     if interpolation == "linear":
-        # one lookup of the sample interval (a time given twice opens no interval: the torque steps there
-        # to the second row's value), then the line through its two ends
-        y2 = y.reshape(t.size, -1)
-        i = np.nonzero(np.diff(t) > 0)[0]
-        slope = (y2[i + 1] - y2[i]) / (t[i + 1] - t[i])[:, None]
-        tt = ca.MX.sym("t")
-        j = ca.low(ca.DM(np.r_[t[i], t[-1]]), tt)
-        expr = ca.MX(ca.DM(y2[i]))[j, :].T + ca.MX(ca.DM(slope))[j, :].T * (tt - ca.MX(ca.DM(t[i]))[j])
-        return ca.Function("input", [tt], [expr])
+        return _linear_input(t, y.reshape(t.size, -1))
     if interpolation != "spline":
         raise InputError(f"interpolation {interpolation!r} is not known: choose spline or linear")
     cuts = sorted({int(b) for b in breaks if 0 < int(b) < t.size - 1})
@@ -459,9 +476,7 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     t_all, torques = t_in, torques_in
     x0 = np.zeros(5) if x0 is None else np.asarray(x0, float)
     c = np.array(d["friction"].c if "friction" in d else (0.0, 0.0))
-    noise = d["torque_noise"].draw(t.size, segment) if "torque_noise" in d else np.zeros((t.size, 2))
     tau = input_function(t_all, torques, breaks, interpolation)
-    tau_noise = input_function(t, noise, (), "linear")
     servo_gain = _nonnegative("servo_gain", servo_gain)
     if servo_gain > 0 and reference_rates is None:
         raise InputError("servo_gain > 0 needs reference_rates")
@@ -471,7 +486,10 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     cmd = tau(time)
     if servo_gain > 0:
         cmd = cmd + servo_gain * (input_function(t_all, reference_rates, breaks, interpolation)(time) - phi_dot)
-    ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], robot.radius), cmd + tau_noise(time) - c * phi_dot,
+    applied = cmd
+    if "torque_noise" in d:
+        applied = applied + input_function(t, d["torque_noise"].draw(t.size, segment), (), "linear")(time)
+    ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], robot.radius), applied - c * phi_dot,
                      phi_dot, cmd)
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
     integ = ca.integrator("torque_plant", "cvodes", {"t": time, "x": z, "ode": ode}, float(t[0]), list(t[1:]), opts)
