@@ -122,6 +122,29 @@ def check_samples(t, rates):
     return t, rates
 
 
+@lru_cache(maxsize=1)
+def _rotor_dynamics() -> ca.Function:
+    """``(x, phi_dot, (Jxx, Jzz, J_r, R)) -> (dx/dt, omega)`` of the rate-driven robot: (11) and (6)-(10), in SX
+    (one compact function for the integrator's right side)."""
+    x, pd, r = ca.SX.sym("x", 5), ca.SX.sym("pd", 2), ca.SX.sym("robot", 4)
+    omega = model.omega_from_rotor_rates(pd, x[3], x[4], x[2], r[0], r[1], r[2])
+    return ca.Function("rotor_dynamics", [x, pd, r], [model.montana(omega, x[3], x[4], x[2], r[3]), omega])
+
+
+@lru_cache(maxsize=1)
+def _torque_dynamics() -> ca.Function:
+    """``(z, u, reference, noise, K, c, (Jxx, Jzz, J_r, R)) -> (dz/dt, omega, phi_dot, cmd)`` of the torque plant
+    (:func:`run_torques`), in SX. ``z`` = (state, p, rotor angles, integral of cmd); the command is ``cmd = u + K
+    (reference - phi_dot)``, the rotors take ``cmd + noise - c phi_dot``."""
+    z, u, ref, noise, gain, c, r = (ca.SX.sym(n, k) for n, k in (("z", 11), ("u", 2), ("ref", 2), ("noise", 2),
+                                                                 ("gain", 1), ("c", 2), ("robot", 4)))
+    x, p = z[0:5], z[5:7]
+    omega, phi_dot = model.omega_from_momenta(p, x[3], x[4], x[2], r[0], r[1], r[2])
+    cmd = u + gain * (ref - phi_dot)
+    ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], r[3]), cmd + noise - c * phi_dot, phi_dot, cmd)
+    return ca.Function("torque_dynamics", [z, u, ref, noise, gain, c, r], [ode, omega, phi_dot, cmd])
+
+
 def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 1e-11,
                     abstol: float = 1e-13) -> RotorSimulation:
     """Integrate (6)-(10) with omega from (11), driven by sampled rotor rates.
@@ -177,8 +200,7 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
             b = min(a + CHUNK, n - 1)
             lo, hi = (0, n) if n - 1 <= CHUNK else (max(0, a - OVERLAP), min(n, b + 1 + OVERLAP))
             spline = rate_spline(tau[lo:hi], turns[lo:hi])
-            omega = model.omega_from_rotor_rates(spline(time), x[3], x[4], x[2], jxx, jzz, jr)
-            ode = model.montana(omega, x[3], x[4], x[2], R)
+            ode, omega = _rotor_dynamics()(x, spline(time), ca.DM([jxx, jzz, jr, R]))
             integ = ca.integrator("rotor_sim", "cvodes", {"t": time, "x": x, "ode": ode}, float(tau[a]),
                                   list(tau[a + 1:b + 1]), opts)
             xs[a + 1:b + 1] = np.array(interrupts.call(integ, x0=xk)["xf"]).T
@@ -423,11 +445,12 @@ def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Functio
     if any(e1 - e0 < 3 for e0, e1 in zip(edges, edges[1:])):
         raise InputError("every piece of the input between breaks needs at least 4 samples")
     tt = ca.MX.sym("t")
-    expr = None
-    for e0, e1 in reversed(list(zip(edges, edges[1:]))):
-        piece = rate_spline(t[e0:e1 + 1], y[e0:e1 + 1])(tt)
-        expr = piece if expr is None else ca.if_else(tt < t[e1], piece, expr)
-    return ca.Function("input", [tt], [expr])
+    pieces = [rate_spline(t[e0:e1 + 1], y[e0:e1 + 1])(tt) for e0, e1 in zip(edges, edges[1:])]
+    if len(pieces) == 1:
+        return ca.Function("input", [tt], pieces)
+    # the piece that starts at or before t (a break sample takes the next piece), and only that one evaluated
+    index = ca.low(ca.DM(np.r_[-np.inf, t[cuts], np.inf]), tt)
+    return ca.Function("input", [tt], [ca.conditional(index, pieces[:-1], pieces[-1], True)])
 
 
 def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0), disturbances=(),
@@ -481,16 +504,13 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     if servo_gain > 0 and reference_rates is None:
         raise InputError("servo_gain > 0 needs reference_rates")
     time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
-    x, p = z[0:5], z[5:7]
-    omega, phi_dot = model.omega_from_momenta(p, x[3], x[4], x[2], robot.j_xx, robot.j_zz, robot.rotor_inertia_axial)
-    cmd = tau(time)
-    if servo_gain > 0:
-        cmd = cmd + servo_gain * (input_function(t_all, reference_rates, breaks, interpolation)(time) - phi_dot)
-    applied = cmd
-    if "torque_noise" in d:
-        applied = applied + input_function(t, d["torque_noise"].draw(t.size, segment), (), "linear")(time)
-    ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], robot.radius), applied - c * phi_dot,
-                     phi_dot, cmd)
+    zero = ca.DM.zeros(2)
+    ref = input_function(t_all, reference_rates, breaks, interpolation)(time) if servo_gain > 0 else zero
+    noise = (input_function(t, d["torque_noise"].draw(t.size, segment), (), "linear")(time)
+             if "torque_noise" in d else zero)
+    ode, omega, phi_dot, cmd = _torque_dynamics()(z, tau(time), ref, noise, servo_gain, c,
+                                                  ca.DM([robot.j_xx, robot.j_zz, robot.rotor_inertia_axial,
+                                                         robot.radius]))
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
     integ = ca.integrator("torque_plant", "cvodes", {"t": time, "x": z, "ode": ode}, float(t[0]), list(t[1:]), opts)
     z0 = np.concatenate([x0, p0, phi0, p0 if commanded_p0 is None else commanded_p0]).astype(float)
