@@ -116,9 +116,9 @@ def test_seed_is_checked_without_noise(files, capsys):
 
 # ----------------------------------------------------------------------------- the file's own motion
 
-def _sim_json(files, path, *extra):
+def _sim_json(capsys, files, path, *extra):
     out = files / "out.json"
-    code, _, err = command("simulate", path, "--json", out, *extra)
+    code, _, err = run(capsys, "simulate", path, "--json", out, *extra)
     assert code == 0, err
     return json.loads(out.read_text())
 
@@ -136,36 +136,36 @@ def _scipy_rates(path, robot):
 
 
 @pytest.mark.slow
-def test_a_tampered_file_gives_its_true_open_loop_error_in_every_mode(files):
+def test_a_tampered_file_gives_its_true_open_loop_error_in_every_mode(files, capsys):
     """With the file's rotor_rates doubled, plain simulate reported the miss but --closed-loop and --noise
     re-planned from the goal and reported an open loop of 2e-9: every mode now drives the file's own rates."""
     doubled = _mutate(files, "doubled", lambda d: d.update(rotor_rates=[[2 * r for r in row]
                                                                        for row in d["rotor_rates"]]))
     expected = _scipy_rates(doubled, MODEL)
     assert expected > 0.1
-    plain = _sim_json(files, doubled)["arrival_error"]
+    plain = _sim_json(capsys, files, doubled)["arrival_error"]
     assert plain == pytest.approx(expected, rel=1e-6)
     for extra in (["--closed-loop"], ["--noise", "1e-3"], ["--closed-loop", "--noise", "1e-3"]):
-        d = _sim_json(files, doubled, *extra)
+        d = _sim_json(capsys, files, doubled, *extra)
         opened = d.get("open_loop_arrival_error", d["arrival_error"])
         assert opened == pytest.approx(expected, rel=1e-6), extra
-    d = _sim_json(files, doubled, "--closed-loop")
+    d = _sim_json(capsys, files, doubled, "--closed-loop")
     assert d["arrival_error"] == pytest.approx(expected, rel=1e-6)   # far off the pole: nothing to correct from
     assert "no correcting motion" in d["stopped"]
     # rates 5 % too large: the closed loop starts from that motion and corrects it
     faster = _mutate(files, "faster", lambda d: d.update(rotor_rates=[[1.05 * r for r in row]
                                                                      for row in d["rotor_rates"]]))
-    d = _sim_json(files, faster, "--closed-loop")
+    d = _sim_json(capsys, files, faster, "--closed-loop")
     assert d["open_loop_arrival_error"] == pytest.approx(_scipy_rates(faster, MODEL), rel=1e-6)
     assert d["open_loop_arrival_error"] > 1e-2 and d["arrival_error"] < 1e-6
 
 
 @pytest.mark.parametrize("extra", [[], *(pytest.param(e, marks=pytest.mark.slow) for e in (
     ["--closed-loop"], ["--plant", "torques"], ["--noise", "1e-3"], ["--closed-loop", "--plant", "torques"]))])
-def test_plot_is_written_in_every_mode(files, extra, tmp_path):
+def test_plot_is_written_in_every_mode(files, extra, tmp_path, capsys):
     """`--closed-loop --plot F` exited 0 and wrote no figure."""
     png = tmp_path / "s.png"
-    code, out, err = command("simulate", files / "p1.json", "--robot", files / "real.toml", "--plot", png, *extra)
+    code, out, err = run(capsys, "simulate", files / "p1.json", "--robot", files / "real.toml", "--plot", png, *extra)
     assert code == 0, err
     assert png.read_bytes()[:4] == b"\x89PNG" and png.stat().st_size > 10000 and f"wrote {png}" in out
 
@@ -174,11 +174,11 @@ def test_plot_is_written_in_every_mode(files, extra, tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("n", [1, 4])
-def test_closed_loop_arrives_on_the_mismatched_robot(files, n):
+def test_closed_loop_arrives_on_the_mismatched_robot(files, n, capsys):
     """The robot of results/closed_loop.md (+5.5 % mass, +7.5 % rotor inertia): the closed loop corrected
     only between figure eights, so n = 1 was the open loop. Now within 1e-3 for n = 1 and n = 4; the final
     state is checked by DOP853 on the printed equations driven by the applied rates."""
-    d = _sim_json(files, files / f"p{n}.json", "--robot", files / "real.toml", "--closed-loop")
+    d = _sim_json(capsys, files, files / f"p{n}.json", "--robot", files / "real.toml", "--closed-loop")
     assert d["open_loop_arrival_error"] > 0.1
     assert d["arrival_error"] < 1e-3
     t, rates = np.array(d["time"]), np.array(d["rotor_rates"])
@@ -199,28 +199,28 @@ def test_closed_loop_arrives_on_the_mismatched_robot(files, n):
 
 
 @pytest.mark.slow
-def test_closed_loop_under_measurement_noise(files):
+def test_closed_loop_under_measurement_noise(files, capsys):
     """sigma = 1e-3 measurement noise: the median arrival error over seeds within 5e-3 (it was ~16 sigma at
     n = 2 without the final correction)."""
-    errors = [_sim_json(files, files / "p1.json", "--robot", files / "real.toml", "--closed-loop", "--noise", "1e-3",
-                        "--seed", seed)["arrival_error"] for seed in range(5)]
+    errors = [_sim_json(capsys, files, files / "p1.json", "--robot", files / "real.toml", "--closed-loop", "--noise",
+                        "1e-3", "--seed", seed)["arrival_error"] for seed in range(5)]
     assert np.median(errors) < 5e-3, errors
 
 
 @pytest.mark.slow
-def test_closed_loop_executes_turns_in_place_and_routes(files, tmp_path):
+def test_closed_loop_executes_turns_in_place_and_routes(files, tmp_path, capsys):
     """Closed-loop execution of a turn in place and of a route was refused; now the file's motion is run and
     corrected on the mismatched robot."""
     turn, route = tmp_path / "turn.json", tmp_path / "route.json"
-    code, _, err = command("plan", "--robot", files / "model.toml", "--to", "0", "0", "--psi", "0.5", "--duration",
-                           "10", "--json", turn)
+    code, _, err = run(capsys, "plan", "--robot", files / "model.toml", "--to", "0", "0", "--psi", "0.5",
+                       "--duration", "10", "--json", turn)
     assert code == 0, err
     (tmp_path / "wp.csv").write_text("u_a,v_a,psi,steps\n0,0,0,\n0.1,0.1,0.2,1\n0.2,0.0,0.0,1\n")
-    code, _, err = command("route", tmp_path / "wp.csv", "--robot", files / "model.toml", "--duration", "10",
-                           "--json", route)
+    code, _, err = run(capsys, "route", tmp_path / "wp.csv", "--robot", files / "model.toml", "--duration", "10",
+                       "--json", route)
     assert code == 0, err
     for path in (turn, route):
-        d = _sim_json(files, path, "--robot", files / "real.toml", "--closed-loop")
+        d = _sim_json(capsys, files, path, "--robot", files / "real.toml", "--closed-loop")
         assert d["open_loop_arrival_error"] > 1e-2 and d["arrival_error"] < 1e-3, path
 
 
@@ -305,7 +305,7 @@ def test_time_optimal_breaks_against_a_brute_force_scan():
 
 
 @pytest.mark.slow
-def test_linear_replay_of_the_files_torques_reaches_the_goal(files, nonstop):
+def test_linear_replay_of_the_files_torques_reaches_the_goal(files, nonstop, capsys):
     """The JSON's torques replayed by the stated rule (linear between rows, a step at a repeated time) drive
     the torque-driven robot, integrated by scipy on the printed equations, onto the goal; `simulate --plant
     torques` (the file's torques on its own time grid) arrives at the same state."""
@@ -313,7 +313,7 @@ def test_linear_replay_of_the_files_torques_reaches_the_goal(files, nonstop):
     final = _replay_torques(d, MODEL)
     goal = State.of(d["goal"])
     assert float(np.linalg.norm(arrival_error(State(*final), goal, MODEL.radius))) < 1e-5
-    sim = _sim_json(files, path, "--plant", "torques")
+    sim = _sim_json(capsys, files, path, "--plant", "torques")
     assert np.abs(np.array([sim["final"][n] for n in STATE_NAMES]) - final).max() < 1e-6
 
 
@@ -382,17 +382,17 @@ def test_a_plan_file_over_the_sample_limit_is_refused_naming_it(tmp_path):
 
 
 @pytest.mark.slow
-def test_a_time_optimal_plan_runs_on_the_torque_plant_with_its_own_torques(files, tmp_path):
+def test_a_time_optimal_plan_runs_on_the_torque_plant_with_its_own_torques(files, tmp_path, capsys):
     """`--plant torques` re-timed the plan with min-jerk, and a time-optimal plan was refused with a min-jerk
     duration error. Now its bang-bang torques (with their steps) drive the torque plant onto the goal, as
     scipy's integration of the printed equations under the replay rule does."""
     path = tmp_path / "to.json"
-    code, _, err = command("plan", "--robot", files / "limited.toml", "--to", "0.1", "0.12", "--psi", "0.4",
-                           "--timing", "time-optimal", "--json", path)
+    code, _, err = run(capsys, "plan", "--robot", files / "limited.toml", "--to", "0.1", "0.12", "--psi", "0.4",
+                       "--timing", "time-optimal", "--json", path)
     assert code == 0, err
     d = json.loads(path.read_text())
     assert len(d["torque_breaks"]) > 10
-    sim = _sim_json(files, path, "--plant", "torques")
+    sim = _sim_json(capsys, files, path, "--plant", "torques")
     assert sim["arrival_error"] < 1e-5
     final = _replay_torques(d, MODEL)
     assert np.abs(np.array([sim["final"][n] for n in STATE_NAMES]) - final).max() < 1e-6

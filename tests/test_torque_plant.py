@@ -231,3 +231,27 @@ def test_input_function_is_the_pieces_or_linear():
         input_function(t, y, breaks=[2])
     with pytest.raises(InputError, match="not known"):
         input_function(t, y, interpolation="cubic")
+
+
+def test_linear_input_steps_at_a_time_given_twice():
+    """The replay rule of plan files: linear between rows, a step at a time given twice (to the second row's
+    value, at that time), the end pieces extended. Against numpy's interp on each piece between the steps,
+    at the samples, a hair before each step, at random times and outside the span; a time given twice at
+    either end opens no piece, and three rows at one time step from the first to the last."""
+    rng = np.random.default_rng(5)
+    t = np.r_[0.0, 0.0, np.sort(rng.uniform(0.1, 3.9, 40)), 4.0, 4.0]
+    t[[6, 20, 21]] = t[5], t[19], t[19]            # steps at t[5] (two rows) and t[19] (three rows)
+    y = rng.normal(size=(t.size, 2))
+    pieces = [(1, 5), (6, 19), (21, t.size - 2)]    # first and last row of each piece of strictly increasing times
+    tt = np.r_[t, np.nextafter(t, -np.inf), rng.uniform(-1.0, 5.0, 400)]
+    piece = np.clip(np.searchsorted(t[[a for a, _ in pieces]], tt, side="right") - 1, 0, len(pieces) - 1)
+    expect = np.empty((tt.size, 2))
+    for k, (a, b) in enumerate(pieces):
+        tp, yp, at = t[a:b + 1], y[a:b + 1], piece == k
+        for i in range(2):
+            inside = np.interp(tt[at], tp, yp[:, i])
+            lo, hi = (yp[1, i] - yp[0, i]) / (tp[1] - tp[0]), (yp[-1, i] - yp[-2, i]) / (tp[-1] - tp[-2])
+            expect[at, i] = np.where(tt[at] < tp[0], yp[0, i] + lo * (tt[at] - tp[0]),
+                                     np.where(tt[at] > tp[-1], yp[-1, i] + hi * (tt[at] - tp[-1]), inside))
+    got = np.array(input_function(t, y, interpolation="linear").map(tt.size)(tt[None, :])).T
+    np.testing.assert_allclose(got, expect, rtol=0, atol=1e-12)

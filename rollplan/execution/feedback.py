@@ -146,12 +146,12 @@ class ExecutionResult(Arrival):
 
     def to_dict(self) -> dict:
         """The keys of ``rollplan simulate --closed-loop --json``."""
-        rows = lambda a: [[float(v) for v in r] for r in np.asarray(a)]  # noqa: E731
+        rows = lambda a: np.asarray(a, float).tolist()  # noqa: E731  (Python floats, row by row)
         m = self.series
         return {"plant": self.plant, "closed_loop": self.closed_loop, "goal": self.goal.as_dict(),
-                "time": [float(v) for v in m.time], "rotor_rates": rows(m.rotor_rates),
+                "time": rows(m.time), "rotor_rates": rows(m.rotor_rates),
                 "rotor_torques": rows(m.rotor_torques), "state": rows(m.state),
-                "segment": [int(v) for v in m.segment], "final": self.final.as_dict(),
+                "segment": np.asarray(m.segment).astype(int).tolist(), "final": self.final.as_dict(),
                 "error": dict(zip(STATE_NAMES, map(float, self.error))), "arrival_error": self.arrival_error,
                 "position_error": self.position_error, "estimates": self.estimates, "segments": self.segments,
                 "stopped": self.stopped}

@@ -122,6 +122,29 @@ def check_samples(t, rates):
     return t, rates
 
 
+@lru_cache(maxsize=1)
+def _rotor_dynamics() -> ca.Function:
+    """``(x, phi_dot, (Jxx, Jzz, J_r, R)) -> (dx/dt, omega)`` of the rate-driven robot: (11) and (6)-(10), in SX
+    (one compact function for the integrator's right side)."""
+    x, pd, r = ca.SX.sym("x", 5), ca.SX.sym("pd", 2), ca.SX.sym("robot", 4)
+    omega = model.omega_from_rotor_rates(pd, x[3], x[4], x[2], r[0], r[1], r[2])
+    return ca.Function("rotor_dynamics", [x, pd, r], [model.montana(omega, x[3], x[4], x[2], r[3]), omega])
+
+
+@lru_cache(maxsize=1)
+def _torque_dynamics() -> ca.Function:
+    """``(z, u, reference, noise, K, c, (Jxx, Jzz, J_r, R)) -> (dz/dt, omega, phi_dot, cmd)`` of the torque plant
+    (:func:`run_torques`), in SX. ``z`` = (state, p, rotor angles, integral of cmd); the command is ``cmd = u + K
+    (reference - phi_dot)``, the rotors take ``cmd + noise - c phi_dot``."""
+    z, u, ref, noise, gain, c, r = (ca.SX.sym(n, k) for n, k in (("z", 11), ("u", 2), ("ref", 2), ("noise", 2),
+                                                                 ("gain", 1), ("c", 2), ("robot", 4)))
+    x, p = z[0:5], z[5:7]
+    omega, phi_dot = model.omega_from_momenta(p, x[3], x[4], x[2], r[0], r[1], r[2])
+    cmd = u + gain * (ref - phi_dot)
+    ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], r[3]), cmd + noise - c * phi_dot, phi_dot, cmd)
+    return ca.Function("torque_dynamics", [z, u, ref, noise, gain, c, r], [ode, omega, phi_dot, cmd])
+
+
 def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 1e-11,
                     abstol: float = 1e-13) -> RotorSimulation:
     """Integrate (6)-(10) with omega from (11), driven by sampled rotor rates.
@@ -177,8 +200,7 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
             b = min(a + CHUNK, n - 1)
             lo, hi = (0, n) if n - 1 <= CHUNK else (max(0, a - OVERLAP), min(n, b + 1 + OVERLAP))
             spline = rate_spline(tau[lo:hi], turns[lo:hi])
-            omega = model.omega_from_rotor_rates(spline(time), x[3], x[4], x[2], jxx, jzz, jr)
-            ode = model.montana(omega, x[3], x[4], x[2], R)
+            ode, omega = _rotor_dynamics()(x, spline(time), ca.DM([jxx, jzz, jr, R]))
             integ = ca.integrator("rotor_sim", "cvodes", {"t": time, "x": x, "ode": ode}, float(tau[a]),
                                   list(tau[a + 1:b + 1]), opts)
             xs[a + 1:b + 1] = np.array(interrupts.call(integ, x0=xk)["xf"]).T
@@ -381,6 +403,31 @@ def run_rates(robot: Robot, t, rates, x0=None, disturbances=(), segment: int = 0
     return PlantResponse("rates", series, measure(m.state, d, robot.radius, segment), rates)
 
 
+def _linear_input(t, y) -> ca.Function:
+    """Linear interpolation through ``(t, y)`` (N, m), a step at a time given twice: ``f(t) -> (m,)``.
+
+    The steps are taken out: ``f = g + J`` with ``g`` continuous (CasADi's linear interpolant through the
+    distinct times) and ``J`` the sum of the steps at or before ``t``. The interpolant keeps its data: an
+    evaluation costs a binary search, not a copy of every sample.
+    """
+    new = np.r_[True, np.diff(t) != 0]              # first row of each distinct time
+    tk, left = t[new], y[new]
+    right = y[np.r_[new[1:], True]]                 # last row of each distinct time: the value from there on
+    right[-1] = left[-1]                            # the end: the value the last interval reaches
+    jump = right - left
+    jump[0] = 0.0                                   # no step at the start: the first interval's value holds
+    steps = np.nonzero(np.abs(jump).max(axis=1) > 0)[0]
+    cum = np.cumsum(jump, axis=0)
+    tt = ca.MX.sym("t")
+    expr = ca.interpolant("input", "linear", [tk], (right - cum).ravel(order="C"))(tt)
+    if steps.size:
+        # the number of steps at or before t, then the sum of those steps
+        count = ca.low(ca.DM(np.r_[-np.inf, tk[steps], np.inf]), tt)
+        sums = np.vstack([np.zeros(jump.shape[1]), cum[steps]])
+        expr += ca.interpolant("steps", "linear", [np.arange(steps.size + 1.0)], sums.ravel(order="C"))(count)
+    return ca.Function("input", [tt], [expr])
+
+
 def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Function:
     """``f(t) -> (m,)`` through the samples ``(t, y)``: splines split at the sample indices ``breaks``, or linear.
 
@@ -390,15 +437,7 @@ def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Functio
     """
     t, y = np.asarray(t, float), np.asarray(y, float)
     if interpolation == "linear":
-        # one lookup of the sample interval (a time given twice opens no interval: the torque steps there
-        # to the second row's value), then the line through its two ends
-        y2 = y.reshape(t.size, -1)
-        i = np.nonzero(np.diff(t) > 0)[0]
-        slope = (y2[i + 1] - y2[i]) / (t[i + 1] - t[i])[:, None]
-        tt = ca.MX.sym("t")
-        j = ca.low(ca.DM(np.r_[t[i], t[-1]]), tt)
-        expr = ca.MX(ca.DM(y2[i]))[j, :].T + ca.MX(ca.DM(slope))[j, :].T * (tt - ca.MX(ca.DM(t[i]))[j])
-        return ca.Function("input", [tt], [expr])
+        return _linear_input(t, y.reshape(t.size, -1))
     if interpolation != "spline":
         raise InputError(f"interpolation {interpolation!r} is not known: choose spline or linear")
     cuts = sorted({int(b) for b in breaks if 0 < int(b) < t.size - 1})
@@ -406,11 +445,12 @@ def input_function(t, y, breaks=(), interpolation: str = "spline") -> ca.Functio
     if any(e1 - e0 < 3 for e0, e1 in zip(edges, edges[1:])):
         raise InputError("every piece of the input between breaks needs at least 4 samples")
     tt = ca.MX.sym("t")
-    expr = None
-    for e0, e1 in reversed(list(zip(edges, edges[1:]))):
-        piece = rate_spline(t[e0:e1 + 1], y[e0:e1 + 1])(tt)
-        expr = piece if expr is None else ca.if_else(tt < t[e1], piece, expr)
-    return ca.Function("input", [tt], [expr])
+    pieces = [rate_spline(t[e0:e1 + 1], y[e0:e1 + 1])(tt) for e0, e1 in zip(edges, edges[1:])]
+    if len(pieces) == 1:
+        return ca.Function("input", [tt], pieces)
+    # the piece that starts at or before t (a break sample takes the next piece), and only that one evaluated
+    index = ca.low(ca.DM(np.r_[-np.inf, t[cuts], np.inf]), tt)
+    return ca.Function("input", [tt], [ca.conditional(index, pieces[:-1], pieces[-1], True)])
 
 
 def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0), disturbances=(),
@@ -459,20 +499,18 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     t_all, torques = t_in, torques_in
     x0 = np.zeros(5) if x0 is None else np.asarray(x0, float)
     c = np.array(d["friction"].c if "friction" in d else (0.0, 0.0))
-    noise = d["torque_noise"].draw(t.size, segment) if "torque_noise" in d else np.zeros((t.size, 2))
     tau = input_function(t_all, torques, breaks, interpolation)
-    tau_noise = input_function(t, noise, (), "linear")
     servo_gain = _nonnegative("servo_gain", servo_gain)
     if servo_gain > 0 and reference_rates is None:
         raise InputError("servo_gain > 0 needs reference_rates")
     time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
-    x, p = z[0:5], z[5:7]
-    omega, phi_dot = model.omega_from_momenta(p, x[3], x[4], x[2], robot.j_xx, robot.j_zz, robot.rotor_inertia_axial)
-    cmd = tau(time)
-    if servo_gain > 0:
-        cmd = cmd + servo_gain * (input_function(t_all, reference_rates, breaks, interpolation)(time) - phi_dot)
-    ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], robot.radius), cmd + tau_noise(time) - c * phi_dot,
-                     phi_dot, cmd)
+    zero = ca.DM.zeros(2)
+    ref = input_function(t_all, reference_rates, breaks, interpolation)(time) if servo_gain > 0 else zero
+    noise = (input_function(t, d["torque_noise"].draw(t.size, segment), (), "linear")(time)
+             if "torque_noise" in d else zero)
+    ode, omega, phi_dot, cmd = _torque_dynamics()(z, tau(time), ref, noise, servo_gain, c,
+                                                  ca.DM([robot.j_xx, robot.j_zz, robot.rotor_inertia_axial,
+                                                         robot.radius]))
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
     integ = ca.integrator("torque_plant", "cvodes", {"t": time, "x": z, "ode": ode}, float(t[0]), list(t[1:]), opts)
     z0 = np.concatenate([x0, p0, phi0, p0 if commanded_p0 is None else commanded_p0]).astype(float)
