@@ -267,6 +267,14 @@ def _json_constant(text: str):
     raise InputError(f"{text} is not allowed: numbers must be finite")
 
 
+def _unique_keys(pairs) -> dict:
+    """The object of ``pairs``; ValueError if a key is given twice (see :func:`load_json`)."""
+    data = dict(pairs)
+    if len(data) != len(pairs):
+        raise ValueError("a key is given twice")
+    return data
+
+
 def load_json(path, what: str = "JSON file", max_bytes: int = 1 << 29):
     """The value of the JSON file ``path`` (see :func:`read_text`): finite numbers only, nested at most
     :data:`MAX_DEPTH` deep, integers of at most :data:`MAX_INT_DIGITS` digits."""
@@ -274,8 +282,9 @@ def load_json(path, what: str = "JSON file", max_bytes: int = 1 << 29):
     where = f"{what} {show_path(path)}"
     try:
         # floats parsed by json's C scanner, then checked finite in one pass with the depth; any problem is
-        # reported by the exact parse below (it names the number that is too large, the first error in the text)
-        data = json.loads(text, parse_int=_json_int, parse_constant=_json_constant)
+        # reported by the exact parse below (it names the number that is too large, the first error in the text).
+        # A key given twice goes to the exact parse too: the value it replaces is not seen by the scan.
+        data = json.loads(text, parse_int=_json_int, parse_constant=_json_constant, object_pairs_hook=_unique_keys)
     except (InputError, ValueError, RecursionError, MemoryError):
         pass
     else:

@@ -181,14 +181,21 @@ def report(data: dict) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out-dir", default="results", help="folder of embedded.md and embedded.json")
+    ap.add_argument("--out-dir", help="folder of embedded.md and embedded.json (default results; with --quick, "
+                                      "required: results/ keeps the full report)")
     ap.add_argument("--no-host", action="store_true", help="skip the host timing")
     ap.add_argument("--quick", action="store_true",
                     help="count the instructions of the paper's case only (of the first of TARGETS), to check "
                          "that the script runs")
     args = ap.parse_args()
+    if args.quick and args.out_dir is None:
+        print("embedded_report.py: --quick writes a partial report: give --out-dir (results/ keeps the full one)",
+              file=sys.stderr)
+        sys.exit(2)
+    args.out_dir = args.out_dir or "results"
     load = Path("/proc/loadavg").read_text().split()[0] if Path("/proc/loadavg").exists() else "?"
-    data = {"versions": versions(), "steps_per_leaf": codegen.DEFAULT_STEPS_PER_LEAF, "k_max": codegen.DEFAULT_K_MAX,
+    data = {"quick": args.quick, "versions": versions(), "steps_per_leaf": codegen.DEFAULT_STEPS_PER_LEAF,
+            "k_max": codegen.DEFAULT_K_MAX,
             "load": load}
     with tempfile.TemporaryDirectory() as tmp:
         for real in ("double", "float"):

@@ -271,9 +271,14 @@ def replay(p, samples):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out-dir", default="results")
+    ap.add_argument("--out-dir", help="default results; with --quick, required (results/ keeps the full run)")
     ap.add_argument("--quick", action="store_true", help="a few cases only (for the tests of this script)")
     args = ap.parse_args(argv)
+    if args.quick and args.out_dir is None:
+        print("reconfiguration.py: --quick writes a partial report: give --out-dir (results/ keeps the full one)",
+              file=sys.stderr)
+        return 2
+    args.out_dir = args.out_dir or "results"
     out = Path(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

@@ -106,7 +106,8 @@ def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list, warm:
         env["ROLLPLAN_TEST_FRESH_CACHE"] = "1"
     with tempfile.TemporaryDirectory() as tmp:
         xml = Path(tmp) / "junit.xml"
-        cmd = [sys.executable, "-m", "pytest", "-q", "-n", jobs, *select, f"--junitxml={xml}", *extra, tests]
+        cache = [] if warm else ["-p", "no:cacheprovider"]   # the build cache lives in pytest's cache folder
+        cmd = [sys.executable, "-m", "pytest", "-q", "-n", jobs, *cache, *select, f"--junitxml={xml}", *extra, tests]
         if warm:
             print(f"{tier}: filling the build cache (unmeasured run)", file=sys.stderr)
             subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, check=False)

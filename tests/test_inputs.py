@@ -220,3 +220,21 @@ def test_csv_field_over_the_limit_is_one_line(tmp_path):
     with pytest.raises(InputError, match="longer than 131072 characters") as err:
         read_csv(f, "targets file")
     assert one_line(err) and "line 2" in str(err.value)
+
+
+@pytest.mark.parametrize("text, value, refused", [
+    ('{"a": 1e999, "a": 1}', None, "1e999"),           # the overflowing value is replaced by a later one
+    ('[{"b": [-1e400], "b": 2}]', None, "-1e400"),
+    ('{"a": 1, "a": 2.5}', {"a": 2.5}, None),          # as json reads it: the last value of a key
+])
+def test_a_key_given_twice_does_not_hide_a_number_too_large(tmp_path, text, value, refused):
+    """Every number token of a JSON file is checked, also one whose key is given again later in the object."""
+    from rollplan.inputs import load_json
+
+    path = tmp_path / "p.json"
+    path.write_text(text)
+    if refused:
+        with pytest.raises(InputError, match=f"the number '{refused}' is too large for a double"):
+            load_json(path, "plan file")
+    else:
+        assert load_json(path, "plan file") == value == json.loads(text)

@@ -263,3 +263,14 @@ def test_suite_report_measures_cold_by_default_and_warm_after_a_filling_run(tmp_
     assert (data["unit"]["cache"], data["unit, warm cache"]["cache"]) == ("fresh", "warm")
     text = (out / "suite.md").read_text()
     assert "| unit |" in text and "| unit, warm cache |" in text
+
+
+@pytest.mark.parametrize("name", ["embedded_report.py", "reconfiguration.py"])
+def test_a_quick_run_never_writes_over_the_full_results(tmp_path, name):
+    """``--quick`` makes a partial report: without ``--out-dir`` it is refused in one line (exit 2) and nothing is
+    written, so the full report in results/ is never replaced by a quick one."""
+    script = Path(__file__).resolve().parent.parent / "scripts" / name
+    run = subprocess.run([sys.executable, str(script), "--quick"], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120, check=False)
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1 and "--out-dir" in run.stderr
+    assert not any(tmp_path.iterdir())
