@@ -40,7 +40,8 @@ def make_animation(motion, robot, goal, out, frames: int = 100, fps: int = 20, p
     ``motion`` is a :class:`~rollplan.timeseries.TimeSeries` with ``rotor_rates`` (the state in
     :class:`~rollplan.problem.State` order, [m, rad]); ``goal`` (u_a, v_a, ...) [m];
     ``progress(label, done, total)`` is called after each frame written; ``dpi`` scales the frames
-    (default: matplotlib's); ``blit=False`` draws every frame whole (slower, the same picture).
+    (default: matplotlib's); ``blit=False`` draws every frame whole (slower; the same picture but for a few pixels where
+    the cursor meets the axes' frame).
     """
     from matplotlib.lines import Line2D
 

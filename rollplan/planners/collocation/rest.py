@@ -404,6 +404,7 @@ class RestToRestPlanner:
             raise SolverError(f"the collocation solution ({where}) leaves the contact bound {c:.6g} rad between "
                               f"collocation points by {excess:.2e} rad after {BACKOFF_TRIES} backed-off solves; "
                               "hint: raise N", "Bound_Violated")
+        # the end error after the correction, as the certificate's CVODES integration gives it
         end = np.r_[motion.state[-1] / np.array([problem.radius] * 2 + [1.0] * 3), end_rates] - final
         motion = scaled_motion(motion, horizon)
         cert = _certificate(problem, State(*motion.state[-1]), end_rates, where)
