@@ -202,6 +202,20 @@ def _unrefined(plan, note: str):
     return replace(plan, stats=replace(plan.stats, details={**plan.stats.details, "refine": note}))
 
 
+def _shorter(plan, best, elapsed: float, details: dict, not_done: str, what: str, why: str):
+    """The outcome of a polish of ``plan`` (:func:`refine`, :func:`fast_polish`): a :class:`RefinedPlan` of the
+    certified motion ``best`` when it is shorter than ``plan`` by more than :data:`MIN_GAIN`, else ``plan`` with the
+    reason (``not_done``: no start of ``what`` was certified, ``why`` each start's status; or not shorter)."""
+    if best is None:
+        return _unrefined(plan, f"{not_done}: no start of {what} was certified ({why})")
+    if not best.path_length < plan.path_length * (1.0 - MIN_GAIN):
+        return _unrefined(plan, f"{not_done}: {what}'s certified motion ({best.path_length:.6g}) is not "
+                                f"shorter than the plan ({plan.path_length:.6g})")
+    stats = SolverStats("ipopt", best.stats.status, best.stats.iterations, plan.stats.time_s + elapsed,
+                        {**details, "turns": best.turns})
+    return RefinedPlan(plan.problem, plan, best, best.certificate, stats, best.path_length)
+
+
 def refine(plan, intervals: int = INTERVALS, contact_bound: float = CONTACT_BOUND):
     """The polish of the certified geometric ``plan`` (module docstring): a :class:`RefinedPlan` when a
     certified motion shorter than ``plan`` is found, else ``plan`` with the reason in
@@ -253,15 +267,8 @@ def refine(plan, intervals: int = INTERVALS, contact_bound: float = CONTACT_BOUN
     elapsed = time.perf_counter() - t_start
     details = {"unrefined_length": plan.path_length, "unrefined_time_s": plan.stats.time_s, "refine_time_s": elapsed,
                "intervals": intervals, "contact_bound": contact_bound, "starts": tried}
-    if best is None:
-        why = ", ".join(failures) or ", ".join(f"{s['start']}: {s['status']}" for s in tried)
-        return _unrefined(plan, f"not refined: no start of the collocation was certified ({why})")
-    if not best.path_length < plan.path_length * (1.0 - MIN_GAIN):
-        return _unrefined(plan, f"not refined: the collocation's certified motion ({best.path_length:.6g}) is not "
-                                f"shorter than the plan ({plan.path_length:.6g})")
-    stats = SolverStats("ipopt", best.stats.status, best.stats.iterations, plan.stats.time_s + elapsed,
-                        {**details, "turns": best.turns})
-    return RefinedPlan(problem, plan, best, best.certificate, stats, best.path_length)
+    why = ", ".join(failures) or ", ".join(f"{s['start']}: {s['status']}" for s in tried)
+    return _shorter(plan, best, elapsed, details, "not refined", "the collocation", why)
 
 
 @lru_cache(maxsize=4)
@@ -324,12 +331,5 @@ def fast_polish(plan, intervals: int = FAST_INTERVALS, contact_bound: float = CO
     elapsed = time.perf_counter() - t_start
     details = {"polish": "fast", "unrefined_length": plan.path_length, "unrefined_time_s": plan.stats.time_s,
                "refine_time_s": elapsed, "intervals": intervals, "contact_bound": contact_bound, "starts": tried}
-    if best is None:
-        why = ", ".join(f"{s['start']}: {s['status']}" for s in tried)
-        return _unrefined(plan, f"not polished: no start of the fast polish was certified ({why})")
-    if not best.path_length < plan.path_length * (1.0 - MIN_GAIN):
-        return _unrefined(plan, f"not polished: the fast polish's certified motion ({best.path_length:.6g}) is not "
-                                f"shorter than the plan ({plan.path_length:.6g})")
-    stats = SolverStats("ipopt", best.stats.status, best.stats.iterations, plan.stats.time_s + elapsed,
-                        {**details, "turns": best.turns})
-    return RefinedPlan(problem, plan, best, best.certificate, stats, best.path_length)
+    why = ", ".join(f"{s['start']}: {s['status']}" for s in tried)
+    return _shorter(plan, best, elapsed, details, "not polished", "the fast polish", why)
