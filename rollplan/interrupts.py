@@ -6,7 +6,8 @@ iteration, once per right-hand-side evaluation of CVODES). When Python's
 handler raises KeyboardInterrupt, CasADi aborts the solver, but it does not
 pass the KeyboardInterrupt on: IPOPT returns with status
 ``NonIpopt_Exception_Thrown`` and a warning on stderr (which :func:`call` drops), CVODES
-raises a RuntimeError (``CV_RHSFUNC_FAIL``). A caller would take either for a failed
+raises a RuntimeError (``CV_RHSFUNC_FAIL``, or ``CV_LSETUP_FAIL`` when the signal
+arrives in the Jacobian's setup). A caller would take either for a failed
 solve: the geometric planner would try the next branch (and return a longer
 plan, or go on for minutes), a batch would record the row in flight as
 failed. Evaluations of plain CasADi Functions (``map``) do not poll; Python
