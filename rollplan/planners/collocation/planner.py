@@ -295,7 +295,9 @@ class CollocationPlanner(Method):
         self.point = _point_function(self.cost)
         t0 = time.perf_counter()
         nlp, self.path_rows = self.transcription.contact_nlp(self.point, N_PAR)
-        self.solver = ca.nlpsol("collocation", "ipopt", nlp, ipopt_options(self.tol, self.max_iter))
+        self.solver = ca.nlpsol("collocation", "ipopt", nlp, {**ipopt_options(self.tol, self.max_iter),
+                                                              **self.transcription.contact_derivatives(self.point,
+                                                                                                       N_PAR)})
         self.build_time_s = time.perf_counter() - t0
 
     @staticmethod

@@ -278,7 +278,9 @@ class RestToRestPlanner:
         self.rest_transcription = RestTranscription(self.transcription)
         nlp, self.path_rows = interrupts.call_in_thread(self.rest_transcription.contact_nlp, self.point, N_PAR)
         self.ipopt_options = {**ipopt_options(self.tol, self.max_iter), **REST_IPOPT_OPTIONS}
-        self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp, self.ipopt_options)
+        derivatives = interrupts.call_in_thread(self.rest_transcription.contact_derivatives, self.point, N_PAR)
+        self.solver = interrupts.call_in_thread(ca.nlpsol, "rest", "ipopt", nlp,
+                                                {**self.ipopt_options, **derivatives})
         self.build_time_s = time.perf_counter() - t0
 
     def twin(self, options: dict | None = None) -> RestToRestPlanner:

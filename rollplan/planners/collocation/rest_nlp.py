@@ -23,9 +23,8 @@ import math
 import casadi as ca
 import numpy as np
 
-from ...core import model
 from ...errors import InputError
-from .transcription import Guess, Transcription
+from .transcription import Guess, Transcription, interval_derivatives
 
 __all__ = ["RestTranscription", "linear_stages"]
 
@@ -98,6 +97,19 @@ class RestTranscription:
         return ca.Function("rest_interval", [x0, xc, x1, h, par], [ca.horzcat(*defects), cont, ca.vertcat(*depths), J],
                            ["x0", "xc", "x1", "h", "par"], ["defect", "continuity", "depth", "J"])
 
+    def interval_block(self, point: ca.Function, n_par: int) -> ca.Function:
+        """``B(z, par) -> (g, J)`` of one interval: ``z = (X_i, xc_i, X_{i+1})`` (its slice of the decision
+        vector), ``g`` its rows of the constraints (the collocation equations, the continuity, the contact bound
+        at the d points and at the end), ``J`` its cost (:meth:`interval_function`, h = 1 / N)."""
+        N, d = self.transcription.intervals, self.transcription.degree
+        depth = self.transcription.contact_path()
+        G = self.interval_function(point, depth, n_par)
+        z, par = ca.SX.sym("z", N_FREE * d + 14), ca.SX.sym("par", n_par)
+        x0, x1 = z[:7], z[N_FREE * d + 7:]
+        defect, cont, depths, J = G(x0, ca.reshape(z[7:N_FREE * d + 7], N_FREE, d), x1, 1.0 / N, par)
+        return ca.Function("rest_block", [z, par], [ca.vertcat(ca.vec(defect), cont, depths, depth(x1)), J],
+                           ["z", "par"], ["g", "J"])
+
     def contact_nlp(self, point: ca.Function, n_par: int):
         """The NLP ``({"x", "p", "f", "g"}, path_rows)``: the contact bound ``-z >= cos(bound)`` (the depth of the
         contact point (1)) at every collocation point and interval end is in the rows ``path_rows`` marks,
@@ -105,22 +117,17 @@ class RestTranscription:
         at the collocation points the depth bound implies them where ``|u_o|, |v_o| < pi / 2`` (so about every
         feasible point of the full transcription both NLPs have the same feasible set and local optima)."""
         N, d = self.transcription.intervals, self.transcription.degree
-        x = ca.SX.sym("x", 7)
-        depth = ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])
-        G = self.interval_function(point, depth, n_par)
-        par = ca.SX.sym("par", n_par)
-        xk = ca.SX.sym("X0", 7)
-        V, g, J = [xk], [], 0
-        for i in range(N):
-            xc = ca.SX.sym(f"XC{i}", N_FREE, d)
-            x1 = ca.SX.sym(f"X{i + 1}", 7)
-            defect, cont, depths, Ji = G(xk, xc, x1, 1.0 / N, par)
-            V += [ca.vec(xc), x1]
-            g += [ca.vec(defect), cont, depths, depth(x1)]
-            J = J + Ji
-            xk = x1
+        B = self.interval_block(point, n_par)
+        x, par = ca.SX.sym("x", 7 + N * self.block), ca.SX.sym("par", n_par)
+        g, J = zip(*(B(x[i * self.block:i * self.block + B.size1_in(0)], par) for i in range(N)))
         rows = np.concatenate([np.zeros(N_FREE * d + 5, bool), np.ones(d + 1, bool)] * N)
-        return {"x": ca.vertcat(*V), "p": par, "f": J, "g": ca.vertcat(*g)}, rows
+        return {"x": x, "p": par, "f": ca.sum1(ca.vertcat(*J)), "g": ca.vertcat(*g)}, rows
+
+    def contact_derivatives(self, point: ca.Function, n_par: int) -> dict:
+        """The derivatives of :meth:`contact_nlp`'s NLP as options of :func:`casadi.nlpsol`, built interval by
+        interval (:func:`.transcription.interval_derivatives`)."""
+        return interval_derivatives(self.interval_block(point, n_par), self.transcription.intervals, self.block,
+                                    7 + self.transcription.intervals * self.block)
 
     def pack(self, guess: Guess) -> np.ndarray:
         """The decision vector of a guess (its collocation values of u_o, v_o and the rates, and its accelerations,

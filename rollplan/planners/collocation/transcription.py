@@ -26,7 +26,7 @@ from ...problem import Problem
 from ...result import CertifiedMotion
 
 __all__ = ["SCHEMES", "CORRECTION_TOL", "Guess", "Transcription", "CollocationRun", "ipopt_options",
-           "check_contact_bound", "sensitivity_step", "fixed_step", "gauss_newton"]
+           "check_contact_bound", "sensitivity_step", "fixed_step", "gauss_newton", "interval_derivatives"]
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
 SCHEMES = ("legendre", "radau")
@@ -42,6 +42,52 @@ def ipopt_options(tol: float, max_iter: int) -> dict:
     """The options of every collocation NLP: IPOPT silent, tolerance ``tol`` (also on the constraints)."""
     return {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.tol": tol,
             "ipopt.constr_viol_tol": tol, "ipopt.max_iter": max_iter, "ipopt.mu_strategy": "adaptive"}
+
+
+def _scatter(block: ca.Sparsity, rows, cols, shape, nonzeros: ca.MX) -> ca.MX:
+    """The sum of copies of a matrix of sparsity ``block`` with their corners at ``(rows[i], cols[i])`` in a
+    matrix of ``shape``; ``nonzeros`` (MX) the copies' nonzeros, one copy after the other."""
+    r, c = (np.asarray(v, int) for v in block.get_triplet())
+    R = (r[None, :] + np.asarray(rows, int)[:, None]).ravel().tolist()
+    C = (c[None, :] + np.asarray(cols, int)[:, None]).ravel().tolist()
+    sp, where = ca.Sparsity.triplet(*shape, R, C, True)
+    add = ca.DM(ca.Sparsity.triplet(sp.nnz(), len(R), list(where), list(range(len(R)))), 1.0)
+    return ca.sparsity_cast(ca.mtimes(add, ca.vec(nonzeros)), sp)
+
+
+def interval_derivatives(block: ca.Function, intervals: int, stride: int, n_x: int) -> dict:
+    """The derivative functions ``{"grad_f", "jac_g", "hess_lag"}`` (options of :func:`casadi.nlpsol`) of an NLP
+    made of intervals:
+
+        f(x, p) = sum_i J(z_i, p),   g(x, p) = (g(z_0, p), ..., g(z_{N-1}, p)),   z_i = x[i s : i s + nz],
+
+    ``block(z, p) -> (g, J)`` one interval's SX function, ``s = stride`` (consecutive intervals share the
+    ``nz - s`` states between them). Each is one interval's SX derivative mapped over the intervals and summed
+    where the intervals overlap (MX): the same functions as CasADi's derivatives of the whole NLP (the
+    Lagrangian's Hessian, upper triangle, and the Jacobian with the same sparsity), built in a small fraction of
+    the time, since the derivatives of the large expression graph are never formed."""
+    z, p = ca.SX.sym("z", block.size1_in(0)), ca.SX.sym("p", block.size1_in(1))
+    g, J = block(z, p)
+    nz, ng = z.numel(), g.numel()
+    sigma, lam = ca.SX.sym("sigma"), ca.SX.sym("lam", ng)
+    cost = ca.Function("interval_cost", [z, p], [J, ca.gradient(J, z)])
+    rows = ca.Function("interval_rows", [z, p], [g, ca.jacobian(g, z)])
+    second = ca.Function("interval_second", [z, p, sigma, lam],
+                         [ca.triu(ca.hessian(sigma * J + ca.dot(lam, g), z)[0])])
+    N = intervals
+    x, par = ca.MX.sym("x", n_x), ca.MX.sym("p", p.numel())
+    lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", N * ng)
+    starts = np.arange(N) * stride
+    Z = ca.horzcat(*[x[int(o):int(o) + nz] for o in starts])
+    (Jv, grad), (gv, jac) = cost.map(N)(Z, par), rows.map(N)(Z, par)
+    hess = second.map(N)(Z, par, lam_f, ca.reshape(lam_g, ng, N))
+    grad = _scatter(cost.sparsity_out(1), starts, np.zeros(N, int), (n_x, 1), grad.nz[:])
+    jac = _scatter(rows.sparsity_out(1), np.arange(N) * ng, starts, (N * ng, n_x), jac.nz[:])
+    hess = _scatter(second.sparsity_out(0), starts, starts, (n_x, n_x), hess.nz[:])
+    return {"grad_f": ca.Function("nlp_grad_f", [x, par], [ca.sum2(Jv), grad], ["x", "p"], ["f", "grad_f_x"]),
+            "jac_g": ca.Function("nlp_jac_g", [x, par], [ca.vec(gv), jac], ["x", "p"], ["g", "jac_g_x"]),
+            "hess_lag": ca.Function("nlp_hess_l", [x, par, lam_f, lam_g], [hess],
+                                    ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])}
 
 
 def sensitivity_step(name: str, x, w, par, xdot, quad, jacobians: bool = True) -> ca.Function:
@@ -239,6 +285,19 @@ class Transcription:
         return ca.Function("interval", [x0, xc, w, h, par], [ca.horzcat(*defects), x_end, J],
                            ["x0", "xc", "w", "h", "par"], ["defect", "x_end", "J"])
 
+    def interval_block(self, point: ca.Function, path: ca.Function, n_par: int) -> ca.Function:
+        """``B(z, par) -> (g, J)`` of one interval: ``z = (X_i, XC_i, W_i, X_{i+1})`` (its slice of the decision
+        vector), ``g`` its rows of the constraints (the collocation equations, the continuity, ``path`` at the
+        d points and at the end), ``J`` its cost (:meth:`interval_function`, h = 1 / N)."""
+        N, d, nx, nu = self.intervals, self.degree, self.nx, self.nu
+        G = self.interval_function(point, n_par)
+        z, par = ca.SX.sym("z", self._block + nx), ca.SX.sym("par", n_par)
+        x0, xc, w, x1 = z[:nx], ca.reshape(z[nx:nx + nx * d], nx, d), z[nx + nx * d:nx + nx * d + nu], z[-nx:]
+        defect, x_end, J = G(x0, xc, w, 1.0 / N, par)
+        return ca.Function("interval_block", [z, par],
+                           [ca.vertcat(ca.vec(defect), x_end - x1, path.map(d)(xc).T, path(x1)), J],
+                           ["z", "par"], ["g", "J"])
+
     def nlp(self, point: ca.Function, path: ca.Function, n_par: int):
         """The NLP of the transcription: ``({"x", "p", "f", "g"}, path_rows)``.
 
@@ -246,31 +305,29 @@ class Transcription:
         point and interval end; ``path_rows`` (bool array over g) marks its rows,
         the others are equalities (collocation equations and continuity).
         """
-        N, d = self.intervals, self.degree
-        G = self.interval_function(point, n_par)
-        par = ca.SX.sym("par", n_par)
-        V, g, J = [], [], 0
-        nx = self.nx
-        xk = ca.SX.sym("X0", nx)
-        V.append(xk)
-        for i in range(N):
-            xc = ca.SX.sym(f"XC{i}", nx, d)
-            w = ca.SX.sym(f"W{i}", self.nu)
-            defect, x_end, Ji = G(xk, xc, w, 1.0 / N, par)
-            xk = ca.SX.sym(f"X{i + 1}", nx)
-            V += [ca.vec(xc), w, xk]
-            g += [ca.vec(defect), x_end - xk, path.map(d)(xc).T, path(xk)]
-            J = J + Ji
+        N, d, nx, s = self.intervals, self.degree, self.nx, self._block
+        B = self.interval_block(point, path, n_par)
+        x, par = ca.SX.sym("x", nx + N * s), ca.SX.sym("par", n_par)
+        g, J = zip(*(B(x[i * s:i * s + s + nx], par) for i in range(N)))
         rows = np.concatenate([np.zeros(nx * d + nx, bool), np.ones(d + 1, bool)] * N)
-        return {"x": ca.vertcat(*V), "p": par, "f": J, "g": ca.vertcat(*g)}, rows
+        return {"x": x, "p": par, "f": ca.sum1(ca.vertcat(*J)), "g": ca.vertcat(*g)}, rows
+
+    def contact_path(self) -> ca.Function:
+        """The contact bound's path function ``-z`` (the depth of the contact point (1) below the centre, the
+        cosine of its polar angle) of a state whose entries 3 and 4 are u_o and v_o."""
+        x = ca.SX.sym("x", self.nx)
+        return ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])
 
     def contact_nlp(self, point: ca.Function, n_par: int):
-        """:meth:`nlp` with the contact bound as the path constraint: ``-z >= cos(bound)`` for the contact
-        point (1) (the depth below the centre, the cosine of the polar angle) at every collocation point and
-        interval end; the state's entries 3 and 4 are u_o and v_o."""
-        x = ca.SX.sym("x", self.nx)
-        depth = ca.Function("depth", [x], [-model.contact_point(x[3], x[4])[2]])
-        return self.nlp(point, depth, n_par)
+        """:meth:`nlp` with the contact bound as the path constraint: ``-z >= cos(bound)`` (:meth:`contact_path`)
+        at every collocation point and interval end."""
+        return self.nlp(point, self.contact_path(), n_par)
+
+    def contact_derivatives(self, point: ca.Function, n_par: int) -> dict:
+        """The derivatives of :meth:`contact_nlp`'s NLP as options of :func:`casadi.nlpsol`, built interval by
+        interval (:func:`interval_derivatives`)."""
+        return interval_derivatives(self.interval_block(point, self.contact_path(), n_par), self.intervals,
+                                    self._block, self.nx + self.intervals * self._block)
 
     def contact_bounds(self, guess: Guess, start, final, contact_bound: float, path_rows):
         """``(x0, lbx, ubx, lbg, ubg)`` of the NLP of :meth:`contact_nlp`: ``start``, ``final`` fixed,
