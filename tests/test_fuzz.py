@@ -331,13 +331,13 @@ def test_batch_files(tmp_path_factory, csv_file):
 # ----------------------------------------------------------------------------- plan JSON files
 
 
-@functools.lru_cache(maxsize=2)
-def written_plan(kind, folder):
+@pytest.fixture(scope="module", params=["pole", "composed"])
+def plan_json(tmp_path_factory, request):
     """A plan with its motion, as written by plan --duration: pole to pole (default robot), or from a start off
-    the pole timed by the smooth-cruise law within a robot's motor limits (its file is about 20 MB: the law
-    samples each of its three pieces 16000 times)."""
-    out = folder / f"{kind}_plan.json"
-    if kind == "pole":
+    the pole timed by the smooth-cruise law within a robot's motor limits."""
+    folder = tmp_path_factory.mktemp("planjson")
+    out = folder / "plan.json"
+    if request.param == "pole":
         argv = ["plan", "--to", "0.03", "0.05", "--psi", "0.3", "--duration", "4", "--samples", "800"]
     else:
         (folder / "r.toml").write_text("radius = 0.1\nmass_total = 1.2\nmass_shell = 0.4\nrotor_inertia_axial = 2e-4\n"
@@ -381,15 +381,10 @@ def dumps_plan(data, path) -> str:
                            for key, value in data.items()) + "}"
 
 
-#: The mutations of a plan file; the last, edits of its text (cut short, a NaN, a huge or long number, deep nesting,
-#: a BOM, Latin-1), are made at the same places of any plan file, before its samples.
-KINDS = ("same", "drop", "replace", "robot", "scale", "text", "text")
-
-
 @st.composite
-def plan_file(draw, path, kinds=KINDS):
+def plan_file(draw, path):
     data = dict(plan_data(path)[0])   # the values changed below are replaced, never changed in place
-    kind = draw(st.sampled_from(kinds))
+    kind = draw(st.sampled_from(["same", "drop", "replace", "robot", "scale", "text", "text"]))
     if kind == "drop":
         del data[draw(st.sampled_from(["time", "rotor_rates", "robot", "target", "start", "goal"]))]
     elif kind == "replace":
@@ -424,26 +419,8 @@ def plan_file(draw, path, kinds=KINDS):
 
 @FUZZ
 @given(data=st.data(), command=st.sampled_from(["simulate", "simulate", "simulate", "animate"]))
-def test_plan_files(tmp_path_factory, data, command):
-    check_plan_file(tmp_path_factory, written_plan("pole", tmp_path_factory.getbasetemp()), data, command, KINDS)
-
-
-#: The composed plan's examples: its text edits are those of the pole plan's file (above), so only the mutations
-#: of its values are drawn, as many as the 30 examples of all kinds drew of them (30 * 5/7).
-COMPOSED = settings(FUZZ, max_examples=max(1, round(FUZZ.max_examples * 5 / 7)))
-
-
-@COMPOSED
-@given(data=st.data(), command=st.sampled_from(["simulate", "simulate", "simulate", "animate"]))
-def test_composed_plan_files(tmp_path_factory, data, command):
-    check_plan_file(tmp_path_factory, written_plan("composed", tmp_path_factory.getbasetemp()), data, command,
-                    KINDS[:5])
-
-
-def check_plan_file(tmp_path_factory, plan_json, data, command, kinds):
-    """Simulate or animate a mutation of the plan file ``plan_json``: exit 0, 2 or 3, one line on a refusal; the
-    unchanged file's simulation ends where the plan's rotor rates, integrated by DOP853, take the robot."""
-    mutated = data.draw(plan_file(plan_json, kinds))
+def test_plan_files(tmp_path_factory, plan_json, data, command):
+    mutated = data.draw(plan_file(plan_json))
     raw, kind = mutated.raw, mutated.kind
     folder = tmp_path_factory.mktemp("planfile")
     (folder / "plan.json").write_bytes(raw)
