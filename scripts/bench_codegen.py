@@ -130,14 +130,19 @@ def build(out: Path, steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, prefi
 
 def time_plans(out: Path, prefix: str = "rollplan", targets=TARGETS, reps: int = 20):
     """Microseconds of each C plan of ``targets`` (best of ``reps``; built with -O2): rows of
-    (new k: leaf table rebuilt, same k, same k without the certificate, the certificate alone, status)."""
+    (new k: leaf table rebuilt, same k, same k without the certificate, the certificate alone, status).
+
+    The planner's object files of :func:`build` (the generated Makefile compiles them with the same -O2) are
+    linked when present; otherwise its sources are compiled here."""
     text = _BENCH_C.replace("@PREFIX@", prefix).replace(
         "@TARGETS@", ", ".join("{" + ", ".join(repr(float(x)) for x in t) + "}" for t in targets))
     (out / "bench.c").write_text(text)
     exe = out / "bench"
+    objects = [out / "rollplan_planner.o", out / f"{prefix}_model.o"]
+    if not all(o.exists() for o in objects):
+        objects = [o.with_suffix(".c") for o in objects]
     subprocess.run(["cc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-o", str(exe), str(out / "bench.c"),
-                    str(out / "rollplan_planner.c"), str(out / f"{prefix}_model.c"), "-lm"], check=True,
-                   capture_output=True)
+                    *map(str, objects), "-lm"], check=True, capture_output=True)
     lines = subprocess.run([str(exe), str(reps)], check=True, capture_output=True, text=True).stdout.splitlines()
     return [tuple(float(x) for x in line.split()[:4]) + (int(line.split()[4]),) for line in lines]
 

@@ -1058,7 +1058,7 @@ def main(argv=None):
            "batch": 500 if args.quick else 4000, "map_repeats": 1 if args.quick else 5,
            "single_evals": 100 if args.quick else 1000, "check_points": 4 if args.quick else 8,
            "jit": not args.no_jit, "jit_flags": args.jit_flags, "cold": not args.no_cold,
-           "coll_repeats": 1 if args.quick else 11, "coll_targets": 2 if args.quick else len(bench_collocation.TARGETS),
+           "coll_repeats": 1 if args.quick else 11, "coll_targets": 1 if args.quick else len(bench_collocation.TARGETS),
            "c_reps": 3 if args.quick else 20, "quick": args.quick, "cold_repeats": 3 if args.quick else 7,
            "high_k_repeats": 1 if args.quick else 3}
     v = geometric.GeometricPhasePlanner(certifier="cvodes").certifier.integrator

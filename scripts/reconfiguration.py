@@ -29,15 +29,32 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 
-import rollplan
-from rollplan.core.paths import PathIntegrator
-from rollplan.io import save_figure, tagged, write_atomic, write_json
-from rollplan.planners.geometric import ComposedPlanner, as_composed
-from rollplan.planners.geometric.maneuvers import StraightRoll
-from rollplan.plots.composed import plot_composed
-from rollplan.problem import N3Z_MIN, Problem
+def parse_args(argv=None):
+    """The command line; ``--quick`` without ``--out-dir`` exits 2 with one line (before the slow imports below)."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out-dir", help="default results; with --quick, required (results/ keeps the full run)")
+    ap.add_argument("--quick", action="store_true", help="a few cases only (for the tests of this script)")
+    args = ap.parse_args(argv)
+    if args.quick and args.out_dir is None:
+        print("reconfiguration.py: --quick writes a partial report: give --out-dir (results/ keeps the full one)",
+              file=sys.stderr)
+        sys.exit(2)
+    return args
+
+
+if __name__ == "__main__":
+    parse_args()
+
+import numpy as np  # noqa: E402
+
+import rollplan  # noqa: E402
+from rollplan.core.paths import PathIntegrator  # noqa: E402
+from rollplan.io import save_figure, tagged, write_atomic, write_json  # noqa: E402
+from rollplan.planners.geometric import ComposedPlanner, as_composed  # noqa: E402
+from rollplan.planners.geometric.maneuvers import StraightRoll  # noqa: E402
+from rollplan.plots.composed import plot_composed  # noqa: E402
+from rollplan.problem import N3Z_MIN, Problem  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 import references as ref  # noqa: E402  (the independent references of the tests)
@@ -270,14 +287,7 @@ def replay(p, samples):
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out-dir", help="default results; with --quick, required (results/ keeps the full run)")
-    ap.add_argument("--quick", action="store_true", help="a few cases only (for the tests of this script)")
-    args = ap.parse_args(argv)
-    if args.quick and args.out_dir is None:
-        print("reconfiguration.py: --quick writes a partial report: give --out-dir (results/ keeps the full one)",
-              file=sys.stderr)
-        return 2
+    args = parse_args(argv)
     args.out_dir = args.out_dir or "results"
     out = Path(args.out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -156,11 +156,13 @@ def test_compare_torque_panels_exclude_the_end_spikes():
 
 @pytest.fixture(scope="module")
 def atlases():
+    """Two atlases of the paper's k (about 2 s: the tests that use them are in the full tier)."""
     from rollplan.studies.atlas import compute_atlas
 
     return compute_atlas(2.5, 1, 21), compute_atlas(2.5, 1, 41)
 
 
+@pytest.mark.slow
 def test_atlas_reachable_panel_has_no_sampling_holes(atlases):
     """The reachability histogram's white holes were gaps between grid points that read as unreachable
     regions: the images of the grid cells are filled, so the pairs a finer grid reaches (points between the
@@ -188,6 +190,7 @@ def test_atlas_reachable_panel_has_no_sampling_holes(atlases):
     assert inside[in_a_hole].mean() > 0.9 and inside.mean() > 0.9
 
 
+@pytest.mark.slow
 def test_atlas_contours_leave_the_crowded_corner_to_the_colours(atlases):
     """An atlas corner (a, b near A_MAX) was a tangle of white contours: none is drawn where a or b exceeds
     the labelled region."""

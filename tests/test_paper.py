@@ -42,7 +42,8 @@ def study():
 
 @pytest.fixture(scope="module")
 def reduced(study):
-    """A reduced reproduction: coarse sweeps, one self-intersection probe per interval."""
+    """A reduced reproduction: coarse sweeps, one self-intersection probe per interval (about 4 s: the tests that
+    use it are in the full tier; the building blocks below check the main path in the unit tier)."""
     return run_case_study(k_points=71, a_points=300, samples=200, crossing_samples=1000, crossings_per_interval=1,
                           study=study)
 
@@ -56,6 +57,7 @@ def find(result, start):
 # ----------------------------------------------------------------------------- the reduced reproduction
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("start,key", [
     ("gamma [rad] pointing the shift along +v_a, k = 0", "gamma_k0"),
     ("h/R at k = 2.5", "h_k2.5"), ("h/R at k = 5", "h_k5"),
@@ -72,6 +74,7 @@ def test_reduced_rows_match_paper_digits(reduced, start, key):
     assert row.status == "reproduced"
 
 
+@pytest.mark.slow
 def test_printed_radius_is_a_discrepancy_against_closed_form_36(reduced):
     row = find(reduced, "a/R with h/R = 1 at k = 0")
     assert row.status == "discrepancy" and row.paper == 0.533681
@@ -82,6 +85,7 @@ def test_printed_radius_is_a_discrepancy_against_closed_form_36(reduced):
     assert round(eq36(0.533681), 5) == 1.17636
 
 
+@pytest.mark.slow
 def test_k5_is_a_discrepancy_and_the_computed_zero_is_a_zero(reduced, dop853):
     row = find(reduced, "zero k_5")
     assert row.status == "discrepancy"
@@ -91,6 +95,7 @@ def test_k5_is_a_discrepancy_and_the_computed_zero_is_a_zero(reduced, dop853):
     assert math.hypot(u, v) > 1.0                       # the printed k_5 is far from a zero
 
 
+@pytest.mark.slow
 def test_self_intersection_claim_and_path_length_claim(reduced):
     for i in range(6):
         row = find(reduced, f"self-intersections of the half-step plane path, k in [k_{i}, k_{i + 1}]")
@@ -104,12 +109,14 @@ def test_self_intersection_claim_and_path_length_claim(reduced):
     assert p1.residual < 1e-9 and p0.residual < 1e-9
 
 
+@pytest.mark.slow
 def test_roots_count_is_stable_on_doubled_grid(reduced):
     assert reduced.k_sweep.roots_double_grid == len(reduced.k_sweep.roots)
     assert len(reduced.k_sweep.roots) == 6
     assert np.allclose(reduced.k_sweep.roots, reduced.k_sweep.roots_cvodes, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_json_schema(reduced, tmp_path):
     write_reproduction(reduced, tmp_path, figures=False)
     doc = json.loads((tmp_path / "reproduction.json").read_text())
@@ -202,9 +209,24 @@ def test_cli_rejects_file_as_out(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_cli_reproduce_writes_everything(tmp_path, capsys):
+def test_cli_reproduce_writes_everything(tmp_path, capsys, monkeypatch, reduced):
+    """The command writes every figure, the table and the report. Its computation is the reduced one (the numbers
+    are checked above; the full-size run is the documented command of docs/results.md, run by
+    tests/test_readme_commands.py)."""
+    import dataclasses
+
+    from rollplan.studies.paper import run
+
+    asked = []
+
+    def reduced_run(**options):
+        asked.append(options)
+        return dataclasses.replace(reduced, timings=dict(reduced.timings))
+
+    monkeypatch.setattr(run, "run_case_study", reduced_run)
     out = tmp_path / "paper"
     assert main(["reproduce", "--out", str(out)]) == 0
+    assert list(asked[0]) == ["progress"]            # the defaults: the command passes no sizes of its own
     names = {p.name for p in out.iterdir()}
     assert {f"fig{i:02d}.png" for i in range(6, 13)} <= names
     assert {"reproduction.json", "REPRODUCTION.md"} <= names
@@ -220,6 +242,7 @@ def test_batches_report_progress(study):
     assert [c[1] for c in calls] == [study.chunk, 2 * study.chunk, 2 * study.chunk + 7]
 
 
+@pytest.mark.slow
 def test_reproduction_onto_a_full_disk_is_one_line(reduced, full_disk):
     """Regression: reproduce onto a full disk was a traceback; now OutputError (the CLI exits 2), no
     temporary left."""
