@@ -348,6 +348,15 @@ def test_simulate_other_robot(planned, tmp_path, capsys):
     assert err > 1e-3
 
 
+def test_plan_json_metadata(planned):
+    import rollplan
+
+    data = planned[3]
+    assert data["version"] == rollplan.__version__ and data["units"]["length"] == "m"
+    assert data["units"]["torque"] == "N m"
+
+
+@pytest.mark.slow
 def test_simulate_plot_and_json_metadata(planned, tmp_path, capsys):
     import rollplan
 
@@ -568,6 +577,10 @@ def test_k_defaults_to_the_papers_case(tmp_path, capsys):
     d = json.loads(js.read_text())
     assert d["k"] == 2.5
     assert d["eta"] == pytest.approx(references.trace(0.3, 0.3, 2.5)[2], abs=1e-10)
+
+
+@pytest.mark.slow
+def test_atlas_k_defaults_to_the_papers_case(tmp_path, capsys):
     assert run(capsys, "atlas", "--resolution", "3", "--out", str(tmp_path / "a.png"), "--json",
                str(tmp_path / "a.json"))[0] == 0
     assert json.loads((tmp_path / "a.json").read_text())["k"] == 2.5

@@ -226,7 +226,7 @@ def test_mirror_symmetry_of_optimal_cost(planner40, warm40):
 
 def test_rotor_effort_equals_quadrature_of_rotor_rates():
     robot = Robot()
-    r = collocate((0.05, 0.03, 0.4), robot=robot, cost="rotor_effort", intervals=30)
+    r = collocate((0.05, 0.03, 0.4), robot=robot, cost="rotor_effort", intervals=12)
     assert r.problem.radius == robot.radius and r.residual < 1e-6
     # the verified rotor effort matches the transcription's objective (same functional, different quadrature)
     assert r.measures.rotor_effort == pytest.approx(r.solution.objective, rel=1e-4)
@@ -304,6 +304,7 @@ def test_explicit_guess_object_is_used(planner40, warm40):
     assert again.solution.objective == pytest.approx(r.solution.objective, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_collocate_keywords_and_warm_start_plan(warm40):
     """collocate() states the problem by keywords; warm_start= passes the geometric-phase plan it follows,
     and planners.solve(problem, "collocation") is the same solve."""

@@ -424,7 +424,7 @@ def test_the_reach_limit_is_refused_in_the_api_before_any_leg():
     assert calls == []
 
 
-@pytest.mark.parametrize("k", [0.0, 2.5, 10.0])
+@pytest.mark.parametrize("k", [0.0, 2.5, pytest.param(10.0, marks=pytest.mark.slow)])
 def test_the_reach_limit_bounds_what_a_figure_eight_does(k):
     """MAX_DISTANCE rests on: one figure eight moves the contact point on the plane by at most its length
     4 pi A_MAX (two circles of radius <= A_MAX). Checked on the largest leaves by DOP853 on the printed
