@@ -94,7 +94,7 @@ def test_step_command_matches_printed_reference(tmp_path, capsys, argv, ab, k, g
 
 @pytest.mark.parametrize("curve,ab,k,gamma", [
     ("viviani", (0.5, 0.3), 2.5, 0.0),
-    ("triangle", (0.69, 0.2), 20.0, 0.4),
+    pytest.param("triangle", (0.69, 0.2), 20.0, 0.4, marks=pytest.mark.slow),   # the reference: ~0.9 s
     ("square", (0.1, 0.6), 0.0, -1.0),
     ("circles", (0.3, 0.4), 2.5, 0.0),
 ])
@@ -403,6 +403,7 @@ def test_duration_errors(capsys, tmp_path):
     assert main(["animate", str(plain), "--out", str(tmp_path / "a.gif")]) == 2
 
 
+@pytest.mark.slow
 def test_animate_writes_a_gif(planned, tmp_path):
     _, _, out, _ = planned
     gif = tmp_path / "roll.gif"
@@ -616,6 +617,7 @@ def test_summaries_have_six_significant_digits(capsys):
         assert len(number.split("e")[0].replace("-", "").replace(".", "").lstrip("0")) <= 6, number
 
 
+@pytest.mark.slow
 def test_route_and_composed_plan_follow_the_conventions(tmp_path, capsys):
     """The commands of composed plans (plan --from/--contact, route) keep the conventions: --json - on stdout
     with version and units, the summary on stderr with every length in the unit in use (named), 6 digits and

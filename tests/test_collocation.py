@@ -316,6 +316,7 @@ def test_collocate_keywords_and_warm_start_plan(warm40):
     assert q.solution.objective == pytest.approx(warm40.solution.objective, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_naive_guess_is_a_singular_point_and_fails_with_a_hint():
     """At rest on the south pole the linearized kinematics are not controllable: the equality
     Jacobian loses rank, and IPOPT fails from the naive guess for a psi = 0 target (see comparison.md)."""

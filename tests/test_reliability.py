@@ -106,6 +106,7 @@ def test_other_public_classes_validate_their_options():
         CvodesCertifier(reltol=-1.0)
 
 
+@pytest.mark.slow
 def test_short_duration_is_served_or_refused_never_a_failed_motion_with_exit_0(tmp_path, capsys):
     """`--duration 1e-6` printed "rotor-only arrival error 1.00e+00" and exited 0: the shortest accepted
     duration is served (the rotor simulation runs in normalized time, so the motion reaches its goal, which an
@@ -122,6 +123,18 @@ def test_short_duration_is_served_or_refused_never_a_failed_motion_with_exit_0(t
     final = references.rotor_drive(d["robot"], np.asarray(d["time"]), np.asarray(d["rotor_rates"]))[-1]
     assert math.hypot(final[0] - 0.0, final[1] - 0.1) / d["radius"] < 1e-6
     assert code == 0 and run(capsys, "simulate", str(out))[0] == 0
+    _too_short_or_long_durations_are_refused(tmp_path, capsys)
+
+
+def test_durations_and_samples_out_of_range_are_refused_before_any_work(tmp_path, capsys):
+    """The refusals of the test above, in the unit tier (they cost no plan)."""
+    _too_short_or_long_durations_are_refused(tmp_path, capsys)
+
+
+def _too_short_or_long_durations_are_refused(tmp_path, capsys):
+    from rollplan.execution.timing import DURATION_RANGE
+
+    out = tmp_path / "p.json"
     for duration in ("1e-6", "1e-300", "1e308", repr(DURATION_RANGE[1] * 1.5), "0", "-1"):
         code, text, err = run(capsys, "plan", "--to", "0", "0.1", "--duration", duration)
         assert code == 2 and "duration" in err and one_line(err) and text == ""   # refused before planning
@@ -441,6 +454,7 @@ def test_wrong_types_in_the_new_api_are_input_errors(call, needle):
     assert "\n" not in str(err.value)
 
 
+@pytest.mark.slow
 def test_plan_files_with_a_start_or_goal_outside_the_region(tmp_path, capsys):
     """A plan file's start and goal are states of the region plans start and end in (a start at u_o = pi/2 was
     simulated from a singular pose, exit 0); a start 1e308 m away gives an infinite arrival error without an
