@@ -11,7 +11,7 @@ from graphlib import CycleError, TopologicalSorter
 from pathlib import Path
 
 import pytest
-from conftest import package_tree
+from conftest import package_nodes, package_tree
 
 import rollplan
 
@@ -136,8 +136,8 @@ def test_no_hidden_upward_dependency_through_code_in_strings():
     """Code written into a string and run elsewhere (``python -c``) imports too: an upward import there is
     listed in SUBPROCESS_IMPORTS, or it is an error."""
     found = set()
-    for name in MODULES:
-        for node in ast.walk(_tree(name)):
+    for name, path in MODULES.items():
+        for node in package_nodes(path):
             text = _string(node)
             if text is not None and "import" in text:
                 try:
