@@ -216,6 +216,7 @@ def test_path_length_cost_gives_constant_speed_shortest_path(warm40):
     assert r.path_length < p.path_length
 
 
+@pytest.mark.slow
 def test_mirror_symmetry_of_optimal_cost(planner40, warm40):
     """y -> -y maps the model onto itself with psi -> -psi: the optimum of the mirrored target is equal."""
     m = planner40.solve(Problem((TARGET[0], -TARGET[1], -TARGET[2]), k=K), guess="warm")
@@ -294,6 +295,7 @@ def test_bad_solve_input(planner40):
         planner40.solve_from(PROBLEM, g)
 
 
+@pytest.mark.slow
 def test_explicit_guess_object_is_used(planner40, warm40):
     """A Guess built from a previous solution converges faster to the same optimum."""
     r = warm40

@@ -46,7 +46,8 @@ def test_spectral_step_matches_scipy(fmap, scipy_trace, a, b, k, gamma):
     assert np.abs(sx(fmap, a, b, k, gamma) - scipy_trace(a, b, k, gamma)).max() < 1e-11
 
 
-@pytest.mark.parametrize("a,b,k,gamma,steps", MULTI)
+@pytest.mark.parametrize("a,b,k,gamma,steps", [pytest.param(*m, marks=pytest.mark.slow) if m[2] == 10.0 else m
+                                               for m in MULTI])   # k = 10 over two steps: 0.6 s of reference
 def test_spectral_steps_composed_match_scipy(fmap, scipy_trace, a, b, k, gamma, steps):
     """The one-pass spectral step map, composed over n steps, against the reference's n steps."""
     x = np.zeros(3)
@@ -195,7 +196,8 @@ def test_contact_path_length_is_the_curve_length(planner):
     assert sphere == pytest.approx(traj.path_length(), rel=1e-6)
 
 
-def test_pluggable_curve_matches_scipy():
+@pytest.mark.parametrize("params, k", [((0.5, 0.3), 2.5), pytest.param((0.8, -0.4), 6.0, marks=pytest.mark.slow)])
+def test_pluggable_curve_matches_scipy(params, k):
     """Any closed curve through the south pole: a lemniscate-like curve, one piece."""
 
     def lemniscate(phi, p):
@@ -204,12 +206,11 @@ def test_pluggable_curve_matches_scipy():
 
     curve = Curve((Piece(lemniscate),), ("alpha", "beta"))
     f = piece_rhs(curve, 0)
-    for params, k in [((0.5, 0.3), 2.5), ((0.8, -0.4), 6.0)]:
-        spectral = np.array(spectral_step(curve)([0, 0, 0], params, k, 0.4)).ravel()
-        ref = solve_ivp(lambda t, y, params=params, k=k: np.array(f(t, y, params, k, 0.4)).ravel(), (0, 2 * np.pi),
-                        [0, 0, 0], method="DOP853", rtol=1e-13, atol=1e-15).y[:, -1]
-        assert np.abs(spectral - ref).max() < 1e-10
-        assert np.hypot(*spectral[:2]) > 1e-3  # it does move the robot
+    spectral = np.array(spectral_step(curve)([0, 0, 0], params, k, 0.4)).ravel()
+    ref = solve_ivp(lambda t, y: np.array(f(t, y, params, k, 0.4)).ravel(), (0, 2 * np.pi),
+                    [0, 0, 0], method="DOP853", rtol=1e-13, atol=1e-15).y[:, -1]
+    assert np.abs(spectral - ref).max() < 1e-10
+    assert np.hypot(*spectral[:2]) > 1e-3  # it does move the robot
 
 
 def test_rk8_step_has_order_eight():

@@ -205,6 +205,7 @@ def test_a_fifo_as_input_is_refused_without_blocking(tmp_path, argv):
 # ----------------------------------------------------------------------------- tracebacks turned into one line
 
 
+@pytest.mark.slow
 def test_plan_files_that_are_not_plans(tmp_path, capsys):
     """simulate/animate on a plan with rates x1e300, a radius given as a string, a NaN target, a 5000-digit
     integer, 100k-deep arrays, a BOM: one line, exit 2 (or the simulation, for the BOM)."""
