@@ -45,6 +45,7 @@ radius is given, angles in rad.
 
 from __future__ import annotations
 
+from copy import deepcopy
 from fractions import Fraction
 from functools import lru_cache, wraps
 from math import isqrt
@@ -54,9 +55,9 @@ from scipy.integrate import solve_ivp
 
 
 def _remembered(func):
-    """``func`` (a pure function of numbers, returning an array) computed once per process for each set of
-    arguments, a copy returned each time: the tests ask for the same reference again and again. Arguments that
-    cannot be hashed (arrays) are computed every time."""
+    """``func`` (a pure function of numbers) computed once per process for each set of arguments, a copy of its
+    result returned each time: the tests ask for the same reference again and again. Arguments that cannot be
+    hashed (arrays) are computed every time."""
     cache = {}
 
     @wraps(func)
@@ -67,8 +68,8 @@ def _remembered(func):
         except TypeError:
             return func(*args, **kwargs)
         if key not in cache:
-            cache[key] = np.array(func(*args, **kwargs), float)
-        return cache[key].copy()
+            cache[key] = func(*args, **kwargs)
+        return deepcopy(cache[key])
 
     return remembered
 
@@ -856,6 +857,7 @@ def printed_rates(x, acc, k):
 CONTACT_BOUND_80 = np.radians(80.0)
 
 
+@_remembered
 def optimal_control_length(start, goal, k, turns=(-1, 0, 1), intervals=60, substeps=4, bound=CONTACT_BOUND_80):
     """The shortest contact path [R] between the states ``start`` and ``goal`` (units of R) found by optimal control
     on (15), (16), (20) as printed (:func:`printed_rates`): contact accelerations constant on ``intervals`` equal
