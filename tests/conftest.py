@@ -30,12 +30,11 @@ sys.dont_write_bytecode = False
 import hypothesis  # noqa: E402
 import pytest  # noqa: E402
 
+#: ``references`` (and its scipy) and the planners are imported where a fixture needs them, not here: the
+#: controlling process of a pytest-xdist run imports this file too and runs no test (~1 s of CPU saved there).
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import rollplan  # noqa: E402
-from rollplan.planners.geometric import GeometricPhasePlanner  # noqa: E402
-
-import references  # noqa: E402
 
 #: Set (to anything) for a run whose compiled functions and C libraries are all built anew, in a new and empty
 #: cache directory removed at the end, instead of the run-to-run build cache (:func:`_build_cache`).
@@ -49,11 +48,9 @@ def _package_digest(package=None) -> str:
     excluded) and of the versions of Python, CasADi and numpy: two runs with the same digest build the same compiled
     functions and libraries."""
     import hashlib
+    from importlib.metadata import version
 
-    import casadi
-    import numpy
-
-    h = hashlib.sha256(f"{sys.version}|{casadi.__version__}|{numpy.__version__}".encode())
+    h = hashlib.sha256(f"{sys.version}|{version('casadi')}|{version('numpy')}".encode())
     package = Path(package or Path(rollplan.__file__).parent)
     for path in sorted(package.rglob("*")):
         if path.is_file() and "__pycache__" not in path.parts:
@@ -182,6 +179,8 @@ _START_HANDLERS = _start_handlers()
 @pytest.fixture(scope="session")
 def planner():
     """One geometric-phase planner for the whole session (step map and leaf tables built once)."""
+    from rollplan.planners.geometric import GeometricPhasePlanner
+
     return GeometricPhasePlanner()
 
 
@@ -189,6 +188,8 @@ def planner():
 def scipy_trace():
     """Independent reference: (u_a, v_a, psi) after ``steps`` figure eights (a, b) rotated by gamma,
     from zero, by DOP853 on the printed (28)-(30), (35) (units of R, rad)."""
+    import references
+
     return references.trace
 
 
@@ -334,6 +335,17 @@ def _parsed(path: Path):
 def package_tree(path) -> ast.Module:
     """The syntax tree of a source file of the package, parsed once per process for every test that reads it."""
     return _parsed(Path(path).resolve())
+
+
+@functools.cache
+def _walked(path: Path) -> tuple:
+    return tuple(ast.walk(_parsed(path)))
+
+
+def package_nodes(path) -> tuple:
+    """Every node of :func:`package_tree` in ``ast.walk`` order, listed once per process (walking the whole package
+    again costs each test that reads it ~0.1 s)."""
+    return _walked(Path(path).resolve())
 
 
 def one_line(err):

@@ -45,12 +45,33 @@ radius is given, angles in rad.
 
 from __future__ import annotations
 
+from copy import deepcopy
 from fractions import Fraction
-from functools import lru_cache
+from functools import lru_cache, wraps
 from math import isqrt
 
 import numpy as np
 from scipy.integrate import solve_ivp
+
+
+def _remembered(func):
+    """``func`` (a pure function of numbers) computed once per process for each set of arguments, a copy of its
+    result returned each time: the tests ask for the same reference again and again. Arguments that cannot be
+    hashed (arrays) are computed every time."""
+    cache = {}
+
+    @wraps(func)
+    def remembered(*args, **kwargs):
+        try:
+            key = (args, tuple(sorted(kwargs.items())))
+            hash(key)
+        except TypeError:
+            return func(*args, **kwargs)
+        if key not in cache:
+            cache[key] = func(*args, **kwargs)
+        return deepcopy(cache[key])
+
+    return remembered
 
 # ----------------------------------------------------------------------------- angles
 
@@ -303,6 +324,7 @@ def leaf_end(a, side, k, gamma=0.0, x0=(0.0, 0.0, 0.0), rtol=1e-13, atol=1e-14):
     return sol.y[:, -1]
 
 
+@_remembered
 def trace(a, b, k, gamma=0.0, steps=1, rtol=1e-13, atol=1e-14):
     """(u_a, v_a, psi) after ``steps`` figure eights (a, b) rotated by gamma, from zero, by DOP853."""
     x = np.zeros(3)
@@ -631,6 +653,7 @@ def based_circle_path(a, side, sigma, orientation, beta, mirror=False):
     return path
 
 
+@_remembered
 def based_eight(a, b, sigma, orientation, beta, k, steps=1, x0=(0.0, 0.0, 0.0), mirror=False):
     """(u_a, v_a, psi) after ``steps`` figure eights (circle a on +y, then b on -y) at the base point
     (sigma, beta) turned by ``orientation`` (:func:`based_circle_path`), by DOP853 on (15), (16), (20)."""
@@ -803,6 +826,7 @@ def family_traces(name, a, b, k):
     return x
 
 
+@_remembered
 def family_trace(name, a, b, k, gamma=0.0, x0=(0.0, 0.0, 0.0)):
     """(u_a, v_a, psi) after the figure eight of family ``name`` (leaf a on +y, leaf b on -y) rotated by gamma
     (31), by DOP853 on the printed (28)-(30) piece by piece."""
@@ -833,6 +857,7 @@ def printed_rates(x, acc, k):
 CONTACT_BOUND_80 = np.radians(80.0)
 
 
+@_remembered
 def optimal_control_length(start, goal, k, turns=(-1, 0, 1), intervals=60, substeps=4, bound=CONTACT_BOUND_80):
     """The shortest contact path [R] between the states ``start`` and ``goal`` (units of R) found by optimal control
     on (15), (16), (20) as printed (:func:`printed_rates`): contact accelerations constant on ``intervals`` equal

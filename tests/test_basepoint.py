@@ -151,7 +151,9 @@ def test_leaf_bound_keeps_leaves_inside_the_polar_limit():
         assert sigma + 2 * math.asin(a) <= POLAR_MAX + 1e-12
 
 
+@pytest.mark.slow
 def test_local_solve_reaches_a_target_by_the_printed_equations():
+    """(The first local solve of a process builds its NLP: about 1 s of CPU; later solves take milliseconds.)"""
     base, k = (0.5, 0.8), 3.0
     target = ref.based_eight(0.25, 0.18, base[0], 1.2, base[1], k)   # a reachable target
     leg = solve_leg(target, base, k, 1, [(0.2, 0.2, o) for o in (0.0, 1.5, 3.0, -1.5)])

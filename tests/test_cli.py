@@ -94,7 +94,7 @@ def test_step_command_matches_printed_reference(tmp_path, capsys, argv, ab, k, g
 
 @pytest.mark.parametrize("curve,ab,k,gamma", [
     ("viviani", (0.5, 0.3), 2.5, 0.0),
-    ("triangle", (0.69, 0.2), 20.0, 0.4),
+    pytest.param("triangle", (0.69, 0.2), 20.0, 0.4, marks=pytest.mark.slow),   # the reference: ~0.9 s
     ("square", (0.1, 0.6), 0.0, -1.0),
     ("circles", (0.3, 0.4), 2.5, 0.0),
 ])
@@ -348,6 +348,15 @@ def test_simulate_other_robot(planned, tmp_path, capsys):
     assert err > 1e-3
 
 
+def test_plan_json_metadata(planned):
+    import rollplan
+
+    data = planned[3]
+    assert data["version"] == rollplan.__version__ and data["units"]["length"] == "m"
+    assert data["units"]["torque"] == "N m"
+
+
+@pytest.mark.slow
 def test_simulate_plot_and_json_metadata(planned, tmp_path, capsys):
     import rollplan
 
@@ -394,6 +403,7 @@ def test_duration_errors(capsys, tmp_path):
     assert main(["animate", str(plain), "--out", str(tmp_path / "a.gif")]) == 2
 
 
+@pytest.mark.slow
 def test_animate_writes_a_gif(planned, tmp_path):
     _, _, out, _ = planned
     gif = tmp_path / "roll.gif"
@@ -568,6 +578,10 @@ def test_k_defaults_to_the_papers_case(tmp_path, capsys):
     d = json.loads(js.read_text())
     assert d["k"] == 2.5
     assert d["eta"] == pytest.approx(references.trace(0.3, 0.3, 2.5)[2], abs=1e-10)
+
+
+@pytest.mark.slow
+def test_atlas_k_defaults_to_the_papers_case(tmp_path, capsys):
     assert run(capsys, "atlas", "--resolution", "3", "--out", str(tmp_path / "a.png"), "--json",
                str(tmp_path / "a.json"))[0] == 0
     assert json.loads((tmp_path / "a.json").read_text())["k"] == 2.5
@@ -603,6 +617,7 @@ def test_summaries_have_six_significant_digits(capsys):
         assert len(number.split("e")[0].replace("-", "").replace(".", "").lstrip("0")) <= 6, number
 
 
+@pytest.mark.slow
 def test_route_and_composed_plan_follow_the_conventions(tmp_path, capsys):
     """The commands of composed plans (plan --from/--contact, route) keep the conventions: --json - on stdout
     with version and units, the summary on stderr with every length in the unit in use (named), 6 digits and

@@ -216,6 +216,7 @@ def test_path_length_cost_gives_constant_speed_shortest_path(warm40):
     assert r.path_length < p.path_length
 
 
+@pytest.mark.slow
 def test_mirror_symmetry_of_optimal_cost(planner40, warm40):
     """y -> -y maps the model onto itself with psi -> -psi: the optimum of the mirrored target is equal."""
     m = planner40.solve(Problem((TARGET[0], -TARGET[1], -TARGET[2]), k=K), guess="warm")
@@ -226,7 +227,7 @@ def test_mirror_symmetry_of_optimal_cost(planner40, warm40):
 
 def test_rotor_effort_equals_quadrature_of_rotor_rates():
     robot = Robot()
-    r = collocate((0.05, 0.03, 0.4), robot=robot, cost="rotor_effort", intervals=30)
+    r = collocate((0.05, 0.03, 0.4), robot=robot, cost="rotor_effort", intervals=12)
     assert r.problem.radius == robot.radius and r.residual < 1e-6
     # the verified rotor effort matches the transcription's objective (same functional, different quadrature)
     assert r.measures.rotor_effort == pytest.approx(r.solution.objective, rel=1e-4)
@@ -294,6 +295,7 @@ def test_bad_solve_input(planner40):
         planner40.solve_from(PROBLEM, g)
 
 
+@pytest.mark.slow
 def test_explicit_guess_object_is_used(planner40, warm40):
     """A Guess built from a previous solution converges faster to the same optimum."""
     r = warm40
@@ -304,6 +306,7 @@ def test_explicit_guess_object_is_used(planner40, warm40):
     assert again.solution.objective == pytest.approx(r.solution.objective, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_collocate_keywords_and_warm_start_plan(warm40):
     """collocate() states the problem by keywords; warm_start= passes the geometric-phase plan it follows,
     and planners.solve(problem, "collocation") is the same solve."""
@@ -315,6 +318,7 @@ def test_collocate_keywords_and_warm_start_plan(warm40):
     assert q.solution.objective == pytest.approx(warm40.solution.objective, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_naive_guess_is_a_singular_point_and_fails_with_a_hint():
     """At rest on the south pole the linearized kinematics are not controllable: the equality
     Jacobian loses rank, and IPOPT fails from the naive guess for a psi = 0 target (see comparison.md)."""

@@ -149,18 +149,26 @@ def test_plan_command_polishes_by_default_and_plans_the_figure_eights_with_polis
     assert code == 0, err
     e = json.loads((tmp_path / "e.json").read_text())
     assert e["mode"] == "one" and "refined" not in e and e["path_length"] == d["unrefined_length"]
-    # the outputs of closed-form pieces plan the figure eights; asked with the polish, one line and exit 2
-    code, out, err = run(capsys, *argv, "--plot", str(tmp_path / "p.png"))
-    assert code == 0 and (tmp_path / "p.png").exists() and "refined" not in out, err
+    # the outputs of closed-form pieces plan the figure eights: asked with the polish, one line and exit 2
     code, out, err = run(capsys, *argv, "--polish", "fast", "--duration", "5")
     assert code == 2 and one_line(err) and "--polish fast does not combine with --duration" in err
+    code, out, err = run(capsys, *argv, "--polish", "fast", "--branch", "-1")
+    assert code == 2 and one_line(err) and "--polish fast does not combine with --branch" in err
+
+
+@pytest.mark.slow
+def test_outputs_of_closed_form_pieces_plan_the_figure_eights(tmp_path, capsys):
+    """--plot and --branch plan the figure eights (the outputs of closed-form pieces), not the polish."""
+    start, goal, k = README_PAIR
+    argv = ["plan", "--from", *map(str, start), "--to", str(goal[0]), str(goal[1]), "--psi", str(goal[2]),
+            "--contact", *map(str, goal[3:]), "--k", str(k)]
+    code, out, err = run(capsys, *argv, "--plot", str(tmp_path / "p.png"))
+    assert code == 0 and (tmp_path / "p.png").exists() and "refined" not in out, err
     # one branch of the figure eights is the pole plan of that branch, never silently polished away
     code, out, err = run(capsys, *argv, "--branch", "-1", "--json", str(tmp_path / "b.json"))
     assert code == 0 and "refined" not in out, err
     b = json.loads((tmp_path / "b.json").read_text())
     assert b["mode"] == "one" and "refined" not in b
-    code, out, err = run(capsys, *argv, "--polish", "fast", "--branch", "-1")
-    assert code == 2 and one_line(err) and "--polish fast does not combine with --branch" in err
 
 
 @pytest.mark.slow

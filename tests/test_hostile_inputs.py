@@ -224,17 +224,37 @@ def _positionals():
     return {(name, a.dest) for name, p in sub.choices.items() for a in p._actions if not a.option_strings}
 
 
+def _write_inputs(path):
+    """Valid input files (and a plan.json that is read only after the options) in the folder ``path``."""
+    (path / "robot.toml").write_text(ROBOT)
+    (path / "bad.toml").write_text("radius = = 1\n")
+    (path / "w.csv").write_text(WAYPOINTS)
+    (path / "t.csv").write_text(TARGETS)
+    (path / "plan.json").write_text("{}")
+    (path / "notdir").write_text("a file, not a folder\n")
+
+
 @pytest.fixture
 def folder(tmp_path, monkeypatch):
-    """A working folder with valid input files (and a plan.json that is read only after the options)."""
+    """A working folder of its own with valid input files, for a test that writes input files there."""
     monkeypatch.chdir(tmp_path)
-    (tmp_path / "robot.toml").write_text(ROBOT)
-    (tmp_path / "bad.toml").write_text("radius = = 1\n")
-    (tmp_path / "w.csv").write_text(WAYPOINTS)
-    (tmp_path / "t.csv").write_text(TARGETS)
-    (tmp_path / "plan.json").write_text("{}")
-    (tmp_path / "notdir").write_text("a file, not a folder\n")
+    _write_inputs(tmp_path)
     return tmp_path
+
+
+@pytest.fixture(scope="module")
+def _shared_inputs(tmp_path_factory):
+    path = tmp_path_factory.mktemp("inputs")
+    _write_inputs(path)
+    return path
+
+
+@pytest.fixture
+def inputs(_shared_inputs, monkeypatch):
+    """The working folder with valid input files that the tests of a bad flag share (made once per module: a
+    folder per test cost more than most of these tests); each such test checks that nothing was written there."""
+    monkeypatch.chdir(_shared_inputs)
+    return _shared_inputs
 
 
 def _files(path):
@@ -280,13 +300,13 @@ def test_every_number_option_uses_the_one_parser():
 @pytest.mark.parametrize("command, flag, values, needle",
                          [(c, f, v, n) for (c, f), cases in FLAG_CASES.items() for v, n in cases],
                          ids=lambda x: repr(x)[:30])
-def test_a_bad_flag_is_refused_in_one_line(capsys, folder, command, flag, values, needle):
+def test_a_bad_flag_is_refused_in_one_line(capsys, inputs, command, flag, values, needle):
     if values and values[0].startswith("="):
         bad = [flag + values[0]]
     else:
         bad = [flag, *values]
     argv = [*bad, *BASE[command]] if command is None else [*BASE[command], *bad]
-    _refused(capsys, folder, argv, {needle})
+    _refused(capsys, inputs, argv, {needle})
 
 
 @pytest.mark.parametrize("command, dest, name, content, needle",
@@ -424,7 +444,7 @@ def test_the_reach_limit_is_refused_in_the_api_before_any_leg():
     assert calls == []
 
 
-@pytest.mark.parametrize("k", [0.0, 2.5, 10.0])
+@pytest.mark.parametrize("k", [0.0, 2.5, pytest.param(10.0, marks=pytest.mark.slow)])
 def test_the_reach_limit_bounds_what_a_figure_eight_does(k):
     """MAX_DISTANCE rests on: one figure eight moves the contact point on the plane by at most its length
     4 pi A_MAX (two circles of radius <= A_MAX). Checked on the largest leaves by DOP853 on the printed

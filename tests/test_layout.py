@@ -4,13 +4,14 @@ Checked on the source (ast), and by importing every module in a fresh interprete
 
 import ast
 import functools
+import json
 import subprocess
 import sys
 from graphlib import CycleError, TopologicalSorter
 from pathlib import Path
 
 import pytest
-from conftest import package_tree
+from conftest import package_nodes, package_tree
 
 import rollplan
 
@@ -31,12 +32,13 @@ def _tree(name: str) -> ast.Module:
     return package_tree(MODULES[name])
 
 
-def _imports(name: str):
+@functools.cache
+def _imports(name: str) -> tuple:
     """``(target module, imported name or None, line)`` of every import statement of a module, at any
-    depth (imports inside functions count too), relative imports resolved."""
+    depth (imports inside functions count too), relative imports resolved; found once per process."""
     path = MODULES[name]
     package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
-    yield from _imports_of(_tree(name), package)
+    return tuple(_imports_of(_tree(name), package))
 
 
 def _imports_of(tree, package):
@@ -56,8 +58,10 @@ def _imports_of(tree, package):
                 yield target, alias.name, node.lineno
 
 
+@functools.cache
 def _graph() -> dict:
-    """Module -> the rollplan modules it imports (a ``from X import y`` of a submodule y counts as X.y)."""
+    """Module -> the rollplan modules it imports (a ``from X import y`` of a submodule y counts as X.y); made
+    once per process: do not change it."""
     graph = {}
     for name in MODULES:
         deps = set()
@@ -132,8 +136,8 @@ def test_no_hidden_upward_dependency_through_code_in_strings():
     """Code written into a string and run elsewhere (``python -c``) imports too: an upward import there is
     listed in SUBPROCESS_IMPORTS, or it is an error."""
     found = set()
-    for name in MODULES:
-        for node in ast.walk(_tree(name)):
+    for name, path in MODULES.items():
+        for node in package_nodes(path):
             text = _string(node)
             if text is not None and "import" in text:
                 try:
@@ -154,6 +158,7 @@ def test_import_graph_has_no_cycles():
         pytest.fail(f"import cycle: {' -> '.join(exc.args[1])}")
 
 
+@pytest.mark.slow
 def test_modules_import_in_dependency_order_in_a_fresh_interpreter():
     order = list(TopologicalSorter(_graph()).static_order())
     code = "import importlib, sys\nfor m in sys.argv[1:]:\n    importlib.import_module(m)\n"
@@ -161,31 +166,48 @@ def test_modules_import_in_dependency_order_in_a_fresh_interpreter():
     assert run.returncode == 0, run.stderr
 
 
-def _fresh(code: str) -> None:
-    """Run ``code`` in a fresh interpreter; fails with its stderr."""
+def _fresh(code: str) -> str:
+    """Run ``code`` in a fresh interpreter: its stdout; fails with its stderr."""
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=False)
     assert run.returncode == 0, run.stderr
+    return run.stdout
 
 
-def test_no_runtime_path_imports_scipy():
+@pytest.fixture(scope="module")
+def loaded():
+    """What a fresh interpreter has loaded (scipy, and the heavy modules a plan does not need) after importing
+    rollplan and its command, after a plan by the Python API, and after the `rollplan plan` command: one
+    process for the tests that read it."""
+    out = _fresh("import json, sys, rollplan, rollplan.cli\n"
+                 "HEAVY = ('matplotlib', 'rollplan.planners.collocation', 'rollplan.plots', 'rollplan.studies',\n"
+                 "         'scipy')\n"
+                 "def heavy():\n"
+                 "    return [m for m in sys.modules if m.startswith(HEAVY)]\n"
+                 "seen = {'import': heavy()}\n"
+                 "p = rollplan.plan((1, -0.5, 1), steps=3, k=2.5)\n"
+                 "assert p.certificate.passed\n"
+                 "seen['plan'] = heavy()\n"
+                 "code = rollplan.cli.main(['plan', '--to', '1', '-0.5', '--psi', '1', '--steps', '3', '--k', '2.5'])\n"
+                 "seen['command'] = heavy()\n"
+                 "print(json.dumps([code, seen]))\n")
+    code, seen = json.loads(out.splitlines()[-1])
+    assert code == 0
+    return seen
+
+
+def test_no_runtime_path_imports_scipy(loaded):
     """scipy is a test dependency only: importing rollplan and its command, and planning, load no scipy."""
-    _fresh("import sys, rollplan, rollplan.cli\n"
-           "assert 'scipy' not in sys.modules, 'import'\n"
-           "p = rollplan.plan((1, -0.5, 1), steps=3, k=2.5)\n"
-           "assert p.certificate.passed and 'scipy' not in sys.modules, 'plan'\n")
+    assert not [m for m in loaded["import"] + loaded["plan"] if m.startswith("scipy")]
     _fresh("import sys\n"
            "sys.modules['scipy'] = None   # as if scipy were not installed: importing it fails\n"
            "import rollplan.cli\n"
            "assert rollplan.cli.main(['plan', '--to', '0.5', '0.3', '--psi', '0.4', '--steps', '2']) == 0\n")
 
 
-def test_a_plan_loads_neither_collocation_nor_plots():
-    """The `rollplan plan` command loads what a plan uses (lazy imports), not the other planners or plots."""
-    _fresh("import sys, rollplan.cli\n"
-           "rollplan.cli.main(['plan', '--to', '1', '-0.5', '--psi', '1', '--steps', '3', '--k', '2.5'])\n"
-           "heavy = [m for m in sys.modules if m.startswith(('matplotlib', 'rollplan.planners.collocation',\n"
-           "         'rollplan.plots', 'rollplan.studies', 'scipy'))]\n"
-           "assert not heavy, heavy\n")
+def test_a_plan_loads_neither_collocation_nor_plots(loaded):
+    """The `rollplan plan` command loads what a plan uses (lazy imports), not the other planners or plots (nor
+    does importing rollplan or a plan by the Python API before it)."""
+    assert not loaded["command"], loaded["command"]
 
 
 def test_lazy_names_resolve():

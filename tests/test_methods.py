@@ -107,7 +107,7 @@ def test_no_method_returns_a_plan_above_its_tolerance():
 
 _CASES = {
     "geometric": (POLE, {}),
-    "collocation": (POLE, {"intervals": 20}),
+    "collocation": (POLE, {"intervals": 10}),
     "rest_to_rest": (ROLL, {"intervals": 8, "cost": "path_energy"}),
     "minimum_time": (Problem((*np.multiply(ROLL.goal[:2], default_robot().radius), *ROLL.goal[2:]),
                              robot=replace(default_robot(), max_rotor_rate=300.0, max_rotor_torque=0.05)),
@@ -231,11 +231,11 @@ def test_the_rest_to_rest_methods_share_their_nlp():
     """A method is cheap to make: the NLP is built once per set of NLP options, whatever the per-solve ones."""
     a = RestToRestMethod(intervals=8, horizon=1.0, turns=0)
     b = RestToRestMethod(intervals=8, horizon=2.0, turns=1)
-    assert a.planner is b.planner and RestToRestMethod(intervals=9).planner is not a.planner
+    assert a.planner is b.planner and RestToRestMethod(intervals=4).planner is not a.planner
     with pytest.raises(InputError, match="guess"):
         solve(ROLL, "rest_to_rest", intervals=8, guess="warm")
     with pytest.raises(InputError, match="max_rotor_rate"):
-        MinimumTimeMethod(intervals=8).solve(ROLL)
+        MinimumTimeMethod(intervals=4).solve(ROLL)
 
 
 # ----------------------------------------------------------------------------- the methods agree

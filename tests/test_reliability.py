@@ -106,6 +106,7 @@ def test_other_public_classes_validate_their_options():
         CvodesCertifier(reltol=-1.0)
 
 
+@pytest.mark.slow
 def test_short_duration_is_served_or_refused_never_a_failed_motion_with_exit_0(tmp_path, capsys):
     """`--duration 1e-6` printed "rotor-only arrival error 1.00e+00" and exited 0: the shortest accepted
     duration is served (the rotor simulation runs in normalized time, so the motion reaches its goal, which an
@@ -122,6 +123,18 @@ def test_short_duration_is_served_or_refused_never_a_failed_motion_with_exit_0(t
     final = references.rotor_drive(d["robot"], np.asarray(d["time"]), np.asarray(d["rotor_rates"]))[-1]
     assert math.hypot(final[0] - 0.0, final[1] - 0.1) / d["radius"] < 1e-6
     assert code == 0 and run(capsys, "simulate", str(out))[0] == 0
+    _too_short_or_long_durations_are_refused(tmp_path, capsys)
+
+
+def test_durations_and_samples_out_of_range_are_refused_before_any_work(tmp_path, capsys):
+    """The refusals of the test above, in the unit tier (they cost no plan)."""
+    _too_short_or_long_durations_are_refused(tmp_path, capsys)
+
+
+def _too_short_or_long_durations_are_refused(tmp_path, capsys):
+    from rollplan.execution.timing import DURATION_RANGE
+
+    out = tmp_path / "p.json"
     for duration in ("1e-6", "1e-300", "1e308", repr(DURATION_RANGE[1] * 1.5), "0", "-1"):
         code, text, err = run(capsys, "plan", "--to", "0", "0.1", "--duration", duration)
         assert code == 2 and "duration" in err and one_line(err) and text == ""   # refused before planning
@@ -192,6 +205,7 @@ def test_a_fifo_as_input_is_refused_without_blocking(tmp_path, argv):
 # ----------------------------------------------------------------------------- tracebacks turned into one line
 
 
+@pytest.mark.slow
 def test_plan_files_that_are_not_plans(tmp_path, capsys):
     """simulate/animate on a plan with rates x1e300, a radius given as a string, a NaN target, a 5000-digit
     integer, 100k-deep arrays, a BOM: one line, exit 2 (or the simulation, for the BOM)."""
@@ -370,7 +384,9 @@ def test_timed_route_is_certified_by_its_rotors_and_read_back(tmp_path, capsys):
     assert run(capsys, "simulate", str(out))[0] == 0
 
 
-def test_a_motion_that_misses_is_not_a_success(monkeypatch, capsys, tmp_path):
+@pytest.mark.parametrize("law", ["duration", pytest.param("min-jerk", marks=pytest.mark.slow),
+                                 pytest.param("smooth-cruise", marks=pytest.mark.slow)])
+def test_a_motion_that_misses_is_not_a_success(monkeypatch, capsys, tmp_path, law):
     """Whatever makes a motion miss its goal (here: its rotor rates halved), the command does not exit 0:
     certify_motion (the rotor-only simulation from the motion's start) guards every plan and timing law."""
     from rollplan.execution import actuation
@@ -385,11 +401,12 @@ def test_a_motion_that_misses_is_not_a_success(monkeypatch, capsys, tmp_path):
     monkeypatch.setattr(actuation, "sample_motion", halved)
     robot = tmp_path / "r.toml"
     robot.write_text(LIMITED)
-    for argv in (["--to", "0", "0.1", "--duration", "5"],
-                 *(["--robot", str(robot), "--from", "0", "0", "0", "0.2", "0", "--to", "0.05", "0", "--timing", law]
-                   for law in ("min-jerk", "smooth-cruise"))):
-        code, _, err = run(capsys, "plan", *argv)
-        assert code == 3 and "misses the goal" in err and one_line(err), err
+    if law == "duration":
+        argv = ["--to", "0", "0.1", "--duration", "5"]
+    else:
+        argv = ["--robot", str(robot), "--from", "0", "0", "0", "0.2", "0", "--to", "0.05", "0", "--timing", law]
+    code, _, err = run(capsys, "plan", *argv)
+    assert code == 3 and "misses the goal" in err and one_line(err), err
 
 
 def test_actuate_refuses_wrong_types_and_durations():
@@ -438,6 +455,7 @@ def test_wrong_types_in_the_new_api_are_input_errors(call, needle):
     assert "\n" not in str(err.value)
 
 
+@pytest.mark.slow
 def test_plan_files_with_a_start_or_goal_outside_the_region(tmp_path, capsys):
     """A plan file's start and goal are states of the region plans start and end in (a start at u_o = pi/2 was
     simulated from a singular pose, exit 0); a start 1e308 m away gives an infinite arrival error without an

@@ -86,6 +86,7 @@ def test_reduced_solution_solves_the_full_transcription(scheme, degree):
     assert np.abs(colloc[:, :, 3:5]).max() <= planner.contact_bound
 
 
+@pytest.mark.slow
 def test_correction_at_an_optimum_whose_end_jacobian_is_singular():
     """From the straight line, N = 8, the NLP of a straight roll reaches an optimum where the controls cannot move
     the end state in one direction (the smallest singular value of the end-state Jacobian below 1e-9 of the largest):

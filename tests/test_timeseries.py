@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import package_tree
+from conftest import package_nodes, package_tree
 
 import rollplan
 from rollplan.errors import InputError
@@ -31,7 +31,7 @@ def _trees():
 
 def test_the_old_record_names_are_gone_from_the_package():
     found = sorted(f"{path.relative_to(PACKAGE.parent)}:{node.lineno} {name}"
-                   for path, tree in _trees() for node in ast.walk(tree)
+                   for path, _ in _trees() for node in package_nodes(path)
                    for name in [node.name if isinstance(node, ast.ClassDef) else node.id if isinstance(node, ast.Name)
                                 else node.attr if isinstance(node, ast.Attribute) else
                                 node.value if isinstance(node, ast.Constant) and isinstance(node.value, str) else None]
@@ -41,8 +41,8 @@ def test_the_old_record_names_are_gone_from_the_package():
 
 def test_no_two_classes_of_the_package_share_a_name():
     where = collections.defaultdict(list)
-    for path, tree in _trees():
-        for node in ast.walk(tree):
+    for path, _ in _trees():
+        for node in package_nodes(path):
             if isinstance(node, ast.ClassDef):
                 where[node.name].append(str(path.relative_to(PACKAGE.parent)))
     assert {name: paths for name, paths in where.items() if len(paths) > 1} == {}
@@ -51,8 +51,8 @@ def test_no_two_classes_of_the_package_share_a_name():
 def test_no_other_class_records_states_in_time():
     """A class with both a time field and a state field is a parallel time-series record: only TimeSeries is one."""
     records = []
-    for _, tree in _trees():
-        for node in ast.walk(tree):
+    for path, _ in _trees():
+        for node in package_nodes(path):
             if isinstance(node, ast.ClassDef):
                 fields = {s.target.id for s in node.body if isinstance(s, ast.AnnAssign) and
                           isinstance(s.target, ast.Name)}
