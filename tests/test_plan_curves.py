@@ -274,3 +274,41 @@ def test_c_search_of_the_family_against_a_brute_force(curve, k):
         gain = abs(math.sin(steps * eta / 2) / math.sin(eta / 2))
         assert abs(x[2] - eta) < 1e-8 and abs(math.hypot(x[0], x[1]) - math.hypot(u, v) / gain) < 1e-8, \
             ((u, v, psi), steps, (m, a2, b2))
+
+
+@pytest.mark.slow
+def test_a_family_table_is_kept_on_disk_and_gives_the_same_plans(monkeypatch):
+    """The rho table of a family's C planner (seconds to build at a new k) is saved in the cache directory and
+    loaded by a later plan at that k: the same plans, bit for bit; a file whose bytes do not match its digest, or
+    whose values at the radii the C planner evaluates again differ, is not taken: the table is built again and the
+    file rewritten."""
+    import ctypes
+    import hashlib
+
+    _require_library("viviani")
+    lib, k, target = compiled_search.library("viviani"), 1.0, (0.3, 0.2, 0.5, 1)
+    path = compiled_search._table_path(lib, k)
+    path.unlink(missing_ok=True)
+    loads = []
+    load = compiled_search._load_table
+    monkeypatch.setattr(compiled_search, "_load_table", lambda *a: loads.append(load(*a)) or loads[-1])
+
+    def again():
+        ctypes.CDLL(lib.path).rollplan_forget_table()   # as a new process: no table kept
+        compiled_search._family_k.clear()
+        return compiled_search.family_plans(*target, k, "viviani", every=True)
+
+    fresh = again()
+    assert fresh and loads == [b""] and path.is_file()
+    saved = path.read_bytes()
+    assert again() == fresh and loads[-1] == saved[32:]   # loaded, not built
+    body = bytearray(saved[32:])
+    body[-3] ^= 1                                          # a flipped bit: the digest does not match
+    path.write_bytes(saved[:32] + bytes(body))
+    assert again() == fresh and loads[-1] == b"" and path.read_bytes() == saved
+    n = int(np.frombuffer(saved[32:40], "<f8")[0])
+    data = np.frombuffer(saved[32:], "<f8").copy()
+    data[2 + n - 1] += 1e-9                                # rho at A_MAX, which the C planner evaluates again
+    body = data.astype("<f8").tobytes()
+    path.write_bytes(hashlib.sha256(body).digest() + body)
+    assert again() == fresh and loads[-1] == body and path.read_bytes() == saved
