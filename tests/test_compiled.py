@@ -185,6 +185,7 @@ print(f(4), compiled.last_build()["source"])
 """
 
 
+@pytest.mark.slow
 def test_a_damaged_cached_library_is_rebuilt_not_loaded(cache):
     """A cached search library truncated to 1000 bytes killed `rollplan plan` with SIGBUS inside ctypes (no
     exception to catch): the library's bytes are checked against the digest written beside it before loading,
