@@ -84,6 +84,7 @@ def test_bad_input():
         compute_atlas(1.0, steps=0)
 
 
+@pytest.mark.slow
 def test_cli_atlas(tmp_path):
     png, js = tmp_path / "atlas.png", tmp_path / "atlas.json"
     assert cli.main(["atlas", "--k", "2.5", "--steps", "2", "--resolution", "6", "--out", str(png),
@@ -96,7 +97,8 @@ def test_cli_atlas(tmp_path):
     assert cli.main(["atlas", "--k", "1", "--out", str(tmp_path / "no" / "a.png")]) == 2
 
 
-@pytest.mark.parametrize("curve", ["viviani", "triangle", "square"])
+@pytest.mark.parametrize("curve", ["viviani", *(pytest.param(c, marks=pytest.mark.slow)
+                                                for c in ("triangle", "square"))])
 def test_atlas_of_a_curve_family_matches_scipy(tmp_path, curve):
     """`rollplan atlas --curve NAME`: h and eta of the family's figure eight on the grid against DOP853 on the
     printed (28)-(30) along the leaves as typed in tests/references.py; the fold determinant against finite

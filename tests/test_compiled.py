@@ -185,6 +185,7 @@ print(f(4), compiled.last_build()["source"])
 """
 
 
+@pytest.mark.slow
 def test_a_damaged_cached_library_is_rebuilt_not_loaded(cache):
     """A cached search library truncated to 1000 bytes killed `rollplan plan` with SIGBUS inside ctypes (no
     exception to catch): the library's bytes are checked against the digest written beside it before loading,
@@ -442,7 +443,7 @@ def _session_cache_copied_to(folder, capsys):
             shutil.copy2(path, folder / path.name)
 
 
-@pytest.mark.parametrize("how", ["inside", "link"])
+@pytest.mark.parametrize("how", ["inside", pytest.param("link", marks=pytest.mark.slow)])
 def test_a_cache_directory_under_a_folder_others_can_write_is_refused(tmp_path, how, capsys):
     """A private cache folder inside a folder others may write (no sticky bit), or reached by a link that lives in
     one, can be swapped for another user's: one line, exit 2, nothing written. With the sticky bit it is used (it

@@ -59,7 +59,7 @@ def _speed_where(prof, s_values, iterations=200):
     return prof.evaluate(hi)[1]
 
 
-@pytest.mark.parametrize("name", ("triangle", "square"))
+@pytest.mark.parametrize("name", ("triangle", pytest.param("square", marks=pytest.mark.slow)))
 def test_polygon_is_great_circle_arcs_and_every_law_stops_at_every_vertex(name):
     a, b = 0.45, 0.3
     path = _path(name, a, b)
@@ -109,6 +109,7 @@ def _largest_sample_step(name, a, b, law="nonstop-min-jerk"):
     return np.abs(np.diff(tq, axis=0)).max() / np.abs(tq).max()
 
 
+@pytest.mark.slow
 def test_nonstop_torques_continuous_on_a_viviani_eight_not_on_circles():
     """Sampled densely, the non-stop torques of the Viviani eight (a = b) change by little between samples;
     those of the circles step at every pole (their curvature flips sign there)."""
@@ -144,7 +145,8 @@ def test_rotor_rates_of_every_family_drive_the_printed_equations_to_the_end(name
     assert np.abs(final[3:]).max() < 1e-6
 
 
-@pytest.mark.parametrize("name, a, b", (("triangle", 0.4, 0.3), ("viviani", 0.4, 0.3)))
+@pytest.mark.parametrize("name, a, b", (pytest.param("triangle", 0.4, 0.3, marks=pytest.mark.slow),
+                                        ("viviani", 0.4, 0.3)))
 def test_optimal_timing_rests_at_corners_and_nears_the_cauchy_schwarz_bound(name, a, b):
     """The int|omega|^2-optimal rest-to-rest timing of a path with corners (it refused them before): at rest at
     every corner (the typed polygon's vertices; the Viviani eight's unequal lobes), and its cost, measured on the
@@ -179,6 +181,7 @@ def test_a_viviani_plan_runs_nonstop_and_its_rates_land_on_the_goal():
     assert np.hypot(final[0] - g.u_a, final[1] - g.v_a) / R < 1e-6 and abs(references.wrap(final[2] - g.psi)) < 1e-6
 
 
+@pytest.mark.slow
 def test_time_optimal_torques_at_a_corner_are_measured_on_the_side_the_robot_is_on():
     """At rest on a corner s is flat, so times just after the rest had s at the corner to rounding and were measured
     with the piece before's A (which jumps there) times the s'' of the piece after: unit_peaks reported 19 % over

@@ -488,6 +488,7 @@ def _compiled_search_built():
     return True
 
 
+@pytest.mark.slow
 def test_compiled_search_chooses_the_plan_of_the_numpy_search():
     """The C search (the generated planner's enumeration, called through ctypes) and the numpy reference
     enumeration (tests/reference_enumerate.py) choose the same plan: branch and (a, b, gamma), by default (the
@@ -671,6 +672,7 @@ def test_a_rejected_shortest_root_is_replaced_by_the_next_certified_one_of_the_c
     assert (p.branch, p.a, p.b) == (ref.branch, pytest.approx(ref.a, abs=1e-9), pytest.approx(ref.b, abs=1e-9))
 
 
+@pytest.mark.slow
 def test_planner_without_a_compiler_says_what_to_install(tmp_path):
     """Without the C search (ROLLPLAN_NO_COMPILE=1, or no compiler on the PATH) `rollplan plan` prints one line
     naming why (and what to install) and exits 4 (solver failed), no traceback."""

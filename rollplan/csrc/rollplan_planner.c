@@ -328,6 +328,11 @@ static casadi_real s_tdu[NTABLE];                         /* du/dE at the radii,
 static unsigned short s_rb[NTABLE + 1], s_eb[NTABLE + 1];
 static casadi_real s_rscale, s_escale;                    /* bucket of r: r s_rscale; of a turn E: E s_escale */
 static casadi_real s_eps, s_eps_g;                        /* table error bound; its effect on g */
+static casadi_real s_err_mid;                             /* the table's largest error at the cells' midpoints */
+/* A table given by table_load (rho and d rho / dr already in s_trho, s_tdrho) for s_loaded_k, s_loaded_n radii
+ * (0: none), its midpoint error s_loaded_err: the next prepare() of that k takes it instead of evaluating. */
+static casadi_real s_loaded_k, s_loaded_err;
+static int s_loaded_n = 0;
 /* Bounds of the table's rho on its cells (cell_range) and, for range queries (rho_range), on blocks of RHO_BLOCK
  * cells: level j of the sparse table bounds the 2^j blocks from each block. */
 #define RHO_BLOCK 16
@@ -758,8 +763,21 @@ static void rho_range(casadi_real r0, casadi_real r1, casadi_real *lo, casadi_re
  * (enumerate._build_rho_table). Returns 0 on success. */
 static void prepare_pieces(casadi_real k);
 
+/* A loaded table (table_load) matches this build and k: rho and d rho / dr evaluated again at three of its n radii
+ * equal the loaded ones exactly. */
+static int loaded_intact(int n, casadi_real k) {
+    const int at[3] = {n / 3, (2 * n) / 3, n - 1};
+    casadi_real rho, drho;
+    int q;
+    for (q = 0; q < 3; ++q) {
+        signed_length(s_tr[at[q]], k, &rho, &drho);
+        if (!(rho == s_trho[at[q]] && drho == s_tdrho[at[q]])) return 0;
+    }
+    return 1;
+}
+
 static int prepare(casadi_real k) {
-    int panels = s_bucket_p[NBUCKET - 1], i, j, parts, nr, n;
+    int panels = s_bucket_p[NBUCKET - 1], i, j, parts, nr, n, loaded;
     casadi_real h, re, rr, x, rho, err, big, e0, e1, is0, is1;
     if (s_ready && s_k == k) return 0;
     s_ready = 0;
@@ -807,8 +825,10 @@ static int prepare(casadi_real k) {
         is0 = is1;
     }
     s_tr[n++] = A_MAX;
+    loaded = s_loaded_n == n && s_loaded_k == k && loaded_intact(n, k);
+    s_loaded_n = 0;
     for (i = 0; i < n; ++i) {
-        signed_length(s_tr[i], k, &s_trho[i], &s_tdrho[i]);
+        if (!loaded) signed_length(s_tr[i], k, &s_trho[i], &s_tdrho[i]);
         s_te[i] = turn(s_tr[i], k);
         re = RP_SQRT(RP_R(1.0) - s_tr[i] * s_tr[i]);                 /* c and s of consts(); du/dE = 1 / (dE/du) */
         rr = RP_SQRT(RP_R(1.0) - RP_R(2.0) * s_tr[i] * s_tr[i]);
@@ -843,14 +863,15 @@ static int prepare(casadi_real k) {
             s_bhi[j][i] = MAX(s_bhi[j - 1][i], s_bhi[j - 1][i + (1 << (j - 1))]);
         }
     }
-    err = RP_R(0.0);
+    err = loaded ? s_loaded_err : RP_R(0.0);
     big = RP_R(0.0);
-    for (i = 0; i + 1 < n; ++i) {
+    for (i = 0; i + 1 < n && !loaded; ++i) {
         x = RP_R(0.5) * (s_tr[i] + s_tr[i + 1]);
         signed_length(x, k, &rho, NULL);
         rho_lookup(x, &re, NULL);
         err = RP_FMAX(err, RP_FABS(re - rho));
     }
+    s_err_mid = err;
     for (i = 0; i < n; ++i) big = RP_FMAX(big, RP_FABS(s_trho[i]));
     s_eps = SAFETY * err + RP_R(1e-13);
     s_eps_g = RP_R(8.0) * big * s_eps + s_eps * s_eps;    /* the table's error carried into g (enumerate.roots) */
@@ -862,6 +883,38 @@ static int prepare(casadi_real k) {
 void RP_NAME(forget_table)(void) {
     s_ready = 0;
     s_memo_used = 0;
+}
+
+int RP_NAME(table_save)(casadi_real k, int capacity, casadi_real *rho, casadi_real *drho, casadi_real *err, int *n) {
+    int i;
+    *n = 0;
+    if (!(k >= K_MIN && k <= K_MAX)) return RP_BAD_INPUT;
+    if (prepare(k)) return RP_NO_CONVERGENCE;
+    *n = s_nt;
+    if (s_nt > capacity) return RP_TOO_MANY;
+    for (i = 0; i < s_nt; ++i) {
+        rho[i] = s_trho[i];
+        drho[i] = s_tdrho[i];
+    }
+    *err = s_err_mid;
+    return RP_OK;
+}
+
+int RP_NAME(table_load)(casadi_real k, int n, const casadi_real *rho, const casadi_real *drho, casadi_real err) {
+    int i;
+    if (s_ready && s_k == k) return RP_OK;   /* that table is already kept */
+    if (!(k >= K_MIN && k <= K_MAX) || n < 2 || n > NTABLE || !(err >= RP_R(0.0))) return RP_BAD_INPUT;
+    for (i = 0; i < n; ++i)
+        if (!(isfinite(rho[i]) && isfinite(drho[i]))) return RP_BAD_INPUT;
+    s_ready = 0;
+    for (i = 0; i < n; ++i) {
+        s_trho[i] = rho[i];
+        s_tdrho[i] = drho[i];
+    }
+    s_loaded_k = k;
+    s_loaded_n = n;
+    s_loaded_err = err;
+    return RP_OK;
 }
 
 /* ------------------------------------------------------------------ branches (enumerate.py) */

@@ -191,6 +191,21 @@ int RP_NAME(sample)(const RP_NAME(plan_t) *plan, int steps, casadi_real k, casad
 void RP_NAME(forget_table)(void);
 
 /*
+ * The leaf map's rho table of k (built now unless it is the one kept): its rho and d rho / dr at the table's *n
+ * radii into rho[] and drho[] (capacity entries each) and its largest error at the cells' midpoints into *err, so
+ * that a later process can skip the build (<prefix>_table_load). Returns <PREFIX>_OK, <PREFIX>_BAD_INPUT (k outside
+ * [K_MIN, K_MAX]), <PREFIX>_NO_CONVERGENCE or <PREFIX>_TOO_MANY (*n > capacity).
+ */
+int RP_NAME(table_save)(casadi_real k, int capacity, casadi_real *rho, casadi_real *drho, casadi_real *err, int *n);
+
+/*
+ * Give the planner the table <prefix>_table_save gave for k: the next plan at k takes it instead of building it
+ * if it has as many radii as this build's table of k and its values at three radii evaluated again equal the given
+ * ones exactly (otherwise the table is built as usual). Returns <PREFIX>_OK or <PREFIX>_BAD_INPUT.
+ */
+int RP_NAME(table_load)(casadi_real k, int n, const casadi_real *rho, const casadi_real *drho, casadi_real err);
+
+/*
  * Convenience wrapper of <prefix>_step_jac with plain arguments (static work area).
  * jac may be NULL; otherwise it receives the 4x2 Jacobian, column-major.
  * Returns 0 on success.

@@ -17,6 +17,7 @@ How it is built, loaded and called: docs/design/c-planner.md."""
 from __future__ import annotations
 
 import ctypes
+import hashlib
 import math
 import os
 import shutil
@@ -24,14 +25,16 @@ import tempfile
 import threading
 import time
 from functools import lru_cache
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
 from ... import interrupts
-from ...core.compiled import last_build, no_compiler_reason, shared_library
+from ...core.compiled import check_private, last_build, no_compiler_reason, shared_library
 from ...core.families import FAMILIES
-from ...errors import InputError, SolverError
+from ...errors import InputError, OutputError, SolverError, UnsafeCacheError
+from ...outputs import write_atomic
 from ...problem import K_MAX
 from .c_sources import C_FAMILIES, DEFAULT_K_MAX, generator_files, sources
 from .search_constants import K_MONOTONE
@@ -133,6 +136,8 @@ class _Library(NamedTuple):
     plan_many: object
     certify: object
     path: str
+    table_save: object
+    table_load: object
 
 
 def _load(path: str):
@@ -141,6 +146,7 @@ def _load(path: str):
         plan_with, plan_all = getattr(lib, f"{PREFIX}_plan_with"), getattr(lib, f"{PREFIX}_plan_all")
         plan_many = getattr(lib, f"{PREFIX}_plan_many")
         certify = getattr(lib, f"{PREFIX}_certify")
+        table_save, table_load = getattr(lib, f"{PREFIX}_table_save"), getattr(lib, f"{PREFIX}_table_load")
     except AttributeError as exc:   # not the planner's library: rebuilt
         raise OSError(str(exc)) from exc
     d, opt, plan = ctypes.c_double, ctypes.POINTER(_Options), ctypes.POINTER(_Plan)
@@ -150,8 +156,11 @@ def _load(path: str):
     plan_many.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.c_int, d, opt, ctypes.c_void_p, ctypes.c_void_p,
                           ctypes.c_void_p]
     certify.argtypes = [d, d, d, ctypes.c_int, d, d, d, d, dp, dp, dp]
+    table_save.argtypes = [d, ctypes.c_int, dp, dp, dp, ctypes.POINTER(ctypes.c_int)]
+    table_load.argtypes = [d, ctypes.c_int, dp, dp, d]
     plan_with.restype = plan_all.restype = plan_many.restype = certify.restype = ctypes.c_int
-    return _Library(plan_with, plan_all, plan_many, certify, str(path))
+    table_save.restype = table_load.restype = ctypes.c_int
+    return _Library(plan_with, plan_all, plan_many, certify, str(path), table_save, table_load)
 
 
 #: Serializes the calls of the second instance of :func:`_second_certify`.
@@ -211,14 +220,88 @@ def _incomplete(status: int) -> SolverError:
     return SolverError(f"the C search did not complete (status {status} of the C planner)", f"C status {status}")
 
 
-def _call(entry, k: float, direct: bool, *args) -> int:
+def _table_path(lib, k: float) -> Path:
+    """The file of the rho table of k of the library ``lib`` (beside it in the cache directory; its name holds the
+    library's, which holds the digest of its sources, and k exactly)."""
+    path = Path(lib.path)
+    return path.with_name(f"{path.stem}-table-{float(k).hex()}.bin")
+
+
+def _load_table(lib, k: float) -> bytes:
+    """Give the C planner ``lib`` its rho table of k from the cache directory (``<prefix>_table_load``; the C planner
+    takes it only if its values at three radii evaluated again equal it exactly): the table's bytes given, or
+    b"" when there is none or it is unusable (a file not private, or whose bytes do not match the SHA-256 digest it
+    starts with), and the C planner builds the table."""
+    path = _table_path(lib, k)
+    try:
+        check_private(path)
+        raw = path.read_bytes()
+    except (OSError, UnsafeCacheError):
+        return b""
+    body = raw[32:]
+    if len(raw) < 32 or hashlib.sha256(body).digest() != raw[:32] or len(body) % 8:
+        return b""
+    data = np.frombuffer(body, dtype="<f8")
+    if data.size < 6 or not math.isfinite(data[0]) or data.size != 2 + 2 * int(data[0]):
+        return b""
+    n = int(data[0])
+    rho, drho = np.ascontiguousarray(data[2:2 + n]), np.ascontiguousarray(data[2 + n:])
+    dp = ctypes.POINTER(ctypes.c_double)
+    status = lib.table_load(float(k), n, rho.ctypes.data_as(dp), drho.ctypes.data_as(dp), float(data[1]))
+    return body if status == OK else b""
+
+
+def _save_table(lib, k: float, loaded: bytes) -> None:
+    """Write the C planner's rho table of k (``<prefix>_table_save``) into the cache directory unless it is the one
+    ``loaded``: the SHA-256 digest of the rest, then n, the midpoint error, rho and d rho / dr (little-endian
+    doubles). Nothing when it cannot be written (another process writing it, a full disk: a later process builds
+    the table again)."""
+    n, err, capacity = ctypes.c_int(0), ctypes.c_double(0.0), 4096
+    dp = ctypes.POINTER(ctypes.c_double)
+    for _ in range(2):
+        rho, drho = np.empty(capacity), np.empty(capacity)
+        status = lib.table_save(float(k), capacity, rho.ctypes.data_as(dp), drho.ctypes.data_as(dp),
+                                ctypes.byref(err), ctypes.byref(n))
+        if status != TOO_MANY:
+            break
+        capacity = n.value
+    if status != OK:
+        return
+    body = np.concatenate(([n.value, err.value], rho[:n.value], drho[:n.value])).astype("<f8").tobytes()
+    if body == loaded:
+        return
+    path = _table_path(lib, k)
+    try:
+        write_atomic(path, hashlib.sha256(body).digest() + body, what="rho table")
+        os.chmod(path, 0o600)
+    except (OutputError, OSError):
+        pass
+
+
+#: The k of the table each family's C planner keeps (a table of another k is loaded from the cache directory or
+#: built, then saved there).
+_family_k: dict = {}
+
+
+def _call(entry, k: float, direct: bool, *args, lib=None) -> int:
     """``entry(*args)`` of the C planner (one call at a time: the planner keeps static state). A call that may be
     long (a new k builds the rho table: 1.3 s at k = 99; a high k or many steps search many branches; every root)
     runs in a helper thread (:func:`rollplan.interrupts.call_in_thread`), so that Ctrl-C acts at once; ``direct``
-    allows a direct call where it is short (see :data:`_DIRECT_STEPS`)."""
+    allows a direct call where it is short (see :data:`_DIRECT_STEPS`). With ``lib`` (a family's C planner, whose
+    rho table takes seconds to build) the table of a new k is taken from the cache directory, or saved there once
+    built."""
     def locked():
         with _lock:
-            return entry(*args)
+            if lib is None or _family_k.get(lib.path) == k:
+                return entry(*args)
+            loaded = _load_table(lib, k)
+            status = entry(*args)
+            if status not in (OK, NO_PLAN, NOT_CERTIFIED, TOO_MANY):   # (the table of k may not be built)
+                _family_k.pop(lib.path, None)
+                return status
+            _family_k[lib.path] = k
+            _save_table(lib, k, loaded)
+            return status
 
     short = direct and (entry, k) == _last_k[0] and k <= DEFAULT_K_MAX
     status = locked() if short else interrupts.call_in_thread(locked)
@@ -411,13 +494,13 @@ def family_plans(u: float, v: float, psi: float, steps: int, k: float, curve: st
     args = (float(u), float(v), float(psi), int(steps), float(k), ctypes.byref(options))
     if not every:
         plan = _Plan()
-        status = _call(lib.plan_with, k, steps <= _DIRECT_STEPS, *args, ctypes.byref(plan))
+        status = _call(lib.plan_with, k, steps <= _DIRECT_STEPS, *args, ctypes.byref(plan), lib=lib)
         plans = [plan]
     else:
         capacity, count = _FIRST_CAPACITY, ctypes.c_int(0)
         while True:
             buffer = (_Plan * capacity)()
-            status = _call(lib.plan_all, k, False, *args, buffer, capacity, ctypes.byref(count))
+            status = _call(lib.plan_all, k, False, *args, buffer, capacity, ctypes.byref(count), lib=lib)
             if status != TOO_MANY or count.value <= capacity:
                 break
             capacity = count.value
