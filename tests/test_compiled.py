@@ -469,3 +469,13 @@ def test_a_cache_directory_under_a_folder_others_can_write_is_refused(tmp_path, 
     r = subprocess.run([sys.executable, "-m", "rollplan.cli", "plan", "--to", "0.3", "0.2"], capture_output=True,
                        text=True, timeout=300, check=False, env={**os.environ, "ROLLPLAN_CACHE_DIR": str(folder)})
     assert r.returncode == 0, r.stderr
+
+
+def test_clear_cache_removes_the_libraries_and_the_stored_leaf_tables(tmp_path, monkeypatch):
+    from rollplan.core.compiled import clear_cache
+    monkeypatch.setenv("ROLLPLAN_CACHE_DIR", str(tmp_path))
+    names = ["c_planner_search_triangle-ab12.so", "c_planner_search_triangle-ab12-table-0x1.8p+0.bin"]
+    for name in names + ["notes.txt"]:
+        (tmp_path / name).write_bytes(b"x")
+    assert clear_cache() == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]

@@ -514,8 +514,8 @@ def _remember(memo_path: Path, key: str) -> None:
 
 
 def clear_cache() -> int:
-    """Delete every compiled library (and leftover build directory) in :func:`cache_dir`; returns the
-    number of libraries removed."""
+    """Delete every compiled library (and leftover build directory, and the C planner's stored leaf tables) in
+    :func:`cache_dir`; returns the number of libraries removed."""
     root = cache_dir()
     n = 0
     if root.is_dir():
@@ -524,7 +524,7 @@ def clear_cache() -> int:
                 p.unlink(missing_ok=True)
                 _digest_path(p).unlink(missing_ok=True)
                 n += 1
-            elif p.suffix == ".key":
+            elif p.suffix == ".key" or (p.suffix == ".bin" and "-table-" in p.name):
                 p.unlink(missing_ok=True)
             elif p.name.startswith(".build-") and p.is_dir():
                 shutil.rmtree(p, ignore_errors=True)
