@@ -18,6 +18,7 @@ from scipy.linalg.lapack import dgesv
 from test_interrupts import run_and_interrupt
 
 from rollplan import Robot, State
+from rollplan.cli import main
 from rollplan.io import write_json
 from rollplan.problem import STATE_NAMES, arrival_error
 
@@ -48,9 +49,8 @@ def files(tmp_path_factory):
     (d / "real.toml").write_text(REAL_TOML)
     (d / "limited.toml").write_text(LIMITED_TOML)
     for n in (1, 4):
-        code, _, err = command("plan", "--robot", d / "model.toml", "--to", "0.2", "0.25", "--psi", "0.8",
-                               "--steps", n, "--duration", 5 * n, "--json", d / f"p{n}.json")
-        assert code == 0, err
+        assert main(["plan", "--robot", str(d / "model.toml"), "--to", "0.2", "0.25", "--psi", "0.8", "--steps", str(n),
+                     "--duration", str(5 * n), "--json", str(d / f"p{n}.json")]) == 0
     return d
 
 
@@ -303,9 +303,8 @@ def _quintic_times(fractions, duration):
 def nonstop(files):
     """A plan of 2 figure eights timed by nonstop-min-jerk over 10 s (no stop at the 3 poles inside)."""
     path = files / "nonstop.json"
-    code, _, err = command("plan", "--robot", files / "model.toml", "--to", "0.1", "0.12", "--psi", "0.4", "--steps",
-                           "2", "--timing", "nonstop-min-jerk", "--duration", "10", "--json", path)
-    assert code == 0, err
+    assert main(["plan", "--robot", str(files / "model.toml"), "--to", "0.1", "0.12", "--psi", "0.4", "--steps", "2",
+                 "--timing", "nonstop-min-jerk", "--duration", "10", "--json", str(path)]) == 0
     return json.loads(path.read_text()), path
 
 
