@@ -172,6 +172,20 @@ def test_execute_refuses_bad_input(plan4):
         execute(plan4, MODEL, "real.toml", 2.5)
 
 
+def test_execute_refuses_a_bad_plant_or_robot_before_timing_the_plan(plan4, monkeypatch):
+    """A bad plant or real robot was refused only after the whole plan had been timed (seconds)."""
+    from rollplan.execution import feedback
+
+    def timer(*args):
+        raise AssertionError("the plan was timed before the input was checked")
+
+    monkeypatch.setattr(feedback, "_timer", timer)
+    for kwargs, match in (({"plant": "voltage"}, "plant"), ({"real_robot": replace(REAL, radius=0.2)}, "radius"),
+                          ({"real_robot": "real.toml"}, "Robot")):
+        with pytest.raises(InputError, match=match):
+            execute(plan4, MODEL, kwargs.pop("real_robot", REAL), 2.5, **kwargs)
+
+
 def test_robot_from_inertias_round_trip():
     for rob in (MODEL, REAL, rollplan.default_robot()):
         r = robot_from_inertias(rob.radius, rob.j_xx, rob.j_zz, rob.rotor_inertia_axial, like=rob)
