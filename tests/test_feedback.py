@@ -149,6 +149,7 @@ def test_torque_plant_closed_loop_with_friction_and_rate_servo(plan4):
     assert cl.estimates[-1]["friction"] == pytest.approx([2e-5, 2e-5], rel=1e-5)
 
 
+@pytest.mark.slow
 def test_closed_loop_from_a_start_off_the_pole_to_a_goal_off_the_pole():
     """Issue 12's composed plans: an approach roll, three figure eights and a departure roll, closed loop."""
     start, goal = (0.01, -0.02, 0.3, 0.2, -0.1), (0.15, 0.2, 1.0, -0.1, 0.15)
@@ -261,6 +262,7 @@ def test_cli_closed_loop_refuses_a_file_without_steps(plan_file, capsys):
     assert "steps" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_open_loop_on_the_exact_robot_is_the_plan(asym_plan):
     """Open loop on the model itself: arrives, and the rate plant's reported torques (spline derivative of the
     simulated axial momenta (P)) are the plan's torques (T) computed by AD along the path."""
@@ -314,6 +316,7 @@ def test_torque_closed_loop_under_noise_leaves_the_frictionless_robot_at_rest(se
     assert all(d["friction"] == [0.0, 0.0] for d in ex.estimates[1:])
 
 
+@pytest.mark.slow
 def test_closed_loop_runs_a_viviani_plan_whole_then_corrects():
     """A plan of Viviani lobes, closed loop: applied whole (no re-plan in another family), then corrected by
     figure eights of circles onto the goal; its applied rates replayed by DOP853 on the printed equations."""
