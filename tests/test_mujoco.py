@@ -24,6 +24,7 @@ import references
 
 try:
     import mujoco
+    from mujoco import rollout
 except ImportError:
     if os.environ.get("ROLLPLAN_REQUIRE_MUJOCO") == "1":
         raise
@@ -268,9 +269,11 @@ def independent_replay(robot: dict, t, torques, start, steps_per_second=10_000):
     model.opt.timestep = (t[-1] - t[0]) / n
     edges = t[0] + np.arange(n + 1) * model.opt.timestep
     means = np.diff(piecewise_linear_integral(t, torques, edges), axis=0) / model.opt.timestep
-    for i in range(n):
-        data.ctrl[:] = means[i]
-        mujoco.mj_step(model, data)
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(model, spec))
+    mujoco.mj_getState(model, data, state, spec)
+    out, _ = rollout.rollout(model, data, state, means)     # mj_step n times with these controls
+    mujoco.mj_setState(model, data, out[0, -1], spec)
     rot = np.zeros(9)
     mujoco.mju_quat2Mat(rot, data.qpos[3:7])
     rot = rot.reshape(3, 3)
