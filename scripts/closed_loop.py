@@ -67,6 +67,7 @@ BEYOND = [  # section 5: MuJoCo settings beyond the paper's equations (com offse
     ("rolling resistance 1e-4 m", {"rolling": 1e-4}),
 ]
 BEYOND_STEPS = 1
+MUJOCO_SETTINGS = {}  # sections 4 and 5: MuJoCo settings of every run (mujoco_engine.Settings; {}: the defaults)
 TORQUE_CASES = [  # the three plans of results/sensitivity.md: target [m, rad], steps, duration [s]
     ((0.0, 0.1, 0.0), 1, 10.0),
     ((0.05, 0.08, 0.5), 2, 10.0),
@@ -197,9 +198,10 @@ def issue_run(case: dict) -> dict:
 
 def issue_cases(seeds):
     """Section 4's runs: torque plant and (when mujoco imports) MuJoCo, 1 and 4 figure eights, no noise and noise."""
-    base = {"goal": list(GOAL), "piece_duration": PIECE, "settings": None, "open": False}
     cases = []
     for plant in ("torques", "mujoco") if mujoco_available() else ("torques",):
+        base = {"goal": list(GOAL), "piece_duration": PIECE, "open": False,
+                "settings": (dict(MUJOCO_SETTINGS) or None) if plant == "mujoco" else None}
         for n in MUJOCO_STEPS:
             cases.append({**base, "plant": plant, "steps": n, "noise": 0.0, "seed": 0, "average": 0})
             cases += [{**base, "plant": plant, "steps": n, "noise": MUJOCO_NOISE, "seed": s, "average": 0}
@@ -213,7 +215,8 @@ def issue_cases(seeds):
 def beyond_cases():
     """Section 5's runs: MuJoCo with each of ``BEYOND``'s settings, open and closed loop, no noise."""
     return [{"goal": list(GOAL), "piece_duration": PIECE, "plant": "mujoco", "steps": BEYOND_STEPS, "noise": 0.0,
-             "seed": 0, "average": 0, "settings": {k: list(v) if isinstance(v, tuple) else v for k, v in st.items()},
+             "seed": 0, "average": 0,
+             "settings": {k: list(v) if isinstance(v, tuple) else v for k, v in {**MUJOCO_SETTINGS, **st}.items()},
              "label": label, "open": True} for label, st in BEYOND]
 
 
@@ -246,6 +249,7 @@ def mujoco_section(seeds, workers, scheduler=None):
             row["friction_fed"] = int(sum(fed))
             rows.append(row)
     return {"mujoco_version": mujoco_available(), "seeds": seeds, "rows": rows, "runs": runs, "average": AVERAGE,
+            "settings": dict(MUJOCO_SETTINGS),
             "beyond": beyond_runs, "wall_seconds": time.perf_counter() - t0, "workers": workers, "commit": commit()}
 
 
@@ -365,10 +369,12 @@ def mujoco_report(mj) -> list:
         return L + ["Not run.", ""]
     old = "plant" not in mj["rows"][0]
     L += [f"The real robot of section 1 (+5.5 % total mass, +7.5 % rotor inertias): the project's torque plant, and "
-          f"MuJoCo {mj['mujoco_version']} (`rollplan.execution.mujoco_engine`, default settings: RK4, 1e-4 s, stiff "
-          "sphere-plane contact; no bearing friction in either). The plan for the model robot, the same goal, 2.5 s a "
-          "piece; the plan's motor torques fed forward, no servo; the state measured at rest; closed loop with the "
-          "corrections (as `rollplan simulate PLAN --robot REAL.toml [--engine mujoco] --closed-loop [--noise S]`). "
+          f"MuJoCo {mj['mujoco_version']} (`rollplan.execution.mujoco_engine`, "
+          + (f"settings {mj['settings']}" if mj.get("settings") else "default settings: RK4, 1e-4 s, stiff "
+             "sphere-plane contact") + "; no bearing friction in either). The plan for the model robot, the same "
+          "goal, 2.5 s a piece; the plan's motor torques fed forward, no servo; the state measured at rest; closed "
+          "loop with the corrections (as `rollplan simulate PLAN --robot REAL.toml [--engine mujoco] --closed-loop "
+          "[--noise S]`). "
           "Arrival error of the true final state (the plant's, not the measured one). Noise: "
           f"{mj['rows'][0]['noise']:g} (R and rad) per sample, {mj['seeds']} seeds a row; the state used for a "
           "re-plan or correction is the last sample of the motion (one reading)"

@@ -76,16 +76,19 @@ def test_reconfiguration_script_runs(tmp_path):
 @pytest.mark.slow
 def test_closed_loop_script_runs(tmp_path):
     """The script end to end with one seed per case, two model errors, one noise level of the issue's case and
-    one plan of the torque-against-rate comparison (every section, fewer samples of each than even --quick)."""
+    one plan of the torque-against-rate comparison (every section, fewer samples of each than even --quick), MuJoCo
+    at a 1 ms step (its closed loop tested in test_mujoco at that step)."""
     scripts = Path(__file__).resolve().parent.parent / "scripts"
     run = ("import sys; sys.path.insert(0, sys.argv[1]); import closed_loop as c; c.ERRORS = (0.01, 0.10); "
            "c.NOISE_LEVELS = (1e-3,); c.TORQUE_CASES = c.TORQUE_CASES[:1]; c.MUJOCO_STEPS = (1,); "
-           "c.BEYOND = c.BEYOND[:1]; sys.argv = [c.__file__] + sys.argv[2:]; c.main()")
+           "c.BEYOND = c.BEYOND[:1]; c.MUJOCO_SETTINGS = {'timestep': 1e-3, 'solref': (2e-3, 1.0)}; "
+           "sys.argv = [c.__file__] + sys.argv[2:]; c.main()")
     subprocess.run([sys.executable, "-c", run, str(scripts), "--seeds", "1", "--torque-seeds", "1", "--mujoco-seeds",
                     "1", "--out-dir", str(tmp_path)], check=True, capture_output=True, timeout=1800)
     text = (tmp_path / "closed_loop.md").read_text()
     assert "## 1. The issue's robot" in text and "## 2. Monte Carlo" in text and "## 3. Torque-driven" in text
     assert "## 4. The issue's robot closed loop" in text and "| torque plant | 1 |" in text
+    assert "settings {'timestep': 0.001" in text
     assert (tmp_path / "closed_loop.png").stat().st_size > 0 and (tmp_path / "closed_loop.json").stat().st_size > 0
 
 

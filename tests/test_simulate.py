@@ -3,8 +3,10 @@ with a final correction; the plan file's keys validated once; Ctrl-C and large f
 (subprocesses where the defect was in the process's behaviour)."""
 
 import json
+import math
 import subprocess
 import sys
+from bisect import bisect_right
 from pathlib import Path
 
 import numpy as np
@@ -12,9 +14,11 @@ import pytest
 from conftest import one_line, run
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
+from scipy.linalg.lapack import dgesv
 from test_interrupts import run_and_interrupt
 
 from rollplan import Robot, State
+from rollplan.cli import main
 from rollplan.io import write_json
 from rollplan.problem import STATE_NAMES, arrival_error
 
@@ -39,16 +43,22 @@ def command(*argv, timeout=600):
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    """The model and real robots, and a plan of 4 figure eights (20 s, min-jerk) for the model."""
+    """The model and real robots, and a plan of 1 figure eight (5 s, min-jerk) for the model (p1.json)."""
     d = tmp_path_factory.mktemp("sim")
     (d / "model.toml").write_text(MODEL_TOML)
     (d / "real.toml").write_text(REAL_TOML)
     (d / "limited.toml").write_text(LIMITED_TOML)
-    for n in (1, 4):
-        code, _, err = command("plan", "--robot", d / "model.toml", "--to", "0.2", "0.25", "--psi", "0.8",
-                               "--steps", n, "--duration", 5 * n, "--json", d / f"p{n}.json")
-        assert code == 0, err
+    _plan_file(d, 1)
     return d
+
+
+def _plan_file(d, n):
+    """``d/p{n}.json``: n figure eights (5 s each, min-jerk) for the model to (0.2, 0.25, 0.8), planned on first use."""
+    path = d / f"p{n}.json"
+    if not path.exists():
+        assert main(["plan", "--robot", str(d / "model.toml"), "--to", "0.2", "0.25", "--psi", "0.8", "--steps", str(n),
+                     "--duration", str(5 * n), "--json", str(path)]) == 0
+    return path
 
 
 # ----------------------------------------------------------------------------- Ctrl-C
@@ -57,7 +67,7 @@ def files(tmp_path_factory):
 @pytest.mark.parametrize("delay", [2.0, 2.5, 3.0, 3.5])
 def test_ctrl_c_in_the_torque_plant_is_exit_130_in_one_line(files, delay):
     """SIGINT while the torque plant's CVODES runs (closed loop) ended in a CV_RHSFUNC_FAIL traceback, exit 1."""
-    code, elapsed, _, err = run_and_interrupt(["simulate", str(files / "p4.json"), "--robot",
+    code, elapsed, _, err = run_and_interrupt(["simulate", str(_plan_file(files, 4)), "--robot",
                                                str(files / "real.toml"), "--closed-loop", "--plant", "torques"],
                                               delay)
     if code == 0:
@@ -178,7 +188,7 @@ def test_closed_loop_arrives_on_the_mismatched_robot(files, n, capsys):
     """The robot of results/closed_loop.md (+5.5 % mass, +7.5 % rotor inertia): the closed loop corrected
     only between figure eights, so n = 1 was the open loop. Now within 1e-3 for n = 1 and n = 4; the final
     state is checked by DOP853 on the printed equations driven by the applied rates."""
-    d = _sim_json(capsys, files, files / f"p{n}.json", "--robot", files / "real.toml", "--closed-loop")
+    d = _sim_json(capsys, files, _plan_file(files, n), "--robot", files / "real.toml", "--closed-loop")
     assert d["open_loop_arrival_error"] > 0.1
     assert d["arrival_error"] < 1e-3
     t, rates = np.array(d["time"]), np.array(d["rotor_rates"])
@@ -226,18 +236,63 @@ def test_closed_loop_executes_turns_in_place_and_routes(files, tmp_path, capsys)
 
 # ----------------------------------------------------------------------------- torque breaks in plan files
 
+def _piece_rhs(j_xx, j_zz, j_r, radius, t, torques):
+    """:func:`references.torque_driven_rhs` with the torques ``(t, torques)`` interpolated linearly (np.interp's
+    rule, held outside), in scalar arithmetic: the same printed equations (n_1, n_2 of (2)-(4), the 5x5 system of
+    (11) and the axial momenta by LAPACK's LU solve (dgesv, as numpy's solve), Montana's (6)-(10)), the sample
+    interval found by bisection. Checked against references.torque_driven_rhs
+    (test_the_scalar_torque_rhs_is_the_references)."""
+    ts, q1, q2, last = t.tolist(), torques[:, 0].tolist(), torques[:, 1].tolist(), len(t) - 2
+    a = np.zeros((5, 5))
+    a[0, 0] = a[1, 1] = j_xx
+    a[2, 2] = j_zz
+    a[3, 3] = a[4, 4] = j_r
+    b = np.zeros(5)
+
+    def f(s, z):
+        i = min(max(bisect_right(ts, s) - 1, 0), last)
+        w = min(max((s - ts[i]) / (ts[i + 1] - ts[i]), 0.0), 1.0)
+        psi, u, v = z[2], z[3], z[4]
+        cu, su, cv, sv, cp, sp = math.cos(u), math.sin(u), math.cos(v), math.sin(v), math.cos(psi), math.sin(psi)
+        n1 = (cu * cp + su * sv * sp, -cu * sp + su * sv * cp, su * cv)
+        n2 = (cv * sp, cv * cp, -sv)
+        a[3, :3] = a[:3, 3] = j_r * n1[0], j_r * n1[1], j_r * n1[2]
+        a[4, :3] = a[:3, 4] = j_r * n2[0], j_r * n2[1], j_r * n2[2]
+        b[3], b[4] = z[5], z[6]
+        _, _, x, info = dgesv(a, b)
+        assert info == 0
+        wx, wy, wz = x[:3].tolist()
+        roll = wx * sp + wy * cp
+        return np.array([radius * wy, -radius * wx, -wz - roll * math.tan(v), -roll / cv, -wx * cp + wy * sp,
+                         q1[i] + w * (q1[i + 1] - q1[i]), q2[i] + w * (q2[i + 1] - q2[i])])
+
+    return f
+
+
+def test_the_scalar_torque_rhs_is_the_references():
+    rng = np.random.default_rng(2)
+    t = np.sort(rng.uniform(0.0, 2.0, 40))
+    q = rng.normal(size=(40, 2)) * 0.01
+    m = MODEL
+    fast = _piece_rhs(m.j_xx, m.j_zz, m.rotor_inertia_axial, m.radius, t, q)
+    ref, _ = references.torque_driven_rhs(m.j_xx, m.j_zz, m.rotor_inertia_axial, m.radius,
+                                          lambda s: [np.interp(s, t, q[:, 0]), np.interp(s, t, q[:, 1])])
+    for s in [*rng.uniform(-0.5, 2.5, 30), *t[:3], t[-1]]:
+        z = np.r_[rng.normal(size=2), rng.uniform(-np.pi, np.pi), rng.uniform(-1.2, 1.2, 2), rng.normal(size=2) * 1e-3]
+        np.testing.assert_allclose(fast(s, z), ref(s, z), rtol=1e-12, atol=1e-15)
+
+
 def _replay_torques(d, robot):
     """The replay rule of plan files in numpy: torques linear between rows, a step at a time given twice;
-    DOP853 on the printed torque-driven equations (references), restarted at every step. The final state."""
+    DOP853 on the printed torque-driven equations (references, in scalar arithmetic: :func:`_piece_rhs`),
+    restarted at every step. The final state."""
     t, tq = np.array(d["time"]), np.array(d["rotor_torques"])
     cuts = [0, *(np.nonzero(np.diff(t) == 0)[0] + 1).tolist(), t.size]
     z = np.r_[[d["start"][n] for n in STATE_NAMES], 0.0, 0.0]
     for a, b in zip(cuts, cuts[1:]):
         tp, qp = t[a:b], tq[a:b]
-        f, _ = references.torque_driven_rhs(robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, robot.radius,
-                                            lambda s, tp=tp, qp=qp: [np.interp(s, tp, qp[:, 0]),
-                                                                     np.interp(s, tp, qp[:, 1])])
         if tp[-1] > tp[0]:
+            f = _piece_rhs(robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, robot.radius, tp, qp)
             z = solve_ivp(f, (tp[0], tp[-1]), z, method="DOP853", rtol=1e-11, atol=1e-14,
                           max_step=20 * (tp[1] - tp[0])).y[:, -1]
     return z[:5]
@@ -255,9 +310,8 @@ def _quintic_times(fractions, duration):
 def nonstop(files):
     """A plan of 2 figure eights timed by nonstop-min-jerk over 10 s (no stop at the 3 poles inside)."""
     path = files / "nonstop.json"
-    code, _, err = command("plan", "--robot", files / "model.toml", "--to", "0.1", "0.12", "--psi", "0.4", "--steps",
-                           "2", "--timing", "nonstop-min-jerk", "--duration", "10", "--json", path)
-    assert code == 0, err
+    assert main(["plan", "--robot", str(files / "model.toml"), "--to", "0.1", "0.12", "--psi", "0.4", "--steps", "2",
+                 "--timing", "nonstop-min-jerk", "--duration", "10", "--json", str(path)]) == 0
     return json.loads(path.read_text()), path
 
 

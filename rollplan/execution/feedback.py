@@ -370,6 +370,7 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
         raise InputError("the plan is the empty motion (its start is its goal): nothing to execute")
     if any(p.kind not in ("approach", "leaf", "departure") for p in pieces):
         raise InputError("closed-loop execution needs a plan of figure eights (turns in place are not supported)")
+    _check_plant_and_robots(plant, model_robot, real_robot)      # before the timing: bad input fails at once
     samples_per_piece = check_whole("samples_per_piece", samples_per_piece, 50, 100_000)
     piece_duration = _positive("piece_duration", piece_duration)
     m = _timer(timing, piece_duration, samples_per_piece)(plan, model_robot)
@@ -380,6 +381,18 @@ def execute(plan, model_robot: Robot, real_robot: Robot, piece_duration: float, 
                            samples_per_piece=samples_per_piece, window=window, estimate_friction=estimate_friction,
                            rest_readings=rest_readings, servo_gain=servo_gain, mujoco_model=mujoco_model,
                            progress=progress, timing=timing, tolerance=tolerance, corrections=corrections)
+
+
+def _check_plant_and_robots(plant, model_robot, real_robot) -> None:
+    """InputError unless ``plant`` is known and both robots are Robots of the same radius."""
+    if plant not in (*PLANT_NAMES, "mujoco"):
+        raise InputError(f"plant {plant!r} is not known: choose one of {', '.join(PLANT_NAMES)}, mujoco")
+    for name, rob in (("model_robot", model_robot), ("real_robot", real_robot)):
+        if not isinstance(rob, Robot):
+            raise InputError(f"{name} = {rob!r:.60} is not allowed: give a rollplan.Robot")
+    if not math.isclose(model_robot.radius, real_robot.radius, rel_tol=1e-12):
+        raise InputError(f"the model's radius {model_robot.radius:g} m and the real robot's "
+                         f"{real_robot.radius:g} m differ: the radius is measured, give the same")
 
 
 def _as_samples(m, kinds) -> Samples:
@@ -441,14 +454,7 @@ def execute_samples(first: Samples, start: State, goal: State, steps: int, model
         """Re-plan by the method "geometric": ``n`` figure eights from ``start`` to the goal."""
         return solve(Problem(goal, start=start, robot=robot), "geometric", steps=n)
 
-    if plant not in (*PLANT_NAMES, "mujoco"):
-        raise InputError(f"plant {plant!r} is not known: choose one of {', '.join(PLANT_NAMES)}, mujoco")
-    for name, rob in (("model_robot", model_robot), ("real_robot", real_robot)):
-        if not isinstance(rob, Robot):
-            raise InputError(f"{name} = {rob!r:.60} is not allowed: give a rollplan.Robot")
-    if not math.isclose(model_robot.radius, real_robot.radius, rel_tol=1e-12):
-        raise InputError(f"the model's radius {model_robot.radius:g} m and the real robot's "
-                         f"{real_robot.radius:g} m differ: the radius is measured, give the same")
+    _check_plant_and_robots(plant, model_robot, real_robot)
     piece_duration = _positive("piece_duration", piece_duration)
     samples_per_piece = check_whole("samples_per_piece", samples_per_piece, 50, 100_000)
     window = check_whole("window", window, 4, 100_000)
