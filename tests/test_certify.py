@@ -90,6 +90,15 @@ def test_compiled_and_virtual_machine_agree():
     assert e1 == pytest.approx(e2, rel=1e-3, abs=1e-14)
 
 
+@pytest.fixture(scope="module")
+def generated_c(tmp_path_factory):
+    """The C planner as ``rollplan codegen`` writes it with its defaults: its text only, not built (the shared build
+    of conftest costs a C compile this module does not need)."""
+    from rollplan import codegen
+
+    return codegen.generate(tmp_path_factory.mktemp("c") / "planner")
+
+
 def test_one_certificate_tolerance(generated_c):
     """Every planner's default tolerance and the generated C planner's are the one CERTIFICATE_TOLERANCE."""
     from rollplan.codegen import c_library
