@@ -408,16 +408,17 @@ def test_plan_demo_all_lists_the_plans_of_python_all(built, target):
 
 @pytest.mark.slow
 def test_plan_demo_all_random_targets_match_python(built):
-    """Random targets, k in [1/2, K_MAX], n in 1..4: the same list of plans as the numpy search."""
+    """Random targets, k in [1/2, K_MAX], n in 1..4: the same list of plans as the numpy search (five targets, n = 1
+    to 3, about 1000 roots, each certified by the reference)."""
     rng = np.random.default_rng(12)
     listed, traced = 0, []
-    for _ in range(8):
+    for _ in range(5):
         u, v = rng.uniform(-1.5, 1.5, 2)
         target = (float(u), float(v), float(rng.uniform(-4, 4)), int(rng.integers(1, 5)),
                   float(rng.uniform(0.5, DEFAULT_K_MAX)))
         listed += _check_all(built, target, checked=1, traced=traced) > 0
     _check_traced(traced)
-    assert listed >= 6
+    assert listed >= 4
 
 
 def test_plan_all_capacity_and_bad_arguments(built):

@@ -486,12 +486,30 @@ def _h2(a, b, k):
     return np.abs(s) ** 2
 
 
+@cache
+def _grid_leaves(k, n):
+    """The scan grid of :func:`_scan_sheets` and its leaves' ``(d, E)`` (leafmap.leaf_values), once per (k, n): every
+    branch and sheet scans the same grid."""
+    grid = np.linspace(1e-9, A_MAX, n)
+    return (grid, *leafmap.leaf_values(grid, k))
+
+
+def _h2_on_grid(ok, other, k, n, swap):
+    """``h^2`` of :func:`_h2` where one leaf runs over the grid points ``ok`` and the other has the radii ``other``:
+    the grid's leaves from :func:`_grid_leaves`, the composition of leafmap.step_values (item 4 of
+    docs/design/leaf-map.md)."""
+    _, d_grid, e_grid = _grid_leaves(k, n)
+    d_other, e_other = leafmap.leaf_values(other, k)
+    (da, ea), db = ((d_other, e_other), d_grid[ok]) if swap else ((d_grid[ok], e_grid[ok]), d_other)
+    return np.abs(da + np.exp(-1j * ea) * np.conj(db)) ** 2
+
+
 def _scan_sheets(eta, h_m, k, pieces, n, swap):
     """Roots on the sheets ``b = E_j^-1(E(a) - eta)`` scanned in a (or, with ``swap``, a over b): sign
     changes of h^2 - h_m^2 refined by brentq, local minima of |h^2 - h_m^2| checked by scipy's bounded
     minimiser for a close pair. Returns (a, b) pairs."""
     out = []
-    grid = np.linspace(1e-9, A_MAX, n)
+    grid = _grid_leaves(k, n)[0]
     for lo, hi in pieces:
         def other(x, lo=lo, hi=hi):
             t = leafmap.turn(x, k) + (eta if swap else -eta)
@@ -507,7 +525,7 @@ def _scan_sheets(eta, h_m, k, pieces, n, swap):
         if ok.sum() < 2:
             continue
         xs, ys = grid[ok], y[ok]
-        vals = _h2(ys, xs, k) - h_m * h_m if swap else _h2(xs, ys, k) - h_m * h_m
+        vals = _h2_on_grid(ok, ys, k, n, swap) - h_m * h_m
         # contiguous runs of valid samples only (the sheet may be cut by the piece's range)
         runs = np.split(np.arange(xs.size), np.nonzero(np.diff(np.nonzero(ok)[0]) > 1)[0] + 1)
         for run in runs:
