@@ -128,20 +128,35 @@ def rk8_trace(ab, k: float, gamma: float = 0.0, delta: float = 0.1, x0=(0.0, 0.0
     ``delta = CERT_DELTA`` and step doubling; :func:`generate` uses a small ``delta`` to check the step map.
     ``curve``: the leaf family (:data:`rollplan.core.families.FAMILIES`).
     """
-    curve = families.figure_eight(curve)
     x = np.asarray(x0, float)
     p = np.asarray(ab, float)
-    for i, piece in enumerate(curve.pieces):
-        f = piece_rhs(curve, i)
-        step = rk8_step(f)
+    for i, (piece, f) in enumerate(_piece_rhs(curve)):
         for b0, b1 in zip(piece.breaks[:-1], piece.breaks[1:]):
             w = b1 - b0
             rate = max(abs(float(f(b0 + q * w / 4, ca.DM.zeros(3), p, k, gamma)[2])) for q in range(5))
             n = int(np.ceil(w * (CERT_BASE + rate) / delta))
             phis = b0 + np.arange(n) * (w / n)
-            xs = step.mapaccum(n)(x, phis.reshape(1, -1), w / n, p, k, gamma)
+            xs = _rk8_steps(curve, i, n)(x, phis.reshape(1, -1), w / n, p, k, gamma)
             x = np.array(xs[:, -1]).ravel()
     return x
+
+
+@lru_cache(maxsize=8)
+def _piece_rhs(curve: str) -> tuple:
+    """``(piece, right side)`` of each piece of the figure eight of the family ``curve``, built once."""
+    eight = families.figure_eight(curve)
+    return tuple((piece, piece_rhs(eight, i)) for i, piece in enumerate(eight.pieces))
+
+
+@lru_cache(maxsize=256)
+def _rk8_steps(curve: str, piece: int, n: int) -> ca.Function:
+    """``n`` RK8 steps on piece ``piece`` of the family ``curve`` (the step of :func:`rk8_step`, accumulated)."""
+    return _rk8_step(curve, piece).mapaccum(n)
+
+
+@lru_cache(maxsize=16)
+def _rk8_step(curve: str, piece: int) -> ca.Function:
+    return rk8_step(_piece_rhs(curve)[piece][1])
 
 
 def _valid_k_max(k_max) -> float:
