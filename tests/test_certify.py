@@ -31,7 +31,7 @@ def _error(final: State, ref) -> float:
     return float(np.linalg.norm(e))
 
 
-@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("seed", [0, 1, 2, 3, pytest.param(4, marks=pytest.mark.slow), 5])
 def test_estimate_bounds_the_true_error(seed):
     """On random plans, also at coarse step counts (large tolerances stop the doubling early), the
     estimate is at least the error against DOP853 at rtol 1e-13 (whose own error, ~1e-12, is allowed)."""

@@ -239,6 +239,7 @@ def test_one_circle_turns_by_half_the_turn(psi, k):
 # ----------------------------------------------------------------------------- two legs
 
 
+@pytest.mark.slow
 def test_a_tiny_shift_with_a_turn_takes_two_legs(planner):
     p = planner.solve(Problem((1e-7, -2e-7, 0.8), k=2.5))
     assert p.mode == "two" and len(p.legs) == 2 and reference_residual(p) < TOL
@@ -512,6 +513,7 @@ def test_command_refuses_bad_states_with_exit_2(capsys, argv, needle):
     assert code == 2 and needle in err and err.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_command_route_writes_json_and_figure(tmp_path, capsys):
     import json
 
