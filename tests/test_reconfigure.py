@@ -239,7 +239,6 @@ def test_one_circle_turns_by_half_the_turn(psi, k):
 # ----------------------------------------------------------------------------- two legs
 
 
-@pytest.mark.slow
 def test_a_tiny_shift_with_a_turn_takes_two_legs(planner):
     p = planner.solve(Problem((1e-7, -2e-7, 0.8), k=2.5))
     assert p.mode == "two" and len(p.legs) == 2 and reference_residual(p) < TOL
