@@ -409,14 +409,17 @@ def test_plan_demo_all_lists_the_plans_of_python_all(built, target):
 
 @pytest.mark.slow
 def test_plan_demo_all_random_targets_match_python(built):
-    """Random targets, k in [1/2, K_MAX], n in 1..4: the same list of plans as the numpy search (five targets, n = 1
-    to 3, about 1000 roots, each certified by the reference)."""
+    """Random targets, k in [1/2, K_MAX], n in 1..4: the same list of plans as the numpy search. Five of the first six
+    draws (950 roots, each certified by the reference): the fifth (n = 3, 552 roots) and the seventh and eighth
+    (n = 4, 1374 roots) take no line or branch of rollplan_planner.c that these five do not (gcov)."""
     rng = np.random.default_rng(12)
     listed, traced = 0, []
-    for _ in range(5):
+    for draw in range(6):
         u, v = rng.uniform(-1.5, 1.5, 2)
         target = (float(u), float(v), float(rng.uniform(-4, 4)), int(rng.integers(1, 5)),
                   float(rng.uniform(0.5, DEFAULT_K_MAX)))
+        if draw == 4:
+            continue
         listed += _check_all(built, target, checked=1, traced=traced) > 0
     _check_traced(traced)
     assert listed >= 4
