@@ -737,7 +737,13 @@ def test_certificate_refuses_a_wrong_plan_and_bad_arguments(clib):
 
 
 @pytest.mark.slow
-def test_k_max_is_checked_at_generation(tmp_path):
+def test_k_max_is_checked_at_generation(tmp_path, monkeypatch):
+    """A k_max out of range, or beyond what the step map serves, is refused before the library's functions are
+    built (seconds of symbolic work that a refusal wasted)."""
+    def not_now(*args, **kwargs):
+        raise AssertionError("the library's functions were built before k_max was checked")
+
+    monkeypatch.setattr(codegen.c_library, "generated_functions", not_now)
     with pytest.raises(InputError, match="k_max = 10 is not allowed with 240 steps per leaf"):
         codegen.generate(tmp_path / "a", k_max=10)
     for bad in (-1, 101, float("nan"), "5", True):
