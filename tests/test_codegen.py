@@ -394,8 +394,9 @@ def _check_traced(traced):
         assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) < 1e-9 + 1e-11 * n, (u, v, psi, plan)
 
 
-@pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5), (0.3, -0.2, 0.5, 2, 1.5), (0.0, 1.0, 0.0, 1, 0.5),
-                                    (0.3, 0.2, 0.5, 2, 0.1), (0.3, 0.2, 0.0, 1, 0.45)])
+@pytest.mark.parametrize("target", [(0.0, 1.0, 0.0, 1, 2.5),
+                                    pytest.param((0.3, -0.2, 0.5, 2, 1.5), marks=pytest.mark.slow),
+                                    (0.0, 1.0, 0.0, 1, 0.5), (0.3, 0.2, 0.5, 2, 0.1), (0.3, 0.2, 0.0, 1, 0.45)])
 def test_plan_demo_all_lists_the_plans_of_python_all(built, target):
     """plan_demo --all (every root on every branch, certified on board) against the numpy search's --all list; the
     paper's case k = 2.5, h = 1 R has its smallest solution a = b = 0.300429 R first; k < 1/2 (sigma graphs of the
@@ -408,16 +409,20 @@ def test_plan_demo_all_lists_the_plans_of_python_all(built, target):
 
 @pytest.mark.slow
 def test_plan_demo_all_random_targets_match_python(built):
-    """Random targets, k in [1/2, K_MAX], n in 1..4: the same list of plans as the numpy search."""
+    """Random targets, k in [1/2, K_MAX], n in 1..4: the same list of plans as the numpy search. Five of the first six
+    draws (950 roots, each certified by the reference): the fifth (n = 3, 552 roots) and the seventh and eighth
+    (n = 4, 1374 roots) take no line or branch of rollplan_planner.c that these five do not (gcov)."""
     rng = np.random.default_rng(12)
     listed, traced = 0, []
-    for _ in range(8):
+    for draw in range(6):
         u, v = rng.uniform(-1.5, 1.5, 2)
         target = (float(u), float(v), float(rng.uniform(-4, 4)), int(rng.integers(1, 5)),
                   float(rng.uniform(0.5, DEFAULT_K_MAX)))
+        if draw == 4:
+            continue
         listed += _check_all(built, target, checked=1, traced=traced) > 0
     _check_traced(traced)
-    assert listed >= 6
+    assert listed >= 4
 
 
 def test_plan_all_capacity_and_bad_arguments(built):
@@ -449,6 +454,7 @@ def test_plan_all_capacity_and_bad_arguments(built):
 TEST_BUILD = ["cc", "-std=c99", "-O0", "-Wall", "-Wextra", "-Werror"]
 
 
+@pytest.mark.slow
 def test_search_falls_back_to_certifying_every_root(built, tmp_path):
     """The search's fallback: when the shortest root fails its certificate, the search runs again certifying every
     root, so the plan is the shortest certified one. A test build (planner.c with RP_TEST_REJECT_BELOW = L,
@@ -731,7 +737,13 @@ def test_certificate_refuses_a_wrong_plan_and_bad_arguments(clib):
 
 
 @pytest.mark.slow
-def test_k_max_is_checked_at_generation(tmp_path):
+def test_k_max_is_checked_at_generation(tmp_path, monkeypatch):
+    """A k_max out of range, or beyond what the step map serves, is refused before the library's functions are
+    built (seconds of symbolic work that a refusal wasted)."""
+    def not_now(*args, **kwargs):
+        raise AssertionError("the library's functions were built before k_max was checked")
+
+    monkeypatch.setattr(codegen.c_library, "generated_functions", not_now)
     with pytest.raises(InputError, match="k_max = 10 is not allowed with 240 steps per leaf"):
         codegen.generate(tmp_path / "a", k_max=10)
     for bad in (-1, 101, float("nan"), "5", True):
@@ -849,6 +861,7 @@ def _rotated_circles(r, side, gamma):
     return curve
 
 
+@pytest.mark.slow
 def test_traces_are_the_trace_of_each_plan():
     """The batched DOP853 traces of the fuzz tests against DOP853 plan by plan (other steps, k, gamma, radii)."""
     plans = [(0.3, 0.2, 2.5, 0.7, 1), (0.69, 0.05, DEFAULT_K_MAX, -2.0, 2), (0.1, 0.6, 0.3, 3.0, 2),

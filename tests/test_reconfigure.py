@@ -512,6 +512,7 @@ def test_command_refuses_bad_states_with_exit_2(capsys, argv, needle):
     assert code == 2 and needle in err and err.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_command_route_writes_json_and_figure(tmp_path, capsys):
     import json
 

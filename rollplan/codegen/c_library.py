@@ -128,20 +128,35 @@ def rk8_trace(ab, k: float, gamma: float = 0.0, delta: float = 0.1, x0=(0.0, 0.0
     ``delta = CERT_DELTA`` and step doubling; :func:`generate` uses a small ``delta`` to check the step map.
     ``curve``: the leaf family (:data:`rollplan.core.families.FAMILIES`).
     """
-    curve = families.figure_eight(curve)
     x = np.asarray(x0, float)
     p = np.asarray(ab, float)
-    for i, piece in enumerate(curve.pieces):
-        f = piece_rhs(curve, i)
-        step = rk8_step(f)
+    for i, (piece, f) in enumerate(_piece_rhs(curve)):
         for b0, b1 in zip(piece.breaks[:-1], piece.breaks[1:]):
             w = b1 - b0
             rate = max(abs(float(f(b0 + q * w / 4, ca.DM.zeros(3), p, k, gamma)[2])) for q in range(5))
             n = int(np.ceil(w * (CERT_BASE + rate) / delta))
             phis = b0 + np.arange(n) * (w / n)
-            xs = step.mapaccum(n)(x, phis.reshape(1, -1), w / n, p, k, gamma)
+            xs = _rk8_steps(curve, i, n)(x, phis.reshape(1, -1), w / n, p, k, gamma)
             x = np.array(xs[:, -1]).ravel()
     return x
+
+
+@lru_cache(maxsize=8)
+def _piece_rhs(curve: str) -> tuple:
+    """``(piece, right side)`` of each piece of the figure eight of the family ``curve``, built once."""
+    eight = families.figure_eight(curve)
+    return tuple((piece, piece_rhs(eight, i)) for i, piece in enumerate(eight.pieces))
+
+
+@lru_cache(maxsize=256)
+def _rk8_steps(curve: str, piece: int, n: int) -> ca.Function:
+    """``n`` RK8 steps on piece ``piece`` of the family ``curve`` (the step of :func:`rk8_step`, accumulated)."""
+    return _rk8_step(curve, piece).mapaccum(n)
+
+
+@lru_cache(maxsize=16)
+def _rk8_step(curve: str, piece: int) -> ca.Function:
+    return rk8_step(_piece_rhs(curve)[piece][1])
 
 
 def _valid_k_max(k_max) -> float:
@@ -187,13 +202,26 @@ def _check_k_max(k_max, steps_per_leaf: int, step: ca.Function, curve: str = "ci
     return k_max
 
 
+@lru_cache(maxsize=8)
+def _step_map(steps_per_leaf: int, curve: str) -> ca.Function:
+    """The step map that :func:`_check_k_max` checks (:func:`step_functions`), built once per size and family."""
+    return step_functions(steps_per_leaf, curve=curve)[0]
+
+
+@lru_cache(maxsize=4)
+def _functions(steps_per_leaf: int, prefix: str, curve: str) -> tuple:
+    """:func:`generated_functions`, built once per process for each size, prefix and family (CasADi functions do not
+    change): a second :func:`generate` of the same kind skips seconds of symbolic work."""
+    return tuple(generated_functions(steps_per_leaf, prefix, curve))
+
+
 def auto_steps_per_leaf(k_max, curve: str = "circles") -> int:
     """The smallest of :data:`AUTO_STEPS_PER_LEAF` whose step map is accurate to STEP_MAP_TOL up to ``k_max`` (the
     check of :func:`_check_k_max`); InputError naming the cap when none is."""
     k_max = _valid_k_max(k_max)
     worst = math.inf
     for steps_per_leaf in AUTO_STEPS_PER_LEAF:
-        worst = _step_map_error(k_max, step_functions(steps_per_leaf, curve=curve)[0], curve)
+        worst = _step_map_error(k_max, _step_map(steps_per_leaf, curve), curve)
         if worst <= STEP_MAP_TOL:
             return steps_per_leaf
     raise InputError(f"k_max = {k_max:g} is not allowed: even the largest automatic size, {AUTO_STEPS_PER_LEAF[-1]} "
@@ -270,11 +298,12 @@ def generate(out, steps_per_leaf: int = DEFAULT_STEPS_PER_LEAF, prefix: str = DE
     real = _check_real(real)
     check_choice("curve", curve, C_FAMILIES)
     out = check_folder(out, overwrite=check_flag("overwrite", overwrite))   # refused before any work
+    k_max = _valid_k_max(k_max)
     if isinstance(steps_per_leaf, str) and steps_per_leaf == "auto":
         steps_per_leaf = auto_steps_per_leaf(k_max, curve)              # refused before anything is written
     leaf_degree(steps_per_leaf, len(c_curve(curve).pieces[0].breaks) - 1)   # refused before anything is written
-    funcs = generated_functions(steps_per_leaf, prefix, curve)
-    k_max = _check_k_max(k_max, steps_per_leaf, funcs[3], curve)       # refused before anything is written
+    k_max = _check_k_max(k_max, steps_per_leaf, _step_map(steps_per_leaf, curve), curve)   # refused before the rest
+    funcs = list(_functions(steps_per_leaf, prefix, curve))
     library = sources(prefix, steps_per_leaf, k_max, real, functions=funcs, curve=curve)
     values = config_values(funcs, steps_per_leaf, k_max, real, curve)
     subs = {
