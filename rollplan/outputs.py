@@ -35,6 +35,7 @@ import errno
 import fcntl
 import hashlib
 import json
+import math
 import os
 import re
 import shutil
@@ -329,6 +330,68 @@ def write_atomic(path, data, what: str = "output") -> None:
 
 #: Bytes of JSON text gathered before :func:`json_chunks` yields them.
 JSON_CHUNK = 1 << 16
+#: Items of a list of numbers (or of rows of numbers) that :func:`json_chunks` encodes in one piece.
+JSON_ROWS = 1024
+_NUMBER_TYPES = {float, int}
+
+
+def _numbers(obj, depth: int = 0) -> bool:
+    """Whether ``obj`` is a non-empty list of plain finite floats and ints, or of such lists (rows of samples,
+    three levels at most)."""
+    types = set(map(type, obj))
+    if types <= _NUMBER_TYPES:
+        return all(map(math.isfinite, obj))
+    return depth < 3 and types == {list} and all(v and _numbers(v, depth + 1) for v in obj)
+
+
+def _item_text(v, level: int) -> str:
+    """``json.dumps(v, indent=1)`` at nesting ``level`` of a number or a list that :func:`_numbers` accepts."""
+    if type(v) is not list:
+        return repr(v)
+    inner = "\n" + " " * (level + 1)
+    items = map(repr, v) if type(v[0]) is not list else (_item_text(x, level + 1) for x in v)
+    return "[" + inner + ("," + inner).join(items) + "\n" + " " * level + "]"
+
+
+def _json_pieces(obj, level: int):
+    """The pieces of ``json.dumps(obj, indent=1)`` at nesting ``level``: json's own text, but lists of plain finite
+    numbers (or rows of them: the bulk of a motion's samples) joined a thousand items at a time, not item by item
+    as json's pure-Python indenting encoder does."""
+    if isinstance(obj, (list, tuple)):
+        if not obj:
+            yield "[]"
+            return
+        inner = "\n" + " " * (level + 1)
+        if _numbers(obj):
+            for i in range(0, len(obj), JSON_ROWS):
+                yield ("," if i else "[") + inner + ("," + inner).join(
+                    [_item_text(v, level + 1) for v in obj[i:i + JSON_ROWS]])
+            yield "\n" + " " * level + "]"
+            return
+        yield "[" + inner
+        for i, v in enumerate(obj):
+            if i:
+                yield "," + inner
+            yield from _json_pieces(v, level + 1)
+        yield "\n" + " " * level + "]"
+    elif isinstance(obj, dict):
+        if not obj:
+            yield "{}"
+            return
+        inner = "\n" + " " * (level + 1)
+        yield "{" + inner
+        for i, (k, v) in enumerate(obj.items()):
+            if not isinstance(k, str):      # json's own conversion of other keys (and its error)
+                k = json.loads(json.dumps({k: None}, allow_nan=False))
+                k = next(iter(k))
+            yield ("," + inner if i else "") + json.encoder.encode_basestring_ascii(k) + ": "
+            yield from _json_pieces(v, level + 1)
+        yield "\n" + " " * level + "}"
+    else:
+        text = json.dumps(obj, allow_nan=False)
+        if text[:1] in "[{":    # not a JSON scalar: json's own (a subclass, default=...); indented by json
+            text = json.dumps(obj, indent=1, allow_nan=False).replace("\n", "\n" + " " * level)
+        yield text
 
 
 def json_chunks(obj, size: int = JSON_CHUNK):
@@ -336,7 +399,7 @@ def json_chunks(obj, size: int = JSON_CHUNK):
     yielded while it is encoded: together exactly ``json.dumps(obj, indent=1) + "\n"``, never the whole text at
     once (a list of thousands of plans streams into its file or a pipe)."""
     gathered, n = [], 0
-    for text in json.JSONEncoder(indent=1, allow_nan=False).iterencode(obj):
+    for text in _json_pieces(obj, 0):
         gathered.append(text)
         n += len(text)
         if n >= size:

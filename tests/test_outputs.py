@@ -13,6 +13,8 @@ import textwrap
 
 import pytest
 from conftest import fill, one_line, run
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rollplan.errors import InputError, OutputError
 from rollplan.outputs import (
@@ -325,6 +327,34 @@ def test_json_chunks_are_the_text_of_json_dumps_in_pieces():
     pieces = list(json_chunks(obj, size=1000))
     assert len(pieces) > 10 and all(len(p) < 1200 for p in pieces)
     assert b"".join(pieces) == (json.dumps(obj, indent=1) + "\n").encode()
+
+
+NUMBER = st.one_of(st.floats(allow_nan=False, allow_infinity=False), st.integers(-10**30, 10**30))
+JSON_VALUES = st.recursive(
+    st.one_of(NUMBER, st.booleans(), st.none(), st.text(max_size=5)),
+    lambda inner: st.one_of(st.lists(inner, max_size=4), st.lists(NUMBER, min_size=1, max_size=6),
+                            st.lists(st.lists(NUMBER, min_size=1, max_size=3), min_size=1, max_size=3),
+                            st.tuples(inner, NUMBER),
+                            st.dictionaries(st.one_of(st.text(max_size=4), st.integers(), st.floats(allow_nan=False),
+                                                      st.booleans(), st.none()), inner, max_size=3)),
+    max_leaves=30)
+
+
+@settings(max_examples=300, deadline=None)
+@given(obj=JSON_VALUES, size=st.integers(1, 200))
+def test_json_chunks_are_json_dumps_for_any_value(obj, size):
+    """Byte for byte json.dumps(obj, indent=1) and a newline, for any JSON value: numbers (-0.0, huge ints,
+    subnormals), lists of numbers and rows of them (the fast path), bools among numbers, tuples, keys of every
+    type json converts."""
+    assert b"".join(json_chunks(obj, size=size)) == (json.dumps(obj, indent=1) + "\n").encode()
+
+
+@pytest.mark.parametrize("bad", [[1.0, math.nan], [[1.0], [2.0, math.inf]], {"a": [-math.inf]}, {math.nan: 1}])
+def test_json_chunks_refuse_non_finite_numbers_like_json(bad):
+    with pytest.raises(ValueError, match="Out of range float values are not JSON compliant"):
+        b"".join(json_chunks(bad))
+    with pytest.raises(ValueError, match="Out of range float values are not JSON compliant"):
+        json.dumps(bad, indent=1, allow_nan=False)
 
 
 def test_write_json_streams_into_a_temporary_file_then_renames(tmp_path):
