@@ -335,7 +335,8 @@ JSON_VALUES = st.recursive(
     lambda inner: st.one_of(st.lists(inner, max_size=4), st.lists(NUMBER, min_size=1, max_size=6),
                             st.lists(st.lists(NUMBER, min_size=1, max_size=3), min_size=1, max_size=3),
                             st.tuples(inner, NUMBER),
-                            st.dictionaries(st.one_of(st.text(max_size=4), st.integers(), st.floats(allow_nan=False),
+                            st.dictionaries(st.one_of(st.text(max_size=4), st.integers(),
+                                                      st.floats(allow_nan=False, allow_infinity=False),
                                                       st.booleans(), st.none()), inner, max_size=3)),
     max_leaves=30)
 
@@ -349,7 +350,8 @@ def test_json_chunks_are_json_dumps_for_any_value(obj, size):
     assert b"".join(json_chunks(obj, size=size)) == (json.dumps(obj, indent=1) + "\n").encode()
 
 
-@pytest.mark.parametrize("bad", [[1.0, math.nan], [[1.0], [2.0, math.inf]], {"a": [-math.inf]}, {math.nan: 1}])
+@pytest.mark.parametrize("bad", [[1.0, math.nan], [[1.0], [2.0, math.inf]], {"a": [-math.inf]}, {math.nan: 1},
+                                 {math.inf: []}])
 def test_json_chunks_refuse_non_finite_numbers_like_json(bad):
     with pytest.raises(ValueError, match="Out of range float values are not JSON compliant"):
         b"".join(json_chunks(bad))
