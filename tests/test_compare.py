@@ -119,9 +119,28 @@ def test_contact_bound_and_leaf_radius():
     assert robot_for_k(K).k == pytest.approx(K, rel=1e-14) and robot_for_k(K).j_zz == pytest.approx(1.0)
 
 
+#: The comparison of the module's tests (``comp``), and of the brute forces of its multistart.
+COMPARED = dict(target=(0.5, 0.3, 0.4), steps=1, k=K, intervals=16, branches=1)
+
+
 @pytest.fixture(scope="module")
-def comp():
-    return compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=1, naive=False)
+def comp_calls():
+    """The comparison of :data:`COMPARED` by two workers (the second with a twin solver), and what its multistart
+    called: ``(comparison, corrections, solved)``, ``solved`` each NLP solve's ``(planner or twin, solution)``."""
+    from rollplan.planners.collocation import rest
+
+    calls, solved, real_correct, real_nlp = [], [], rest.correct, rest.RestToRestPlanner.solve_nlp
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(rest, "correct", lambda *a, **kw: calls.append(a) or real_correct(*a, **kw))
+        mp.setattr(rest.RestToRestPlanner, "solve_nlp",
+                   lambda self, *a: solved.append((self, real_nlp(self, *a))) or solved[-1][1])
+        c = compare(**COMPARED, workers=2)
+    return c, calls, solved
+
+
+@pytest.fixture(scope="module")
+def comp(comp_calls):
+    return comp_calls[0]
 
 
 def test_comparison_is_fair(comp):
@@ -358,17 +377,11 @@ def test_minimum_time_within_the_limits():
     assert max(o["peak_rotor_torque"] / 0.05, o["peak_rotor_rate"] / 300.0) > 0.95
 
 
-def test_multistart_corrects_only_the_best_start_and_keeps_the_best_certified_optimum(monkeypatch):
+def test_multistart_corrects_only_the_best_start_and_keeps_the_best_certified_optimum(comp_calls):
     """The Gauss-Newton correction and the CVODES certificate cost more than an IPOPT solve; the multistart
     corrected and certified every converged start. Now only the start with the least NLP optimum is finished,
     and it is the one a brute force keeps: every converged start finished on its own, the least certified cost."""
-    from rollplan.planners.collocation import rest
-
-    calls, solved, real_correct, real_nlp = [], [], rest.correct, rest.RestToRestPlanner.solve_nlp
-    monkeypatch.setattr(rest, "correct", lambda *a, **kw: calls.append(a) or real_correct(*a, **kw))
-    monkeypatch.setattr(rest.RestToRestPlanner, "solve_nlp",
-                        lambda self, *a: solved.append((self, real_nlp(self, *a))) or solved[-1][1])
-    c = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=1)
+    c, calls, solved = comp_calls
     converged = [s for s in c.starts if s.status == "ok"]
     assert len(converged) >= 2 and len(calls) == 1 and len(solved) == len(converged)
     brute = [measure(planner.finish(nlp).motion)["angular_velocity"] for planner, nlp in solved]
@@ -408,12 +421,13 @@ def test_gauss_newton_integrates_sensitivities_only_where_it_steps():
     assert steps >= 1 and counts["plain"] // N >= steps + 1    # the first controls and one trial per step, plainly
 
 
-def test_starts_solved_in_parallel_are_those_solved_one_after_the_other():
+def test_starts_solved_in_parallel_are_those_solved_one_after_the_other(comp):
     """The starts of the multistart ran one after the other on one core; now by two workers at once, the second
     with a twin of the NLP's IPOPT solver (its derivatives shared). The brute force: the same comparison with
     one worker gives the same starts (names, statuses, NLP optima) and the same kept optimum."""
-    one = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=2, workers=1)
-    two = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=2, workers=2)
+    two = comp
+    assert len(two.starts) >= 4       # each worker solves more than one start
+    one = compare(**COMPARED, workers=1)
     assert [(s.name, s.turns, s.status) for s in two.starts] == [(s.name, s.turns, s.status) for s in one.starts]
     for a, b in zip(one.starts, two.starts):
         assert (a.cost is None) == (b.cost is None)
