@@ -60,6 +60,24 @@ def profiles(path):
     return {name: law.profile(path, LIMITS) for name, law in LAWS.items()}
 
 
+class _Motions(dict):
+    """Each law's motion sampled by its own rule (``samples_per_piece``: 400 to 20000 a piece), on the plan's goal,
+    made when first asked for."""
+
+    def __init__(self, path, profiles, goal):
+        super().__init__()
+        self.path, self.profiles, self.goal = path, profiles, goal
+
+    def __missing__(self, name):
+        self[name] = sample_motion(self.path, self.profiles[name], 2000, self.goal, LAWS[name].samples_per_piece)
+        return self[name]
+
+
+@pytest.fixture(scope="module")
+def motions(path, profiles, plan):
+    return _Motions(path, profiles, plan.goal)
+
+
 def _utilisation(path, prof, samples=50001):
     """Brute force: the largest |value| / limit over uniform samples and both sides of every pole passage."""
     t = np.linspace(0, prof.duration, samples)
@@ -165,10 +183,10 @@ def test_time_optimal_other_durations(profiles, path):
 
 
 @pytest.mark.parametrize("name", list(LAWS))
-def test_rotor_rates_alone_reach_the_target(name, profiles, path, plan):
+def test_rotor_rates_alone_reach_the_target(name, motions, plan):
     """The rotor rates, sampled by the law's own rule, drive (6)-(10) with omega from (11) (CVODES, cubic
     spline through the samples) onto the target to 1e-5 R."""
-    m = sample_motion(path, profiles[name], 2000, plan.goal, LAWS[name].samples_per_piece)
+    m = motions[name]
     sim = simulate_rotors(ROBOT, m.series.time, m.series.rotor_rates, plan.goal)
     assert sim.position_error < 1e-5 and sim.arrival_error < 1e-5
 
@@ -186,11 +204,12 @@ def test_time_optimal_rates_drive_the_printed_equations_onto_the_target(profiles
     assert err < 1e-5 and abs(references.wrap(sol.y[2, -1] - g.psi)) < 1e-5
 
 
-def test_torques_are_rates_of_axial_momentum(profiles, path):
+def test_torques_are_rates_of_axial_momentum(motions, path):
     """tau_i = J_r d/dt (n_i . omega + phi_i_dot), with the printed axes, by central differences away from
     the torque steps; the trapezoid integral of the samples (the replay rule of rollplan.execution.actuation)
     tracks the momentum to O(h x step) per pole passage."""
-    m = sample_motion(path, profiles["smooth-cruise"], 40001)
+    m = motions["smooth-cruise"]
+    assert m.series.time.size > 40000
     n1, n2, _ = references.axes(m.series.state[:, 3], m.series.state[:, 4], m.series.state[:, 2])
     jr, dt = ROBOT.rotor_inertia_axial, m.series.time[1] - m.series.time[0]
     tj = joint_times(path, m.profile)
@@ -206,7 +225,7 @@ def test_torques_are_rates_of_axial_momentum(profiles, path):
         assert np.abs(trap - h).max() < dt * steps[:, i].sum() + 1e-6 * np.abs(h).max()
 
 
-def test_torque_steps_at_poles_for_nonstop_laws(profiles, path):
+def test_torque_steps_at_poles_for_nonstop_laws(profiles, path, motions):
     """Passing a pole at speed s' the torque steps by (B+ - B-) s'^2: finite, present, seen in the samples."""
     prof = profiles["smooth-cruise"]
     tj = joint_times(path, prof)
@@ -214,7 +233,7 @@ def test_torque_steps_at_poles_for_nonstop_laws(profiles, path):
     left, right = path.evaluate(path.joints, "left"), path.evaluate(path.joints, "right")
     step = (right.B - left.B) * sd[:, None] ** 2
     assert np.abs(step).max() > 0.1 * LIMITS.max_rotor_torque and np.all(sd > 0)
-    m = sample_motion(path, prof, 100001)
+    m = motions["smooth-cruise"]
     i = np.searchsorted(m.series.time, tj[0])
     seen = m.series.rotor_torques[i + 1] - m.series.rotor_torques[i - 1]
     np.testing.assert_allclose(seen, step[0], atol=0.02 * np.abs(step[0]).max())
