@@ -129,7 +129,7 @@ def test_contract(name, profiles, path):
     assert prof.minimum_duration == pytest.approx(T, rel=1e-12)
 
 
-@pytest.mark.parametrize("name", SCALED)
+@pytest.mark.parametrize("name", [n if n == "min-jerk" else pytest.param(n, marks=pytest.mark.slow) for n in SCALED])
 def test_scaled_minimum_duration(name, path, profiles):
     """At T_min the brute-force peak utilisation is 1; just below it the law is refused naming the limit and
     the shortest duration (which is accepted when given back); rates scale as 1/T and torques as 1/T^2."""
@@ -147,6 +147,7 @@ def test_scaled_minimum_duration(name, path, profiles):
     assert r1 == pytest.approx(r0 / 2, rel=1e-6) and q1 == pytest.approx(q0 / 4, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_time_optimal_within_limits_with_one_active(profiles, path):
     """Every sample within the limits (to 1e-6), one limit active (>= 99 %) on almost all of the time, and
     faster than every other law at its own shortest duration."""
@@ -161,6 +162,7 @@ def test_time_optimal_within_limits_with_one_active(profiles, path):
         assert profiles[name].duration > prof.duration
 
 
+@pytest.mark.slow
 def test_time_optimal_against_the_phase_plane(profiles, path):
     """The law's duration (grid of 2000 intervals, stretched to meet the limits between nodes) against the
     phase-plane integration on a grid eight times finer: a little longer (conservative), within 1e-3."""
@@ -169,6 +171,7 @@ def test_time_optimal_against_the_phase_plane(profiles, path):
     assert 0 < rel < 1e-3
 
 
+@pytest.mark.slow
 def test_time_optimal_other_durations(profiles, path):
     law = get_law("time-optimal")
     tstar = profiles["time-optimal"].duration
@@ -182,7 +185,7 @@ def test_time_optimal_other_durations(profiles, path):
         law.profile(path, Limits(300.0, None), None)
 
 
-@pytest.mark.parametrize("name", list(LAWS))
+@pytest.mark.parametrize("name", [n if n == "min-jerk" else pytest.param(n, marks=pytest.mark.slow) for n in LAWS])
 def test_rotor_rates_alone_reach_the_target(name, motions, plan):
     """The rotor rates, sampled by the law's own rule, drive (6)-(10) with omega from (11) (CVODES, cubic
     spline through the samples) onto the target to 1e-5 R."""
@@ -204,6 +207,7 @@ def test_time_optimal_rates_drive_the_printed_equations_onto_the_target(profiles
     assert err < 1e-5 and abs(references.wrap(sol.y[2, -1] - g.psi)) < 1e-5
 
 
+@pytest.mark.slow
 def test_torques_are_rates_of_axial_momentum(motions, path):
     """tau_i = J_r d/dt (n_i . omega + phi_i_dot), with the printed axes, by central differences away from
     the torque steps; the trapezoid integral of the samples (the replay rule of rollplan.execution.actuation)
@@ -225,6 +229,7 @@ def test_torques_are_rates_of_axial_momentum(motions, path):
         assert np.abs(trap - h).max() < dt * steps[:, i].sum() + 1e-6 * np.abs(h).max()
 
 
+@pytest.mark.slow
 def test_torque_steps_at_poles_for_nonstop_laws(profiles, path, motions):
     """Passing a pole at speed s' the torque steps by (B+ - B-) s'^2: finite, present, seen in the samples."""
     prof = profiles["smooth-cruise"]
@@ -388,6 +393,7 @@ def test_cli_time_optimal_json(robot_file, tmp_path, capsys):
     assert fig.stat().st_size > 10000
 
 
+@pytest.mark.slow
 def test_cli_refuses_a_duration_beyond_the_limits(robot_file, capsys):
     """A too short --duration exits 2 naming the limit and the shortest feasible duration; that duration
     is then accepted."""
@@ -418,11 +424,13 @@ def test_cli_timing_errors(argv, match, capsys, tmp_path):
 
 @pytest.mark.slow
 def test_cli_plan_file_with_limits_round_trip(robot_file, tmp_path, capsys):
-    """A plan file keeps the robot's limits; simulate reads it (and plan files without them, see test_cli)."""
+    """A plan file keeps the robot's limits; simulate reads it (and plan files without them, see test_cli). The
+    timing law is min-jerk, whose rule samples 400 times a piece (smooth-cruise's 16000 made a file 40 times as
+    large, most of this test's time spent writing and reading JSON): the limits are the robot's either way."""
     from rollplan.io import load_rotor_plan
 
     out = tmp_path / "p.json"
-    assert _run(capsys, "plan", "--robot", robot_file, "--to", 0.0, 0.1, "--timing", "smooth-cruise",
+    assert _run(capsys, "plan", "--robot", robot_file, "--to", 0.0, 0.1, "--timing", "min-jerk",
                 "--json", out)[0] == 0
     assert load_rotor_plan(out).robot == ROBOT
     code, text, _ = _run(capsys, "simulate", out)
