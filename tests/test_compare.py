@@ -203,6 +203,7 @@ def small_planner():
     return RestToRestPlanner(8, 2, cost="angular_velocity")
 
 
+@pytest.mark.slow
 def test_horizon_scaling_law(small_planner, hard_path):
     """The problem is homogeneous in T: at T = 1e-6 the collocation's and the GP timing's costs are those of
     T = 1 times T^p (p = -1 for int |omega|^2 dt, -3 for int |tau|^2 dt, 0 for the path length), the peak rate
@@ -224,6 +225,7 @@ def test_horizon_scaling_law(small_planner, hard_path):
             assert small[name] == pytest.approx(one[name] * T ** p, rel=1e-9), name
 
 
+@pytest.mark.slow
 def test_contact_bound_holds_between_collocation_points():
     """With the bound active (path length, bound 0.6 rad) the NLP's bound at the collocation points is backed
     off until every sample of the certified motion is within it."""
@@ -421,6 +423,7 @@ def test_gauss_newton_integrates_sensitivities_only_where_it_steps():
     assert steps >= 1 and counts["plain"] // N >= steps + 1    # the first controls and one trial per step, plainly
 
 
+@pytest.mark.slow
 def test_starts_solved_in_parallel_are_those_solved_one_after_the_other(comp):
     """The starts of the multistart ran one after the other on one core; now by two workers at once, the second
     with a twin of the NLP's IPOPT solver (its derivatives shared). The brute force: the same comparison with
