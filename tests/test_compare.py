@@ -484,7 +484,9 @@ def test_cli_compare_curve_times_the_familys_plan(tmp_path, capsys):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("target", [(0.5, 0.3, 0.4), (0.2, 0.1, 2.0)])
+# the hard target only: the default one, (0.5, 0.3, 0.4), keeps its optimum even when every start but gp0 is
+# screened out, so it cannot tell a screening that drops the start of the optimum
+@pytest.mark.parametrize("target", [(0.2, 0.1, 2.0)])
 def test_screened_multistart_keeps_the_optimum_of_the_full_multistart(target, monkeypatch):
     """Every start was solved on the full grid, the hard ones for up to 150 IPOPT iterations each. Now the starts
     are screened on the coarse grid and only gp0 and the promising ones solved on the full grid. The brute force:
