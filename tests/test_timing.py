@@ -244,6 +244,14 @@ def test_torque_steps_at_poles_for_nonstop_laws(profiles, path, motions):
     np.testing.assert_allclose(seen, step[0], atol=0.02 * np.abs(step[0]).max())
 
 
+def test_actuate_times_a_plan_by_default_with_min_jerk(plan):
+    """actuate: the default is min-jerk, resting at every joint at the times the duration gives."""
+    mj = actuate(plan, rollplan.Robot(), 12.0)
+    assert mj.timing == "min-jerk" and mj.minimum_duration is None
+    np.testing.assert_allclose(mj.series.time[mj.rest_indices], [0, 3, 6, 9, 12], atol=1e-12)
+
+
+@pytest.mark.slow
 def test_actuate_times_a_plan(plan):
     """actuate: the default is min-jerk; with limits and no duration, the law's shortest duration."""
     m = actuate(plan, ROBOT, None, 10, "time-optimal")
