@@ -125,17 +125,21 @@ COMPARED = dict(target=(0.5, 0.3, 0.4), steps=1, k=K, intervals=16, branches=1)
 
 @pytest.fixture(scope="module")
 def comp_calls():
-    """The comparison of :data:`COMPARED` by two workers (the second with a twin solver), and what its multistart
-    called: ``(comparison, corrections, solved)``, ``solved`` each NLP solve's ``(planner or twin, solution)``."""
+    """The comparison of :data:`COMPARED` by two workers (the second with a twin solver), what its multistart
+    called and the progress it reported: ``(comparison, corrections, solved, seen)``, ``solved`` each NLP solve's
+    ``(planner or twin, solution)``, ``seen`` each report's ``(label, done, total, stage)``."""
     from rollplan.planners.collocation import rest
+    from rollplan.progress import reporting
 
     calls, solved, real_correct, real_nlp = [], [], rest.correct, rest.RestToRestPlanner.solve_nlp
-    with pytest.MonkeyPatch.context() as mp:
+    seen = []
+    with pytest.MonkeyPatch.context() as mp, \
+            reporting(lambda label, done, total, **kw: seen.append((label, done, total, kw.get("stage")))):
         mp.setattr(rest, "correct", lambda *a, **kw: calls.append(a) or real_correct(*a, **kw))
         mp.setattr(rest.RestToRestPlanner, "solve_nlp",
                    lambda self, *a: solved.append((self, real_nlp(self, *a))) or solved[-1][1])
         c = compare(**COMPARED, workers=2)
-    return c, calls, solved
+    return c, calls, solved, seen
 
 
 @pytest.fixture(scope="module")
@@ -305,14 +309,9 @@ def test_intervals_beyond_what_memory_serves_are_refused_at_once(intervals):
     assert time.perf_counter() - t0 < 60   # before any work (start-up of a loaded machine included)
 
 
-@pytest.mark.slow
-def test_compare_shows_its_progress():
+def test_compare_shows_its_progress(comp_calls):
     """Long comparisons were silent: compare reports its stages (the NLP, the GP timing, each collocation start)."""
-    from rollplan.progress import reporting
-
-    seen = []
-    with reporting(lambda label, done, total, **kw: seen.append((label, done, total, kw.get("stage")))):
-        compare((0.5, 0.3, 0.4), 1, k=K, intervals=8, branches=1, naive=True)
+    seen = comp_calls[3]
     mine = [s for s in seen if s[0] == "compare"]
     stages = [s[3] for s in mine]
     assert stages[:2] == ["building the collocation NLP", "timing the geometric-phase branches"]
@@ -383,7 +382,7 @@ def test_multistart_corrects_only_the_best_start_and_keeps_the_best_certified_op
     """The Gauss-Newton correction and the CVODES certificate cost more than an IPOPT solve; the multistart
     corrected and certified every converged start. Now only the start with the least NLP optimum is finished,
     and it is the one a brute force keeps: every converged start finished on its own, the least certified cost."""
-    c, calls, solved = comp_calls
+    c, calls, solved, _ = comp_calls
     converged = [s for s in c.starts if s.status == "ok"]
     assert len(converged) >= 2 and len(calls) == 1 and len(solved) == len(converged)
     brute = [measure(planner.finish(nlp).motion)["angular_velocity"] for planner, nlp in solved]
