@@ -611,9 +611,9 @@ def test_curve_column_chooses_the_family_per_row_and_is_echoed(tmp_path, capsys)
     it (for ``best``, the family chosen); the Viviani plan, integrated by DOP853 along the typed lobes (printed
     (28)-(30)), lands on its target; a bad family fails its row with a line naming the value and the choices.
 
-    Each leaf family builds its C tables for each k it meets (seconds each), so the rows share one k, and the
-    ``best`` row has a k below 1/2, where only the circles plan (the other families refuse that k): the family
-    ``best`` chose is then known without building the tables of all four families."""
+    Each leaf family builds its C tables for each k it meets, so the rows share one k, and the ``best`` row has a k
+    below 1/2, where only the circles plan (the other families refuse that k): the family ``best`` chose is then
+    known without building the tables of all four families."""
     path = tmp_path / "t.csv"
     path.write_text("u_a,v_a,psi,k,curve\n0,1,0,1,viviani\n0,1,0,1,\n0,1,0,1,hexagon\n0.2,0.5,0.3,0.2,best\n")
     out = tmp_path / "o.jsonl"

@@ -432,9 +432,8 @@ def test_cli_timing_errors(argv, match, capsys, tmp_path):
 
 @pytest.mark.slow
 def test_cli_plan_file_with_limits_round_trip(robot_file, tmp_path, capsys):
-    """A plan file keeps the robot's limits; simulate reads it (and plan files without them, see test_cli). The
-    timing law is min-jerk, whose rule samples 400 times a piece (smooth-cruise's 16000 made a file 40 times as
-    large, most of this test's time spent writing and reading JSON): the limits are the robot's either way."""
+    """A plan file keeps the robot's limits; simulate reads it (and plan files without them, see test_cli). Timed
+    by min-jerk, the law with the fewest samples a piece (the smallest file): the limits kept do not depend on it."""
     from rollplan.io import load_rotor_plan
 
     out = tmp_path / "p.json"
