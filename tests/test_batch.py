@@ -566,6 +566,7 @@ def test_the_shipped_example_runs(tmp_path, capsys):
         assert [d["final"]["u_a"], d["final"]["v_a"], d["final"]["psi"]] == pytest.approx([u, v, psi], abs=1e-9)
 
 
+@pytest.mark.slow
 def test_rows_are_planned_many_per_call_as_one_by_one(tmp_path, monkeypatch):
     """The planning phase gives the rows of one k and one number of steps to plan_many together (not one call each),
     and writes the lines plan_row writes for each row alone (solver times aside), failures and a target that needs
