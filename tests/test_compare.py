@@ -440,6 +440,7 @@ def test_starts_solved_in_parallel_are_those_solved_one_after_the_other(comp):
     assert two.collocation.residual <= 1e-9 and one.collocation.residual <= 1e-9
 
 
+@pytest.mark.slow
 def test_twin_solver_solves_the_same_nlp_alone_and_at_the_same_time():
     """A twin's IPOPT (derivatives shared with its planner) solves the NLP to the planner's own optimum, also while
     the planner solves another start in another thread (each solver's statistics its own)."""
