@@ -119,9 +119,32 @@ def test_contact_bound_and_leaf_radius():
     assert robot_for_k(K).k == pytest.approx(K, rel=1e-14) and robot_for_k(K).j_zz == pytest.approx(1.0)
 
 
+#: The comparison of the module's tests (``comp``), and of the brute forces of its multistart.
+COMPARED = dict(target=(0.5, 0.3, 0.4), steps=1, k=K, intervals=16, branches=1)
+
+
 @pytest.fixture(scope="module")
-def comp():
-    return compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=1, naive=False)
+def comp_calls():
+    """The comparison of :data:`COMPARED` by two workers (the second with a twin solver), what its multistart
+    called and the progress it reported: ``(comparison, corrections, solved, seen)``, ``solved`` each NLP solve's
+    ``(planner or twin, solution)``, ``seen`` each report's ``(label, done, total, stage)``."""
+    from rollplan.planners.collocation import rest
+    from rollplan.progress import reporting
+
+    calls, solved, real_correct, real_nlp = [], [], rest.correct, rest.RestToRestPlanner.solve_nlp
+    seen = []
+    with pytest.MonkeyPatch.context() as mp, \
+            reporting(lambda label, done, total, **kw: seen.append((label, done, total, kw.get("stage")))):
+        mp.setattr(rest, "correct", lambda *a, **kw: calls.append(a) or real_correct(*a, **kw))
+        mp.setattr(rest.RestToRestPlanner, "solve_nlp",
+                   lambda self, *a: solved.append((self, real_nlp(self, *a))) or solved[-1][1])
+        c = compare(**COMPARED, workers=2)
+    return c, calls, solved, seen
+
+
+@pytest.fixture(scope="module")
+def comp(comp_calls):
+    return comp_calls[0]
 
 
 def test_comparison_is_fair(comp):
@@ -184,6 +207,7 @@ def small_planner():
     return RestToRestPlanner(8, 2, cost="angular_velocity")
 
 
+@pytest.mark.slow
 def test_horizon_scaling_law(small_planner, hard_path):
     """The problem is homogeneous in T: at T = 1e-6 the collocation's and the GP timing's costs are those of
     T = 1 times T^p (p = -1 for int |omega|^2 dt, -3 for int |tau|^2 dt, 0 for the path length), the peak rate
@@ -205,6 +229,7 @@ def test_horizon_scaling_law(small_planner, hard_path):
             assert small[name] == pytest.approx(one[name] * T ** p, rel=1e-9), name
 
 
+@pytest.mark.slow
 def test_contact_bound_holds_between_collocation_points():
     """With the bound active (path length, bound 0.6 rad) the NLP's bound at the collocation points is backed
     off until every sample of the certified motion is within it."""
@@ -284,14 +309,9 @@ def test_intervals_beyond_what_memory_serves_are_refused_at_once(intervals):
     assert time.perf_counter() - t0 < 60   # before any work (start-up of a loaded machine included)
 
 
-@pytest.mark.slow
-def test_compare_shows_its_progress():
+def test_compare_shows_its_progress(comp_calls):
     """Long comparisons were silent: compare reports its stages (the NLP, the GP timing, each collocation start)."""
-    from rollplan.progress import reporting
-
-    seen = []
-    with reporting(lambda label, done, total, **kw: seen.append((label, done, total, kw.get("stage")))):
-        compare((0.5, 0.3, 0.4), 1, k=K, intervals=8, branches=1, naive=True)
+    seen = comp_calls[3]
     mine = [s for s in seen if s[0] == "compare"]
     stages = [s[3] for s in mine]
     assert stages[:2] == ["building the collocation NLP", "timing the geometric-phase branches"]
@@ -358,17 +378,11 @@ def test_minimum_time_within_the_limits():
     assert max(o["peak_rotor_torque"] / 0.05, o["peak_rotor_rate"] / 300.0) > 0.95
 
 
-def test_multistart_corrects_only_the_best_start_and_keeps_the_best_certified_optimum(monkeypatch):
+def test_multistart_corrects_only_the_best_start_and_keeps_the_best_certified_optimum(comp_calls):
     """The Gauss-Newton correction and the CVODES certificate cost more than an IPOPT solve; the multistart
     corrected and certified every converged start. Now only the start with the least NLP optimum is finished,
     and it is the one a brute force keeps: every converged start finished on its own, the least certified cost."""
-    from rollplan.planners.collocation import rest
-
-    calls, solved, real_correct, real_nlp = [], [], rest.correct, rest.RestToRestPlanner.solve_nlp
-    monkeypatch.setattr(rest, "correct", lambda *a, **kw: calls.append(a) or real_correct(*a, **kw))
-    monkeypatch.setattr(rest.RestToRestPlanner, "solve_nlp",
-                        lambda self, *a: solved.append((self, real_nlp(self, *a))) or solved[-1][1])
-    c = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=1)
+    c, calls, solved, _ = comp_calls
     converged = [s for s in c.starts if s.status == "ok"]
     assert len(converged) >= 2 and len(calls) == 1 and len(solved) == len(converged)
     brute = [measure(planner.finish(nlp).motion)["angular_velocity"] for planner, nlp in solved]
@@ -408,12 +422,14 @@ def test_gauss_newton_integrates_sensitivities_only_where_it_steps():
     assert steps >= 1 and counts["plain"] // N >= steps + 1    # the first controls and one trial per step, plainly
 
 
-def test_starts_solved_in_parallel_are_those_solved_one_after_the_other():
+@pytest.mark.slow
+def test_starts_solved_in_parallel_are_those_solved_one_after_the_other(comp):
     """The starts of the multistart ran one after the other on one core; now by two workers at once, the second
     with a twin of the NLP's IPOPT solver (its derivatives shared). The brute force: the same comparison with
     one worker gives the same starts (names, statuses, NLP optima) and the same kept optimum."""
-    one = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=2, workers=1)
-    two = compare((0.5, 0.3, 0.4), 1, k=K, intervals=16, branches=2, workers=2)
+    two = comp
+    assert len(two.starts) >= 4       # each worker solves more than one start
+    one = compare(**COMPARED, workers=1)
     assert [(s.name, s.turns, s.status) for s in two.starts] == [(s.name, s.turns, s.status) for s in one.starts]
     for a, b in zip(one.starts, two.starts):
         assert (a.cost is None) == (b.cost is None)
@@ -424,6 +440,7 @@ def test_starts_solved_in_parallel_are_those_solved_one_after_the_other():
     assert two.collocation.residual <= 1e-9 and one.collocation.residual <= 1e-9
 
 
+@pytest.mark.slow
 def test_twin_solver_solves_the_same_nlp_alone_and_at_the_same_time():
     """A twin's IPOPT (derivatives shared with its planner) solves the NLP to the planner's own optimum, also while
     the planner solves another start in another thread (each solver's statistics its own)."""
@@ -467,7 +484,9 @@ def test_cli_compare_curve_times_the_familys_plan(tmp_path, capsys):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("target", [(0.5, 0.3, 0.4), (0.2, 0.1, 2.0)])
+# the hard target only: the default one, (0.5, 0.3, 0.4), keeps its optimum even when every start but gp0 is
+# screened out, so it cannot tell a screening that drops the start of the optimum
+@pytest.mark.parametrize("target", [(0.2, 0.1, 2.0)])
 def test_screened_multistart_keeps_the_optimum_of_the_full_multistart(target, monkeypatch):
     """Every start was solved on the full grid, the hard ones for up to 150 IPOPT iterations each. Now the starts
     are screened on the coarse grid and only gp0 and the promising ones solved on the full grid. The brute force:

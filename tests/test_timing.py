@@ -60,6 +60,24 @@ def profiles(path):
     return {name: law.profile(path, LIMITS) for name, law in LAWS.items()}
 
 
+class _Motions(dict):
+    """Each law's motion sampled by its own rule (``samples_per_piece``: 400 to 20000 a piece), on the plan's goal,
+    made when first asked for."""
+
+    def __init__(self, path, profiles, goal):
+        super().__init__()
+        self.path, self.profiles, self.goal = path, profiles, goal
+
+    def __missing__(self, name):
+        self[name] = sample_motion(self.path, self.profiles[name], 2000, self.goal, LAWS[name].samples_per_piece)
+        return self[name]
+
+
+@pytest.fixture(scope="module")
+def motions(path, profiles, plan):
+    return _Motions(path, profiles, plan.goal)
+
+
 def _utilisation(path, prof, samples=50001):
     """Brute force: the largest |value| / limit over uniform samples and both sides of every pole passage."""
     t = np.linspace(0, prof.duration, samples)
@@ -111,7 +129,7 @@ def test_contract(name, profiles, path):
     assert prof.minimum_duration == pytest.approx(T, rel=1e-12)
 
 
-@pytest.mark.parametrize("name", SCALED)
+@pytest.mark.parametrize("name", [n if n == "min-jerk" else pytest.param(n, marks=pytest.mark.slow) for n in SCALED])
 def test_scaled_minimum_duration(name, path, profiles):
     """At T_min the brute-force peak utilisation is 1; just below it the law is refused naming the limit and
     the shortest duration (which is accepted when given back); rates scale as 1/T and torques as 1/T^2."""
@@ -129,6 +147,7 @@ def test_scaled_minimum_duration(name, path, profiles):
     assert r1 == pytest.approx(r0 / 2, rel=1e-6) and q1 == pytest.approx(q0 / 4, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_time_optimal_within_limits_with_one_active(profiles, path):
     """Every sample within the limits (to 1e-6), one limit active (>= 99 %) on almost all of the time, and
     faster than every other law at its own shortest duration."""
@@ -143,6 +162,7 @@ def test_time_optimal_within_limits_with_one_active(profiles, path):
         assert profiles[name].duration > prof.duration
 
 
+@pytest.mark.slow
 def test_time_optimal_against_the_phase_plane(profiles, path):
     """The law's duration (grid of 2000 intervals, stretched to meet the limits between nodes) against the
     phase-plane integration on a grid eight times finer: a little longer (conservative), within 1e-3."""
@@ -151,6 +171,7 @@ def test_time_optimal_against_the_phase_plane(profiles, path):
     assert 0 < rel < 1e-3
 
 
+@pytest.mark.slow
 def test_time_optimal_other_durations(profiles, path):
     law = get_law("time-optimal")
     tstar = profiles["time-optimal"].duration
@@ -164,11 +185,11 @@ def test_time_optimal_other_durations(profiles, path):
         law.profile(path, Limits(300.0, None), None)
 
 
-@pytest.mark.parametrize("name", list(LAWS))
-def test_rotor_rates_alone_reach_the_target(name, profiles, path, plan):
+@pytest.mark.parametrize("name", [n if n == "min-jerk" else pytest.param(n, marks=pytest.mark.slow) for n in LAWS])
+def test_rotor_rates_alone_reach_the_target(name, motions, plan):
     """The rotor rates, sampled by the law's own rule, drive (6)-(10) with omega from (11) (CVODES, cubic
     spline through the samples) onto the target to 1e-5 R."""
-    m = sample_motion(path, profiles[name], 2000, plan.goal, LAWS[name].samples_per_piece)
+    m = motions[name]
     sim = simulate_rotors(ROBOT, m.series.time, m.series.rotor_rates, plan.goal)
     assert sim.position_error < 1e-5 and sim.arrival_error < 1e-5
 
@@ -186,11 +207,13 @@ def test_time_optimal_rates_drive_the_printed_equations_onto_the_target(profiles
     assert err < 1e-5 and abs(references.wrap(sol.y[2, -1] - g.psi)) < 1e-5
 
 
-def test_torques_are_rates_of_axial_momentum(profiles, path):
+@pytest.mark.slow
+def test_torques_are_rates_of_axial_momentum(motions, path):
     """tau_i = J_r d/dt (n_i . omega + phi_i_dot), with the printed axes, by central differences away from
     the torque steps; the trapezoid integral of the samples (the replay rule of rollplan.execution.actuation)
     tracks the momentum to O(h x step) per pole passage."""
-    m = sample_motion(path, profiles["smooth-cruise"], 40001)
+    m = motions["smooth-cruise"]
+    assert m.series.time.size > 40000
     n1, n2, _ = references.axes(m.series.state[:, 3], m.series.state[:, 4], m.series.state[:, 2])
     jr, dt = ROBOT.rotor_inertia_axial, m.series.time[1] - m.series.time[0]
     tj = joint_times(path, m.profile)
@@ -206,7 +229,8 @@ def test_torques_are_rates_of_axial_momentum(profiles, path):
         assert np.abs(trap - h).max() < dt * steps[:, i].sum() + 1e-6 * np.abs(h).max()
 
 
-def test_torque_steps_at_poles_for_nonstop_laws(profiles, path):
+@pytest.mark.slow
+def test_torque_steps_at_poles_for_nonstop_laws(profiles, path, motions):
     """Passing a pole at speed s' the torque steps by (B+ - B-) s'^2: finite, present, seen in the samples."""
     prof = profiles["smooth-cruise"]
     tj = joint_times(path, prof)
@@ -214,12 +238,20 @@ def test_torque_steps_at_poles_for_nonstop_laws(profiles, path):
     left, right = path.evaluate(path.joints, "left"), path.evaluate(path.joints, "right")
     step = (right.B - left.B) * sd[:, None] ** 2
     assert np.abs(step).max() > 0.1 * LIMITS.max_rotor_torque and np.all(sd > 0)
-    m = sample_motion(path, prof, 100001)
+    m = motions["smooth-cruise"]
     i = np.searchsorted(m.series.time, tj[0])
     seen = m.series.rotor_torques[i + 1] - m.series.rotor_torques[i - 1]
     np.testing.assert_allclose(seen, step[0], atol=0.02 * np.abs(step[0]).max())
 
 
+def test_actuate_times_a_plan_by_default_with_min_jerk(plan):
+    """actuate: the default is min-jerk, resting at every joint at the times the duration gives."""
+    mj = actuate(plan, rollplan.Robot(), 12.0)
+    assert mj.timing == "min-jerk" and mj.minimum_duration is None
+    np.testing.assert_allclose(mj.series.time[mj.rest_indices], [0, 3, 6, 9, 12], atol=1e-12)
+
+
+@pytest.mark.slow
 def test_actuate_times_a_plan(plan):
     """actuate: the default is min-jerk; with limits and no duration, the law's shortest duration."""
     m = actuate(plan, ROBOT, None, 10, "time-optimal")
@@ -369,6 +401,7 @@ def test_cli_time_optimal_json(robot_file, tmp_path, capsys):
     assert fig.stat().st_size > 10000
 
 
+@pytest.mark.slow
 def test_cli_refuses_a_duration_beyond_the_limits(robot_file, capsys):
     """A too short --duration exits 2 naming the limit and the shortest feasible duration; that duration
     is then accepted."""
@@ -399,11 +432,12 @@ def test_cli_timing_errors(argv, match, capsys, tmp_path):
 
 @pytest.mark.slow
 def test_cli_plan_file_with_limits_round_trip(robot_file, tmp_path, capsys):
-    """A plan file keeps the robot's limits; simulate reads it (and plan files without them, see test_cli)."""
+    """A plan file keeps the robot's limits; simulate reads it (and plan files without them, see test_cli). Timed
+    by min-jerk, the law with the fewest samples a piece (the smallest file): the limits kept do not depend on it."""
     from rollplan.io import load_rotor_plan
 
     out = tmp_path / "p.json"
-    assert _run(capsys, "plan", "--robot", robot_file, "--to", 0.0, 0.1, "--timing", "smooth-cruise",
+    assert _run(capsys, "plan", "--robot", robot_file, "--to", 0.0, 0.1, "--timing", "min-jerk",
                 "--json", out)[0] == 0
     assert load_rotor_plan(out).robot == ROBOT
     code, text, _ = _run(capsys, "simulate", out)

@@ -112,16 +112,33 @@ def test_torque_bound_against_lp():
             assert res.x[1] == pytest.approx(1e9)
 
 
+class _Grids(dict):
+    """The grids of a path by their number of intervals, each made once."""
+
+    def __init__(self, path):
+        super().__init__()
+        self.path = path
+
+    def __missing__(self, n):
+        self[n] = self.path.grid(n)
+        return self[n]
+
+
 @pytest.fixture(scope="module")
 def plan_path():
     robot = rollplan.Robot()
     return ContactPath.of_plan(rollplan.plan((0.05, 0.08, 0.5), 2, robot=robot), robot)
 
 
-def test_grid_solvers_agree_on_a_plan(plan_path):
+@pytest.fixture(scope="module")
+def grids(plan_path):
+    return _Grids(plan_path)
+
+
+def test_grid_solvers_agree_on_a_plan(grids):
     """numpy (TOPP-RA's passes) and casadi (IPOPT: the optimum of the convex discrete problem) on one grid;
     both meet the rows of the discrete problem."""
-    grid = plan_path.grid(1000)
+    grid = grids[1000]
     numpy_, casadi_ = (solve_topp(grid, LIMITS, backend=b) for b in ("numpy", "casadi"))
     assert casadi_.duration == pytest.approx(numpy_.duration, rel=1e-5)
     assert casadi_.duration <= numpy_.duration * (1 + 1e-9)  # the greedy pass is not shorter than the optimum
@@ -131,22 +148,23 @@ def test_grid_solvers_agree_on_a_plan(plan_path):
 
 
 @pytest.mark.slow
-def test_toppra_agrees_on_a_plan(plan_path):
+def test_toppra_agrees_on_a_plan(grids):
     """The TOPP-RA library on the same rows as the numpy passes (where toppra is installed)."""
     if not toppra_available():
         pytest.skip("toppra is not installed (pip install 'rollplan[toppra]')")
-    grid = plan_path.grid(2000)
+    grid = grids[2000]
     ours, lib = solve_topp(grid, LIMITS), solve_topp(grid, LIMITS, backend="toppra")
     assert lib.duration == pytest.approx(ours.duration, rel=1e-6)
     assert grid_violation(grid, lib, LIMITS)["torque"] < 1e-6
 
 
-def test_phase_plane_agrees_and_converges(plan_path):
+@pytest.mark.slow
+def test_phase_plane_agrees_and_converges(grids):
     """The relative difference of the grid solution and the phase-plane integration falls with the grid size;
     the grid solution (feasible at its nodes) is the longer."""
     diffs = []
     for n in (1000, 3000, 9000):
-        grid = plan_path.grid(n)
+        grid = grids[n]
         t_grid = solve_topp(grid, LIMITS).duration
         t_pp = references.phase_plane_topp(grid, LIMITS.max_rotor_rate, LIMITS.max_rotor_torque)["duration"]
         diffs.append((t_grid - t_pp) / t_pp)
@@ -154,9 +172,9 @@ def test_phase_plane_agrees_and_converges(plan_path):
     assert diffs[2] < 3e-4
 
 
-def test_bang_bang(plan_path):
+def test_bang_bang(grids):
     """On almost all of the time a torque row or the rate bound is active (to 1e-3)."""
-    grid = plan_path.grid(2000)
+    grid = grids[2000]
     prof = solve_topp(grid, LIMITS)
     u = prof.u[:, None]
     tq = np.maximum(np.abs(grid.A_right[:-1] * u + grid.B_right[:-1] * prof.x[:-1, None]).max(axis=1),
