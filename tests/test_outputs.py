@@ -341,7 +341,7 @@ JSON_VALUES = st.recursive(
     max_leaves=30)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=120, deadline=None)
 @given(obj=JSON_VALUES, size=st.integers(1, 200))
 def test_json_chunks_are_json_dumps_for_any_value(obj, size):
     """Byte for byte json.dumps(obj, indent=1) and a newline, for any JSON value: numbers (-0.0, huge ints,
