@@ -53,6 +53,7 @@ def check_lines(lines, rows=ROWS):
             assert abs(f["u_a"] - u) < 1e-9 and abs(f["v_a"] - v) < 1e-9 and abs(f["psi"] - psi) < 1e-9
 
 
+@pytest.mark.slow
 def test_order_kept_and_failures_recorded_in_parallel(tmp_path):
     out = tmp_path / "plans.jsonl"
     r = run_batch(write_csv(tmp_path / "t.csv"), out, jobs=2)
@@ -68,6 +69,7 @@ def test_order_kept_and_failures_recorded_in_parallel(tmp_path):
     assert x == pytest.approx([0.3, -0.4, 0.2], abs=1e-9)
 
 
+@pytest.mark.slow
 def test_interrupted_run_keeps_lines_and_resumes(tmp_path):
     csv_path, out = write_csv(tmp_path / "t.csv"), tmp_path / "plans.jsonl"
 

@@ -49,6 +49,7 @@ def test_estimate_bounds_the_true_error(seed):
     assert final.u_o == pytest.approx(0.0, abs=1e-14) and final.v_o == pytest.approx(0.0, abs=1e-14)
 
 
+@pytest.mark.slow
 def test_estimate_bounds_the_error_at_high_k():
     cert = RK8Certifier()
     ref = references.trace(0.69, 0.3, 30.0, 0.4, 1)

@@ -22,6 +22,7 @@ import references
 
 # ----------------------------------------------------------------------------- plan and step
 
+@pytest.mark.slow
 def test_plan_paper_case_json_and_plot(tmp_path, capsys):
     js, png = tmp_path / "p.json", tmp_path / "p.png"
     code, out, _ = run(capsys, "plan", "--to", "0", "1", "--k", "2.5", "--all", "--json", str(js), "--plot", str(png))

@@ -307,6 +307,7 @@ def test_close_pair_hidden_by_the_table_is_found_on_the_accurate_map():
     np.testing.assert_allclose(scanned, brute, rtol=0, atol=1e-10)
 
 
+@pytest.mark.slow
 def test_first_root_behind_a_tangency_at_the_end_of_the_graph():
     """A shift of 1.2e-3 R in 5 steps, eta ~ 2e-7, k = 3.11: at a = 0, g = -h^2 is within the table's floor and flat,
     a tangency of the table that the polish moves onto a = 0 (no root). The branch's first root, at a = b = 0.0166,

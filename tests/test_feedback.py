@@ -217,6 +217,7 @@ def plan_file(tmp_path_factory):
     return d, f, real
 
 
+@pytest.mark.slow
 def test_cli_closed_loop_json(plan_file, capsys):
     d, f, real = plan_file
     out = str(d / "cl.json")

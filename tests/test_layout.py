@@ -81,6 +81,7 @@ def test_every_module_is_found():
             "rollplan.studies.paper.stages", "rollplan.plots.paper"} <= set(MODULES)
 
 
+@pytest.mark.slow
 def test_no_module_imports_another_modules_private_names():
     bad = [f"{MODULES[name].relative_to(PACKAGE.parent)}:{line}: from {target} import {item}"
            for name in MODULES for target, item, line in _imports(name)
