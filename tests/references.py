@@ -45,6 +45,7 @@ radius is given, angles in rad.
 
 from __future__ import annotations
 
+import math
 from copy import deepcopy
 from fractions import Fraction
 from functools import lru_cache, wraps
@@ -290,30 +291,42 @@ def curve_rhs(point, dpoint, psi, k, radius=1.0):
     (29) is printed with ``v^2`` under the root; it is ``y^2`` as in (28) (a misprint). ``point`` and ``dpoint``
     may also be of shape (3, N) (N curves at once; then ``psi`` is of shape (N,)).
     """
+    m = math if np.ndim(psi) == 0 else np     # scalar arithmetic for one point: DOP853 calls this ~10^5 times
     x, y, z = point
-    s = np.sqrt(radius**2 - y**2)
+    s = m.sqrt(radius**2 - y**2)
     p = z * dpoint[0] - x * dpoint[2]                                   # (z, 0, -x) . dpoint
     q = -x * y / s * dpoint[0] + s * dpoint[1] - y * z / s * dpoint[2]  # (-x y / s, s, -y z / s) . dpoint
     return np.array([
-        -np.cos(psi) / s * p + np.sin(psi) / radius * q,
-        np.sin(psi) / s * p + np.cos(psi) / radius * q,
+        -m.cos(psi) / s * p + m.sin(psi) / radius * q,
+        m.sin(psi) / s * p + m.cos(psi) / radius * q,
         ((1 - k) * y * p / (radius**2 - y**2) + k * x * q / (z * s)) / radius,
     ])
 
 
+def _circle_xyz(a, phi, side, gamma, m):
+    """The point and d/dphi of :func:`circle` as tuples of their entries (``m``: math or numpy)."""
+    d = m.sqrt(1 - a * a)
+    s, c = m.sin(phi), m.cos(phi)
+    p = (a * s, side * (-a * d * c + d * a), -a * a * c - d * d)
+    dp = (a * c, side * a * d * s, a * a * s)
+    cg, sg = m.cos(gamma), m.sin(gamma)         # Rz(gamma) (31)
+
+    def turned(v):
+        return cg * v[0] - sg * v[1], sg * v[0] + cg * v[1], v[2]
+
+    return turned(p), turned(dp)
+
+
 def circle(a, phi, side, gamma=0.0):
     """Point of the circle (35) of radius a (side +1: +y, -1: -y) turned by Rz(gamma) (31), and d/dphi."""
-    d = np.sqrt(1 - a * a)
-    s, c = np.sin(phi), np.cos(phi)
-    p = np.array([a * s, side * (-a * d * c + d * a), -a * a * c - d * d])
-    dp = np.array([a * c, side * a * d * s, a * a * s])
-    rz = _rz(gamma)
-    return rz @ p, rz @ dp
+    scalar = np.ndim(a) == 0 and np.ndim(phi) == 0 and np.ndim(gamma) == 0
+    p, dp = _circle_xyz(a, phi, side, gamma, math if scalar else np)
+    return np.array(p), np.array(dp)
 
 
 def rhs(phi, state, a, side, k, gamma):
     """(28)-(30) along the circle (35) rotated by gamma (R = 1): the right side for solve_ivp."""
-    point, dpoint = circle(a, phi, side, gamma)
+    point, dpoint = _circle_xyz(a, phi, side, gamma, math)
     return curve_rhs(point, dpoint, state[2], k)
 
 
