@@ -12,6 +12,7 @@ import re
 import struct
 import subprocess
 import sys
+import tempfile
 import termios
 import threading
 
@@ -175,26 +176,28 @@ def test_ctrl_c_while_a_long_list_is_certified_exits_130_within_a_second():
 
 
 #: ``python -c`` program: the command line (argv after the program) with every progress display shown at once
-#: (the command line shows one only after 5 s of work).
-_NO_PROGRESS_DELAY = """import sys
+#: (the command line shows one only after 5 s of work: tests/test_progress.py checks the delay on a terminal); it
+#: prints the delays asked for on stdout.
+_AT_ONCE = """import sys
 import rollplan.progress
 init = rollplan.progress.Progress.__init__
-def shown_at_once(self, *args, **kwargs):
+def sooner(self, *args, **kwargs):
+    print("delay", kwargs.get("delay"), flush=True)
     kwargs["delay"] = 0.0
     init(self, *args, **kwargs)
-rollplan.progress.Progress.__init__ = shown_at_once
+rollplan.progress.Progress.__init__ = sooner
 from rollplan.cli import main
 sys.exit(main(sys.argv[1:]))
 """
 
 
-def _run_on_a_terminal(argv, columns=120, delay=True):
-    """``rollplan argv`` with stderr on a pseudo-terminal of ``columns`` columns: (exit code, stderr text); without
-    ``delay`` its progress shows from the start (:data:`_NO_PROGRESS_DELAY`)."""
+def _run_on_a_terminal(argv, columns=120):
+    """``rollplan argv`` with stderr on a pseudo-terminal of ``columns`` columns, its progress shown at once
+    (:data:`_AT_ONCE`): (exit code, stderr text, stdout text)."""
     main, side = pty.openpty()
     fcntl.ioctl(side, termios.TIOCSWINSZ, struct.pack("HHHH", 24, columns, 0, 0))
-    command = ["-m", "rollplan.cli"] if delay else ["-c", _NO_PROGRESS_DELAY]
-    proc = subprocess.Popen([sys.executable, *command, *argv], stdout=subprocess.DEVNULL, stderr=side)
+    out = tempfile.TemporaryFile()  # noqa: SIM115 (read after the process ends, closed on return)
+    proc = subprocess.Popen([sys.executable, "-c", _AT_ONCE, *argv], stdout=out, stderr=side)
     os.close(side)
     got = []
 
@@ -213,17 +216,21 @@ def _run_on_a_terminal(argv, columns=120, delay=True):
     code = proc.wait(timeout=600)
     reader.join(10)
     os.close(main)
-    return code, b"".join(got).decode(errors="replace")
+    out.seek(0)
+    with out:
+        return code, b"".join(got).decode(errors="replace"), out.read().decode()
 
 
 @pytest.mark.slow
 def test_a_long_list_shows_a_progress_bar_on_a_terminal():
     """`plan --all` on a terminal: a bar of the certificates that ends at the count of roots. The command line shows
-    a bar only after 5 s of work; here it shows from the start (:data:`_NO_PROGRESS_DELAY`), so that a list of
-    tens of roots (k = 4, n = 2) shows it instead of thousands certified for more than 5 s."""
+    a bar only after 5 s of work (checked: the delay it asks for); here the bar shows at once
+    (:data:`_AT_ONCE`), so that a list of tens of roots (k = 4, n = 2) shows it instead of thousands
+    certified for more than 5 s."""
     _require_library()
-    code, err = _run_on_a_terminal(["plan", "--to", "0", "1", "--k", "4", "--steps", "2", "--all"], delay=False)
+    code, err, out = _run_on_a_terminal(["plan", "--to", "0", "1", "--k", "4", "--steps", "2", "--all"])
     assert code == 0, err
+    assert out.splitlines()[0] == "delay 5.0", out[:200]
     listed = re.search(r"all plans: (\d+)", err) or re.search(r"certify \(k = 4, (\d+) roots\)", err)
     assert listed, err[-2000:]
     n = listed.group(1)

@@ -90,3 +90,19 @@ def test_the_cvodes_trace_of_many_steps_reports(planner):
     with reporting(Progress(stream=buf, interval=0.0)):
         planner.cvodes.final(0.3, 0.3, 2.5, 0.0, 3)
     assert re.findall(r"CVODES trace, steps: (\d)/3", buf.getvalue()) == ["1", "2", "3"]
+
+
+def test_tqdm_bar_on_a_terminal_waits_for_its_delay():
+    """On a terminal the bar too shows only once the work has gone on for the delay (tqdm's own delay): none for
+    work shorter than it, a bar after it."""
+    quick, slow = io.StringIO(), io.StringIO()
+    for buf, seconds in ((quick, 0.05), (slow, 0.6)):
+        with Progress(stream=buf, terminal=True, delay=0.3) as progress:
+            t0 = time.monotonic()
+            i = 0
+            while time.monotonic() - t0 < seconds:
+                progress("sweep", i, 10**6)
+                i += 1
+                time.sleep(0.01)
+    assert quick.getvalue() == ""
+    assert "sweep: " in slow.getvalue() and "\r" in slow.getvalue()
