@@ -339,8 +339,12 @@ def _numbers(obj, depth: int = 0) -> bool:
     """Whether ``obj`` is a non-empty list of plain finite floats and ints, or of such lists (rows of samples,
     three levels at most)."""
     types = set(map(type, obj))
-    if types <= _NUMBER_TYPES:
+    if types <= {int}:
+        return True
+    if types <= {float}:
         return all(map(math.isfinite, obj))
+    if types <= _NUMBER_TYPES:      # ints beyond a float's range are JSON numbers too
+        return all(math.isfinite(v) for v in obj if type(v) is float)
     return depth < 3 and types == {list} and all(v and _numbers(v, depth + 1) for v in obj)
 
 
@@ -399,12 +403,16 @@ def json_chunks(obj, size: int = JSON_CHUNK):
     yielded while it is encoded: together exactly ``json.dumps(obj, indent=1) + "\n"``, never the whole text at
     once (a list of thousands of plans streams into its file or a pipe)."""
     gathered, n = [], 0
-    for text in _json_pieces(obj, 0):
-        gathered.append(text)
-        n += len(text)
-        if n >= size:
-            yield "".join(gathered).encode()
-            gathered, n = [], 0
+    try:
+        for text in _json_pieces(obj, 0):
+            gathered.append(text)
+            n += len(text)
+            if n >= size:
+                yield "".join(gathered).encode()
+                gathered, n = [], 0
+    except RecursionError:      # circular (or too deep): json's own error
+        json.dumps(obj, indent=1, allow_nan=False)
+        raise
     gathered.append("\n")
     yield "".join(gathered).encode()
 

@@ -329,7 +329,8 @@ def test_json_chunks_are_the_text_of_json_dumps_in_pieces():
     assert b"".join(pieces) == (json.dumps(obj, indent=1) + "\n").encode()
 
 
-NUMBER = st.one_of(st.floats(allow_nan=False, allow_infinity=False), st.integers(-10**30, 10**30))
+NUMBER = st.one_of(st.floats(allow_nan=False, allow_infinity=False), st.integers(-10**30, 10**30),
+                   st.integers(10**308, 10**400))
 JSON_VALUES = st.recursive(
     st.one_of(NUMBER, st.booleans(), st.none(), st.text(max_size=5)),
     lambda inner: st.one_of(st.lists(inner, max_size=4), st.lists(NUMBER, min_size=1, max_size=6),
@@ -382,3 +383,15 @@ def test_write_json_streams_into_a_temporary_file_then_renames(tmp_path):
         write_json(out, {"plans": [{"a": i / 3} for i in range(20000)] + [{"a": math.nan}]})
     assert out.read_bytes() == (json.dumps(obj, indent=1) + "\n").encode()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["list.json"]
+
+
+def test_json_chunks_raise_the_error_of_json_for_what_it_cannot_write():
+    """A circular list and an int of more digits than Python writes: json's own errors."""
+    circular = [1.0]
+    circular.append(circular)
+    for bad in (circular, {"a": [1.0, 10**5000]}):
+        with pytest.raises(ValueError) as ours:
+            b"".join(json_chunks(bad))
+        with pytest.raises(ValueError) as theirs:
+            json.dumps(bad, indent=1, allow_nan=False)
+        assert str(ours.value) == str(theirs.value)
