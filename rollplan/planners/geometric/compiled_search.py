@@ -229,9 +229,15 @@ def _table_path(lib, k: float) -> Path:
 
 def _load_table(lib, k: float) -> bytes:
     """Give the C planner ``lib`` its rho table of k from the cache directory (``<prefix>_table_load``; the C planner
-    takes it only if its values at three radii evaluated again equal it exactly): the table's bytes given, or
-    b"" when there is none or it is unusable (a file not private, or whose bytes do not match the SHA-256 digest it
-    starts with), and the C planner builds the table."""
+    takes it only if it has as many radii as its own table of k and its values at three radii evaluated again equal
+    it exactly): the table's bytes given, or b"" when there is none or it is unusable (a file not private, or whose
+    bytes do not match the SHA-256 digest it starts with), and the C planner builds the table.
+
+    What this detects: damage (the digest), a table of another k or another build of the planner (the three radii).
+    What it does not: a deliberate edit with the digest recomputed (the digest is not keyed; the other radii and the
+    midpoint error are taken as stored). The file is trusted as the cache's compiled libraries are, by living in
+    a private cache directory (:func:`rollplan.core.compiled.check_private`); a plan from an edited table is still
+    certified by its own integration, but roots could be missed."""
     path = _table_path(lib, k)
     try:
         check_private(path)
