@@ -200,46 +200,54 @@ def asym_plan():
 
 
 @contextlib.contextmanager
-def run_wide(tmp_path_factory, name):
-    """``(folder, first)`` under a lock that every pytest-xdist worker of this run shares: ``folder`` is the same
-    path in every worker (in this run's temporary folder), ``first`` is True for the one that made it. Whatever the
-    first writes there is seen by the others after it; without xdist the folder is this process's own."""
+def cache_wide(name):
+    """A folder of the run's cache directory (``ROLLPLAN_CACHE_DIR``: the run-to-run build cache of this package
+    content, or this run's fresh one) under a lock that every pytest-xdist worker and every run shares: what one
+    builds there, the others (and the next run of the same package content) find."""
     import fcntl
 
-    root = tmp_path_factory.getbasetemp()
-    if os.environ.get("PYTEST_XDIST_WORKER"):
-        root = root.parent   # the folder of this run that holds each worker's temporary folder
-    folder = root / f"run-wide-{name}"
-    with open(root / f"run-wide-{name}.lock", "a") as lock:
+    root = Path(os.environ["ROLLPLAN_CACHE_DIR"])
+    root.mkdir(mode=0o700, parents=True, exist_ok=True)
+    with open(root / f"test-{name}.lock", "a") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         try:
-            first = not folder.exists()
-            if first:
-                folder.mkdir()
-            yield folder, first
+            yield root / f"test-{name}"
         finally:
             fcntl.flock(lock, fcntl.LOCK_UN)
 
 
+def _compiler_identity() -> str:
+    """A short digest of the C compiler's and make's ``--version``: what else a build from the same sources depends
+    on."""
+    import hashlib
+
+    texts = [subprocess.run([tool, "--version"], capture_output=True, text=True, check=False).stdout
+             for tool in ("cc", "make") if shutil.which(tool)]
+    return hashlib.sha256("\0".join(texts).encode()).hexdigest()[:12]
+
+
 @pytest.fixture(scope="session")
-def generated_c(tmp_path_factory):
+def generated_c():
     """The C planner written by ``rollplan codegen`` with its defaults and built by its Makefile (``plan_demo`` and
-    ``librollplan.so``), once per test run: the pytest-xdist workers share it, so use it read-only (build other
-    targets in a copy). For ``test_codegen``, ``test_certify``, ``test_embedded``."""
+    ``librollplan.so``), shared by the pytest-xdist workers and kept with the run-to-run build cache (the same
+    package content and compiler give the same files; a fresh cache builds it, as on a clean clone): use it
+    read-only (build other targets in a copy). For ``test_codegen``, ``test_certify``, ``test_embedded``."""
     import pickle
 
     from rollplan import codegen
 
-    with run_wide(tmp_path_factory, "c-planner") as (folder, first):
-        if first:
+    with cache_wide(f"c-planner-{_compiler_identity()}") as folder:
+        done = folder / "generated.pickle"
+        if not done.exists():       # not built, or a build that did not finish
+            shutil.rmtree(folder, ignore_errors=True)
+            folder.mkdir()
             made = codegen.generate(folder / "planner")
             run = subprocess.run(["make", "-C", str(made.out), "plan_demo", "librollplan.so"], check=False,
                                  capture_output=True, text=True)
             assert run.returncode == 0, run.stderr
-            (folder / "generated.pickle").write_bytes(pickle.dumps(made))
-        elif not (folder / "generated.pickle").exists():
-            pytest.fail("the C planner could not be built (see the first test that used it)")
-        return pickle.loads((folder / "generated.pickle").read_bytes())
+            (folder / "generated.tmp").write_bytes(pickle.dumps(made))
+            (folder / "generated.tmp").replace(done)
+        return pickle.loads(done.read_bytes())
 
 
 @pytest.fixture(scope="session")
