@@ -25,6 +25,9 @@ import sys
 import tempfile
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from quick_runs import refuse_quick_into_results  # noqa: E402
+
 
 def parse_args(argv=None):
     """The command line; ``--quick`` without ``--out-dir`` exits 2 with one line (before the slow imports below)."""
@@ -36,10 +39,7 @@ def parse_args(argv=None):
                     help="count the instructions of the paper's case only (of the first of TARGETS), to check "
                          "that the script runs")
     args = ap.parse_args(argv)
-    if args.quick and args.out_dir is None:
-        print("embedded_report.py: --quick writes a partial report: give --out-dir (results/ keeps the full one)",
-              file=sys.stderr)
-        sys.exit(2)
+    refuse_quick_into_results(args, "embedded_report.py")
     return args
 
 
@@ -52,7 +52,6 @@ from rollplan.codegen import c_library as codegen  # noqa: E402
 from rollplan.io import write_atomic, write_json  # noqa: E402
 from rollplan.problem import K_MIN  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_codegen  # noqa: E402
 
 #: Targets (u, v, psi, steps, k) counted on the boards: the paper's case first.

@@ -29,6 +29,9 @@ import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from quick_runs import refuse_quick_into_results  # noqa: E402
+
 
 def parse_args(argv=None):
     """The command line; ``--quick`` without ``--out-dir`` exits 2 with one line (before the slow imports below)."""
@@ -36,10 +39,7 @@ def parse_args(argv=None):
     ap.add_argument("--out-dir", help="default results; with --quick, required (results/ keeps the full run)")
     ap.add_argument("--quick", action="store_true", help="a few cases only (for the tests of this script)")
     args = ap.parse_args(argv)
-    if args.quick and args.out_dir is None:
-        print("reconfiguration.py: --quick writes a partial report: give --out-dir (results/ keeps the full one)",
-              file=sys.stderr)
-        sys.exit(2)
+    refuse_quick_into_results(args, "reconfiguration.py")
     return args
 
 
