@@ -85,4 +85,4 @@ def test_any_overlapping_blocks(nz, ng, np_, intervals, stride, seed):
     x = ca.SX.sym("x", n_x)
     gs, Js = zip(*(block(x[i * stride:i * stride + nz], p) for i in range(intervals)))
     nlp = {"x": x, "p": p, "f": ca.sum1(ca.vertcat(*Js)), "g": ca.vertcat(*gs)}
-    assert_same_functions(interval_derivatives(block, intervals, stride, n_x), nlp, seed, points=2)
+    assert_same_functions(interval_derivatives(block, intervals, stride), nlp, seed, points=2)

@@ -24,7 +24,7 @@ import casadi as ca
 import numpy as np
 
 from ...errors import InputError
-from .transcription import Guess, Transcription, interval_derivatives
+from .transcription import Guess, Transcription, interval_derivatives, interval_nlp
 
 __all__ = ["RestTranscription", "linear_stages"]
 
@@ -117,17 +117,13 @@ class RestTranscription:
         at the collocation points the depth bound implies them where ``|u_o|, |v_o| < pi / 2`` (so about every
         feasible point of the full transcription both NLPs have the same feasible set and local optima)."""
         N, d = self.transcription.intervals, self.transcription.degree
-        B = self.interval_block(point, n_par)
-        x, par = ca.SX.sym("x", 7 + N * self.block), ca.SX.sym("par", n_par)
-        g, J = zip(*(B(x[i * self.block:i * self.block + B.size1_in(0)], par) for i in range(N)))
         rows = np.concatenate([np.zeros(N_FREE * d + 5, bool), np.ones(d + 1, bool)] * N)
-        return {"x": x, "p": par, "f": ca.sum1(ca.vertcat(*J)), "g": ca.vertcat(*g)}, rows
+        return interval_nlp(self.interval_block(point, n_par), N, self.block), rows
 
     def contact_derivatives(self, point: ca.Function, n_par: int) -> dict:
         """The derivatives of :meth:`contact_nlp`'s NLP as options of :func:`casadi.nlpsol`, built interval by
         interval (:func:`.transcription.interval_derivatives`)."""
-        return interval_derivatives(self.interval_block(point, n_par), self.transcription.intervals, self.block,
-                                    7 + self.transcription.intervals * self.block)
+        return interval_derivatives(self.interval_block(point, n_par), self.transcription.intervals, self.block)
 
     def pack(self, guess: Guess) -> np.ndarray:
         """The decision vector of a guess (its collocation values of u_o, v_o and the rates, and its accelerations,

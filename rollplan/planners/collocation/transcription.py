@@ -26,7 +26,8 @@ from ...problem import Problem
 from ...result import CertifiedMotion
 
 __all__ = ["SCHEMES", "CORRECTION_TOL", "Guess", "Transcription", "CollocationRun", "ipopt_options",
-           "check_contact_bound", "sensitivity_step", "fixed_step", "gauss_newton", "interval_derivatives"]
+           "check_contact_bound", "sensitivity_step", "fixed_step", "gauss_newton", "interval_nlp",
+           "interval_derivatives"]
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
 SCHEMES = ("legendre", "radau")
@@ -55,17 +56,25 @@ def _scatter(block: ca.Sparsity, rows, cols, shape, nonzeros: ca.MX) -> ca.MX:
     return ca.sparsity_cast(ca.mtimes(add, ca.vec(nonzeros)), sp)
 
 
-def interval_derivatives(block: ca.Function, intervals: int, stride: int, n_x: int) -> dict:
-    """The derivative functions ``{"grad_f", "jac_g", "hess_lag"}`` (options of :func:`casadi.nlpsol`) of an NLP
-    made of intervals:
+def interval_nlp(block: ca.Function, intervals: int, stride: int) -> dict:
+    """The NLP ``{"x", "p", "f", "g"}`` (SX) made of intervals:
 
         f(x, p) = sum_i J(z_i, p),   g(x, p) = (g(z_0, p), ..., g(z_{N-1}, p)),   z_i = x[i s : i s + nz],
 
-    ``block(z, p) -> (g, J)`` one interval's SX function, ``s = stride`` (consecutive intervals share the
-    ``nz - s`` states between them). Each is one interval's SX derivative mapped over the intervals and summed
-    where the intervals overlap (MX): the same functions as CasADi's derivatives of the whole NLP (the
-    Lagrangian's Hessian, upper triangle, and the Jacobian with the same sparsity), built in a small fraction of
-    the time, since the derivatives of the large expression graph are never formed."""
+    ``block(z, p) -> (g, J)`` one interval's SX function, ``N = intervals``, ``s = stride`` (consecutive intervals
+    share the ``nz - s`` states between them; x has ``(N - 1) s + nz`` entries)."""
+    nz = block.size1_in(0)
+    x, p = ca.SX.sym("x", (intervals - 1) * stride + nz), ca.SX.sym("par", block.size1_in(1))
+    g, J = zip(*(block(x[i * stride:i * stride + nz], p) for i in range(intervals)))
+    return {"x": x, "p": p, "f": ca.sum1(ca.vertcat(*J)), "g": ca.vertcat(*g)}
+
+
+def interval_derivatives(block: ca.Function, intervals: int, stride: int) -> dict:
+    """The derivative functions ``{"grad_f", "jac_g", "hess_lag"}`` (options of :func:`casadi.nlpsol`) of
+    :func:`interval_nlp`'s NLP of the same arguments. Each is one interval's SX derivative mapped over the
+    intervals and summed where the intervals overlap (MX): the same functions as CasADi's derivatives of the whole
+    NLP (the Lagrangian's Hessian, upper triangle, and the Jacobian with the same sparsity), built in a small
+    fraction of the time, since the derivatives of the large expression graph are never formed."""
     z, p = ca.SX.sym("z", block.size1_in(0)), ca.SX.sym("p", block.size1_in(1))
     g, J = block(z, p)
     nz, ng = z.numel(), g.numel()
@@ -75,6 +84,7 @@ def interval_derivatives(block: ca.Function, intervals: int, stride: int, n_x: i
     second = ca.Function("interval_second", [z, p, sigma, lam],
                          [ca.triu(ca.hessian(sigma * J + ca.dot(lam, g), z)[0])])
     N = intervals
+    n_x = (N - 1) * stride + nz
     x, par = ca.MX.sym("x", n_x), ca.MX.sym("p", p.numel())
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", N * ng)
     starts = np.arange(N) * stride
@@ -305,12 +315,9 @@ class Transcription:
         point and interval end; ``path_rows`` (bool array over g) marks its rows,
         the others are equalities (collocation equations and continuity).
         """
-        N, d, nx, s = self.intervals, self.degree, self.nx, self._block
-        B = self.interval_block(point, path, n_par)
-        x, par = ca.SX.sym("x", nx + N * s), ca.SX.sym("par", n_par)
-        g, J = zip(*(B(x[i * s:i * s + s + nx], par) for i in range(N)))
+        N, d, nx = self.intervals, self.degree, self.nx
         rows = np.concatenate([np.zeros(nx * d + nx, bool), np.ones(d + 1, bool)] * N)
-        return {"x": x, "p": par, "f": ca.sum1(ca.vertcat(*J)), "g": ca.vertcat(*g)}, rows
+        return interval_nlp(self.interval_block(point, path, n_par), N, self._block), rows
 
     def contact_path(self) -> ca.Function:
         """The contact bound's path function ``-z`` (the depth of the contact point (1) below the centre, the
@@ -327,7 +334,7 @@ class Transcription:
         """The derivatives of :meth:`contact_nlp`'s NLP as options of :func:`casadi.nlpsol`, built interval by
         interval (:func:`interval_derivatives`)."""
         return interval_derivatives(self.interval_block(point, self.contact_path(), n_par), self.intervals,
-                                    self._block, self.nx + self.intervals * self._block)
+                                    self._block)
 
     def contact_bounds(self, guess: Guess, start, final, contact_bound: float, path_rows):
         """``(x0, lbx, ubx, lbg, ubg)`` of the NLP of :meth:`contact_nlp`: ``start``, ``final`` fixed,
