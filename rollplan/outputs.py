@@ -386,8 +386,7 @@ def _json_pieces(obj, level: int):
         yield "{" + inner
         for i, (k, v) in enumerate(obj.items()):
             if not isinstance(k, str):      # json's own conversion of other keys (and its error)
-                k = json.loads(json.dumps({k: None}, allow_nan=False))
-                k = next(iter(k))
+                k = next(iter(json.loads(json.dumps({k: None}, allow_nan=False))))
             yield ("," + inner if i else "") + json.encoder.encode_basestring_ascii(k) + ": "
             yield from _json_pieces(v, level + 1)
         yield "\n" + " " * level + "}"
