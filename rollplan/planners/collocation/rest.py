@@ -86,6 +86,8 @@ BACKOFF_FACTOR = 1.25
 #: MUMPS's automatic choice of ordering.
 REST_IPOPT_OPTIONS = {"ipopt.mumps_pivot_order": 0}
 _NEWTON_STEPS = 8
+#: Steps per interval of the eighth-order formula that gives the Newton correction's Jacobian (:func:`correct`).
+JACOBIAN_SUBSTEPS = 2
 
 
 def check_intervals(intervals) -> int:
@@ -472,11 +474,14 @@ def _newton_step(cost: str, jacobians: bool = True, substeps: int | None = None)
 def correct(controls, start, final, par, cost: str = "path_energy", where: str = "rest-to-rest",
             fixed_steps: tuple[int, int] | None = None):
     """Minimum-norm Gauss-Newton correction (:func:`.transcription.gauss_newton`) of piecewise-constant
-    accelerations in normalized time (T = 1), through CVODES with sensitivities, until the motion from ``start``
-    (7,) ends at ``final`` (7,: the goal at rest) to :data:`.transcription.CORRECTION_TOL`. ``par`` are
-    :func:`rest_parameters` with T = 1. With ``fixed_steps = (n, m)`` the motion is integrated instead by ``n``
-    steps per interval of the eighth-order formula (:func:`.transcription.fixed_step`), the Jacobian by ``m``: a
-    cheaper correction, for few intervals, that the CVODES certificate (:func:`certify`) checks like any other.
+    accelerations in normalized time (T = 1) until the motion from ``start`` (7,), integrated by CVODES, ends at
+    ``final`` (7,: the goal at rest) to :data:`.transcription.CORRECTION_TOL`. ``par`` are :func:`rest_parameters`
+    with T = 1. The Jacobian of the end state is that of :data:`JACOBIAN_SUBSTEPS` steps per interval of the
+    eighth-order formula (:func:`.transcription.fixed_step`, a small fraction of the cost of CVODES's
+    sensitivities); the end error, which alone decides the result, is CVODES's. Where that correction stops short
+    of the tolerance it goes on with CVODES's sensitivities. With ``fixed_steps = (n, m)`` the motion is
+    integrated instead by ``n`` steps per interval of the eighth-order formula, the Jacobian by ``m``: a cheaper
+    correction, for few intervals, that the CVODES certificate (:func:`certify`) checks like any other.
 
     Returns
     -------
@@ -489,9 +494,13 @@ def correct(controls, start, final, par, cost: str = "path_energy", where: str =
     SolverError
         ``"Correction_Failed"``: the end conditions are not met to :data:`TOLERANCE` after the steps.
     """
-    n, m = fixed_steps if fixed_steps is not None else (None, None)
+    n, m = fixed_steps if fixed_steps is not None else (None, JACOBIAN_SUBSTEPS)
+    plain = _newton_step(cost, False, n)
     a, q, size, _ = gauss_newton(_newton_step(cost, True, m), controls, start, final, par, CORRECTION_TOL,
-                                 _NEWTON_STEPS, _newton_step(cost, False, n))
+                                 _NEWTON_STEPS, plain)
+    if fixed_steps is None and not size <= CORRECTION_TOL:
+        a, q, size, _ = gauss_newton(_newton_step(cost, True, None), a, start, final, par, CORRECTION_TOL,
+                                     _NEWTON_STEPS, plain)
     if not size <= TOLERANCE:
         raise SolverError(f"the Newton correction of the collocation solution ({where}) leaves an end-condition "
                           f"error of {size:.2e} > {TOLERANCE:.0e}; hint: raise N or d", "Correction_Failed")
