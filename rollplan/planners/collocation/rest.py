@@ -36,6 +36,7 @@ from .costs import N_PAR
 from .rest_nlp import RestTranscription
 from .transcription import (
     CORRECTION_TOL,
+    JACOBIAN_SUBSTEPS,
     CollocationRun,
     Guess,
     Transcription,
@@ -86,8 +87,6 @@ BACKOFF_FACTOR = 1.25
 #: MUMPS's automatic choice of ordering.
 REST_IPOPT_OPTIONS = {"ipopt.mumps_pivot_order": 0}
 _NEWTON_STEPS = 8
-#: Steps per interval of the eighth-order formula that gives the Newton correction's Jacobian (:func:`correct`).
-JACOBIAN_SUBSTEPS = 2
 
 
 def check_intervals(intervals) -> int:
@@ -476,8 +475,8 @@ def correct(controls, start, final, par, cost: str = "path_energy", where: str =
     """Minimum-norm Gauss-Newton correction (:func:`.transcription.gauss_newton`) of piecewise-constant
     accelerations in normalized time (T = 1) until the motion from ``start`` (7,), integrated by CVODES, ends at
     ``final`` (7,: the goal at rest) to :data:`.transcription.CORRECTION_TOL`. ``par`` are :func:`rest_parameters`
-    with T = 1. The Jacobian of the end state is that of :data:`JACOBIAN_SUBSTEPS` steps per interval of the
-    eighth-order formula (:func:`.transcription.fixed_step`, a small fraction of the cost of CVODES's
+    with T = 1. The Jacobian of the end state is that of :data:`.transcription.JACOBIAN_SUBSTEPS` steps per
+    interval of the eighth-order formula (:func:`.transcription.fixed_step`, a small fraction of the cost of CVODES's
     sensitivities); the end error, which alone decides the result, is CVODES's. Where that correction stops short
     of the tolerance it goes on with CVODES's sensitivities. With ``fixed_steps = (n, m)`` the motion is
     integrated instead by ``n`` steps per interval of the eighth-order formula, the Jacobian by ``m``: a cheaper
@@ -495,12 +494,9 @@ def correct(controls, start, final, par, cost: str = "path_energy", where: str =
         ``"Correction_Failed"``: the end conditions are not met to :data:`TOLERANCE` after the steps.
     """
     n, m = fixed_steps if fixed_steps is not None else (None, JACOBIAN_SUBSTEPS)
-    plain = _newton_step(cost, False, n)
     a, q, size, _ = gauss_newton(_newton_step(cost, True, m), controls, start, final, par, CORRECTION_TOL,
-                                 _NEWTON_STEPS, plain)
-    if fixed_steps is None and not size <= CORRECTION_TOL:
-        a, q, size, _ = gauss_newton(_newton_step(cost, True, None), a, start, final, par, CORRECTION_TOL,
-                                     _NEWTON_STEPS, plain)
+                                 _NEWTON_STEPS, _newton_step(cost, False, n),
+                                 None if fixed_steps is not None else _newton_step(cost, True, None))
     if not size <= TOLERANCE:
         raise SolverError(f"the Newton correction of the collocation solution ({where}) leaves an end-condition "
                           f"error of {size:.2e} > {TOLERANCE:.0e}; hint: raise N or d", "Correction_Failed")

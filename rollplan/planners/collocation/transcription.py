@@ -25,8 +25,8 @@ from ...errors import InputError, check_choice, check_whole
 from ...problem import Problem
 from ...result import CertifiedMotion
 
-__all__ = ["SCHEMES", "CORRECTION_TOL", "Guess", "Transcription", "CollocationRun", "ipopt_options",
-           "check_contact_bound", "sensitivity_step", "fixed_step", "gauss_newton", "interval_nlp",
+__all__ = ["SCHEMES", "CORRECTION_TOL", "JACOBIAN_SUBSTEPS", "Guess", "Transcription", "CollocationRun",
+           "ipopt_options", "check_contact_bound", "sensitivity_step", "fixed_step", "gauss_newton", "interval_nlp",
            "interval_derivatives"]
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
@@ -37,6 +37,9 @@ GN_RCOND = 1e-9
 #: Target of the Gauss-Newton correction of every collocation solution: largest end-condition error of the corrected
 #: controls (units of R, rad).
 CORRECTION_TOL = 1e-12
+#: Steps per interval of the eighth-order formula (:func:`fixed_step`) that give the Jacobian of the collocation
+#: planners' Newton corrections, CVODES integrating their end error (:func:`gauss_newton`, ``fallback``).
+JACOBIAN_SUBSTEPS = 2
 
 
 def ipopt_options(tol: float, max_iter: int) -> dict:
@@ -152,7 +155,7 @@ def fixed_step(name: str, x, w, par, xdot, quad, substeps: int, jacobians: bool 
 
 
 def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float = CORRECTION_TOL,
-                 max_steps: int = 8, plain: ca.Function | None = None):
+                 max_steps: int = 8, plain: ca.Function | None = None, fallback: ca.Function | None = None):
     """Minimum-norm Gauss-Newton correction of piecewise-constant controls so that the integrated motion ends
     at ``final``.
 
@@ -167,9 +170,10 @@ def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float
     the given controls and the trials and gives the end error and the quadrature; ``step`` then gives only the
     sensitivities, computed only where a step is taken (not for the controls that end the correction). ``plain``
     may be the same :func:`sensitivity_step` without jacobians, or another integration of the same ODE (e.g. a
-    :func:`fixed_step` with more steps than the ``step`` of the Jacobian). Returns ``(controls, quadrature, end
-    error)`` of the last (best) controls and the end error of the given controls (``inf`` where an integration
-    failed).
+    :func:`fixed_step` with more steps than the ``step`` of the Jacobian). ``fallback``, a step function with
+    jacobians (e.g. CVODES's :func:`sensitivity_step` where ``step`` is a :func:`fixed_step`), goes on from the last
+    controls where ``step`` stopped short of ``goal_tol``. Returns ``(controls, quadrature, end error)`` of the last
+    (best) controls and the end error of the given controls (``inf`` where an integration failed).
     """
     a = np.array(controls, float)
     N, nu = a.shape
@@ -214,6 +218,8 @@ def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float
                 break
         else:
             break
+    if fallback is not None and not size <= goal_tol and math.isfinite(size):
+        a, q, size, _ = gauss_newton(fallback, a, start, final, par, goal_tol, max_steps, plain)
     return a, q, size, first
 
 
