@@ -260,9 +260,10 @@ def _batch_process(csv_path, out, jobs):
                             stderr=subprocess.PIPE, text=True, start_new_session=True)
 
 
-#: (signal, --jobs) of the interrupted attempts, in turn: each signal at random moments of runs in this process
-#: and of runs with forked workers.
-INTERRUPTIONS = [(signal.SIGINT, 1), (signal.SIGINT, 2), (signal.SIGKILL, 1), (signal.SIGKILL, 2)] * 2
+#: (signal, --jobs) of the interrupted attempts, in turn: each signal in a run in this process and in a run with
+#: forked workers, each signal once early and once late (attempt i falls in the i-th of as many equal parts of a
+#: whole run, at a random moment within it: start-up, planner construction, planning and writing are all hit).
+INTERRUPTIONS = [(signal.SIGINT, 1), (signal.SIGKILL, 2), (signal.SIGKILL, 1), (signal.SIGINT, 2)]
 
 
 @pytest.mark.slow
@@ -283,9 +284,9 @@ def test_interrupted_at_random_moments_and_resumed_equals_an_uninterrupted_run(t
     out = tmp_path / "out.jsonl"
     rng = random.Random(18)
     history = []
-    for sig, jobs in INTERRUPTIONS:
+    for i, (sig, jobs) in enumerate(INTERRUPTIONS):
         proc = _batch_process(csv_path, out, jobs=jobs)
-        delay = rng.uniform(0.3, whole)
+        delay = 0.3 + (whole - 0.3) * (i + rng.random()) / len(INTERRUPTIONS)
         time.sleep(delay)
         if sig == signal.SIGKILL:
             os.killpg(proc.pid, signal.SIGKILL)
@@ -345,6 +346,23 @@ def _live_children(pid):
     return found
 
 
+def _live_group(pgid):
+    """Pids of the live processes (not zombies) of the process group ``pgid`` (Linux /proc)."""
+    found = []
+    for name in os.listdir("/proc"):
+        if not name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{name}/stat") as fh:
+                stat = fh.read()
+        except OSError:
+            continue
+        fields = stat[stat.rfind(")") + 2:].split()
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            found.append(int(name))
+    return found
+
+
 def _alive(pid):
     try:
         with open(f"/proc/{pid}/stat") as fh:
@@ -384,7 +402,11 @@ def test_workers_die_with_the_parent(tmp_path, sig):
         while any(map(_alive, workers)) and time.perf_counter() - t0 < 5.0:
             time.sleep(0.05)
         assert not any(map(_alive, workers)), f"workers {workers} outlived their parent (exit {code})"
-        time.sleep(2.0)   # a worker that lived on would print when its row ended
+        # nor any other process of the run (a worker started after the count above): once none is left,
+        # nothing can print any more
+        while _live_group(proc.pid) and time.perf_counter() - t0 < 5.0:
+            time.sleep(0.05)
+        assert _live_group(proc.pid) == [], f"processes of the run outlived their parent (exit {code})"
     finally:
         with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGKILL)

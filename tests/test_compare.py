@@ -378,6 +378,66 @@ def test_minimum_time_within_the_limits():
     assert max(o["peak_rotor_torque"] / 0.05, o["peak_rotor_rate"] / 300.0) > 0.95
 
 
+def _written_out_minimum_time_nlp(planner):
+    """The minimum-time NLP written out whole, as one expression graph: the transcription's NLP with T substituted,
+    then the limits' rows of every interval (start, d points, end) after all of them; f = T."""
+    from rollplan.planners.collocation.rest import motion_function
+
+    tr = planner.base.transcription
+    N, d, nx, nu = tr.intervals, tr.degree, tr.nx, tr.nu
+    nlp, _ = tr.contact_nlp(planner.base.point, N_PAR)
+    V, par = nlp["x"], nlp["p"]
+    T, limits, fixed = ca.SX.sym("T"), ca.SX.sym("limits", 2), ca.SX.sym("fixed", N_PAR)
+    sub = ca.vertcat(fixed[0], T, fixed[2:])
+    f, lim, block = motion_function(), [], nx * d + nu + nx
+    for i in range(N):
+        o = nx + i * block
+        w = V[o + nx * d: o + nx * d + nu]
+        for xp in [V[o - nx: o], *(V[o + nx * j: o + nx * (j + 1)] for j in range(d)), V[o + nx * d + nu: o + block]]:
+            _, _, rates, torque = f(xp, w, sub)
+            lim += [rates / limits[0], torque / limits[1]]
+    g_dyn = ca.substitute(nlp["g"], par, sub)
+    return {"x": ca.vertcat(V, T), "p": ca.vertcat(fixed, limits), "f": T, "g": ca.vertcat(g_dyn, *lim)}, \
+        g_dyn.numel()
+
+
+def test_minimum_time_nlp_built_by_intervals_is_the_written_out_nlp():
+    """The minimum-time NLP was one expression graph that CasADi differentiated whole (seconds to build); now it
+    and its derivatives are built interval by interval, T a variable shared by every interval. Against the NLP
+    written out whole: the same cost, the same rows (each interval's rows, then its limits', instead of all
+    transcription rows, then all limits), the same gradient, Jacobian and Hessian of the Lagrangian at random
+    points."""
+    from rollplan.planners.collocation.rest import MinimumTimePlanner
+
+    planner = MinimumTimePlanner(intervals=4, degree=2)
+    ref_nlp, n_dyn = _written_out_minimum_time_nlp(planner)
+    ref = ca.nlpsol("whole", "ipopt", ref_nlp, {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"})
+    N, n_lim = planner.base.transcription.intervals, planner.n_lim
+    per = n_dyn // N
+    perm = np.concatenate([np.r_[np.arange(i * per, (i + 1) * per), n_dyn + np.arange(i * n_lim, (i + 1) * n_lim)]
+                           for i in range(N)])           # row r of the new NLP is row perm[r] of the written-out one
+    assert sorted(perm) == list(range(ref_nlp["g"].numel()))
+    rng = np.random.default_rng(3)
+    nx, npar = ref_nlp["x"].numel(), ref_nlp["p"].numel()
+    dense = lambda v: np.atleast_2d(np.array(ca.DM(v)))  # noqa: E731
+    for _ in range(3):
+        x, p = rng.normal(size=nx), rng.uniform(0.5, 2.0, size=npar)
+        x[-1] = rng.uniform(0.5, 3.0)   # T
+        sigma, lam = rng.normal(), rng.normal(size=perm.size)
+        lam_ref = np.empty_like(lam)
+        lam_ref[perm] = lam
+        for name, args, args_ref, rows in (("nlp_grad_f", [x, p], [x, p], None), ("nlp_jac_g", [x, p], [x, p], perm),
+                                           ("nlp_hess_l", [x, p, sigma, lam], [x, p, sigma, lam_ref], None)):
+            mine, theirs = planner.solver.get_function(name).call(args), ref.get_function(name).call(args_ref)
+            for k, (a, b) in enumerate(zip(mine, theirs)):
+                a, b = dense(a), dense(b)
+                if rows is not None:
+                    b = b[rows]
+                if name == "nlp_hess_l":   # upper triangles
+                    a, b = np.triu(a), np.triu(b)
+                assert a.shape == b.shape and np.abs(a - b).max() <= 1e-12 * max(1.0, np.abs(b).max()), (name, k)
+
+
 def test_multistart_corrects_only_the_best_start_and_keeps_the_best_certified_optimum(comp_calls):
     """The Gauss-Newton correction and the CVODES certificate cost more than an IPOPT solve; the multistart
     corrected and certified every converged start. Now only the start with the least NLP optimum is finished,

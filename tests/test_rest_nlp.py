@@ -103,6 +103,33 @@ def test_correction_at_an_optimum_whose_end_jacobian_is_singular():
     assert planner.finish(nlp).residual < TOLERANCE
 
 
+def test_correction_jacobian_by_eighth_order_steps_gives_the_controls_of_cvodes_sensitivities(monkeypatch):
+    """The Newton correction's Jacobian came from CVODES's forward sensitivities (about ten times a plain
+    integration per interval); now from JACOBIAN_SUBSTEPS eighth-order steps per interval, CVODES integrating only
+    the end error that decides the result. The corrected controls are those of the correction through CVODES's
+    sensitivities (to 1e-10) and land on the goal at rest (DOP853 on the printed equations)."""
+    from rollplan.planners.collocation import rest
+    from rollplan.planners.collocation.transcription import CORRECTION_TOL, JACOBIAN_SUBSTEPS, gauss_newton
+    from rollplan.studies.comparison import branch_guess
+
+    problem = Problem((0.5, 0.3, 0.4), k=K)
+    planner = RestToRestPlanner(16, 3)
+    guess, m = branch_guess(problem, planner)
+    nlp = planner.solve_nlp(problem, guess, 1.0, m)
+    a0 = planner.transcription.unpack(nlp.x)[2]
+    asked, real = [], rest._newton_step
+    monkeypatch.setattr(rest, "_newton_step", lambda *a: asked.append(a) or real(*a))
+    controls, _ = correct(a0, nlp.start, nlp.final, nlp.par, planner.cost)
+    # the CVODES sensitivities are only the fallback (gauss_newton's last argument), asked for but not used
+    assert (planner.cost, True, JACOBIAN_SUBSTEPS) in asked
+    reference, _, size, first = gauss_newton(real(planner.cost, True, None), a0, nlp.start, nlp.final, nlp.par,
+                                             CORRECTION_TOL, 8, real(planner.cost, False, None))
+    assert size <= CORRECTION_TOL < first
+    assert np.abs(controls - reference).max() <= 1e-10 * np.abs(reference).max()
+    y, rates = references.rest_path_final(controls, 1.0, K)
+    assert np.abs(y - nlp.final[:3]).max() < TOLERANCE and np.abs(rates).max() < TOLERANCE
+
+
 def test_decision_vectors_convert_both_ways():
     """``unpack`` (all intervals at once) gives each interval's closed forms (:meth:`stages`), ``pack`` inverts it,
     and the full transcription's layout (``full``, ``reduced``) round-trips exactly."""

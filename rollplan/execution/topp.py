@@ -283,6 +283,8 @@ def _solve_casadi(grid: PathGrid, limits: Limits, tol: float = 1e-12) -> np.ndar
     g, lbg, ubg = [C**2 - X], [-np.inf * np.ones(n)], [np.zeros(n)]
     P0, Q0, P1, Q1 = _rows(grid)
     for i in range(P0.shape[1]):
+        if not (P0[:, i].any() or Q0[:, i].any() or P1[:, i].any() or Q1[:, i].any()):
+            continue    # a rotor without torque on this path: its rows are 0 <= tau
         g += [P0[:, i] * u + Q0[:, i] * X[:-1], P1[:, i] * u + Q1[:, i] * X[1:]]
         lbg += [-tau * np.ones(n - 1)] * 2
         ubg += [tau * np.ones(n - 1)] * 2

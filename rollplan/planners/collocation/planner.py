@@ -34,11 +34,13 @@ from ..method import Method, with_steps
 from .costs import COSTS, N_PAR, Cost
 from .transcription import (
     CORRECTION_TOL,
+    JACOBIAN_SUBSTEPS,
     SCHEMES,
     CollocationRun,
     Guess,
     Transcription,
     check_contact_bound,
+    fixed_step,
     gauss_newton,
     ipopt_options,
     sensitivity_step,
@@ -391,8 +393,10 @@ class CollocationPlanner(Method):
                               f"iterations; hint: {hint}", status)
         states, colloc, controls = tr.unpack(np.array(sol["x"]).ravel())
         t0 = time.perf_counter()
-        controls, objective, miss, uncorrected = gauss_newton(_newton_step(self.cost), controls, start, final, par,
-                                                 CORRECTION_TOL, plain=_newton_step(self.cost, False))
+        # the Jacobian by eighth-order steps, the end error by CVODES (rest.correct)
+        controls, objective, miss, uncorrected = gauss_newton(
+            _newton_step(self.cost, True, JACOBIAN_SUBSTEPS), controls, start, final, par, CORRECTION_TOL,
+            plain=_newton_step(self.cost, False), fallback=_newton_step(self.cost))
         ver = self.verify(controls, problem.k, horizon, problem.robot, start)
         verify_time = time.perf_counter() - t0
         R = problem.radius
@@ -438,10 +442,13 @@ class CollocationPlanner(Method):
 
 
 @lru_cache(maxsize=8)
-def _newton_step(cost: Cost, jacobians: bool = True) -> ca.Function:
-    """:func:`.transcription.sensitivity_step` of ``x' = T f(x, w)`` (normalized time), the quadrature ``T L``."""
+def _newton_step(cost: Cost, jacobians: bool = True, substeps: int | None = None) -> ca.Function:
+    """:func:`.transcription.sensitivity_step` of ``x' = T f(x, w)`` (normalized time), the quadrature ``T L``
+    (with ``substeps``, its :func:`.transcription.fixed_step`)."""
     x, w, par = ca.SX.sym("x", 5), ca.SX.sym("w", 2), ca.SX.sym("par", N_PAR)
     xdot, L, _ = _point_function(cost)(x, w, par)
+    if substeps is not None:
+        return fixed_step("collocation_newton", x, w, par, par[1] * xdot, par[1] * L, substeps, jacobians)
     return sensitivity_step("collocation_newton", x, w, par, par[1] * xdot, par[1] * L, jacobians)
 
 

@@ -36,12 +36,15 @@ from .costs import N_PAR
 from .rest_nlp import RestTranscription
 from .transcription import (
     CORRECTION_TOL,
+    JACOBIAN_SUBSTEPS,
     CollocationRun,
     Guess,
     Transcription,
     check_contact_bound,
     fixed_step,
     gauss_newton,
+    interval_derivatives,
+    interval_nlp,
     ipopt_options,
     sensitivity_step,
 )
@@ -470,11 +473,14 @@ def _newton_step(cost: str, jacobians: bool = True, substeps: int | None = None)
 def correct(controls, start, final, par, cost: str = "path_energy", where: str = "rest-to-rest",
             fixed_steps: tuple[int, int] | None = None):
     """Minimum-norm Gauss-Newton correction (:func:`.transcription.gauss_newton`) of piecewise-constant
-    accelerations in normalized time (T = 1), through CVODES with sensitivities, until the motion from ``start``
-    (7,) ends at ``final`` (7,: the goal at rest) to :data:`.transcription.CORRECTION_TOL`. ``par`` are
-    :func:`rest_parameters` with T = 1. With ``fixed_steps = (n, m)`` the motion is integrated instead by ``n``
-    steps per interval of the eighth-order formula (:func:`.transcription.fixed_step`), the Jacobian by ``m``: a
-    cheaper correction, for few intervals, that the CVODES certificate (:func:`certify`) checks like any other.
+    accelerations in normalized time (T = 1) until the motion from ``start`` (7,), integrated by CVODES, ends at
+    ``final`` (7,: the goal at rest) to :data:`.transcription.CORRECTION_TOL`. ``par`` are :func:`rest_parameters`
+    with T = 1. The Jacobian of the end state is that of :data:`.transcription.JACOBIAN_SUBSTEPS` steps per
+    interval of the eighth-order formula (:func:`.transcription.fixed_step`, a small fraction of the cost of CVODES's
+    sensitivities); the end error, which alone decides the result, is CVODES's. Where that correction stops short
+    of the tolerance it goes on with CVODES's sensitivities. With ``fixed_steps = (n, m)`` the motion is
+    integrated instead by ``n`` steps per interval of the eighth-order formula, the Jacobian by ``m``: a cheaper
+    correction, for few intervals, that the CVODES certificate (:func:`certify`) checks like any other.
 
     Returns
     -------
@@ -487,9 +493,10 @@ def correct(controls, start, final, par, cost: str = "path_energy", where: str =
     SolverError
         ``"Correction_Failed"``: the end conditions are not met to :data:`TOLERANCE` after the steps.
     """
-    n, m = fixed_steps if fixed_steps is not None else (None, None)
+    n, m = fixed_steps if fixed_steps is not None else (None, JACOBIAN_SUBSTEPS)
     a, q, size, _ = gauss_newton(_newton_step(cost, True, m), controls, start, final, par, CORRECTION_TOL,
-                                 _NEWTON_STEPS, _newton_step(cost, False, n))
+                                 _NEWTON_STEPS, _newton_step(cost, False, n),
+                                 None if fixed_steps is not None else _newton_step(cost, True, None))
     if not size <= TOLERANCE:
         raise SolverError(f"the Newton correction of the collocation solution ({where}) leaves an end-condition "
                           f"error of {size:.2e} > {TOLERANCE:.0e}; hint: raise N or d", "Correction_Failed")
@@ -586,28 +593,34 @@ class MinimumTimePlanner:
         self.base = base
         tr = base.transcription
         N, d, nx, nu = tr.intervals, tr.degree, tr.nx, tr.nu
-        nlp, rows = tr.contact_nlp(base.point, N_PAR)
-        V, par = nlp["x"], nlp["p"]
-        T = ca.SX.sym("T")
-        limits = ca.SX.sym("limits", 2)   # max rate, max torque
-        fixed = ca.SX.sym("fixed", N_PAR)
+        stride = nx * d + nu + nx
+        # one interval's rows: those of the rest-to-rest transcription at the free T, then the limits at its start,
+        # its d points and its end; T the one variable shared by every interval (the NLP and its derivatives built
+        # interval by interval)
+        zt, p = ca.SX.sym("z", stride + nx + 1), ca.SX.sym("p", N_PAR + 2)
+        z, T, fixed, limits = zt[:-1], zt[-1], p[:N_PAR], p[N_PAR:]   # limits: max rate, max torque
         sub = ca.vertcat(fixed[0], T, fixed[2:])
-        g_dyn = ca.substitute(nlp["g"], par, sub)
+        g_dyn, _ = tr.interval_block(base.point, tr.contact_path(), N_PAR)(z, sub)
+        w = z[nx * (d + 1): nx * (d + 1) + nu]
         f = motion_function()
         lim = []
-        block = nx * d + nu + nx
-        for i in range(N):
-            o = nx + i * block
-            x0, xc = V[o - nx: o], [V[o + nx * j: o + nx * (j + 1)] for j in range(d)]
-            w, x1 = V[o + nx * d: o + nx * d + nu], V[o + nx * d + nu: o + block]
-            for xp in (x0, *xc, x1):
-                _, _, rates, torque = f(xp, w, sub)
-                lim += [rates / limits[0], torque / limits[1]]
+        for xp in [z[nx * j: nx * (j + 1)] for j in range(d + 1)] + [z[stride:]]:
+            _, _, rates, torque = f(xp, w, sub)
+            lim += [rates / limits[0], torque / limits[1]]
         g_lim = ca.vertcat(*lim)
-        self.n_dyn, self.n_lim, self.path_rows = g_dyn.numel(), g_lim.numel(), rows
-        self.solver = interrupts.call_in_thread(ca.nlpsol, "min_time", "ipopt",
-                                                {"x": ca.vertcat(V, T), "p": ca.vertcat(fixed, limits), "f": T,
-                                                 "g": ca.vertcat(g_dyn, g_lim)}, ipopt_options(tol, max_iter))
+        block = ca.Function("min_time_block", [zt, p], [ca.vertcat(g_dyn, g_lim), T / N], ["z", "p"], ["g", "J"])
+        self.n_lim, self.path_rows = g_lim.numel(), tr.path_rows()
+        nlp = interrupts.call_in_thread(interval_nlp, block, N, stride, 1)
+        derivatives = interrupts.call_in_thread(interval_derivatives, block, N, stride, 1)
+        self.solver = interrupts.call_in_thread(ca.nlpsol, "min_time", "ipopt", nlp,
+                                                {**ipopt_options(tol, max_iter), **derivatives})
+
+    def _row_bounds(self, lbg, ubg) -> tuple[np.ndarray, np.ndarray]:
+        """The bounds of the NLP's rows from those of the transcription's: each interval's rows, then its limits'
+        rows in [-1, 1]."""
+        N, ones = self.base.transcription.intervals, np.ones((self.base.transcription.intervals, self.n_lim))
+        return (np.hstack([np.reshape(lbg, (N, -1)), -ones]).ravel(),
+                np.hstack([np.reshape(ubg, (N, -1)), ones]).ravel())
 
     def solve(self, problem: Problem, guess: Guess, duration_guess: float, robot: Robot, turns: int = 0):
         """Minimum-time rest-to-rest motion within ``robot``'s limits (both must be set), from ``guess``
@@ -627,7 +640,7 @@ class MinimumTimePlanner:
         guess = tr.check_guess(guess)
         x0, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, c, self.path_rows)
         x0 = np.append(x0, check_range("duration_guess", duration_guess, 0.0, 1e6, low_open=True))
-        lbg, ubg = np.concatenate([lbg, -np.ones(self.n_lim)]), np.concatenate([ubg, np.ones(self.n_lim)])
+        lbg, ubg = self._row_bounds(lbg, ubg)
         limits = np.array([robot.max_rotor_rate, robot.max_rotor_torque])
         backed, bound, solve_time, iters = limits.copy(), c, 0.0, 0
         par1 = rest_parameters(problem.k, 1.0, robot)
@@ -656,7 +669,7 @@ class MinimumTimePlanner:
             if polar > 0.0:
                 bound -= BACKOFF_FACTOR * polar
                 _, lbx, ubx, lbg, ubg = tr.contact_bounds(guess, start, final, bound, self.path_rows)
-                lbg, ubg = np.concatenate([lbg, -np.ones(self.n_lim)]), np.concatenate([ubg, np.ones(self.n_lim)])
+                lbg, ubg = self._row_bounds(lbg, ubg)
             x0 = np.append(np.clip(v[:-1], lbx, ubx), T)
         else:
             raise SolverError(f"the minimum-time solution ({where}) exceeds the rotor limits by "

@@ -25,8 +25,8 @@ from ...errors import InputError, check_choice, check_whole
 from ...problem import Problem
 from ...result import CertifiedMotion
 
-__all__ = ["SCHEMES", "CORRECTION_TOL", "Guess", "Transcription", "CollocationRun", "ipopt_options",
-           "check_contact_bound", "sensitivity_step", "fixed_step", "gauss_newton", "interval_nlp",
+__all__ = ["SCHEMES", "CORRECTION_TOL", "JACOBIAN_SUBSTEPS", "Guess", "Transcription", "CollocationRun",
+           "ipopt_options", "check_contact_bound", "sensitivity_step", "fixed_step", "gauss_newton", "interval_nlp",
            "interval_derivatives"]
 
 #: Collocation point families accepted by :func:`casadi.collocation_points`.
@@ -37,6 +37,9 @@ GN_RCOND = 1e-9
 #: Target of the Gauss-Newton correction of every collocation solution: largest end-condition error of the corrected
 #: controls (units of R, rad).
 CORRECTION_TOL = 1e-12
+#: Steps per interval of the eighth-order formula (:func:`fixed_step`) that give the Jacobian of the collocation
+#: planners' Newton corrections, CVODES integrating their end error (:func:`gauss_newton`, ``fallback``).
+JACOBIAN_SUBSTEPS = 2
 
 
 def ipopt_options(tol: float, max_iter: int) -> dict:
@@ -56,20 +59,29 @@ def _scatter(block: ca.Sparsity, rows, cols, shape, nonzeros: ca.MX) -> ca.MX:
     return ca.sparsity_cast(ca.mtimes(add, ca.vec(nonzeros)), sp)
 
 
-def interval_nlp(block: ca.Function, intervals: int, stride: int) -> dict:
+def _windows(x, intervals: int, stride: int, nz: int, shared: int) -> list:
+    """Each interval's slice of ``x``: its window of ``nz - shared`` entries, then the ``shared`` last entries."""
+    local, n_loc = nz - shared, x.numel() - shared
+    return [ca.vertcat(x[i * stride:i * stride + local], x[n_loc:]) if shared else x[i * stride:i * stride + nz]
+            for i in range(intervals)]
+
+
+def interval_nlp(block: ca.Function, intervals: int, stride: int, shared: int = 0) -> dict:
     """The NLP ``{"x", "p", "f", "g"}`` (SX) made of intervals:
 
         f(x, p) = sum_i J(z_i, p),   g(x, p) = (g(z_0, p), ..., g(z_{N-1}, p)),   z_i = x[i s : i s + nz],
 
     ``block(z, p) -> (g, J)`` one interval's SX function, ``N = intervals``, ``s = stride`` (consecutive intervals
-    share the ``nz - s`` states between them; x has ``(N - 1) s + nz`` entries)."""
+    share the ``nz - s`` states between them; x has ``(N - 1) s + nz`` entries). With ``shared`` > 0 the last
+    ``shared`` entries of z are variables of every interval (a free final time), stored once at the end of x:
+    ``z_i = (x[i s : i s + nz - shared], x[n - shared:])``."""
     nz = block.size1_in(0)
     x, p = ca.SX.sym("x", (intervals - 1) * stride + nz), ca.SX.sym("par", block.size1_in(1))
-    g, J = zip(*(block(x[i * stride:i * stride + nz], p) for i in range(intervals)))
+    g, J = zip(*(block(z, p) for z in _windows(x, intervals, stride, nz, shared)))
     return {"x": x, "p": p, "f": ca.sum1(ca.vertcat(*J)), "g": ca.vertcat(*g)}
 
 
-def interval_derivatives(block: ca.Function, intervals: int, stride: int) -> dict:
+def interval_derivatives(block: ca.Function, intervals: int, stride: int, shared: int = 0) -> dict:
     """The derivative functions ``{"grad_f", "jac_g", "hess_lag"}`` (options of :func:`casadi.nlpsol`) of
     :func:`interval_nlp`'s NLP of the same arguments. Each is one interval's SX derivative mapped over the
     intervals and summed where the intervals overlap (MX): the same functions as CasADi's derivatives of the whole
@@ -78,22 +90,32 @@ def interval_derivatives(block: ca.Function, intervals: int, stride: int) -> dic
     z, p = ca.SX.sym("z", block.size1_in(0)), ca.SX.sym("p", block.size1_in(1))
     g, J = block(z, p)
     nz, ng = z.numel(), g.numel()
+    loc = nz - shared
     sigma, lam = ca.SX.sym("sigma"), ca.SX.sym("lam", ng)
-    cost = ca.Function("interval_cost", [z, p], [J, ca.gradient(J, z)])
-    rows = ca.Function("interval_rows", [z, p], [g, ca.jacobian(g, z)])
+    grad, jac = ca.gradient(J, z), ca.jacobian(g, z)
+    hess = ca.hessian(sigma * J + ca.dot(lam, g), z)[0]
+    # each derivative in parts: the window's own variables, and the shared ones (stored at the end of x)
+    cost = ca.Function("interval_cost", [z, p], [J, grad[:loc], grad[loc:]])
+    rows = ca.Function("interval_rows", [z, p], [g, jac[:, :loc], jac[:, loc:]])
     second = ca.Function("interval_second", [z, p, sigma, lam],
-                         [ca.triu(ca.hessian(sigma * J + ca.dot(lam, g), z)[0])])
+                         [ca.triu(hess[:loc, :loc]), hess[:loc, loc:], ca.triu(hess[loc:, loc:])])
     N = intervals
     n_x = (N - 1) * stride + nz
+    n_loc = n_x - shared
     x, par = ca.MX.sym("x", n_x), ca.MX.sym("p", p.numel())
     lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", N * ng)
-    starts = np.arange(N) * stride
-    Z = ca.horzcat(*[x[int(o):int(o) + nz] for o in starts])
-    (Jv, grad), (gv, jac) = cost.map(N)(Z, par), rows.map(N)(Z, par)
-    hess = second.map(N)(Z, par, lam_f, ca.reshape(lam_g, ng, N))
-    grad = _scatter(cost.sparsity_out(1), starts, np.zeros(N, int), (n_x, 1), grad.nz[:])
-    jac = _scatter(rows.sparsity_out(1), np.arange(N) * ng, starts, (N * ng, n_x), jac.nz[:])
-    hess = _scatter(second.sparsity_out(0), starts, starts, (n_x, n_x), hess.nz[:])
+    starts, ends, zero = np.arange(N) * stride, np.full(N, n_loc), np.zeros(N, int)
+    Z = ca.horzcat(*_windows(x, N, stride, nz, shared))
+    (Jv, grad_l, grad_s), (gv, jac_l, jac_s) = cost.map(N)(Z, par), rows.map(N)(Z, par)
+    hess_ll, hess_ls, hess_ss = second.map(N)(Z, par, lam_f, ca.reshape(lam_g, ng, N))
+    grad = _scatter(cost.sparsity_out(1), starts, zero, (n_x, 1), grad_l.nz[:])
+    jac = _scatter(rows.sparsity_out(1), np.arange(N) * ng, starts, (N * ng, n_x), jac_l.nz[:])
+    hess = _scatter(second.sparsity_out(0), starts, starts, (n_x, n_x), hess_ll.nz[:])
+    if shared:
+        grad = grad + _scatter(cost.sparsity_out(2), ends, zero, (n_x, 1), grad_s.nz[:])
+        jac = jac + _scatter(rows.sparsity_out(2), np.arange(N) * ng, ends, (N * ng, n_x), jac_s.nz[:])
+        hess = hess + _scatter(second.sparsity_out(1), starts, ends, (n_x, n_x), hess_ls.nz[:]) + \
+            _scatter(second.sparsity_out(2), ends, ends, (n_x, n_x), hess_ss.nz[:])
     return {"grad_f": ca.Function("nlp_grad_f", [x, par], [ca.sum2(Jv), grad], ["x", "p"], ["f", "grad_f_x"]),
             "jac_g": ca.Function("nlp_jac_g", [x, par], [ca.vec(gv), jac], ["x", "p"], ["g", "jac_g_x"]),
             "hess_lag": ca.Function("nlp_hess_l", [x, par, lam_f, lam_g], [hess],
@@ -133,7 +155,7 @@ def fixed_step(name: str, x, w, par, xdot, quad, substeps: int, jacobians: bool 
 
 
 def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float = CORRECTION_TOL,
-                 max_steps: int = 8, plain: ca.Function | None = None):
+                 max_steps: int = 8, plain: ca.Function | None = None, fallback: ca.Function | None = None):
     """Minimum-norm Gauss-Newton correction of piecewise-constant controls so that the integrated motion ends
     at ``final``.
 
@@ -148,9 +170,10 @@ def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float
     the given controls and the trials and gives the end error and the quadrature; ``step`` then gives only the
     sensitivities, computed only where a step is taken (not for the controls that end the correction). ``plain``
     may be the same :func:`sensitivity_step` without jacobians, or another integration of the same ODE (e.g. a
-    :func:`fixed_step` with more steps than the ``step`` of the Jacobian). Returns ``(controls, quadrature, end
-    error)`` of the last (best) controls and the end error of the given controls (``inf`` where an integration
-    failed).
+    :func:`fixed_step` with more steps than the ``step`` of the Jacobian). ``fallback``, a step function with
+    jacobians (e.g. CVODES's :func:`sensitivity_step` where ``step`` is a :func:`fixed_step`), goes on from the last
+    controls where ``step`` stopped short of ``goal_tol``. Returns ``(controls, quadrature, end error)`` of the last
+    (best) controls and the end error of the given controls (``inf`` where an integration failed).
     """
     a = np.array(controls, float)
     N, nu = a.shape
@@ -195,6 +218,8 @@ def gauss_newton(step: ca.Function, controls, start, final, par, goal_tol: float
                 break
         else:
             break
+    if fallback is not None and not size <= goal_tol and math.isfinite(size):
+        a, q, size, _ = gauss_newton(fallback, a, start, final, par, goal_tol, max_steps, plain)
     return a, q, size, first
 
 
@@ -315,9 +340,12 @@ class Transcription:
         point and interval end; ``path_rows`` (bool array over g) marks its rows,
         the others are equalities (collocation equations and continuity).
         """
-        N, d, nx = self.intervals, self.degree, self.nx
-        rows = np.concatenate([np.zeros(nx * d + nx, bool), np.ones(d + 1, bool)] * N)
-        return interval_nlp(self.interval_block(point, path, n_par), N, self._block), rows
+        return interval_nlp(self.interval_block(point, path, n_par), self.intervals, self._block), self.path_rows()
+
+    def path_rows(self) -> np.ndarray:
+        """The rows of :meth:`nlp`'s constraints that are its path constraint (bool), interval after interval."""
+        return np.concatenate([np.zeros(self.nx * self.degree + self.nx, bool), np.ones(self.degree + 1, bool)]
+                              * self.intervals)
 
     def contact_path(self) -> ca.Function:
         """The contact bound's path function ``-z`` (the depth of the contact point (1) below the centre, the
