@@ -5,9 +5,11 @@ import os
 import shutil
 import subprocess
 import sys
+import types
 from pathlib import Path
 
 import pytest
+from conftest import cache_wide
 
 
 @pytest.mark.slow
@@ -96,7 +98,12 @@ def test_closed_loop_script_runs(tmp_path):
 @pytest.mark.skipif(any(shutil.which(t) is None for t in ("arm-none-eabi-gcc", "qemu-system-arm", "make", "cc"))
                     and os.environ.get("ROLLPLAN_REQUIRE_EMBEDDED") != "1", reason="needs the ARM toolchain and QEMU")
 def test_embedded_report_script_runs(tmp_path):
-    run_script("embedded_report.py", tmp_path, "--no-host", "--quick", timeout=1800)
+    """The quick run, its builds kept with the tests' build cache (``--build-dir``): a run of the same package
+    content and toolchain reuses them (the first one builds them)."""
+    with cache_wide("embedded-report") as builds:
+        run_script("embedded_report.py", tmp_path, "--no-host", "--quick", "--build-dir", str(builds), timeout=1800)
+        for real in ("double", "float"):     # kept where --build-dir says
+            assert any((kept / "build" / "m4f" / "bench_fw.elf").is_file() for kept in builds.glob(f"{real}-*"))
     text = (tmp_path / "embedded.md").read_text()
     assert "| double | m7 (mps2-an500) |" in text and "| float | m4f (mps2-an386) |" in text
     assert "Instructions per plan" in text and (tmp_path / "embedded.json").stat().st_size > 0
@@ -106,6 +113,42 @@ def test_embedded_report_script_runs(tmp_path):
             (row,) = data[real]["instructions"][board]
             assert row["target"] == [0.0, 1.0, 0.0, 1, 2.5] and row["status"] == 0
             assert 0 < row["certificate"] < row["plan"] < row["first_plan"]
+
+
+def test_embedded_report_reuses_the_builds_of_the_same_sources(tmp_path, monkeypatch):
+    """``--build-dir``: the builds of one generated content and toolchain are kept in a folder of their own, which a
+    later run with the same sources and toolchain reuses (``make`` is run in it again: it rebuilds nothing) and
+    another toolchain does not."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+    try:
+        import embedded_report
+    finally:
+        sys.path.pop(0)
+    made = []
+    monkeypatch.setattr(embedded_report, "make", lambda out, *goals: made.append(out))
+
+    def generate(out, real):    # the sources rollplan codegen writes, in short
+        out.mkdir()
+        (out / "Makefile").write_text(f"all: # {real}\n")
+        return types.SimpleNamespace(out=out, prefix="rollplan")
+
+    monkeypatch.setattr(embedded_report.codegen, "generate", generate)
+    tools = {"arm-none-eabi-gcc": "gcc 1", "qemu-system-arm": "qemu 1"}
+    first = tmp_path / "first"
+    first.mkdir()
+    kept, prefix = embedded_report.build("double", first, str(tmp_path / "builds"), tools)
+    assert kept.parent == tmp_path / "builds" and kept.name.startswith("double-") and prefix == "rollplan"
+    assert (kept / "Makefile").is_file() and made == [kept]
+    (kept / "built").touch()
+    again = tmp_path / "again"
+    again.mkdir()
+    assert embedded_report.build("double", again, str(tmp_path / "builds"), tools)[0] == kept
+    assert (kept / "built").exists() and made == [kept, kept]
+    other = tmp_path / "other"
+    other.mkdir()
+    assert embedded_report.build("double", other, str(tmp_path / "builds"), {**tools, "qemu-system-arm": "qemu 2"})[0] \
+        not in (kept, other / "double")
+    assert sorted(p.name.split("-")[0] for p in (tmp_path / "builds").iterdir()) == ["double", "double"]
 
 
 FAKE_TESTS = """import time
