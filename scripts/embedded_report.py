@@ -232,8 +232,8 @@ def report(data: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
-    args = parse_args()
+def main(argv=None) -> None:
+    args = parse_args(argv)
     args.out_dir = args.out_dir or "results"
     load = Path("/proc/loadavg").read_text().split()[0] if Path("/proc/loadavg").exists() else "?"
     data = {"quick": args.quick, "versions": versions(), "steps_per_leaf": codegen.DEFAULT_STEPS_PER_LEAF,

@@ -1,5 +1,6 @@
 """The scripts in scripts/ run on the package as it is (they are not part of the package's API)."""
 
+import importlib
 import json
 import os
 import shutil
@@ -44,23 +45,27 @@ def test_benchmark_script_runs(tmp_path):
 @pytest.mark.slow
 def test_polish_ipopt_script_runs(tmp_path):
     """scripts/polish_ipopt.py writes the table of what IPOPT changes on the C planner's plans."""
-    run_script("polish_ipopt.py", tmp_path, "--per-k", "1")
+    run_script_here("polish_ipopt.py", tmp_path, "--per-k", "1")
     text = (tmp_path / "polish_ipopt.md").read_text()
     assert "(a, b) changed by IPOPT" in text and "| targets | 7 |" in text
     report = json.loads((tmp_path / "polish_ipopt.json").read_text())
     assert report["summary"]["targets"] == 7 and len(report["rows"]) == 7
 
 
-def run_script(name: str, out_dir, *args: str, timeout: float = 900) -> None:
-    """Run scripts/NAME with ``args`` and ``--out-dir out_dir``; fails on a nonzero exit."""
-    script = Path(__file__).resolve().parent.parent / "scripts" / name
-    subprocess.run([sys.executable, str(script), *args, "--out-dir", str(out_dir)], check=True, capture_output=True,
-                   timeout=timeout)
+def run_script_here(name: str, out_dir, *args: str) -> None:
+    """Run scripts/NAME's ``main`` with ``args`` and ``--out-dir out_dir`` in this process (it shares the imports and
+    the solvers the tests built before it: what the script measures is the same); fails on a nonzero exit."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+    try:
+        status = importlib.import_module(name.removesuffix(".py")).main([*args, "--out-dir", str(out_dir)])
+    finally:
+        sys.path.remove(str(Path(__file__).resolve().parent.parent / "scripts"))
+    assert status in (0, None)
 
 
 @pytest.mark.slow
 def test_timing_table_script_runs(tmp_path):
-    run_script("timing_table.py", tmp_path, "--quick")
+    run_script_here("timing_table.py", tmp_path, "--quick")
     text = (tmp_path / "timing.md").read_text()
     assert "of the shortest min-jerk duration under the same limits" in text and "| default (4.86) |" in text
     assert "## Convergence in the grid size" in text and (tmp_path / "timing.json").stat().st_size > 0
@@ -68,7 +73,7 @@ def test_timing_table_script_runs(tmp_path):
 
 @pytest.mark.slow
 def test_reconfiguration_script_runs(tmp_path):
-    run_script("reconfiguration.py", tmp_path, "--quick")
+    run_script_here("reconfiguration.py", tmp_path, "--quick")
     text = (tmp_path / "reconfiguration.md").read_text()
     assert "## Turning in place" in text and "DOP853" in text and "## A route of five waypoints" in text
     assert "## Lengths against optimal control" in text and "--refine ratio" in text
@@ -101,7 +106,7 @@ def test_embedded_report_script_runs(tmp_path):
     """The quick run, its builds kept with the tests' build cache (``--build-dir``): a run of the same package
     content and toolchain reuses them (the first one builds them)."""
     with cache_wide("embedded-report") as builds:
-        run_script("embedded_report.py", tmp_path, "--no-host", "--quick", "--build-dir", str(builds), timeout=1800)
+        run_script_here("embedded_report.py", tmp_path, "--no-host", "--quick", "--build-dir", str(builds))
         for real in ("double", "float"):     # kept where --build-dir says
             assert any((kept / "build" / "m4f" / "bench_fw.elf").is_file() for kept in builds.glob(f"{real}-*"))
     text = (tmp_path / "embedded.md").read_text()
@@ -259,7 +264,7 @@ def test_curve_families_script_runs_and_its_plans_land(tmp_path):
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import references
 
-    run_script("curve_families.py", tmp_path, "--quick", timeout=1800)
+    run_script_here("curve_families.py", tmp_path, "--quick")
     text = (tmp_path / "curve_families.md").read_text()
     assert "## Summary over the grid" in text and "## Conclusions" in text and "Non-stop with continuous" in text
     assert (tmp_path / "curve_families.png").stat().st_size > 1000
@@ -278,7 +283,7 @@ def test_curve_families_script_runs_and_its_plans_land(tmp_path):
 
 @pytest.mark.slow
 def test_basepoint_bench_script_runs(tmp_path):
-    run_script("basepoint_bench.py", tmp_path, "--quick")
+    run_script_here("basepoint_bench.py", tmp_path, "--quick")
     text = (tmp_path / "basepoint.md").read_text()
     assert "| README example |" in text and "| random 1 |" in text and "DOP853" in text
     rows = json.loads((tmp_path / "basepoint.json").read_text())["rows"]
