@@ -52,6 +52,13 @@ def test_polish_ipopt_script_runs(tmp_path):
     assert report["summary"]["targets"] == 7 and len(report["rows"]) == 7
 
 
+def run_script(name: str, out_dir, *args: str, timeout: float = 900) -> None:
+    """Run scripts/NAME with ``args`` and ``--out-dir out_dir`` in a process of its own; fails on a nonzero exit."""
+    script = Path(__file__).resolve().parent.parent / "scripts" / name
+    subprocess.run([sys.executable, str(script), *args, "--out-dir", str(out_dir)], check=True, capture_output=True,
+                   timeout=timeout)
+
+
 def run_script_here(name: str, out_dir, *args: str) -> None:
     """Run scripts/NAME's ``main`` with ``args`` and ``--out-dir out_dir`` in this process (it shares the imports and
     the solvers the tests built before it: what the script measures is the same); fails on a nonzero exit."""
