@@ -24,10 +24,7 @@ the same reuses that folder (``make`` rebuilds what is out of date: nothing); th
 from __future__ import annotations
 
 import argparse
-import hashlib
-import os
 import re
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -146,19 +143,8 @@ def build(real: str, tmp: Path, build_dir: str | None, tools: dict) -> tuple[Pat
     """Generate the planner in ``real`` and cross-compile it for the boards; returns (folder, prefix). The folder is
     ``tmp/real``, or with ``build_dir`` ``build_dir/<real>-<digest>`` (the generated files and ``tools``), reused
     when it exists."""
-    out = tmp / real
-    g = codegen.generate(out, real=real)
-    if build_dir is not None:
-        h = hashlib.sha256(repr(sorted(tools.items())).encode())
-        for path in sorted(out.rglob("*")):
-            if path.is_file():
-                h.update(str(path.relative_to(out)).encode() + b"\0" + path.read_bytes() + b"\0")
-        kept = Path(build_dir) / f"{real}-{h.hexdigest()[:16]}"
-        if not kept.exists():           # copied whole, then renamed: a stopped run leaves no half folder there
-            part = kept.with_name(f"{kept.name}.part{os.getpid()}")
-            shutil.copytree(out, part, symlinks=True)
-            part.rename(kept)
-        out = kept
+    g = codegen.generate(tmp / real, real=real)
+    out = bench_codegen.kept(tmp / real, build_dir, real, tools)
     make(out, "-j2", "arm-m7", "arm-m4f")   # the boards only: the host build is not reported
     return out, g.prefix
 
