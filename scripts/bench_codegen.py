@@ -12,7 +12,10 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
+import os
+import shutil
 import subprocess
 import tempfile
 import time
@@ -128,6 +131,30 @@ def build(out: Path, steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, prefi
     return g
 
 
+def kept(out: Path, build_dir: str | None, name: str, tools: dict) -> Path:
+    """``out`` (a generated folder, not built yet), or with ``build_dir`` its copy ``build_dir/<name>-<digest>`` (the
+    digest of its files and of ``tools``, e.g. the compilers' versions): made once, then reused by every later run of
+    the same sources and tools, so that ``make`` there rebuilds nothing."""
+    if build_dir is None:
+        return out
+    h = hashlib.sha256(repr(sorted(tools.items())).encode())
+    for path in sorted(out.rglob("*")):
+        if path.is_file():
+            h.update(str(path.relative_to(out)).encode() + b"\0" + path.read_bytes() + b"\0")
+    folder = Path(build_dir) / f"{name}-{h.hexdigest()[:16]}"
+    if not folder.exists():             # copied whole, then renamed: a stopped run leaves no half folder there
+        part = folder.with_name(f"{folder.name}.part{os.getpid()}")
+        shutil.copytree(out, part, symlinks=True)
+        part.rename(folder)
+    return folder
+
+
+def host_tools() -> dict:
+    """The first line of ``cc --version`` and ``make --version``: what a host build depends on besides its sources."""
+    return {tool: subprocess.run([tool, "--version"], capture_output=True, text=True, check=True).stdout.split("\n")[0]
+            for tool in ("cc", "make")}
+
+
 def time_plans(out: Path, prefix: str = "rollplan", targets=TARGETS, reps: int = 20):
     """Microseconds of each C plan of ``targets`` (best of ``reps``; built with -O2): rows of
     (new k: leaf table rebuilt, same k, same k without the certificate, the certificate alone, status).
@@ -167,7 +194,7 @@ def python_plan_ms(targets=TARGETS) -> float:
 
 
 def measure(steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, reps: int = 20, python: bool = True,
-            targets=TARGETS) -> dict:
+            targets=TARGETS, build_dir: str | None = None) -> dict:
     """Timing and size of the C planner, side by side with the Python planner on the same targets.
 
     ``targets`` are (u, v, psi, steps, k) tuples. Keys of the result: ``c_us_per_plan`` (mean over the targets
@@ -175,11 +202,13 @@ def measure(steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, reps: int = 20
     ``c_us_per_plan_same_k_without_certificate``, ``c_us_certificate`` (the certificate alone), their medians
     and maxima (``..._median``, ``..._max``), ``c_per_target`` (rows of the four and the status),
     ``c_failed_plans``, ``c_code_bytes`` (generated .c and .h), ``c_static_lib_bytes``, ``plan_demo_bytes``,
-    ``c_work_doubles`` (static work memory), ``python_ms_per_target`` and ``python_ms_per_plan`` (mean).
+    ``c_work_doubles`` (static work memory), ``python_ms_per_target`` and ``python_ms_per_plan`` (mean). With
+    ``build_dir`` the build is kept there and reused (:func:`kept`); the times are measured anew.
     """
     with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "c"
-        g = build(out, steps_per_leaf)
+        g = codegen.generate(Path(tmp) / "c", steps_per_leaf)
+        out = kept(Path(tmp) / "c", build_dir, "host", host_tools())
+        subprocess.run(["make", "-s", "-C", str(out)], check=True, capture_output=True)
         rows = time_plans(out, targets=targets, reps=reps)
         binary = (out / "plan_demo").stat().st_size
         lib = (out / "librollplan.a").stat().st_size

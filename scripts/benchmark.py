@@ -5,6 +5,7 @@ Writes ``results/benchmarks.md`` (tables, machine, date, commit, profile) and
 ``results/benchmarks.json``. Run from the repository root:
 
     python scripts/benchmark.py [--quick] [--no-jit] [--out-dir results] [--only plan cold high_k]
+                                [--build-dir DIR]
 
 The benchmark is a list of sections (:data:`SECTIONS`). A section is a
 function ``section(ctx) -> dict`` returning ``{"title": str, "rows": [dict],
@@ -19,7 +20,9 @@ profile, batches, `plan --all` per plan listed, the default plan between full st
 (``scripts/bench_default.py:measure``), and the budgets of the issues with their measured values
 (shown first). ``--only`` reruns some sections and keeps the others from the
 existing ``benchmarks.json`` (each section carries its own date and commit). The
-load average at start is recorded: the machine is shared.
+load average at start is recorded: the machine is shared. ``--build-dir DIR`` keeps
+the C planner's build of the c_planner section (``DIR/host-<digest>``, :func:`bench_codegen.kept`) for later runs
+of the same sources and compilers.
 
 The scipy baseline is what a researcher would write by hand from the paper:
 the printed equations (28)-(30) for the figure eight of circles (35) in numpy
@@ -205,7 +208,7 @@ def section_plan(ctx):
     """rollplan.plan (warm) against the scipy baseline on the same targets, at equal accuracy."""
     verifier = geometric.GeometricPhasePlanner(certifier="cvodes")
     rows, raw = [], []
-    for target, steps in TARGETS:
+    for target, steps in TARGETS[:1] if ctx["quick"] else TARGETS:
         p = rollplan.plan(target, steps, k=K)                 # warms the planner, per-k tables, compiled functions
         t_warm, c_warm, ts = _median_times(lambda: rollplan.plan(target, steps, k=K), ctx["repeats"])
         t_newton, _ = _median_time(lambda: rollplan.plan(target, steps, k=K, root_solver="newton"), ctx["repeats"])
@@ -561,7 +564,7 @@ def section_c_planner(ctx):
         why = "no C compiler" if {"gcc", "cc"} & set(missing) else "no make"
         return {"title": title, "rows": [], "notes": [f"skipped: {why} ({', '.join(missing)} not found on PATH)."],
                 "summary": {"skipped": why}}
-    res = bench_codegen.measure(reps=ctx["c_reps"], python=True)
+    res = bench_codegen.measure(reps=ctx["c_reps"], python=True, build_dir=ctx.get("build_dir"))
     py_us = res["python_ms_per_plan"] * 1e3
     new_k = len({t[4] for t in bench_codegen.TARGETS} - {bench_codegen.TARGETS[0][4]})   # k after the warm-up
     second = bench_codegen.python_plan_times()                  # now every k's tables are cached
@@ -1046,11 +1049,15 @@ def to_markdown(report) -> str:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="few repeats (smoke test)")
+    ap.add_argument("--quick", action="store_true",
+                    help="few repeats, the first target only of the plan section (smoke test)")
     ap.add_argument("--no-jit", action="store_true", help="skip the JIT-compiled step map (gcc takes ~20 s)")
     ap.add_argument("--no-cold", action="store_true", help="skip the cold first-call subprocesses")
     ap.add_argument("--jit-flags", default="-O1 -fPIC", help="C compiler flags of the JIT step map")
     ap.add_argument("--out-dir", default="results")
+    ap.add_argument("--build-dir", help="keep the C planner's build of the c_planner section in DIR/host-<digest> and "
+                                        "reuse it in later runs of the same sources and compilers (default: a "
+                                        "temporary folder; the times are measured anew)")
     ap.add_argument("--only", nargs="*", help="run only these sections (their function names without 'section_', e.g. "
                     "--only plan cold high_k); the other sections are kept from the existing benchmarks.json")
     args = ap.parse_args(argv)
@@ -1069,6 +1076,7 @@ def main(argv=None):
               "commit": git_commit(), "machine": mach, "command": " ".join(["python"] + sys.argv),
               "settings": dict(ctx), "sections": []}
     ctx["load_average"] = mach["load_average"]
+    ctx["build_dir"] = args.build_dir
     ctx["results"] = {}
     out = Path(args.out_dir)
     kept = {}

@@ -5,6 +5,7 @@ Usage::
     python scripts/embedded_report.py               # writes results/embedded.md and results/embedded.json
     python scripts/embedded_report.py --no-host     # without the host timing (scripts/bench_codegen.py)
     python scripts/embedded_report.py --quick --no-host --out-dir /tmp/e   # the paper's case only: a check
+    python scripts/embedded_report.py --build-dir build/embedded   # keep the builds; a rerun reuses them
 
 Generates the planner in double and in float (``rollplan codegen --real float``), cross-compiles both
 with the generated Makefile (Cortex-M7 with a double FPU on QEMU's mps2-an500, Cortex-M4F with a
@@ -14,6 +15,10 @@ plan are counted on the emulated boards: QEMU with ``-icount shift=0`` advances 
 instruction, and the boards' CMSDK timer (25 MHz) counts one tick per 40 instructions. QEMU counts
 instructions, not cycles (it models no pipeline, FPU latency or flash wait states). Needs arm-none-eabi-gcc
 (with newlib), qemu-system-arm, make and cc.
+
+The builds go to a temporary folder, or with ``--build-dir DIR`` to ``DIR/<real>-<digest>`` (the digest of the
+generated sources and of the toolchain's versions), kept: a later run whose generated sources and toolchain are
+the same reuses that folder (``make`` rebuilds what is out of date: nothing); the measurements are made anew.
 """
 
 from __future__ import annotations
@@ -35,6 +40,8 @@ def parse_args(argv=None):
     ap.add_argument("--out-dir", help="folder of embedded.md and embedded.json (default results; with --quick, "
                                       "required: results/ keeps the full report)")
     ap.add_argument("--no-host", action="store_true", help="skip the host timing")
+    ap.add_argument("--build-dir", help="keep the builds in DIR/<real>-<digest> and reuse them in later runs of "
+                                        "the same generated sources and toolchain (default: a temporary folder)")
     ap.add_argument("--quick", action="store_true",
                     help="count the instructions of the paper's case only (of the first of TARGETS), to check "
                          "that the script runs")
@@ -112,7 +119,9 @@ def sizes(out: Path) -> dict:
 
 def instructions(out: Path, prefix: str, targets=TARGETS) -> dict:
     """Instructions per plan on each board for every target (first plan, plan, certificate)."""
-    (out / "bench_fw.c").write_text(_BENCH_FW.replace("@PREFIX@", prefix))
+    source = _BENCH_FW.replace("@PREFIX@", prefix)
+    if not (out / "bench_fw.c").exists() or (out / "bench_fw.c").read_text() != source:   # kept: no rebuild
+        (out / "bench_fw.c").write_text(source)
     res = {}
     for t, machine in BOARDS.items():
         make(out, f"build/{t}/bench_fw.elf")
@@ -128,6 +137,16 @@ def instructions(out: Path, prefix: str, targets=TARGETS) -> dict:
                          "certificate": cert})
         res[t] = rows
     return res
+
+
+def build(real: str, tmp: Path, build_dir: str | None, tools: dict) -> tuple[Path, str]:
+    """Generate the planner in ``real`` and cross-compile it for the boards; returns (folder, prefix). The folder is
+    ``tmp/real``, or with ``build_dir`` ``build_dir/<real>-<digest>`` (the generated files and ``tools``), reused
+    when it exists."""
+    g = codegen.generate(tmp / real, real=real)
+    out = bench_codegen.kept(tmp / real, build_dir, real, tools)
+    make(out, "-j2", "arm-m7", "arm-m4f")   # the boards only: the host build is not reported
+    return out, g.prefix
 
 
 def versions() -> dict:
@@ -199,8 +218,8 @@ def report(data: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
-    args = parse_args()
+def main(argv=None) -> None:
+    args = parse_args(argv)
     args.out_dir = args.out_dir or "results"
     load = Path("/proc/loadavg").read_text().split()[0] if Path("/proc/loadavg").exists() else "?"
     data = {"quick": args.quick, "versions": versions(), "steps_per_leaf": codegen.DEFAULT_STEPS_PER_LEAF,
@@ -208,11 +227,9 @@ def main() -> None:
             "load": load}
     with tempfile.TemporaryDirectory() as tmp:
         for real in ("double", "float"):
-            out = Path(tmp) / real
-            g = codegen.generate(out, real=real)
-            make(out, "-j2", "arm-m7", "arm-m4f")   # the boards only: the host build is not reported
+            out, prefix = build(real, Path(tmp), args.build_dir, data["versions"])
             data[real] = {"sizes": sizes(out),
-                          "instructions": instructions(out, g.prefix, TARGETS[:1] if args.quick else TARGETS)}
+                          "instructions": instructions(out, prefix, TARGETS[:1] if args.quick else TARGETS)}
             print(f"{real}: {data[real]['sizes']}", file=sys.stderr)
     if not args.no_host:
         data["host"] = bench_codegen.measure(reps=20, python=True)

@@ -175,9 +175,9 @@ def test_outputs_of_closed_form_pieces_plan_the_figure_eights(tmp_path, capsys):
 def test_the_benchmark_measures_the_warm_default_with_its_budget(tmp_path):
     """The warm time of the default is measured by scripts/bench_default.py through scripts/benchmark.py (a
     section and a budget row), per pair with the stages where the time goes."""
-    from test_scripts import run_script
+    from test_scripts import run_script_here
 
-    run_script("benchmark.py", tmp_path, "--quick", "--only", "fast_default", "budgets")
+    run_script_here("benchmark.py", tmp_path, "--quick", "--only", "fast_default", "budgets")
     report = json.loads((tmp_path / "benchmarks.json").read_text())
     sections = {sec["function"]: sec for sec in report["sections"]}
     summary = sections["section_fast_default"]["summary"]

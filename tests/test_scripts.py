@@ -1,13 +1,16 @@
 """The scripts in scripts/ run on the package as it is (they are not part of the package's API)."""
 
+import importlib
 import json
 import os
 import shutil
 import subprocess
 import sys
+import types
 from pathlib import Path
 
 import pytest
+from conftest import cache_wide
 
 
 @pytest.mark.slow
@@ -17,8 +20,10 @@ def test_benchmark_script_runs(tmp_path):
     `rollplan compare`, each with its budget row. A second run with --only reruns one section and keeps the
     others, each with the date of its own run."""
     script = Path(__file__).resolve().parent.parent / "scripts" / "benchmark.py"
-    subprocess.run([sys.executable, str(script), "--quick", "--no-jit", "--no-cold",
-                    "--out-dir", str(tmp_path)], check=True, capture_output=True, timeout=600)
+    with cache_wide("benchmark") as builds:     # the C planner's build kept with the tests' build cache
+        subprocess.run([sys.executable, str(script), "--quick", "--no-jit", "--no-cold", "--build-dir", str(builds),
+                        "--out-dir", str(tmp_path)], check=True, capture_output=True, timeout=600)
+        assert any((kept / "librollplan.a").is_file() for kept in builds.glob("host-*"))
     text = (tmp_path / "benchmarks.md").read_text()
     assert "evaluations/s" in text and "commit" in text and "speed-up" in text and "Profile" in text
     assert "## Budgets" in text and "Collocation planner" in text and "C planner" in text
@@ -42,7 +47,7 @@ def test_benchmark_script_runs(tmp_path):
 @pytest.mark.slow
 def test_polish_ipopt_script_runs(tmp_path):
     """scripts/polish_ipopt.py writes the table of what IPOPT changes on the C planner's plans."""
-    run_script("polish_ipopt.py", tmp_path, "--per-k", "1")
+    run_script_here("polish_ipopt.py", tmp_path, "--per-k", "1")
     text = (tmp_path / "polish_ipopt.md").read_text()
     assert "(a, b) changed by IPOPT" in text and "| targets | 7 |" in text
     report = json.loads((tmp_path / "polish_ipopt.json").read_text())
@@ -50,15 +55,26 @@ def test_polish_ipopt_script_runs(tmp_path):
 
 
 def run_script(name: str, out_dir, *args: str, timeout: float = 900) -> None:
-    """Run scripts/NAME with ``args`` and ``--out-dir out_dir``; fails on a nonzero exit."""
+    """Run scripts/NAME with ``args`` and ``--out-dir out_dir`` in a process of its own; fails on a nonzero exit."""
     script = Path(__file__).resolve().parent.parent / "scripts" / name
     subprocess.run([sys.executable, str(script), *args, "--out-dir", str(out_dir)], check=True, capture_output=True,
                    timeout=timeout)
 
 
+def run_script_here(name: str, out_dir, *args: str) -> None:
+    """Run scripts/NAME's ``main`` with ``args`` and ``--out-dir out_dir`` in this process (it shares the imports and
+    the solvers the tests built before it: what the script measures is the same); fails on a nonzero exit."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+    try:
+        status = importlib.import_module(name.removesuffix(".py")).main([*args, "--out-dir", str(out_dir)])
+    finally:
+        sys.path.remove(str(Path(__file__).resolve().parent.parent / "scripts"))
+    assert status in (0, None)
+
+
 @pytest.mark.slow
 def test_timing_table_script_runs(tmp_path):
-    run_script("timing_table.py", tmp_path, "--quick")
+    run_script_here("timing_table.py", tmp_path, "--quick")
     text = (tmp_path / "timing.md").read_text()
     assert "of the shortest min-jerk duration under the same limits" in text and "| default (4.86) |" in text
     assert "## Convergence in the grid size" in text and (tmp_path / "timing.json").stat().st_size > 0
@@ -66,7 +82,7 @@ def test_timing_table_script_runs(tmp_path):
 
 @pytest.mark.slow
 def test_reconfiguration_script_runs(tmp_path):
-    run_script("reconfiguration.py", tmp_path, "--quick")
+    run_script_here("reconfiguration.py", tmp_path, "--quick")
     text = (tmp_path / "reconfiguration.md").read_text()
     assert "## Turning in place" in text and "DOP853" in text and "## A route of five waypoints" in text
     assert "## Lengths against optimal control" in text and "--refine ratio" in text
@@ -96,7 +112,12 @@ def test_closed_loop_script_runs(tmp_path):
 @pytest.mark.skipif(any(shutil.which(t) is None for t in ("arm-none-eabi-gcc", "qemu-system-arm", "make", "cc"))
                     and os.environ.get("ROLLPLAN_REQUIRE_EMBEDDED") != "1", reason="needs the ARM toolchain and QEMU")
 def test_embedded_report_script_runs(tmp_path):
-    run_script("embedded_report.py", tmp_path, "--no-host", "--quick", timeout=1800)
+    """The quick run, its builds kept with the tests' build cache (``--build-dir``): a run of the same package
+    content and toolchain reuses them (the first one builds them)."""
+    with cache_wide("embedded-report") as builds:
+        run_script_here("embedded_report.py", tmp_path, "--no-host", "--quick", "--build-dir", str(builds))
+        for real in ("double", "float"):     # kept where --build-dir says
+            assert any((kept / "build" / "m4f" / "bench_fw.elf").is_file() for kept in builds.glob(f"{real}-*"))
     text = (tmp_path / "embedded.md").read_text()
     assert "| double | m7 (mps2-an500) |" in text and "| float | m4f (mps2-an386) |" in text
     assert "Instructions per plan" in text and (tmp_path / "embedded.json").stat().st_size > 0
@@ -106,6 +127,42 @@ def test_embedded_report_script_runs(tmp_path):
             (row,) = data[real]["instructions"][board]
             assert row["target"] == [0.0, 1.0, 0.0, 1, 2.5] and row["status"] == 0
             assert 0 < row["certificate"] < row["plan"] < row["first_plan"]
+
+
+def test_embedded_report_reuses_the_builds_of_the_same_sources(tmp_path, monkeypatch):
+    """``--build-dir``: the builds of one generated content and toolchain are kept in a folder of their own, which a
+    later run with the same sources and toolchain reuses (``make`` is run in it again: it rebuilds nothing) and
+    another toolchain does not."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+    try:
+        import embedded_report
+    finally:
+        sys.path.pop(0)
+    made = []
+    monkeypatch.setattr(embedded_report, "make", lambda out, *goals: made.append(out))
+
+    def generate(out, real):    # the sources rollplan codegen writes, in short
+        out.mkdir()
+        (out / "Makefile").write_text(f"all: # {real}\n")
+        return types.SimpleNamespace(out=out, prefix="rollplan")
+
+    monkeypatch.setattr(embedded_report.codegen, "generate", generate)
+    tools = {"arm-none-eabi-gcc": "gcc 1", "qemu-system-arm": "qemu 1"}
+    first = tmp_path / "first"
+    first.mkdir()
+    kept, prefix = embedded_report.build("double", first, str(tmp_path / "builds"), tools)
+    assert kept.parent == tmp_path / "builds" and kept.name.startswith("double-") and prefix == "rollplan"
+    assert (kept / "Makefile").is_file() and made == [kept]
+    (kept / "built").touch()
+    again = tmp_path / "again"
+    again.mkdir()
+    assert embedded_report.build("double", again, str(tmp_path / "builds"), tools)[0] == kept
+    assert (kept / "built").exists() and made == [kept, kept]
+    other = tmp_path / "other"
+    other.mkdir()
+    assert embedded_report.build("double", other, str(tmp_path / "builds"), {**tools, "qemu-system-arm": "qemu 2"})[0] \
+        not in (kept, other / "double")
+    assert sorted(p.name.split("-")[0] for p in (tmp_path / "builds").iterdir()) == ["double", "double"]
 
 
 FAKE_TESTS = """import time
@@ -216,7 +273,7 @@ def test_curve_families_script_runs_and_its_plans_land(tmp_path):
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import references
 
-    run_script("curve_families.py", tmp_path, "--quick", timeout=1800)
+    run_script_here("curve_families.py", tmp_path, "--quick")
     text = (tmp_path / "curve_families.md").read_text()
     assert "## Summary over the grid" in text and "## Conclusions" in text and "Non-stop with continuous" in text
     assert (tmp_path / "curve_families.png").stat().st_size > 1000
@@ -235,7 +292,7 @@ def test_curve_families_script_runs_and_its_plans_land(tmp_path):
 
 @pytest.mark.slow
 def test_basepoint_bench_script_runs(tmp_path):
-    run_script("basepoint_bench.py", tmp_path, "--quick")
+    run_script_here("basepoint_bench.py", tmp_path, "--quick")
     text = (tmp_path / "basepoint.md").read_text()
     assert "| README example |" in text and "| random 1 |" in text and "DOP853" in text
     rows = json.loads((tmp_path / "basepoint.json").read_text())["rows"]
