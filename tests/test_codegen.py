@@ -3,6 +3,7 @@ independent references."""
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import math
 import re
@@ -56,6 +57,77 @@ def built(generated_c):
 @pytest.fixture(scope="module")
 def twins():
     return {f.name(): f for f in generated_functions()}
+
+
+#: A compiler in front of the real one (argv: real compiler, object store, the compiler's arguments): a compile of
+#: one C file (``-c -o OUT FILE.c``) whose compiler, arguments, file and headers of its folder were compiled before
+#: gets the stored object (and the ``.su`` of -fstack-usage); any other call, and a compile that wrote to stderr
+#: or failed, runs the real compiler alone and is not stored.
+_OBJECT_CACHE_CC = """import hashlib, os, shutil, subprocess, sys
+real, store, args = sys.argv[1], sys.argv[2], sys.argv[3:]
+sources = [a for a in args if a.endswith(".c")]
+if "-c" not in args or "-o" not in args or len(sources) != 1:
+    sys.exit(subprocess.run([real, *args]).returncode)
+out, source = args[args.index("-o") + 1], sources[0]
+key = hashlib.sha256(subprocess.run([real, "--version"], capture_output=True).stdout)
+for a in args:
+    key.update((os.path.basename(a) if a == out else a).encode() + b"\\0")
+folder = os.path.dirname(os.path.abspath(source))
+for name in sorted(os.listdir(folder)):
+    if name.endswith(".h") or name == os.path.basename(source):
+        with open(os.path.join(folder, name), "rb") as fh:
+            key.update(name.encode() + b"\\0" + fh.read() + b"\\0")
+kept = os.path.join(store, key.hexdigest())
+su = os.path.splitext(out)[0] + ".su"
+if os.path.exists(kept + ".o"):
+    if os.path.exists(kept + ".su"):
+        shutil.copyfile(kept + ".su", su)
+    shutil.copyfile(kept + ".o", out)
+    sys.exit(0)
+run = subprocess.run([real, *args], stderr=subprocess.PIPE)
+sys.stderr.buffer.write(run.stderr)
+if run.returncode == 0 and not run.stderr:
+    for made, ext in ((su, ".su"), (out, ".o")):
+        if os.path.exists(made):
+            shutil.copyfile(made, kept + f".{os.getpid()}{ext}")
+            os.replace(kept + f".{os.getpid()}{ext}", kept + ext)
+sys.exit(run.returncode)
+"""
+
+
+def make(*argv, **kwargs):
+    """``subprocess.run(["make", *argv])`` (text output captured, no check) with the host compiler (``CC``) and the
+    ARM cross compiler (``ARM``) behind an object store in the run's cache directory (``ROLLPLAN_CACHE_DIR``: the
+    run-to-run build cache of this package content, or a fresh one): an object that an earlier build compiled from
+    the same compiler, flags and sources is copied instead of compiled again (:data:`_OBJECT_CACHE_CC`). The
+    Makefile's rules, flags, links and checks run as they are."""
+    import os
+    import sys
+    from pathlib import Path
+
+    root = Path(os.environ["ROLLPLAN_CACHE_DIR"]) / "test-object-cache"
+    (root / "objects").mkdir(parents=True, exist_ok=True)
+    script = root / "cc.py"
+    if not script.exists() or script.read_text() != _OBJECT_CACHE_CC:
+        script.with_suffix(f".{os.getpid()}").write_text(_OBJECT_CACHE_CC)
+        script.with_suffix(f".{os.getpid()}").replace(script)
+    tools = root / "bin"
+    tools.mkdir(exist_ok=True)
+    front = {"cc": shutil.which("cc"), "arm-none-eabi-gcc": shutil.which("arm-none-eabi-gcc")}
+    for name, real in front.items():
+        if real and not (tools / name).exists():
+            tmp = tools / f".{name}.{os.getpid()}"
+            tmp.write_text(f"#!/bin/sh\nexec {sys.executable} {script} {real} {root / 'objects'} \"$@\"\n")
+            tmp.chmod(0o755)
+            tmp.replace(tools / name)
+    for name in ("ar", "nm", "size", "objdump"):
+        real = shutil.which(f"arm-none-eabi-{name}")
+        if real and not (tools / f"arm-none-eabi-{name}").exists():
+            with contextlib.suppress(FileExistsError):
+                (tools / f"arm-none-eabi-{name}").symlink_to(real)
+    cross = [f"ARM={tools}/arm-none-eabi-"] if front["arm-none-eabi-gcc"] else []
+    return subprocess.run(["make", f"CC={tools / 'cc'}", *cross, *argv], capture_output=True, text=True,
+                          check=False, **kwargs)
 
 
 def external(built, name):
@@ -616,7 +688,7 @@ def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv, request, 
     prefix = argv[argv.index("--prefix") + 1] if "--prefix" in argv else "rollplan"
     assert f"#define RP_NAME(x) {prefix}_##x" in config and "@" not in config
     if not prebuilt:
-        run = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)
+        run = make("-C", str(out), "plan_demo")
         assert run.returncode == 0, run.stderr
     run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], capture_output=True, text=True,
                          check=False)
@@ -669,7 +741,7 @@ def test_generated_prefix_builds_and_plans(tmp_path):
     """A planner generated for k <= 10 (320 steps per leaf): other prefix, and certified plans at k = 10."""
     out = tmp_path / "rp"
     codegen.generate(out, 320, "rp", k_max=10)
-    run = subprocess.run(["make", "-C", str(out)], check=False, capture_output=True, text=True)
+    run = make("-C", str(out))
     assert run.returncode == 0, run.stderr
     assert (out / "librp.a").exists()
     run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], check=False, capture_output=True,
@@ -762,7 +834,7 @@ def test_codegen_k_max_16_sizes_its_step_map_itself(tmp_path, capsys):
     assert "400 steps per leaf" in capsys.readouterr().out
     assert main(["codegen", "--out", str(tmp_path / "small"), "--k-max", "16", "--steps-per-leaf", "320"]) == 2
     assert "320 steps per leaf" in capsys.readouterr().err
-    run = subprocess.run(["make", "-C", str(out), "plan_demo"], check=False, capture_output=True, text=True)
+    run = make("-C", str(out), "plan_demo")
     assert run.returncode == 0, run.stderr
     for u, v, psi, n in ((0.5, -0.3, 1.0, 2), (0.0, 1.0, 0.0, 1)):
         run = subprocess.run([str(out / "plan_demo"), *map(str, (u, v, psi, n, 16))], check=False,
@@ -884,8 +956,7 @@ def test_fuzz_no_wrong_plan_with_exit_0_more(built):
 
 @pytest.fixture(scope="module")
 def built_float(generated_c_float):
-    run = subprocess.run(["make", "-C", str(generated_c_float.out), "plan_demo"], check=False, capture_output=True,
-                         text=True)
+    run = make("-C", str(generated_c_float.out), "plan_demo")
     assert run.returncode == 0, run.stderr
     return generated_c_float
 
