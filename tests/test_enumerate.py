@@ -356,14 +356,16 @@ def test_first_root_behind_a_tangency_at_the_end_of_the_graph():
 @pytest.mark.slow
 def test_brute_force_of_many_branches_at_once_is_that_of_each_branch():
     """The dense scan of several branches in one array (_brute_branches) finds, on each branch, the roots that the
-    scan of that branch alone finds: nothing is paired across the seam of two branches' grids."""
+    scan of that branch alone finds: nothing is paired across the seam of two branches' grids (between branches
+    with roots, and between one where h^2 - h_m^2 < 0 everywhere, h_m = 100, and one where it is mostly > 0)."""
     k, steps, target = 2.5, 5, (0.0621, 0.0847, 2.4915)
-    brs = [b for b in en.branches(k, target[2], steps, math.hypot(*target[:2])) if b.m in (-5, -10, 0, 3, 1, -1)]
-    together = _brute_branches([b.eta for b in brs], [b.h for b in brs], k, 40, 4000)
+    brs = [(b.eta, b.h) for b in en.branches(k, target[2], steps, math.hypot(*target[:2])) if b.m in (-5, -10, 0, 3)]
+    brs += [(brs[0][0], 100.0), (brs[0][0], 1e-6), (brs[0][0], 100.0)]
+    together = _brute_branches([e for e, _ in brs], [h for _, h in brs], k, 40, 1000)   # any grid: the same for both
     assert sum(map(len, together)) >= 4
-    for b, roots in zip(brs, together):
-        alone = _brute_branch(b.eta, b.h, k, 40, 4000)
-        assert len(roots) == len(alone) and np.allclose(roots, alone, rtol=0, atol=1e-12), b.m
+    for (eta, h), roots in zip(brs, together):
+        alone = _brute_branch(eta, h, k, 40, 1000)
+        assert len(roots) == len(alone) and np.allclose(roots, alone, rtol=0, atol=1e-12), (eta, h)
 
 
 # the issue's three failures
