@@ -16,7 +16,7 @@ import pytest
 from conftest import one_line
 from conftest import run as run_cli
 from scipy.optimize import brentq, minimize_scalar
-from test_enumerate import _b_of, _g
+from test_enumerate import _b_of, _g, _repeated
 
 from rollplan import Problem, codegen
 from rollplan.cli import main
@@ -896,10 +896,8 @@ def _fuzz(built, seed, count, many_steps, tol=CERT_TOL):
 def _traces(plans):
     """:func:`references.trace` of many plans ``(a, b, k, gamma, steps)`` at once. The first figure eight of every
     plan by DOP853 from zero, leaf by leaf as one system (:func:`references.curve_leaf_ends`; fewer than
-    :data:`_BATCHED` plans one by one); the later ones by the symmetry of the printed equations (28)-(30): their
-    right side does not depend on (u_a, v_a), and psi only turns the rates of (u_a, v_a) by -psi, so a figure eight
-    started at (u, v, psi) ends at ``(u + i v) + exp(-i psi) S``, ``psi + eta``, where ``(S, eta)`` is its end from
-    zero. Checked against :func:`references.trace` (DOP853 over every step) by
+    :data:`_BATCHED` plans one by one); the later ones by the symmetry of the printed equations
+    (:func:`test_enumerate._repeated`). Checked against :func:`references.trace` (DOP853 over every step) by
     test_traces_are_the_trace_of_each_plan. Final states, shape (len(plans), 3)."""
     if not plans:
         return np.zeros((0, 3))
@@ -911,13 +909,7 @@ def _traces(plans):
                 x[:, i] = references.leaf_end(r[i], side, k[i], gamma[i], x[:, i])
         else:
             x = references.curve_leaf_ends(_rotated_circles(r, side, gamma), x, k)
-    shift, eta = x[0] + 1j * x[1], x[2]
-    end, psi = np.zeros(a.size, complex), np.zeros(a.size)
-    for j in range(int(steps.max())):
-        on = steps > j
-        end[on] += np.exp(-1j * psi[on]) * shift[on]
-        psi[on] += eta[on]
-    return np.stack([end.real, end.imag, psi], axis=1)
+    return _repeated(x.T, steps)
 
 
 #: Fewer plans than this are traced one by one (a call of the batched right side costs that of a few alone).

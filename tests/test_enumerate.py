@@ -292,8 +292,26 @@ def _same_sets(brute, enum, tol=1e-7):
     return missed, extra
 
 
+def _repeated(first, steps):
+    """The ends of ``steps`` figure eights from zero, given ``first`` = the ends (u_a, v_a, psi) of one from zero
+    (arrays of shape (N, 3) and (N,)), by the symmetry of the printed equations (28)-(30): their right side does not
+    depend on (u_a, v_a), and psi only turns the rates of (u_a, v_a) by -psi, so a figure eight started at
+    (u, v, psi) ends at ``(u + i v) + exp(-i psi) S``, ``psi + eta``, where ``(S, eta)`` is its end from zero.
+    Checked against DOP853 over every step by test_codegen.test_traces_are_the_trace_of_each_plan."""
+    first, steps = np.atleast_2d(np.asarray(first, float)), np.atleast_1d(steps)
+    shift, eta = first[:, 0] + 1j * first[:, 1], first[:, 2]
+    end, psi = np.zeros(len(first), complex), np.zeros(len(first))
+    for j in range(int(steps.max())):
+        on = steps > j
+        end[on] += np.exp(-1j * psi[on]) * shift[on]
+        psi[on] += eta[on]
+    return np.stack([end.real, end.imag, psi], axis=1)
+
+
 def _certified_by_dop853(target, steps, k, p):
-    x = references.trace(p.a, p.b, k, p.gamma, steps)
+    """The miss of plan p: its first figure eight by DOP853 on the printed equations, the others by
+    :func:`_repeated`."""
+    x = _repeated(_trace(p.a, p.b, k, p.gamma, 1), steps)[0]
     return max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2])))
 
 
