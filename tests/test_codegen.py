@@ -3,6 +3,7 @@ independent references."""
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import math
 import re
@@ -15,7 +16,7 @@ import pytest
 from conftest import one_line
 from conftest import run as run_cli
 from scipy.optimize import brentq, minimize_scalar
-from test_enumerate import _b_of, _g
+from test_enumerate import _b_of, _g, _repeated
 
 from rollplan import Problem, codegen
 from rollplan.cli import main
@@ -56,6 +57,77 @@ def built(generated_c):
 @pytest.fixture(scope="module")
 def twins():
     return {f.name(): f for f in generated_functions()}
+
+
+#: A compiler in front of the real one (argv: real compiler, object store, the compiler's arguments): a compile of
+#: one C file (``-c -o OUT FILE.c``) whose compiler, arguments, file and headers of its folder were compiled before
+#: gets the stored object (and the ``.su`` of -fstack-usage); any other call, and a compile that wrote to stderr
+#: or failed, runs the real compiler alone and is not stored.
+_OBJECT_CACHE_CC = """import hashlib, os, shutil, subprocess, sys
+real, store, args = sys.argv[1], sys.argv[2], sys.argv[3:]
+sources = [a for a in args if a.endswith(".c")]
+if "-c" not in args or "-o" not in args or len(sources) != 1:
+    sys.exit(subprocess.run([real, *args]).returncode)
+out, source = args[args.index("-o") + 1], sources[0]
+key = hashlib.sha256(subprocess.run([real, "--version"], capture_output=True).stdout)
+for a in args:
+    key.update((os.path.basename(a) if a == out else a).encode() + b"\\0")
+folder = os.path.dirname(os.path.abspath(source))
+for name in sorted(os.listdir(folder)):
+    if name.endswith(".h") or name == os.path.basename(source):
+        with open(os.path.join(folder, name), "rb") as fh:
+            key.update(name.encode() + b"\\0" + fh.read() + b"\\0")
+kept = os.path.join(store, key.hexdigest())
+su = os.path.splitext(out)[0] + ".su"
+if os.path.exists(kept + ".o"):
+    if os.path.exists(kept + ".su"):
+        shutil.copyfile(kept + ".su", su)
+    shutil.copyfile(kept + ".o", out)
+    sys.exit(0)
+run = subprocess.run([real, *args], stderr=subprocess.PIPE)
+sys.stderr.buffer.write(run.stderr)
+if run.returncode == 0 and not run.stderr:
+    for made, ext in ((su, ".su"), (out, ".o")):
+        if os.path.exists(made):
+            shutil.copyfile(made, kept + f".{os.getpid()}{ext}")
+            os.replace(kept + f".{os.getpid()}{ext}", kept + ext)
+sys.exit(run.returncode)
+"""
+
+
+def make(*argv, **kwargs):
+    """``subprocess.run(["make", *argv])`` (text output captured, no check) with the host compiler (``CC``) and the
+    ARM cross compiler (``ARM``) behind an object store in the run's cache directory (``ROLLPLAN_CACHE_DIR``: the
+    run-to-run build cache of this package content, or a fresh one): an object that an earlier build compiled from
+    the same compiler, flags and sources is copied instead of compiled again (:data:`_OBJECT_CACHE_CC`). The
+    Makefile's rules, flags, links and checks run as they are."""
+    import os
+    import sys
+    from pathlib import Path
+
+    root = Path(os.environ["ROLLPLAN_CACHE_DIR"]) / "test-object-cache"
+    (root / "objects").mkdir(parents=True, exist_ok=True)
+    script = root / "cc.py"
+    if not script.exists() or script.read_text() != _OBJECT_CACHE_CC:
+        script.with_suffix(f".{os.getpid()}").write_text(_OBJECT_CACHE_CC)
+        script.with_suffix(f".{os.getpid()}").replace(script)
+    tools = root / "bin"
+    tools.mkdir(exist_ok=True)
+    front = {"cc": shutil.which("cc"), "arm-none-eabi-gcc": shutil.which("arm-none-eabi-gcc")}
+    for name, real in front.items():
+        if real and not (tools / name).exists():
+            tmp = tools / f".{name}.{os.getpid()}"
+            tmp.write_text(f"#!/bin/sh\nexec {sys.executable} {script} {real} {root / 'objects'} \"$@\"\n")
+            tmp.chmod(0o755)
+            tmp.replace(tools / name)
+    for name in ("ar", "nm", "size", "objdump"):
+        real = shutil.which(f"arm-none-eabi-{name}")
+        if real and not (tools / f"arm-none-eabi-{name}").exists():
+            with contextlib.suppress(FileExistsError):
+                (tools / f"arm-none-eabi-{name}").symlink_to(real)
+    cross = [f"ARM={tools}/arm-none-eabi-"] if front["arm-none-eabi-gcc"] else []
+    return subprocess.run(["make", f"CC={tools / 'cc'}", *cross, *argv], capture_output=True, text=True,
+                          check=False, **kwargs)
 
 
 def external(built, name):
@@ -616,7 +688,7 @@ def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv, request, 
     prefix = argv[argv.index("--prefix") + 1] if "--prefix" in argv else "rollplan"
     assert f"#define RP_NAME(x) {prefix}_##x" in config and "@" not in config
     if not prebuilt:
-        run = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)
+        run = make("-C", str(out), "plan_demo")
         assert run.returncode == 0, run.stderr
     run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], capture_output=True, text=True,
                          check=False)
@@ -669,7 +741,7 @@ def test_generated_prefix_builds_and_plans(tmp_path):
     """A planner generated for k <= 10 (320 steps per leaf): other prefix, and certified plans at k = 10."""
     out = tmp_path / "rp"
     codegen.generate(out, 320, "rp", k_max=10)
-    run = subprocess.run(["make", "-C", str(out)], check=False, capture_output=True, text=True)
+    run = make("-C", str(out))
     assert run.returncode == 0, run.stderr
     assert (out / "librp.a").exists()
     run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], check=False, capture_output=True,
@@ -762,7 +834,7 @@ def test_codegen_k_max_16_sizes_its_step_map_itself(tmp_path, capsys):
     assert "400 steps per leaf" in capsys.readouterr().out
     assert main(["codegen", "--out", str(tmp_path / "small"), "--k-max", "16", "--steps-per-leaf", "320"]) == 2
     assert "320 steps per leaf" in capsys.readouterr().err
-    run = subprocess.run(["make", "-C", str(out), "plan_demo"], check=False, capture_output=True, text=True)
+    run = make("-C", str(out), "plan_demo")
     assert run.returncode == 0, run.stderr
     for u, v, psi, n in ((0.5, -0.3, 1.0, 2), (0.0, 1.0, 0.0, 1)):
         run = subprocess.run([str(out / "plan_demo"), *map(str, (u, v, psi, n, 16))], check=False,
@@ -822,23 +894,22 @@ def _fuzz(built, seed, count, many_steps, tol=CERT_TOL):
 
 
 def _traces(plans):
-    """:func:`references.trace` of many plans ``(a, b, k, gamma, steps)`` at once: leaf by leaf, the figure eights
-    of every plan that has that step as one DOP853 system (:func:`references.curve_leaf_ends`; fewer than
-    :data:`_BATCHED` one by one), checked against :func:`references.trace` by
+    """:func:`references.trace` of many plans ``(a, b, k, gamma, steps)`` at once. The first figure eight of every
+    plan by DOP853 from zero, leaf by leaf as one system (:func:`references.curve_leaf_ends`; fewer than
+    :data:`_BATCHED` plans one by one); the later ones by the symmetry of the printed equations
+    (:func:`test_enumerate._repeated`). Checked against :func:`references.trace` (DOP853 over every step) by
     test_traces_are_the_trace_of_each_plan. Final states, shape (len(plans), 3)."""
     if not plans:
         return np.zeros((0, 3))
     a, b, k, gamma, steps = (np.array(c, float) for c in zip(*plans))
     x = np.zeros((3, a.size))
-    for j in range(int(steps.max())):
-        on = np.nonzero(steps > j)[0]
-        for r, side in ((a, 1.0), (b, -1.0)):
-            if on.size < _BATCHED:
-                for i in on:
-                    x[:, i] = references.leaf_end(r[i], side, k[i], gamma[i], x[:, i])
-            else:
-                x[:, on] = references.curve_leaf_ends(_rotated_circles(r[on], side, gamma[on]), x[:, on], k[on])
-    return x.T
+    for r, side in ((a, 1.0), (b, -1.0)):
+        if a.size < _BATCHED:
+            for i in range(a.size):
+                x[:, i] = references.leaf_end(r[i], side, k[i], gamma[i], x[:, i])
+        else:
+            x = references.curve_leaf_ends(_rotated_circles(r, side, gamma), x, k)
+    return _repeated(x.T, steps)
 
 
 #: Fewer plans than this are traced one by one (a call of the batched right side costs that of a few alone).
@@ -863,12 +934,15 @@ def _rotated_circles(r, side, gamma):
 
 @pytest.mark.slow
 def test_traces_are_the_trace_of_each_plan():
-    """The batched DOP853 traces of the fuzz tests against DOP853 plan by plan (other steps, k, gamma, radii)."""
+    """The traces of the fuzz tests (batched, and one by one for fewer than _BATCHED plans; later figure eights by
+    the symmetry) against DOP853 over every step, plan by plan (other steps, k, gamma, radii)."""
     plans = [(0.3, 0.2, 2.5, 0.7, 1), (0.69, 0.05, DEFAULT_K_MAX, -2.0, 2), (0.1, 0.6, 0.3, 3.0, 2),
-             (0.45, 0.45, 0.0, 0.0, 1), (0.2, 0.65, 1.5, 1.0, 1), (0.6, 0.3, 4.0, -1.0, 1), (0.01, 0.02, 0.5, 0.2, 1)]
-    for plan, x in zip(plans, _traces(plans)):
-        alone = references.trace(*plan)
-        assert np.abs(x - alone).max() < 1e-11, (plan, x, alone)
+             (0.45, 0.45, 0.0, 0.0, 1), (0.2, 0.65, 1.5, 1.0, 1), (0.6, 0.3, 4.0, -1.0, 1), (0.01, 0.02, 0.5, 0.2, 1),
+             (0.3, 0.2, 2.5, 0.7, 5), (0.5, 0.1, 6.0, -0.4, 4)]
+    for batch in (plans, plans[-3:-1]):
+        for plan, x in zip(batch, _traces(batch)):
+            alone = references.trace(*plan)
+            assert np.abs(x - alone).max() < 1e-11, (plan, x, alone)
 
 
 def test_fuzz_no_wrong_plan_with_exit_0(built):
@@ -884,8 +958,7 @@ def test_fuzz_no_wrong_plan_with_exit_0_more(built):
 
 @pytest.fixture(scope="module")
 def built_float(generated_c_float):
-    run = subprocess.run(["make", "-C", str(generated_c_float.out), "plan_demo"], check=False, capture_output=True,
-                         text=True)
+    run = make("-C", str(generated_c_float.out), "plan_demo")
     assert run.returncode == 0, run.stderr
     return generated_c_float
 

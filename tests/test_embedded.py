@@ -19,6 +19,7 @@ import subprocess
 import sys
 
 import pytest
+from test_codegen import make
 
 TOOLS = ("arm-none-eabi-gcc", "arm-none-eabi-objdump", "qemu-system-arm", "make", "cc")
 MISSING = [t for t in TOOLS if shutil.which(t) is None]
@@ -35,8 +36,7 @@ PAPER = ["0", "1", "0", "1", "2.5"]
 def boards(generated_c, tmp_path_factory):
     out = tmp_path_factory.mktemp("boards") / "planner"
     shutil.copytree(generated_c.out, out, symlinks=True)   # the shared build is read-only; the times are kept
-    run = subprocess.run(["make", "-s", "-C", str(out), "-j2", "plan_demo", "arm-m7", "arm-m4f"],
-                         capture_output=True, text=True, timeout=900, check=False)
+    run = make("-s", "-C", str(out), "-j2", "plan_demo", "arm-m7", "arm-m4f", timeout=900)
     assert run.returncode == 0, run.stderr
     return out
 
@@ -65,8 +65,7 @@ def test_makefile_cross_compiles_strictly(boards):
 
 
 def test_make_qemu_prints_the_host_plan(boards):
-    run = subprocess.run(["make", "-s", "-C", str(boards), "qemu"], capture_output=True, text=True, timeout=600,
-                         check=False)
+    run = make("-s", "-C", str(boards), "qemu", timeout=600)
     assert run.returncode == 0, run.stdout + run.stderr
     lines = dict(line.split(":", 1) for line in run.stdout.splitlines() if ":" in line)
     want = host(boards, PAPER).stdout.split()[:3]
@@ -102,8 +101,7 @@ def test_a_fault_exits_instead_of_hanging(boards, tmp_path):
 
 
 def test_static_memory_and_stack_bound(boards):
-    run = subprocess.run(["make", "-s", "-C", str(boards), "check-static"], capture_output=True, text=True,
-                         timeout=600, check=False)
+    run = make("-s", "-C", str(boards), "check-static", timeout=600)
     assert run.returncode == 0, run.stderr
     for t in BOARD:
         run = subprocess.run([sys.executable, str(boards / "stack_bound.py"), "--su", str(boards / "build" / t),
@@ -114,8 +112,7 @@ def test_static_memory_and_stack_bound(boards):
 
 
 def test_make_size_reports_flash_ram_and_stack(boards):
-    run = subprocess.run(["make", "-s", "-C", str(boards), "size"], capture_output=True, text=True, timeout=600,
-                         check=False)
+    run = make("-s", "-C", str(boards), "size", timeout=600)
     assert run.returncode == 0, run.stderr
     for t in BOARD:
         assert re.search(rf"{t} planner firmware .*flash \d+ B, RAM \d+ B", run.stdout)
@@ -130,8 +127,7 @@ def test_float_build_on_the_cortex_m4f(generated_c_float):
     assert "M4F_EXTRA = -Wdouble-promotion" in (out / "Makefile").read_text()
     said = ""
     for goal in ("check-static", "qemu"):
-        run = subprocess.run(["make", "-s", "-C", str(out), "-j2", goal], capture_output=True, text=True, timeout=900,
-                             check=False)
+        run = make("-s", "-C", str(out), "-j2", goal, timeout=900)
         assert run.returncode == 0, run.stdout + run.stderr
         said += run.stdout
     assert "no double operation in the float library" in said and "both boards print the host's" in said

@@ -149,47 +149,71 @@ def _radius_of_turn(e, k):
 
 def _brute_branch(eta, h_m, k, samples_per_rad, min_samples):
     """Roots a of branch (eta, h_m) by the dense scan of the module docstring."""
+    return _brute_branches([eta], [h_m], k, samples_per_rad, min_samples)[0]
+
+
+def _branch_grid(eta, k, samples_per_rad, min_samples):
+    """The scan grid in a of branch eta (uniform in E(a) and in a), empty where E(a) - eta leaves [E(A_MAX), 0]."""
     e_min = float(leafmap.turn(A_MAX, k))
     lo_e, hi_e = max(e_min, e_min + eta), min(0.0, eta)       # E(a) - eta within [E(A_MAX), 0]
     if lo_e > hi_e:
-        return []
+        return np.zeros(0)
     a_lo = _radius_of_turn(hi_e, k) if hi_e < 0 else 0.0
     a_hi = _radius_of_turn(lo_e, k) if lo_e > e_min else A_MAX
     n = max(min_samples, int(samples_per_rad * (hi_e - lo_e)))
     grid = np.unique(np.concatenate([np.linspace(a_lo, a_hi, n), leafmap.turn_inverse(np.linspace(hi_e, lo_e, n), k)]))
-    grid = grid[(grid > 0) & np.isfinite(grid)]
-    bs = _b_of(grid, eta, k)
+    return grid[(grid > 0) & np.isfinite(grid)]
+
+
+def _brute_branches(etas, h_ms, k, samples_per_rad, min_samples):
+    """Roots a of each branch (eta_i, h_i) by the dense scan of the module docstring: every branch's grid, sign
+    changes and minima in one array (a bisection or golden-section step is one vectorised call for all branches,
+    not one per branch). A list of root lists, one per branch."""
+    grids = [_branch_grid(eta, k, samples_per_rad, min_samples) for eta in etas]
+    grid = np.concatenate(grids)
+    which = np.repeat(np.arange(len(grids)), [g.size for g in grids])
+    eta_of, h_of = np.asarray(etas, float)[which], np.asarray(h_ms, float)[which]
+    bs = _b_of(grid, eta_of, k)
     ok = np.isfinite(bs) & (bs > 0)
-    grid, bs = grid[ok], bs[ok]
+    grid, bs, which, eta_of, h_of = grid[ok], bs[ok], which[ok], eta_of[ok], h_of[ok]
+    h2_of = h_of * h_of
     shift, _ = leafmap.step_values(grid, bs, k)
-    f = np.abs(shift) ** 2 - h_m * h_m
+    f = np.abs(shift) ** 2 - h2_of
 
-    def g(a):   # _g for an array of a
-        return np.abs(leafmap.step_values(a, _b_of(a, eta, k), k)[0]) ** 2 - h_m * h_m
+    def g(a, i):   # _g for an array of a, at the branches of the grid points i
+        return np.abs(leafmap.step_values(a, _b_of(a, eta_of[i], k), k)[0]) ** 2 - h2_of[i]
 
-    changes = np.nonzero(np.sign(f[:-1]) * np.sign(f[1:]) < 0)[0]
-    roots = list(_bisect(g, grid[changes], grid[changes + 1]))
+    same = which[:-1] == which[1:]                              # neighbours on one branch
+    changes = np.nonzero((np.sign(f[:-1]) * np.sign(f[1:]) < 0) & same)[0]
+    roots = [[] for _ in grids]
+    for i, a in zip(changes, _bisect(lambda a: g(a, changes), grid[changes], grid[changes + 1])):
+        roots[which[i]].append(a)
     # local minima of |f| without a sign change: a close pair or a tangency inside one interval
     af = np.abs(f)
-    low = np.nonzero((af[1:-1] < af[:-2]) & (af[1:-1] < af[2:]))[0] + 1
+    low = np.nonzero((af[1:-1] < af[:-2]) & (af[1:-1] < af[2:]) & same[:-1] & same[1:])[0] + 1
     low = low[(f[low - 1] * f[low] > 0) & (f[low] * f[low + 1] > 0)]
     sign = np.sign(f[low])
-    lowest = _golden_minimum(lambda a: sign * g(a), grid[low - 1], grid[low + 1])
-    for i in np.nonzero(np.sign(g(lowest)) != sign)[0]:
-        roots.append(brentq(_g, grid[low[i] - 1], lowest[i], args=(eta, h_m, k), xtol=1e-15, rtol=1e-15))
-        roots.append(brentq(_g, lowest[i], grid[low[i] + 1], args=(eta, h_m, k), xtol=1e-15, rtol=1e-15))
+    lowest = _golden_minimum(lambda a: sign * g(a, low), grid[low - 1], grid[low + 1])
+    for j in np.nonzero(np.sign(g(lowest, low)) != sign)[0]:
+        i = low[j]
+        args = (float(eta_of[i]), float(h_of[i]), k)
+        roots[which[i]].append(brentq(_g, grid[i - 1], lowest[j], args=args, xtol=1e-15, rtol=1e-15))
+        roots[which[i]].append(brentq(_g, lowest[j], grid[i + 1], args=args, xtol=1e-15, rtol=1e-15))
     return roots
 
 
 def _bisect(f, lo, hi, halvings=60):
     """The root in each bracket [lo_i, hi_i] of a sign change of the vectorised f, all brackets halved together
-    (60 halvings: far below the spacing of doubles for the brute force's brackets)."""
+    (60 halvings: far below the spacing of doubles for the brute force's brackets; it stops sooner once every
+    bracket is two neighbouring doubles, whose midpoint no further halving changes)."""
     lo, hi = np.array(lo, float), np.array(hi, float)
     if lo.size == 0:
         return lo
     f_lo = f(lo)
     for _ in range(halvings):
         mid = 0.5 * (lo + hi)
+        if np.all((mid == lo) | (mid == hi)):
+            break
         f_mid = f(mid)
         right = np.sign(f_mid) == np.sign(f_lo)   # the sign change is in [mid, hi]
         lo, f_lo, hi = np.where(right, mid, lo), np.where(right, f_mid, f_lo), np.where(right, hi, mid)
@@ -198,7 +222,8 @@ def _bisect(f, lo, hi, halvings=60):
 
 def _golden_minimum(f, lo, hi, steps=90):
     """A local minimum of the vectorised f in each interval [lo_i, hi_i], by golden-section search on all intervals
-    together (90 steps shrink them by 0.618^90 < 1e-18)."""
+    together (90 steps shrink them by 0.618^90 < 1e-18; it stops sooner once every interval is within four
+    spacings of doubles)."""
     lo, hi = np.array(lo, float), np.array(hi, float)
     if lo.size == 0:
         return lo
@@ -206,6 +231,8 @@ def _golden_minimum(f, lo, hi, steps=90):
     c, d = hi - inv * (hi - lo), lo + inv * (hi - lo)
     f_c, f_d = f(c), f(d)
     for _ in range(steps):
+        if np.all(hi - lo <= 4.0 * np.spacing(hi)):
+            break
         left = f_c < f_d   # the minimum is in [lo, d]: d becomes the old c
         lo, hi = np.where(left, lo, c), np.where(left, d, hi)
         new = np.where(left, hi - inv * (hi - lo), lo + inv * (hi - lo))
@@ -234,15 +261,21 @@ def _scan_roots(target, steps, k, branches, samples_per_rad, min_samples):
     h_des = math.hypot(u, v)
     lam = -float(leafmap.turn(A_MAX, k))
     ms = range(math.ceil((-steps * lam - psi) / (2 * math.pi)), math.floor((steps * lam - psi) / (2 * math.pi)) + 1)
-    out = []
+    scanned = []                                     # (m, eta, h_m) of the branches to scan
     for m in (branches if branches is not None else ms):
         eta = (psi + 2 * math.pi * m) / steps
         gain = float(n_step_gain(eta, steps))
         if gain < 1e-12 or abs(eta) > lam:
             continue
-        for a in _brute_branch(eta, h_des / gain, k, samples_per_rad, min_samples):
-            out.append((m, a, float(_b_of(np.array([a]), eta, k)[0])))
-    return out
+        scanned.append((m, eta, h_des / gain))
+    if not scanned:
+        return []
+    roots = _brute_branches([e for _, e, _ in scanned], [h for _, _, h in scanned], k, samples_per_rad, min_samples)
+    found = [(m, eta, a) for (m, eta, _), branch in zip(scanned, roots) for a in branch]
+    if not found:
+        return []
+    bs = _b_of(np.array([a for _, _, a in found]), np.array([eta for _, eta, _ in found]), k)
+    return [(m, a, float(b)) for (m, _, a), b in zip(found, bs)]
 
 
 def _enumerated(target, steps, k, branch=None):
@@ -259,8 +292,26 @@ def _same_sets(brute, enum, tol=1e-7):
     return missed, extra
 
 
+def _repeated(first, steps):
+    """The ends of ``steps`` figure eights from zero, given ``first`` = the ends (u_a, v_a, psi) of one from zero
+    (arrays of shape (N, 3) and (N,)), by the symmetry of the printed equations (28)-(30): their right side does not
+    depend on (u_a, v_a), and psi only turns the rates of (u_a, v_a) by -psi, so a figure eight started at
+    (u, v, psi) ends at ``(u + i v) + exp(-i psi) S``, ``psi + eta``, where ``(S, eta)`` is its end from zero.
+    Checked against DOP853 over every step by test_codegen.test_traces_are_the_trace_of_each_plan."""
+    first, steps = np.atleast_2d(np.asarray(first, float)), np.atleast_1d(steps)
+    shift, eta = first[:, 0] + 1j * first[:, 1], first[:, 2]
+    end, psi = np.zeros(len(first), complex), np.zeros(len(first))
+    for j in range(int(steps.max())):
+        on = steps > j
+        end[on] += np.exp(-1j * psi[on]) * shift[on]
+        psi[on] += eta[on]
+    return np.stack([end.real, end.imag, psi], axis=1)
+
+
 def _certified_by_dop853(target, steps, k, p):
-    x = references.trace(p.a, p.b, k, p.gamma, steps)
+    """The miss of plan p: its first figure eight by DOP853 on the printed equations, the others by
+    :func:`_repeated`."""
+    x = _repeated(_trace(p.a, p.b, k, p.gamma, 1), steps)[0]
     return max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2])))
 
 
@@ -318,6 +369,21 @@ def test_first_root_behind_a_tangency_at_the_end_of_the_graph():
     brute = _brute_branch(brs[0].eta, brs[0].h, k, 40, 4000)
     assert len(first) == 1 and min(brute) < 0.02
     assert first[0].a == pytest.approx(min(brute), abs=1e-12)
+
+
+@pytest.mark.slow
+def test_brute_force_of_many_branches_at_once_is_that_of_each_branch():
+    """The dense scan of several branches in one array (_brute_branches) finds, on each branch, the roots that the
+    scan of that branch alone finds: nothing is paired across the seam of two branches' grids (between branches
+    with roots, and between one where h^2 - h_m^2 < 0 everywhere, h_m = 100, and one where it is mostly > 0)."""
+    k, steps, target = 2.5, 5, (0.0621, 0.0847, 2.4915)
+    brs = [(b.eta, b.h) for b in en.branches(k, target[2], steps, math.hypot(*target[:2])) if b.m in (-5, -10, 0, 3)]
+    brs += [(brs[0][0], 100.0), (brs[0][0], 1e-6), (brs[0][0], 100.0)]
+    together = _brute_branches([e for e, _ in brs], [h for _, h in brs], k, 40, 1000)   # any grid: the same for both
+    assert sum(map(len, together)) >= 4
+    for (eta, h), roots in zip(brs, together):
+        alone = _brute_branch(eta, h, k, 40, 1000)
+        assert len(roots) == len(alone) and np.allclose(roots, alone, rtol=0, atol=1e-12), (eta, h)
 
 
 # the issue's three failures

@@ -584,12 +584,17 @@ def test_ctrl_c_stops_a_route_of_two_leg_searches_promptly(tmp_path):
     rows = "\n".join(f"{1e-6 * (i % 2)},{1e-6 * i},{0.5 * (i % 2)}" for i in range(1, 30))
     path = tmp_path / "w.csv"
     path.write_text(f"u_a,v_a,psi\n0,0,0\n{rows}\n")
-    # the command as a user's shell starts it: SIGINT handled by Python (a background test run ignores it)
+    # the command as a user's shell starts it: SIGINT handled by Python (a background test run ignores it); it says
+    # "ready" on stderr when its first leg is done (the route's progress call), and the signal follows while the
+    # second leg is searched
     code = ("import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
-            "from rollplan.cli import main; sys.exit(main(sys.argv[1:]))")
+            "from rollplan.cli import main; from rollplan.cli.commands import route; shown = route.report; "
+            "route.report = lambda *a, **kw: (sys.stderr.write('ready\\n'), sys.stderr.flush(), shown(*a, **kw))[-1]; "
+            "sys.exit(main(sys.argv[1:]))")
     p = subprocess.Popen([sys.executable, "-c", code, "route", str(path), "--k", "7.7"],
                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    time.sleep(8.0)
+    assert p.stderr.readline() == "ready\n"
+    time.sleep(0.2)
     assert p.poll() is None, "the route ended before the interrupt: make it longer"
     t0 = time.perf_counter()
     p.send_signal(signal.SIGINT)
