@@ -167,15 +167,27 @@ def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path, capsys):
         planned += 1
     assert planned >= 2
 
+def _bisect(g, lo, hi, g_lo, xtol):
+    """The roots of ``g`` (vectorised over the brackets) in the brackets [lo, hi] (arrays; g changes sign on each,
+    ``g_lo`` its values at lo), all brackets halved together until narrower than ``xtol``: their midpoints."""
+    lo, hi, g_lo = (np.array(x, float) for x in (lo, hi, g_lo))
+    while lo.size and np.max(hi - lo) > xtol:
+        mid = 0.5 * (lo + hi)
+        g_mid = g(mid)
+        left = np.sign(g_mid) == np.sign(g_lo)   # the root is in [mid, hi]
+        lo, g_lo, hi = np.where(left, mid, lo), np.where(left, g_mid, g_lo), np.where(left, hi, mid)
+    return 0.5 * (lo + hi)
+
+
 def _brute_family_roots(curve, k, targets, count=240, scan=4000):
     """Every root (m, a, b) of (32)-(33) for each target ``((u, v, psi), steps)`` with the leaves of ``curve``, by a
     brute force independent of the planner: each leaf of a grid of about 1.5 ``count`` sizes (graded towards A_MAX)
     integrated by DOP853 along the curve as typed in tests/references.py (all sizes as one system,
     ``curve_leaf_ends``, checked against ``curve_leaf_end`` leaf by leaf at two sizes), its turn E and
     ``rho = Re(exp(i E / 2) d)`` splined in the size, every branch m scanned at ``scan`` points of a for sign changes of
-    ``h(a, b(a))^2 - h_m^2`` (``b(a) = E^-1(E(a) - eta_m)``, structure (i) and (iii)), each root by brentq."""
+    ``h(a, b(a))^2 - h_m^2`` (``b(a) = E^-1(E(a) - eta_m)``, structure (i) and (iii)), each root by bisection
+    (all brackets of every branch and target at once, to 1e-14)."""
     from scipy.interpolate import CubicSpline
-    from scipy.optimize import brentq
 
     from rollplan.core.curves import A_MAX
 
@@ -197,20 +209,25 @@ def _brute_family_roots(curve, k, targets, count=240, scan=4000):
     e_min = float(turn[-1])
     assert np.all(np.diff(turn) < 0)   # (iv): E decreasing in the size for k >= 1/2
     fine = np.linspace(0.0, A_MAX, 200001)
-    fine_e = e_of(fine)
+    rising = -e_of(fine)   # -E, increasing along the fine table
 
     def size_of(e):
         """E^-1 on the spline: the fine table's linear inverse and two Newton steps (vectorised)."""
-        r = np.interp(-np.asarray(e, float), -fine_e, fine)
+        r = np.interp(-np.asarray(e, float), rising, fine)
         for _ in range(2):
             slope = e_of(r, 1)
             r = np.clip(np.where(slope < 0, r - (e_of(r) - e) / np.where(slope < 0, slope, -1.0), r), 0.0, A_MAX)
         return r
 
-    out = []
-    for (u, v, psi), steps in targets:
+    def g(a, eta, h_m):
+        b = size_of(e_of(a) - eta)
+        ra, rb = rho_of(a), rho_of(b)
+        return ra * ra + rb * rb + 2 * ra * rb * np.cos(eta / 2) - h_m * h_m
+
+    found = []   # (target, m, bracket's lo, hi, g at lo, eta_m, h_m) of every sign change
+    for t, ((u, v, psi), steps) in enumerate(targets):
         psi = float(wrap(psi))
-        h_des, lam, roots = math.hypot(u, v), -e_min, []
+        h_des, lam = math.hypot(u, v), -e_min
         m_lo, m_hi = math.ceil((-steps * lam - psi) / (2 * math.pi)), math.floor((steps * lam - psi) / (2 * math.pi))
         for m in range(m_lo, m_hi + 1):
             eta = (psi + 2 * math.pi * m) / steps
@@ -222,18 +239,17 @@ def _brute_family_roots(curve, k, targets, count=240, scan=4000):
             if lo_e >= hi_e:
                 continue
             a_lo, a_hi = float(size_of(hi_e)), float(size_of(lo_e))
-
-            def g(a, eta=eta, h_m=h_m):
-                b = size_of(e_of(a) - eta)
-                ra, rb = rho_of(a), rho_of(b)
-                return ra * ra + rb * rb + 2 * ra * rb * math.cos(eta / 2) - h_m * h_m
-
             grid = np.linspace(a_lo, a_hi, scan)
-            f = g(grid)
+            f = g(grid, eta, h_m)
             for i in np.nonzero(np.sign(f[:-1]) * np.sign(f[1:]) < 0)[0]:
-                a = brentq(lambda x: float(g(x)), grid[i], grid[i + 1], xtol=1e-14)
-                roots.append((m, a, float(size_of(e_of(a) - eta))))
-        out.append(roots)
+                found.append((t, m, grid[i], grid[i + 1], f[i], eta, h_m))
+    out = [[] for _ in targets]
+    if found:   # every bracket of every branch and target halved together
+        t, m, lo, hi, g_lo, eta, h_m = (np.array(c) for c in zip(*found))
+        a = _bisect(lambda x: g(x, eta, h_m), lo, hi, g_lo, xtol=1e-14)
+        b = size_of(e_of(a) - eta)
+        for q in range(a.size):
+            out[t[q]].append((int(m[q]), float(a[q]), float(b[q])))
     return out
 
 
