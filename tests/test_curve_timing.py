@@ -228,8 +228,7 @@ def test_a_viviani_plan_runs_nonstop_and_its_rates_land_on_the_goal():
     assert p.curve == "viviani" and p.a == pytest.approx(p.b, rel=1e-9)
     m = actuate(p, ROBOT, None, 4, "nonstop-min-jerk")
     assert torque_breaks(m)[0].size == 0 and m.rest_indices.tolist() == [0, m.series.time.size - 1]
-    keys = ("radius", "mass_total", "mass_shell", "rotor_inertia_axial", "rotor_inertia_transverse")
-    final = references.rotor_drive({k: getattr(ROBOT, k) for k in keys}, m.series.time, m.series.rotor_rates)[-1]
+    final = _rotor_drive_end(ROBOT, m.series.time, m.series.rotor_rates)
     g, R = p.goal, ROBOT.radius
     assert np.hypot(final[0] - g.u_a, final[1] - g.v_a) / R < 1e-6 and abs(references.wrap(final[2] - g.psi)) < 1e-6
 
