@@ -90,6 +90,7 @@ def _rotor_drive_end(robot, t, rates, rtol=1e-12, atol=1e-14):
     return sol.y[:, -1]
 
 
+@pytest.mark.slow
 def test_scalar_rotor_drive_ends_where_the_reference_does():
     """:func:`_rotor_drive_end` against ``references.rotor_drive`` on the first tenth of a timed viviani eight (its
     rates, their spline and the integration differ from the reference's by rounding only)."""

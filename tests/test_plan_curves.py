@@ -121,6 +121,7 @@ def _replay_end(u_o, v_o, segment, k):
     return x
 
 
+@pytest.mark.slow
 def test_scalar_replay_is_the_references_replay():
     """:func:`_replay_rhs` is the right side of ``references.replay`` (its printed (15), (16), (20) along scipy's
     spline, to rounding at 200 points), and :func:`_replay_end` ends where ``references.replay`` does on a sampled
