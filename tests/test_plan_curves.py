@@ -75,11 +75,81 @@ def _targets(seed, count):
     return out
 
 
+
+def _replay_rhs(tau, u, v, k):
+    """The right side of ``references.replay`` on one segment: (15), (16), (20) along the not-a-knot cubic splines of
+    the samples ``u``, ``v`` over ``tau``, in scalar arithmetic (each spline's cubic on its interval by Horner)."""
+    from bisect import bisect_right
+
+    from scipy.interpolate import CubicSpline
+
+    spline = CubicSpline(tau, np.column_stack([u, v]))
+    knots, last = spline.x.tolist(), spline.x.size - 2
+    cf = [[spline.c[p, :, q].tolist() for q in range(2)] for p in range(4)]
+
+    def f(t, x):
+        i = min(max(bisect_right(knots, t) - 1, 0), last)
+        d = t - knots[i]
+        uo, vo = (((cf[0][q][i] * d + cf[1][q][i]) * d + cf[2][q][i]) * d + cf[3][q][i] for q in (0, 1))
+        du, dv = ((3 * cf[0][q][i] * d + 2 * cf[1][q][i]) * d + cf[2][q][i] for q in (0, 1))
+        cp, sp, cv = math.cos(x[2]), math.sin(x[2]), math.cos(vo)
+        return [-cp * cv * du + sp * dv, sp * cv * du + cp * dv,
+                (1 - k) * math.sin(vo) * du + k * math.tan(uo) / cv * dv]
+
+    return f
+
+
+def _replay_end(u_o, v_o, segment, k):
+    """The last state of ``references.replay`` from zero: the same segments and chord-length splines, DOP853 with its
+    tolerances, the right side :func:`_replay_rhs` in scalar arithmetic and no samples between the ends (the
+    reference's right side is mostly scipy's and numpy's per-call overhead)."""
+    from scipy.integrate import solve_ivp
+
+    u, v, seg = (np.asarray(a) for a in (u_o, v_o, segment))
+    x = np.zeros(3)
+    for j in range(int(seg.max()) + 1):
+        idx = np.flatnonzero(seg == j)
+        idx = np.r_[idx[0] - 1, idx[idx > 0]] if idx[0] > 0 else idx
+        if idx.size < 2:
+            continue
+        c = references.contact_point(u[idx], v[idx])
+        tau = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))]
+        sol = solve_ivp(_replay_rhs(tau, u[idx], v[idx], k), (0.0, tau[-1]), x, method="DOP853", rtol=1e-10,
+                        atol=1e-12)
+        assert sol.success, sol.message
+        x = sol.y[:, -1]
+    return x
+
+
+@pytest.mark.slow
+def test_scalar_replay_is_the_references_replay():
+    """:func:`_replay_rhs` is the right side of ``references.replay`` (its printed (15), (16), (20) along scipy's
+    spline, to rounding at 200 points), and :func:`_replay_end` ends where ``references.replay`` does on a sampled
+    contact path of three segments (two circles and a great-circle arc from the pole, typed in tests/references.py)
+    within the integrators' own error (DOP853 at rtol 1e-10: their steps differ by rounding)."""
+    from scipy.interpolate import CubicSpline
+
+    t = np.linspace(0.0, 2 * np.pi, 41)
+    arc = references.geodesic(references.polar_point(0.0, 0.0), references.polar_point(0.5, -0.4))
+    pieces = [references.chart_rates(*references.circle(0.4, t, 1.0)),
+              references.chart_rates(*references.circle(0.3, t, -1.0, 0.5)),
+              references.chart_rates(*(np.array(c).T for c in zip(*(arc(x) for x in t))))]
+    u = np.concatenate([piece[0] for piece in pieces])
+    v = np.concatenate([piece[1] for piece in pieces])
+    segment = np.repeat(np.arange(3), t.size)
+    su, sv, f = CubicSpline(t, u[:41]), CubicSpline(t, v[:41]), _replay_rhs(t, u[:41], v[:41], 2.0)
+    rng = np.random.default_rng(3)
+    for s, psi in zip(rng.uniform(0.0, 2 * np.pi, 200), rng.uniform(-np.pi, np.pi, 200)):
+        want = references.rates_15_16_20(psi, su(s), sv(s), su(s, 1), sv(s, 1), 2.0)
+        assert np.abs(np.array(f(s, (0.0, 0.0, psi))) - want).max() < 1e-13 * (1 + np.abs(want).max())
+    want = references.replay(u, v, segment, np.zeros(3), 2.0)[-1]
+    assert np.abs(want).max() > 0.1 and np.abs(_replay_end(u, v, segment, 2.0) - want).max() < 1e-7
+
 @pytest.mark.slow
 @pytest.mark.parametrize("curve", PLANNED)
 def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path, capsys):
-    """``plan --curve --json``: the sampled contact path alone, integrated by scipy (replay, 1e-6), and the figure
-    eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9; a
+    """``plan --curve --json``: the sampled contact path alone, integrated by scipy (:func:`_replay_end`, 1e-6), and
+    the figure eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9; a
     polygon's contact path is made of great-circle arcs (each edge's samples on one great circle to 1e-9)."""
     _require_library(curve)
     landed = 0
@@ -104,7 +174,7 @@ def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path, capsys):
                 arc = pts[np.r_[idx[0] - 1, idx]]
                 normal = np.cross(arc[0], arc[-1])
                 assert np.max(np.abs(arc @ (normal / np.linalg.norm(normal)))) < 1e-9, j
-        x = references.replay(u_o, v_o, segment, np.zeros(3), k)[-1]
+        x = _replay_end(u_o, v_o, segment, k)
         assert abs(x[0] - target[0]) < 1e-6 and abs(x[1] - target[1]) < 1e-6, (target, x)
         assert abs(wrap(x[2] - target[2])) < 1e-6, (target, x)
         f = d["figure_eight"]
@@ -167,15 +237,27 @@ def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path, capsys):
         planned += 1
     assert planned >= 2
 
+def _bisect(g, lo, hi, g_lo, xtol):
+    """The roots of ``g`` (vectorised over the brackets) in the brackets [lo, hi] (arrays; g changes sign on each,
+    ``g_lo`` its values at lo), all brackets halved together until narrower than ``xtol``: their midpoints."""
+    lo, hi, g_lo = (np.array(x, float) for x in (lo, hi, g_lo))
+    while lo.size and np.max(hi - lo) > xtol:
+        mid = 0.5 * (lo + hi)
+        g_mid = g(mid)
+        left = np.sign(g_mid) == np.sign(g_lo)   # the root is in [mid, hi]
+        lo, g_lo, hi = np.where(left, mid, lo), np.where(left, g_mid, g_lo), np.where(left, hi, mid)
+    return 0.5 * (lo + hi)
+
+
 def _brute_family_roots(curve, k, targets, count=240, scan=4000):
     """Every root (m, a, b) of (32)-(33) for each target ``((u, v, psi), steps)`` with the leaves of ``curve``, by a
     brute force independent of the planner: each leaf of a grid of about 1.5 ``count`` sizes (graded towards A_MAX)
     integrated by DOP853 along the curve as typed in tests/references.py (all sizes as one system,
     ``curve_leaf_ends``, checked against ``curve_leaf_end`` leaf by leaf at two sizes), its turn E and
     ``rho = Re(exp(i E / 2) d)`` splined in the size, every branch m scanned at ``scan`` points of a for sign changes of
-    ``h(a, b(a))^2 - h_m^2`` (``b(a) = E^-1(E(a) - eta_m)``, structure (i) and (iii)), each root by brentq."""
+    ``h(a, b(a))^2 - h_m^2`` (``b(a) = E^-1(E(a) - eta_m)``, structure (i) and (iii)), each root by bisection
+    (all brackets of every branch and target at once, to 1e-14)."""
     from scipy.interpolate import CubicSpline
-    from scipy.optimize import brentq
 
     from rollplan.core.curves import A_MAX
 
@@ -197,20 +279,25 @@ def _brute_family_roots(curve, k, targets, count=240, scan=4000):
     e_min = float(turn[-1])
     assert np.all(np.diff(turn) < 0)   # (iv): E decreasing in the size for k >= 1/2
     fine = np.linspace(0.0, A_MAX, 200001)
-    fine_e = e_of(fine)
+    rising = -e_of(fine)   # -E, increasing along the fine table
 
     def size_of(e):
         """E^-1 on the spline: the fine table's linear inverse and two Newton steps (vectorised)."""
-        r = np.interp(-np.asarray(e, float), -fine_e, fine)
+        r = np.interp(-np.asarray(e, float), rising, fine)
         for _ in range(2):
             slope = e_of(r, 1)
             r = np.clip(np.where(slope < 0, r - (e_of(r) - e) / np.where(slope < 0, slope, -1.0), r), 0.0, A_MAX)
         return r
 
-    out = []
-    for (u, v, psi), steps in targets:
+    def g(a, eta, h_m):
+        b = size_of(e_of(a) - eta)
+        ra, rb = rho_of(a), rho_of(b)
+        return ra * ra + rb * rb + 2 * ra * rb * np.cos(eta / 2) - h_m * h_m
+
+    found = []   # (target, m, bracket's lo, hi, g at lo, eta_m, h_m) of every sign change
+    for t, ((u, v, psi), steps) in enumerate(targets):
         psi = float(wrap(psi))
-        h_des, lam, roots = math.hypot(u, v), -e_min, []
+        h_des, lam = math.hypot(u, v), -e_min
         m_lo, m_hi = math.ceil((-steps * lam - psi) / (2 * math.pi)), math.floor((steps * lam - psi) / (2 * math.pi))
         for m in range(m_lo, m_hi + 1):
             eta = (psi + 2 * math.pi * m) / steps
@@ -222,18 +309,17 @@ def _brute_family_roots(curve, k, targets, count=240, scan=4000):
             if lo_e >= hi_e:
                 continue
             a_lo, a_hi = float(size_of(hi_e)), float(size_of(lo_e))
-
-            def g(a, eta=eta, h_m=h_m):
-                b = size_of(e_of(a) - eta)
-                ra, rb = rho_of(a), rho_of(b)
-                return ra * ra + rb * rb + 2 * ra * rb * math.cos(eta / 2) - h_m * h_m
-
             grid = np.linspace(a_lo, a_hi, scan)
-            f = g(grid)
+            f = g(grid, eta, h_m)
             for i in np.nonzero(np.sign(f[:-1]) * np.sign(f[1:]) < 0)[0]:
-                a = brentq(lambda x: float(g(x)), grid[i], grid[i + 1], xtol=1e-14)
-                roots.append((m, a, float(size_of(e_of(a) - eta))))
-        out.append(roots)
+                found.append((t, m, grid[i], grid[i + 1], f[i], eta, h_m))
+    out = [[] for _ in targets]
+    if found:   # every bracket of every branch and target halved together
+        t, m, lo, hi, g_lo, eta, h_m = (np.array(c) for c in zip(*found))
+        a = _bisect(lambda x: g(x, eta, h_m), lo, hi, g_lo, xtol=1e-14)
+        b = size_of(e_of(a) - eta)
+        for q in range(a.size):
+            out[t[q]].append((int(m[q]), float(a[q]), float(b[q])))
     return out
 
 
