@@ -166,18 +166,50 @@ def rotor_driven_rhs(j_xx, j_zz, j_r, radius, rates):
     """Right side ``f(t, x)`` of (6)-(10) with omega from the momentum integral (11), for scipy's solve_ivp.
 
     ``rates(t) -> (phi_1_dot, phi_2_dot)``; the state x in rollplan's order (u_a, v_a, psi, u_o, v_o);
-    (11) solved for omega with the orientation (2) composed from elementary rotations.
+    ``Jc omega = -J_r (n_1 phi_1_dot + n_2 phi_2_dot)`` with n_1, n_2 the columns of (2) and then Montana's
+    (6)-(10), in scalar arithmetic (numpy's per-call cost on 3-vectors is ten times the arithmetic): the same
+    expressions as :func:`axes` and :func:`montana`, checked against (2) composed from elementary rotations and
+    :func:`montana` by tests/test_references.py.
     """
-    jc = np.array([j_xx, j_xx, j_zz])
 
     def f(t, x):
-        psi, u, v = x[2], x[3], x[4]
-        rot = orientation(u, v, psi)
+        psi, u, v = float(x[2]), float(x[3]), float(x[4])
         r1, r2 = rates(t)
-        w = -j_r * (rot[:, 0] * r1 + rot[:, 1] * r2) / jc
-        return montana(w, u, v, psi, radius)
+        cu, su, cv, sv, cp, sp = math.cos(u), math.sin(u), math.cos(v), math.sin(v), math.cos(psi), math.sin(psi)
+        wx = -j_r * ((cu * cp + su * sv * sp) * r1 + cv * sp * r2) / j_xx
+        wy = -j_r * ((-cu * sp + su * sv * cp) * r1 + cv * cp * r2) / j_xx
+        wz = -j_r * (su * cv * r1 - sv * r2) / j_zz
+        roll = wx * sp + wy * cp
+        return np.array([radius * wy, -radius * wx, -wz - roll * math.tan(v), -roll / cv, -wx * cp + wy * sp])
 
     return f
+
+
+def scalar_spline(spline, derivative=False):
+    """A scipy ``CubicSpline`` of vector values (x of shape (n,), values (n, m)) evaluated at one point in plain
+    Python: its cubic on the point's interval by Horner (outside the knots the end pieces, as scipy extrapolates).
+    ``f(x) -> [m values]``, or ``(values, first derivatives)`` with ``derivative``. Equal to the spline's own
+    evaluation to rounding (tests/test_references.py), at a fraction of its per-call cost."""
+    from bisect import bisect_right
+
+    knots, last = spline.x.tolist(), spline.x.size - 2
+    c = spline.c.reshape(4, spline.c.shape[1], -1)
+    c3, c2, c1, c0 = ([c[p, :, q].tolist() for q in range(c.shape[2])] for p in range(4))
+
+    def piece(x):
+        i = min(max(bisect_right(knots, x) - 1, 0), last)
+        return i, x - knots[i]
+
+    def f(x):
+        i, d = piece(x)
+        return [((a[i] * d + b[i]) * d + e[i]) * d + g[i] for a, b, e, g in zip(c3, c2, c1, c0)]
+
+    def fd(x):
+        i, d = piece(x)
+        return ([((a[i] * d + b[i]) * d + e[i]) * d + g[i] for a, b, e, g in zip(c3, c2, c1, c0)],
+                [(3 * a[i] * d + 2 * b[i]) * d + e[i] for a, b, e in zip(c3, c2, c1)])
+
+    return fd if derivative else f
 
 
 def torque_driven_rhs(j_xx, j_zz, j_r, radius, torques, friction=(0.0, 0.0)):
@@ -249,31 +281,26 @@ def composite_inertias(radius, mass_total, mass_shell, rotor_inertia_axial, roto
     return j_zz + mass_total * radius**2, j_zz
 
 
-def rotor_drive(robot: dict, t, rates, x0=None, rtol=1e-12, atol=1e-14):
-    """States (N, 5) at the times ``t`` of the robot driven by the sampled rotor ``rates`` (N, 2) alone.
+def rotor_drive(robot: dict, t, rates, x0=None, rtol=1e-12, atol=1e-14, end=False):
+    """States (N, 5) at the times ``t`` of the robot driven by the sampled rotor ``rates`` (N, 2) alone (with
+    ``end``: the final state (5,) only, no samples between).
 
     ``robot`` holds the five parameters of Section II by rollplan's key names. omega from (11),
-    ``Jc omega = -J_r (n_1 phi_1' + n_2 phi_2')`` with n_1, n_2 the columns of (2), drives (6)-(10);
-    DOP853 integrates them with the rates interpolated by scipy's not-a-knot cubic spline.
+    ``Jc omega = -J_r (n_1 phi_1' + n_2 phi_2')`` with n_1, n_2 the columns of (2), drives (6)-(10)
+    (:func:`rotor_driven_rhs`); DOP853 integrates them with the rates interpolated by scipy's not-a-knot cubic
+    spline (:func:`scalar_spline`).
     """
     from scipy.interpolate import CubicSpline
 
     keys = ("radius", "mass_total", "mass_shell", "rotor_inertia_axial", "rotor_inertia_transverse")
     j_xx, j_zz = composite_inertias(*(robot[k] for k in keys))
-    jc, jr, radius = np.array([j_xx, j_xx, j_zz]), robot["rotor_inertia_axial"], robot["radius"]
     t = np.asarray(t, float)
-    spline = CubicSpline(t, np.asarray(rates, float), bc_type="not-a-knot")
-
-    def f(time, x):
-        psi, u, v = x[2], x[3], x[4]
-        rot = orientation(u, v, psi)
-        r1, r2 = spline(time)
-        return montana(-jr * (rot[:, 0] * r1 + rot[:, 1] * r2) / jc, u, v, psi, radius)
-
+    spline = scalar_spline(CubicSpline(t, np.asarray(rates, float), bc_type="not-a-knot"))
+    f = rotor_driven_rhs(j_xx, j_zz, robot["rotor_inertia_axial"], robot["radius"], spline)
     x0 = np.zeros(5) if x0 is None else np.asarray(x0, float)
-    sol = solve_ivp(f, (t[0], t[-1]), x0, method="DOP853", rtol=rtol, atol=atol, t_eval=t)
+    sol = solve_ivp(f, (t[0], t[-1]), x0, method="DOP853", rtol=rtol, atol=atol, t_eval=None if end else t)
     assert sol.success, sol.message
-    return sol.y.T
+    return sol.y[:, -1] if end else sol.y.T
 
 
 def psi_dot(u_o, v_o, du_o, dv_o, k):
@@ -693,10 +720,11 @@ def composed_final(pieces, start, k):
     return np.concatenate([x, contact])
 
 
-def replay(u_o, v_o, segment, x0, k):
+def replay(u_o, v_o, segment, x0, k, end=False):
     """(u_a, v_a, psi) at every sample of a sampled contact path, from (15), (16), (20) by DOP853 along
     cubic splines of the sampled (u_o, v_o) alone, one spline per segment (from the last sample of the
-    one before), parametrized by the chord length of the contact points (1): shape (N, 3)."""
+    one before), parametrized by the chord length of the contact points (1): shape (N, 3) (with ``end``: the
+    final state (3,) only, no samples between)."""
     from scipy.interpolate import CubicSpline
 
     u, v, seg = (np.asarray(a) for a in (u_o, v_o, segment))
@@ -709,12 +737,17 @@ def replay(u_o, v_o, segment, x0, k):
             continue
         c = contact_point(u[idx], v[idx])
         tau = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))]
-        su, sv = CubicSpline(tau, u[idx]), CubicSpline(tau, v[idx])
-        sol = integrate_contact_path(lambda t, su=su, sv=sv: (su(t), sv(t), su(t, 1), sv(t, 1)), x, (0.0, tau[-1]),
-                                     k, tau, rtol=1e-10, atol=1e-12)
-        out[idx[1:]] = sol.y[:, 1:].T
+        spline = scalar_spline(CubicSpline(tau, np.column_stack([u[idx], v[idx]])), derivative=True)
+
+        def path(t, spline=spline):
+            (uo, vo), (du, dv) = spline(t)
+            return uo, vo, du, dv
+
+        sol = integrate_contact_path(path, x, (0.0, tau[-1]), k, None if end else tau, rtol=1e-10, atol=1e-12)
+        if not end:
+            out[idx[1:]] = sol.y[:, 1:].T
         x = sol.y[:, -1]
-    return out
+    return x if end else out
 
 
 # ----------------------------------------------------------------------------- other leaf families (any curve)

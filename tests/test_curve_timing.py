@@ -48,59 +48,11 @@ def _vertices(name, a, b, gamma=GAMMA):
 
 
 
-_DRIVE_KEYS = ("radius", "mass_total", "mass_shell", "rotor_inertia_axial", "rotor_inertia_transverse")
+def _rotor_drive_end(robot, t, rates):
+    """The final state of ``references.rotor_drive`` for a rollplan robot."""
+    keys = ("radius", "mass_total", "mass_shell", "rotor_inertia_axial", "rotor_inertia_transverse")
+    return references.rotor_drive({k: getattr(robot, k) for k in keys}, t, rates, end=True)
 
-
-def _rotor_drive_end(robot, t, rates, rtol=1e-12, atol=1e-14):
-    """The final state of ``references.rotor_drive`` (same equations (2), (6)-(10), (11), same not-a-knot spline of
-    the rates, same DOP853 and tolerances), its right side in scalar arithmetic: n_1 and n_2 of (3), (4) (the
-    columns of (2), :func:`references.axes`), the spline's cubic on the sample interval by Horner, and no dense
-    output (the reference's right side is mostly numpy's per-call overhead on 3x3 matrices: ten times slower on
-    the 144001 samples of a time-optimal figure eight). Checked against the reference by
-    :func:`test_scalar_rotor_drive_ends_where_the_reference_does`."""
-    import math
-    from bisect import bisect_right
-
-    from scipy.integrate import solve_ivp
-    from scipy.interpolate import CubicSpline
-
-    params = {k: getattr(robot, k) for k in _DRIVE_KEYS}
-    j_xx, j_zz = references.composite_inertias(*params.values())
-    jr, radius = params["rotor_inertia_axial"], params["radius"]
-    t = np.asarray(t, float)
-    spline = CubicSpline(t, np.asarray(rates, float), bc_type="not-a-knot")
-    knots, last = spline.x.tolist(), spline.x.size - 2
-    c = [[spline.c[p, :, q].tolist() for q in range(2)] for p in range(4)]
-
-    def f(time, x):
-        i = min(max(bisect_right(knots, time) - 1, 0), last)
-        d = time - knots[i]
-        r1 = ((c[0][0][i] * d + c[1][0][i]) * d + c[2][0][i]) * d + c[3][0][i]
-        r2 = ((c[0][1][i] * d + c[1][1][i]) * d + c[2][1][i]) * d + c[3][1][i]
-        psi, u, v = x[2], x[3], x[4]
-        cu, su, cv, sv, cp, sp = math.cos(u), math.sin(u), math.cos(v), math.sin(v), math.cos(psi), math.sin(psi)
-        wx = -jr * ((cu * cp + su * sv * sp) * r1 + cv * sp * r2) / j_xx
-        wy = -jr * ((-cu * sp + su * sv * cp) * r1 + cv * cp * r2) / j_xx
-        wz = -jr * (su * cv * r1 - sv * r2) / j_zz
-        roll = wx * sp + wy * cp
-        return [radius * wy, -radius * wx, -wz - roll * math.tan(v), -roll / cv, -wx * cp + wy * sp]
-
-    sol = solve_ivp(f, (t[0], t[-1]), np.zeros(5), method="DOP853", rtol=rtol, atol=atol)
-    assert sol.success, sol.message
-    return sol.y[:, -1]
-
-
-@pytest.mark.slow
-def test_scalar_rotor_drive_ends_where_the_reference_does():
-    """:func:`_rotor_drive_end` against ``references.rotor_drive`` on the first tenth of a timed viviani eight (its
-    rates, their spline and the integration differ from the reference's by rounding only)."""
-    path = _path("viviani", 0.45, 0.3)
-    m = sample_motion(path, LAWS["min-jerk"].profile(path, LIMITS), 4, per_piece=LAWS["min-jerk"].samples_per_piece)
-    keep = slice(0, m.series.time.size // 10)
-    t, rates = m.series.time[keep], m.series.rotor_rates[keep]
-    want = references.rotor_drive({k: getattr(ROBOT, k) for k in _DRIVE_KEYS}, t, rates)[-1]
-    got = _rotor_drive_end(ROBOT, t, rates)
-    assert np.abs(want).max() > 1e-3 and np.abs(got - want).max() < 1e-12, (got, want)
 
 def _speed_where(prof, s_values, iterations=200):
     """s' of a profile where s(t) first reaches each value (bisection on the nondecreasing s(t), every value at

@@ -76,79 +76,10 @@ def _targets(seed, count):
 
 
 
-def _replay_rhs(tau, u, v, k):
-    """The right side of ``references.replay`` on one segment: (15), (16), (20) along the not-a-knot cubic splines of
-    the samples ``u``, ``v`` over ``tau``, in scalar arithmetic (each spline's cubic on its interval by Horner)."""
-    from bisect import bisect_right
-
-    from scipy.interpolate import CubicSpline
-
-    spline = CubicSpline(tau, np.column_stack([u, v]))
-    knots, last = spline.x.tolist(), spline.x.size - 2
-    cf = [[spline.c[p, :, q].tolist() for q in range(2)] for p in range(4)]
-
-    def f(t, x):
-        i = min(max(bisect_right(knots, t) - 1, 0), last)
-        d = t - knots[i]
-        uo, vo = (((cf[0][q][i] * d + cf[1][q][i]) * d + cf[2][q][i]) * d + cf[3][q][i] for q in (0, 1))
-        du, dv = ((3 * cf[0][q][i] * d + 2 * cf[1][q][i]) * d + cf[2][q][i] for q in (0, 1))
-        cp, sp, cv = math.cos(x[2]), math.sin(x[2]), math.cos(vo)
-        return [-cp * cv * du + sp * dv, sp * cv * du + cp * dv,
-                (1 - k) * math.sin(vo) * du + k * math.tan(uo) / cv * dv]
-
-    return f
-
-
-def _replay_end(u_o, v_o, segment, k):
-    """The last state of ``references.replay`` from zero: the same segments and chord-length splines, DOP853 with its
-    tolerances, the right side :func:`_replay_rhs` in scalar arithmetic and no samples between the ends (the
-    reference's right side is mostly scipy's and numpy's per-call overhead)."""
-    from scipy.integrate import solve_ivp
-
-    u, v, seg = (np.asarray(a) for a in (u_o, v_o, segment))
-    x = np.zeros(3)
-    for j in range(int(seg.max()) + 1):
-        idx = np.flatnonzero(seg == j)
-        idx = np.r_[idx[0] - 1, idx[idx > 0]] if idx[0] > 0 else idx
-        if idx.size < 2:
-            continue
-        c = references.contact_point(u[idx], v[idx])
-        tau = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(c, axis=0), axis=1))]
-        sol = solve_ivp(_replay_rhs(tau, u[idx], v[idx], k), (0.0, tau[-1]), x, method="DOP853", rtol=1e-10,
-                        atol=1e-12)
-        assert sol.success, sol.message
-        x = sol.y[:, -1]
-    return x
-
-
-@pytest.mark.slow
-def test_scalar_replay_is_the_references_replay():
-    """:func:`_replay_rhs` is the right side of ``references.replay`` (its printed (15), (16), (20) along scipy's
-    spline, to rounding at 200 points), and :func:`_replay_end` ends where ``references.replay`` does on a sampled
-    contact path of three segments (two circles and a great-circle arc from the pole, typed in tests/references.py)
-    within the integrators' own error (DOP853 at rtol 1e-10: their steps differ by rounding)."""
-    from scipy.interpolate import CubicSpline
-
-    t = np.linspace(0.0, 2 * np.pi, 41)
-    arc = references.geodesic(references.polar_point(0.0, 0.0), references.polar_point(0.5, -0.4))
-    pieces = [references.chart_rates(*references.circle(0.4, t, 1.0)),
-              references.chart_rates(*references.circle(0.3, t, -1.0, 0.5)),
-              references.chart_rates(*(np.array(c).T for c in zip(*(arc(x) for x in t))))]
-    u = np.concatenate([piece[0] for piece in pieces])
-    v = np.concatenate([piece[1] for piece in pieces])
-    segment = np.repeat(np.arange(3), t.size)
-    su, sv, f = CubicSpline(t, u[:41]), CubicSpline(t, v[:41]), _replay_rhs(t, u[:41], v[:41], 2.0)
-    rng = np.random.default_rng(3)
-    for s, psi in zip(rng.uniform(0.0, 2 * np.pi, 200), rng.uniform(-np.pi, np.pi, 200)):
-        want = references.rates_15_16_20(psi, su(s), sv(s), su(s, 1), sv(s, 1), 2.0)
-        assert np.abs(np.array(f(s, (0.0, 0.0, psi))) - want).max() < 1e-13 * (1 + np.abs(want).max())
-    want = references.replay(u, v, segment, np.zeros(3), 2.0)[-1]
-    assert np.abs(want).max() > 0.1 and np.abs(_replay_end(u, v, segment, 2.0) - want).max() < 1e-7
-
 @pytest.mark.slow
 @pytest.mark.parametrize("curve", PLANNED)
 def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path, capsys):
-    """``plan --curve --json``: the sampled contact path alone, integrated by scipy (:func:`_replay_end`, 1e-6), and
+    """``plan --curve --json``: the sampled contact path alone, integrated by scipy (``references.replay``, 1e-6), and
     the figure eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9; a
     polygon's contact path is made of great-circle arcs (each edge's samples on one great circle to 1e-9)."""
     _require_library(curve)
@@ -174,7 +105,7 @@ def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path, capsys):
                 arc = pts[np.r_[idx[0] - 1, idx]]
                 normal = np.cross(arc[0], arc[-1])
                 assert np.max(np.abs(arc @ (normal / np.linalg.norm(normal)))) < 1e-9, j
-        x = _replay_end(u_o, v_o, segment, k)
+        x = references.replay(u_o, v_o, segment, np.zeros(3), k, end=True)
         assert abs(x[0] - target[0]) < 1e-6 and abs(x[1] - target[1]) < 1e-6, (target, x)
         assert abs(wrap(x[2] - target[2])) < 1e-6, (target, x)
         f = d["figure_eight"]
