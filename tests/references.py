@@ -1,7 +1,9 @@
 """Independent references for the tests: the paper's printed equations and closed forms, in numpy.
 
 Nothing here imports rollplan. Each formula is typed once, from the paper as printed (misprints
-corrected and said so), and is what the tests compare rollplan's symbolic model and planners with:
+corrected and said so), and is what the tests compare rollplan's symbolic model and planners with (the one
+exception: :func:`rotor_driven_rhs` repeats (2), (6)-(10) in scalar arithmetic for speed, checked against
+:func:`orientation` and :func:`montana` by tests/test_references.py):
 
 * :func:`orientation` -- (2), composed from elementary rotations; :func:`axes` -- its columns
   n_1, n_2, n_3 as printed in (3)-(5);
@@ -13,7 +15,8 @@ corrected and said so), and is what the tests compare rollplan's symbolic model 
 * :func:`realizability` -- the left side of the realizability condition (13);
 * :func:`inertia_ratio` -- (14); :func:`composite_inertias` -- Jxx, Jzz of Section II; :func:`psi_dot` -- (20);
 * :func:`rotor_drive` -- the robot driven by sampled rotor rates alone: omega from (11), then (6)-(10), by
-  DOP853 with the rates interpolated by scipy's not-a-knot cubic spline;
+  DOP853 with the rates interpolated by scipy's not-a-knot cubic spline (:func:`scalar_spline`: a spline
+  evaluated at one point in plain Python);
 * :func:`curve_rhs` -- the curve ODE (28)-(30) with c_u, c_v of (26); :func:`circle` -- the circle
   (35) rotated by gamma (31); :func:`rhs` and :func:`trace` -- (28)-(30) along the figure eight,
   integrated by scipy's DOP853 (an integrator that shares no code with rollplan);
