@@ -359,3 +359,12 @@ def package_nodes(path) -> tuple:
 def one_line(err):
     """True if ``err`` is one line and no traceback (how every refusal is reported)."""
     return len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+def recorded_fallback(newton_step, args, used):
+    """``newton_step(*args)``; for CVODES's step with sensitivities (the correction's fallback: jacobians on, no
+    substeps) a wrapper that records each call in ``used``."""
+    step = newton_step(*args)
+    if (args[1] if len(args) > 1 else True) and (args[2] if len(args) > 2 else None) is None:
+        return lambda *a, **kw: used.append(kw) or step(*a, **kw)
+    return step

@@ -69,14 +69,17 @@ def warm40(planner40):
 def test_newton_correction_jacobian_by_eighth_order_steps(planner40, monkeypatch):
     """The correction's Jacobian came from CVODES's sensitivities; now from eighth-order steps (CVODES integrating
     the end error): the corrected controls are those of the correction through CVODES's sensitivities (to 1e-10)."""
+    from conftest import recorded_fallback
+
     from rollplan.planners.collocation import planner as cp
     from rollplan.planners.collocation.transcription import CORRECTION_TOL, JACOBIAN_SUBSTEPS
 
-    asked, calls, real_step, real_gn = [], [], cp._newton_step, cp.gauss_newton
-    monkeypatch.setattr(cp, "_newton_step", lambda *a: asked.append(a) or real_step(*a))
+    asked, used, calls, real_step, real_gn = [], [], [], cp._newton_step, cp.gauss_newton
+    monkeypatch.setattr(cp, "_newton_step", lambda *a: asked.append(a) or recorded_fallback(real_step, a, used))
     monkeypatch.setattr(cp, "gauss_newton", lambda *a, **kw: calls.append(a) or real_gn(*a, **kw))
     r = planner40.solve(PROBLEM, guess="warm")
     assert (planner40.cost, True, JACOBIAN_SUBSTEPS) in asked and len(calls) == 1
+    assert (planner40.cost,) in asked and not used   # CVODES's sensitivities: the fallback, never called
     _, controls, start, final, par = calls[0][:5]
     reference, _, size, first = real_gn(real_step(planner40.cost), controls, start, final, par, CORRECTION_TOL,
                                         plain=real_step(planner40.cost, False))
