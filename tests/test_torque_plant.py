@@ -255,3 +255,18 @@ def test_linear_input_steps_at_a_time_given_twice():
                                      np.where(tt[at] > tp[-1], yp[-1, i] + hi * (tt[at] - tp[-1]), inside))
     got = np.array(input_function(t, y, interpolation="linear").map(tt.size)(tt[None, :])).T
     np.testing.assert_allclose(got, expect, rtol=0, atol=1e-12)
+
+
+def test_rate_spline_is_scipys_not_a_knot_spline_on_uneven_times():
+    """Plan files put the torque steps' times between the uniform samples: CasADi's default solver of the spline's
+    coefficients (iterative least squares) stopped at 5e-13 of the rates there, and slowly. Against scipy's
+    not-a-knot CubicSpline at the samples and between them."""
+    from rollplan.execution.plants import rate_spline
+
+    rng = np.random.default_rng(3)
+    t = np.unique(np.r_[np.linspace(0.0, 1.0, 4001), rng.uniform(0.0, 1.0, 300)])
+    y = np.column_stack([np.sin(9 * t), t * np.cos(5 * t)])
+    x = np.r_[t, rng.uniform(0.0, 1.0, 500)]
+    got = np.array(rate_spline(t, y).map(x.size)(x[None, :])).T
+    assert np.abs(got - CubicSpline(t, y, axis=0)(x)).max() < 2e-14
+

@@ -99,10 +99,15 @@ class RotorSimulation(Arrival):
 
 
 def rate_spline(t, rates) -> ca.Function:
-    """Interpolating cubic spline (not-a-knot) through sampled rates: ``f(t) -> (m,)``."""
+    """Interpolating cubic spline (not-a-knot) through sampled rates: ``f(t) -> (m,)``.
+
+    Its coefficients solve the interpolation conditions by a sparse direct LU (CSparse): CasADi's default, an
+    iterative least-squares solver, converges slowly on non-uniform sample times (the steps of a plan file
+    given twice) and stops at about 1e-12 of the rates.
+    """
     t = np.asarray(t, float)
     rates = np.asarray(rates, float)
-    return ca.interpolant("rates", "bspline", [t], rates.ravel(order="C"))
+    return ca.interpolant("rates", "bspline", [t], rates.ravel(order="C"), {"linear_solver": "csparse"})
 
 
 def check_samples(t, rates):
