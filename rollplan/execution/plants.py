@@ -31,11 +31,12 @@ and time-optimal laws) at the joints of the contact path, so one spline across a
 only as h^2 or rings. :func:`input_function` splits the samples at given ``breaks`` (the joints,
 ``Actuation.rest_indices`` for min-jerk) into not-a-knot cubic splines, or interpolates linearly.
 Splines are integrated by CVODES. Linear inputs (the replay rule of plan files) have a kink at every
-sample, where CVODES' error control fails over and over; they are integrated sample interval by
-sample interval, where the inputs are linear in time, by classical RK4 (exact for the momenta, whose
-right side is the input) with ``m`` steps per interval, ``m`` doubled until the result of ``m`` and of
-``2 m`` steps agree within :data:`RK_TOLERANCE` (Richardson: the error of the ``2 m`` result is about
-a fifteenth of that difference).
+sample, and a step at every time given twice, where CVODES' error control fails over and over; they are
+integrated sample interval by sample interval, where the inputs are linear in time, by classical RK4
+(exact for the momenta, whose right side is the input) with ``m`` steps per interval. Each step's error
+is estimated by the embedded third-order solution (the right side at the step's end, ``h/6 (k_4 - k_5)``:
+an over-estimate of RK4's error); ``m`` is doubled until the estimates, summed over every interval, are
+within :data:`RK_TOLERANCE` of each quantity's scale.
 
 Disturbances (:data:`DISTURBANCES`, by name with parameters and a seed, :func:`disturbance`):
 ``friction`` (bearing friction, torque plant), ``measurement`` (white noise on every measured state
@@ -81,9 +82,9 @@ CHUNK = 10_000
 OVERLAP = 40
 #: Sample intervals per call of the torque plant's RK4 (progress and Ctrl-C between calls).
 RK_CHUNK = 2000
-#: Largest difference between the RK4 results of m and 2 m steps per sample interval of the torque plant's
-#: linear replay, relative to the scale of each quantity (lengths: R; angles: 1 rad or their largest value;
-#: momenta: their largest value or the torques' largest impulse).
+#: Largest sum of the RK4 steps' error estimates of the torque plant's linear replay, relative to the scale
+#: of each quantity (lengths: R; angles: 1 rad or their largest value; momenta: their largest value or the
+#: torques' largest impulse).
 RK_TOLERANCE = 1e-10
 #: Most RK4 steps per sample interval.
 RK_MAX_STEPS = 64
@@ -166,9 +167,10 @@ def _torque_dynamics() -> ca.Function:
 
 @lru_cache(maxsize=8)
 def _rk4_interval(m: int) -> ca.Function:
-    """``(z, u0, u1, h, params) -> z`` after ``m`` classical RK4 steps over a sample interval of length ``h`` of
-    the torque plant (:func:`_torque_dynamics`), its inputs ``u = (torque, reference, noise)`` linear in time from
-    ``u0`` to ``u1``; ``params = (K, c, Jxx, Jzz, J_r, R)``."""
+    """``(z, u0, u1, h, params) -> (z, error)`` after ``m`` classical RK4 steps over a sample interval of length
+    ``h`` of the torque plant (:func:`_torque_dynamics`), its inputs ``u = (torque, reference, noise)`` linear
+    in time from ``u0`` to ``u1``; ``params = (K, c, Jxx, Jzz, J_r, R)``; ``error``: the sum of the steps'
+    embedded error estimates ``|h/6 (k_4 - k_5)|`` (module docstring)."""
     z0, u0, u1, h, par = (ca.SX.sym(n, k) for n, k in (("z", 11), ("u0", 6), ("u1", 6), ("h", 1), ("p", 7)))
     dynamics = _torque_dynamics()
 
@@ -176,19 +178,21 @@ def _rk4_interval(m: int) -> ca.Function:
         u = u0 + w * (u1 - u0)
         return dynamics(z, u[0:2], u[2:4], u[4:6], par[0], par[1:3], par[3:7])[0]
 
-    z, dt = z0, h / m
+    z, dt, error = z0, h / m, ca.SX.zeros(11)
     for j in range(m):
         k1 = f(z, j / m)
         k2 = f(z + 0.5 * dt * k1, (j + 0.5) / m)
         k3 = f(z + 0.5 * dt * k2, (j + 0.5) / m)
         k4 = f(z + dt * k3, (j + 1.0) / m)
         z = z + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return ca.Function("torque_rk4", [z0, u0, u1, h, par], [z])
+        error += ca.fabs(dt / 6 * (k4 - f(z, (j + 1.0) / m)))
+    return ca.Function("torque_rk4", [z0, u0, u1, h, par], [z, error])
 
 
 @lru_cache(maxsize=16)
 def _rk4_intervals(m: int, n: int) -> ca.Function:
-    """:func:`_rk4_interval` over ``n`` consecutive intervals (one column each), every state after each."""
+    """:func:`_rk4_interval` over ``n`` consecutive intervals (one column each): every state after each, and
+    every error estimate."""
     return _rk4_interval(m).mapaccum(n)
 
 
@@ -597,7 +601,8 @@ def _replay_spline(t_all, t, torques, reference_rates, d, segment, breaks, z0, p
 def _replay_linear(t_all, inputs, noise, z0, params) -> np.ndarray:
     """The torque plant's states at the distinct times of ``t_all``, driven by ``inputs`` (torques and reference
     rates at ``t_all``, linear between rows, a step at a time given twice) and ``noise`` (at the distinct times):
-    RK4 over every sample interval, the steps per interval doubled until two results agree (module docstring)."""
+    RK4 over every sample interval, the steps per interval doubled until its error estimates are within
+    :data:`RK_TOLERANCE` (module docstring)."""
     new = np.r_[True, np.diff(t_all) != 0]
     last = np.r_[new[1:], True]
     tk = t_all[new]
@@ -611,22 +616,17 @@ def _replay_linear(t_all, inputs, noise, z0, params) -> np.ndarray:
     for a in range(0, n, RK_CHUNK):
         b = min(n, a + RK_CHUNK)
         par = np.repeat(params[:, None], b - a, axis=1)
-
-        def run(steps, a=a, b=b, par=par, z=z):
-            return np.array(interrupts.call(_rk4_intervals(steps, b - a), z, u0[:, a:b], u1[:, a:b],
-                                            h[:, a:b], par)).T
-
-        coarse = run(m)
         while True:
-            fine = run(2 * m)
-            scale = np.maximum(base, np.abs(fine).max(axis=0))
-            if np.all(np.abs(fine - coarse) <= RK_TOLERANCE * scale) or 2 * m >= RK_MAX_STEPS:
+            zs, err = interrupts.call(_rk4_intervals(m, b - a), z, u0[:, a:b], u1[:, a:b], h[:, a:b], par)
+            states = np.array(zs).T
+            scale = np.maximum(base, np.abs(states).max(axis=0))
+            if np.all(np.array(err).sum(axis=1) <= RK_TOLERANCE * scale) or m >= RK_MAX_STEPS:
                 break
-            m, coarse = 2 * m, fine
-        if not np.all(np.isfinite(fine)):
+            m *= 2
+        if not np.all(np.isfinite(states)):
             raise SolverError("the torque-driven motion overflows (RK4)", "RK4_failed")
-        out.append(fine)
-        z = fine[-1]
+        out.append(states)
+        z = states[-1]
     return np.vstack(out)
 
 
