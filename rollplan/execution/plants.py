@@ -620,7 +620,12 @@ def _replay_linear(t_all, inputs, noise, z0, params) -> np.ndarray:
             zs, err = interrupts.call(_rk4_intervals(m, b - a), z, u0[:, a:b], u1[:, a:b], h[:, a:b], par)
             states = np.array(zs).T
             scale = np.maximum(base, np.abs(states).max(axis=0))
-            if np.all(np.array(err).sum(axis=1) <= RK_TOLERANCE * scale) or m >= RK_MAX_STEPS:
+            estimate = float((np.array(err).sum(axis=1) / scale).max())
+            if estimate <= RK_TOLERANCE:
+                break
+            if m >= RK_MAX_STEPS:
+                log.warning("torque plant: RK4 error estimate %.1e > %.0e at %d steps per sample interval (samples "
+                            "%d-%d): the samples are far apart for the motion", estimate, RK_TOLERANCE, m, a, b)
                 break
             m *= 2
         if not np.all(np.isfinite(states)):
