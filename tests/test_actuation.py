@@ -184,3 +184,29 @@ def test_plot_motion(motion, asym_plan):
     assert "angular velocity [rad/s]" in labels and "rotor rate [rad/s]" in labels
     assert "motor torque [N m]" in labels   # N m as in the console and the JSON
     assert all(ax.get_xlabel() == "time t [s]" for ax in fig.axes[:3])
+
+
+@pytest.mark.parametrize("law", ["min-jerk", "nonstop-min-jerk"])   # joints on breaks; joints between them
+def test_joint_times_are_the_full_bisections(asym_plan, law):
+    """joint_times stops halving once no bracket changes and evaluates s alone: the same times, bit for bit, as
+    100 halvings on the profile's evaluate with the same snapping to a break; position is evaluate's s."""
+    from dataclasses import replace
+
+    from rollplan.execution.limits import Limits
+    from rollplan.execution.path import ContactPath
+    from rollplan.execution.timing import get_law, joint_times
+
+    robot = replace(ROBOT, max_rotor_rate=300.0, max_rotor_torque=0.05)
+    path = ContactPath.of_plan(asym_plan, robot)
+    prof = get_law(law).profile(path, Limits.of(robot))
+    joints = path.starts[1:-1]
+    lo, hi = np.zeros(joints.size), np.full(joints.size, prof.duration)
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        below = prof.evaluate(mid)[0] < joints
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    near = prof.breaks[np.clip(np.searchsorted(prof.breaks, hi), 0, prof.breaks.size - 1)]
+    expect = np.where(np.abs(prof.evaluate(near)[0] - joints) <= 1e-12 * path.length, near, hi)
+    assert np.array_equal(joint_times(path, prof), expect)
+    t = np.r_[np.random.default_rng(4).uniform(-1.0, prof.duration + 1.0, 300), prof.breaks]
+    assert np.array_equal(prof.position(t), prof.evaluate(t)[0])

@@ -211,9 +211,10 @@ def test_closed_loop_arrives_on_the_mismatched_robot(files, n, capsys):
 @pytest.mark.slow
 def test_closed_loop_under_measurement_noise(files, capsys):
     """sigma = 1e-3 measurement noise: the median arrival error over seeds within 5e-3 (it was ~16 sigma at
-    n = 2 without the final correction)."""
+    n = 2 without the final correction). Three seeds: each arrives within 3e-3, and without the correction
+    each misses by far more than 5e-3, so the median of three tells the two apart as well as of five."""
     errors = [_sim_json(capsys, files, files / "p1.json", "--robot", files / "real.toml", "--closed-loop", "--noise",
-                        "1e-3", "--seed", seed)["arrival_error"] for seed in range(5)]
+                        "1e-3", "--seed", seed)["arrival_error"] for seed in range(3)]
     assert np.median(errors) < 5e-3, errors
 
 

@@ -255,3 +255,60 @@ def test_linear_input_steps_at_a_time_given_twice():
                                      np.where(tt[at] > tp[-1], yp[-1, i] + hi * (tt[at] - tp[-1]), inside))
     got = np.array(input_function(t, y, interpolation="linear").map(tt.size)(tt[None, :])).T
     np.testing.assert_allclose(got, expect, rtol=0, atol=1e-12)
+
+
+def test_rate_spline_is_scipys_not_a_knot_spline_on_uneven_times():
+    """Plan files put the torque steps' times between the uniform samples: CasADi's default solver of the spline's
+    coefficients (iterative least squares) stopped at 5e-13 of the rates there, and slowly. Against scipy's
+    not-a-knot CubicSpline at the samples and between them."""
+    from rollplan.execution.plants import rate_spline
+
+    rng = np.random.default_rng(3)
+    t = np.unique(np.r_[np.linspace(0.0, 1.0, 4001), rng.uniform(0.0, 1.0, 300)])
+    y = np.column_stack([np.sin(9 * t), t * np.cos(5 * t)])
+    x = np.r_[t, rng.uniform(0.0, 1.0, 500)]
+    got = np.array(rate_spline(t, y).map(x.size)(x[None, :])).T
+    assert np.abs(got - CubicSpline(t, y, axis=0)(x)).max() < 2e-14
+
+
+def _steps_series(n, seed=7):
+    """n uneven sample times over 2 s with three torque steps (times given twice) and smooth torques between."""
+    rng = np.random.default_rng(seed)
+    t = np.sort(np.r_[0.0, rng.uniform(0.0, 2.0, n - 2), 2.0])
+    t = np.sort(np.r_[t, t[[n // 4, n // 2, 3 * n // 4]]])
+    tau = np.column_stack([2e-3 * np.sin(np.pi * t) ** 2, -1e-3 * np.cos(3 * t)])
+    rep = np.nonzero(np.diff(t) == 0)[0] + 1
+    tau[rep] += rng.normal(size=(rep.size, 2)) * 1e-3
+    return t, tau
+
+
+def _interval_by_interval(t, tau, friction=(0.0, 0.0)):
+    """DOP853 on the printed equations, restarted at every sample: the torque linear over each interval, from the
+    last row at its start time to the first row at its end time. States and momenta at the distinct times."""
+    new = np.r_[True, np.diff(t) != 0]
+    tk, first, last = t[new], tau[new], tau[np.r_[new[1:], True]]
+    z, out = np.zeros(7), [np.zeros(7)]
+    for k in range(tk.size - 1):
+        a, b, qa, qb = tk[k], tk[k + 1], last[k], first[k + 1]
+        line = lambda s, a=a, b=b, qa=qa, qb=qb: qa + (s - a) / (b - a) * (qb - qa)  # noqa: E731
+        f, _ = references.torque_driven_rhs(*J, ROBOT.radius, line, friction)
+        z = solve_ivp(f, (a, b), z, method="DOP853", rtol=1e-13, atol=1e-16).y[:, -1]
+        out.append(z)
+    return tk, first, last, np.array(out)
+
+
+def test_linear_torque_replay_is_exact_for_the_momenta_and_matches_dop853():
+    """The replay rule (linear between rows, a step at a time given twice) has a kink at every sample: CVODES
+    took six steps a sample there and drifted 3e-9 of the momenta from their exact value, the trapezoid rule
+    of the torques. Now the momenta are that rule to rounding, and the state is DOP853's, restarted at every
+    sample, on the printed equations; a coarse series (few samples: more RK4 steps per interval) too."""
+    for n in (400, 25):
+        t, tau = _steps_series(n)
+        run = run_torques(ROBOT, t, tau, interpolation="linear")
+        tk, first, last, ref = _interval_by_interval(t, tau)
+        exact = np.vstack([np.zeros(2), np.cumsum(0.5 * (last[:-1] + first[1:]) * np.diff(tk)[:, None], axis=0)])
+        scale = np.abs(exact).max()
+        assert np.abs(run.series.rotor_momenta - exact).max() < 1e-13 * scale, n
+        assert np.abs(run.commanded_momenta - exact).max() < 1e-13 * scale, n
+        np.testing.assert_allclose(run.series.time, tk)
+        assert np.abs(run.series.state - ref[:, :5]).max() < 1e-11, n

@@ -30,6 +30,14 @@ Torque samples between sample times: timed torques have a kink (min-jerk) or a s
 and time-optimal laws) at the joints of the contact path, so one spline across a joint converges
 only as h^2 or rings. :func:`input_function` splits the samples at given ``breaks`` (the joints,
 ``Actuation.rest_indices`` for min-jerk) into not-a-knot cubic splines, or interpolates linearly.
+Splines are integrated by CVODES. Linear inputs (the replay rule of plan files) have a kink at every
+sample, and a step at every time given twice, where CVODES' error control fails over and over; they are
+integrated sample interval by sample interval, where the inputs are linear in time, by classical RK4
+(exact for the momenta, whose right side is the input) with ``m`` steps per interval. Each step's error
+is estimated by the embedded third-order solution (the right side at the step's end, ``h/6 (k_4 - k_5)``:
+an over-estimate of RK4's error); ``m`` is doubled until the estimates, summed over every interval, or
+the change from the result of ``m / 2`` steps (Richardson: about 15 times the error), are within
+:data:`RK_TOLERANCE` of each quantity's scale.
 
 Disturbances (:data:`DISTURBANCES`, by name with parameters and a seed, :func:`disturbance`):
 ``friction`` (bearing friction, torque plant), ``measurement`` (white noise on every measured state
@@ -73,6 +81,14 @@ __all__ = ["RotorSimulation", "rate_spline", "check_samples", "simulate_rotors",
 CHUNK = 10_000
 #: Samples on either side of a chunk that its spline also passes through.
 OVERLAP = 40
+#: Sample intervals per call of the torque plant's RK4 (progress and Ctrl-C between calls).
+RK_CHUNK = 2000
+#: Largest sum of the RK4 steps' error estimates of the torque plant's linear replay, relative to the scale
+#: of each quantity (lengths: R; angles: 1 rad or their largest value; momenta: their largest value or the
+#: torques' largest impulse).
+RK_TOLERANCE = 1e-10
+#: Most RK4 steps per sample interval.
+RK_MAX_STEPS = 64
 #: Largest rotation of the sphere [rad] that sampled rotor rates may ask for (bounded from the rates by
 #: (11)); a real plan turns the sphere by a few rad per figure eight.
 MAX_TURN = 1e6
@@ -99,10 +115,15 @@ class RotorSimulation(Arrival):
 
 
 def rate_spline(t, rates) -> ca.Function:
-    """Interpolating cubic spline (not-a-knot) through sampled rates: ``f(t) -> (m,)``."""
+    """Interpolating cubic spline (not-a-knot) through sampled rates: ``f(t) -> (m,)``.
+
+    Its coefficients solve the interpolation conditions by a sparse direct LU (CSparse): CasADi's default, an
+    iterative least-squares solver, converges slowly on non-uniform sample times (the steps of a plan file
+    given twice) and stops at about 1e-12 of the rates.
+    """
     t = np.asarray(t, float)
     rates = np.asarray(rates, float)
-    return ca.interpolant("rates", "bspline", [t], rates.ravel(order="C"))
+    return ca.interpolant("rates", "bspline", [t], rates.ravel(order="C"), {"linear_solver": "csparse"})
 
 
 def check_samples(t, rates):
@@ -143,6 +164,37 @@ def _torque_dynamics() -> ca.Function:
     cmd = u + gain * (ref - phi_dot)
     ode = ca.vertcat(model.montana(omega, x[3], x[4], x[2], r[3]), cmd + noise - c * phi_dot, phi_dot, cmd)
     return ca.Function("torque_dynamics", [z, u, ref, noise, gain, c, r], [ode, omega, phi_dot, cmd])
+
+
+@lru_cache(maxsize=8)
+def _rk4_interval(m: int) -> ca.Function:
+    """``(z, u0, u1, h, params) -> (z, error)`` after ``m`` classical RK4 steps over a sample interval of length
+    ``h`` of the torque plant (:func:`_torque_dynamics`), its inputs ``u = (torque, reference, noise)`` linear
+    in time from ``u0`` to ``u1``; ``params = (K, c, Jxx, Jzz, J_r, R)``; ``error``: the sum of the steps'
+    embedded error estimates ``|h/6 (k_4 - k_5)|`` (module docstring)."""
+    z0, u0, u1, h, par = (ca.SX.sym(n, k) for n, k in (("z", 11), ("u0", 6), ("u1", 6), ("h", 1), ("p", 7)))
+    dynamics = _torque_dynamics()
+
+    def f(z, w):
+        u = u0 + w * (u1 - u0)
+        return dynamics(z, u[0:2], u[2:4], u[4:6], par[0], par[1:3], par[3:7])[0]
+
+    z, dt, error = z0, h / m, ca.SX.zeros(11)
+    for j in range(m):
+        k1 = f(z, j / m)
+        k2 = f(z + 0.5 * dt * k1, (j + 0.5) / m)
+        k3 = f(z + 0.5 * dt * k2, (j + 0.5) / m)
+        k4 = f(z + dt * k3, (j + 1.0) / m)
+        z = z + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        error += ca.fabs(dt / 6 * (k4 - f(z, (j + 1.0) / m)))
+    return ca.Function("torque_rk4", [z0, u0, u1, h, par], [z, error])
+
+
+@lru_cache(maxsize=16)
+def _rk4_intervals(m: int, n: int) -> ca.Function:
+    """:func:`_rk4_interval` over ``n`` consecutive intervals (one column each): every state after each, and
+    every error estimate."""
+    return _rk4_interval(m).mapaccum(n)
 
 
 def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 1e-11,
@@ -457,7 +509,8 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
                 segment: int = 0, breaks=(), interpolation: str = "spline", commanded_p0=None,
                 servo_gain: float = 0.0, reference_rates=None, reltol: float = 1e-12,
                 abstol: float = 1e-14) -> PlantResponse:
-    """The torque-driven plant: integrate ``dp/dt = tau - c phi_dot``, (O) and Montana (6)-(10) by CVODES.
+    """The torque-driven plant: integrate ``dp/dt = tau - c phi_dot``, (O) and Montana (6)-(10) (by CVODES for
+    splines, by RK4 over each sample interval for linear inputs: module docstring).
 
     Parameters
     ----------
@@ -499,32 +552,91 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     t_all, torques = t_in, torques_in
     x0 = np.zeros(5) if x0 is None else np.asarray(x0, float)
     c = np.array(d["friction"].c if "friction" in d else (0.0, 0.0))
-    tau = input_function(t_all, torques, breaks, interpolation)
     servo_gain = _nonnegative("servo_gain", servo_gain)
     if servo_gain > 0 and reference_rates is None:
         raise InputError("servo_gain > 0 needs reference_rates")
-    time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
-    zero = ca.DM.zeros(2)
-    ref = input_function(t_all, reference_rates, breaks, interpolation)(time) if servo_gain > 0 else zero
-    noise = (input_function(t, d["torque_noise"].draw(t.size, segment), (), "linear")(time)
-             if "torque_noise" in d else zero)
-    ode, omega, phi_dot, cmd = _torque_dynamics()(z, tau(time), ref, noise, servo_gain, c,
-                                                  ca.DM([robot.j_xx, robot.j_zz, robot.rotor_inertia_axial,
-                                                         robot.radius]))
-    opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
-    integ = ca.integrator("torque_plant", "cvodes", {"t": time, "x": z, "ode": ode}, float(t[0]), list(t[1:]), opts)
     z0 = np.concatenate([x0, p0, phi0, p0 if commanded_p0 is None else commanded_p0]).astype(float)
-    try:
-        zs = np.hstack([z0[:, None], np.array(interrupts.call(integ, x0=z0)["xf"])]).T
-    except RuntimeError as exc:
-        raise SolverError(f"CVODES could not integrate the torque-driven motion: {str(exc).splitlines()[-1][:120]}",
-                          "CVODES_failed") from None
+    params = np.r_[servo_gain, c, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, robot.radius]
+    if interpolation == "linear":
+        inputs = [torques, reference_rates if servo_gain > 0 else np.zeros_like(torques)]
+        noise = d["torque_noise"].draw(t.size, segment) if "torque_noise" in d else np.zeros((t.size, 2))
+        zs = _replay_linear(t_all, inputs, noise, z0, params)
+    else:
+        zs = _replay_spline(t_all, t, torques, reference_rates, d, segment, breaks, z0, params, reltol, abstol)
+    time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
+    _, omega, phi_dot, cmd = _torque_dynamics()(z, input_function(t_all, torques, breaks, interpolation)(time),
+                                                _input_or_zero(t_all, reference_rates, breaks, interpolation, time,
+                                                               servo_gain > 0),
+                                                ca.DM.zeros(2), servo_gain, c, ca.DM(params[3:]))
     om, pd, cm = (np.array(v).T for v in ca.Function("out", [time, z], [omega, phi_dot, cmd]).map(t.size)(t[None, :],
                                                                                                          zs.T))
     state = zs[:, 0:5]
     series = TimeSeries(t, state, omega=om, rotor_rates=pd, rotor_angles=zs[:, 7:9], rotor_momenta=zs[:, 5:7],
                         radius=robot.radius)
     return PlantResponse("torques", series, measure(state, d, robot.radius, segment), cm, zs[:, 9:11])
+
+
+def _input_or_zero(t, y, breaks, interpolation, time, given: bool):
+    return input_function(t, y, breaks, interpolation)(time) if given else ca.DM.zeros(2)
+
+
+def _replay_spline(t_all, t, torques, reference_rates, d, segment, breaks, z0, params, reltol, abstol) -> np.ndarray:
+    """The torque plant's states at the distinct times ``t``, its inputs splines split at ``breaks``, by CVODES."""
+    time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
+    zero = ca.DM.zeros(2)
+    servo_gain, c = params[0], params[1:3]
+    tau = input_function(t_all, torques, breaks, "spline")
+    ref = input_function(t_all, reference_rates, breaks, "spline")(time) if servo_gain > 0 else zero
+    noise = (input_function(t, d["torque_noise"].draw(t.size, segment), (), "linear")(time)
+             if "torque_noise" in d else zero)
+    ode = _torque_dynamics()(z, tau(time), ref, noise, servo_gain, c, ca.DM(params[3:]))[0]
+    opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
+    integ = ca.integrator("torque_plant", "cvodes", {"t": time, "x": z, "ode": ode}, float(t[0]), list(t[1:]), opts)
+    try:
+        return np.hstack([z0[:, None], np.array(interrupts.call(integ, x0=z0)["xf"])]).T
+    except RuntimeError as exc:
+        raise SolverError(f"CVODES could not integrate the torque-driven motion: {str(exc).splitlines()[-1][:120]}",
+                          "CVODES_failed") from None
+
+
+def _replay_linear(t_all, inputs, noise, z0, params) -> np.ndarray:
+    """The torque plant's states at the distinct times of ``t_all``, driven by ``inputs`` (torques and reference
+    rates at ``t_all``, linear between rows, a step at a time given twice) and ``noise`` (at the distinct times):
+    RK4 over every sample interval, the steps per interval doubled until its error estimates are within
+    :data:`RK_TOLERANCE` (module docstring)."""
+    new = np.r_[True, np.diff(t_all) != 0]
+    last = np.r_[new[1:], True]
+    tk = t_all[new]
+    u0 = np.hstack([*(y[last][:-1] for y in inputs), noise[:-1]]).T     # the value from each distinct time on
+    u1 = np.hstack([*(y[new][1:] for y in inputs), noise[1:]]).T       # the value each interval reaches
+    h = np.diff(tk)[None, :]
+    impulse = np.abs(inputs[0]).max(initial=0.0) * float(tk[-1] - tk[0]) + np.abs(z0[5:7]).max() + np.abs(z0[9:]).max()
+    base = np.r_[[params[6]] * 2, [1.0] * 3, [impulse] * 2, [1.0] * 2, [impulse] * 2] + 1e-300
+    n, z, m = h.size, z0, 1
+    out = [z0[None, :]]
+    for a in range(0, n, RK_CHUNK):
+        b = min(n, a + RK_CHUNK)
+        par = np.repeat(params[:, None], b - a, axis=1)
+        previous = None
+        while True:
+            zs, err = interrupts.call(_rk4_intervals(m, b - a), z, u0[:, a:b], u1[:, a:b], h[:, a:b], par)
+            states = np.array(zs).T
+            scale = np.maximum(base, np.abs(states).max(axis=0))
+            estimate = float((np.array(err).sum(axis=1) / scale).max())
+            if previous is not None:   # Richardson: the error of the m-step result is about 1/15 of the change
+                estimate = min(estimate, float((np.abs(states - previous) / scale).max()))
+            if estimate <= RK_TOLERANCE:
+                break
+            if m >= RK_MAX_STEPS:
+                log.warning("torque plant: RK4 error estimate %.1e > %.0e at %d steps per sample interval (samples "
+                            "%d-%d): the samples are far apart for the motion", estimate, RK_TOLERANCE, m, a, b)
+                break
+            m, previous = 2 * m, states
+        if not np.all(np.isfinite(states)):
+            raise SolverError("the torque-driven motion overflows (RK4)", "RK4_failed")
+        out.append(states)
+        z = states[-1]
+    return np.vstack(out)
 
 
 #: Plants by name.

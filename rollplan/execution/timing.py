@@ -181,6 +181,13 @@ class TimeProfile:
         sdd = np.sum(c[:, 2:] * (p[2:] * (p[2:] - 1)) * pw[:, :-2], axis=1)
         return s, sd, sdd
 
+    def position(self, t) -> np.ndarray:
+        """``s`` at times ``t``: the first value of :meth:`evaluate`, computed alone (the same arithmetic)."""
+        t = np.clip(np.atleast_1d(np.asarray(t, float)), 0.0, self.duration)
+        k = np.clip(np.searchsorted(self.breaks, t, side="right") - 1, 0, self.coeffs.shape[0] - 1)
+        pw = (t - self.breaks[k])[:, None] ** np.arange(self.coeffs.shape[1])
+        return np.sum(self.coeffs[k] * pw, axis=1)
+
     def stretched(self, factor: float) -> TimeProfile:
         """The same path run ``factor`` times slower: ``s(t / factor)``."""
         p = np.arange(self.coeffs.shape[1])
@@ -203,15 +210,19 @@ def _stretches(path: TimingPath) -> np.ndarray:
 def joint_times(path: TimingPath, profile: TimeProfile, iterations: int = 100) -> np.ndarray:
     """Times at which a profile passes the joints ``starts[1:-1]``.
 
-    Bisection on the nondecreasing s(t); a break of the profile where s is the joint to rounding
-    (``1e-12 L``) is taken instead, so that a law that rests at a joint is evaluated exactly there.
+    Bisection on the nondecreasing s(t) (``iterations`` halvings, or fewer once no bracket changes: then
+    none would); a break of the profile where s is the joint to rounding (``1e-12 L``) is taken instead, so
+    that a law that rests at a joint is evaluated exactly there.
     """
     joints = np.asarray(path.starts, float)[1:-1]
     lo, hi = np.zeros(joints.size), np.full(joints.size, profile.duration)
     for _ in range(iterations):
         mid = 0.5 * (lo + hi)
-        below = profile.evaluate(mid)[0] < joints
-        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+        below = profile.position(mid) < joints
+        lo_next, hi_next = np.where(below, mid, lo), np.where(below, hi, mid)
+        if np.array_equal(lo_next, lo) and np.array_equal(hi_next, hi):
+            break
+        lo, hi = lo_next, hi_next
     b = profile.breaks
     near = b[np.clip(np.searchsorted(b, hi), 0, b.size - 1)]
     on_break = np.abs(profile.evaluate(near)[0] - joints) <= 1e-12 * path.length
