@@ -309,6 +309,13 @@ def test_plan_json_has_the_motion(planned):
     assert np.array_equal(state[0], np.zeros(5))
 
 
+def test_plan_json_is_the_text_json_dumps_writes(planned):
+    """The plan file of a motion (tables of thousands of samples, written by json's C encoder and indented by
+    the writer) is byte for byte ``json.dumps(indent=1)`` of its value and a newline."""
+    _, _, out, data = planned
+    assert out.read_bytes() == (json.dumps(data, indent=1) + "\n").encode()
+
+
 def test_load_rotor_plan_reads_what_plan_duration_wrote(planned):
     _, _, out, data = planned
     rp = load_rotor_plan(out)
