@@ -28,7 +28,7 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, event, given, settings
+from hypothesis import HealthCheck, assume, event, example, given, settings
 from hypothesis import strategies as st
 
 from rollplan.cli import main
@@ -235,8 +235,16 @@ def robot_text(draw):
     return data, robot if kind == "plausible" else None
 
 
+#: A robot (k = 4.7) for which the target has no one-leg plan: plan answers with a composed plan of two legs.
+TWO_LEGS = (b"radius = 0.28125\nmass_total = 2.0\nmass_shell = 1.0\nrotor_inertia_axial = 0.03955078125\n"
+            b"rotor_inertia_transverse = 0.019775390625\n",
+            {"radius": 0.28125, "mass_total": 2.0, "mass_shell": 1.0, "rotor_inertia_axial": 0.03955078125,
+             "rotor_inertia_transverse": 0.019775390625})
+
+
 @FUZZ
 @given(robot=robot_text(), to=st.floats(0.01, 0.08), psi=st.floats(-1, 1))
+@example(robot=TWO_LEGS, to=0.015625, psi=0.75)
 def test_robot_files(tmp_path_factory, robot, to, psi):
     data, plausible = robot
     if plausible is not None:
@@ -253,7 +261,10 @@ def test_robot_files(tmp_path_factory, robot, to, psi):
         d = json.loads(out.read_text())
         if plausible is not None:
             assert d["radius"] == plausible["radius"]
-        certify(d["figure_eight"], d["k"], 1, d["radius"], (0.0, to, psi))
+        if "segments" in d:   # a composed plan: two legs (issue 12)
+            certify_pieces(d, (0.0, to, psi, 0.0, 0.0))
+        else:
+            certify(d["figure_eight"], d["k"], 1, d["radius"], (0.0, to, psi))
 
 
 # ----------------------------------------------------------------------------- batch CSV files
