@@ -44,6 +44,7 @@ import tempfile
 import threading
 import time
 from contextlib import contextmanager, suppress
+from itertools import chain
 from pathlib import Path
 
 from .errors import InputError, OutputError
@@ -348,6 +349,30 @@ def _numbers(obj, depth: int = 0) -> bool:
     return depth < 3 and types == {list} and all(v and _numbers(v, depth + 1) for v in obj)
 
 
+def _number_depth(obj) -> int:
+    """1 for a non-empty list of plain floats and ints, 2 for a non-empty list of non-empty lists of them (rows of
+    samples), else 0: the shapes whose text :func:`_numbers_text` makes with json's C encoder."""
+    types = set(map(type, obj))
+    if types <= _NUMBER_TYPES:
+        return 1 if types else 0
+    if types == {list} and all(obj) and set(map(type, chain.from_iterable(obj))) <= _NUMBER_TYPES:
+        return 2
+    return 0
+
+
+def _numbers_text(items, level: int, depth: int) -> str:
+    """The items of ``items`` (:func:`_number_depth` ``depth``) as ``json.dumps(items, indent=1)`` writes them inside
+    the list's brackets at nesting ``level``: json's compact C-encoded text (the same number texts; its error for a
+    number that is not finite), indented by replacing its separators, which no number's text contains."""
+    inner = "\n" + " " * (level + 1)
+    if depth == 1:
+        return json.dumps(items, allow_nan=False)[1:-1].replace(", ", "," + inner)
+    inner2 = inner + " "
+    text = json.dumps(items, allow_nan=False, separators=(",", ":"))[2:-2]
+    rows = text.replace("],[", "\0").replace(",", "," + inner2).replace("\0", inner + "]," + inner + "[" + inner2)
+    return "[" + inner2 + rows + inner + "]"
+
+
 def _item_text(v, level: int) -> str:
     """``json.dumps(v, indent=1)`` at nesting ``level`` of a number or a list that :func:`_numbers` accepts."""
     if type(v) is not list:
@@ -366,6 +391,12 @@ def _json_pieces(obj, level: int):
             yield "[]"
             return
         inner = "\n" + " " * (level + 1)
+        depth = _number_depth(obj)
+        if depth:
+            for i in range(0, len(obj), JSON_ROWS):
+                yield ("," if i else "[") + inner + _numbers_text(obj[i:i + JSON_ROWS], level, depth)
+            yield "\n" + " " * level + "]"
+            return
         if _numbers(obj):
             for i in range(0, len(obj), JSON_ROWS):
                 yield ("," if i else "[") + inner + ("," + inner).join(

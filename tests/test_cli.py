@@ -309,6 +309,29 @@ def test_plan_json_has_the_motion(planned):
     assert np.array_equal(state[0], np.zeros(5))
 
 
+def test_plan_json_is_the_text_json_dumps_writes(planned):
+    """The plan file of a motion (tables of thousands of samples, written by json's C encoder and indented by
+    the writer) is byte for byte ``json.dumps(indent=1)`` of its value and a newline."""
+    _, _, out, data = planned
+    assert out.read_bytes() == (json.dumps(data, indent=1) + "\n").encode()
+
+
+def test_plan_timing_without_json_builds_no_json_lists(tmp_path, capsys, monkeypatch):
+    """plan --duration without --json: the summary and the figure, and none of the JSON's lists of samples
+    (building them took as long as the plan)."""
+    import rollplan.io
+
+    def refuse(motion):
+        raise AssertionError("motion_to_dict called without --json")
+
+    monkeypatch.setattr(rollplan.io, "motion_to_dict", refuse)
+    robot = tmp_path / "robot.toml"
+    robot.write_text(ROBOT_TOML)
+    code, out, err = run(capsys, "plan", "--robot", robot, "--to", "0.06", "0.1", "--duration", "12")
+    assert code == 0, err
+    assert "rotor-only    arrival error" in out
+
+
 def test_load_rotor_plan_reads_what_plan_duration_wrote(planned):
     _, _, out, data = planned
     rp = load_rotor_plan(out)

@@ -61,18 +61,24 @@ def test_simulation_figure_draws_the_planned_curve_over_the_simulated_one():
         assert min(ln.get_zorder() for ln in planned) > max(ln.get_zorder() for ln in simulated)
 
 
+@pytest.fixture(scope="module")
+def rolled():
+    """The default robot, its plan to (0, 0.1, 1) and the rotor-driven simulation of its 10 s motion."""
+    robot = rollplan.default_robot()
+    p = rollplan.plan((0.0, 0.1, 1.0), robot=robot)
+    m = actuate(p, robot, 10.0)
+    return robot, p, rollplan.simulate_rotors(robot, m.series.time, m.series.rotor_rates, p.goal)
+
+
 @pytest.mark.slow
-def test_the_animation_of_100_frames_stays_under_1_5_mb(tmp_path):
+def test_the_animation_of_100_frames_stays_under_1_5_mb(tmp_path, rolled):
     """`rollplan animate` wrote 5 MB for 100 frames: one palette and transparent unchanged pixels keep it under
     1.5 MB; the decoded frames show the motion (the first and the middle frame differ in both panels)."""
     from PIL import Image
 
     from rollplan.plots.animation import make_animation
 
-    robot = rollplan.default_robot()
-    p = rollplan.plan((0.0, 0.1, 1.0), robot=robot)
-    m = actuate(p, robot, 10.0)
-    sim = rollplan.simulate_rotors(robot, m.series.time, m.series.rotor_rates, p.goal)
+    robot, p, sim = rolled
     gif = tmp_path / "roll.gif"
     make_animation(sim.series, robot, p.goal, gif, 100, 20)
     assert gif.stat().st_size < 1.5e6
@@ -110,6 +116,23 @@ def test_the_animation_draws_only_what_moves_and_shows_the_same_frames(tmp_path)
     assert np.any(frames[True][0] != frames[True][3])   # it moves
     for fast, whole in zip(frames[True], frames[False]):
         assert np.count_nonzero(np.any(fast != whole, axis=2)) <= 8
+
+
+@pytest.mark.slow
+def test_the_legends_drawn_once_give_the_same_gif(tmp_path, monkeypatch, rolled):
+    """The legends (slow text) are drawn once and kept in the frames no moving artist drawn before them meets:
+    the GIF is byte for byte the one with the legends drawn again on every frame, and some frames keep them."""
+    from rollplan.plots import animation
+
+    robot, p, sim = rolled
+    met = []
+    overlaps = animation.overlaps
+    monkeypatch.setattr(animation, "overlaps", lambda *a: met.append(overlaps(*a)) or met[-1])
+    animation.make_animation(sim.series, robot, p.goal, tmp_path / "kept.gif", 12, 20, dpi=50)
+    assert True in met and False in met   # the cursor passes under the legend of the rotor rates, not always
+    monkeypatch.setattr(animation, "overlaps", lambda *a: True)
+    animation.make_animation(sim.series, robot, p.goal, tmp_path / "redrawn.gif", 12, 20, dpi=50)
+    assert (tmp_path / "kept.gif").read_bytes() == (tmp_path / "redrawn.gif").read_bytes()
 
 
 def test_spikes_are_clipped_to_a_robust_range_and_marked():

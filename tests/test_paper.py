@@ -167,6 +167,23 @@ def test_refine_root_matches_brentq(f, lo, hi):
     assert abs(refine_root(f, lo, hi) - brentq(f, lo, hi, xtol=1e-15)) < 1e-10
 
 
+def test_refine_root_evaluates_each_point_once():
+    """The root's function (a CVODES run in the case study) is evaluated once at each point, values already
+    known are not computed again, and the root is the one scipy's brentq finds."""
+    calls = []
+
+    def f(x):
+        calls.append(x)
+        return math.cos(x) - x
+
+    root = refine_root(f, 0.0, 1.0)
+    assert len(calls) == len(set(calls))
+    assert abs(root - brentq(f, 0.0, 1.0, xtol=1e-15)) < 1e-14
+    calls.clear()
+    assert refine_root(f, 0.0, 1.0, known={0.0: f(0.0), 1.0: f(1.0)}) == root
+    assert calls.count(0.0) == calls.count(1.0) == 1   # only the two calls above
+
+
 def test_refine_root_rejects_non_bracket():
     with pytest.raises(InputError, match="does not bracket"):
         refine_root(math.cos, 0.0, 1.0)

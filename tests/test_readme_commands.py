@@ -6,16 +6,24 @@ A line must exit 0, or the status its trailing comment states (``# exit 2``). Li
 the generated C demo, QEMU) are not run here (tests/test_codegen.py and tests/test_embedded.py build them).
 One test per block, so that a block's lines share their files (plan writes plan.json, simulate reads it)
 and pytest-xdist spreads the blocks over the cores.
+
+A ``rollplan`` line that is a command and its words only (no pipe, redirection, glob, variable or brace for
+the shell to act on) runs in this process, through the same ``main`` as the console script
+(``conftest.run``): a process of its own would only add its start-up (importing numpy, CasADi and matplotlib
+again, about 1 s of CPU a line); the console script itself is tested in tests/test_cli.py. Every other line
+runs in bash.
 """
 
 import os
 import re
+import shlex
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from conftest import run
 
 ROOT = Path(__file__).resolve().parent.parent
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
@@ -75,23 +83,44 @@ def documented_blocks():
 BLOCKS = documented_blocks()
 
 
-def run_block(block, folder, timeout=900):
+#: What makes a line more than a command and its words to bash (and braces holding a list or a range).
+SHELL = set("|&;<>()$`\\*?[]~!#=")
+BRACES = re.compile(r"\{[^}]*(,|\.\.)[^}]*\}")
+
+
+def plain_argv(command):
+    """The words after ``rollplan`` of a line bash would run as a command and its words only (the trailing
+    ``# comment`` dropped), else None."""
+    code = re.split(r"(?:^|\s)#", command, maxsplit=1)[0]
+    if SHELL & set(code) or BRACES.search(code):
+        return None
+    words = shlex.split(code)
+    return words[1:] if words and words[0] == "rollplan" else None
+
+
+def run_block(block, folder, capture=None, timeout=900):
     """Run a block's commands in order in ``folder`` (with a copy of examples/); fail on the first line whose
-    exit status is not the documented one."""
+    exit status is not the documented one. With ``capture`` (pytest's ``capfd``) the plain ``rollplan`` lines
+    run in this process (:func:`plain_argv`)."""
     shutil.copytree(ROOT / "examples", folder / "examples", dirs_exist_ok=True)
     env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}")
     for command, expected in block:
-        r = subprocess.run(["bash", "-o", "pipefail", "-c", command], check=False, cwd=folder, env=env,
-                           capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
-        if r.returncode != expected:
-            pytest.fail(f"`{command}` exited {r.returncode}, the docs say {expected}\n"
-                        f"stdout: {r.stdout[-1500:]}\nstderr: {r.stderr[-1500:]}")
+        argv = plain_argv(command) if capture is not None else None
+        if argv is not None:
+            code, out, err = run(capture, *argv, cwd=folder)
+        else:
+            r = subprocess.run(["bash", "-o", "pipefail", "-c", command], check=False, cwd=folder, env=env,
+                               capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+            code, out, err = r.returncode, r.stdout, r.stderr
+        if code != expected:
+            pytest.fail(f"`{command}` exited {code}, the docs say {expected}\n"
+                        f"stdout: {out[-1500:]}\nstderr: {err[-1500:]}")
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("block", [b for _, b in BLOCKS], ids=[i for i, _ in BLOCKS])
-def test_documented_commands_run(block, tmp_path):
-    run_block(block, tmp_path)
+def test_documented_commands_run(block, tmp_path, capfd):
+    run_block(block, tmp_path, capfd)
 
 
 def test_the_docs_have_commands_to_run():
@@ -119,6 +148,23 @@ def test_a_failing_command_fails_its_block(tmp_path):
     with pytest.raises(pytest.fail.Exception, match="exited 0, the docs say 2"):
         run_block([("python -c 'pass'   # exit 2", 2)], tmp_path)
     run_block([("python -c 'import sys; sys.exit(2)'   # exit 2", 2), ("python -c 'pass'", 0)], tmp_path)
+
+
+def test_plain_rollplan_lines_run_in_process_the_others_in_bash():
+    assert plain_argv("rollplan plan --to 5 0 --steps 0   # exit 2: refused (a, b)") == ["plan", "--to", "5", "0",
+                                                                                     "--steps", "0"]
+    assert plain_argv("rollplan atlas --out 'atlas k{k}.png'   # one figure per k") == ["atlas", "--out",
+                                                                                       "atlas k{k}.png"]
+    for line in ("rollplan plan --json - | python -m json.tool", "rollplan plan > out.txt", "rollplan plan a#b",
+                 "rollplan plan --out fig_{1,2}.png", "rollplan plan --out *.png", "X=1 rollplan plan",
+                 "rollplan plan --to $U 0", "python examples/api.py", "make -C planner_c"):
+        assert plain_argv(line) is None, line
+
+
+def test_a_failing_line_in_process_fails_its_block(tmp_path, capfd):
+    with pytest.raises(pytest.fail.Exception, match="exited 2, the docs say 0"):
+        run_block([("rollplan plan --to 5 0 --steps 0", 0)], tmp_path, capfd)
+    run_block([("rollplan plan --to 5 0 --steps 0   # exit 2", 2)], tmp_path, capfd)
 
 
 def slug(heading):

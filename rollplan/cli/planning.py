@@ -191,6 +191,8 @@ def _timed(args, p, robot):
     print(f"  rotors        max |rate| = {num(rate)} rad/s{use_rate}   max |torque| = {num(torque)} N m{use_torque}")
     print(f"  rotor-only    arrival error {sim.arrival_error:.2e} ({NORM}), position error "
           f"{sim.position_error * robot.radius:.2e} m (spline through the rotor rates, (11) and (6)-(10) by CVODES)")
+    if not args.json:   # the JSON's lists of samples only for --json
+        return motion, {}
     extra = motion_to_dict(motion)
     extra["rotor_simulation"] = {"arrival_error": sim.arrival_error, "position_error": sim.position_error,
                                  "final": [float(v) for v in sim.final]}

@@ -117,16 +117,29 @@ def make_animation(motion, robot, goal, out, frames: int = 100, fps: int = 20, p
         stamp.set_text(f"sphere rolling under its rotors, t = {t[i]:{width}.2f} s of {time[-1]:.2f} s")
         return shell + axes + [path, on_shell, legend, cursor, legend2, stamp]   # drawn in this order
 
-    write_atomic(out, _gif(fig, update, frames, fps, dpi, progress, blit))
+    write_atomic(out, _gif(fig, update, frames, fps, dpi, progress, blit, still=(legend, legend2)))
     log.info("wrote %d frames to %s", frames, out)
 
 
-def _gif(fig, update, frames: int, fps: int, dpi, progress, blit: bool = True) -> bytes:
+#: Pixels around an artist's extent that its anti-aliased edges may touch.
+_EDGE = 3
+
+
+def overlaps(renderer, artists, box) -> bool:
+    """Whether any of the drawn ``artists`` (their extents grown by :data:`_EDGE` pixels) meets the display box
+    ``box``."""
+    grown = box.padded(_EDGE)
+    return any(a.get_visible() and a.get_window_extent(renderer).padded(_EDGE).overlaps(grown) for a in artists)
+
+
+def _gif(fig, update, frames: int, fps: int, dpi, progress, blit: bool = True, still=()) -> bytes:
     """The frames ``update(i)`` draws, as a GIF: one palette of :data:`GIF_COLOURS` colours for every frame,
     without dithering, so that what does not move is the same pixels in every frame and each frame after
     the first stores only the rectangle that changed. ``update(i)`` returns the artists it changed and those
     to be drawn over them, in drawing order: with ``blit`` the rest of the figure is drawn once, and each frame
-    is that picture with these artists drawn on it (the view of the axes must not change between frames)."""
+    is that picture with these artists drawn on it (the view of the axes must not change between frames).
+    Those of the ``still`` artists among them (legends: text is the slow part of a frame) are drawn once too,
+    into a second picture, which a frame starts from when no moving artist meets them: the same pixels."""
     import io
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -140,13 +153,34 @@ def _gif(fig, update, frames: int, fps: int, dpi, progress, blit: bool = True) -
         artist.set_animated(True)
     canvas.draw()
     background = canvas.copy_from_bbox(fig.bbox)
+    still = [a for a in still if a in moving]
+    pictures = {(): background}   # the background with some of the still artists drawn on it, by their indices
+
+    def picture(kept):
+        if kept not in pictures:
+            canvas.restore_region(background)
+            for j in kept:
+                fig.draw_artist(still[j])
+            pictures[kept] = canvas.copy_from_bbox(fig.bbox)
+        return pictures[kept]
+
+    if still:   # each still artist: its extent, and the moving artists drawn before it
+        renderer = canvas.get_renderer()
+        under = [(a.get_window_extent(renderer), moving[:moving.index(a)]) for a in still]
     palette, coded, previous = None, [], None
     for i in range(frames):
         update(i)
-        if blit:
-            canvas.restore_region(background)
-            for artist in moving:
-                fig.draw_artist(artist)
+        if blit:   # first with every still artist as drawn once; again with those a moving artist meets drawn too
+            kept = tuple(range(len(still)))
+            while True:
+                canvas.restore_region(picture(kept))
+                for artist in moving:
+                    if artist not in still or still.index(artist) not in kept:
+                        fig.draw_artist(artist)
+                met = tuple(j for j in kept if overlaps(renderer, under[j][1], under[j][0]))
+                if not met:
+                    break
+                kept = tuple(j for j in kept if j not in met)
         else:
             canvas.draw()
         image = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba()).convert("RGB")

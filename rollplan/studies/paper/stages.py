@@ -64,20 +64,29 @@ log = logging.getLogger(__name__)
 Progress = Callable[[str, int, int], None]
 
 
-def refine_root(fun: Callable[[float], float], lo: float, hi: float, xtol: float = 1e-14) -> float:
+def refine_root(fun: Callable[[float], float], lo: float, hi: float, xtol: float = 1e-14,
+                known: dict | None = None) -> float:
     """Root of a scalar function in a sign-changing bracket ``[lo, hi]`` (Brent's method,
-    :func:`rollplan.core.roots.brent`).
+    :func:`rollplan.core.roots.brent`), ``fun`` evaluated once at each point (``known``: values already
+    computed, point -> value).
 
     Raises InputError when ``fun(lo)`` and ``fun(hi)`` have the same sign.
     """
-    f_lo, f_hi = fun(lo), fun(hi)
+    values = dict(known or {})
+
+    def once(x):
+        if x not in values:
+            values[x] = fun(x)
+        return values[x]
+
+    f_lo, f_hi = once(lo), once(hi)
     if f_lo == 0.0:
         return lo
     if f_hi == 0.0:
         return hi
     if np.sign(f_lo) == np.sign(f_hi):
         raise InputError(f"[{lo:g}, {hi:g}] does not bracket a root: f = {f_lo:g}, {f_hi:g}")
-    return brent(fun, lo, hi, xtol=xtol * (1.0 + abs(lo)), rtol=4 * np.finfo(float).eps)
+    return brent(once, lo, hi, xtol=xtol * (1.0 + abs(lo)), rtol=4 * np.finfo(float).eps)
 
 
 def bracket_roots(x: np.ndarray, f: np.ndarray) -> list:
@@ -323,9 +332,10 @@ class CaseStudy:
             # CVODES refinement, in a tight bracket around the spectral root if it holds one.
             d = max(1e-7, 1e-7 * abs(r))
             lo_c, hi_c = max(lo, r - d), min(hi, r + d)
-            if np.sign(cvodes(lo_c)) == np.sign(cvodes(hi_c)):
+            known = {lo_c: cvodes(lo_c), hi_c: cvodes(hi_c)}
+            if np.sign(known[lo_c]) == np.sign(known[hi_c]):
                 lo_c, hi_c = lo, hi
-            roots_cv.append(refine_root(cvodes, lo_c, hi_c, xtol=1e-12))
+            roots_cv.append(refine_root(cvodes, lo_c, hi_c, xtol=1e-12, known=known))
         # Count check on a grid of twice the resolution (midpoints added).
         mid = 0.5 * (x[:-1] + x[1:])
         f_mid = target(self.batch(*pair(mid), label=f"h({variable}) check", progress=progress))
