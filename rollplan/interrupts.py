@@ -31,8 +31,16 @@ outputs left whole) and exits 143; :func:`call` records it like SIGINT.
 Start-up: :func:`guard_start_up` (called first thing by ``rollplan/__init__.py``)
 makes a Ctrl-C while the modules load exit 130 with one line when the program
 is the ``rollplan`` command or ``python -m rollplan.cli``; :func:`end_start_up`
-(first thing in :func:`rollplan.cli.main`, inside its Ctrl-C handling) gives
-SIGINT back to Python's default handler.
+(first thing in :func:`rollplan.cli.main`, inside its Ctrl-C handling) hands
+SIGINT to the command: it raises KeyboardInterrupt as Python's default handler does.
+
+Swallowed: a KeyboardInterrupt raised while CasADi's Python bindings choose among a function's overloads (the
+symbolic construction of a model function: ``ca.cos`` of an SX calls back into Python) is taken for "not this
+overload" and dropped, and one raised in a finalizer or an at-fork callback is printed as "Exception ignored"
+and dropped: the Ctrl-C would be lost. So the command's handler also records the signal, a KeyboardInterrupt
+that Python cannot raise is recorded instead of printed (``sys.unraisablehook``), and :func:`check` raises a
+recorded signal once: at the next solver call (:func:`call`) or progress report. A signal that was raised
+normally may be raised a second time there (while the command stops): the command exits 130 either way.
 
 Exit status 130 after a handled Ctrl-C: CPython (3.11, ``Python/pythonrun.c``) marks a KeyboardInterrupt
 that leaves code run by ``exec`` of a string (``dataclasses`` builds every ``__init__`` that way while
@@ -57,7 +65,8 @@ import threading
 from contextlib import contextmanager
 
 __all__ = ["call", "call_in_thread", "call_in_threads", "abandoned", "Terminated",
-           "terminate_as_interrupt", "guard_start_up", "cli_follows", "end_start_up", "forget_unhandled", "settle"]
+           "terminate_as_interrupt", "guard_start_up", "cli_follows", "end_start_up", "check", "forget_unhandled",
+           "settle"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -68,6 +77,7 @@ class _State:
     pending = None    # the exception of a signal that arrived during the outermost call
     depth = 0         # nesting of calls
     abandoned = False  # a call_in_thread was interrupted: its thread still runs
+    held = False      # the command holds SIGINT (end_start_up): pending stays until delivered by check()
 
 
 def _record(signum, frame):
@@ -126,10 +136,12 @@ class _QuietInterrupts:
 
 def call(function, *args, **kwargs):
     """``function(*args, **kwargs)``, raising KeyboardInterrupt if SIGINT arrived during it (module docstring)."""
+    handler = signal.getsignal(signal.SIGINT)
     install = (_State.depth == 0 and threading.current_thread() is threading.main_thread()
-               and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+               and (handler is signal.default_int_handler or (_State.held and handler is _record)))
     previous = quiet = None
     if _State.depth == 0:
+        check()
         _State.pending = None
     if install:
         previous = signal.signal(signal.SIGINT, _record)
@@ -139,7 +151,8 @@ def call(function, *args, **kwargs):
         result = function(*args, **kwargs)
     except Exception:
         if _State.pending:
-            raise _State.pending from None
+            pending, _State.pending = _State.pending, None
+            raise pending from None
         raise
     finally:
         _State.depth -= 1
@@ -149,7 +162,8 @@ def call(function, *args, **kwargs):
             if sys.stderr is quiet:
                 sys.stderr = quiet.stream
     if _State.pending:
-        raise _State.pending
+        pending, _State.pending = _State.pending, None
+        raise pending
     return result
 
 
@@ -268,10 +282,31 @@ def guard_start_up() -> bool:
 
 
 def end_start_up() -> None:
-    """Give SIGINT back to Python's default handler if the start-up handler holds it (else nothing)."""
+    """If the start-up handler holds SIGINT (this program is the command), hand it to the command: a Ctrl-C raises
+    KeyboardInterrupt and is also recorded until :func:`check` delivers it (module docstring, "Swallowed")."""
     if threading.current_thread() is threading.main_thread() and \
             signal.getsignal(signal.SIGINT) is _interrupted_at_start:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        _State.held, _State.pending = True, None
+        sys.unraisablehook = _unraisable
+        signal.signal(signal.SIGINT, _record)
+
+
+def check() -> None:
+    """Raise a Ctrl-C (or SIGTERM) that the command recorded and that was swallowed on its way (module docstring,
+    "Swallowed"), once; nothing outside the command or when none is pending. Called by :func:`call` and by every
+    progress report (:func:`rollplan.progress.report`)."""
+    if _State.held and _State.pending is not None and threading.current_thread() is threading.main_thread():
+        pending, _State.pending = _State.pending, None
+        raise pending
+
+
+def _unraisable(unraisable) -> None:
+    """``sys.unraisablehook`` of the command: a KeyboardInterrupt that Python could not raise (in a finalizer or an
+    at-fork callback) is recorded for :func:`check`, not printed as a traceback; anything else as Python does."""
+    if isinstance(unraisable.exc_value, KeyboardInterrupt):
+        _State.pending = type(unraisable.exc_value)
+        return
+    sys.__unraisablehook__(unraisable)
 
 
 

@@ -20,6 +20,8 @@ import time
 from contextlib import contextmanager
 from contextvars import ContextVar
 
+from . import interrupts
+
 __all__ = ["Progress", "DEFAULT_INTERVAL", "report", "reporting", "silence"]
 
 #: Seconds between two plain progress lines when the stream is not a terminal.
@@ -130,6 +132,7 @@ class Progress:
         self._shown: dict = {}
 
     def __call__(self, label: str, done: int, total: int, **postfix) -> None:
+        interrupts.check()   # a Ctrl-C swallowed on its way is raised here (rollplan.interrupts)
         if not self.enabled:
             return
         shown = self._shown.get(label)
@@ -160,6 +163,7 @@ _CURRENT: ContextVar = ContextVar("rollplan_progress", default=None)
 
 def report(label: str, done: int, total: int, **postfix) -> None:
     """Report progress to the :class:`Progress` installed by :func:`reporting` (nothing if none is)."""
+    interrupts.check()
     progress = _CURRENT.get()
     if progress is not None:
         progress(label, done, total, **postfix)

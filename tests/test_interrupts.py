@@ -355,3 +355,62 @@ def test_ctrl_c_while_the_multistart_workers_solve_exits_at_once():
     assert code == 130, err
     assert elapsed < 2.0, (elapsed, err)
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
+
+
+SWALLOWED = """
+import signal, sys
+sys.argv = ["rollplan"] + sys.argv[1:]      # this program is the command (interrupts.cli_follows)
+import casadi as ca
+from rollplan import interrupts, progress
+if sys.argv[1:] == ["command"]:
+    interrupts.end_start_up()               # as rollplan.cli.main does first
+
+def interrupt_in_the_bindings(frame, event, arg):   # Ctrl-C while they call back into Python for an overload
+    if event == "call" and frame.f_code.co_name == "DM_from_array":
+        sys.setprofile(None)
+        signal.raise_signal(signal.SIGINT)
+
+sys.setprofile(interrupt_in_the_bindings)
+try:
+    built = ca.cos(ca.SX.sym("x"))
+    print("built" if str(built) == "cos(x)" else "wrong")
+except KeyboardInterrupt:
+    print("raised by casadi")
+for deliver in (lambda: interrupts.call(lambda: None), lambda: progress.report("x", 1, 2)):
+    try:
+        deliver()
+        print("not delivered")
+    except KeyboardInterrupt:
+        print("delivered")
+
+class Finalized:                             # Python cannot raise from a finalizer: "Exception ignored"
+    def __del__(self):
+        signal.raise_signal(signal.SIGINT)
+
+Finalized()
+try:
+    progress.report("x", 1, 2)
+    print("not delivered")
+except KeyboardInterrupt:
+    print("delivered")
+"""
+
+
+@pytest.mark.parametrize("mode", ["command", "library"])
+def test_a_ctrl_c_swallowed_on_its_way_is_delivered_once_by_the_command(mode, tmp_path):
+    """A KeyboardInterrupt raised while CasADi's bindings choose an overload is dropped by them (as when Ctrl-C
+    lands in the symbolic construction of a model function: the command ran on), and one raised in a finalizer is
+    printed as "Exception ignored" with a traceback. The command records the signal: the next solver call or
+    progress report raises it, once; no traceback is printed. A program using the library keeps Python's default
+    (nothing recorded, nothing raised later)."""
+    script = tmp_path / "swallowed.py"
+    script.write_text(SWALLOWED)
+    r = subprocess.run([sys.executable, str(script), mode], check=False, capture_output=True, text=True, timeout=120)
+    lines = r.stdout.splitlines()
+    assert lines[0] == "built", r.stdout   # CasADi dropped the KeyboardInterrupt and built on (the premise)
+    if mode == "command":
+        assert lines[1:] == ["delivered", "not delivered", "delivered"] and "Traceback" not in r.stderr, (r.stdout,
+                                                                                                           r.stderr)
+    else:
+        assert lines[1:] == ["not delivered", "not delivered", "not delivered"], r.stdout
+        assert "Exception ignored" in r.stderr

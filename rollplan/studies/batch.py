@@ -59,6 +59,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import interrupts
 from ..errors import InputError, NoPlanError, OutputError, SolverError, check_choice, check_flag, check_whole
 from ..inputs import parse_number, parse_whole, read_csv, show_path
 from ..io import plan_to_dict, tagged
@@ -390,6 +391,7 @@ def _run(table, out: Path, executor, resume, overwrite, root_solver, progress) -
                 lines[d["index"]] = d
                 count += 1
                 failed += d["status"] != "ok"
+                interrupts.check()   # a Ctrl-C swallowed while the row was planned stops the run here
                 if report:
                     report(count, len(rows), failed)
             if writer is None:
