@@ -312,3 +312,19 @@ def test_linear_torque_replay_is_exact_for_the_momenta_and_matches_dop853():
         assert np.abs(run.commanded_momenta - exact).max() < 1e-13 * scale, n
         np.testing.assert_allclose(run.series.time, tk)
         assert np.abs(run.series.state - ref[:, :5]).max() < 1e-11, n
+
+
+def test_samples_far_apart_for_the_motion_are_replayed_by_cvodes_to_the_printed_equations(caplog):
+    """Five rows over 10 s of torques that turn the robot many times between rows: 64 RK4 steps per interval miss
+    by far (their estimate is above 1e-2), so the plant integrates the same linear inputs by CVODES and still ends
+    where DOP853, restarted at every sample, ends on the printed equations."""
+    import logging
+
+    t = np.linspace(0.0, 10.0, 5)
+    tau = np.column_stack([0.05 * np.sin(np.arange(5) * 1.7), 0.05 * np.cos(np.arange(5) * 2.3)])
+    with caplog.at_level(logging.INFO, logger="rollplan.execution.plants"):
+        run = run_torques(ROBOT, t, tau, interpolation="linear")
+    assert "far apart" in caplog.text and "CVODES" in caplog.text
+    ref = _interval_by_interval(t, tau)[3]
+    assert np.abs(ref[-1, :5]).max() > 10.0   # the motion is long between rows
+    assert np.abs(run.series.state - ref[:, :5]).max() < 1e-6 * np.abs(ref[:, :5]).max()

@@ -37,7 +37,8 @@ integrated sample interval by sample interval, where the inputs are linear in ti
 is estimated by the embedded third-order solution (the right side at the step's end, ``h/6 (k_4 - k_5)``:
 an over-estimate of RK4's error); ``m`` is doubled until the estimates, summed over every interval, or
 the change from the result of ``m / 2`` steps (Richardson: about 15 times the error), are within
-:data:`RK_TOLERANCE` of each quantity's scale.
+:data:`RK_TOLERANCE` of each quantity's scale; samples so far apart for the motion that :data:`RK_MAX_STEPS`
+steps do not reach it are integrated by CVODES on the same linear inputs instead.
 
 Disturbances (:data:`DISTURBANCES`, by name with parameters and a seed, :func:`disturbance`):
 ``friction`` (bearing friction, torque plant), ``measurement`` (white noise on every measured state
@@ -560,9 +561,15 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     if interpolation == "linear":
         inputs = [torques, reference_rates if servo_gain > 0 else np.zeros_like(torques)]
         noise = d["torque_noise"].draw(t.size, segment) if "torque_noise" in d else np.zeros((t.size, 2))
-        zs = _replay_linear(t_all, inputs, noise, z0, params)
+        try:
+            zs = _replay_linear(t_all, inputs, noise, z0, params)
+        except _FarApart as exc:
+            log.info("torque plant: %s; integrated by CVODES instead", exc)
+            zs = _replay_cvodes(t_all, t, torques, reference_rates, d, segment, breaks, z0, params, reltol, abstol,
+                                "linear")
     else:
-        zs = _replay_spline(t_all, t, torques, reference_rates, d, segment, breaks, z0, params, reltol, abstol)
+        zs = _replay_cvodes(t_all, t, torques, reference_rates, d, segment, breaks, z0, params, reltol, abstol,
+                            "spline")
     time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
     _, omega, phi_dot, cmd = _torque_dynamics()(z, input_function(t_all, torques, breaks, interpolation)(time),
                                                 _input_or_zero(t_all, reference_rates, breaks, interpolation, time,
@@ -580,13 +587,15 @@ def _input_or_zero(t, y, breaks, interpolation, time, given: bool):
     return input_function(t, y, breaks, interpolation)(time) if given else ca.DM.zeros(2)
 
 
-def _replay_spline(t_all, t, torques, reference_rates, d, segment, breaks, z0, params, reltol, abstol) -> np.ndarray:
-    """The torque plant's states at the distinct times ``t``, its inputs splines split at ``breaks``, by CVODES."""
+def _replay_cvodes(t_all, t, torques, reference_rates, d, segment, breaks, z0, params, reltol, abstol,
+                   interpolation) -> np.ndarray:
+    """The torque plant's states at the distinct times ``t``, its inputs splines split at ``breaks`` or linear
+    (``interpolation``), by CVODES."""
     time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
     zero = ca.DM.zeros(2)
     servo_gain, c = params[0], params[1:3]
-    tau = input_function(t_all, torques, breaks, "spline")
-    ref = input_function(t_all, reference_rates, breaks, "spline")(time) if servo_gain > 0 else zero
+    tau = input_function(t_all, torques, breaks, interpolation)
+    ref = input_function(t_all, reference_rates, breaks, interpolation)(time) if servo_gain > 0 else zero
     noise = (input_function(t, d["torque_noise"].draw(t.size, segment), (), "linear")(time)
              if "torque_noise" in d else zero)
     ode = _torque_dynamics()(z, tau(time), ref, noise, servo_gain, c, ca.DM(params[3:]))[0]
@@ -599,11 +608,15 @@ def _replay_spline(t_all, t, torques, reference_rates, d, segment, breaks, z0, p
                           "CVODES_failed") from None
 
 
+class _FarApart(Exception):
+    """RK4 did not reach :data:`RK_TOLERANCE` with :data:`RK_MAX_STEPS` steps per sample interval."""
+
+
 def _replay_linear(t_all, inputs, noise, z0, params) -> np.ndarray:
     """The torque plant's states at the distinct times of ``t_all``, driven by ``inputs`` (torques and reference
     rates at ``t_all``, linear between rows, a step at a time given twice) and ``noise`` (at the distinct times):
     RK4 over every sample interval, the steps per interval doubled until its error estimates are within
-    :data:`RK_TOLERANCE` (module docstring)."""
+    :data:`RK_TOLERANCE` (module docstring); :class:`_FarApart` if :data:`RK_MAX_STEPS` do not suffice."""
     new = np.r_[True, np.diff(t_all) != 0]
     last = np.r_[new[1:], True]
     tk = t_all[new]
@@ -628,9 +641,8 @@ def _replay_linear(t_all, inputs, noise, z0, params) -> np.ndarray:
             if estimate <= RK_TOLERANCE:
                 break
             if m >= RK_MAX_STEPS:
-                log.warning("torque plant: RK4 error estimate %.1e > %.0e at %d steps per sample interval (samples "
-                            "%d-%d): the samples are far apart for the motion", estimate, RK_TOLERANCE, m, a, b)
-                break
+                raise _FarApart(f"RK4 error estimate {estimate:.1e} > {RK_TOLERANCE:.0e} at {m} steps per sample "
+                                f"interval (samples {a}-{b}): the samples are far apart for the motion")
             m, previous = 2 * m, states
         if not np.all(np.isfinite(states)):
             raise SolverError("the torque-driven motion overflows (RK4)", "RK4_failed")
