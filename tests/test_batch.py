@@ -136,7 +136,7 @@ def without_times(lines):
 
 # ----------------------------------------------------------------------------- conventions of issue 18
 
-def _strip_times(lines):
+def strip_times(lines):
     """Output lines without the solver's wall time (the only field that differs between two runs)."""
     out = []
     for d in lines:
@@ -646,7 +646,7 @@ def test_rows_are_planned_many_per_call_as_one_by_one(tmp_path, monkeypatch):
     alone = [plan_row(i, row) for i, row in enumerate(read_targets(csv))]
     for d in lines + alone:   # the two-leg search's wall time
         d.get("solver", {}).get("two_legs", {}).pop("search_s", None)
-    assert _strip_times(lines) == _strip_times(alone)
+    assert strip_times(lines) == strip_times(alone)
     check_lines(lines[:6])
     assert lines[7]["status"] == "ok"
 

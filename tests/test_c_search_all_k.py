@@ -18,7 +18,7 @@ import threading
 
 import numpy as np
 import pytest
-from test_enumerate import _brute_roots_2d, _same_sets
+from test_enumerate import brute_roots_2d, same_sets
 from test_interrupts import run_and_interrupt
 
 from rollplan import NoPlanError, Problem
@@ -137,11 +137,11 @@ def test_c_roots_against_the_2d_brute_force(k):
     targets += [((rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-np.pi, np.pi)), int(rng.integers(1, 4)))
                 for _ in range(2)]
     for target, steps in targets:
-        brute = _brute_roots_2d(target, steps, k)
+        brute = brute_roots_2d(target, steps, k)
         turns = wrap_exact(target[2])[1]
         listed = compiled_search.all_roots(*target, steps, k)
         got = [(r.m - turns, r.a, r.b) for r in listed]
-        assert _same_sets(brute, got) == ([], []), (target, steps)
+        assert same_sets(brute, got) == ([], []), (target, steps)
         first = compiled_search.shortest_root(*target, steps, k)
         if not brute:
             assert math.isnan(first.a) and math.isnan(first.b)

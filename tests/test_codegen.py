@@ -16,7 +16,7 @@ import pytest
 from conftest import one_line
 from conftest import run as run_cli
 from scipy.optimize import brentq, minimize_scalar
-from test_enumerate import _b_of, _g, _repeated
+from test_enumerate import b_of, leaf_gap, repeated
 
 from rollplan import Problem, codegen
 from rollplan.cli import main
@@ -559,12 +559,12 @@ def test_close_pair_hidden_by_the_table_is_split_in_c(built, tmp_path):
     makes the C search return the pair's first root, which is brentq's root on the complex step map to 1e-10 (before
     tangency() decided on the accurate map, the C search returned a point between the two, 1.2e-8 away)."""
     k, eta = 5.0, 0.3
-    res = minimize_scalar(lambda a: _g(a, eta, 0.0, k), bounds=(0.5716, 0.5816), method="bounded",
+    res = minimize_scalar(lambda a: leaf_gap(a, eta, 0.0, k), bounds=(0.5716, 0.5816), method="bounded",
                           options={"xatol": 1e-14})
     h = math.sqrt(res.fun) * (1.0 + 1e-8)
-    first = brentq(_g, res.x - 1e-6, res.x, args=(eta, h, k), xtol=1e-16, rtol=1e-15)
+    first = brentq(leaf_gap, res.x - 1e-6, res.x, args=(eta, h, k), xtol=1e-16, rtol=1e-15)
     out = built.out
-    limit = first + float(_b_of(np.array([first]), eta, k)[0]) - 1e-6
+    limit = first + float(b_of(np.array([first]), eta, k)[0]) - 1e-6
     subprocess.run([*TEST_BUILD, f"-DRP_TEST_REJECT_BELOW={limit!r}",
                     "-I", str(out), "-o", str(tmp_path / "pair"), str(out / "plan_demo.o"),
                     str(out / "rollplan_planner.c"), str(out / "rollplan_model.o"), "-lm"], check=True)
@@ -897,7 +897,7 @@ def _traces(plans):
     """:func:`references.trace` of many plans ``(a, b, k, gamma, steps)`` at once. The first figure eight of every
     plan by DOP853 from zero, leaf by leaf as one system (:func:`references.curve_leaf_ends`; fewer than
     :data:`_BATCHED` plans one by one); the later ones by the symmetry of the printed equations
-    (:func:`test_enumerate._repeated`). Checked against :func:`references.trace` (DOP853 over every step) by
+    (:func:`test_enumerate.repeated`). Checked against :func:`references.trace` (DOP853 over every step) by
     test_traces_are_the_trace_of_each_plan. Final states, shape (len(plans), 3)."""
     if not plans:
         return np.zeros((0, 3))
@@ -909,7 +909,7 @@ def _traces(plans):
                 x[:, i] = references.leaf_end(r[i], side, k[i], gamma[i], x[:, i])
         else:
             x = references.curve_leaf_ends(_rotated_circles(r, side, gamma), x, k)
-    return _repeated(x.T, steps)
+    return repeated(x.T, steps)
 
 
 #: Fewer plans than this are traced one by one (a call of the batched right side costs that of a few alone).

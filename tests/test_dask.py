@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from test_batch import _strip_times, check_lines, write_csv
+from test_batch import check_lines, strip_times, write_csv
 
 from rollplan import cli
 from rollplan.errors import InputError
@@ -46,7 +46,7 @@ def test_batch_on_the_cluster_equals_a_local_run(tmp_path, cluster):
         (r_local.total, r_local.planned, r_local.failed, r_local.failed_total) == (6, 6, 3, 3)
     lines = read_output(remote)
     check_lines(lines)   # same order, same failures with their reasons, plans on target
-    assert _strip_times(lines) == _strip_times(read_output(local))
+    assert strip_times(lines) == strip_times(read_output(local))
 
 
 def test_interrupted_local_run_resumed_on_the_cluster(tmp_path, cluster):
@@ -64,7 +64,7 @@ def test_interrupted_local_run_resumed_on_the_cluster(tmp_path, cluster):
     assert out.read_bytes().startswith(kept)
     check_lines(read_output(out))
     run_batch(csv_path, tmp_path / "whole.jsonl")
-    assert _strip_times(read_output(out)) == _strip_times(read_output(tmp_path / "whole.jsonl"))
+    assert strip_times(read_output(out)) == strip_times(read_output(tmp_path / "whole.jsonl"))
 
 
 def test_cli_batch_on_the_cluster(tmp_path, cluster, capsys):

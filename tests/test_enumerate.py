@@ -124,7 +124,7 @@ def test_step_refuses_outside_the_domain(kwargs, word):
 # ----------------------------------------------------------------------------- brute force
 
 
-def _b_of(a, eta, k):
+def b_of(a, eta, k):
     """b with E(b) = E(a) - eta: plain bisection on the closed form (vectorised), nan outside."""
     a = np.asarray(a, float)
     e_min = float(leafmap.turn(A_MAX, k))
@@ -137,9 +137,9 @@ def _b_of(a, eta, k):
     return np.where((target_e >= e_min) & (target_e <= 0.0), 0.5 * (lo + hi), np.nan)
 
 
-def _g(a, eta, h_m, k):
+def leaf_gap(a, eta, h_m, k):
     """h(a, b(a))^2 - h_m^2 by the complex step map."""
-    s, _ = leafmap.step_values(a, _b_of(np.array([a]), eta, k), k)
+    s, _ = leafmap.step_values(a, b_of(np.array([a]), eta, k), k)
     return float(abs(s[0]) ** 2 - h_m * h_m)
 
 
@@ -173,15 +173,15 @@ def _brute_branches(etas, h_ms, k, samples_per_rad, min_samples):
     grid = np.concatenate(grids)
     which = np.repeat(np.arange(len(grids)), [g.size for g in grids])
     eta_of, h_of = np.asarray(etas, float)[which], np.asarray(h_ms, float)[which]
-    bs = _b_of(grid, eta_of, k)
+    bs = b_of(grid, eta_of, k)
     ok = np.isfinite(bs) & (bs > 0)
     grid, bs, which, eta_of, h_of = grid[ok], bs[ok], which[ok], eta_of[ok], h_of[ok]
     h2_of = h_of * h_of
     shift, _ = leafmap.step_values(grid, bs, k)
     f = np.abs(shift) ** 2 - h2_of
 
-    def g(a, i):   # _g for an array of a, at the branches of the grid points i
-        return np.abs(leafmap.step_values(a, _b_of(a, eta_of[i], k), k)[0]) ** 2 - h2_of[i]
+    def g(a, i):   # leaf_gap for an array of a, at the branches of the grid points i
+        return np.abs(leafmap.step_values(a, b_of(a, eta_of[i], k), k)[0]) ** 2 - h2_of[i]
 
     same = which[:-1] == which[1:]                              # neighbours on one branch
     changes = np.nonzero((np.sign(f[:-1]) * np.sign(f[1:]) < 0) & same)[0]
@@ -197,8 +197,8 @@ def _brute_branches(etas, h_ms, k, samples_per_rad, min_samples):
     for j in np.nonzero(np.sign(g(lowest, low)) != sign)[0]:
         i = low[j]
         args = (float(eta_of[i]), float(h_of[i]), k)
-        roots[which[i]].append(brentq(_g, grid[i - 1], lowest[j], args=args, xtol=1e-15, rtol=1e-15))
-        roots[which[i]].append(brentq(_g, lowest[j], grid[i + 1], args=args, xtol=1e-15, rtol=1e-15))
+        roots[which[i]].append(brentq(leaf_gap, grid[i - 1], lowest[j], args=args, xtol=1e-15, rtol=1e-15))
+        roots[which[i]].append(brentq(leaf_gap, lowest[j], grid[i + 1], args=args, xtol=1e-15, rtol=1e-15))
     return roots
 
 
@@ -274,7 +274,7 @@ def _scan_roots(target, steps, k, branches, samples_per_rad, min_samples):
     found = [(m, eta, a) for (m, eta, _), branch in zip(scanned, roots) for a in branch]
     if not found:
         return []
-    bs = _b_of(np.array([a for _, _, a in found]), np.array([eta for _, eta, _ in found]), k)
+    bs = b_of(np.array([a for _, _, a in found]), np.array([eta for _, eta, _ in found]), k)
     return [(m, a, float(b)) for (m, _, a), b in zip(found, bs)]
 
 
@@ -284,7 +284,7 @@ def _enumerated(target, steps, k, branch=None):
     return [(r.m, r.a, r.b) for r in en.roots(brs, k)]
 
 
-def _same_sets(brute, enum, tol=1e-7):
+def same_sets(brute, enum, tol=1e-7):
     missed = [r for r in brute if not any(e[0] == r[0] and abs(e[1] - r[1]) < tol and abs(e[2] - r[2]) < tol
                                           for e in enum)]
     extra = [e for e in enum if not any(e[0] == r[0] and abs(e[1] - r[1]) < tol and abs(e[2] - r[2]) < tol
@@ -292,7 +292,7 @@ def _same_sets(brute, enum, tol=1e-7):
     return missed, extra
 
 
-def _repeated(first, steps):
+def repeated(first, steps):
     """The ends of ``steps`` figure eights from zero, given ``first`` = the ends (u_a, v_a, psi) of one from zero
     (arrays of shape (N, 3) and (N,)), by the symmetry of the printed equations (28)-(30): their right side does not
     depend on (u_a, v_a), and psi only turns the rates of (u_a, v_a) by -psi, so a figure eight started at
@@ -310,8 +310,8 @@ def _repeated(first, steps):
 
 def _certified_by_dop853(target, steps, k, p):
     """The miss of plan p: its first figure eight by DOP853 on the printed equations, the others by
-    :func:`_repeated`."""
-    x = _repeated(_trace(p.a, p.b, k, p.gamma, 1), steps)[0]
+    :func:`repeated`."""
+    x = repeated(_trace(p.a, p.b, k, p.gamma, 1), steps)[0]
     return max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2])))
 
 
@@ -343,13 +343,14 @@ def test_close_pair_hidden_by_the_table_is_found_on_the_accurate_map():
     as one tangency; the accurate map splits it (enumerate._tangencies). Reference: scipy's bounded minimiser and
     brentq on the complex step map of the brute force."""
     k, eta = 5.0, 0.3
-    res = minimize_scalar(lambda a: _g(a, eta, 0.0, k), bounds=(0.5716, 0.5816), method="bounded",
+    res = minimize_scalar(lambda a: leaf_gap(a, eta, 0.0, k), bounds=(0.5716, 0.5816), method="bounded",
                           options={"xatol": 1e-14})
     h = math.sqrt(res.fun) * (1.0 + 1e-8)
-    assert _g(res.x, eta, h, k) < 0.0
+    assert leaf_gap(res.x, eta, h, k) < 0.0
     lo, hi = res.x - 1e-6, res.x + 1e-6
-    assert _g(lo, eta, h, k) > 0.0 and _g(hi, eta, h, k) > 0.0
-    brute = [brentq(_g, a0, a1, args=(eta, h, k), xtol=1e-16, rtol=1e-15) for a0, a1 in ((lo, res.x), (res.x, hi))]
+    assert leaf_gap(lo, eta, h, k) > 0.0 and leaf_gap(hi, eta, h, k) > 0.0
+    brute = [brentq(leaf_gap, a0, a1, args=(eta, h, k), xtol=1e-16, rtol=1e-15)
+             for a0, a1 in ((lo, res.x), (res.x, hi))]
     got = sorted(r.a for r in en.roots(en.branches(k, eta, 1, h, 0), k) if abs(r.a - res.x) < 1e-3)
     assert len(got) == 2 and got[1] - got[0] > 1e-8
     np.testing.assert_allclose(got, brute, rtol=0, atol=1e-10)
@@ -412,7 +413,7 @@ def test_named_failure_all_plans_complete():
     assert len(plans) >= 46
     brute = _brute_roots(target, 3, 2.5)
     enum = [(q.branch, q.a, q.b) for q in plans]
-    assert _same_sets(brute, enum) == ([], [])
+    assert same_sets(brute, enum) == ([], [])
     assert all(_certified_by_dop853(target, 3, 2.5, q) < 1e-9 for q in plans[:5])
 
 
@@ -432,7 +433,7 @@ def test_enumeration_against_brute_force(target, steps, k, branches):
     enum = []
     for m in (branches if branches is not None else [None]):
         enum += _enumerated(target, steps, k, m)
-    missed, extra = _same_sets(brute, enum)
+    missed, extra = same_sets(brute, enum)
     assert missed == [] and extra == []
 
 
@@ -451,7 +452,7 @@ def test_random_targets_default_is_the_shortest_and_all_complete(k):
         sub = None if (steps <= 2 and k <= 5) else [b.m for b in brs[:5]]
         brute = _brute_roots(target, steps, k, branches=sub)
         enum = [(r.m, r.a, r.b) for r in en.roots([b for b in brs if sub is None or b.m in sub], k)]
-        assert _same_sets(brute, enum) == ([], [])
+        assert same_sets(brute, enum) == ([], [])
         try:
             p = rollplan.plan(target, steps=steps, k=k, legs="one")
         except rollplan.NoPlanError:
@@ -615,7 +616,7 @@ def _scan_sheets(eta, h_m, k, pieces, n, swap):
     return [(y, x) if swap else (x, y) for x, y in out]
 
 
-def _brute_roots_2d(target, steps, k, n=6000):
+def brute_roots_2d(target, steps, k, n=6000):
     """All (m, a, b) solving (32)-(33) for any k: the level set E(a) - E(b) = eta_m scanned over a (b on
     each monotone piece) and over b (a on each piece), so that no part of it is seen only where it is
     steep; roots found by both scans are merged."""
@@ -649,9 +650,9 @@ def test_enumeration_for_every_k_against_a_2d_brute_force(k):
     targets = [((0.3, 0.2, 0.0), 1), ((0.05, -0.1, 0.0), 2), ((0.2, 0.1, 0.3), 1)]
     targets += [((rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-np.pi, np.pi)), int(rng.integers(1, 4)))]
     for target, steps in targets:
-        brute = _brute_roots_2d(target, steps, k)
+        brute = brute_roots_2d(target, steps, k)
         enum = _enumerated(target, steps, k)
-        missed, extra = _same_sets(brute, enum)
+        missed, extra = same_sets(brute, enum)
         assert missed == [] and extra == [], (target, steps, missed, extra)
 
 
@@ -669,7 +670,7 @@ def test_planner_below_one_half_is_the_shortest_and_complete(k):
         dist, direction = rng.uniform(0.02, 0.5), rng.uniform(-np.pi, np.pi)
         psi = 0.0 if rng.uniform() < 0.3 else rng.uniform(-1.0, 1.0) * min(np.pi, 0.9 * steps * span)
         target = (dist * np.cos(direction), dist * np.sin(direction), psi)
-        brute = _brute_roots_2d(target, steps, k)
+        brute = brute_roots_2d(target, steps, k)
         try:
             p = rollplan.plan(target, steps=steps, k=k, all_solutions=True, legs="one")
         except rollplan.NoPlanError:
@@ -677,7 +678,7 @@ def test_planner_below_one_half_is_the_shortest_and_complete(k):
             continue
         plans = (p,) + p.alternatives
         assert all(_certified_by_dop853(target, steps, k, q) < 1e-9 for q in plans)
-        missed, extra = _same_sets(brute, [(q.branch, q.a, q.b) for q in plans])
+        missed, extra = same_sets(brute, [(q.branch, q.a, q.b) for q in plans])
         assert extra == []
         # a brute-force root the certificate rejected would be missing; none is expected here
         assert missed == []
