@@ -73,6 +73,20 @@ def run_script_here(name: str, out_dir, *args: str) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("name", ["basepoint_bench.py", "curve_families.py", "embedded_report.py", "polish_ipopt.py",
+                                  "reconfiguration.py", "timing_table.py"])
+def test_a_script_run_as_a_program_reads_its_own_arguments(name, tmp_path):
+    """The scripts whose runs the tests make through ``main`` (:func:`run_script_here`), run as a user does:
+    ``python scripts/NAME`` passes its arguments (without the program's name) to ``main`` and exits with its
+    status (argparse's 2 for an unknown option, naming only that option)."""
+    script = Path(__file__).resolve().parent.parent / "scripts" / name
+    run = subprocess.run([sys.executable, str(script), "--no-such-option"], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=300, check=False)
+    assert run.returncode == 2 and run.stderr.strip().endswith("unrecognized arguments: --no-such-option"), run.stderr
+    assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.slow
 def test_timing_table_script_runs(tmp_path):
     run_script_here("timing_table.py", tmp_path, "--quick")
     text = (tmp_path / "timing.md").read_text()
