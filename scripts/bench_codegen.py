@@ -131,21 +131,42 @@ def build(out: Path, steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, prefi
     return g
 
 
-def kept(out: Path, build_dir: str | None, name: str, tools: dict) -> Path:
-    """``out`` (a generated folder, not built yet), or with ``build_dir`` its copy ``build_dir/<name>-<digest>`` (the
-    digest of its files and of ``tools``, e.g. the compilers' versions): made once, then reused by every later run of
-    the same sources and tools, so that ``make`` there rebuilds nothing."""
+#: The make variables of the environment that the generated Makefiles read (``CC ?= cc`` and the like): part of
+#: a kept build's key (:func:`kept`).
+MAKE_VARIABLES = ("CC", "CFLAGS", "CPPFLAGS", "LDFLAGS", "ARM", "MAKEFLAGS")
+
+
+def kept(out: Path, build_dir: str | None, name: str, tools: dict, build) -> Path:
+    """Build ``out`` (a generated folder) by ``build(folder)``, there, or with ``build_dir`` in its copy
+    ``build_dir/<name>-<digest>`` (the digest of its files, of ``tools``, e.g. the compilers' versions, and of the
+    environment's :data:`MAKE_VARIABLES`): made once, then reused by every later run of the same sources, tools and
+    variables, where ``build`` (``make``) rebuilds nothing. A new copy is built under a temporary name and renamed
+    only once ``build`` succeeded: a stopped or failed build leaves no kept folder, and of two runs building the
+    same one at once the second to finish uses the first's. Returns the built folder."""
     if build_dir is None:
+        build(out)
         return out
     h = hashlib.sha256(repr(sorted(tools.items())).encode())
+    h.update(repr([(v, os.environ.get(v)) for v in MAKE_VARIABLES]).encode())
     for path in sorted(out.rglob("*")):
         if path.is_file():
             h.update(str(path.relative_to(out)).encode() + b"\0" + path.read_bytes() + b"\0")
     folder = Path(build_dir) / f"{name}-{h.hexdigest()[:16]}"
-    if not folder.exists():             # copied whole, then renamed: a stopped run leaves no half folder there
-        part = folder.with_name(f"{folder.name}.part{os.getpid()}")
-        shutil.copytree(out, part, symlinks=True)
+    if folder.exists():
+        build(folder)
+        return folder
+    part = folder.with_name(f"{folder.name}.part{os.getpid()}")
+    shutil.rmtree(part, ignore_errors=True)
+    shutil.copytree(out, part, symlinks=True)
+    try:
+        build(part)
         part.rename(folder)
+    except OSError:
+        if not folder.exists():
+            raise
+        build(folder)   # built meanwhile by another run
+    finally:
+        shutil.rmtree(part, ignore_errors=True)
     return folder
 
 
@@ -207,8 +228,8 @@ def measure(steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, reps: int = 20
     """
     with tempfile.TemporaryDirectory() as tmp:
         g = codegen.generate(Path(tmp) / "c", steps_per_leaf)
-        out = kept(Path(tmp) / "c", build_dir, "host", host_tools())
-        subprocess.run(["make", "-s", "-C", str(out)], check=True, capture_output=True)
+        out = kept(Path(tmp) / "c", build_dir, "host", host_tools(),
+                   lambda folder: subprocess.run(["make", "-s", "-C", str(folder)], check=True, capture_output=True))
         rows = time_plans(out, targets=targets, reps=reps)
         binary = (out / "plan_demo").stat().st_size
         lib = (out / "librollplan.a").stat().st_size

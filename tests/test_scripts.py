@@ -166,17 +166,33 @@ def test_embedded_report_reuses_the_builds_of_the_same_sources(tmp_path, monkeyp
     first.mkdir()
     kept, prefix = embedded_report.build("double", first, str(tmp_path / "builds"), tools)
     assert kept.parent == tmp_path / "builds" and kept.name.startswith("double-") and prefix == "rollplan"
-    assert (kept / "Makefile").is_file() and made == [kept]
+    # built under a temporary name, kept once the build succeeded
+    assert (kept / "Makefile").is_file() and made == [kept.with_name(f"{kept.name}.part{os.getpid()}")]
     (kept / "built").touch()
     again = tmp_path / "again"
     again.mkdir()
     assert embedded_report.build("double", again, str(tmp_path / "builds"), tools)[0] == kept
-    assert (kept / "built").exists() and made == [kept, kept]
+    assert (kept / "built").exists() and made[1:] == [kept]
     other = tmp_path / "other"
     other.mkdir()
     assert embedded_report.build("double", other, str(tmp_path / "builds"), {**tools, "qemu-system-arm": "qemu 2"})[0] \
         not in (kept, other / "double")
     assert sorted(p.name.split("-")[0] for p in (tmp_path / "builds").iterdir()) == ["double", "double"]
+    monkeypatch.setenv("CFLAGS", "-O0 -g")   # other make variables: another build
+    flags = tmp_path / "flags"
+    flags.mkdir()
+    assert embedded_report.build("double", flags, str(tmp_path / "builds"), tools)[0] != kept
+
+    def failing(out, *goals):
+        raise subprocess.CalledProcessError(2, "make")
+
+    monkeypatch.setattr(embedded_report, "make", failing)   # a failed (or stopped) build keeps nothing
+    monkeypatch.setenv("CFLAGS", "-O1")
+    failed = tmp_path / "failed"
+    failed.mkdir()
+    with pytest.raises(subprocess.CalledProcessError):
+        embedded_report.build("double", failed, str(tmp_path / "builds"), tools)
+    assert len(list((tmp_path / "builds").iterdir())) == 3
 
 
 FAKE_TESTS = """import time
