@@ -2,6 +2,8 @@
 numpy, a closed form (Sherman-Morrison), scipy's DOP853, the rate-driven plant, and the conservation of
 the angular momentum about the contact point."""
 
+import time
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -328,3 +330,17 @@ def test_samples_far_apart_for_the_motion_are_replayed_by_cvodes_to_the_printed_
     ref = _interval_by_interval(t, tau)[3]
     assert np.abs(ref[-1, :5]).max() > 10.0   # the motion is long between rows
     assert np.abs(run.series.state - ref[:, :5]).max() < 1e-6 * np.abs(ref[:, :5]).max()
+
+
+@pytest.mark.slow
+def test_ctrl_c_while_cvodes_runs_the_torque_plant_is_a_keyboard_interrupt():
+    """Spline inputs (and linear ones too far apart for RK4) are integrated by CVODES, which swallows a Ctrl-C
+    (rollplan.interrupts): the plant raises KeyboardInterrupt within a second, not a solver failure."""
+    from test_interrupts import interrupt_after
+
+    t = np.linspace(0.0, 800.0, 40001)
+    tau = np.column_stack([2e-3 * np.sin(0.7 * t), -1e-3 * np.cos(1.3 * t)])
+    timer = interrupt_after(0.5)
+    with pytest.raises(KeyboardInterrupt):
+        run_torques(ROBOT, t, tau, interpolation="spline")
+    assert timer.sent and time.perf_counter() - timer.sent[0] < 1.0
