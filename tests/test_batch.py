@@ -338,47 +338,34 @@ def test_second_batch_on_the_same_output_is_refused(tmp_path, capsys):
     assert first.returncode == SLOW_EXIT, err
     assert [d["index"] for d in read_lines(out)] == list(range(len(SLOW_ROWS)))
 
-def _live_children(pid):
-    """Pids of the live processes (not zombies) whose parent is ``pid`` (Linux /proc)."""
-    found = []
-    for name in os.listdir("/proc"):
-        if not name.isdigit():
-            continue
-        try:
-            with open(f"/proc/{name}/stat") as fh:
-                stat = fh.read()
-        except OSError:
-            continue
-        state, ppid = stat[stat.rfind(")") + 2:].split()[:2]
-        if int(ppid) == pid and state != "Z":
-            found.append(int(name))
-    return found
-
-
-def _live_group(pgid):
-    """Pids of the live processes (not zombies) of the process group ``pgid`` (Linux /proc)."""
-    found = []
-    for name in os.listdir("/proc"):
-        if not name.isdigit():
-            continue
-        try:
-            with open(f"/proc/{name}/stat") as fh:
-                stat = fh.read()
-        except OSError:
-            continue
-        fields = stat[stat.rfind(")") + 2:].split()
-        if int(fields[2]) == pgid and fields[0] != "Z":
-            found.append(int(name))
-    return found
-
-
-def _alive(pid):
+def _stat(pid):
+    """(state, parent pid, process group) of the process ``pid``, or None if it is gone (Linux /proc)."""
     try:
         with open(f"/proc/{pid}/stat") as fh:
             stat = fh.read()
     except OSError:
-        return False
-    return stat[stat.rfind(")") + 2:].split()[0] != "Z"
+        return None
+    state, ppid, pgrp = stat[stat.rfind(")") + 2:].split()[:3]
+    return state, int(ppid), int(pgrp)
+
+
+def _live(field, value):
+    """Pids of the live processes (not zombies) whose parent pid (``field`` 1) or process group (2) is ``value``."""
+    stats = ((int(name), _stat(name)) for name in os.listdir("/proc") if name.isdigit())
+    return [pid for pid, stat in stats if stat is not None and stat[field] == value and stat[0] != "Z"]
+
+
+def _live_children(pid):
+    return _live(1, pid)
+
+
+def _live_group(pgid):
+    return _live(2, pgid)
+
+
+def _alive(pid):
+    stat = _stat(pid)
+    return stat is not None and stat[0] != "Z"
 
 
 @pytest.mark.slow
