@@ -558,6 +558,8 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
         raise InputError("servo_gain > 0 needs reference_rates")
     z0 = np.concatenate([x0, p0, phi0, p0 if commanded_p0 is None else commanded_p0]).astype(float)
     params = np.r_[servo_gain, c, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, robot.radius]
+    tau = input_function(t_all, torques, breaks, interpolation)   # the inputs as CasADi functions of time
+    ref = input_function(t_all, reference_rates, breaks, interpolation) if servo_gain > 0 else None
     if interpolation == "linear":
         inputs = [torques, reference_rates if servo_gain > 0 else np.zeros_like(torques)]
         noise = d["torque_noise"].draw(t.size, segment) if "torque_noise" in d else np.zeros((t.size, 2))
@@ -565,15 +567,11 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
             zs = _replay_linear(t_all, inputs, noise, z0, params)
         except _FarApart as exc:
             log.info("torque plant: %s; integrated by CVODES instead", exc)
-            zs = _replay_cvodes(t_all, t, torques, reference_rates, d, segment, breaks, z0, params, reltol, abstol,
-                                "linear")
+            zs = _replay_cvodes(t, tau, ref, d, segment, z0, params, reltol, abstol)
     else:
-        zs = _replay_cvodes(t_all, t, torques, reference_rates, d, segment, breaks, z0, params, reltol, abstol,
-                            "spline")
+        zs = _replay_cvodes(t, tau, ref, d, segment, z0, params, reltol, abstol)
     time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
-    _, omega, phi_dot, cmd = _torque_dynamics()(z, input_function(t_all, torques, breaks, interpolation)(time),
-                                                _input_or_zero(t_all, reference_rates, breaks, interpolation, time,
-                                                               servo_gain > 0),
+    _, omega, phi_dot, cmd = _torque_dynamics()(z, tau(time), ca.DM.zeros(2) if ref is None else ref(time),
                                                 ca.DM.zeros(2), servo_gain, c, ca.DM(params[3:]))
     om, pd, cm = (np.array(v).T for v in ca.Function("out", [time, z], [omega, phi_dot, cmd]).map(t.size)(t[None, :],
                                                                                                          zs.T))
@@ -583,22 +581,16 @@ def run_torques(robot: Robot, t, torques, x0=None, p0=(0.0, 0.0), phi0=(0.0, 0.0
     return PlantResponse("torques", series, measure(state, d, robot.radius, segment), cm, zs[:, 9:11])
 
 
-def _input_or_zero(t, y, breaks, interpolation, time, given: bool):
-    return input_function(t, y, breaks, interpolation)(time) if given else ca.DM.zeros(2)
-
-
-def _replay_cvodes(t_all, t, torques, reference_rates, d, segment, breaks, z0, params, reltol, abstol,
-                   interpolation) -> np.ndarray:
-    """The torque plant's states at the distinct times ``t``, its inputs splines split at ``breaks`` or linear
-    (``interpolation``), by CVODES."""
+def _replay_cvodes(t, tau, ref, d, segment, z0, params, reltol, abstol) -> np.ndarray:
+    """The torque plant's states at the distinct times ``t`` by CVODES, driven by the input functions ``tau`` and
+    ``ref`` (None: no servo) of :func:`input_function`."""
     time, z = ca.MX.sym("t"), ca.MX.sym("z", 11)
     zero = ca.DM.zeros(2)
     servo_gain, c = params[0], params[1:3]
-    tau = input_function(t_all, torques, breaks, interpolation)
-    ref = input_function(t_all, reference_rates, breaks, interpolation)(time) if servo_gain > 0 else zero
     noise = (input_function(t, d["torque_noise"].draw(t.size, segment), (), "linear")(time)
              if "torque_noise" in d else zero)
-    ode = _torque_dynamics()(z, tau(time), ref, noise, servo_gain, c, ca.DM(params[3:]))[0]
+    ode = _torque_dynamics()(z, tau(time), zero if ref is None else ref(time), noise, servo_gain, c,
+                             ca.DM(params[3:]))[0]
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
     integ = ca.integrator("torque_plant", "cvodes", {"t": time, "x": z, "ode": ode}, float(t[0]), list(t[1:]), opts)
     try:
