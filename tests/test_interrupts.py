@@ -217,9 +217,11 @@ def test_ctrl_c_at_any_moment_of_compare_acts_at_once(delay):
 @pytest.mark.slow
 @pytest.mark.parametrize("delay", [0.2, 0.6])
 def test_ctrl_c_while_compare_screens_its_starts_acts_at_once(delay):
-    """The default `compare` first solves every start on a coarse grid, by two workers: SIGINT during that
-    screening exits 130 within a second or two (the machine may be loaded), one line, no traceback."""
-    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3"], delay,
+    """`compare` (N >= 40) first solves every start on a coarse grid, by two workers: SIGINT during that
+    screening exits 130 within a second or two (the machine may be loaded), one line, no traceback. At N = 300
+    the screening (with the first start on the full grid) outlasts both moments; at the default N = 100 the
+    rest of the command may end before the later one."""
+    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3", "--intervals", "300"], delay,
                                               wait_for="screening")
     assert code == 130, err
     assert elapsed < 3.0, (delay, elapsed, err)
