@@ -906,18 +906,13 @@ def printed_rates(x, acc, k):
 CONTACT_BOUND_80 = np.radians(80.0)
 
 
-@_remembered
-def optimal_control_length(start, goal, k, turns=(-1, 0, 1), intervals=60, substeps=4, bound=CONTACT_BOUND_80):
-    """The shortest contact path [R] between the states ``start`` and ``goal`` (units of R) found by optimal control
-    on (15), (16), (20) as printed (:func:`printed_rates`): contact accelerations constant on ``intervals`` equal
-    intervals of [0, 1], rest at both ends, polar angle of the contact point at most ``bound`` at every node,
-    minimum path energy ``int |(u_a', v_a')|^2 dt`` (on a fixed horizon its minimizers are the shortest paths at
-    constant speed). Multiple shooting, ``substeps`` RK4 steps per interval, IPOPT from the straight line in the
-    state on each whole number of turns m of psi in ``turns``. Returns ``(shortest, {m: length or None})``,
-    the length the RK4 quadrature of the speed along the solution."""
+@lru_cache(maxsize=8)
+def _optimal_control_nlp(intervals, substeps):
+    """The NLP of :func:`optimal_control_length` with k as its parameter, and its RK4 step ``(x, a, k) -> (x
+    after the interval, energy, length)``; built once per grid."""
     import casadi as ca
 
-    x, a = ca.SX.sym("x", 7), ca.SX.sym("a", 2)
+    x, a, k = ca.SX.sym("x", 7), ca.SX.sym("a", 2), ca.SX.sym("k")
     h = 1.0 / (intervals * substeps)
 
     def f(z):
@@ -933,12 +928,25 @@ def optimal_control_length(start, goal, k, turns=(-1, 0, 1), intervals=60, subst
         z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         energy += h / 6 * (e1 + 2 * e2 + 2 * e3 + e4)
         length += h / 6 * (l1 + 2 * l2 + 2 * l3 + l4)
-    step = ca.Function("step", [x, a], [z, energy, length])
+    step = ca.Function("step", [x, a, k], [z, energy, length])
     X, A = ca.SX.sym("X", 7, intervals + 1), ca.SX.sym("A", 2, intervals)
-    Z, E, L = step.map(intervals)(X[:, :-1], A)
+    Z, E, L = step.map(intervals)(X[:, :-1], A, k)
     g = [ca.vec(Z - X[:, 1:]), (ca.cos(X[3, :]) * ca.cos(X[4, :])).T]
-    solver = ca.nlpsol("reference", "ipopt", {"x": ca.veccat(X, A), "f": ca.sum2(E), "g": ca.vertcat(*g)},
+    solver = ca.nlpsol("reference", "ipopt", {"x": ca.veccat(X, A), "p": k, "f": ca.sum2(E), "g": ca.vertcat(*g)},
                        {"ipopt.print_level": 0, "print_time": False, "ipopt.max_iter": 500, "ipopt.tol": 1e-10})
+    return solver, step
+
+
+@_remembered
+def optimal_control_length(start, goal, k, turns=(-1, 0, 1), intervals=60, substeps=4, bound=CONTACT_BOUND_80):
+    """The shortest contact path [R] between the states ``start`` and ``goal`` (units of R) found by optimal control
+    on (15), (16), (20) as printed (:func:`printed_rates`): contact accelerations constant on ``intervals`` equal
+    intervals of [0, 1], rest at both ends, polar angle of the contact point at most ``bound`` at every node,
+    minimum path energy ``int |(u_a', v_a')|^2 dt`` (on a fixed horizon its minimizers are the shortest paths at
+    constant speed). Multiple shooting, ``substeps`` RK4 steps per interval, IPOPT from the straight line in the
+    state on each whole number of turns m of psi in ``turns``. Returns ``(shortest, {m: length or None})``,
+    the length the RK4 quadrature of the speed along the solution."""
+    solver, step = _optimal_control_nlp(intervals, substeps)
     ng = 7 * intervals
     lbg = np.r_[np.zeros(ng), np.full(intervals + 1, np.cos(bound))]
     ubg = np.r_[np.zeros(ng), np.full(intervals + 1, np.inf)]
@@ -954,12 +962,13 @@ def optimal_control_length(start, goal, k, turns=(-1, 0, 1), intervals=60, subst
         guess = x0[:, None] + (x1 - x0)[:, None] * np.linspace(0.0, 1.0, intervals + 1)
         lb = np.r_[lbx.ravel(order="F"), np.full(2 * intervals, -np.inf)]
         ub = np.r_[ubx.ravel(order="F"), np.full(2 * intervals, np.inf)]
-        sol = solver(x0=np.r_[guess.ravel(order="F"), np.zeros(2 * intervals)], lbx=lb, ubx=ub, lbg=lbg, ubg=ubg)
+        sol = solver(x0=np.r_[guess.ravel(order="F"), np.zeros(2 * intervals)], p=k, lbx=lb, ubx=ub, lbg=lbg,
+                     ubg=ubg)
         lengths[m] = None
         if solver.stats()["success"]:
             v = np.array(sol["x"]).ravel()
             Xs = v[:7 * (intervals + 1)].reshape((7, intervals + 1), order="F")
             As = v[7 * (intervals + 1):].reshape((2, intervals), order="F")
-            lengths[m] = float(np.sum(np.array(step.map(intervals)(Xs[:, :-1], As)[2])))
+            lengths[m] = float(np.sum(np.array(step.map(intervals)(Xs[:, :-1], As, k)[2])))
     found = [v for v in lengths.values() if v is not None]
     return (min(found) if found else np.inf), lengths
