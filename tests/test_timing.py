@@ -78,6 +78,12 @@ def motions(path, profiles, plan):
     return _Motions(path, profiles, plan.goal)
 
 
+@pytest.fixture(scope="module")
+def time_optimal_3000(path, profiles, plan):
+    """The time-optimal motion at 3000 samples a piece (a quarter of the law's own rule), on the plan's goal."""
+    return sample_motion(path, profiles["time-optimal"], 2000, plan.goal, 3000)
+
+
 def _utilisation(path, prof, samples=50001):
     """Brute force: the largest |value| / limit over uniform samples and both sides of every pole passage."""
     t = np.linspace(0, prof.duration, samples)
@@ -148,11 +154,11 @@ def test_scaled_minimum_duration(name, path, profiles):
 
 
 @pytest.mark.slow
-def test_time_optimal_within_limits_with_one_active(profiles, path):
+def test_time_optimal_within_limits_with_one_active(profiles, path, time_optimal_3000):
     """Every sample within the limits (to 1e-6), one limit active (>= 99 %) on almost all of the time, and
     faster than every other law at its own shortest duration."""
     prof = profiles["time-optimal"]
-    m = sample_motion(path, prof, 4, per_piece=3000)
+    m = time_optimal_3000
     util = LIMITS.utilisation(m.series.rotor_rates, m.series.rotor_torques)
     assert util.max() <= 1 + 1e-6
     assert np.mean(util > 0.99) > 0.9
@@ -195,10 +201,10 @@ def test_rotor_rates_alone_reach_the_target(name, motions, plan):
 
 
 @pytest.mark.slow
-def test_time_optimal_rates_drive_the_printed_equations_onto_the_target(profiles, path, plan):
+def test_time_optimal_rates_drive_the_printed_equations_onto_the_target(time_optimal_3000, plan):
     """The same with scipy's DOP853 on the printed (2), (6)-(10), (11) and scipy's not-a-knot spline (rtol 1e-9:
     its final state is within 1e-7 of rtol 1e-11's, 100 times below the tolerance, at a third of the cost)."""
-    m = sample_motion(path, profiles["time-optimal"], 2000, plan.goal, 3000)
+    m = time_optimal_3000
     f = references.rotor_driven_rhs(ROBOT.j_xx, ROBOT.j_zz, ROBOT.rotor_inertia_axial, ROBOT.radius,
                                     CubicSpline(m.series.time, m.series.rotor_rates, bc_type="not-a-knot"))
     sol = solve_ivp(f, (0, m.duration), np.zeros(5), method="DOP853", rtol=1e-9, atol=1e-11)
