@@ -191,10 +191,11 @@ def test_time_optimal_other_durations(profiles, path):
         law.profile(path, Limits(300.0, None), None)
 
 
-@pytest.mark.parametrize("name", [n if n == "min-jerk" else pytest.param(n, marks=pytest.mark.slow) for n in LAWS])
+@pytest.mark.parametrize("name", [n if n == "min-jerk" else pytest.param(n, marks=pytest.mark.slow) for n in SCALED])
 def test_rotor_rates_alone_reach_the_target(name, motions, plan):
     """The rotor rates, sampled by the law's own rule, drive (6)-(10) with omega from (11) (CVODES, cubic
-    spline through the samples) onto the target to 1e-5 R."""
+    spline through the samples) onto the target to 1e-5 R. (time-optimal: test_cli_time_optimal_json, whose
+    command makes this plan's motion, the same samples, and runs the same simulation.)"""
     m = motions[name]
     sim = simulate_rotors(ROBOT, m.series.time, m.series.rotor_rates, plan.goal)
     assert sim.position_error < 1e-5 and sim.arrival_error < 1e-5
@@ -401,7 +402,7 @@ def test_cli_time_optimal_json(robot_file, tmp_path, capsys):
     assert data["duration"] == t[-1] == data["minimum_duration"] and data["timing"] == "time-optimal"
     util = LIMITS.utilisation(rates, torques)
     assert util.max() <= 1 + 1e-6 and np.mean(util > 0.99) > 0.9
-    assert data["rotor_simulation"]["position_error"] < 1e-5
+    assert data["rotor_simulation"]["position_error"] < 1e-5 and data["rotor_simulation"]["arrival_error"] < 1e-5
     assert data["robot"]["max_rotor_torque"] == 0.05 and data["segment"][-1] == 3
     assert "shortest feasible duration with timing time-optimal is" in text and "100.0% of the limit" in text
     assert fig.stat().st_size > 10000
