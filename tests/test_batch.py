@@ -375,8 +375,10 @@ def test_workers_die_with_the_parent(tmp_path, sig):
     """SIGKILL or SIGTERM of `batch --jobs 2` (the parent only) left its forked workers alive, later printing
     BrokenPipeError tracebacks. Now no worker outlives the parent by more than a few seconds and none prints;
     SIGTERM stops the run as Ctrl-C does: exit 143, one line, the finished lines kept (whole lines only)."""
-    # rows of many steps at high k, polished and certified in Python (--method ipopt): a second or more each
-    rows = [(f"{0.05 * i:.2f}", "0.8", "2.5", "20", f"{40 + 4 * i}", f"r{i}") for i in range(16)]
+    # rows of many steps at high k, polished and certified in Python (--method ipopt): a second or more each; the
+    # first row, planned in the parent before it forks the workers, a quick one (the workers start sooner)
+    rows = [("0", "1", "0", "1", "2.5", "r0")] + \
+        [(f"{0.05 * i:.2f}", "0.8", "2.5", "20", f"{40 + 4 * i}", f"r{i}") for i in range(1, 16)]
     csv_path, out = write_csv(tmp_path / "t.csv", rows), tmp_path / "out.jsonl"
     err_path = tmp_path / "err.txt"
     # the run's cache: this test run's, so the compiled functions of --method ipopt are built once a run, not once

@@ -78,6 +78,12 @@ def motions(path, profiles, plan):
     return _Motions(path, profiles, plan.goal)
 
 
+@pytest.fixture(scope="module")
+def time_optimal_3000(path, profiles, plan):
+    """The time-optimal motion at 3000 samples a piece (a quarter of the law's own rule), on the plan's goal."""
+    return sample_motion(path, profiles["time-optimal"], 2000, plan.goal, 3000)
+
+
 def _utilisation(path, prof, samples=50001):
     """Brute force: the largest |value| / limit over uniform samples and both sides of every pole passage."""
     t = np.linspace(0, prof.duration, samples)
@@ -148,11 +154,11 @@ def test_scaled_minimum_duration(name, path, profiles):
 
 
 @pytest.mark.slow
-def test_time_optimal_within_limits_with_one_active(profiles, path):
+def test_time_optimal_within_limits_with_one_active(profiles, path, time_optimal_3000):
     """Every sample within the limits (to 1e-6), one limit active (>= 99 %) on almost all of the time, and
     faster than every other law at its own shortest duration."""
     prof = profiles["time-optimal"]
-    m = sample_motion(path, prof, 4, per_piece=3000)
+    m = time_optimal_3000
     util = LIMITS.utilisation(m.series.rotor_rates, m.series.rotor_torques)
     assert util.max() <= 1 + 1e-6
     assert np.mean(util > 0.99) > 0.9
@@ -185,20 +191,21 @@ def test_time_optimal_other_durations(profiles, path):
         law.profile(path, Limits(300.0, None), None)
 
 
-@pytest.mark.parametrize("name", [n if n == "min-jerk" else pytest.param(n, marks=pytest.mark.slow) for n in LAWS])
+@pytest.mark.parametrize("name", [n if n == "min-jerk" else pytest.param(n, marks=pytest.mark.slow) for n in SCALED])
 def test_rotor_rates_alone_reach_the_target(name, motions, plan):
     """The rotor rates, sampled by the law's own rule, drive (6)-(10) with omega from (11) (CVODES, cubic
-    spline through the samples) onto the target to 1e-5 R."""
+    spline through the samples) onto the target to 1e-5 R. (time-optimal: test_cli_time_optimal_json, whose
+    command makes this plan's motion, the same samples, and runs the same simulation.)"""
     m = motions[name]
     sim = simulate_rotors(ROBOT, m.series.time, m.series.rotor_rates, plan.goal)
     assert sim.position_error < 1e-5 and sim.arrival_error < 1e-5
 
 
 @pytest.mark.slow
-def test_time_optimal_rates_drive_the_printed_equations_onto_the_target(profiles, path, plan):
+def test_time_optimal_rates_drive_the_printed_equations_onto_the_target(time_optimal_3000, plan):
     """The same with scipy's DOP853 on the printed (2), (6)-(10), (11) and scipy's not-a-knot spline (rtol 1e-9:
     its final state is within 1e-7 of rtol 1e-11's, 100 times below the tolerance, at a third of the cost)."""
-    m = sample_motion(path, profiles["time-optimal"], 2000, plan.goal, 3000)
+    m = time_optimal_3000
     f = references.rotor_driven_rhs(ROBOT.j_xx, ROBOT.j_zz, ROBOT.rotor_inertia_axial, ROBOT.radius,
                                     CubicSpline(m.series.time, m.series.rotor_rates, bc_type="not-a-knot"))
     sol = solve_ivp(f, (0, m.duration), np.zeros(5), method="DOP853", rtol=1e-9, atol=1e-11)
@@ -395,7 +402,7 @@ def test_cli_time_optimal_json(robot_file, tmp_path, capsys):
     assert data["duration"] == t[-1] == data["minimum_duration"] and data["timing"] == "time-optimal"
     util = LIMITS.utilisation(rates, torques)
     assert util.max() <= 1 + 1e-6 and np.mean(util > 0.99) > 0.9
-    assert data["rotor_simulation"]["position_error"] < 1e-5
+    assert data["rotor_simulation"]["position_error"] < 1e-5 and data["rotor_simulation"]["arrival_error"] < 1e-5
     assert data["robot"]["max_rotor_torque"] == 0.05 and data["segment"][-1] == 3
     assert "shortest feasible duration with timing time-optimal is" in text and "100.0% of the limit" in text
     assert fig.stat().st_size > 10000
