@@ -19,11 +19,25 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 
-from rollplan import Problem
-from rollplan.outputs import write_atomic, write_json
-from rollplan.planners.geometric import ComposedPlanner
+def parse_args(argv=None):
+    """The command line, read before the slow imports below (a bad option is refused at once)."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out-dir", default="results")
+    ap.add_argument("--pairs", type=int, default=6)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--quick", action="store_true", help="the README example and one random pair, one repeat")
+    return ap.parse_args(argv)
+
+
+if __name__ == "__main__":
+    parse_args()
+
+import numpy as np  # noqa: E402
+
+from rollplan import Problem  # noqa: E402
+from rollplan.outputs import write_atomic, write_json  # noqa: E402
+from rollplan.planners.geometric import ComposedPlanner  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 import references as ref  # noqa: E402  (the independent references of the tests)
@@ -107,12 +121,7 @@ def to_markdown(report) -> str:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out-dir", default="results")
-    ap.add_argument("--pairs", type=int, default=6)
-    ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--quick", action="store_true", help="the README example and one random pair, one repeat")
-    args = ap.parse_args(argv)
+    args = parse_args(argv)
     pairs, repeats = (1, 1) if args.quick else (args.pairs, args.repeats)
     load = f"{os.getloadavg()[0]:.1f}"
     rows = measure(list(EXAMPLES[:1] if args.quick else EXAMPLES) + random_pairs(pairs), repeats)

@@ -78,12 +78,15 @@ def run_script_here(name: str, out_dir, *args: str) -> None:
 def test_a_script_run_as_a_program_reads_its_own_arguments(name, tmp_path):
     """The scripts whose runs the tests make through ``main`` (:func:`run_script_here`), run as a user does:
     ``python scripts/NAME`` passes its arguments (without the program's name) to ``main`` and exits with its
-    status (argparse's 2 for an unknown option, naming only that option)."""
+    status (argparse's 2 for an unknown option, naming only that option), before the slow imports (numpy,
+    rollplan: ``-X importtime`` lists what was imported)."""
     script = Path(__file__).resolve().parent.parent / "scripts" / name
-    run = subprocess.run([sys.executable, str(script), "--no-such-option"], cwd=tmp_path, capture_output=True,
-                         text=True, timeout=300, check=False)
+    run = subprocess.run([sys.executable, "-X", "importtime", str(script), "--no-such-option"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=300, check=False)
     assert run.returncode == 2 and run.stderr.strip().endswith("unrecognized arguments: --no-such-option"), run.stderr
     assert not any(tmp_path.iterdir())
+    imported = {line.rsplit("|", 1)[-1].strip() for line in run.stderr.splitlines() if line.startswith("import time:")}
+    assert "encodings" in imported and not imported & {"numpy", "rollplan"}
 
 
 @pytest.mark.slow
