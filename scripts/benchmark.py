@@ -1070,10 +1070,11 @@ def main(argv=None):
            "high_k_repeats": 1 if args.quick else 3}
     v = geometric.GeometricPhasePlanner(certifier="cvodes").certifier.integrator
     ctx["verifier"] = f"{v.multistep.capitalize()}, rtol {v.reltol:g}, atol {v.abstol:g}"
+    command = sys.argv if argv is None else [f"scripts/{Path(__file__).name}", *argv]   # main(argv): not sys.argv
     mach = machine()
     print(f"load average at start: {mach['load_average']}", file=sys.stderr, flush=True)
     report = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
-              "commit": git_commit(), "machine": mach, "command": " ".join(["python"] + sys.argv),
+              "commit": git_commit(), "machine": mach, "command": " ".join(["python", *command]),
               "settings": dict(ctx), "sections": []}
     ctx["load_average"] = mach["load_average"]
     ctx["build_dir"] = args.build_dir

@@ -19,10 +19,8 @@ def test_benchmark_script_runs(tmp_path):
     of the rest-to-rest collocation over rockit (wall and CPU time, the optima's difference) and the wall time of
     `rollplan compare`, each with its budget row. A second run with --only reruns one section and keeps the
     others, each with the date of its own run."""
-    script = Path(__file__).resolve().parent.parent / "scripts" / "benchmark.py"
     with cache_wide("benchmark") as builds:     # the C planner's build kept with the tests' build cache
-        subprocess.run([sys.executable, str(script), "--quick", "--no-jit", "--no-cold", "--build-dir", str(builds),
-                        "--out-dir", str(tmp_path)], check=True, capture_output=True, timeout=600)
+        run_script_here("benchmark.py", tmp_path, "--quick", "--no-jit", "--no-cold", "--build-dir", str(builds))
         assert any((kept / "librollplan.a").is_file() for kept in builds.glob("host-*"))
     text = (tmp_path / "benchmarks.md").read_text()
     assert "evaluations/s" in text and "commit" in text and "speed-up" in text and "Profile" in text
@@ -31,14 +29,15 @@ def test_benchmark_script_runs(tmp_path):
     assert "root_solver ipopt warm [ms]" in text
     assert (tmp_path / "benchmarks.json").stat().st_size > 0
     report = json.loads((tmp_path / "benchmarks.json").read_text())
+    assert report["command"] == f"python scripts/benchmark.py --quick --no-jit --no-cold --build-dir {builds} " \
+                                f"--out-dir {tmp_path}"     # the run's own arguments, not its caller's
     sections = {sec["function"]: sec for sec in report["sections"]}
     peer, comp = sections["section_peer"]["summary"], sections["section_compare"]["summary"]
     assert peer["speedup"] > 0 and peer["speedup_cpu"] > 0 and peer["relative_difference"] <= 1e-6
     assert comp["median_s"] > 0 and comp["cpu_median_s"] > 0
     budgets = [row["budget"] for row in sections["section_budgets"]["rows"]]
     assert any("faster than rockit" in b for b in budgets) and any("`rollplan compare`" in b for b in budgets)
-    subprocess.run([sys.executable, str(script), "--quick", "--only", "memory", "--out-dir", str(tmp_path)],
-                   check=True, capture_output=True, timeout=600)
+    run_script_here("benchmark.py", tmp_path, "--quick", "--only", "memory")
     again = {sec["function"]: sec for sec in json.loads((tmp_path / "benchmarks.json").read_text())["sections"]}
     assert set(again) == set(sections)
     assert again["section_peer"] == sections["section_peer"] and again["section_memory"] != sections["section_memory"]
