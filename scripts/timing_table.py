@@ -231,7 +231,7 @@ def main(argv=None):
     args = parse_args(argv)
     backends = (["toppra"] if toppra_available() else []) + ["casadi"]
     settings = {"backends": backends, "reference_grid": 2000 if args.quick else REFERENCE_GRID,
-                "convergence_grids": [500, 2000] if args.quick else [500, 1000, 2000, 4000, 8000, 16000, 32000],
+                "convergence_grids": [250, 500] if args.quick else [500, 1000, 2000, 4000, 8000, 16000, 32000],
                 "repeats": 1 if args.quick else 3,
                 "figures": {} if not args.quick else None}
     cases = [(n, rob, tg, st) for n, rob in ROBOTS.items() for tg, st in TARGETS]
