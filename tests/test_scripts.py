@@ -327,6 +327,7 @@ def test_basepoint_bench_script_runs(tmp_path):
     run_script_here("basepoint_bench.py", tmp_path, "--quick")
     text = (tmp_path / "basepoint.md").read_text()
     assert "| README example |" in text and "| random 1 |" in text and "DOP853" in text
+    assert "times of the first solve, which builds the solvers: not warm" in text    # --quick times no warm solve
     rows = json.loads((tmp_path / "basepoint.json").read_text())["rows"]
     assert all(r["any_length"] <= r["pole_length"] and r["dop853_residual"] <= 1e-9 for r in rows)
 
