@@ -102,6 +102,7 @@ def test_reconfiguration_script_runs(tmp_path):
     text = (tmp_path / "reconfiguration.md").read_text()
     assert "## Turning in place" in text and "DOP853" in text and "## A route of five waypoints" in text
     assert "## Lengths against optimal control" in text and "--refine ratio" in text
+    assert "### The new default on more random pairs\n\n1 pairs (--quick: the README example's, not random)" in text
     assert (tmp_path / "composed.png").stat().st_size > 0 and (tmp_path / "reconfiguration.json").stat().st_size > 0
 
 
