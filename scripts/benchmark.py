@@ -1003,6 +1003,13 @@ def git_commit():
         return "unknown"
 
 
+def command_line(argv, script: str) -> str:
+    """The command that ran ``script`` (a path) with ``argv``, as a report states it: ``sys.argv`` when ``main`` was
+    called without arguments (a run from the shell), else ``python scripts/<name> argv...`` (``main(argv)`` called
+    from Python, whose own ``sys.argv`` is another program's)."""
+    return " ".join(["python", *(sys.argv if argv is None else [f"scripts/{Path(script).name}", *argv])])
+
+
 def _fmt(v):
     if isinstance(v, float):
         if math.isnan(v):
@@ -1070,11 +1077,10 @@ def main(argv=None):
            "high_k_repeats": 1 if args.quick else 3}
     v = geometric.GeometricPhasePlanner(certifier="cvodes").certifier.integrator
     ctx["verifier"] = f"{v.multistep.capitalize()}, rtol {v.reltol:g}, atol {v.abstol:g}"
-    command = sys.argv if argv is None else [f"scripts/{Path(__file__).name}", *argv]   # main(argv): not sys.argv
     mach = machine()
     print(f"load average at start: {mach['load_average']}", file=sys.stderr, flush=True)
     report = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
-              "commit": git_commit(), "machine": mach, "command": " ".join(["python", *command]),
+              "commit": git_commit(), "machine": mach, "command": command_line(argv, __file__),
               "settings": dict(ctx), "sections": []}
     ctx["load_average"] = mach["load_average"]
     ctx["build_dir"] = args.build_dir

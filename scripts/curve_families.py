@@ -69,7 +69,7 @@ from rollplan.plots.curve_families import plot_curve_families  # noqa: E402
 from rollplan.progress import Progress  # noqa: E402
 from rollplan.robot import load_robot  # noqa: E402
 
-from benchmark import git_commit, machine  # noqa: E402
+from benchmark import command_line, git_commit, machine  # noqa: E402
 
 BASE = load_robot(Path(__file__).resolve().parent.parent / "examples" / "robot.toml")
 #: Targets (u_a, v_a, psi) [R, rad] and figure eights n; the first is the paper's case (with k = 2.5).
@@ -391,7 +391,7 @@ def main(argv=None):
     if args.quick:
         cases = cases[:1]
     rep = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
-           "commit": git_commit(), "machine": machine(), "command": " ".join(["python"] + sys.argv), "rows": []}
+           "commit": git_commit(), "machine": machine(), "command": command_line(argv, __file__), "rows": []}
     try:
         with Progress(unit="rows") as progress:
             for i, case in enumerate(cases):

@@ -54,7 +54,7 @@ from rollplan.io import save_figure, tagged, write_atomic, write_json  # noqa: E
 from rollplan.plots.timing import plot_timing  # noqa: E402
 from rollplan.progress import Progress  # noqa: E402
 
-from benchmark import git_commit, machine  # noqa: E402
+from benchmark import command_line, git_commit, machine  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 import references  # noqa: E402
@@ -239,7 +239,7 @@ def main(argv=None):
         cases = cases[:1]
     mach = machine()
     report = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
-              "commit": git_commit(), "machine": mach, "command": " ".join(["python"] + sys.argv),
+              "commit": git_commit(), "machine": mach, "command": command_line(argv, __file__),
               "toppra": "toppra" in backends, "settings": {k: v for k, v in settings.items() if k != "figures"},
               "rows": []}
     try:

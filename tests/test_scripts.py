@@ -94,6 +94,7 @@ def test_timing_table_script_runs(tmp_path):
     text = (tmp_path / "timing.md").read_text()
     assert "of the shortest min-jerk duration under the same limits" in text and "| default (4.86) |" in text
     assert "## Convergence in the grid size" in text and (tmp_path / "timing.json").stat().st_size > 0
+    assert f"command `python scripts/timing_table.py --quick --out-dir {tmp_path}`" in text   # not the caller's
 
 
 @pytest.mark.slow
@@ -324,6 +325,7 @@ def test_curve_families_script_runs_and_its_plans_land(tmp_path):
     assert "## Summary over the grid" in text and "## Conclusions" in text and "Non-stop with continuous" in text
     assert (tmp_path / "curve_families.png").stat().st_size > 1000
     rep = json.loads((tmp_path / "curve_families.json").read_text())
+    assert rep["command"] == f"python scripts/curve_families.py --quick --out-dir {tmp_path}"   # not the caller's
     (row,) = rep["rows"]
     assert set(row["families"]) == {"circles", "viviani", "triangle", "square"}
     for name, f in row["families"].items():
