@@ -235,6 +235,10 @@ def test_fails():
 """
 
 
+#: The fake suites use no plugin but pytest-xdist (``-n``): their runs skip loading the others (~0.25 s of CPU each).
+NO_PLUGINS = ("-p", "no:hypothesispytest", "-p", "no:randomly")
+
+
 def test_suite_report_names_failed_errored_and_skipped_tests(tmp_path):
     """The failed, errored and skipped tests of a run are named from pytest's JUnit XML (a failure in the test is
     failed, one in a fixture an error) and, when the run wrote no XML, from its -ra summary lines."""
@@ -282,8 +286,8 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     (tests / "test_fake.py").write_text(FAKE_TESTS)
     script = Path(__file__).resolve().parent.parent / "scripts" / "suite_report.py"
     out = tmp_path / "out"
-    run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tests", str(tests), "--out-dir", str(out)],
-                         capture_output=True, text=True, timeout=600, check=False)
+    run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tests", str(tests), "--out-dir", str(out),
+                          "--", *NO_PLUGINS], capture_output=True, text=True, timeout=600, check=False)
     assert run.returncode == 1, run.stderr      # pytest's status: a test failed
     data = json.loads((out / "suite.json").read_text())
     assert (data["unit"]["tests"], data["unit"]["passed"], data["unit"]["failed"], data["unit"]["skipped"]) == \
@@ -294,6 +298,7 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     assert {n for n, _ in data["full"]["slowest"]} == {"test_fake.py::" + n for n in (
         "test_quick", "test_slow", "test_param[1]", "test_param[2]", "test_skipped", "test_fails")}
     assert data["full"]["wall_s"] >= 0.3 and data["unit"]["exit_status"] == 1
+    assert data["full"]["command"].endswith(" ".join(NO_PLUGINS))     # the arguments after -- reach pytest
     text = (out / "suite.md").read_text()
     assert "| unit |" in text and "| full |" in text and "6 (4, 1, 1)" in text and "5 (3, 1, 1)" in text
     assert "`test_fake.py::test_slow`" in text and "scripts/suite_report.py" in text
@@ -305,7 +310,8 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     assert "`test_fake.py::test_fails`" in text and "`test_fake.py::test_skipped` | shown as skipped" in text
     (tests / "test_fake.py").write_text(FAKE_TESTS.replace("assert False", "pass"))
     run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tier", "unit", "--tests", str(tests),
-                          "--out-dir", str(out)], capture_output=True, text=True, timeout=600, check=False)
+                          "--out-dir", str(out), "--", *NO_PLUGINS], capture_output=True, text=True, timeout=600,
+                         check=False)
     assert run.returncode == 0, run.stderr
     again = json.loads((out / "suite.json").read_text())
     assert again["full"] == data["full"] and (again["unit"]["passed"], again["unit"]["failed"]) == (4, 0)
@@ -365,7 +371,8 @@ def test_suite_report_measures_cold_by_default_and_warm_after_a_filling_run(tmp_
     base = [sys.executable, str(script), "--jobs", "0", "--tier", "unit", "--tests", str(tests), "--out-dir", str(out)]
     env = {**os.environ, "ROLLPLAN_TEST_FRESH_CACHE": "1"}
     for extra in ([], ["--warm"]):
-        run = subprocess.run(base + extra, capture_output=True, text=True, timeout=600, check=False, env=env)
+        run = subprocess.run([*base, *extra, "--", *NO_PLUGINS], capture_output=True, text=True, timeout=600,
+                             check=False, env=env)
         assert run.returncode == 0, run.stderr
     assert log.read_text().splitlines() == ["'1'", "None", "None"]
     data = json.loads((out / "suite.json").read_text())
