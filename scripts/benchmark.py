@@ -538,7 +538,7 @@ def section_fast_default(ctx):
     (``scripts/bench_default.py``)."""
     import bench_default
 
-    res = bench_default.measure(2 if ctx["quick"] else 5, 3 if ctx["quick"] else 12)
+    res = bench_default.measure(1 if ctx["quick"] else 5, 3 if ctx["quick"] else 12)
     rows = [{"k": r["k"], "pole plan": f"{r['pole_mode']}, {r['pole']:.4f} R", "pole [ms]": r["pole_ms"],
              "default [R]": r["default"], "polished": r["polished"], "default [ms]": r["ms"],
              "default CPU [ms]": r["cpu_ms"], "of which pole plan [ms]": r["stage_pole_ms"],
