@@ -538,7 +538,7 @@ def section_fast_default(ctx):
     (``scripts/bench_default.py``)."""
     import bench_default
 
-    res = bench_default.measure(2 if ctx["quick"] else 5, 3 if ctx["quick"] else 12)
+    res = bench_default.measure(1 if ctx["quick"] else 5, 3 if ctx["quick"] else 12)
     rows = [{"k": r["k"], "pole plan": f"{r['pole_mode']}, {r['pole']:.4f} R", "pole [ms]": r["pole_ms"],
              "default [R]": r["default"], "polished": r["polished"], "default [ms]": r["ms"],
              "default CPU [ms]": r["cpu_ms"], "of which pole plan [ms]": r["stage_pole_ms"],
@@ -1003,6 +1003,13 @@ def git_commit():
         return "unknown"
 
 
+def command_line(argv, script: str) -> str:
+    """The command that ran ``script`` (a path) with ``argv``, as a report states it: ``sys.argv`` when ``main`` was
+    called without arguments (a run from the shell), else ``python scripts/<name> argv...`` (``main(argv)`` called
+    from Python, whose own ``sys.argv`` is another program's)."""
+    return " ".join(["python", *(sys.argv if argv is None else [f"scripts/{Path(script).name}", *argv])])
+
+
 def _fmt(v):
     if isinstance(v, float):
         if math.isnan(v):
@@ -1073,7 +1080,7 @@ def main(argv=None):
     mach = machine()
     print(f"load average at start: {mach['load_average']}", file=sys.stderr, flush=True)
     report = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
-              "commit": git_commit(), "machine": mach, "command": " ".join(["python"] + sys.argv),
+              "commit": git_commit(), "machine": mach, "command": command_line(argv, __file__),
               "settings": dict(ctx), "sections": []}
     ctx["load_average"] = mach["load_average"]
     ctx["build_dir"] = args.build_dir

@@ -36,27 +36,40 @@ import warnings
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-from scipy.interpolate import CubicSpline
-from scipy.optimize import brentq, fsolve
 
-import rollplan
-from rollplan.core import families
-from rollplan.core.curves import A_MAX
-from rollplan.core.paths import PathIntegrator, figure_eight_pieces
-from rollplan.core.plane import compose, wrap
-from rollplan.errors import InputError, NoPlanError
-from rollplan.execution.limits import Limits
-from rollplan.execution.optimal_timing import optimal_timing, timed_samples, timing_bound
-from rollplan.execution.path import ContactPath
-from rollplan.execution.timing import LAWS, unit_peaks
-from rollplan.io import save_figure, tagged, write_atomic, write_json
-from rollplan.measures import measure
-from rollplan.plots.curve_families import plot_curve_families
-from rollplan.progress import Progress
-from rollplan.robot import load_robot
+def parse_args(argv=None):
+    """The command line, read before the slow imports below (a bad option is refused at once)."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="the paper's case at one k (smoke test)")
+    ap.add_argument("--out-dir", default="results")
+    ap.add_argument("--from-json", metavar="FILE", help="write the report and figure again from a run's JSON")
+    return ap.parse_args(argv)
 
-from benchmark import git_commit, machine
+
+if __name__ == "__main__":
+    parse_args()
+
+import numpy as np  # noqa: E402
+from scipy.interpolate import CubicSpline  # noqa: E402
+from scipy.optimize import brentq, fsolve  # noqa: E402
+
+import rollplan  # noqa: E402
+from rollplan.core import families  # noqa: E402
+from rollplan.core.curves import A_MAX  # noqa: E402
+from rollplan.core.paths import PathIntegrator, figure_eight_pieces  # noqa: E402
+from rollplan.core.plane import compose, wrap  # noqa: E402
+from rollplan.errors import InputError, NoPlanError  # noqa: E402
+from rollplan.execution.limits import Limits  # noqa: E402
+from rollplan.execution.optimal_timing import optimal_timing, timed_samples, timing_bound  # noqa: E402
+from rollplan.execution.path import ContactPath  # noqa: E402
+from rollplan.execution.timing import LAWS, unit_peaks  # noqa: E402
+from rollplan.io import save_figure, tagged, write_atomic, write_json  # noqa: E402
+from rollplan.measures import measure  # noqa: E402
+from rollplan.plots.curve_families import plot_curve_families  # noqa: E402
+from rollplan.progress import Progress  # noqa: E402
+from rollplan.robot import load_robot  # noqa: E402
+
+from benchmark import command_line, git_commit, machine  # noqa: E402
 
 BASE = load_robot(Path(__file__).resolve().parent.parent / "examples" / "robot.toml")
 #: Targets (u_a, v_a, psi) [R, rad] and figure eights n; the first is the paper's case (with k = 2.5).
@@ -369,11 +382,7 @@ def advice(rep) -> list:
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="the paper's case at one k (smoke test)")
-    ap.add_argument("--out-dir", default="results")
-    ap.add_argument("--from-json", metavar="FILE", help="write the report and figure again from a run's JSON")
-    args = ap.parse_args(argv)
+    args = parse_args(argv)
     if args.from_json:
         rep = json.loads(Path(args.from_json).read_text())
         return write(rep, Path(args.out_dir))
@@ -382,7 +391,7 @@ def main(argv=None):
     if args.quick:
         cases = cases[:1]
     rep = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
-           "commit": git_commit(), "machine": machine(), "command": " ".join(["python"] + sys.argv), "rows": []}
+           "commit": git_commit(), "machine": machine(), "command": command_line(argv, __file__), "rows": []}
     try:
         with Progress(unit="rows") as progress:
             for i, case in enumerate(cases):

@@ -17,17 +17,29 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
+
+def parse_args(argv=None):
+    """The command line, read before the slow imports below (a bad option is refused at once)."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--per-k", type=int, default=24, help="targets per k (default 24)")
+    ap.add_argument("--out-dir", default="results", help="where to write polish_ipopt.md and .json")
+    return ap.parse_args(argv)
+
+
+if __name__ == "__main__":
+    parse_args()
+
+import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import rollplan
-from rollplan.core.plane import target_shift, wrap_exact
-from rollplan.io import write_atomic, write_json
-from rollplan.planners.geometric.leafmap import panels_for
-from rollplan.planners.geometric.refine import leaf_residual
+import rollplan  # noqa: E402
+from rollplan.core.plane import target_shift, wrap_exact  # noqa: E402
+from rollplan.io import write_atomic, write_json  # noqa: E402
+from rollplan.planners.geometric.leafmap import panels_for  # noqa: E402
+from rollplan.planners.geometric.refine import leaf_residual  # noqa: E402
 
-from benchmark import git_commit
+from benchmark import git_commit  # noqa: E402
 
 KS = (0.0, 0.3, 1.0, 2.5, 5.0, 10.0, 30.0)
 
@@ -114,10 +126,7 @@ def to_markdown(report) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--per-k", type=int, default=24, help="targets per k (default 24)")
-    ap.add_argument("--out-dir", default="results", help="where to write polish_ipopt.md and .json")
-    args = ap.parse_args(argv)
+    args = parse_args(argv)
     m = measure(args.per_k)
     report = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
               "commit": git_commit(), "per_k": args.per_k, "summary": summary(m["rows"]), "rows": m["rows"]}

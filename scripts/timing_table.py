@@ -27,21 +27,34 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 
-import rollplan
-from rollplan.errors import NoPlanError
-from rollplan.execution.actuation import sample_motion
-from rollplan.execution.limits import Limits
-from rollplan.execution.path import ContactPath
-from rollplan.execution.plants import simulate_rotors
-from rollplan.execution.timing import LAWS, velocity_limit
-from rollplan.execution.topp import solve_topp, toppra_available
-from rollplan.io import save_figure, tagged, write_atomic, write_json
-from rollplan.plots.timing import plot_timing
-from rollplan.progress import Progress
+def parse_args(argv=None):
+    """The command line, read before the slow imports below (a bad option is refused at once)."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true",
+                    help="one row, coarse reference, one solve per grid size, no figures (smoke test)")
+    ap.add_argument("--out-dir", default="results")
+    return ap.parse_args(argv)
 
-from benchmark import git_commit, machine
+
+if __name__ == "__main__":
+    parse_args()
+
+import numpy as np  # noqa: E402
+
+import rollplan  # noqa: E402
+from rollplan.errors import NoPlanError  # noqa: E402
+from rollplan.execution.actuation import sample_motion  # noqa: E402
+from rollplan.execution.limits import Limits  # noqa: E402
+from rollplan.execution.path import ContactPath  # noqa: E402
+from rollplan.execution.plants import simulate_rotors  # noqa: E402
+from rollplan.execution.timing import LAWS, velocity_limit  # noqa: E402
+from rollplan.execution.topp import solve_topp, toppra_available  # noqa: E402
+from rollplan.io import save_figure, tagged, write_atomic, write_json  # noqa: E402
+from rollplan.plots.timing import plot_timing  # noqa: E402
+from rollplan.progress import Progress  # noqa: E402
+
+from benchmark import command_line, git_commit, machine  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 import references  # noqa: E402
@@ -215,14 +228,10 @@ def to_markdown(report) -> str:
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true",
-                    help="one row, coarse reference, one solve per grid size, no figures (smoke test)")
-    ap.add_argument("--out-dir", default="results")
-    args = ap.parse_args(argv)
+    args = parse_args(argv)
     backends = (["toppra"] if toppra_available() else []) + ["casadi"]
     settings = {"backends": backends, "reference_grid": 2000 if args.quick else REFERENCE_GRID,
-                "convergence_grids": [500, 2000] if args.quick else [500, 1000, 2000, 4000, 8000, 16000, 32000],
+                "convergence_grids": [250, 500] if args.quick else [500, 1000, 2000, 4000, 8000, 16000, 32000],
                 "repeats": 1 if args.quick else 3,
                 "figures": {} if not args.quick else None}
     cases = [(n, rob, tg, st) for n, rob in ROBOTS.items() for tg, st in TARGETS]
@@ -230,7 +239,7 @@ def main(argv=None):
         cases = cases[:1]
     mach = machine()
     report = {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC"),
-              "commit": git_commit(), "machine": mach, "command": " ".join(["python"] + sys.argv),
+              "commit": git_commit(), "machine": mach, "command": command_line(argv, __file__),
               "toppra": "toppra" in backends, "settings": {k: v for k, v in settings.items() if k != "figures"},
               "rows": []}
     try:

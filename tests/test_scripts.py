@@ -19,10 +19,8 @@ def test_benchmark_script_runs(tmp_path):
     of the rest-to-rest collocation over rockit (wall and CPU time, the optima's difference) and the wall time of
     `rollplan compare`, each with its budget row. A second run with --only reruns one section and keeps the
     others, each with the date of its own run."""
-    script = Path(__file__).resolve().parent.parent / "scripts" / "benchmark.py"
     with cache_wide("benchmark") as builds:     # the C planner's build kept with the tests' build cache
-        subprocess.run([sys.executable, str(script), "--quick", "--no-jit", "--no-cold", "--build-dir", str(builds),
-                        "--out-dir", str(tmp_path)], check=True, capture_output=True, timeout=600)
+        run_script_here("benchmark.py", tmp_path, "--quick", "--no-jit", "--no-cold", "--build-dir", str(builds))
         assert any((kept / "librollplan.a").is_file() for kept in builds.glob("host-*"))
     text = (tmp_path / "benchmarks.md").read_text()
     assert "evaluations/s" in text and "commit" in text and "speed-up" in text and "Profile" in text
@@ -31,14 +29,15 @@ def test_benchmark_script_runs(tmp_path):
     assert "root_solver ipopt warm [ms]" in text
     assert (tmp_path / "benchmarks.json").stat().st_size > 0
     report = json.loads((tmp_path / "benchmarks.json").read_text())
+    assert report["command"] == f"python scripts/benchmark.py --quick --no-jit --no-cold --build-dir {builds} " \
+                                f"--out-dir {tmp_path}"     # the run's own arguments, not its caller's
     sections = {sec["function"]: sec for sec in report["sections"]}
     peer, comp = sections["section_peer"]["summary"], sections["section_compare"]["summary"]
     assert peer["speedup"] > 0 and peer["speedup_cpu"] > 0 and peer["relative_difference"] <= 1e-6
     assert comp["median_s"] > 0 and comp["cpu_median_s"] > 0
     budgets = [row["budget"] for row in sections["section_budgets"]["rows"]]
     assert any("faster than rockit" in b for b in budgets) and any("`rollplan compare`" in b for b in budgets)
-    subprocess.run([sys.executable, str(script), "--quick", "--only", "memory", "--out-dir", str(tmp_path)],
-                   check=True, capture_output=True, timeout=600)
+    run_script_here("benchmark.py", tmp_path, "--quick", "--only", "memory")
     again = {sec["function"]: sec for sec in json.loads((tmp_path / "benchmarks.json").read_text())["sections"]}
     assert set(again) == set(sections)
     assert again["section_peer"] == sections["section_peer"] and again["section_memory"] != sections["section_memory"]
@@ -78,12 +77,15 @@ def run_script_here(name: str, out_dir, *args: str) -> None:
 def test_a_script_run_as_a_program_reads_its_own_arguments(name, tmp_path):
     """The scripts whose runs the tests make through ``main`` (:func:`run_script_here`), run as a user does:
     ``python scripts/NAME`` passes its arguments (without the program's name) to ``main`` and exits with its
-    status (argparse's 2 for an unknown option, naming only that option)."""
+    status (argparse's 2 for an unknown option, naming only that option), before the slow imports (numpy,
+    rollplan: ``-X importtime`` lists what was imported)."""
     script = Path(__file__).resolve().parent.parent / "scripts" / name
-    run = subprocess.run([sys.executable, str(script), "--no-such-option"], cwd=tmp_path, capture_output=True,
-                         text=True, timeout=300, check=False)
+    run = subprocess.run([sys.executable, "-X", "importtime", str(script), "--no-such-option"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=300, check=False)
     assert run.returncode == 2 and run.stderr.strip().endswith("unrecognized arguments: --no-such-option"), run.stderr
     assert not any(tmp_path.iterdir())
+    imported = {line.rsplit("|", 1)[-1].strip() for line in run.stderr.splitlines() if line.startswith("import time:")}
+    assert "encodings" in imported and not imported & {"numpy", "rollplan"}
 
 
 @pytest.mark.slow
@@ -92,6 +94,7 @@ def test_timing_table_script_runs(tmp_path):
     text = (tmp_path / "timing.md").read_text()
     assert "of the shortest min-jerk duration under the same limits" in text and "| default (4.86) |" in text
     assert "## Convergence in the grid size" in text and (tmp_path / "timing.json").stat().st_size > 0
+    assert f"command `python scripts/timing_table.py --quick --out-dir {tmp_path}`" in text   # not the caller's
 
 
 @pytest.mark.slow
@@ -100,6 +103,7 @@ def test_reconfiguration_script_runs(tmp_path):
     text = (tmp_path / "reconfiguration.md").read_text()
     assert "## Turning in place" in text and "DOP853" in text and "## A route of five waypoints" in text
     assert "## Lengths against optimal control" in text and "--refine ratio" in text
+    assert "### The new default on more random pairs\n\n1 pairs (--quick: the README example's, not random)" in text
     assert (tmp_path / "composed.png").stat().st_size > 0 and (tmp_path / "reconfiguration.json").stat().st_size > 0
 
 
@@ -146,7 +150,8 @@ def test_embedded_report_script_runs(tmp_path):
 def test_embedded_report_reuses_the_builds_of_the_same_sources(tmp_path, monkeypatch):
     """``--build-dir``: the builds of one generated content and toolchain are kept in a folder of their own, which a
     later run with the same sources and toolchain reuses (``make`` is run in it again: it rebuilds nothing) and
-    another toolchain does not."""
+    another toolchain does not. The sources are generated at CasADi's default print precision, whatever the process
+    ran before (rockit sets 14 digits process-wide): the same planner gets the same folder."""
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
     try:
         import embedded_report
@@ -155,16 +160,28 @@ def test_embedded_report_reuses_the_builds_of_the_same_sources(tmp_path, monkeyp
     made = []
     monkeypatch.setattr(embedded_report, "make", lambda out, *goals: made.append(out))
 
+    import casadi
+
+    precision = []
+
     def generate(out, real):    # the sources rollplan codegen writes, in short
         out.mkdir()
         (out / "Makefile").write_text(f"all: # {real}\n")
+        precision.append(casadi.DM.get_precision())
         return types.SimpleNamespace(out=out, prefix="rollplan")
 
     monkeypatch.setattr(embedded_report.codegen, "generate", generate)
     tools = {"arm-none-eabi-gcc": "gcc 1", "qemu-system-arm": "qemu 1"}
     first = tmp_path / "first"
     first.mkdir()
-    kept, prefix = embedded_report.build("double", first, str(tmp_path / "builds"), tools)
+    before = casadi.DM.get_precision()
+    casadi.DM.set_precision(14)     # as rockit leaves it: the generated C's comments would print 14 digits
+    try:
+        kept, prefix = embedded_report.build("double", first, str(tmp_path / "builds"), tools)
+        assert casadi.DM.get_precision() == 14      # restored
+    finally:
+        casadi.DM.set_precision(before)
+    assert precision == [6]     # a fresh process's (bench_codegen.DM_PRECISION)
     assert kept.parent == tmp_path / "builds" and kept.name.startswith("double-") and prefix == "rollplan"
     # built under a temporary name, kept once the build succeeded
     assert (kept / "Makefile").is_file() and made == [kept.with_name(f"{kept.name}.part{os.getpid()}")]
@@ -218,6 +235,10 @@ def test_fails():
 """
 
 
+#: The fake suites use no plugin but pytest-xdist (``-n``): their runs skip loading the others (~0.25 s of CPU each).
+NO_PLUGINS = ("-p", "no:hypothesispytest", "-p", "no:randomly")
+
+
 def test_suite_report_names_failed_errored_and_skipped_tests(tmp_path):
     """The failed, errored and skipped tests of a run are named from pytest's JUnit XML (a failure in the test is
     failed, one in a fixture an error) and, when the run wrote no XML, from its -ra summary lines."""
@@ -265,8 +286,8 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     (tests / "test_fake.py").write_text(FAKE_TESTS)
     script = Path(__file__).resolve().parent.parent / "scripts" / "suite_report.py"
     out = tmp_path / "out"
-    run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tests", str(tests), "--out-dir", str(out)],
-                         capture_output=True, text=True, timeout=600, check=False)
+    run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tests", str(tests), "--out-dir", str(out),
+                          "--", *NO_PLUGINS], capture_output=True, text=True, timeout=600, check=False)
     assert run.returncode == 1, run.stderr      # pytest's status: a test failed
     data = json.loads((out / "suite.json").read_text())
     assert (data["unit"]["tests"], data["unit"]["passed"], data["unit"]["failed"], data["unit"]["skipped"]) == \
@@ -277,6 +298,7 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     assert {n for n, _ in data["full"]["slowest"]} == {"test_fake.py::" + n for n in (
         "test_quick", "test_slow", "test_param[1]", "test_param[2]", "test_skipped", "test_fails")}
     assert data["full"]["wall_s"] >= 0.3 and data["unit"]["exit_status"] == 1
+    assert data["full"]["command"].endswith(" ".join(NO_PLUGINS))     # the arguments after -- reach pytest
     text = (out / "suite.md").read_text()
     assert "| unit |" in text and "| full |" in text and "6 (4, 1, 1)" in text and "5 (3, 1, 1)" in text
     assert "`test_fake.py::test_slow`" in text and "scripts/suite_report.py" in text
@@ -288,7 +310,8 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     assert "`test_fake.py::test_fails`" in text and "`test_fake.py::test_skipped` | shown as skipped" in text
     (tests / "test_fake.py").write_text(FAKE_TESTS.replace("assert False", "pass"))
     run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tier", "unit", "--tests", str(tests),
-                          "--out-dir", str(out)], capture_output=True, text=True, timeout=600, check=False)
+                          "--out-dir", str(out), "--", *NO_PLUGINS], capture_output=True, text=True, timeout=600,
+                         check=False)
     assert run.returncode == 0, run.stderr
     again = json.loads((out / "suite.json").read_text())
     assert again["full"] == data["full"] and (again["unit"]["passed"], again["unit"]["failed"]) == (4, 0)
@@ -308,6 +331,7 @@ def test_curve_families_script_runs_and_its_plans_land(tmp_path):
     assert "## Summary over the grid" in text and "## Conclusions" in text and "Non-stop with continuous" in text
     assert (tmp_path / "curve_families.png").stat().st_size > 1000
     rep = json.loads((tmp_path / "curve_families.json").read_text())
+    assert rep["command"] == f"python scripts/curve_families.py --quick --out-dir {tmp_path}"   # not the caller's
     (row,) = rep["rows"]
     assert set(row["families"]) == {"circles", "viviani", "triangle", "square"}
     for name, f in row["families"].items():
@@ -325,6 +349,7 @@ def test_basepoint_bench_script_runs(tmp_path):
     run_script_here("basepoint_bench.py", tmp_path, "--quick")
     text = (tmp_path / "basepoint.md").read_text()
     assert "| README example |" in text and "| random 1 |" in text and "DOP853" in text
+    assert "times of the first solve, which builds the solvers: not warm" in text    # --quick times no warm solve
     rows = json.loads((tmp_path / "basepoint.json").read_text())["rows"]
     assert all(r["any_length"] <= r["pole_length"] and r["dop853_residual"] <= 1e-9 for r in rows)
 
@@ -346,7 +371,8 @@ def test_suite_report_measures_cold_by_default_and_warm_after_a_filling_run(tmp_
     base = [sys.executable, str(script), "--jobs", "0", "--tier", "unit", "--tests", str(tests), "--out-dir", str(out)]
     env = {**os.environ, "ROLLPLAN_TEST_FRESH_CACHE": "1"}
     for extra in ([], ["--warm"]):
-        run = subprocess.run(base + extra, capture_output=True, text=True, timeout=600, check=False, env=env)
+        run = subprocess.run([*base, *extra, "--", *NO_PLUGINS], capture_output=True, text=True, timeout=600,
+                             check=False, env=env)
         assert run.returncode == 0, run.stderr
     assert log.read_text().splitlines() == ["'1'", "None", "None"]
     data = json.loads((out / "suite.json").read_text())
