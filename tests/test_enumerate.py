@@ -154,8 +154,8 @@ def _brute_branch(eta, h_m, k, samples_per_rad, min_samples):
 
 def _branch_grid(eta, k, samples_per_rad, min_samples):
     """The scan grid in a of branch eta, empty where E(a) - eta leaves [E(A_MAX), 0]: uniform in E(a) at
-    ``samples_per_rad`` points per radian of turn (at least ``min_samples``), which resolves h^2 - h_m^2 where it
-    turns with E, and ``min_samples`` uniform in a, which resolve it where E is flat (small a; a spacing of at most
+    ``samples_per_rad`` points per radian of turn, which resolve h^2 - h_m^2 where it turns with E, and
+    ``min_samples`` uniform in a, which resolve it where E is flat (small a; a spacing of at most
     A_MAX / min_samples: less than a hundredth of the planner's X_STEP for the default 4000)."""
     e_min = float(leafmap.turn(A_MAX, k))
     lo_e, hi_e = max(e_min, e_min + eta), min(0.0, eta)       # E(a) - eta within [E(A_MAX), 0]
@@ -163,7 +163,7 @@ def _branch_grid(eta, k, samples_per_rad, min_samples):
         return np.zeros(0)
     a_lo = _radius_of_turn(hi_e, k) if hi_e < 0 else 0.0
     a_hi = _radius_of_turn(lo_e, k) if lo_e > e_min else A_MAX
-    n = max(min_samples, int(samples_per_rad * (hi_e - lo_e)))
+    n = max(2, int(samples_per_rad * (hi_e - lo_e)))
     grid = np.unique(np.concatenate([np.linspace(a_lo, a_hi, min_samples),
                                      leafmap.turn_inverse(np.linspace(hi_e, lo_e, n), k)]))
     return grid[(grid > 0) & np.isfinite(grid)]
