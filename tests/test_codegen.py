@@ -663,18 +663,40 @@ def _package_csrc():
     return {f.name: f.read_bytes() for f in folder.iterdir() if f.name.endswith((".c", ".h"))}
 
 
+#: The options of :func:`prefixed`'s generation.
+PREFIXED = ("--prefix", "rp_2", "--k-max", "16")
+
+
+@pytest.fixture(scope="module")
+def prefixed(tmp_path_factory):
+    """`rollplan codegen --prefix rp_2 --k-max 16` (another prefix; the step map sized automatically for a k_max
+    above the default) built by its Makefile (``make``: plan_demo and librp_2.a): one build for the tests of the
+    prefix, of the automatic size and of the copied C search. ``out`` the folder, ``said`` what the command
+    printed."""
+    import io
+    from types import SimpleNamespace
+
+    out = tmp_path_factory.mktemp("prefixed") / "rp"
+    said = io.StringIO()
+    with contextlib.redirect_stdout(said):
+        assert main(["codegen", "--out", str(out), *PREFIXED]) == 0
+    run = make("-C", str(out))
+    assert run.returncode == 0, run.stderr
+    return SimpleNamespace(out=out, said=said.getvalue())
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("argv", [(), ("--real", "float"), ("--prefix", "rp_2", "--k-max", "2.5"),
-                                  ("--curve", "viviani")])
+@pytest.mark.parametrize("argv", [(), ("--real", "float"), PREFIXED, ("--curve", "viviani")])
 def test_codegen_copies_the_package_c_search_unchanged(tmp_path, argv, request, capsys):
     """One copy of the C search: the files that `rollplan codegen` writes for it are byte for byte the files of the
-    installed package, for a double and a float build and another prefix (what varies by generation is in the
-    generated rollplan_config.h, which has no template token left); the build compiles them as they are. The
-    default and the float generation are the module's builds (codegen.generate, which `rollplan codegen` calls with
-    its options): their plan_demo is made by the same Makefile rule."""
+    installed package, for a double and a float build, another prefix with a larger step map, and another curve
+    (what varies by generation is in the generated rollplan_config.h, which has no template token left); the build
+    compiles them as they are. The default and the float generation are the module's builds (codegen.generate,
+    which `rollplan codegen` calls with its options), the prefixed one :func:`prefixed`: their plan_demo is made by
+    the same Makefile rule."""
     package = _package_csrc()
     assert {"rollplan_planner.c", "rollplan_planner.h"} <= set(package)
-    prebuilt = {(): "built", ("--real", "float"): "built_float"}.get(argv)
+    prebuilt = {(): "built", ("--real", "float"): "built_float", PREFIXED: "prefixed"}.get(argv)
     if prebuilt:
         out = request.getfixturevalue(prebuilt).out
     else:
@@ -737,13 +759,10 @@ def test_plan_demo_no_plan_agrees_with_python(built):
 
 
 @pytest.mark.slow
-def test_generated_prefix_builds_and_plans(tmp_path):
-    """A planner generated for k <= 10 (320 steps per leaf): other prefix, and certified plans at k = 10."""
-    out = tmp_path / "rp"
-    codegen.generate(out, 320, "rp", k_max=10)
-    run = make("-C", str(out))
-    assert run.returncode == 0, run.stderr
-    assert (out / "librp.a").exists()
+def test_generated_prefix_builds_and_plans(prefixed):
+    """A planner generated for k <= 16 (:func:`prefixed`): other prefix, and certified plans at k = 10."""
+    out = prefixed.out
+    assert (out / "librp_2.a").exists()
     run = subprocess.run([str(out / "plan_demo"), "0", "1", "0", "1", "2.5"], check=False, capture_output=True,
                          text=True)
     a, b = (float(x) for x in run.stdout.split()[:2])
@@ -757,7 +776,7 @@ def test_generated_prefix_builds_and_plans(tmp_path):
         q = reference_plan((u, v, psi), n, 10.0)
         assert q is not None and _same_plan(_parse(run), q)
         assert np.linalg.norm([x[0] - u, x[1] - v, references.wrap(x[2] - psi)]) <= CERT_TOL
-    run = subprocess.run([str(out / "plan_demo"), "0", "2", "0", "1", "10.5"], check=False, capture_output=True)
+    run = subprocess.run([str(out / "plan_demo"), "0", "2", "0", "1", "16.5"], check=False, capture_output=True)
     assert run.returncode == 2
     run = subprocess.run([str(out / "plan_demo"), "0", "2", "0", "1", "-0.1"], check=False, capture_output=True)
     assert run.returncode == 2
@@ -825,17 +844,14 @@ def test_k_max_is_checked_at_generation(tmp_path, monkeypatch):
 
 
 @pytest.mark.slow
-def test_codegen_k_max_16_sizes_its_step_map_itself(tmp_path, capsys):
-    """`codegen --k-max 16` without --steps-per-leaf (auto): the smallest size whose step map is accurate to 1e-10 up
-    to k = 16 (400; 320 is refused for it), and its plan_demo plans a k = 16 target as the Python planner does and
-    lands on it when integrated by DOP853 on the printed equations."""
-    out = tmp_path / "k16"
-    assert main(["codegen", "--out", str(out), "--k-max", "16"]) == 0
-    assert "400 steps per leaf" in capsys.readouterr().out
+def test_codegen_k_max_16_sizes_its_step_map_itself(prefixed, tmp_path, capsys):
+    """`codegen --k-max 16` without --steps-per-leaf (auto, :func:`prefixed`): the smallest size whose step map is
+    accurate to 1e-10 up to k = 16 (400; 320 is refused for it), and its plan_demo plans a k = 16 target as the
+    Python planner does and lands on it when integrated by DOP853 on the printed equations."""
+    out = prefixed.out
+    assert "400 steps per leaf" in prefixed.said
     assert main(["codegen", "--out", str(tmp_path / "small"), "--k-max", "16", "--steps-per-leaf", "320"]) == 2
     assert "320 steps per leaf" in capsys.readouterr().err
-    run = make("-C", str(out), "plan_demo")
-    assert run.returncode == 0, run.stderr
     for u, v, psi, n in ((0.5, -0.3, 1.0, 2), (0.0, 1.0, 0.0, 1)):
         run = subprocess.run([str(out / "plan_demo"), *map(str, (u, v, psi, n, 16))], check=False,
                              capture_output=True, text=True)

@@ -4,15 +4,15 @@ Leaf map (:mod:`rollplan.planners.geometric.leafmap`): the closed-form turn, the
 displacement, the symmetry that makes ``exp(i E/2) d`` real, and ``step`` against scipy DOP853 on
 the printed equations (``tests/references.py``) over the accepted domain, up to (A_MAX, K_MAX).
 
-Enumeration (the numpy reference of the C search, ``tests/reference_enumerate.py``) against a brute force of
-its own: for each branch m, a dense scan in the first leaf radius a (uniform in the turn E(a) and in a, ten times
-finer than the planner's grid), b from ``E(b) = E(a) - eta_m`` by bisection on the closed form, h from the
-complex step map (not the rho form the planner uses), every sign change refined by bisection and every local
-minimum of ``|h^2 - h_m^2|`` checked for a close pair by golden-section search (each on all intervals of the
-branch at once), a close pair's two roots by brentq. For every k (E not monotone below 1/2) a 2-D brute force
+Enumeration (the numpy reference of the C search, ``tests/reference_enumerate.py``) against a brute force of its
+own: for each branch m, a dense scan in the first leaf radius a (uniform in the turn E(a) and in a, ten times finer
+than the planner's grid or more: :func:`_branch_grid`), b from ``E(b) = E(a) - eta_m`` by bisection on the closed
+form, h from the complex step map (not the rho form the planner uses), every sign change refined by bisection and
+every local minimum of ``|h^2 - h_m^2|`` checked for a close pair by golden-section search (each on all intervals of
+the branch at once), a close pair's two roots by brentq. For every k (E not monotone below 1/2) a 2-D brute force
 scans the level set ``E(a) - E(b) = eta_m`` both over a and over b, on monotone pieces of E found numerically (a
-dense scan and scipy's bounded minimiser), refined by brentq and scipy's bounded minimiser. Plans are certified
-by DOP853 over all n steps.
+dense scan and scipy's bounded minimiser), refined by brentq and scipy's bounded minimiser. Plans are certified by
+DOP853 over all n steps.
 """
 
 import json
@@ -153,15 +153,19 @@ def _brute_branch(eta, h_m, k, samples_per_rad, min_samples):
 
 
 def _branch_grid(eta, k, samples_per_rad, min_samples):
-    """The scan grid in a of branch eta (uniform in E(a) and in a), empty where E(a) - eta leaves [E(A_MAX), 0]."""
+    """The scan grid in a of branch eta, empty where E(a) - eta leaves [E(A_MAX), 0]: uniform in E(a) at
+    ``samples_per_rad`` points per radian of turn, which resolve h^2 - h_m^2 where it turns with E, and
+    ``min_samples`` uniform in a, which resolve it where E is flat (small a; a spacing of at most
+    A_MAX / min_samples: less than a hundredth of the planner's X_STEP for the default 4000)."""
     e_min = float(leafmap.turn(A_MAX, k))
     lo_e, hi_e = max(e_min, e_min + eta), min(0.0, eta)       # E(a) - eta within [E(A_MAX), 0]
     if lo_e > hi_e:
         return np.zeros(0)
     a_lo = _radius_of_turn(hi_e, k) if hi_e < 0 else 0.0
     a_hi = _radius_of_turn(lo_e, k) if lo_e > e_min else A_MAX
-    n = max(min_samples, int(samples_per_rad * (hi_e - lo_e)))
-    grid = np.unique(np.concatenate([np.linspace(a_lo, a_hi, n), leafmap.turn_inverse(np.linspace(hi_e, lo_e, n), k)]))
+    n = max(2, int(samples_per_rad * (hi_e - lo_e)))
+    grid = np.unique(np.concatenate([np.linspace(a_lo, a_hi, min_samples),
+                                     leafmap.turn_inverse(np.linspace(hi_e, lo_e, n), k)]))
     return grid[(grid > 0) & np.isfinite(grid)]
 
 
