@@ -12,7 +12,7 @@ every local minimum of ``|h^2 - h_m^2|`` checked for a close pair by golden-sect
 the branch at once), a close pair's two roots by brentq. For every k (E not monotone below 1/2) a 2-D brute force
 scans the level set ``E(a) - E(b) = eta_m`` both over a and over b, on monotone pieces of E found numerically (a
 dense scan and scipy's bounded minimiser), refined by brentq and scipy's bounded minimiser. Plans are certified by
-DOP853 over all n steps.
+DOP853 over their first figure eight and the exact symmetry of the others (:func:`_certified_by_dop853`).
 """
 
 import json
