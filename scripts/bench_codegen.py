@@ -124,26 +124,9 @@ int main(int argc, char **argv) {
 """
 
 
-#: CasADi's print precision of constant matrices (``DM``) in a fresh process. The generated C prints such matrices
-#: in its comments with the process's precision, which rockit sets to 14 digits for the whole process.
-DM_PRECISION = 6
-
-
-def generate(out: Path, *args, **kwargs):
-    """``codegen.generate`` with CasADi's print precision at :data:`DM_PRECISION` (restored after): the files of one
-    planner are the same whatever the process ran before (rockit, in ``benchmark.py``'s peer section or a test
-    process), so its kept build (:func:`kept`) is found again and its size is that of ``rollplan codegen``'s files."""
-    before = ca.DM.get_precision()
-    ca.DM.set_precision(DM_PRECISION)
-    try:
-        return codegen.generate(out, *args, **kwargs)
-    finally:
-        ca.DM.set_precision(before)
-
-
 def build(out: Path, steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, prefix: str = "rollplan"):
     """Generate the library into ``out`` and build ``plan_demo``; returns the GeneratedCode."""
-    g = generate(out, steps_per_leaf, prefix)
+    g = codegen.generate(out, steps_per_leaf, prefix)
     subprocess.run(["make", "-s", "-C", str(out)], check=True, capture_output=True)
     return g
 
@@ -244,7 +227,7 @@ def measure(steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, reps: int = 20
     ``build_dir`` the build is kept there and reused (:func:`kept`); the times are measured anew.
     """
     with tempfile.TemporaryDirectory() as tmp:
-        g = generate(Path(tmp) / "c", steps_per_leaf)
+        g = codegen.generate(Path(tmp) / "c", steps_per_leaf)
         out = kept(Path(tmp) / "c", build_dir, "host", host_tools(),
                    lambda folder: subprocess.run(["make", "-s", "-C", str(folder)], check=True, capture_output=True))
         rows = time_plans(out, targets=targets, reps=reps)

@@ -143,7 +143,7 @@ def build(real: str, tmp: Path, build_dir: str | None, tools: dict) -> tuple[Pat
     """Generate the planner in ``real`` and cross-compile it for the boards; returns (folder, prefix). The folder is
     ``tmp/real``, or with ``build_dir`` ``build_dir/<real>-<digest>`` (the generated files and ``tools``), reused
     when it exists."""
-    g = bench_codegen.generate(tmp / real, real=real)
+    g = codegen.generate(tmp / real, real=real)
     out = bench_codegen.kept(tmp / real, build_dir, real, tools,   # the boards only: the host build is not reported
                              lambda folder: make(folder, "-j2", "arm-m7", "arm-m4f"))
     return out, g.prefix

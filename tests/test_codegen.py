@@ -1054,3 +1054,26 @@ def test_sample_is_the_python_min_jerk_law(clib, target, steps, duration):
                 (steps, k, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, 0.0, 0.0),
                 (0, k, robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, duration, 0.0)):
         assert clib.rollplan_sample(ctypes.byref(p), *bad, rates, None, None) == 2
+
+
+def test_generated_model_code_does_not_depend_on_the_process_print_precision():
+    """CasADi writes the constant matrices of an MX function into the comments of its C at the process's print
+    precision, which another library may change for the whole process (rockit sets 14 digits): the same planner
+    then gave other files (and missed every build cache keyed by their content). ``model_code`` writes at a fresh
+    process's precision and leaves the caller's as it was."""
+    from rollplan.core import c_functions
+
+    x = ca.MX.sym("x", 2)
+    f = ca.Function("f", [x], [ca.DM([1 / 3, 2 / 3]) * x + ca.sin(x)])
+    before = ca.DM.get_precision()
+    try:
+        ca.DM.set_precision(c_functions.DM_PRECISION)
+        fresh = c_functions.model_code([f], "p")
+        ca.DM.set_precision(14)
+        raw = ca.CodeGenerator("p.c")
+        raw.add(f)
+        assert "0.33333333333333" in raw.dump()     # the premise: 14 digits reach the comments
+        assert c_functions.model_code([f], "p") == fresh
+        assert ca.DM.get_precision() == 14
+    finally:
+        ca.DM.set_precision(before)
