@@ -468,11 +468,30 @@ def check_figure_path(path, what: str = "figure") -> Path:
 
 
 def save_figure(fig, path, dpi=120) -> None:
-    """Save a matplotlib figure atomically (format from the suffix)."""
+    """Save a matplotlib figure atomically (format from the suffix).
+
+    A figure with a layout engine (``layout="constrained"``) is laid out and then drawn once: matplotlib's
+    saving draws such a figure a first time without output only to run its layout engine, and here that first
+    draw runs the layout engine alone (the same layout, the same file, about a fifth less time).
+    """
     import io
 
+    import matplotlib
+
     buf = io.BytesIO()
-    fig.savefig(buf, format=Path(path).suffix.lstrip(".").lower() or "png", dpi=dpi)
+    engine = fig.get_layout_engine()
+    if engine is not None and matplotlib.rcParams["savefig.bbox"] != "tight":
+        def layout_only(renderer):   # the draw before the output, as Figure.draw runs the engine
+            del fig.draw
+            if fig.axes:
+                with suppress(ValueError):   # as Figure.draw: a layout that cannot be made is left as it is
+                    engine.execute(fig)
+
+        fig.draw = layout_only
+    try:
+        fig.savefig(buf, format=Path(path).suffix.lstrip(".").lower() or "png", dpi=dpi)
+    finally:
+        fig.__dict__.pop("draw", None)
     write_atomic(path, buf.getvalue(), "figure")
 
 

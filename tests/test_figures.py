@@ -255,3 +255,45 @@ def test_curve_families_figure_draws_what_the_report_holds():
                   for n, f in r["families"].items() if "error" not in f}
         assert drawn == expect
     assert "k=10" in fig.axes[-1].get_xticklabels()[1].get_text()
+
+
+def _laid_out_figure():
+    """A figure with a layout engine and what it lays out: two panels, a colour bar, a legend, a title."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(3, 1.5), layout="constrained")
+    left, right = fig.subplots(1, 2)
+    t = np.linspace(0.0, 1.0, 50)
+    left.plot(t, np.sin(6 * t), label="a long legend entry")
+    left.legend(loc="upper right")
+    left.set_ylabel("a label far to the left [rad/s]")
+    image = right.imshow(np.outer(t, t), aspect="auto")
+    fig.colorbar(image, ax=right, label="colour bar")
+    fig.suptitle("laid out")
+    return fig
+
+
+def test_a_laid_out_figure_is_drawn_once_and_saved_as_matplotlib_saves_it(tmp_path, monkeypatch):
+    """save_figure lays a constrained figure out without matplotlib's extra draw: the same bytes as
+    ``savefig`` (the layout that draw ran is the same), one draw instead of two; with ``savefig.bbox`` tight
+    (which measures a drawn figure) matplotlib's own two draws."""
+    import io
+
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    from rollplan.outputs import save_figure
+
+    draws = []
+    draw = Figure.draw
+    monkeypatch.setattr(Figure, "draw", lambda self, renderer: draws.append(1) or draw(self, renderer))
+    fig = _laid_out_figure()
+    save_figure(fig, tmp_path / "fig.png")
+    assert len(draws) == 1 and "draw" not in fig.__dict__
+    expected = io.BytesIO()
+    _laid_out_figure().savefig(expected, format="png", dpi=120)
+    assert len(draws) == 3
+    assert (tmp_path / "fig.png").read_bytes() == expected.getvalue()
+    with matplotlib.rc_context({"savefig.bbox": "tight"}):
+        save_figure(_laid_out_figure(), tmp_path / "tight.png")
+    assert len(draws) == 5

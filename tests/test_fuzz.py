@@ -421,7 +421,11 @@ def plan_file(draw, path):
     elif kind == "scale":
         factor = 10.0 ** draw(st.integers(-300, 300))
         data["rotor_rates"] = [[r * factor for r in row] for row in data["rotor_rates"]]
-        data["time"] = [t * draw(st.sampled_from([1.0, factor])) for t in data["time"]]
+        # which times are scaled too: one draw for the whole column (a draw per sample would overrun the
+        # choices Hypothesis allows an example on a long file); all, none or each at random
+        share = draw(st.sampled_from([0.0, 0.5, 1.0]))
+        scaled = np.random.default_rng(draw(st.integers(0, 2**32 - 1))).random(len(data["time"])) < share
+        data["time"] = [t * factor if s else t for t, s in zip(data["time"], scaled)]
     raw = dumps_plan(data, path)
     if kind == "text":
         edit = draw(st.sampled_from(["truncate", "nan", "huge", "int", "deep", "bom", "latin1"]))
@@ -466,6 +470,22 @@ def test_plan_files(tmp_path_factory, plan_json, data, command):
             ref = references.rotor_drive(d["robot"], t[keep], np.asarray(d["rotor_rates"])[keep], x0)
             # two cubic splines through the same samples, two integrators: agree far below the 1e-6 tolerance
             assert np.allclose([sim["final"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")], ref[-1], atol=1e-8)
+
+
+@pytest.mark.parametrize("plan_json", ["composed"], indirect=True)
+def test_every_mutation_of_the_largest_plan_file_is_drawn(plan_json):
+    """Each kind of mutation is drawn whole for the longest file too (a draw per sample overran the choices
+    Hypothesis allows an example: the example was dropped, and scaled files of composed plans never ran)."""
+    kinds = set()
+
+    @settings(max_examples=40, deadline=None, database=None, derandomize=True,
+              suppress_health_check=list(HealthCheck))
+    @given(data=st.data())
+    def draw(data):
+        kinds.add(data.draw(plan_file(plan_json)).kind)
+
+    draw()
+    assert kinds == {"same", "drop", "replace", "robot", "scale", "text"}
 
 
 def json_text_value():
