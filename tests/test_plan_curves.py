@@ -10,6 +10,7 @@ import subprocess
 import numpy as np
 import pytest
 from conftest import one_line, run
+from test_codegen import make
 
 from rollplan import InputError, Problem
 from rollplan.core import compiled
@@ -136,7 +137,8 @@ def test_best_is_never_longer_than_any_family():
 @pytest.mark.slow
 @pytest.mark.parametrize("curve", PLANNED)
 def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path, capsys):
-    """``rollplan codegen --curve`` (built with -Wall -Wextra -Werror by its Makefile): plan_demo gives the plan of
+    """``rollplan codegen --curve`` (built with -Wall -Wextra -Werror by its Makefile, through the object store of
+    ``test_codegen.make``): plan_demo gives the plan of
     ``plan --curve`` (same branch, a, b, gamma to 1e-8), and that plan reaches the target when the family's figure
     eight as typed in tests/references.py is integrated by DOP853. Built for k <= 6.5: the triangle's rho table at
     k = 6 has more radii (965) than a circle's at 6.5 (824), so a table sized for the circles fails; each target's k
@@ -146,7 +148,7 @@ def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path, capsys):
     code, stdout, err = run(capsys, "codegen", "--out", str(out), "--curve", curve, "--k-max", "6.5")
     assert code == 0 and f"curve {curve}" in stdout, err
     assert f"#define RP_FAMILY {compiled_search.C_FAMILIES.index(curve)}" in (out / "rollplan_config.h").read_text()
-    build = subprocess.run(["make", "-C", str(out), "plan_demo"], capture_output=True, text=True, check=False)
+    build = make("-C", str(out), "plan_demo")   # an object compiled before from the same sources is copied
     assert build.returncode == 0, build.stderr
     planned = 0
     for target, steps, k in [t for t in _targets(12, 8) if t[2] <= 6.0][:3]:
@@ -254,6 +256,14 @@ def _brute_family_roots(curve, k, targets, count=240, scan=4000):
     return out
 
 
+def _near(want, got, tol):
+    """``near[i, j]``: the roots (m, a, b) ``want[i]`` and ``got[j]`` are on one branch m with a and b each within
+    ``tol``."""
+    w, g = np.array(want, float).reshape(-1, 3), np.array(got, float).reshape(-1, 3)
+    return ((w[:, None, 0] == g[None, :, 0]) & (np.abs(w[:, None, 1] - g[None, :, 1]) < tol)
+            & (np.abs(w[:, None, 2] - g[None, :, 2]) < tol))
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("curve", PLANNED)
 @pytest.mark.parametrize("k", [1.5, 6.0])
@@ -277,15 +287,13 @@ def test_c_search_of_the_family_against_a_brute_force(curve, k):
         # are too coarse for a polygon's leaves, whose corners come near the equator), and every C root that is not
         # within 1e-7 of a brute-force root (a close pair the scan stepped over, or near A_MAX) is a root of the
         # figure eight integrated by DOP853
-        for m, a1, b1 in want:
+        near = {tol: _near(want, got, tol) for tol in (1e-5, 1e-7)}   # [brute-force root, C root]
+        for i, (m, a1, b1) in enumerate(want):
             if max(a1, b1) >= 0.68:   # the splines miss the polygon's leaf map there by up to 5e-4: no check
                 continue
-            tol = 1e-5
-            assert any(r[0] == m and abs(r[1] - a1) < tol and abs(r[2] - b1) < tol for r in got), \
-                ((u, v, psi), steps, (m, a1, b1), got)
-        for m, a2, b2 in got:
-            if not any(r[0] == m and abs(r[1] - a2) < 1e-7 and abs(r[2] - b2) < 1e-7 for r in want):
-                unmatched.append(((u, v, psi), steps, (m, a2, b2)))
+            assert near[1e-5][i].any(), ((u, v, psi), steps, (m, a1, b1), got)
+        for j in np.flatnonzero(~near[1e-7].any(axis=0)):
+            unmatched.append(((u, v, psi), steps, got[j]))
         if want:
             best = compiled_search.family_plans(u, v, float(wrap(psi)), steps, k, curve)[0]
             low = min(want, key=lambda r: r[1] + r[2])
