@@ -57,7 +57,7 @@ def test_plan_curve_refusals_on_the_command_line(capsys):
     assert code == 2 and one_line(err) and "square" in err and "one leg" in err
 
 
-#: The k of the hidden targets: low, middle and near the k_max 12 of the codegen test (a polygon's rho table at
+#: The k of the hidden targets: low, middle and high (a polygon's rho table at
 #: 11.2 has more radii than a circle's at 12). A family's C planner builds its rho table once per k (seconds; kept
 #: in the cache directory), so the tests of this file share these few.
 TARGET_K = (1.5, 6.0, 11.2)
