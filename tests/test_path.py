@@ -134,3 +134,20 @@ def test_bad_input(path, asym_plan):
         ContactPath.of_plan(None, ROBOT)
     with pytest.raises(InputError, match="piece"):
         ContactPath([], ROBOT)
+
+
+def test_the_state_at_a_joint_is_one_state_from_both_sides(path):
+    """The integrated state (u_a, v_a, psi, the rotor angles) at a joint and at the end is the one the path found
+    piece by piece, from either side and whatever other points are evaluated with it: the same numbers, to the bit
+    (u_o, v_o come from each side's curve: equal to rounding)."""
+    s = np.unique(np.r_[np.linspace(0.0, path.length, 97), path.joints])
+    left, right = path.evaluate(s, "left"), path.evaluate(s, "right")
+    at = np.isin(s, np.r_[path.joints, path.length])
+    assert at.sum() == path.joints.size + 1
+    assert np.array_equal(left.state[at, :3], right.state[at, :3])
+    assert np.array_equal(left.rotor_angles[at], right.rotor_angles[at])
+    np.testing.assert_allclose(left.state[at, 3:], right.state[at, 3:], rtol=0, atol=1e-15)
+    alone = path.evaluate(path.joints, "left")
+    assert np.array_equal(alone.state[:, :3], left.state[at, :3][:-1])
+    assert np.array_equal(left.state[-1, :3], path.final_state[:3])
+    assert np.array_equal(left.rotor_angles[-1], path.final_state[3:])

@@ -331,6 +331,15 @@ class ContactPath:
             out[pos] = np.array(interrupts.call(integ, x0=x0, p=self._parameters(piece))["xf"]).T
         return out
 
+    def _states(self, j: int, phis: np.ndarray) -> np.ndarray:
+        """States at increasing ``phis`` along piece j: at its ends those of the construction (the same on both
+        sides of a joint, no integration), in between integrated from its start."""
+        out = np.empty((phis.size, 5))
+        end = phis >= self.pieces[j].phi_end
+        out[end] = self._x0[j + 1]
+        out[~end] = self._integrate(j, self._x0[j], phis[~end])
+        return out
+
     # ------------------------------------------------------------------ public
     @property
     def joints(self) -> np.ndarray:
@@ -370,10 +379,11 @@ class ContactPath:
             piece = self.pieces[j]
             c = piece.scale
             sel = np.nonzero(seg == j)[0]
-            phi = np.clip((s[sel] - self.starts[j]) / c, 0.0, piece.phi_end)
+            phi = np.where(s[sel] >= self.starts[j + 1], piece.phi_end,
+                           np.clip((s[sel] - self.starts[j]) / c, 0.0, piece.phi_end))
             order = np.argsort(phi, kind="stable")
             uq, inv = np.unique(phi[order], return_inverse=True)
-            xs = self._integrate(j, self._x0[j], uq)
+            xs = self._states(j, uq)
             p = self._parameters(piece)
             m = len(piece.params)
             out = piece.function.map(uq.size)(uq[None, :], xs[:, 2][None, :], p[:m], *p[m:])
