@@ -48,6 +48,10 @@ from rollplan.studies.closed_loop import (
 )
 from rollplan.studies.executor import map_in_order
 
+# tqdm's monitor thread would make the process pools spawn their workers (rollplan.studies.executor.start_method:
+# fork only while this process runs no other thread), each importing and building everything again
+tqdm.monitor_interval = 0
+
 GOAL = (0.2, 0.25, 0.8)
 STEPS = 4
 PIECE = 2.5          # s per leaf: 5 s per figure eight
