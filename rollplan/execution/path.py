@@ -387,8 +387,8 @@ class ContactPath:
             xs = self._states(j, uq)
             p = self._parameters(piece)
             m = len(piece.params)
-            out = piece.function.map(uq.size)(uq[None, :], xs[:, 2][None, :], p[:m], *p[m:])
-            uv, w, g, a, da = (np.array(out[i]).T[inv] for i in (1, 2, 3, 4, 5))
+            # CasADi's evaluation and its conversion to arrays (a Ctrl-C during it: KeyboardInterrupt, not an error)
+            uv, w, g, a, da = (v[inv] for v in interrupts.call(_piece_values, piece.function, uq, xs[:, 2], p, m))
             rows = sel[order]
             x = xs[inv]
             W[rows], G[rows], A[rows], B[rows] = w / c, g / c, jr * a / c, jr * da / c**2
@@ -463,6 +463,12 @@ class ContactPath:
         out = self._x0[-1].copy()
         out[2] += 2 * np.pi * self._turns
         return out
+
+
+def _piece_values(function: ca.Function, phi: np.ndarray, psi: np.ndarray, p: np.ndarray, m: int) -> list:
+    """A piece's function at every ``phi`` (with its ``psi``) as arrays, one row a point: u_o v_o, w, g, a, da."""
+    out = function.map(phi.size)(phi[None, :], psi[None, :], p[:m], *p[m:])
+    return [np.array(out[i]).T for i in (1, 2, 3, 4, 5)]
 
 
 def plan_pieces(plan, robot: Robot) -> tuple[list, tuple]:
