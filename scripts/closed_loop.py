@@ -48,6 +48,10 @@ from rollplan.studies.closed_loop import (
 )
 from rollplan.studies.executor import map_in_order
 
+# tqdm's monitor thread would make the process pools spawn their workers (rollplan.studies.executor.start_method:
+# fork only while this process runs no other thread), each importing and building everything again
+tqdm.monitor_interval = 0
+
 GOAL = (0.2, 0.25, 0.8)
 STEPS = 4
 PIECE = 2.5          # s per leaf: 5 s per figure eight
@@ -350,7 +354,8 @@ def main():
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     issue = issue_case(seeds, args.workers)
     mc_rows, mc_runs = monte_carlo(seeds, args.workers, errors=errors, scheduler=args.scheduler)
-    tq_rows, tq_runs = monte_carlo(tseeds, args.workers, "torques", errors=(errors[0], errors[-1]), noises=(0.0,),
+    ends = tuple(dict.fromkeys((errors[0], errors[-1])))   # the smallest and largest error, once each
+    tq_rows, tq_runs = monte_carlo(tseeds, args.workers, "torques", errors=ends, noises=(0.0,),
                                    scheduler=args.scheduler)
     tvr, mismatch = torque_vs_rate()
     mj = mujoco_section(args.mujoco_seeds, args.workers, args.scheduler)

@@ -8,6 +8,7 @@ contact point (1) as printed, the planner's own certificate.
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
 
 import rollplan
 from rollplan import InputError
@@ -134,3 +135,37 @@ def test_bad_input(path, asym_plan):
         ContactPath.of_plan(None, ROBOT)
     with pytest.raises(InputError, match="piece"):
         ContactPath([], ROBOT)
+
+
+def test_states_along_the_path_match_dop853_on_the_printed_equations(path, asym_plan):
+    """(u_a, v_a, psi) inside every leaf and at its ends against DOP853 (rtol 1e-13) on the printed (28)-(30)
+    along the circles (35), leaf after leaf; the path's end is its final state."""
+    R = ROBOT.radius
+    x = np.zeros(3)
+    phis = np.linspace(0.0, 2 * np.pi, 41)
+    for j in range(4):
+        r, side = (asym_plan.a / R, 1.0) if j % 2 == 0 else (asym_plan.b / R, -1.0)
+        ref = solve_ivp(references.rhs, (0.0, 2 * np.pi), x, method="DOP853", rtol=1e-13, atol=1e-14, t_eval=phis,
+                        args=(r, side, asym_plan.k, asym_plan.gamma)).y.T
+        for side_name in ("left", "right"):
+            ps = path.evaluate(path.starts[j] + r * phis, side_name)
+            np.testing.assert_allclose(ps.state[:, :3], ref, rtol=0, atol=1e-10)
+        x = ref[-1]
+    np.testing.assert_allclose(path.final_state[:3], x, rtol=0, atol=1e-10)
+
+
+def test_the_state_at_a_joint_is_one_state_from_both_sides(path):
+    """The integrated state (u_a, v_a, psi, the rotor angles) at a joint and at the end is the one the path found
+    piece by piece, from either side and whatever other points are evaluated with it: the same numbers, to the bit
+    (u_o, v_o come from each side's curve: equal to rounding)."""
+    s = np.unique(np.r_[np.linspace(0.0, path.length, 97), path.joints])
+    left, right = path.evaluate(s, "left"), path.evaluate(s, "right")
+    at = np.isin(s, np.r_[path.joints, path.length])
+    assert at.sum() == path.joints.size + 1
+    assert np.array_equal(left.state[at, :3], right.state[at, :3])
+    assert np.array_equal(left.rotor_angles[at], right.rotor_angles[at])
+    np.testing.assert_allclose(left.state[at, 3:], right.state[at, 3:], rtol=0, atol=1e-15)
+    alone = path.evaluate(path.joints, "left")
+    assert np.array_equal(alone.state[:, :3], left.state[at, :3][:-1])
+    assert np.array_equal(left.state[-1, :3], path.final_state[:3])
+    assert np.array_equal(left.rotor_angles[-1], path.final_state[3:])

@@ -109,19 +109,27 @@ def test_reconfiguration_script_runs(tmp_path):
 
 @pytest.mark.slow
 def test_closed_loop_script_runs(tmp_path):
-    """The script end to end with one seed per case, two model errors, one noise level of the issue's case and
-    one plan of the torque-against-rate comparison (every section, fewer samples of each than even --quick), MuJoCo
-    at a 1 ms step (its closed loop tested in test_mujoco at that step)."""
+    """The script end to end with one seed per case, one model error (each row of the Monte Carlo tables is one
+    error; the torque plant's runs the smallest and largest, here the same, run once), one noise level of the issue's
+    case and one plan of the torque-against-rate comparison (every section, fewer samples of each than even --quick),
+    MuJoCo at a 1 ms step (its closed loop tested in test_mujoco at that step). The process pools fork their workers
+    (which inherit what the script has built), not spawn them."""
     scripts = Path(__file__).resolve().parent.parent / "scripts"
-    run = ("import sys; sys.path.insert(0, sys.argv[1]); import closed_loop as c; c.ERRORS = (0.01, 0.10); "
+    run = ("import sys; sys.path.insert(0, sys.argv[1]); import closed_loop as c; c.ERRORS = (0.10,); "
            "c.NOISE_LEVELS = (1e-3,); c.TORQUE_CASES = c.TORQUE_CASES[:1]; c.MUJOCO_STEPS = (1,); "
            "c.BEYOND = c.BEYOND[:1]; c.MUJOCO_SETTINGS = {'timestep': 1e-3, 'solref': (2e-3, 1.0)}; "
-           "sys.argv = [c.__file__] + sys.argv[2:]; c.main()")
+           "import rollplan.studies.executor as ex; seen = []; pick = ex.start_method; "
+           "ex.start_method = lambda: seen.append(pick()) or seen[-1]; "
+           "sys.argv = [c.__file__] + sys.argv[2:]; c.main(); "
+           "assert seen and set(seen) == {'fork'}, f'the pools started their workers by {seen}'")
     subprocess.run([sys.executable, "-c", run, str(scripts), "--seeds", "1", "--torque-seeds", "1", "--mujoco-seeds",
                     "1", "--out-dir", str(tmp_path)], check=True, capture_output=True, timeout=1800)
     text = (tmp_path / "closed_loop.md").read_text()
     assert "## 1. The issue's robot" in text and "## 2. Monte Carlo" in text and "## 3. Torque-driven" in text
     assert "## 4. The issue's robot closed loop" in text and "| torque plant | 1 |" in text
+    data = json.loads((tmp_path / "closed_loop.json").read_text())
+    assert [(r["kind"], r["error"]) for r in data["monte_carlo_torques"]] == [("k", 0.10), ("J_r", 0.10)]
+    assert len(data["runs_torques"]) == 2 and len(data["runs_rates"]) == 4
     assert "settings {'timestep': 0.001" in text
     assert (tmp_path / "closed_loop.png").stat().st_size > 0 and (tmp_path / "closed_loop.json").stat().st_size > 0
 

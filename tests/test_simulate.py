@@ -14,7 +14,6 @@ import pytest
 from conftest import one_line, run
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
-from scipy.linalg.lapack import dgesv
 from test_interrupts import run_and_interrupt
 
 from rollplan import Robot, State
@@ -67,8 +66,9 @@ def _plan_file(d, n):
 @pytest.mark.parametrize("delay", [1.5, 2.5, 3.5, 4.5])
 def test_ctrl_c_in_the_torque_plant_is_exit_130_in_one_line(files, delay):
     """SIGINT while the torque plant runs (closed loop) ended in a CV_RHSFUNC_FAIL traceback, exit 1. The plan
-    of 12 figure eights runs for about 7 s on an idle machine, so that every delay falls inside it."""
-    code, elapsed, _, err = run_and_interrupt(["simulate", str(_plan_file(files, 12)), "--robot",
+    of 16 figure eights runs for about 6 s of CPU (as 12 did before the timing of its re-plans got faster), so
+    that every delay falls inside it."""
+    code, elapsed, _, err = run_and_interrupt(["simulate", str(_plan_file(files, 16)), "--robot",
                                                str(files / "real.toml"), "--closed-loop", "--plant", "torques"],
                                               delay)
     if code == 0:
@@ -241,29 +241,26 @@ def test_closed_loop_executes_turns_in_place_and_routes(files, tmp_path, capsys)
 def _piece_rhs(j_xx, j_zz, j_r, radius, t, torques):
     """:func:`references.torque_driven_rhs` with the torques ``(t, torques)`` interpolated linearly (np.interp's
     rule, held outside), in scalar arithmetic: the same printed equations (n_1, n_2 of (2)-(4), the 5x5 system of
-    (11) and the axial momenta by LAPACK's LU solve (dgesv, as numpy's solve), Montana's (6)-(10)), the sample
-    interval found by bisection. Checked against references.torque_driven_rhs
-    (test_the_scalar_torque_rhs_is_the_references)."""
+    (11) and the axial momenta, Montana's (6)-(10)), the sample interval found by bisection. The 5x5 system is solved
+    by eliminating the rotor rates, ``phi_i_dot = p_i / J_r - n_i . omega``: then ``(diag(Jxx, Jxx, Jzz) - J_r (n_1
+    n_1^T + n_2 n_2^T)) omega = -(n_1 p_1 + n_2 p_2)``, whose matrix is ``D + J_r n_3 n_3^T`` with ``D = diag(Jxx -
+    J_r, Jxx - J_r, Jzz - J_r)`` and ``n_3 = n_1 x n_2`` (n_1, n_2, n_3 orthonormal), solved by Sherman-Morrison.
+    Checked against references.torque_driven_rhs (test_the_scalar_torque_rhs_is_the_references)."""
     ts, q1, q2, last = t.tolist(), torques[:, 0].tolist(), torques[:, 1].tolist(), len(t) - 2
-    a = np.zeros((5, 5))
-    a[0, 0] = a[1, 1] = j_xx
-    a[2, 2] = j_zz
-    a[3, 3] = a[4, 4] = j_r
-    b = np.zeros(5)
+    dx, dz = 1.0 / (j_xx - j_r), 1.0 / (j_zz - j_r)
 
     def f(s, z):
         i = min(max(bisect_right(ts, s) - 1, 0), last)
         w = min(max((s - ts[i]) / (ts[i + 1] - ts[i]), 0.0), 1.0)
-        psi, u, v = z[2], z[3], z[4]
+        psi, u, v, p1, p2 = z[2], z[3], z[4], z[5], z[6]
         cu, su, cv, sv, cp, sp = math.cos(u), math.sin(u), math.cos(v), math.sin(v), math.cos(psi), math.sin(psi)
-        n1 = (cu * cp + su * sv * sp, -cu * sp + su * sv * cp, su * cv)
-        n2 = (cv * sp, cv * cp, -sv)
-        a[3, :3] = a[:3, 3] = j_r * n1[0], j_r * n1[1], j_r * n1[2]
-        a[4, :3] = a[:3, 4] = j_r * n2[0], j_r * n2[1], j_r * n2[2]
-        b[3], b[4] = z[5], z[6]
-        _, _, x, info = dgesv(a, b)
-        assert info == 0
-        wx, wy, wz = x[:3].tolist()
+        a1, a2, a3 = cu * cp + su * sv * sp, -cu * sp + su * sv * cp, su * cv     # n_1
+        b1, b2, b3 = cv * sp, cv * cp, -sv                                          # n_2
+        c1, c2, c3 = a2 * b3 - a3 * b2, a3 * b1 - a1 * b3, a1 * b2 - a2 * b1        # n_3 = n_1 x n_2
+        r1, r2, r3 = -(a1 * p1 + b1 * p2) * dx, -(a2 * p1 + b2 * p2) * dx, -(a3 * p1 + b3 * p2) * dz   # D^-1 rhs
+        e1, e2, e3 = c1 * dx, c2 * dx, c3 * dz                                      # D^-1 n_3
+        g = j_r * (c1 * r1 + c2 * r2 + c3 * r3) / (1.0 + j_r * (c1 * e1 + c2 * e2 + c3 * e3))
+        wx, wy, wz = r1 - g * e1, r2 - g * e2, r3 - g * e3
         roll = wx * sp + wy * cp
         return np.array([radius * wy, -radius * wx, -wz - roll * math.tan(v), -roll / cv, -wx * cp + wy * sp,
                          q1[i] + w * (q1[i + 1] - q1[i]), q2[i] + w * (q2[i + 1] - q2[i])])

@@ -45,7 +45,8 @@ momenta ``J_r phi' a`` with ``a_i = n_i . w + g_i``):
 where ``tau_i = J_r d/dt (n_i . omega + phi_i_dot)`` is the motor torque (derived in
 :mod:`rollplan.execution.actuation`) and ``da/dphi`` the total derivative along the
 piece (psi' from (30)). The state (u_a, v_a, psi) and the rotor angles
-``phi_i(s) = int G_i ds`` are integrated along the pieces by CVODES; all
+``phi_i(s) = int G_i ds`` are integrated along the pieces by CVODES (Adams: the right side is smooth and not
+stiff; it takes about a third of the steps of BDF at the same tolerance, and errs less); all
 functions come from :mod:`rollplan.core.model` through :func:`curve_piece_function`.
 
 Plans of any start and goal
@@ -102,7 +103,7 @@ __all__ = ["SMOOTH_JOINT_RTOL", "CORNER_CURVES", "curve_piece_function", "piece_
 #: A joint is smooth when omega per unit s' (``W``) agrees on its two sides to this fraction of its size.
 SMOOTH_JOINT_RTOL = 1e-8
 
-_CVODES = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 200000}
+_CVODES = {"abstol": 1e-13, "reltol": 1e-12, "max_num_steps": 200000, "linear_multistep_method": "adams"}
 
 #: Curves of :data:`rollplan.core.paths.CURVES` with vertices, and their pieces per leaf: the figure eights of the
 #: geodesic polygons. Every piece of a leaf but its first starts at a vertex (a corner); at the pole the edge
@@ -331,6 +332,15 @@ class ContactPath:
             out[pos] = np.array(interrupts.call(integ, x0=x0, p=self._parameters(piece))["xf"]).T
         return out
 
+    def _states(self, j: int, phis: np.ndarray) -> np.ndarray:
+        """States at increasing ``phis`` along piece j: at its ends those of the construction (the same on both
+        sides of a joint, no integration), in between integrated from its start."""
+        out = np.empty((phis.size, 5))
+        end = phis >= self.pieces[j].phi_end
+        out[end] = self._x0[j + 1]
+        out[~end] = self._integrate(j, self._x0[j], phis[~end])
+        return out
+
     # ------------------------------------------------------------------ public
     @property
     def joints(self) -> np.ndarray:
@@ -370,14 +380,15 @@ class ContactPath:
             piece = self.pieces[j]
             c = piece.scale
             sel = np.nonzero(seg == j)[0]
-            phi = np.clip((s[sel] - self.starts[j]) / c, 0.0, piece.phi_end)
+            phi = np.where(s[sel] >= self.starts[j + 1], piece.phi_end,
+                           np.clip((s[sel] - self.starts[j]) / c, 0.0, piece.phi_end))
             order = np.argsort(phi, kind="stable")
             uq, inv = np.unique(phi[order], return_inverse=True)
-            xs = self._integrate(j, self._x0[j], uq)
+            xs = self._states(j, uq)
             p = self._parameters(piece)
             m = len(piece.params)
-            out = piece.function.map(uq.size)(uq[None, :], xs[:, 2][None, :], p[:m], *p[m:])
-            uv, w, g, a, da = (np.array(out[i]).T[inv] for i in (1, 2, 3, 4, 5))
+            # CasADi's evaluation and its conversion to arrays (a Ctrl-C during it: KeyboardInterrupt, not an error)
+            uv, w, g, a, da = (v[inv] for v in interrupts.call(_piece_values, piece.function, uq, xs[:, 2], p, m))
             rows = sel[order]
             x = xs[inv]
             W[rows], G[rows], A[rows], B[rows] = w / c, g / c, jr * a / c, jr * da / c**2
@@ -452,6 +463,12 @@ class ContactPath:
         out = self._x0[-1].copy()
         out[2] += 2 * np.pi * self._turns
         return out
+
+
+def _piece_values(function: ca.Function, phi: np.ndarray, psi: np.ndarray, p: np.ndarray, m: int) -> list:
+    """A piece's function at every ``phi`` (with its ``psi``) as arrays, one row a point: u_o v_o, w, g, a, da."""
+    out = function.map(phi.size)(phi[None, :], psi[None, :], p[:m], *p[m:])
+    return [np.array(out[i]).T for i in (1, 2, 3, 4, 5)]
 
 
 def plan_pieces(plan, robot: Robot) -> tuple[list, tuple]:
