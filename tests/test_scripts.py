@@ -17,8 +17,8 @@ from conftest import cache_wide
 def test_benchmark_script_runs(tmp_path):
     """Every section once (--quick, without the JIT and the cold subprocesses), issue 28's among them: the speed-up
     of the rest-to-rest collocation over rockit (wall and CPU time, the optima's difference) and the wall time of
-    `rollplan compare`, each with its budget row. A second run with --only reruns one section and keeps the
-    others, each with the date of its own run."""
+    `rollplan compare`, each with its budget row. A second run, as a program, with --only reruns two sections and
+    keeps the others, each with the date of its own run."""
     with cache_wide("benchmark") as builds:     # the C planner's build kept with the tests' build cache
         run_script_here("benchmark.py", tmp_path, "--quick", "--no-jit", "--no-cold", "--build-dir", str(builds))
         assert any((kept / "librollplan.a").is_file() for kept in builds.glob("host-*"))
@@ -37,10 +37,12 @@ def test_benchmark_script_runs(tmp_path):
     assert comp["median_s"] > 0 and comp["cpu_median_s"] > 0
     budgets = [row["budget"] for row in sections["section_budgets"]["rows"]]
     assert any("faster than rockit" in b for b in budgets) and any("`rollplan compare`" in b for b in budgets)
-    run_script_here("benchmark.py", tmp_path, "--quick", "--only", "memory")
+    # as a program (its own entry point and imports: the default's section imports the tests' references)
+    run_script("benchmark.py", tmp_path, "--quick", "--only", "memory", "fast_default")
     again = {sec["function"]: sec for sec in json.loads((tmp_path / "benchmarks.json").read_text())["sections"]}
     assert set(again) == set(sections)
     assert again["section_peer"] == sections["section_peer"] and again["section_memory"] != sections["section_memory"]
+    assert again["section_fast_default"] != sections["section_fast_default"]
 
 
 @pytest.mark.slow
