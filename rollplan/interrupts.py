@@ -39,7 +39,9 @@ symbolic construction of a model function: ``ca.cos`` of an SX calls back into P
 overload" and dropped, and one raised in a finalizer or an at-fork callback is printed as "Exception ignored"
 and dropped: the Ctrl-C would be lost. So the command's handler also records the signal, a KeyboardInterrupt
 that Python cannot raise is recorded instead of printed (``sys.unraisablehook``), and :func:`check` raises a
-recorded signal once: at the next solver call (:func:`call`) or progress report. A signal that was raised
+recorded signal once: at the next solver call (:func:`call`) or progress report. A KeyboardInterrupt raised
+inside a C extension's conversion (CasADi's result to an array) reaches Python as a SystemError: the command takes
+an unexpected error raised while a signal is pending (:func:`pending`) for the interrupt. A signal that was raised
 normally may be raised a second time there (while the command stops): the command exits 130 either way.
 
 Exit status 130 after a handled Ctrl-C: CPython (3.11, ``Python/pythonrun.c``) marks a KeyboardInterrupt
@@ -65,8 +67,8 @@ import threading
 from contextlib import contextmanager
 
 __all__ = ["call", "call_in_thread", "call_in_threads", "abandoned", "Terminated",
-           "terminate_as_interrupt", "guard_start_up", "cli_follows", "end_start_up", "check", "forget_unhandled",
-           "settle"]
+           "terminate_as_interrupt", "guard_start_up", "cli_follows", "end_start_up", "check", "pending",
+           "forget_unhandled", "settle"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -298,6 +300,14 @@ def check() -> None:
     if _State.held and _State.pending is not None and threading.current_thread() is threading.main_thread():
         pending, _State.pending = _State.pending, None
         raise pending
+
+
+def pending():
+    """The Ctrl-C (KeyboardInterrupt) or SIGTERM (:class:`Terminated`) that the command recorded and that was not
+    delivered by :func:`check`, or None (always None outside the command). An error raised while one is pending
+    is taken for the interrupt (:func:`rollplan.cli.main`): Python turns a KeyboardInterrupt raised inside a C
+    extension's conversion (CasADi's result to an array) into a SystemError."""
+    return _State.pending if _State.held else None
 
 
 def _unraisable(unraisable) -> None:

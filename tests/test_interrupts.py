@@ -419,3 +419,36 @@ def test_a_ctrl_c_swallowed_on_its_way_is_delivered_once_by_the_command(mode, tm
     else:
         assert lines[1:] == ["not delivered", "not delivered", "not delivered"], r.stdout
         assert "Exception ignored" in r.stderr
+
+
+TURNED = """
+import signal, sys
+sys.argv = ["rollplan", "step", "--a", "0.3"]   # this program is the command (interrupts.cli_follows)
+from rollplan.cli import main
+from rollplan.cli.commands import step
+
+def converted(args):            # as a C extension's conversion that met the KeyboardInterrupt: a SystemError
+    if {signalled}:
+        try:
+            signal.raise_signal(signal.SIGINT)
+        except KeyboardInterrupt:
+            pass
+    raise SystemError("<built-in function DM_from_array> returned a result with an exception set")
+
+step.cmd_step = converted
+sys.exit(main())
+"""
+
+
+@pytest.mark.parametrize("signalled", [True, False])
+def test_an_error_raised_while_a_ctrl_c_is_pending_is_the_interrupt(signalled, tmp_path):
+    """A KeyboardInterrupt raised inside a C extension's conversion (CasADi's result to an array) reaches Python as a
+    SystemError: the command ended with a traceback, exit 1. With a Ctrl-C pending (recorded by the command's
+    handler) the error is the interrupt: one line, exit 130; without one it is the error it is."""
+    script = tmp_path / "turned.py"
+    script.write_text(TURNED.format(signalled=signalled))
+    r = subprocess.run([sys.executable, str(script)], check=False, capture_output=True, text=True, timeout=120)
+    if signalled:
+        assert r.returncode == 130 and r.stderr.strip().splitlines() == ["rollplan: interrupted"], r.stderr
+    else:
+        assert r.returncode == 1 and "SystemError" in r.stderr, r.stderr
