@@ -297,9 +297,10 @@ def check() -> None:
     """Raise a Ctrl-C (or SIGTERM) that the command recorded and that was swallowed on its way (module docstring,
     "Swallowed"), once; nothing outside the command or when none is pending. Called by :func:`call` and by every
     progress report (:func:`rollplan.progress.report`)."""
-    if _State.held and _State.pending is not None and threading.current_thread() is threading.main_thread():
-        pending, _State.pending = _State.pending, None
-        raise pending
+    signal_type = pending()
+    if signal_type is not None and threading.current_thread() is threading.main_thread():
+        _State.pending = None
+        raise signal_type
 
 
 def pending():

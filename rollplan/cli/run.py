@@ -120,10 +120,7 @@ def _main(argv) -> int:
         return EXIT_SOLVER
     except OSError as exc:   # stdout on a full disk (`> /dev/full`), into a closed pipe (`| head -c1`): one line
         if exc.errno not in WRITE_FAILURES:
-            status = _interrupted()
-            if status is None:
-                raise
-            return status
+            return _interrupted_or_raise(exc)
         _drop_stdout()
         try:
             print(f"rollplan: error: the standard output cannot be written: {WRITE_FAILURES[exc.errno]}",
@@ -131,22 +128,19 @@ def _main(argv) -> int:
         except OSError:   # stderr is gone too (`2>&1 | head`): the exit status says it
             _drop_stdout(sys.stderr)
         return EXIT_INPUT
-    except Exception:   # the interrupt if one is pending, else raised on
-        status = _interrupted()
-        if status is None:
-            raise
-        return status
+    except Exception as exc:
+        return _interrupted_or_raise(exc)
     finally:
         Claims.stack = None
 
 
-def _interrupted() -> int | None:
-    """For an unexpected error: the exit status of a Ctrl-C (or SIGTERM) pending when it was raised
+def _interrupted_or_raise(exc: Exception) -> int:
+    """For an unexpected error ``exc``: the exit status of a Ctrl-C (or SIGTERM) pending when it was raised
     (:func:`rollplan.interrupts.pending`: the interrupt turned into another error on its way), its one line
-    printed; None if none is pending (the error is raised on)."""
+    printed; ``exc`` raised on if none is pending."""
     signal_type = interrupts.pending()
     if signal_type is None:
-        return None
+        raise exc
     terminated = issubclass(signal_type, interrupts.Terminated)
     print(f"rollplan: {'terminated' if terminated else 'interrupted'}", file=sys.stderr)
     return EXIT_TERMINATED if terminated else EXIT_INTERRUPTED

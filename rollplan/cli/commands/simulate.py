@@ -3,7 +3,6 @@ loop."""
 
 from __future__ import annotations
 
-from ... import interrupts
 from ...errors import InputError, check_finite, check_whole
 from ...inputs import show_path
 from ...io import save_figure
@@ -153,12 +152,10 @@ def cmd_simulate(args) -> int:
     other = load_robot(args.robot) if args.robot else None
     rp = load_rotor_plan(args.plan_file)
     robot = other or rp.robot
-    # inside interrupts.call: a Ctrl-C that lands while CasADi converts a result (the error it leaves, SystemError)
-    # is the interrupt (exit 130), wherever in the plants, the estimators or the re-plans it lands
     if args.engine == "mujoco":
-        return interrupts.call(_simulate_mujoco, args, rp, robot, gain)
+        return _simulate_mujoco(args, rp, robot, gain)
     if args.closed_loop or args.plant != "rates" or args.noise:
-        return interrupts.call(_simulate_executed, args, rp, robot)
+        return _simulate_executed(args, rp, robot)
     keep = rp.distinct
     sim = simulate_rotors(robot, rp.time[keep], rp.rotor_rates[keep], rp.goal, x0=rp.start.array())
     e = sim.error
