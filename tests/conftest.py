@@ -356,6 +356,16 @@ def package_nodes(path) -> tuple:
     return _walked(Path(path).resolve())
 
 
+def run_program(folder, name: str, text: str, *args: str) -> subprocess.CompletedProcess:
+    """Write ``text`` as the program ``folder/name`` and run it in a fresh interpreter with ``args`` (its output
+    captured as text; two minutes at most): for what must not depend on what ran before in the test process (its
+    threads, signal handlers, process-wide settings)."""
+    script = Path(folder) / name
+    script.write_text(text)
+    return subprocess.run([sys.executable, str(script), *args], check=False, capture_output=True, text=True,
+                          timeout=120)
+
+
 def one_line(err):
     """True if ``err`` is one line and no traceback (how every refusal is reported)."""
     return len(err.strip().splitlines()) == 1 and "Traceback" not in err

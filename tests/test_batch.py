@@ -12,6 +12,7 @@ import sys
 import time
 
 import pytest
+from conftest import run_program
 
 from rollplan import cli
 from rollplan.errors import InputError
@@ -535,9 +536,7 @@ def test_forked_workers_start_with_the_planner_built(tmp_path):
     """With --jobs 2 the workers are forked after the parent built the planner: they construct nothing. Run in a
     fresh interpreter: the test process may run other threads (a Dask test leaves one), and then the executor
     rightly spawns instead of forking."""
-    script = tmp_path / "forked.py"
-    script.write_text(_FORKED)
-    done = subprocess.run([sys.executable, str(script)], check=False, capture_output=True, text=True, timeout=120)
+    done = run_program(tmp_path, "forked.py", _FORKED)
     assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr[-2000:]
 
 

@@ -6,6 +6,7 @@ import os
 import sys
 
 import pytest
+from conftest import run_program
 
 from rollplan.errors import InputError
 from rollplan.studies.executor import DASK_EXTRA, Executor, map_in_order
@@ -119,11 +120,7 @@ def test_first_item_here_and_the_forked_workers_share_what_it_built(tmp_path):
     """first_here: item 0 runs in the parent before the fork; the workers get the rest and find built what it
     built (nothing is built twice). Run in a fresh interpreter: the test process itself may run other threads
     (then the executor rightly spawns instead of forking)."""
-    import subprocess
-
-    script = tmp_path / "first_here.py"
-    script.write_text(_FIRST_HERE)
-    done = subprocess.run([sys.executable, str(script)], check=False, capture_output=True, text=True, timeout=120)
+    done = run_program(tmp_path, "first_here.py", _FIRST_HERE)
     assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr[-2000:]
 
 

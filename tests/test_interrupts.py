@@ -16,6 +16,7 @@ from concurrent.futures import ThreadPoolExecutor
 import casadi as ca
 import numpy as np
 import pytest
+from conftest import run_program
 
 from rollplan import interrupts
 from rollplan.planners.geometric import GeometricPhasePlanner
@@ -408,9 +409,7 @@ def test_a_ctrl_c_swallowed_on_its_way_is_delivered_once_by_the_command(mode, tm
     printed as "Exception ignored" with a traceback. The command records the signal: the next solver call or
     progress report raises it, once; no traceback is printed. A program using the library keeps Python's default
     (nothing recorded, nothing raised later)."""
-    script = tmp_path / "swallowed.py"
-    script.write_text(SWALLOWED)
-    r = subprocess.run([sys.executable, str(script), mode], check=False, capture_output=True, text=True, timeout=120)
+    r = run_program(tmp_path, "swallowed.py", SWALLOWED, mode)
     lines = r.stdout.splitlines()
     assert lines[0] == "built", r.stdout   # CasADi dropped the KeyboardInterrupt and built on (the premise)
     if mode == "command":
@@ -445,9 +444,7 @@ def test_an_error_raised_while_a_ctrl_c_is_pending_is_the_interrupt(signalled, t
     """A KeyboardInterrupt raised inside a C extension's conversion (CasADi's result to an array) reaches Python as a
     SystemError: the command ended with a traceback, exit 1. With a Ctrl-C pending (recorded by the command's
     handler) the error is the interrupt: one line, exit 130; without one it is the error it is."""
-    script = tmp_path / "turned.py"
-    script.write_text(TURNED.format(signalled=signalled))
-    r = subprocess.run([sys.executable, str(script)], check=False, capture_output=True, text=True, timeout=120)
+    r = run_program(tmp_path, "turned.py", TURNED.format(signalled=signalled))
     if signalled:
         assert r.returncode == 130 and r.stderr.strip().splitlines() == ["rollplan: interrupted"], r.stderr
     else:
