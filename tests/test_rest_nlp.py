@@ -90,7 +90,8 @@ def test_reduced_solution_solves_the_full_transcription(scheme, degree):
 @pytest.mark.slow
 def test_correction_at_an_optimum_whose_end_jacobian_is_singular():
     """From the straight line, N = 8, the NLP of a straight roll reaches an optimum where the controls cannot move
-    the end state in one direction (the smallest singular value of the end-state Jacobian below 1e-9 of the largest):
+    the end state in one direction (the smallest singular value of the end-state Jacobian below 1e-9 of the largest;
+    IPOPT may need its fresh start there, :data:`.rest.IPOPT_RESTARTS`):
     Gauss-Newton ignores that direction instead of taking a huge step, and its controls reach the goal at rest
     (DOP853 on the printed equations)."""
     u, v = 0.3, -0.2
@@ -102,6 +103,30 @@ def test_correction_at_an_optimum_whose_end_jacobian_is_singular():
     y, rates = references.rest_path_final(controls, 1.0, K)
     assert np.abs(y - final[:3]).max() < TOLERANCE and np.abs(rates).max() < TOLERANCE
     assert planner.finish(nlp).residual < TOLERANCE
+
+
+def test_a_failed_solve_starts_again_from_its_last_iterate(monkeypatch):
+    """IPOPT stopped short of the optimum (its iteration limit) starts again from its last iterate and reaches the
+    optimum of one uninterrupted solve; without the fresh start the same solve fails, and where the fresh start
+    fails too the error names both statuses."""
+    from rollplan.errors import SolverError
+    from rollplan.planners.collocation import rest
+
+    problem = Problem((0.5, 0.7, 0.8), k=K)
+    planner = RestToRestPlanner(8, 3, cost="path_energy")
+    start, final = planner.boundary(problem, 0)
+    guess = naive_guess(planner.transcription, start, final)
+    whole = planner.solve_nlp(problem, guess)
+    short = planner.twin({"ipopt.max_iter": whole.iterations - 3})
+    again = short.solve_nlp(problem, guess)
+    assert again.iterations > whole.iterations - 3 and again.status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+    assert np.abs(again.x - whole.x).max() < 1e-6 and again.objective == pytest.approx(whole.objective, rel=1e-9)
+    monkeypatch.setattr(rest, "IPOPT_RESTARTS", 0)
+    with pytest.raises(SolverError, match="Maximum_Iterations_Exceeded after"):
+        short.solve_nlp(problem, guess)
+    monkeypatch.undo()
+    with pytest.raises(SolverError, match="Maximum_Iterations_Exceeded, then Maximum_Iterations_Exceeded after 2 "):
+        planner.twin({"ipopt.max_iter": 1}).solve_nlp(problem, guess)
 
 
 def test_correction_jacobian_by_eighth_order_steps_gives_the_controls_of_cvodes_sensitivities(monkeypatch):

@@ -86,6 +86,11 @@ BACKOFF_FACTOR = 1.25
 #: systems (banded blocks, one per interval) by approximate minimum degree, which factors them faster than
 #: MUMPS's automatic choice of ordering.
 REST_IPOPT_OPTIONS = {"ipopt.mumps_pivot_order": 0}
+#: Fresh starts of IPOPT from the last iterate of a failed rest-to-rest solve. A start resets the barrier
+#: parameter, the filter and the regularization of the KKT systems: near an optimum whose constraint Jacobian
+#: is rank-deficient (a straight roll: the controls move the final yaw only to second order) the line search of
+#: a long solve can stall there, and whether it does depends on round-off (docs/design/collocation.md).
+IPOPT_RESTARTS = 1
 _NEWTON_STEPS = 8
 
 
@@ -365,18 +370,24 @@ class RestToRestPlanner:
                            f * horizon ** COST_POWERS[self.cost], status, iters, solve_time)
 
     def _ipopt(self, x0, lbx, ubx, lbg, ubg, par, where: str, iters: int):
-        """One IPOPT solve from ``x0`` (the NLP's decision vector): ``(x in the full transcription's layout, f,
-        status, iters + its iterations, wall time)``; SolverError if it failed."""
+        """IPOPT's solution of the NLP from ``x0`` (its decision vector): ``(x in the full transcription's layout,
+        f, status, iters + its iterations, wall time)``. Where a solve fails, IPOPT starts again from its last
+        iterate, up to :data:`IPOPT_RESTARTS` times; SolverError if the last one fails too."""
         t0 = time.perf_counter()
-        sol = interrupts.call(self.solver, x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
+        x, statuses = x0, []
+        for _ in range(1 + IPOPT_RESTARTS):
+            sol = interrupts.call(self.solver, x0=x, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=par)
+            st = self.solver.stats()
+            statuses.append(str(st["return_status"]))
+            iters += int(st["iter_count"])
+            x = np.array(sol["x"]).ravel()
+            if st["success"] or not np.all(np.isfinite(x)):
+                break
         solve_time = time.perf_counter() - t0
-        st = self.solver.stats()
-        status = str(st["return_status"])
-        iters += int(st["iter_count"])
         if not st["success"]:
-            raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {status} after {iters} "
-                              "iterations; hint: warm-start from a geometric-phase plan", status)
-        return self.rest_transcription.full(np.array(sol["x"]).ravel()), float(sol["f"]), status, iters, solve_time
+            raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {', then '.join(statuses)} "
+                              f"after {iters} iterations; hint: warm-start from a geometric-phase plan", statuses[-1])
+        return self.rest_transcription.full(x), float(sol["f"]), statuses[-1], iters, solve_time
 
     def finish(self, nlp: NlpSolution, fixed_steps: tuple[int, int] | None = None) -> RestResult:
         """The second stage of :meth:`solve`: the Newton correction and the CVODES certificate of ``nlp`` (a
