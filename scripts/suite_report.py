@@ -25,6 +25,7 @@ import argparse
 import datetime
 import json
 import os
+import platform
 import re
 import resource
 import subprocess
@@ -43,6 +44,16 @@ SLOWEST = 20
 FILES = 15
 #: at most this many skipped tests are named (all are counted)
 SKIPPED_NAMED = 50
+
+
+def processor() -> str:
+    """The processor's model name (``/proc/cpuinfo``, else :func:`platform.processor`): machines differ between
+    runs, and so do their speeds."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            return next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    except (OSError, StopIteration):
+        return platform.processor() or "unknown"
 
 
 def _cpu() -> float:
@@ -132,7 +143,8 @@ def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list, warm:
         "cache": "warm" if warm else "fresh",
         "command": " ".join(["python -m pytest -q -n", jobs, *(f'-m "{s}"' for s in select[1:]), tests, *extra]),
         "date": f"{start:%Y-%m-%d %H:%M UTC}", "commit": commit + ("+" if dirty else ""),
-        "exit_status": run.returncode, "summary": summary, "cores": os.cpu_count(), "jobs": jobs,
+        "exit_status": run.returncode, "summary": summary, "cores": os.cpu_count(), "processor": processor(),
+        "jobs": jobs,
         "required": require, "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
         "load_start": [round(x, 2) for x in load0], "load_end": [round(x, 2) for x in load1],
         "tests": len(cases), "passed": sum(o == "passed" for _, _, o, _ in cases),
@@ -173,7 +185,7 @@ def render(data: dict) -> str:
              "shared: the load average at the start and the end is given, and the CPU time (user + system of pytest "
              "and every process it started) depends less on the load than the wall time.", "",
              "| tier | command | date, commit | tests (passed, failed, skipped) | wall time | budget | CPU time | "
-             "sum of test durations | cores, workers | load average at start, end (1 min) |",
+             "sum of test durations | cores (processor), workers | load average at start, end (1 min) |",
              "|---|---|---|---:|---:|---|---:|---:|---|---|"]
     for key, (_, budget, what) in _rows(data):
         m = data.get(key)
@@ -183,7 +195,8 @@ def render(data: dict) -> str:
         verdict = "within" if m["wall_s"] <= budget else "over"
         lines.append(f"| {key} | `{m['command']}` | {m['date']}, `{m['commit']}` | {m['tests']} ({m['passed']}, "
                      f"{m['failed']}, {m['skipped']}) | **{_minutes(m['wall_s'])}** | {verdict} ({what}) | "
-                     f"{_minutes(m['cpu_s'])} | {_minutes(m['test_seconds'])} | {m['cores']}, {m['jobs']} | "
+                     f"{_minutes(m['cpu_s'])} | {_minutes(m['test_seconds'])} | "
+                     f"{m['cores']} ({m.get('processor', 'not recorded')}), {m['jobs']} | "
                      f"{m['load_start'][0]:.2f}, {m['load_end'][0]:.2f} |")
     for tier, _ in _rows(data):
         m = data.get(tier)
