@@ -70,6 +70,7 @@ from rollplan.planners import geometric
 import bench_batch
 import bench_codegen
 import bench_collocation
+from suite_report import processor
 
 K = 2.5
 #: (target (u_a, v_a, psi), steps) of the plan benchmark, all at k = K.
@@ -976,16 +977,7 @@ SECTIONS.insert(SECTIONS.index(section_list_all) + 1, section_fast_default)
 
 
 def machine():
-    model = ""
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    model = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return {"platform": platform.platform(), "cpu": model or platform.processor(), "cores": os.cpu_count(),
+    return {"platform": platform.platform(), "cpu": processor(), "cores": os.cpu_count(),
             "python": platform.python_version(), "casadi": ca.__version__, "numpy": np.__version__,
             "scipy": scipy.__version__, "rollplan": rollplan.__version__,
             "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None}
