@@ -167,26 +167,27 @@ class TimeProfile:
 
         ``piece`` (ints like ``t``) forces the polynomial piece used, e.g. the one that ends at a break.
         """
-        t = np.clip(np.atleast_1d(np.asarray(t, float)), 0.0, self.duration)
-        if piece is None:
-            k = np.clip(np.searchsorted(self.breaks, t, side="right") - 1, 0, self.coeffs.shape[0] - 1)
-        else:
-            k = np.asarray(piece, int)
-        dt = t - self.breaks[k]
-        c = self.coeffs[k]
+        c, pw = self._terms(t, piece)
         p = np.arange(c.shape[1])
-        pw = dt[:, None] ** p
         s = np.sum(c * pw, axis=1)
         sd = np.sum(c[:, 1:] * p[1:] * pw[:, :-1], axis=1)
         sdd = np.sum(c[:, 2:] * (p[2:] * (p[2:] - 1)) * pw[:, :-2], axis=1)
         return s, sd, sdd
 
     def position(self, t) -> np.ndarray:
-        """``s`` at times ``t``: the first value of :meth:`evaluate`, computed alone (the same arithmetic)."""
+        """``s`` at times ``t``: the first value of :meth:`evaluate`, computed alone."""
+        c, pw = self._terms(t)
+        return np.sum(c * pw, axis=1)
+
+    def _terms(self, t, piece=None) -> tuple[np.ndarray, np.ndarray]:
+        """The coefficients (M, degree + 1) of the pieces of times ``t`` (M,), clipped to [0, T], and the powers
+        of the times from the pieces' starts (M, degree + 1)."""
         t = np.clip(np.atleast_1d(np.asarray(t, float)), 0.0, self.duration)
-        k = np.clip(np.searchsorted(self.breaks, t, side="right") - 1, 0, self.coeffs.shape[0] - 1)
-        pw = (t - self.breaks[k])[:, None] ** np.arange(self.coeffs.shape[1])
-        return np.sum(self.coeffs[k] * pw, axis=1)
+        if piece is None:
+            k = np.clip(np.searchsorted(self.breaks, t, side="right") - 1, 0, self.coeffs.shape[0] - 1)
+        else:
+            k = np.asarray(piece, int)
+        return self.coeffs[k], (t - self.breaks[k])[:, None] ** np.arange(self.coeffs.shape[1])
 
     def stretched(self, factor: float) -> TimeProfile:
         """The same path run ``factor`` times slower: ``s(t / factor)``."""
