@@ -120,13 +120,46 @@ def test_a_failed_solve_starts_again_from_its_last_iterate(monkeypatch):
     short = planner.twin({"ipopt.max_iter": whole.iterations - 3})
     again = short.solve_nlp(problem, guess)
     assert again.iterations > whole.iterations - 3 and again.status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+    assert again.statuses == ("Maximum_Iterations_Exceeded", again.status) and whole.statuses == (whole.status,)
     assert np.abs(again.x - whole.x).max() < 1e-6 and again.objective == pytest.approx(whole.objective, rel=1e-9)
+    assert short.finish(again).stats.details["ipopt_statuses"] == again.statuses
     monkeypatch.setattr(rest, "IPOPT_RESTARTS", 0)
     with pytest.raises(SolverError, match="Maximum_Iterations_Exceeded after"):
         short.solve_nlp(problem, guess)
     monkeypatch.undo()
     with pytest.raises(SolverError, match="Maximum_Iterations_Exceeded, then Maximum_Iterations_Exceeded after 2 "):
         planner.twin({"ipopt.max_iter": 1}).solve_nlp(problem, guess)
+
+
+@pytest.mark.parametrize("status, starts", [
+    ("Restoration_Failed", 2), ("Maximum_Iterations_Exceeded", 2), ("Error_In_Step_Computation", 2),
+    ("Search_Direction_Becomes_Too_Small", 2), ("NonIpopt_Exception_Thrown", 1), ("User_Requested_Stop", 1),
+    ("Infeasible_Problem_Detected", 1), ("Invalid_Number_Detected", 1), ("Maximum_CpuTime_Exceeded", 1)])
+def test_only_a_stalled_solve_starts_again(status, starts):
+    """IPOPT starts again only after a stall that a fresh start can change: never after an interrupt (a Ctrl-C
+    that a program's own handler turned into an exception in the solver is not lost), a local infeasibility or an
+    invalid number. A stand-in for IPOPT reports ``status`` at every start."""
+    from rollplan.errors import SolverError
+
+    class Failing:
+        x0 = []
+
+        def __call__(self, **args):
+            self.x0.append(np.array(args["x0"]))
+            return {"x": args["x0"] + 1.0, "f": 0.0}
+
+        def stats(self):
+            return {"return_status": status, "iter_count": 3, "success": False}
+
+    planner = RestToRestPlanner(8, 3, cost="path_energy").twin()
+    planner.solver = Failing()
+    problem = Problem((0.5, 0.7, 0.8), k=K)
+    start, final = planner.boundary(problem, 0)
+    with pytest.raises(SolverError, match=", then ".join([status] * starts) + f" after {3 * starts} ") as err:
+        planner.solve_nlp(problem, naive_guess(planner.transcription, start, final))
+    assert err.value.status == status and len(planner.solver.x0) == starts
+    if starts == 2:    # from the last iterate, not from the guess again
+        assert np.array_equal(planner.solver.x0[1], planner.solver.x0[0] + 1.0)
 
 
 def test_correction_jacobian_by_eighth_order_steps_gives_the_controls_of_cvodes_sensitivities(monkeypatch):

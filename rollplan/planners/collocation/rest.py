@@ -86,11 +86,15 @@ BACKOFF_FACTOR = 1.25
 #: systems (banded blocks, one per interval) by approximate minimum degree, which factors them faster than
 #: MUMPS's automatic choice of ordering.
 REST_IPOPT_OPTIONS = {"ipopt.mumps_pivot_order": 0}
-#: Fresh starts of IPOPT from the last iterate of a failed rest-to-rest solve. A start resets the barrier
-#: parameter, the filter and the regularization of the KKT systems: near an optimum whose constraint Jacobian
-#: is rank-deficient (a straight roll: the controls move the final yaw only to second order) the line search of
-#: a long solve can stall there, and whether it does depends on round-off (docs/design/collocation.md).
+#: Fresh starts of IPOPT from the last iterate of a rest-to-rest solve that stalled (:data:`RESTART_STATUSES`).
+#: A start resets the barrier parameter, the filter and the regularization of the KKT systems: near an optimum
+#: whose constraint Jacobian is rank-deficient (a straight roll: the controls move the final yaw only to second
+#: order) the line search can stall, and whether it does depends on round-off (docs/design/collocation.md).
 IPOPT_RESTARTS = 1
+#: The IPOPT statuses of a stalled solve, which a fresh start can change; never an interrupt
+#: (``NonIpopt_Exception_Thrown``, ``User_Requested_Stop``), a local infeasibility or an invalid number.
+RESTART_STATUSES = frozenset({"Restoration_Failed", "Maximum_Iterations_Exceeded", "Error_In_Step_Computation",
+                              "Search_Direction_Becomes_Too_Small"})
 _NEWTON_STEPS = 8
 
 
@@ -151,7 +155,8 @@ class RestResult(CollocationRun):
     objective : float
         The cost of ``controls`` (CVODES quadrature; lengths in R; ``rotor_energy`` divided by J_r^2); the
         NLP's optimal value is ``stats.details["nlp_objective"]``, the contact bound the last NLP solved with
-        ``stats.details["backed_off_bound"]``.
+        ``stats.details["backed_off_bound"]``, the statuses of every start of IPOPT (fresh starts after a stall,
+        :data:`IPOPT_RESTARTS`, and the solves with a backed-off bound) ``stats.details["ipopt_statuses"]``.
     motion : TimeSeries
         The certified motion (CVODES samples) [length unit].
     certificate : Certificate
@@ -216,6 +221,9 @@ class NlpSolution:
     iterations : int
     solve_time_s : float
         IPOPT's wall time [s].
+    statuses : tuple of str
+        The statuses of IPOPT's starts: more than one where a start stalled and IPOPT started again from its last
+        iterate (:data:`IPOPT_RESTARTS`).
     """
 
     problem: Problem
@@ -232,6 +240,7 @@ class NlpSolution:
     status: str
     iterations: int
     solve_time_s: float
+    statuses: tuple = ()
 
 
 class RestToRestPlanner:
@@ -249,7 +258,7 @@ class RestToRestPlanner:
     tol : float
         IPOPT's tolerance, in (0, 1e-2].
     max_iter : int
-        IPOPT's iteration limit.
+        IPOPT's iteration limit, per start of IPOPT (a stalled solve starts again: :data:`IPOPT_RESTARTS`).
     samples_per_interval : int
         CVODES samples per interval of the certified motion (even, >= 2).
 
@@ -365,14 +374,15 @@ class RestToRestPlanner:
         where = f"rest-to-rest N = {tr.intervals}, d = {tr.degree}, cost {self.cost}, {guess.name} guess, m = {turns}"
         x0, lbx, ubx, lbg, ubg = self.rest_transcription.contact_bounds(guess, start, final, self.contact_bound,
                                                                         self.path_rows)
-        v, f, status, iters, solve_time = self._ipopt(x0, lbx, ubx, lbg, ubg, par, where, 0)
+        v, f, status, iters, solve_time, statuses = self._ipopt(x0, lbx, ubx, lbg, ubg, par, where, 0)
         return NlpSolution(problem, guess, float(horizon), int(turns), robot, start, final, par, where, v,
-                           f * horizon ** COST_POWERS[self.cost], status, iters, solve_time)
+                           f * horizon ** COST_POWERS[self.cost], status, iters, solve_time, statuses)
 
     def _ipopt(self, x0, lbx, ubx, lbg, ubg, par, where: str, iters: int):
         """IPOPT's solution of the NLP from ``x0`` (its decision vector): ``(x in the full transcription's layout,
-        f, status, iters + its iterations, wall time)``. Where a solve fails, IPOPT starts again from its last
-        iterate, up to :data:`IPOPT_RESTARTS` times; SolverError if the last one fails too."""
+        f, status, iters + its iterations, wall time, the statuses of its starts)``. Where a solve stalls
+        (:data:`RESTART_STATUSES`), IPOPT starts again from its last iterate, up to :data:`IPOPT_RESTARTS` times
+        (each start up to ``max_iter`` iterations); SolverError if the last start fails."""
         t0 = time.perf_counter()
         x, statuses = x0, []
         for _ in range(1 + IPOPT_RESTARTS):
@@ -381,13 +391,13 @@ class RestToRestPlanner:
             statuses.append(str(st["return_status"]))
             iters += int(st["iter_count"])
             x = np.array(sol["x"]).ravel()
-            if st["success"] or not np.all(np.isfinite(x)):
+            if st["success"] or statuses[-1] not in RESTART_STATUSES or not np.all(np.isfinite(x)):
                 break
         solve_time = time.perf_counter() - t0
         if not st["success"]:
             raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {', then '.join(statuses)} "
                               f"after {iters} iterations; hint: warm-start from a geometric-phase plan", statuses[-1])
-        return self.rest_transcription.full(x), float(sol["f"]), statuses[-1], iters, solve_time
+        return self.rest_transcription.full(x), float(sol["f"]), statuses[-1], iters, solve_time, tuple(statuses)
 
     def finish(self, nlp: NlpSolution, fixed_steps: tuple[int, int] | None = None) -> RestResult:
         """The second stage of :meth:`solve`: the Newton correction and the CVODES certificate of ``nlp`` (a
@@ -403,6 +413,7 @@ class RestToRestPlanner:
         problem, guess, horizon, start, final, par = nlp.problem, nlp.guess, nlp.horizon, nlp.start, nlp.final, nlp.par
         v, f, status, iters, solve_time = nlp.x, nlp.objective / horizon ** COST_POWERS[self.cost], nlp.status, \
             nlp.iterations, nlp.solve_time_s
+        statuses = list(nlp.statuses)
         bound = c
         for _ in range(BACKOFF_TRIES):
             controls, objective = correct(tr.unpack(v)[2], start, final, par, self.cost, where, fixed_steps)
@@ -413,9 +424,10 @@ class RestToRestPlanner:
             # the bound holds at the collocation points only: back it off (warm-started)
             bound -= BACKOFF_FACTOR * excess
             _, lbx, ubx, lbg, ubg = self.rest_transcription.contact_bounds(guess, start, final, bound, self.path_rows)
-            v, f, status, iters, dt = self._ipopt(np.clip(self.rest_transcription.reduced(v), lbx, ubx), lbx, ubx,
-                                                  lbg, ubg, par, where, iters)
+            v, f, status, iters, dt, more = self._ipopt(np.clip(self.rest_transcription.reduced(v), lbx, ubx), lbx,
+                                                        ubx, lbg, ubg, par, where, iters)
             solve_time += dt
+            statuses += more
         else:
             raise SolverError(f"the collocation solution ({where}) leaves the contact bound {c:.6g} rad between "
                               f"collocation points by {excess:.2e} rad after {BACKOFF_TRIES} backed-off solves; "
@@ -428,7 +440,8 @@ class RestToRestPlanner:
         stats = SolverStats("ipopt", status, iters, solve_time, {"build_time_s": self.build_time_s,
                                                                  "backed_off_bound": float(bound),
                                                                  "nlp_objective": f * scale,
-                                                                 "correction_error": float(np.abs(end).max())})
+                                                                 "correction_error": float(np.abs(end).max()),
+                                                                 "ipopt_statuses": tuple(statuses)})
         return RestResult(problem, self.cost, tr, horizon, nlp.turns, guess.name, c,
                           controls / horizon ** 2, objective * scale, motion, cert, stats)
 
