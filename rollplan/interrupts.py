@@ -29,7 +29,7 @@ SIGTERM: while :func:`terminate_as_interrupt` holds (the command, :func:`rollpla
 outputs left whole) and exits 143; :func:`call` records it like SIGINT.
 
 Start-up: :func:`guard_start_up` (called first thing by ``rollplan/__init__.py``)
-makes a Ctrl-C while the modules load exit 130 with one line when the program
+makes a Ctrl-C while the modules load exit 130 at once with one line when the program
 is the ``rollplan`` command or ``python -m rollplan.cli``; :func:`end_start_up`
 (first thing in :func:`rollplan.cli.main`, inside its Ctrl-C handling) hands
 SIGINT to the command: it raises KeyboardInterrupt as Python's default handler does.
@@ -64,7 +64,7 @@ import os
 import signal
 import sys
 import threading
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 
 __all__ = ["call", "call_in_thread", "call_in_threads", "abandoned", "Terminated",
            "terminate_as_interrupt", "guard_start_up", "cli_follows", "end_start_up", "check", "pending",
@@ -260,8 +260,14 @@ def terminate_as_interrupt():
 
 
 def _interrupted_at_start(signum, frame):
-    print("rollplan: interrupted", file=sys.stderr)
-    raise SystemExit(130)
+    """Exit 130 at once with one line: an exception raised here, inside the interpreter's import machinery, can come
+    out as another one (numpy's C extension turns it into an ImportError and a traceback). Nothing of the command
+    has run yet, so there is nothing to clean up; the line is one write, so that no other output splits it."""
+    for stream in (sys.stdout, sys.stderr):
+        with suppress(AttributeError, OSError, ValueError):
+            stream.flush()
+    os.write(2, b"rollplan: interrupted\n")
+    os._exit(130)
 
 
 def cli_follows() -> bool:
