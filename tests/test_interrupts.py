@@ -174,72 +174,135 @@ def run_and_interrupt(argv, delay, wait_for=None, env=None, sig=signal.SIGINT, c
     return proc.returncode, elapsed, out, "".join(lines)
 
 
+def stderr_times(argv, env=None, command=None):
+    """One uninterrupted run of the command (as :func:`run_and_interrupt` launches it): ``[(seconds from the start,
+    stderr line)]``, the last entry ``(seconds to the exit, "")``."""
+    command = [sys.executable, "-m", "rollplan.cli"] if command is None else command
+    t0 = time.perf_counter()
+    proc = subprocess.Popen([*command, *argv], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env)
+    times = [(time.perf_counter() - t0, line) for line in proc.stderr]
+    assert proc.wait(timeout=600) == 0, "".join(line for _, line in times)
+    return [*times, (time.perf_counter() - t0, "")]
+
+
+def phase(times, after=None, until=None):
+    """``(start, length)`` [s] of the phase of a run (:func:`stderr_times`) from the first stderr line containing
+    ``after`` (from the start if None) to the first one containing ``until`` (to the exit if None)."""
+    def at(text, default):
+        return default if text is None else next(t for t, line in times if line and text in line)
+
+    begin = at(after, 0.0)
+    return begin, at(until, times[-1][0]) - begin
+
+
+#: Shortest phase (s, on the measuring run) that the Ctrl-C tests interrupt at fractions of its length: below it the
+#: moments are too close together, or to the phase's end, for the interrupted run's own timing.
+MIN_PHASE = 0.4
+
+
+def moments_in(length, fractions):
+    """The moments (s from the phase's start) at ``fractions`` of a phase of ``length`` s, measured on this machine
+    by an uninterrupted run: a moment falls inside the phase whatever the machine's speed. The tests keep the
+    fractions below one half, so that the moment stays inside when the measuring run was slowed by the load up to
+    twice as much as the interrupted one."""
+    assert length >= MIN_PHASE, f"the phase lasts {length:.2f} s: too short to interrupt at chosen moments"
+    return [f * length for f in fractions]
+
+
+@pytest.fixture(scope="module")
+def plan_loop(tmp_path_factory):
+    """The length [s] of `plan --to 0 1 --k 99` with no leaf table on disk (a fresh cache), on this machine."""
+    env = fresh_cache_env(tmp_path_factory.mktemp("plan-loop") / "cache")
+    return phase(stderr_times(["plan", "--to", "0", "1", "--k", "99"], env=env))[1]
+
+
+#: The compare whose phases the Ctrl-C tests of compare interrupt: the construction of the collocation NLP
+#: (N = 600: about a second, one call into C++), the screening of the starts on a coarse grid, and the starts
+#: solved on the full grid by two workers (seconds).
+COMPARE = ["-v", "compare", "--to", "0.5", "0.3", "--intervals", "600"]
+
+
+@pytest.fixture(scope="module")
+def compare_run():
+    """stderr_times of one uninterrupted COMPARE on this machine."""
+    return stderr_times(COMPARE)
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("delay", [1.4, 1.8, 2.2])
-def test_ctrl_c_stops_the_solver_loop_with_exit_130(delay, tmp_path):
+@pytest.mark.parametrize("fraction", [0.25, 0.35, 0.45])
+def test_ctrl_c_stops_the_solver_loop_with_exit_130(fraction, plan_loop, tmp_path):
     """`plan --to 0 1 --k 99` with no leaf table on disk builds its table and searches 511 branches for
-    seconds; SIGINT at moments of that work exits 130 within a second or two (the machine may be loaded),
-    with "rollplan: interrupted" as the last line on stderr and no traceback."""
+    seconds; SIGINT at moments of that work (fractions of its length, measured here) exits 130 within a second or
+    two (the machine may be loaded), with "rollplan: interrupted" as the last line on stderr and no traceback."""
+    delay, = moments_in(plan_loop, [fraction])
     code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99"], delay,
                                               env=fresh_cache_env(tmp_path / "cache"))
-    assert code == 130, err
+    assert code == 130, (delay, plan_loop, err)
     assert elapsed < 2.0
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("delay", moments(5, 0.3, 3.0, 1))
-def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(delay):
+@pytest.mark.parametrize("fraction", [0.35])
+def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(fraction, compare_run):
     """Ctrl-C in `compare --intervals 2000` took 24-30 s to act: CasADi's construction of the collocation solver
-    (minutes for a large N, one call into C++ that never returns to Python) held it. SIGINT at a random moment
-    of that construction (N = 600: seconds) now exits 130 within a second or two (the machine may be loaded),
-    one line, no traceback. One moment: the construction is that one call, so a second moment in it takes the
-    same path (test_ctrl_c_at_any_moment_of_compare_acts_at_once draws moments over the whole command)."""
-    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3", "--intervals", "600"], delay,
-                                              wait_for="building the collocation NLP")
-    assert code == 130, err
+    (minutes for a large N, one call into C++ that never returns to Python) held it. SIGINT a third into that
+    construction (N = 600; its length measured here, up to the next stderr line) now exits 130 within a second or
+    two (the machine may be loaded), one line, no traceback. One moment: the construction is that one call, so a
+    second moment in it takes the same path (test_ctrl_c_at_any_moment_of_compare_acts_at_once draws moments over
+    the whole command)."""
+    _, length = phase(compare_run, "building the collocation NLP: N = 600", "building the collocation NLP: N = 10,")
+    delay, = moments_in(length, [fraction])
+    code, elapsed, _, err = run_and_interrupt(COMPARE, delay, wait_for="building the collocation NLP: N = 600")
+    assert code == 130, (delay, length, err)
     assert elapsed < 3.0, (elapsed, err)
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
 
 
+#: The phases of COMPARE (from the first stderr line containing one text to the first containing the next): the
+#: construction of the NLP, then the coarse NLP, the geometric-phase timing and the screening, then the workers'
+#: solves, the correction and the certificates to the exit.
+COMPARE_PHASES = ["building the collocation NLP: N = 600", "building the collocation NLP: N = 10,", "worker(s)", None]
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("delay", moments(7, 0.0, 12.0, 3))
-def test_ctrl_c_at_any_moment_of_compare_acts_at_once(delay):
-    """SIGINT at a random moment of a whole `compare` (construction, GP timing, IPOPT, Gauss-Newton, CVODES
-    certification of each start): exit 130 within a few seconds on a loaded machine, or the finished run's 0.
-    A small compare (N = 60, some 10 s on an idle machine) has every one of those phases."""
-    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3", "--intervals", "60"], delay,
-                                              wait_for="building the collocation NLP")
-    assert code in (0, 130), err
+@pytest.mark.parametrize("which, draw", list(enumerate(moments(7, 0.05, 0.45, 3))))
+def test_ctrl_c_at_any_moment_of_compare_acts_at_once(which, draw, compare_run):
+    """SIGINT at a random moment of each phase of a `compare` (COMPARE_PHASES: construction, geometric-phase
+    timing, IPOPT, Gauss-Newton, CVODES certification of each start; the moment a random fraction of the phase's
+    length, measured here): exit 130 within a few seconds on a loaded machine, one line of ours and no warning."""
+    after, until = COMPARE_PHASES[which], COMPARE_PHASES[which + 1]
+    delay, = moments_in(phase(compare_run, after, until)[1], [draw])
+    code, elapsed, _, err = run_and_interrupt(COMPARE, delay, wait_for=after)
+    assert code == 130, (after, delay, err)
     assert elapsed < 3.0, (delay, elapsed, err)
-    assert "Traceback" not in err and "KeyboardInterruptException" not in err   # one line of ours, no warning
-    if code == 130:
-        assert err.strip().splitlines()[-1] == "rollplan: interrupted"
+    assert "Traceback" not in err and "KeyboardInterruptException" not in err
+    assert err.strip().splitlines()[-1] == "rollplan: interrupted"
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("delay", [0.2, 0.6])
-def test_ctrl_c_while_compare_screens_its_starts_acts_at_once(delay):
-    """`compare` (N >= 40) first solves every start on a coarse grid, by two workers: SIGINT during that
-    screening exits 130 within a second or two (the machine may be loaded), one line, no traceback. At N = 300
-    the screening (with the first start on the full grid) outlasts both moments; at the default N = 100 the
-    rest of the command may end before the later one."""
-    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3", "--intervals", "300"], delay,
-                                              wait_for="screening")
-    assert code == 130, err
+@pytest.mark.parametrize("fraction", [0.15, 0.35])
+def test_ctrl_c_while_compare_screens_its_starts_acts_at_once(fraction, compare_run):
+    """`compare` (N >= 40) first solves every start on a coarse grid, then the best on the full grid, by two
+    workers: SIGINT after the screening began (at fractions of the rest of the command, measured here) exits 130
+    within a second or two (the machine may be loaded), one line, no traceback."""
+    delay, = moments_in(phase(compare_run, "screening")[1], [fraction])
+    code, elapsed, _, err = run_and_interrupt(COMPARE, delay, wait_for="screening")
+    assert code == 130, (delay, err)
     assert elapsed < 3.0, (delay, elapsed, err)
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
 
 
 @pytest.mark.slow
-def test_sigterm_stops_the_solver_loop_with_exit_143(tmp_path):
+def test_sigterm_stops_the_solver_loop_with_exit_143(plan_loop, tmp_path):
     """SIGTERM killed the command at once, leaving its workers and temporaries; now, once the command runs (here:
     while it builds its leaf table), it stops as for Ctrl-C, also inside the solvers (recorded like SIGINT, see
-    test_ctrl_c_stops_the_solver_loop_with_exit_130, at the same moments of its work; a progress line is printed
-    only when the table takes seconds, which an idle machine does not): exit 143, one line."""
-    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99"], 1.8,
+    test_ctrl_c_stops_the_solver_loop_with_exit_130, at one of the same moments of its work; a progress line is
+    printed only when the table takes seconds, which an idle machine does not): exit 143, one line."""
+    delay, = moments_in(plan_loop, [0.35])
+    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99"], delay,
                                               env=fresh_cache_env(tmp_path / "cache"), sig=signal.SIGTERM)
-    assert code == 143, err
+    assert code == 143, (delay, plan_loop, err)
     assert elapsed < 2.0
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: terminated"
 
@@ -287,6 +350,32 @@ def test_ctrl_c_during_start_up_is_one_line_and_exit_130(launcher, tmp_path):
     for delay, code, err in late + early + [interrupted_at(0.3), interrupted_at(0.0)]:
         assert code == 130, (delay, code, err)
         assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted", (delay, err)
+
+
+_IMPORT_INTERRUPT = """
+import signal, sys
+sys.argv[0] = "rollplan"        # this program is the command: importing rollplan installs the start-up guard
+import rollplan
+
+class InterruptOnImport:        # Ctrl-C while numpy's C extension imports {module} (inside PyCapsule_Import)
+    def find_spec(self, name, path=None, target=None):
+        if name == "{module}":
+            sys.meta_path.remove(self)
+            signal.raise_signal(signal.SIGINT)
+
+sys.meta_path.insert(0, InterruptOnImport())
+import numpy
+print("not interrupted", file=sys.stderr)
+"""
+
+
+@pytest.mark.parametrize("module", ["datetime", "numpy.linalg"])
+def test_ctrl_c_inside_an_extensions_import_at_start_up_is_one_line_and_exit_130(module, tmp_path):
+    """A Ctrl-C while numpy's C extension imported a module at start-up became numpy's ImportError: a traceback
+    and exit 1 after "rollplan: interrupted". The signal, raised from an import hook at that import, now ends the
+    command with the one line and exit 130."""
+    run = run_program(tmp_path, "start.py", _IMPORT_INTERRUPT.format(module=module))
+    assert run.returncode == 130 and run.stderr == "rollplan: interrupted\n", (run.returncode, run.stderr)
 
 
 _EXEC_INTERRUPT = """
@@ -352,20 +441,21 @@ def test_a_ctrl_c_after_the_command_finished_keeps_its_exit_status(tmp_path):
 
 
 @pytest.mark.slow
-def test_ctrl_c_while_the_multistart_workers_solve_exits_at_once():
+def test_ctrl_c_while_the_multistart_workers_solve_exits_at_once(compare_run):
     """The starts of `compare` are solved by two worker threads, in which IPOPT sees no signal; the main thread
-    waits for them and takes Ctrl-C: exit 130 within a second (two on a loaded machine), one line, the workers
-    left to the process's end."""
-    code, elapsed, _, err = run_and_interrupt(["-v", "compare", "--to", "0.5", "0.3"], 0.3,
-                                              wait_for="worker(s)")
-    assert code == 130, err
+    waits for them and takes Ctrl-C (a third into that phase, measured here): exit 130 within a second (two on
+    a loaded machine), one line, the workers left to the process's end."""
+    delay, = moments_in(phase(compare_run, "worker(s)")[1], [0.3])
+    code, elapsed, _, err = run_and_interrupt(COMPARE, delay, wait_for="worker(s)")
+    assert code == 130, (delay, err)
     assert elapsed < 2.0, (elapsed, err)
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
 
 
 SWALLOWED = """
 import signal, sys
-sys.argv = ["rollplan"] + sys.argv[1:]      # this program is the command (interrupts.cli_follows)
+if sys.argv[1:] == ["command"]:
+    sys.argv = ["rollplan"] + sys.argv[1:]  # this program is the command (interrupts.cli_follows)
 import casadi as ca
 from rollplan import interrupts, progress
 if sys.argv[1:] == ["command"]:
