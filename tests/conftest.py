@@ -58,13 +58,19 @@ def _package_digest(package=None) -> str:
     return h.hexdigest()[:20]
 
 
+def fresh_cache(config) -> bool:
+    """True if the run builds everything anew in a fresh directory: :data:`FRESH_CACHE` set, or pytest's cache
+    disabled (``-p no:cacheprovider``)."""
+    return bool(os.environ.get(FRESH_CACHE)) or getattr(config, "cache", None) is None
+
+
 def _build_cache(config) -> Path | None:
     """The cache directory this run shares with earlier runs of the same package content (``.pytest_cache``),
     so that a developer's second run loads the C libraries and compiled functions the first one built. It is
     keyed by :func:`_package_digest`, not only by the keys of rollplan's own cache: any change to the package
     (a source, a template, a C file) gives a new, empty directory, so a run never loads what another content
     built. None (a fresh directory instead) with :data:`FRESH_CACHE` set or pytest's cache disabled."""
-    if os.environ.get(FRESH_CACHE) or getattr(config, "cache", None) is None:
+    if fresh_cache(config):
         return None
     root = config.cache.mkdir("rollplan-build")
     root.chmod(0o700)

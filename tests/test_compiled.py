@@ -317,13 +317,14 @@ def test_the_c_search_is_generated_again_only_when_the_code_that_writes_it_chang
     assert set(c_sources.STATIC_FILES) <= set(texts) and (package / "csrc").resolve() in {p.parent for p in listed}
 
 
-def test_the_test_run_has_its_own_cache_directory():
+def test_the_test_run_has_its_own_cache_directory(request):
     """conftest gives the run a cache folder that is not the user's: the build cache of this package content, or
-    a new one with ROLLPLAN_TEST_FRESH_CACHE; the same in every worker and subprocess."""
+    a new one with ROLLPLAN_TEST_FRESH_CACHE or pytest's cache disabled; the same in every worker and
+    subprocess."""
     import conftest
 
     folder = cmod.cache_dir()
-    if os.environ.get(conftest.FRESH_CACHE):
+    if conftest.fresh_cache(request.config):
         assert folder.name.startswith("rollplan-test-cache-")
     else:
         assert folder.name == conftest._package_digest() and folder.parent.name == "rollplan-build"
