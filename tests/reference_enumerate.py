@@ -61,6 +61,7 @@ from rollplan.planners.geometric.search_constants import (
 )
 from rollplan.problem import Problem
 from rollplan.progress import report
+from rollplan.result import CERTIFICATE_TOLERANCE
 
 __all__ = ["K_MONOTONE", "K_ENUMERATED", "K_FAST", "PHASE_STEP", "X_STEP", "SIGMA_STEP", "HERMITE_REL", "SAFETY",
            "MIN_WIDTH", "TABLE_PHASE", "TABLE_STEP", "TABLE_INV_S", "POLISH_STEP", "POLISH_BRACKET", "NOT_A_ROOT",
@@ -910,13 +911,18 @@ def roots(brs: list, k: float, first_only: bool = False, lengths=(0.0, math.inf)
         xr, orr, kinds = xr[keep], orr[keep], kinds[keep]
     if xr.size == 0:
         return []
+    real = np.ones(xr.size, bool)
     if polish:
         xr, a, b = _polish(gr, xr, orr)
+        # a tangency of the table at the end of the graph is polished onto a (or b) = 0 up to the table's last bits
+        # (1e-34, not 0, with other BLAS kernels): the accurate map decides, as in the C search's candidate()
+        g, dg = gr.accurate(xr, orr)[:2]
+        real = newton_step(g, dg, gr.h2[orr])[1] <= NOT_A_ROOT * CERTIFICATE_TOLERANCE
     else:
         _, _, a, b = gr.values(xr, orr)
     bi = gr.br[orr]
     length = a + b
-    inside = (a > 0.0) & (b > 0.0)
+    inside = (a > 0.0) & (b > 0.0) & real
     ok = inside & (length >= lengths[0] - 1e-12) & (length <= lengths[1] + 1e-12)
     # first_only: a branch whose every candidate was polished onto a = 0 or b = 0 (a tangency of the table at the
     # end of the graph, no root) has not given its first root yet: its roots are searched again, all of them
