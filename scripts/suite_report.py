@@ -47,13 +47,21 @@ SKIPPED_NAMED = 50
 
 
 def processor() -> str:
-    """The processor's model name (``/proc/cpuinfo``, else :func:`platform.processor`): machines differ between
-    runs, and so do their speeds."""
+    """The processor's model name (``/proc/cpuinfo``, else :func:`platform.processor`) and its widest vector
+    instructions (they choose the kernels of the OpenBLAS that CasADi bundles, and so the round-off of its solvers;
+    ``OPENBLAS_CORETYPE`` overrides them and is named when set): machines differ between runs."""
+    model, flags = platform.processor() or "unknown", set()
     try:
         with open("/proc/cpuinfo", encoding="utf-8") as f:
-            return next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
-    except (OSError, StopIteration):
-        return platform.processor() or "unknown"
+            info = dict(line.split(":", 1) for line in f.read().split("\n\n")[0].splitlines() if ":" in line)
+        info = {key.strip(): value.strip() for key, value in info.items()}
+        model, flags = info.get("model name", model), set(info.get("flags", "").split())
+    except OSError:
+        pass
+    widest = next((f for f in ("avx512f", "avx2", "avx", "sse4_2") if f in flags), None)
+    extra = [x for x in (widest, os.environ.get("OPENBLAS_CORETYPE") and
+                         f"OPENBLAS_CORETYPE={os.environ['OPENBLAS_CORETYPE']}") if x]
+    return f"{model} ({', '.join(extra)})" if extra else model
 
 
 def _cpu() -> float:

@@ -236,6 +236,27 @@ def test_fails():
 NO_PLUGINS = ("-p", "no:hypothesispytest", "-p", "no:randomly")
 
 
+def test_the_reports_name_the_processor_and_what_chooses_the_blas_kernels(monkeypatch):
+    """suite_report.processor (also benchmark.machine's): the model name of /proc/cpuinfo where it exists, its
+    widest vector instructions, and OPENBLAS_CORETYPE when set (the kernels decide the solvers' round-off)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+    try:
+        import suite_report
+    finally:
+        sys.path.pop(0)
+    monkeypatch.delenv("OPENBLAS_CORETYPE", raising=False)
+    plain = suite_report.processor()
+    assert plain and "OPENBLAS_CORETYPE" not in plain
+    if os.path.exists("/proc/cpuinfo"):
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            text = f.read()
+        names = [line.split(":", 1)[1].strip() for line in text.splitlines() if line.startswith("model name")]
+        assert not names or plain.startswith(names[0])
+        assert ("avx2" in text.split()) <= ("avx" in plain)
+    monkeypatch.setenv("OPENBLAS_CORETYPE", "Haswell")
+    assert suite_report.processor().endswith("OPENBLAS_CORETYPE=Haswell)")
+
+
 def test_suite_report_names_failed_errored_and_skipped_tests(tmp_path):
     """The failed, errored and skipped tests of a run are named from pytest's JUnit XML (a failure in the test is
     failed, one in a fixture an error) and, when the run wrote no XML, from its -ra summary lines."""
