@@ -260,14 +260,27 @@ def terminate_as_interrupt():
 
 
 def _interrupted_at_start(signum, frame):
-    """Exit 130 at once with one line: an exception raised here, inside the interpreter's import machinery, can come
-    out as another one (numpy's C extension turns it into an ImportError and a traceback). Nothing of the command
-    has run yet, so there is nothing to clean up; the line is one write, so that no other output splits it."""
+    """One line, written at once (no other output splits it), and exit 130. Inside the interpreter's import
+    machinery, where the command's modules load, the process exits at once: an exception raised there can come out
+    as another one (numpy's C extension turns it into an ImportError and a traceback), and nothing of the command
+    has run. Elsewhere (a program of the command's name that never hands SIGINT on) SystemExit, so that its own
+    clean-up runs."""
     for stream in (sys.stdout, sys.stderr):
         with suppress(AttributeError, OSError, ValueError):
             stream.flush()
     os.write(2, b"rollplan: interrupted\n")
-    os._exit(130)
+    if _importing(frame):
+        os._exit(130)
+    raise SystemExit(130)
+
+
+def _importing(frame) -> bool:
+    """True if a frame of the interpreter's import machinery is on ``frame``'s stack."""
+    while frame is not None:
+        if frame.f_code.co_filename.startswith("<frozen importlib._bootstrap"):
+            return True
+        frame = frame.f_back
+    return False
 
 
 def cli_follows() -> bool:

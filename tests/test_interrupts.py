@@ -378,6 +378,28 @@ def test_ctrl_c_inside_an_extensions_import_at_start_up_is_one_line_and_exit_130
     assert run.returncode == 130 and run.stderr == "rollplan: interrupted\n", (run.returncode, run.stderr)
 
 
+_NAMED_LIKE_THE_COMMAND = """
+import signal, sys
+import rollplan                 # the program is named rollplan: the start-up guard is installed and stays
+with open(sys.argv[1], "w") as out:
+    try:
+        out.write("partial result\\n")
+        signal.raise_signal(signal.SIGINT)
+    finally:
+        out.write("clean-up ran\\n")
+"""
+
+
+def test_a_program_named_like_the_command_keeps_its_clean_up_on_ctrl_c(tmp_path):
+    """A program of the command's name that imports rollplan and never hands SIGINT to the command: a Ctrl-C in
+    its own code (not while modules load) still exits 130 with the one line, and its finally blocks and files
+    are completed (the exit at once is for the import machinery only)."""
+    out = tmp_path / "out.txt"
+    run = run_program(tmp_path, "rollplan", _NAMED_LIKE_THE_COMMAND, str(out))
+    assert run.returncode == 130 and run.stderr == "rollplan: interrupted\n", (run.returncode, run.stderr)
+    assert out.read_text() == "partial result\nclean-up ran\n"
+
+
 _EXEC_INTERRUPT = """
 import sys
 {setup}
