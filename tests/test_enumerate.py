@@ -377,6 +377,19 @@ def test_first_root_behind_a_tangency_at_the_end_of_the_graph():
 
 
 @pytest.mark.slow
+def test_no_roots_where_the_table_is_flat_and_the_accurate_map_misses():
+    """k = 100, n = 12, a target 7e-5 R away: h = 7e-6 is within the table's floor over much of the branch, and the
+    polish of its flat cells ended at points where the accurate map misses by 4.5e-4 to 1.5e-3 (258 of them were
+    returned as roots). The reference returns none, as the brute force and the planner (no plan) find."""
+    u, v, psi, n, k = -7.273e-05, -1.623e-05, -1.67708, 12, 100.0
+    brs = en.branches(k, psi, n, math.hypot(u, v), 0)
+    assert en.roots(brs, k) == []
+    assert all(_brute_branch(b.eta, b.h, k, 40, 1000) == [] for b in brs)
+    with pytest.raises(rollplan.NoPlanError):
+        rollplan.plan((u, v, psi), k=k, steps=n, branch=0, all_solutions=True)
+
+
+@pytest.mark.slow
 def test_brute_force_of_many_branches_at_once_is_that_of_each_branch():
     """The dense scan of several branches in one array (_brute_branches) finds, on each branch, the roots that the
     scan of that branch alone finds: nothing is paired across the seam of two branches' grids (between branches
