@@ -374,15 +374,16 @@ class RestToRestPlanner:
         where = f"rest-to-rest N = {tr.intervals}, d = {tr.degree}, cost {self.cost}, {guess.name} guess, m = {turns}"
         x0, lbx, ubx, lbg, ubg = self.rest_transcription.contact_bounds(guess, start, final, self.contact_bound,
                                                                         self.path_rows)
-        v, f, status, iters, solve_time, statuses = self._ipopt(x0, lbx, ubx, lbg, ubg, par, where, 0)
+        v, f, iters, solve_time, statuses = self._ipopt(x0, lbx, ubx, lbg, ubg, par, where, 0)
         return NlpSolution(problem, guess, float(horizon), int(turns), robot, start, final, par, where, v,
-                           f * horizon ** COST_POWERS[self.cost], status, iters, solve_time, statuses)
+                           f * horizon ** COST_POWERS[self.cost], statuses[-1], iters, solve_time, statuses)
 
     def _ipopt(self, x0, lbx, ubx, lbg, ubg, par, where: str, iters: int):
         """IPOPT's solution of the NLP from ``x0`` (its decision vector): ``(x in the full transcription's layout,
-        f, status, iters + its iterations, wall time, the statuses of its starts)``. Where a solve stalls
-        (:data:`RESTART_STATUSES`), IPOPT starts again from its last iterate, up to :data:`IPOPT_RESTARTS` times
-        (each start up to ``max_iter`` iterations); SolverError if the last start fails."""
+        f, iters + its iterations, wall time, the statuses of its starts: the last is the solution's)``. Where a
+        solve stalls (:data:`RESTART_STATUSES`), IPOPT starts again from its last iterate, up to
+        :data:`IPOPT_RESTARTS` times (each start up to ``max_iter`` iterations); SolverError if the last start
+        fails."""
         t0 = time.perf_counter()
         x, statuses = x0, []
         for _ in range(1 + IPOPT_RESTARTS):
@@ -397,7 +398,7 @@ class RestToRestPlanner:
         if not st["success"]:
             raise SolverError(f"IPOPT did not solve the collocation problem ({where}): {', then '.join(statuses)} "
                               f"after {iters} iterations; hint: warm-start from a geometric-phase plan", statuses[-1])
-        return self.rest_transcription.full(x), float(sol["f"]), statuses[-1], iters, solve_time, tuple(statuses)
+        return self.rest_transcription.full(x), float(sol["f"]), iters, solve_time, tuple(statuses)
 
     def finish(self, nlp: NlpSolution, fixed_steps: tuple[int, int] | None = None) -> RestResult:
         """The second stage of :meth:`solve`: the Newton correction and the CVODES certificate of ``nlp`` (a
@@ -424,10 +425,11 @@ class RestToRestPlanner:
             # the bound holds at the collocation points only: back it off (warm-started)
             bound -= BACKOFF_FACTOR * excess
             _, lbx, ubx, lbg, ubg = self.rest_transcription.contact_bounds(guess, start, final, bound, self.path_rows)
-            v, f, status, iters, dt, more = self._ipopt(np.clip(self.rest_transcription.reduced(v), lbx, ubx), lbx,
-                                                        ubx, lbg, ubg, par, where, iters)
+            v, f, iters, dt, more = self._ipopt(np.clip(self.rest_transcription.reduced(v), lbx, ubx), lbx, ubx,
+                                                lbg, ubg, par, where, iters)
             solve_time += dt
             statuses += more
+            status = more[-1]
         else:
             raise SolverError(f"the collocation solution ({where}) leaves the contact bound {c:.6g} rad between "
                               f"collocation points by {excess:.2e} rad after {BACKOFF_TRIES} backed-off solves; "
