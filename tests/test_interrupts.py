@@ -143,12 +143,16 @@ def moments(seed, low, high, n):
     return [rng.uniform(low, high) for _ in range(n)]
 
 
+#: The command's launcher in the Ctrl-C tests (a test may give another, e.g. the console script).
+CLI = [sys.executable, "-m", "rollplan.cli"]
+
+
 def run_and_interrupt(argv, delay, wait_for=None, env=None, sig=signal.SIGINT, command=None):
     """Run the command (``command``: its launcher, ``python -m rollplan.cli`` unless given); ``delay`` seconds after
     its stderr shows ``wait_for`` (or after the start), SIGINT (or ``sig``). Returns (exit code, seconds from the
     signal to the exit, stdout, stderr)."""
-    command = [sys.executable, "-m", "rollplan.cli"] if command is None else command
-    proc = subprocess.Popen([*command, *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    proc = subprocess.Popen([*(command or CLI), *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=env)
     lines = []
     seen = threading.Event()
     if wait_for is None:
@@ -177,9 +181,9 @@ def run_and_interrupt(argv, delay, wait_for=None, env=None, sig=signal.SIGINT, c
 def stderr_times(argv, env=None, command=None):
     """One uninterrupted run of the command (as :func:`run_and_interrupt` launches it): ``[(seconds from the start,
     stderr line)]``, the last entry ``(seconds to the exit, "")``."""
-    command = [sys.executable, "-m", "rollplan.cli"] if command is None else command
     t0 = time.perf_counter()
-    proc = subprocess.Popen([*command, *argv], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env)
+    proc = subprocess.Popen([*(command or CLI), *argv], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            env=env)
     times = [(time.perf_counter() - t0, line) for line in proc.stderr]
     assert proc.wait(timeout=600) == 0, "".join(line for _, line in times)
     return [*times, (time.perf_counter() - t0, "")]
@@ -222,6 +226,12 @@ def plan_loop(tmp_path_factory):
 COMPARE = ["-v", "compare", "--to", "0.5", "0.3", "--intervals", "600"]
 
 
+#: The phases of COMPARE (from the first stderr line containing one text to the first containing the next): the
+#: construction of the NLP, then the coarse NLP, the geometric-phase timing and the screening, then the workers'
+#: solves, the correction and the certificates to the exit.
+COMPARE_PHASES = ["building the collocation NLP: N = 600", "building the collocation NLP: N = 10,", "worker(s)", None]
+
+
 @pytest.fixture(scope="module")
 def compare_run():
     """stderr_times of one uninterrupted COMPARE on this machine."""
@@ -251,18 +261,12 @@ def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(fraction, compare_run)
     two (the machine may be loaded), one line, no traceback. One moment: the construction is that one call, so a
     second moment in it takes the same path (test_ctrl_c_at_any_moment_of_compare_acts_at_once draws moments over
     the whole command)."""
-    _, length = phase(compare_run, "building the collocation NLP: N = 600", "building the collocation NLP: N = 10,")
+    _, length = phase(compare_run, *COMPARE_PHASES[:2])
     delay, = moments_in(length, [fraction])
-    code, elapsed, _, err = run_and_interrupt(COMPARE, delay, wait_for="building the collocation NLP: N = 600")
+    code, elapsed, _, err = run_and_interrupt(COMPARE, delay, wait_for=COMPARE_PHASES[0])
     assert code == 130, (delay, length, err)
     assert elapsed < 3.0, (elapsed, err)
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
-
-
-#: The phases of COMPARE (from the first stderr line containing one text to the first containing the next): the
-#: construction of the NLP, then the coarse NLP, the geometric-phase timing and the screening, then the workers'
-#: solves, the correction and the certificates to the exit.
-COMPARE_PHASES = ["building the collocation NLP: N = 600", "building the collocation NLP: N = 10,", "worker(s)", None]
 
 
 @pytest.mark.slow

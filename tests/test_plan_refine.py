@@ -5,7 +5,6 @@ problem typed from the printed (15), (16), (20) alone, by multiple shooting with
 collocation), solved by IPOPT from straight-line starts on the whole turns m = -1, 0, 1 of psi.
 """
 
-import functools
 import json
 import math
 from types import SimpleNamespace
@@ -92,23 +91,27 @@ def test_refine_and_all_solutions_do_not_combine():
         solve(Problem((0.0, 1.0, 0.0), k=2.5), "geometric", refine="yes")
 
 
+#: `plan --refine` whose polish the Ctrl-C test interrupts, and the stderr line that announces the polish.
+REFINE = ["-v", "plan", "--from", "0.3", "-0.2", "0.5", "-0.3", "0.2", "--to", "-0.5", "0.6", "--psi", "-0.7",
+          "--contact", "0.35", "0.25", "--k", "4", "--refine"]
+POLISH = "building the collocation NLP"
+
+
+@pytest.fixture(scope="module")
+def polish_length():
+    """Seconds from the polish's announcement to the exit of one uninterrupted REFINE on this machine."""
+    return phase(stderr_times(REFINE), POLISH)[1]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("draw", moments(25, 0.05, 0.45, 2))
-def test_ctrl_c_during_plan_refine_acts_at_once(draw):
+def test_ctrl_c_during_plan_refine_acts_at_once(draw, polish_length):
     """SIGINT at a random moment of the polish of `plan --refine` (NLP construction, IPOPT, correction,
     certificate; a random fraction of its length, from its announcement to the exit, measured here): exit 130
     within a few seconds on a loaded machine, one line, no traceback."""
-    argv = ["-v", "plan", "--from", "0.3", "-0.2", "0.5", "-0.3", "0.2", "--to", "-0.5", "0.6", "--psi", "-0.7",
-            "--contact", "0.35", "0.25", "--k", "4", "--refine"]
-    delay, = moments_in(_polish_length(tuple(argv)), [draw])
-    code, elapsed, _, err = run_and_interrupt(argv, delay, wait_for="building the collocation NLP")
+    delay, = moments_in(polish_length, [draw])
+    code, elapsed, _, err = run_and_interrupt(REFINE, delay, wait_for=POLISH)
     assert code == 130, (delay, err)
     assert elapsed < 3.0, (delay, elapsed, err)
     assert "Traceback" not in err and "KeyboardInterruptException" not in err
     assert err.strip().splitlines()[-1] == "rollplan: interrupted"
-
-
-@functools.cache
-def _polish_length(argv):
-    """Seconds from the polish's announcement to the exit of one uninterrupted `plan --refine` on this machine."""
-    return phase(stderr_times(list(argv)), "building the collocation NLP")[1]

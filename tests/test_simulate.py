@@ -51,13 +51,17 @@ def files(tmp_path_factory):
     return d
 
 
+#: The report of the first re-plan of the closed-loop run of 16 figure eights: its torque plant runs after it.
+FIRST_REPLAN = "31 pieces"
+
+
 @pytest.fixture(scope="module")
 def plant_run(files):
     """The closed-loop torque-plant run of the plan of 16 figure eights, and its length [s] from the first
     re-plan's report to the exit on this machine (one uninterrupted run)."""
     argv = ["-v", "simulate", str(_plan_file(files, 16)), "--robot", str(files / "real.toml"), "--closed-loop",
             "--plant", "torques"]
-    return argv, phase(stderr_times(argv), "31 pieces")[1]
+    return argv, phase(stderr_times(argv), FIRST_REPLAN)[1]
 
 
 def _plan_file(d, n):
@@ -79,7 +83,7 @@ def test_ctrl_c_in_the_torque_plant_is_exit_130_in_one_line(files, plant_run, fr
     plan of 16 figure eights), measured on this machine."""
     argv, length = plant_run
     delay, = moments_in(length, [fraction])
-    code, elapsed, _, err = run_and_interrupt(argv, delay, wait_for="31 pieces")
+    code, elapsed, _, err = run_and_interrupt(argv, delay, wait_for=FIRST_REPLAN)
     assert code == 130, err
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
     assert elapsed < 5.0
