@@ -291,10 +291,18 @@ def cli_follows() -> bool:
     return script == "rollplan" or any(argv[i:i + 2] == ["-m", "rollplan.cli"] for i in range(len(argv)))
 
 
+def _run_as_rollplan_module() -> bool:
+    """True while ``python -m rollplan.<module>`` finds its module (``sys.argv[0]`` is ``"-m"`` then); not for
+    ``python -m`` of another package that imports rollplan."""
+    argv = getattr(sys, "orig_argv", [])
+    named = next((argv[i + 1] for i in range(len(argv) - 1) if argv[i] == "-m"), "")
+    return bool(sys.argv) and sys.argv[0] == "-m" and named.split(".")[0] == "rollplan"
+
+
 def guard_start_up() -> bool:
     """Install the start-up handler (module docstring) if this program is the command or ``python -m`` of a
     rollplan module, in the main thread, with Python's default handler; True if installed."""
-    started = cli_follows() or (bool(sys.argv) and sys.argv[0] == "-m")
+    started = cli_follows() or _run_as_rollplan_module()
     if not (started and threading.current_thread() is threading.main_thread()
             and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
         return False

@@ -404,6 +404,25 @@ def test_a_program_named_like_the_command_keeps_its_clean_up_on_ctrl_c(tmp_path)
     assert out.read_text() == "partial result\nclean-up ran\n"
 
 
+@pytest.mark.parametrize("package, guarded", [("userpkg", False), ("rollplan.version", True)])
+def test_python_m_of_another_package_importing_rollplan_keeps_pythons_ctrl_c(package, guarded, tmp_path):
+    """``python -m`` of a user's package whose ``__init__`` imports rollplan (``sys.argv[0]`` is ``"-m"`` while
+    its package loads) keeps Python's default SIGINT handler and unraisable hook; ``python -m rollplan.<module>``
+    is guarded while rollplan loads and hands Ctrl-C on as the command does."""
+    (tmp_path / "userpkg").mkdir()
+    (tmp_path / "userpkg" / "__init__.py").write_text("import rollplan\n")
+    (tmp_path / "userpkg" / "__main__.py").write_text("")
+    (tmp_path / "sitecustomize.py").write_text(
+        "import atexit, signal, sys\n"
+        "atexit.register(lambda: print(signal.getsignal(signal.SIGINT) is signal.default_int_handler,\n"
+        "                              sys.unraisablehook is sys.__unraisablehook__))\n")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")])}
+    run = subprocess.run([sys.executable, "-m", package], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120, check=False, env=env)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split() == (["False", "False"] if guarded else ["True", "True"]), run.stdout
+
+
 _EXEC_INTERRUPT = """
 import sys
 {setup}
