@@ -1016,23 +1016,25 @@ static void sigma_radii(casadi_real p, const branch_t *br, casadi_real k, casadi
 
 /* g = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta / 2) - h^2 of the branch br at the radii (a, b), and its
  * derivative along the graph whose radii move as (da, db); rho from the table (accurate = 0) or from the accurate
- * map (accurate = 1). */
+ * map (accurate = 1). With dg NULL the accurate map gives rho alone (a family's d rho / dr costs two more leaf
+ * integrations); g is the same. */
 static void level_values(casadi_real a, casadi_real b, casadi_real da, casadi_real db, const branch_t *br,
                          casadi_real k, int accurate, casadi_real *g, casadi_real *dg) {
-    casadi_real ra, rb, pa, pb, c = br->c_half;
+    casadi_real ra, rb, pa = RP_R(0.0), pb = RP_R(0.0), c = br->c_half;
     if (accurate) {
-        signed_length(a, k, &ra, &pa);
-        signed_length(b, k, &rb, &pb);
+        signed_length(a, k, &ra, dg ? &pa : NULL);
+        signed_length(b, k, &rb, dg ? &pb : NULL);
     } else {
         rho_lookup(a, &ra, &pa);
         rho_lookup(b, &rb, &pb);
     }
     *g = ra * ra + rb * rb + RP_R(2.0) * c * ra * rb - br->h * br->h;
-    *dg = RP_R(2.0) * (ra + c * rb) * pa * da + RP_R(2.0) * (rb + c * ra) * pb * db;
+    if (dg) *dg = RP_R(2.0) * (ra + c * rb) * pa * da + RP_R(2.0) * (rb + c * ra) * pb * db;
 }
 
 /* (g, g', a, b) at sigma = p on the sigma graph br (_SigmaGraphs._values): rho of the table (accurate = 0) or of the
- * accurate map (1); g as in branch_values, g' with da/dsigma and db/dsigma. */
+ * accurate map (1); g as in branch_values, g' with da/dsigma and db/dsigma (not computed on the accurate map when dg
+ * is NULL). */
 static void sigma_values(casadi_real p, const branch_t *br, casadi_real k, int accurate, casadi_real *g,
                          casadi_real *dg, casadi_real *a, casadi_real *b) {
     casadi_real ea, eb, den;
@@ -1104,7 +1106,7 @@ static casadi_real other(casadi_real x, casadi_real e, casadi_real k) {
 /* (g, g', a, b) at x on branch br (the graph over x; the w and sigma graphs of enumerate.py compute the same g
  * in their own parameter): with (a, b) = (x, y) if eta >= 0 else (y, x),
  *   g = rho(a)^2 + rho(b)^2 + 2 rho(a) rho(b) cos(eta / 2) - h^2,  dy/dx = E'(x) / E'(y);
- * rho from the table (accurate = 0) or from the accurate map (accurate = 1). */
+ * rho from the table (accurate = 0) or from the accurate map (accurate = 1; dg may be NULL there: g alone). */
 static void branch_values(casadi_real x, const branch_t *br, casadi_real k, int accurate, casadi_real *g,
                           casadi_real *dg, casadi_real *a, casadi_real *b) {
     casadi_real y = x, dy = RP_R(1.0), ex, dex, da, db;
@@ -1275,11 +1277,11 @@ static int outward(casadi_real x, casadi_real gx, casadi_real w, int dir, int re
  * root if the accurate map misses there by more than NOT_A_ROOT: candidate()). Returns the roots written to xs. */
 static int tangency(casadi_real sl, casadi_real xc, casadi_real sh, int ref, const branch_t *br, casadi_real k,
                     casadi_real *xs) {
-    casadi_real gl, gc, gh, d, a, b, w = sh - sl;
+    casadi_real gl, gc, gh, a, b, w = sh - sl;
     int n = 0;
-    branch_values(sl, br, k, 1, &gl, &d, &a, &b);
-    branch_values(xc, br, k, 1, &gc, &d, &a, &b);
-    branch_values(sh, br, k, 1, &gh, &d, &a, &b);
+    branch_values(sl, br, k, 1, &gl, NULL, &a, &b);
+    branch_values(xc, br, k, 1, &gc, NULL, &a, &b);
+    branch_values(sh, br, k, 1, &gh, NULL, &a, &b);
     if (sgn(gl) == -ref) n += outward(sl, gl, w, -1, ref, br, k, xs + n);
     if (gl * gc < 0) xs[n++] = bracketed(sl, xc, gl, br, k, 0, 1);
     if (gc * gh < 0) xs[n++] = bracketed(xc, sh, gc, br, k, 0, 1);
@@ -1295,7 +1297,7 @@ static int tangency(casadi_real sl, casadi_real xc, casadi_real sh, int ref, con
  * tangency()). Returns the number of roots written to xs (unsorted). */
 static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p0, casadi_real g1, casadi_real p1,
                    const casadi_real crit[2], const branch_t *br, casadi_real k, casadi_real floor_g, casadi_real *xs) {
-    casadi_real w = x1 - x0, pts[4], vals[4], dv[4], lo, mid, hi, sl, sh, dl, dh, xc, gc, gl, ga, gb, d, a, b;
+    casadi_real w = x1 - x0, pts[4], vals[4], dv[4], lo, mid, hi, sl, sh, dl, dh, xc, gc, gl, ga, gb, a, b;
     int n = 0, j, half;
     pts[0] = x0;
     pts[3] = x1;
@@ -1315,8 +1317,8 @@ static int examine(casadi_real x0, casadi_real x1, casadi_real g0, casadi_real p
              * (H is monotone between the points, so one root at most) */
             ga = vals[j];
             gb = vals[j + 1];
-            if (RP_FABS(ga) <= floor_g) branch_values(pts[j], br, k, 1, &ga, &d, &a, &b);
-            if (RP_FABS(gb) <= floor_g) branch_values(pts[j + 1], br, k, 1, &gb, &d, &a, &b);
+            if (RP_FABS(ga) <= floor_g) branch_values(pts[j], br, k, 1, &ga, NULL, &a, &b);
+            if (RP_FABS(gb) <= floor_g) branch_values(pts[j + 1], br, k, 1, &gb, NULL, &a, &b);
             if (ga * gb < 0) xs[n++] = bracketed(pts[j], pts[j + 1], ga, br, k, 0, 1);
         }
         if (vals[j + 1] == RP_R(0.0) && pts[j + 1] > br->p_lo) xs[n++] = pts[j + 1];
