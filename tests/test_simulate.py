@@ -167,11 +167,12 @@ def test_a_tampered_file_gives_its_true_open_loop_error_in_every_mode(files, cap
     assert expected > 0.1
     plain = _sim_json(capsys, files, doubled)["arrival_error"]
     assert plain == pytest.approx(expected, rel=1e-6)
+    runs = {}
     for extra in (["--closed-loop"], ["--noise", "1e-3"], ["--closed-loop", "--noise", "1e-3"]):
-        d = _sim_json(capsys, files, doubled, *extra)
+        d = runs[" ".join(extra)] = _sim_json(capsys, files, doubled, *extra)
         opened = d.get("open_loop_arrival_error", d["arrival_error"])
         assert opened == pytest.approx(expected, rel=1e-6), extra
-    d = _sim_json(capsys, files, doubled, "--closed-loop")
+    d = runs["--closed-loop"]
     assert d["arrival_error"] == pytest.approx(expected, rel=1e-6)   # far off the pole: nothing to correct from
     assert "no correcting motion" in d["stopped"]
     # rates 5 % too large: the closed loop starts from that motion and corrects it
