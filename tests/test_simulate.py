@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import one_line, run
-from scipy.integrate import solve_ivp
+from scipy.integrate import ode, solve_ivp
 from scipy.interpolate import CubicSpline
 from test_interrupts import moments_in, phase, run_and_interrupt, stderr_times
 
@@ -293,10 +293,24 @@ def test_the_scalar_torque_rhs_is_the_references():
         np.testing.assert_allclose(fast(s, z), ref(s, z), rtol=1e-12, atol=1e-15)
 
 
-def _replay_torques(d, robot):
+def _dop853(f, t0, t1, z, max_step):
+    """Hairer and Wanner's DOP853 itself (scipy.integrate.ode's Fortran code) from ``z`` at t0 to t1."""
+    solver = ode(f).set_integrator("dop853", rtol=1e-11, atol=1e-14, max_step=max_step, nsteps=10**7)
+    z = solver.set_initial_value(z, t0).integrate(t1)
+    assert solver.successful(), solver.get_return_code()
+    return z
+
+
+def _dop853_ivp(f, t0, t1, z, max_step):
+    """:func:`_dop853` by scipy's solve_ivp (its DOP853 in Python)."""
+    return solve_ivp(f, (t0, t1), z, method="DOP853", rtol=1e-11, atol=1e-14, max_step=max_step).y[:, -1]
+
+
+def _replay_torques(d, robot, integrate=_dop853):
     """The replay rule of plan files in numpy: torques linear between rows, a step at a time given twice;
     DOP853 on the printed torque-driven equations (references, in scalar arithmetic: :func:`_piece_rhs`),
-    restarted at every step. The final state."""
+    restarted at every step, at most 20 samples a step. The final state. The Fortran DOP853 by default (a step
+    driven by Python costs more than the scalar right side it calls; test_the_fortran_replay_is_solve_ivps)."""
     t, tq = np.array(d["time"]), np.array(d["rotor_torques"])
     cuts = [0, *(np.nonzero(np.diff(t) == 0)[0] + 1).tolist(), t.size]
     z = np.r_[[d["start"][n] for n in STATE_NAMES], 0.0, 0.0]
@@ -304,9 +318,20 @@ def _replay_torques(d, robot):
         tp, qp = t[a:b], tq[a:b]
         if tp[-1] > tp[0]:
             f = _piece_rhs(robot.j_xx, robot.j_zz, robot.rotor_inertia_axial, robot.radius, tp, qp)
-            z = solve_ivp(f, (tp[0], tp[-1]), z, method="DOP853", rtol=1e-11, atol=1e-14,
-                          max_step=20 * (tp[1] - tp[0])).y[:, -1]
+            z = integrate(f, tp[0], tp[-1], z, 20 * (tp[1] - tp[0]))
     return z[:5]
+
+
+def test_the_fortran_replay_is_solve_ivps():
+    """The two DOP853 codes replay the same torques (a step at a time given twice) to the same final state, far
+    within the 1e-6 that the replays of plan files are compared with."""
+    rng = np.random.default_rng(5)
+    t = np.r_[np.linspace(0.0, 0.5, 51), np.linspace(0.5, 1.0, 51)]
+    tq = 0.02 * np.sin(np.outer(t, rng.uniform(2, 8, 2)) + rng.uniform(0, 6, 2))
+    tq[51:] += 0.01    # the step at t = 0.5
+    d = {"time": t, "rotor_torques": tq, "start": dict(zip(STATE_NAMES, [0.01, -0.02, 0.3, 0.2, -0.1]))}
+    fortran, ivp = _replay_torques(d, MODEL), _replay_torques(d, MODEL, _dop853_ivp)
+    assert np.abs(ivp[:2]).max() > 1e-3 and np.abs(fortran - ivp).max() < 5e-8, fortran - ivp
 
 
 def _quintic_times(fractions, duration):
