@@ -114,11 +114,12 @@ def test_closed_loop_script_runs(tmp_path):
     """The script end to end with one seed per case, one model error (each row of the Monte Carlo tables is one
     error; the torque plant's runs the smallest and largest, here the same, run once), one noise level of the issue's
     case and one plan of the torque-against-rate comparison (every section, fewer samples of each than even --quick),
-    MuJoCo at a 1 ms step (its closed loop tested in test_mujoco at that step). The process pools fork their workers
-    (which inherit what the script has built), not spawn them."""
+    two figure eights instead of four in sections 1 to 3 (the closed loop still re-plans after the first and then
+    corrects), MuJoCo at a 1 ms step (its closed loop tested in test_mujoco at that step). The process pools fork
+    their workers (which inherit what the script has built), not spawn them."""
     scripts = Path(__file__).resolve().parent.parent / "scripts"
     run = ("import sys; sys.path.insert(0, sys.argv[1]); import closed_loop as c; c.ERRORS = (0.10,); "
-           "c.NOISE_LEVELS = (1e-3,); c.TORQUE_CASES = c.TORQUE_CASES[:1]; c.MUJOCO_STEPS = (1,); "
+           "c.NOISE_LEVELS = (1e-3,); c.STEPS = 2; c.TORQUE_CASES = c.TORQUE_CASES[:1]; c.MUJOCO_STEPS = (1,); "
            "c.BEYOND = c.BEYOND[:1]; c.MUJOCO_SETTINGS = {'timestep': 1e-3, 'solref': (2e-3, 1.0)}; "
            "import rollplan.studies.executor as ex; seen = []; pick = ex.start_method; "
            "ex.start_method = lambda: seen.append(pick()) or seen[-1]; "
