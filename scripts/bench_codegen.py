@@ -136,6 +136,17 @@ def build(out: Path, steps_per_leaf: int = codegen.DEFAULT_STEPS_PER_LEAF, prefi
 MAKE_VARIABLES = ("CC", "CFLAGS", "CPPFLAGS", "LDFLAGS", "ARM", "MAKEFLAGS")
 
 
+def kept_folder(out: Path, build_dir: str, name: str, tools: dict) -> Path:
+    """Where :func:`kept` keeps the build of the generated folder ``out``: ``build_dir/<name>-<digest>``, the digest
+    of its files, of ``tools`` and of the environment's :data:`MAKE_VARIABLES`."""
+    h = hashlib.sha256(repr(sorted(tools.items())).encode())
+    h.update(repr([(v, os.environ.get(v)) for v in MAKE_VARIABLES]).encode())
+    for path in sorted(out.rglob("*")):
+        if path.is_file():
+            h.update(str(path.relative_to(out)).encode() + b"\0" + path.read_bytes() + b"\0")
+    return Path(build_dir) / f"{name}-{h.hexdigest()[:16]}"
+
+
 def kept(out: Path, build_dir: str | None, name: str, tools: dict, build) -> Path:
     """Build ``out`` (a generated folder) by ``build(folder)``, there, or with ``build_dir`` in its copy
     ``build_dir/<name>-<digest>`` (the digest of its files, of ``tools``, e.g. the compilers' versions, and of the
@@ -146,12 +157,7 @@ def kept(out: Path, build_dir: str | None, name: str, tools: dict, build) -> Pat
     if build_dir is None:
         build(out)
         return out
-    h = hashlib.sha256(repr(sorted(tools.items())).encode())
-    h.update(repr([(v, os.environ.get(v)) for v in MAKE_VARIABLES]).encode())
-    for path in sorted(out.rglob("*")):
-        if path.is_file():
-            h.update(str(path.relative_to(out)).encode() + b"\0" + path.read_bytes() + b"\0")
-    folder = Path(build_dir) / f"{name}-{h.hexdigest()[:16]}"
+    folder = kept_folder(out, build_dir, name, tools)
     if folder.exists():
         build(folder)
         return folder
