@@ -93,17 +93,14 @@ def test_the_animation_of_100_frames_stays_under_1_5_mb(tmp_path, rolled):
 
 
 @pytest.mark.slow
-def test_the_animation_draws_only_what_moves_and_shows_the_same_frames(tmp_path):
+def test_the_animation_draws_only_what_moves_and_shows_the_same_frames(tmp_path, rolled):
     """Each frame is the figure's still parts drawn once with the moving artists drawn over them: the frames are
     those of matplotlib drawing every frame whole (but for a few pixels where the cursor crosses an axis line)."""
     from PIL import Image
 
     from rollplan.plots.animation import make_animation
 
-    robot = rollplan.default_robot()
-    p = rollplan.plan((0.05, 0.1, 1.0), robot=robot)
-    m = actuate(p, robot, 10.0)
-    sim = rollplan.simulate_rotors(robot, m.series.time, m.series.rotor_rates, p.goal)
+    robot, p, sim = rolled
     frames = {}
     for blit in (True, False):
         make_animation(sim.series, robot, p.goal, tmp_path / f"{blit}.gif", 6, 20, dpi=60, blit=blit)
