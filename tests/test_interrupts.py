@@ -178,13 +178,21 @@ def run_and_interrupt(argv, delay, wait_for=None, env=None, sig=signal.SIGINT, c
     return proc.returncode, elapsed, out, "".join(lines)
 
 
-def stderr_times(argv, env=None, command=None):
+def stderr_times(argv, env=None, command=None, until=None):
     """One uninterrupted run of the command (as :func:`run_and_interrupt` launches it): ``[(seconds from the start,
-    stderr line)]``, the last entry ``(seconds to the exit, "")``."""
+    stderr line)]``, the last entry ``(seconds to the exit, "")``; with ``until``, the run is stopped (killed) at
+    the first stderr line containing it, the last entry (a test that needs no later moment of the command)."""
     t0 = time.perf_counter()
     proc = subprocess.Popen([*(command or CLI), *argv], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                             env=env)
-    times = [(time.perf_counter() - t0, line) for line in proc.stderr]
+    times = []
+    for line in proc.stderr:
+        times.append((time.perf_counter() - t0, line))
+        if until is not None and until in line:
+            proc.kill()
+            proc.wait(timeout=60)
+            proc.stderr.close()
+            return times
     assert proc.wait(timeout=600) == 0, "".join(line for _, line in times)
     return [*times, (time.perf_counter() - t0, "")]
 
@@ -220,16 +228,30 @@ def plan_loop(tmp_path_factory):
     return phase(stderr_times(["plan", "--to", "0", "1", "--k", "99"], env=env))[1]
 
 
-#: The compare whose phases the Ctrl-C tests of compare interrupt: the construction of the collocation NLP
-#: (N = 600: about a second, one call into C++), the screening of the starts on a coarse grid, and the starts
-#: solved on the full grid by two workers (seconds).
-COMPARE = ["-v", "compare", "--to", "0.5", "0.3", "--intervals", "600"]
+#: The compare whose construction of the collocation NLP the Ctrl-C tests of compare interrupt (N = 600: about a
+#: second, one call into C++).
+COMPARE_BUILD = ["-v", "compare", "--to", "0.5", "0.3", "--intervals", "600"]
+
+#: The compare whose later phases they interrupt: the screening of the starts on a coarse grid, and the starts solved
+#: on the full grid by two workers (seconds). The same code as COMPARE_BUILD's on a grid half as fine (N = 300:
+#: still screened, N >= 40), for half the CPU time of its construction and of its solves.
+COMPARE = ["-v", "compare", "--to", "0.5", "0.3", "--intervals", "300"]
 
 
-#: The phases of COMPARE (from the first stderr line containing one text to the first containing the next): the
-#: construction of the NLP, then the coarse NLP, the geometric-phase timing and the screening, then the workers'
-#: solves, the correction and the certificates to the exit.
-COMPARE_PHASES = ["building the collocation NLP: N = 600", "building the collocation NLP: N = 10,", "worker(s)", None]
+#: The phases of a compare (from the first stderr line containing one text to the first containing the next), each
+#: with the compare interrupted in it: the construction of the NLP (COMPARE_BUILD), then the coarse NLP, the
+#: geometric-phase timing and the screening, then the workers' solves, the correction and the certificates to the
+#: exit (COMPARE).
+COMPARE_PHASES = [(COMPARE_BUILD, "building the collocation NLP: N = 600", "building the collocation NLP: N = 10,"),
+                  (COMPARE, "building the collocation NLP: N = 10,", "worker(s)"),
+                  (COMPARE, "worker(s)", None)]
+
+
+@pytest.fixture(scope="module")
+def compare_build_run():
+    """stderr_times of COMPARE_BUILD on this machine, stopped once its NLP is built (the construction is the phase
+    of it that the tests interrupt)."""
+    return stderr_times(COMPARE_BUILD, until=COMPARE_PHASES[0][2])
 
 
 @pytest.fixture(scope="module")
@@ -254,16 +276,17 @@ def test_ctrl_c_stops_the_solver_loop_with_exit_130(fraction, plan_loop, tmp_pat
 
 @pytest.mark.slow
 @pytest.mark.parametrize("fraction", [0.35])
-def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(fraction, compare_run):
+def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(fraction, compare_build_run):
     """Ctrl-C in `compare --intervals 2000` took 24-30 s to act: CasADi's construction of the collocation solver
     (minutes for a large N, one call into C++ that never returns to Python) held it. SIGINT a third into that
     construction (N = 600; its length measured here, up to the next stderr line) now exits 130 within a second or
     two (the machine may be loaded), one line, no traceback. One moment: the construction is that one call, so a
     second moment in it takes the same path (test_ctrl_c_at_any_moment_of_compare_acts_at_once draws moments over
     the whole command)."""
-    _, length = phase(compare_run, *COMPARE_PHASES[:2])
+    command, after, until = COMPARE_PHASES[0]
+    _, length = phase(compare_build_run, after, until)
     delay, = moments_in(length, [fraction])
-    code, elapsed, _, err = run_and_interrupt(COMPARE, delay, wait_for=COMPARE_PHASES[0])
+    code, elapsed, _, err = run_and_interrupt(command, delay, wait_for=after)
     assert code == 130, (delay, length, err)
     assert elapsed < 3.0, (elapsed, err)
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"
@@ -271,13 +294,15 @@ def test_ctrl_c_while_compare_builds_its_nlp_acts_at_once(fraction, compare_run)
 
 @pytest.mark.slow
 @pytest.mark.parametrize("which, draw", list(enumerate(moments(7, 0.05, 0.45, 3))))
-def test_ctrl_c_at_any_moment_of_compare_acts_at_once(which, draw, compare_run):
+def test_ctrl_c_at_any_moment_of_compare_acts_at_once(which, draw, request):
     """SIGINT at a random moment of each phase of a `compare` (COMPARE_PHASES: construction, geometric-phase
     timing, IPOPT, Gauss-Newton, CVODES certification of each start; the moment a random fraction of the phase's
-    length, measured here): exit 130 within a few seconds on a loaded machine, one line of ours and no warning."""
-    after, until = COMPARE_PHASES[which], COMPARE_PHASES[which + 1]
-    delay, = moments_in(phase(compare_run, after, until)[1], [draw])
-    code, elapsed, _, err = run_and_interrupt(COMPARE, delay, wait_for=after)
+    length, measured here on the compare interrupted in it): exit 130 within a few seconds on a loaded machine, one
+    line of ours and no warning."""
+    command, after, until = COMPARE_PHASES[which]
+    times = request.getfixturevalue("compare_build_run" if command is COMPARE_BUILD else "compare_run")
+    delay, = moments_in(phase(times, after, until)[1], [draw])
+    code, elapsed, _, err = run_and_interrupt(command, delay, wait_for=after)
     assert code == 130, (after, delay, err)
     assert elapsed < 3.0, (delay, elapsed, err)
     assert "Traceback" not in err and "KeyboardInterruptException" not in err
