@@ -399,6 +399,18 @@ def plan_data(path):
     return data, {key: json.dumps(value) for key, value in data.items()}
 
 
+@functools.lru_cache(maxsize=2)
+def rotor_reference(path) -> np.ndarray:
+    """The final state (u_a, v_a, psi, u_o, v_o) of the plan file's rotor rates alone, by
+    ``references.rotor_drive`` (DOP853 on the printed equations), integrated once for every unchanged copy of the
+    file that a test simulates."""
+    d = plan_data(path)[0]
+    x0 = [d["start"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")]
+    t = np.asarray(d["time"])
+    keep = np.r_[True, np.diff(t) > 0]   # a time given twice is a step of the torques: the rates once
+    return references.rotor_drive(d["robot"], t[keep], np.asarray(d["rotor_rates"])[keep], x0)[-1]
+
+
 def dumps_plan(data, path) -> str:
     """``json.dumps(data)`` for a shallow copy of the plan file's value: the values it shares are not written
     again."""
@@ -463,13 +475,9 @@ def test_plan_files(tmp_path_factory, plan_json, data, command):
         assert all(math.isfinite(v) for v in sim["final"].values())
         if kind == "same":
             assert sim["arrival_error"] < 1e-6
-            d = plan_data(plan_json)[0]   # what raw holds
-            x0 = [d["start"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")]
-            t = np.asarray(d["time"])
-            keep = np.r_[True, np.diff(t) > 0]   # a time given twice is a step of the torques: the rates once
-            ref = references.rotor_drive(d["robot"], t[keep], np.asarray(d["rotor_rates"])[keep], x0)
             # two cubic splines through the same samples, two integrators: agree far below the 1e-6 tolerance
-            assert np.allclose([sim["final"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")], ref[-1], atol=1e-8)
+            assert np.allclose([sim["final"][n] for n in ("u_a", "v_a", "psi", "u_o", "v_o")],
+                               rotor_reference(plan_json), atol=1e-8)
 
 
 @pytest.mark.parametrize("plan_json", ["composed"], indirect=True)
