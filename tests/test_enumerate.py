@@ -90,6 +90,19 @@ def test_displacement_derivative_against_differences():
         assert np.all(np.abs(dd - fd) < 1e-5 * (1 + np.abs(dd)))
 
 
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.floats(0.0, A_MAX), min_size=1, max_size=300), st.floats(0.0, K_MAX),
+       st.integers(1, 400), st.booleans())
+def test_displacement_does_not_depend_on_its_blocks(r, k, chunk, derivative):
+    """The leaf rule applied block by block: the same values to round-off (the BLAS kernel may sum a block in
+    another order) for any block size as with the default."""
+    r = np.array(r)
+    got = leafmap.displacement(r, k, derivative=derivative, chunk=chunk)
+    want = leafmap.displacement(r, k, derivative=derivative)
+    for one, other in zip(*((got, want) if derivative else ((got,), (want,)))):
+        assert np.all(np.abs(one - other) <= 1e-14 * np.abs(other).max(initial=1.0))
+
+
 def test_symmetry_exp_half_turn_times_displacement_is_real():
     """The leaf's mirror symmetry: exp(i E / 2) d is real, checked on DOP853's leaf ends."""
     for r, k in ((0.2, 2.5), (0.6, 5.0), (A_MAX, 20.0)):

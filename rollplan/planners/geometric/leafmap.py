@@ -167,12 +167,19 @@ def turn_inverse(e, k: float):
     return np.where(inside, np.sqrt(u), np.nan)
 
 
-def displacement(r, k: float, derivative: bool = False, chunk: int = 2048):
+#: Values (radii x nodes) per block of the leaf rule in :func:`displacement`: blocks of about 256 KB stay in the
+#: processor's cache (larger ones made the rule 10-45 % slower); the values do not depend on the block.
+BLOCK_VALUES = 32768
+
+
+def displacement(r, k: float, derivative: bool = False, chunk: int | None = None):
     """Displacement ``d(r, k)`` (complex, ``u_a + i v_a``) of the +y leaf from zero, for an array of
     radii in ``[0, A_MAX]``; with ``derivative`` also ``dd/dr`` (the rule applied to the
-    r-derivative of the integrand). Gauss-Legendre rule of docs/design/leaf-map.md."""
+    r-derivative of the integrand). Gauss-Legendre rule of docs/design/leaf-map.md, applied to ``chunk`` radii at
+    a time (default: :data:`BLOCK_VALUES` values per block)."""
     r = np.atleast_1d(np.asarray(r, float))
     chi, w = gauss_nodes(panels_for(k))
+    chunk = chunk or max(1, BLOCK_VALUES // chi.size)
     cchi, schi = np.cos(chi), np.sin(chi)
     out = np.empty(r.size, complex)
     dout = np.empty(r.size, complex) if derivative else None
