@@ -111,8 +111,9 @@ def test_interrupts_call_passes_results_and_errors_through():
 
 @pytest.mark.slow
 def test_planner_is_interrupted_not_sent_to_another_branch(tmp_path, monkeypatch):
-    """A Ctrl-C during a k = 99 plan (its C search and compiled functions built afresh, then the search) stops it
-    with KeyboardInterrupt, not a NoPlanError, SolverError or a plan on a longer branch."""
+    """A Ctrl-C during a k = 99 plan with nothing compiled on disk (half a second in, the compiler builds the C
+    search: most of such a plan's first use) stops it with KeyboardInterrupt, not a NoPlanError, SolverError or a
+    plan on a longer branch."""
     from rollplan import Problem
     from rollplan.planners.geometric import compiled_search
 
@@ -131,8 +132,8 @@ def test_planner_is_interrupted_not_sent_to_another_branch(tmp_path, monkeypatch
 
 
 def fresh_cache_env(folder):
-    """The environment with an empty leaf-table cache in ``folder`` (made here): a k = 99 plan then builds its
-    table (seconds of work)."""
+    """The environment with an empty cache in ``folder`` (made here): a k = 99 plan then compiles its C search (most
+    of its seconds of work), builds its table and searches."""
     folder.mkdir()
     return {**os.environ, "ROLLPLAN_CACHE_DIR": str(folder)}
 
@@ -223,7 +224,7 @@ def moments_in(length, fractions):
 
 @pytest.fixture(scope="module")
 def plan_loop(tmp_path_factory):
-    """The length [s] of `plan --to 0 1 --k 99` with no leaf table on disk (a fresh cache), on this machine."""
+    """The length [s] of `plan --to 0 1 --k 99` with nothing compiled on disk (a fresh cache), on this machine."""
     env = fresh_cache_env(tmp_path_factory.mktemp("plan-loop") / "cache")
     return phase(stderr_times(["plan", "--to", "0", "1", "--k", "99"], env=env))[1]
 
@@ -263,9 +264,10 @@ def compare_run():
 @pytest.mark.slow
 @pytest.mark.parametrize("fraction", [0.25, 0.35, 0.45])
 def test_ctrl_c_stops_the_solver_loop_with_exit_130(fraction, plan_loop, tmp_path):
-    """`plan --to 0 1 --k 99` with no leaf table on disk builds its table and searches 511 branches for
-    seconds; SIGINT at moments of that work (fractions of its length, measured here) exits 130 within a second or
-    two (the machine may be loaded), with "rollplan: interrupted" as the last line on stderr and no traceback."""
+    """`plan --to 0 1 --k 99` with nothing compiled on disk compiles its C search (a compiler in a child process,
+    most of the run), builds its table and searches 511 branches; SIGINT at moments of that work (fractions of its
+    length from the start, measured here: past the imports, mostly in the compiler's run) exits 130 within a second
+    or two (the machine may be loaded), with "rollplan: interrupted" as the last line on stderr and no traceback."""
     delay, = moments_in(plan_loop, [fraction])
     code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99"], delay,
                                               env=fresh_cache_env(tmp_path / "cache"))
@@ -325,7 +327,7 @@ def test_ctrl_c_while_compare_screens_its_starts_acts_at_once(fraction, compare_
 @pytest.mark.slow
 def test_sigterm_stops_the_solver_loop_with_exit_143(plan_loop, tmp_path):
     """SIGTERM killed the command at once, leaving its workers and temporaries; now, once the command runs (here:
-    while it builds its leaf table), it stops as for Ctrl-C, also inside the solvers (recorded like SIGINT, see
+    while it compiles its C search), it stops as for Ctrl-C, also inside the solvers (recorded like SIGINT, see
     test_ctrl_c_stops_the_solver_loop_with_exit_130, at one of the same moments of its work; a progress line is
     printed only when the table takes seconds, which an idle machine does not): exit 143, one line."""
     delay, = moments_in(plan_loop, [0.35])
