@@ -95,12 +95,11 @@ sys.exit(run.returncode)
 """
 
 
-def make(*argv, **kwargs):
-    """``subprocess.run(["make", *argv])`` (text output captured, no check) with the host compiler (``CC``) and the
-    ARM cross compiler (``ARM``) behind an object store in the run's cache directory (``ROLLPLAN_CACHE_DIR``: the
-    run-to-run build cache of this package content, or a fresh one): an object that an earlier build compiled from
-    the same compiler, flags and sources is copied instead of compiled again (:data:`_OBJECT_CACHE_CC`). The
-    Makefile's rules, flags, links and checks run as they are."""
+def object_store_tools() -> dict:
+    """The make variables that put the object store of the run's cache directory (``ROLLPLAN_CACHE_DIR``: the
+    run-to-run build cache of this package content, or a fresh one) in front of the host compiler (``CC``) and the
+    ARM cross compiler (``ARM``, a prefix): an object that an earlier build compiled from the same compiler, flags and
+    sources is copied instead of compiled again (:data:`_OBJECT_CACHE_CC`)."""
     import os
     import sys
     from pathlib import Path
@@ -125,8 +124,15 @@ def make(*argv, **kwargs):
         if real and not (tools / f"arm-none-eabi-{name}").exists():
             with contextlib.suppress(FileExistsError):
                 (tools / f"arm-none-eabi-{name}").symlink_to(real)
-    cross = [f"ARM={tools}/arm-none-eabi-"] if front["arm-none-eabi-gcc"] else []
-    return subprocess.run(["make", f"CC={tools / 'cc'}", *cross, *argv], capture_output=True, text=True,
+    return {"CC": str(tools / "cc"), **({"ARM": f"{tools}/arm-none-eabi-"} if front["arm-none-eabi-gcc"] else {})}
+
+
+def make(*argv, **kwargs):
+    """``subprocess.run(["make", *argv])`` (text output captured, no check) with the host and ARM compilers behind
+    the run's object store (:func:`object_store_tools`). The Makefile's rules, flags, links and checks run as they
+    are."""
+    tools = object_store_tools()
+    return subprocess.run(["make", *(f"{k}={v}" for k, v in tools.items()), *argv], capture_output=True, text=True,
                           check=False, **kwargs)
 
 

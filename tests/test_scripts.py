@@ -163,9 +163,14 @@ def test_closed_loop_script_runs(tmp_path):
 @pytest.mark.slow
 @pytest.mark.skipif(any(shutil.which(t) is None for t in ("arm-none-eabi-gcc", "qemu-system-arm", "make", "cc"))
                     and os.environ.get("ROLLPLAN_REQUIRE_EMBEDDED") != "1", reason="needs the ARM toolchain and QEMU")
-def test_embedded_report_script_runs(tmp_path):
+def test_embedded_report_script_runs(tmp_path, monkeypatch):
     """The quick run, its builds kept with the tests' build cache (``--build-dir``): a run of the same package
-    content and toolchain reuses them (the first one builds them)."""
+    content and toolchain reuses them (the first one builds them). Its make compiles through the object store of
+    tests/test_embedded.py's builds (the same sources and flags: each object compiled once per run)."""
+    from test_codegen import object_store_tools
+
+    for name, value in object_store_tools().items():   # make reads CC and ARM from the environment
+        monkeypatch.setenv(name, value)
     with cache_wide("embedded-report") as builds:
         run_script_here("embedded_report.py", tmp_path, "--no-host", "--quick", "--build-dir", str(builds))
         for real in ("double", "float"):     # kept where --build-dir says
