@@ -7,11 +7,12 @@ Tiers: ``unit`` is ``pytest -m "not slow"``, ``full`` the whole suite; each runs
 (``pytest -q -n JOBS``) with ``ROLLPLAN_REQUIRE_EMBEDDED=1`` and ``ROLLPLAN_REQUIRE_MUJOCO=1`` as in ``.ci/run``
 (``--no-require`` leaves the environment as it is). Measured per tier: the wall time of the pytest command
 (collection and the workers' start included), its CPU time (user + system of pytest and everything it started),
-the load average at the start and the end (the machine may be shared), the counts of passed, failed (errors
-included), errored and skipped tests, the names of the failed and errored tests (with the first line of their
-message) and of the skipped ones (with the reason), and each test's duration (setup, call and teardown, from
-pytest's JUnit XML). A tier not run this time keeps its last measurement (read back from suite.json); suite.md is
-rendered from suite.json alone.
+the load average at the start and the end (the machine may be shared), the machine's speed at the start and the
+end (:func:`speed_probe`: a virtual machine's speed can change by half from one minute to the next), the counts of
+passed, failed (errors included), errored and skipped tests, the names of the failed and errored tests (with the
+first line of their message) and of the skipped ones (with the reason), and each test's duration (setup, call and
+teardown, from pytest's JUnit XML). A tier not run this time keeps its last measurement (read back from
+suite.json); suite.md is rendered from suite.json alone.
 
 Build cache: by default a tier is measured cold, every C library and compiled function built anew in a fresh cache
 directory (as on a clean clone). With ``--warm`` it is measured as a developer's next run is: an unmeasured run
@@ -44,6 +45,22 @@ SLOWEST = 20
 FILES = 15
 #: at most this many skipped tests are named (all are counted)
 SKIPPED_NAMED = 50
+
+
+#: Iterations of the pure-Python loop of :func:`speed_probe`.
+PROBE_ITERATIONS = 3_000_000
+
+
+def speed_probe() -> float:
+    """Seconds of a fixed pure-Python loop (:data:`PROBE_ITERATIONS` additions; the best of three runs): the
+    machine's speed at that moment, measured the same way before and after a tier."""
+    best = float("inf")
+    for _ in range(3):
+        t, x = time.perf_counter(), 0
+        for i in range(PROBE_ITERATIONS):
+            x += i
+        best = min(best, time.perf_counter() - t)
+    return best
 
 
 def processor() -> str:
@@ -130,10 +147,11 @@ def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list, warm:
         if warm:
             print(f"{tier}: filling the build cache (unmeasured run)", file=sys.stderr)
             subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, check=False)
-        load0, start = os.getloadavg(), datetime.datetime.now(datetime.timezone.utc)
+        probe0, load0, start = speed_probe(), os.getloadavg(), datetime.datetime.now(datetime.timezone.utc)
         c, t = _cpu(), time.perf_counter()
         run = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, check=False)
         wall, cpu, load1 = time.perf_counter() - t, _cpu() - c, os.getloadavg()
+        probe1 = speed_probe()
         cases = parse_junit(xml) if xml.exists() else []
     if run.returncode not in (0, 1):
         print(run.stdout[-3000:], run.stderr[-3000:], sep="\n", file=sys.stderr)
@@ -155,6 +173,7 @@ def run_tier(tier: str, jobs: str, tests: str, require: bool, extra: list, warm:
         "jobs": jobs,
         "required": require, "wall_s": round(wall, 1), "cpu_s": round(cpu, 1),
         "load_start": [round(x, 2) for x in load0], "load_end": [round(x, 2) for x in load1],
+        "probe_s": [round(probe0, 3), round(probe1, 3)], "probe_iterations": PROBE_ITERATIONS,
         "tests": len(cases), "passed": sum(o == "passed" for _, _, o, _ in cases),
         "failed": sum(o in ("failed", "error") for _, _, o, _ in cases),
         "errors": sum(o == "error" for _, _, o, _ in cases),
@@ -183,6 +202,12 @@ def _rows(data: dict) -> list:
             if not suffix or tier + suffix in data]
 
 
+def _probe(m: dict) -> str:
+    """The speed cell of a measurement: the loop's seconds at the start and the end, or "not recorded"."""
+    probe = m.get("probe_s")
+    return f"{probe[0]:.2f} s, {probe[1]:.2f} s" if probe else "not recorded"
+
+
 def render(data: dict) -> str:
     """results/suite.md from the measurements of suite.json."""
     lines = ["# Duration of the test suite", "",
@@ -191,21 +216,24 @@ def render(data: dict) -> str:
              "compiled function built anew, as on a clean clone) unless the tier says warm cache (a developer's next "
              "run: loaded from the build cache an earlier run of the same package content filled). The machine may be "
              "shared: the load average at the start and the end is given, and the CPU time (user + system of pytest "
-             "and every process it started) depends less on the load than the wall time.", "",
+             "and every process it started) depends less on the load than the wall time. The speed of a virtual "
+             "machine also changes from minute to minute: the seconds of a fixed pure-Python loop (best of three) "
+             "at the start and the end say how fast it was (smaller is faster).", "",
              "| tier | command | date, commit | tests (passed, failed, skipped) | wall time | budget | CPU time | "
-             "sum of test durations | cores (processor), workers | load average at start, end (1 min) |",
-             "|---|---|---|---:|---:|---|---:|---:|---|---|"]
+             "sum of test durations | cores (processor), workers | load average at start, end (1 min) | "
+             "speed: loop at start, end |",
+             "|---|---|---|---:|---:|---|---:|---:|---|---|---|"]
     for key, (_, budget, what) in _rows(data):
         m = data.get(key)
         if not m:
-            lines.append(f"| {key} | not run by this script yet | | | | {what} | | | | |")
+            lines.append(f"| {key} | not run by this script yet | | | | {what} | | | | | |")
             continue
         verdict = "within" if m["wall_s"] <= budget else "over"
         lines.append(f"| {key} | `{m['command']}` | {m['date']}, `{m['commit']}` | {m['tests']} ({m['passed']}, "
                      f"{m['failed']}, {m['skipped']}) | **{_minutes(m['wall_s'])}** | {verdict} ({what}) | "
                      f"{_minutes(m['cpu_s'])} | {_minutes(m['test_seconds'])} | "
                      f"{m['cores']} ({m.get('processor', 'not recorded')}), {m['jobs']} | "
-                     f"{m['load_start'][0]:.2f}, {m['load_end'][0]:.2f} |")
+                     f"{m['load_start'][0]:.2f}, {m['load_end'][0]:.2f} | {_probe(m)} |")
     for tier, _ in _rows(data):
         m = data.get(tier)
         if not m:

@@ -326,7 +326,7 @@ def test_suite_report_names_failed_errored_and_skipped_tests(tmp_path):
 def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     """scripts/suite_report.py runs each tier of a small suite whose counts are known (six tests: four pass,
     one of them slow, one is skipped, one fails) and writes suite.md from that run: the counts, the slowest
-    test, the status; a second run of one tier keeps the other tier's row."""
+    test, the status, the speed probe before and after; a second run of one tier keeps the other tier's row."""
     tests = tmp_path / "fake"
     tests.mkdir()
     (tests / "pytest.ini").write_text("[pytest]\nmarkers =\n    slow: slow\n")
@@ -349,6 +349,10 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     text = (out / "suite.md").read_text()
     assert "| unit |" in text and "| full |" in text and "6 (4, 1, 1)" in text and "5 (3, 1, 1)" in text
     assert "`test_fake.py::test_slow`" in text and "scripts/suite_report.py" in text
+    # the machine's speed before and after each tier: the loop's seconds, in the table
+    for tier in ("unit", "full"):
+        start, end = data[tier]["probe_s"]
+        assert 0 < start < 60 and 0 < end < 60 and f"| {start:.2f} s, {end:.2f} s |" in text
     # the failed test is named, with its message, and so is the skipped one, with its reason
     for tier in ("unit", "full"):
         assert [n for n, _, _ in data[tier]["failures"]] == ["test_fake.py::test_fails"]
