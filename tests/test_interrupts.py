@@ -109,26 +109,32 @@ def test_interrupts_call_passes_results_and_errors_through():
     assert interrupts.call(interrupts.call, max, 1, 2) == 2   # nested
 
 
-@pytest.mark.slow
-def test_planner_is_interrupted_not_sent_to_another_branch(tmp_path, monkeypatch):
-    """A Ctrl-C during a k = 99 plan with nothing compiled on disk (half a second in, the compiler builds the C
-    search: most of such a plan's first use) stops it with KeyboardInterrupt, not a NoPlanError, SolverError or a
-    plan on a longer branch."""
+def test_planner_is_interrupted_not_sent_to_another_branch():
+    """A Ctrl-C during the C search of a k = 99 plan (its library loaded; a k no other test uses, so the search first
+    builds its rho table: a few tenths of a second) stops it with KeyboardInterrupt, not a NoPlanError, SolverError
+    or a plan on a longer branch."""
     from rollplan import Problem
     from rollplan.planners.geometric import compiled_search
 
-    monkeypatch.setenv("ROLLPLAN_CACHE_DIR", str(tmp_path))   # nothing compiled on disk: the plan takes seconds
-    compiled_search.library.cache_clear()
+    _require_c_search(compiled_search)
     planner = GeometricPhasePlanner()
-    timer = interrupt_after(0.5)
+    timer = interrupt_after(0.1)
     try:
         with pytest.raises(KeyboardInterrupt):
-            planner.solve(Problem((0.0, 1.0, 0.0), k=99.0))
+            planner.solve(Problem((0.0, 1.0, 0.0), k=98.73))
     finally:
         timer.cancel()
-        compiled_search.library.cache_clear()
     # within a second on an idle machine; the bound leaves room for a loaded one (2.5 s seen at load 5 on 2 cores)
     assert time.perf_counter() - timer.sent[0] < 5.0
+
+
+def _require_c_search(compiled_search):
+    """Skip without a C compiler; else load the C search (built once per run) so that what follows is the search."""
+    from rollplan.core import compiled
+
+    if compiled.compiler_command() is None:
+        pytest.skip("no C compiler: the compiled search is not built")
+    assert compiled_search.library() is not None, compiled.last_build()
 
 
 def fresh_cache_env(folder):
