@@ -103,6 +103,12 @@ def test_displacement_does_not_depend_on_its_blocks(r, k, chunk, derivative):
         assert np.all(np.abs(one - other) <= 1e-14 * np.abs(other).max(initial=1.0))
 
 
+@pytest.mark.parametrize("chunk", [0, -1, 2.5, True])
+def test_displacement_refuses_a_block_that_is_not_a_positive_integer(chunk):
+    with pytest.raises(ValueError, match=f"chunk = {chunk!r}"):
+        leafmap.displacement([0.1, 0.2], 2.5, chunk=chunk)
+
+
 def test_symmetry_exp_half_turn_times_displacement_is_real():
     """The leaf's mirror symmetry: exp(i E / 2) d is real, checked on DOP853's leaf ends."""
     for r, k in ((0.2, 2.5), (0.6, 5.0), (A_MAX, 20.0)):

@@ -167,8 +167,9 @@ def turn_inverse(e, k: float):
     return np.where(inside, np.sqrt(u), np.nan)
 
 
-#: Values (radii x nodes) per block of the leaf rule in :func:`displacement`: blocks of about 256 KB stay in the
-#: processor's cache (larger ones made the rule 10-45 % slower); the values do not depend on the block.
+#: Values (radii x nodes) per block of the leaf rule in :func:`displacement`: the block's arrays (256 KB each) stay in
+#: the processor's cache (blocks of 2048 radii made the rule 10-45 % slower); the block changes the values by
+#: round-off only (the order in which BLAS sums a block's rows).
 BLOCK_VALUES = 32768
 
 
@@ -179,7 +180,10 @@ def displacement(r, k: float, derivative: bool = False, chunk: int | None = None
     a time (default: :data:`BLOCK_VALUES` values per block)."""
     r = np.atleast_1d(np.asarray(r, float))
     chi, w = gauss_nodes(panels_for(k))
-    chunk = chunk or max(1, BLOCK_VALUES // chi.size)
+    if chunk is None:
+        chunk = max(1, BLOCK_VALUES // chi.size)
+    elif not isinstance(chunk, (int, np.integer)) or isinstance(chunk, bool) or chunk < 1:
+        raise ValueError(f"chunk = {chunk!r}: a number of radii per block, an integer >= 1, or None (the default)")
     cchi, schi = np.cos(chi), np.sin(chi)
     out = np.empty(r.size, complex)
     dout = np.empty(r.size, complex) if derivative else None
