@@ -346,7 +346,7 @@ def test_newton_step_is_newton_on_the_shift(h, slope, off, curve):
     in one step from anywhere in (0, 2 x*], which Newton on g misses by (x - x*)^2 / (2 x) (g'' / (2 g'))."""
     x = h / slope * (1.0 + off)
     s, ds = slope * x + curve * x * x, slope + 2.0 * curve * x
-    if s <= 0.0:
+    if s <= 0.0 or abs(ds) < 1e-6 * slope:   # |S| = S; at S' = 0 Newton's step is not defined
         return
     g, dg = s * s - h * h, 2.0 * s * ds
     step, miss = en.newton_step(np.array([g]), np.array([dg]), np.array([h * h]))
