@@ -372,6 +372,17 @@ def run_program(folder, name: str, text: str, *args: str) -> subprocess.Complete
                           timeout=120)
 
 
+def require_c_search(curve: str = "circles") -> None:
+    """Skip without a C compiler; with one, the compiled C search of the leaf family ``curve`` must build (a failed
+    build fails the test) and is loaded, so that what the test runs next is the search, not its build."""
+    from rollplan.core import compiled
+    from rollplan.planners.geometric import compiled_search
+
+    if compiled.compiler_command() is None:
+        pytest.skip("no C compiler: the compiled search is not built")
+    assert compiled_search.library(curve) is not None, compiled.last_build()
+
+
 def one_line(err):
     """True if ``err`` is one line and no traceback (how every refusal is reported)."""
     return len(err.strip().splitlines()) == 1 and "Traceback" not in err

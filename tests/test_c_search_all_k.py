@@ -18,11 +18,11 @@ import threading
 
 import numpy as np
 import pytest
+from conftest import require_c_search
 from test_enumerate import brute_roots_2d, same_sets
 from test_interrupts import run_and_interrupt
 
 from rollplan import NoPlanError, Problem
-from rollplan.core import compiled
 from rollplan.core.curves import A_MAX
 from rollplan.core.plane import wrap_exact
 from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search, leafmap
@@ -37,13 +37,6 @@ def _gamma_tol(a, b):
     ~1e-14 s^-3."""
     r = max(a, b)
     return 1e-12 * (1.0 + (1.0 - 2.0 * r * r) ** -1.5)
-
-
-def _require_library():
-    """Skip without a C compiler; with one, the compiled search must build (a failed build fails the test)."""
-    if compiled.compiler_command() is None:
-        pytest.skip("no C compiler: the compiled search is not built")
-    assert compiled_search.library() is not None, compiled.last_build()
 
 
 def _targets(seed, ks, count, steps=None):
@@ -108,19 +101,19 @@ def _check_same_lists(seed, ks, count, fixed_steps=None):
 @pytest.mark.slow
 def test_same_plan_as_the_numpy_search_below_one_half():
     """k in [0.1, 1/2) (E not monotone or increasing: the C sigma graphs)."""
-    _require_library()
+    require_c_search()
     assert _check_same_plans(31, lambda rng: rng.uniform(0.1, 0.5), 16) >= 4
 
 
 def test_same_lists_as_the_numpy_search_below_one_half():
-    _require_library()
+    require_c_search()
     assert _check_same_lists(32, lambda rng: rng.uniform(0.1, 0.5), 6) >= 2
 
 
 @pytest.mark.slow
 def test_same_plan_as_the_numpy_search_for_every_k():
     """k log-uniform in [0.1, 30]: both graphs of the C search (sigma graphs below 1/2, the graph over x above)."""
-    _require_library()
+    require_c_search()
     ks = lambda rng: math.exp(rng.uniform(math.log(0.1), math.log(30.0)))   # noqa: E731
     assert _check_same_plans(33, ks, 16) >= 8
     assert _check_same_lists(34, ks, 4, fixed_steps=1) >= 2
@@ -131,7 +124,7 @@ def test_c_roots_against_the_2d_brute_force(k):
     """Every root of the C search (rollplan_plan_all, uncertified) is one of the brute force's and none is missed;
     the shortest root (rollplan_plan_with) is the brute force's shortest. Targets with psi = 0 have the branch
     eta = 0 (a = b, and a != b with E(a) = E(b) where E is not monotone)."""
-    _require_library()
+    require_c_search()
     rng = np.random.default_rng(int(k * 1000) + 41)
     targets = [((0.3, 0.2, 0.0), 1), ((0.05, -0.1, 0.0), 2)]
     targets += [((rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(-np.pi, np.pi)), int(rng.integers(1, 4)))
@@ -155,7 +148,7 @@ def test_ctrl_c_during_a_long_c_search_exits_130():
     """`plan --all --k 99` spends minutes in one call of the C search (every root of 511 branches); a SIGINT during
     it exits 130 within two seconds (the call runs in a helper thread, the main thread acts on the signal), one
     line, no traceback."""
-    _require_library()
+    require_c_search()
     code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99", "--all"], 5.0)
     assert code == 130, err
     assert elapsed < 2.0
@@ -167,7 +160,7 @@ def test_ctrl_c_while_a_long_list_is_certified_exits_130_within_a_second():
     """`plan --all` at k = 12, n = 4 certifies 1864 roots (seconds): its progress shows on stderr, and a SIGINT
     during the certificates exits 130 within a second (the machine may be loaded: 1.5 s), one line, no
     traceback."""
-    _require_library()
+    require_c_search()
     code, elapsed, _, err = run_and_interrupt(["-v", "plan", "--to", "0", "1", "--k", "12", "--steps", "4", "--all"],
                                               0.5, wait_for="certifying 1864 roots in C")
     assert code == 130, err
@@ -227,7 +220,7 @@ def test_a_long_list_shows_a_progress_bar_on_a_terminal():
     a bar only after 5 s of work (checked: the delay it asks for); here the bar shows at once
     (:data:`_AT_ONCE`), so that a list of tens of roots (k = 4, n = 2) shows it instead of thousands
     certified for more than 5 s."""
-    _require_library()
+    require_c_search()
     code, err, out = _run_on_a_terminal(["plan", "--to", "0", "1", "--k", "4", "--steps", "2", "--all"])
     assert code == 0, err
     assert out.splitlines()[0] == "delay 5.0", out[:200]
@@ -241,7 +234,7 @@ def test_a_long_list_shows_a_progress_bar_on_a_terminal():
 def test_two_threads_certify_as_one():
     """certify_roots with two threads (the second on its own instance of the C library, a copy of the file loaded
     again) gives exactly the certificates of one thread, in the same order."""
-    _require_library()
+    require_c_search()
     roots = compiled_search.listed_roots(0.3, -0.2, 0.5, 2, 1.5)
     assert len(roots) >= 10
     one = compiled_search.certify_roots(roots, 0.3, -0.2, 0.5, 2, 1.5, threads=1)

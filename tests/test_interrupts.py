@@ -16,7 +16,7 @@ from concurrent.futures import ThreadPoolExecutor
 import casadi as ca
 import numpy as np
 import pytest
-from conftest import run_program
+from conftest import require_c_search, run_program
 
 from rollplan import interrupts
 from rollplan.planners.geometric import GeometricPhasePlanner
@@ -114,9 +114,8 @@ def test_planner_is_interrupted_not_sent_to_another_branch():
     builds its rho table: a few tenths of a second) stops it with KeyboardInterrupt, not a NoPlanError, SolverError
     or a plan on a longer branch."""
     from rollplan import Problem
-    from rollplan.planners.geometric import compiled_search
 
-    _require_c_search(compiled_search)
+    require_c_search()
     planner = GeometricPhasePlanner()
     timer = interrupt_after(0.1)
     try:
@@ -126,15 +125,6 @@ def test_planner_is_interrupted_not_sent_to_another_branch():
         timer.cancel()
     # within a second on an idle machine; the bound leaves room for a loaded one (2.5 s seen at load 5 on 2 cores)
     assert time.perf_counter() - timer.sent[0] < 5.0
-
-
-def _require_c_search(compiled_search):
-    """Skip without a C compiler; else load the C search (built once per run) so that what follows is the search."""
-    from rollplan.core import compiled
-
-    if compiled.compiler_command() is None:
-        pytest.skip("no C compiler: the compiled search is not built")
-    assert compiled_search.library() is not None, compiled.last_build()
 
 
 def fresh_cache_env(folder):

@@ -9,11 +9,10 @@ import subprocess
 
 import numpy as np
 import pytest
-from conftest import one_line, run
+from conftest import one_line, require_c_search, run
 from test_codegen import make
 
 from rollplan import InputError, Problem
-from rollplan.core import compiled
 from rollplan.core.plane import wrap
 from rollplan.planners import solve
 from rollplan.planners.geometric import GeometricPhasePlanner, compiled_search
@@ -22,12 +21,6 @@ import references
 
 #: The families the C search plans with (beside the circles).
 PLANNED = ("viviani", "triangle", "square")
-
-
-def _require_library(curve):
-    if compiled.compiler_command() is None:
-        pytest.skip("no C compiler: the compiled search is not built")
-    assert compiled_search.library(curve) is not None, compiled.last_build()
 
 
 @pytest.mark.parametrize("options, needle", [
@@ -83,7 +76,7 @@ def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path, capsys):
     """``plan --curve --json``: the sampled contact path alone, integrated by scipy (``references.replay``, 1e-6), and
     the figure eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9; a
     polygon's contact path is made of great-circle arcs (each edge's samples on one great circle to 1e-9)."""
-    _require_library(curve)
+    require_c_search(curve)
     landed = 0
     for i, (target, steps, k) in enumerate(_targets(26, 6)):
         out = tmp_path / f"p{i}.json"
@@ -143,7 +136,7 @@ def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path, capsys):
     eight as typed in tests/references.py is integrated by DOP853. Built for k <= 6.5: the triangle's rho table at
     k = 6 has more radii (965) than a circle's at 6.5 (824), so a table sized for the circles fails; each target's k
     (of TARGET_K, up to 6) costs plan_demo the build of its table."""
-    _require_library(curve)
+    require_c_search(curve)
     out = tmp_path / "c"
     code, stdout, err = run(capsys, "codegen", "--out", str(out), "--curve", curve, "--k-max", "6.5")
     assert code == 0 and f"curve {curve}" in stdout, err
@@ -272,7 +265,7 @@ def test_c_search_of_the_family_against_a_brute_force(curve, k):
     below 0.68 within 1e-5 in a and b (the brute force's splines of DOP853 leaves); every other C root is a root of the
     figure eight integrated by DOP853 (1e-8: e.g. a close pair the brute force's scan stepped over; all such figure
     eights as one system, ``family_traces``); the C search's shortest plan (smallest a + b) is the brute force's."""
-    _require_library(curve)
+    require_c_search(curve)
     rng = np.random.default_rng(int(10 * k))
     targets = []
     for _ in range(4):
@@ -322,7 +315,7 @@ def test_a_family_table_is_kept_on_disk_and_gives_the_same_plans(monkeypatch):
     import ctypes
     import hashlib
 
-    _require_library("viviani")
+    require_c_search("viviani")
     lib, k, target = compiled_search.library("viviani"), 1.0, (0.3, 0.2, 0.5, 1)
     path = compiled_search._table_path(lib, k)
     path.unlink(missing_ok=True)

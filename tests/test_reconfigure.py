@@ -487,7 +487,7 @@ def test_collocation_refuses_a_start_beyond_its_contact_bound_clearly():
 def test_collocation_warm_started_from_a_composed_plan(polish):
     """Start and goal off the pole: the warm start is the plan (polished by default, or the composed geometric
     plan); the optimum is certified."""
-    problem = Problem((0.3, 0.2, 0.5, 0.2, -0.1), start=(0.0, 0.0, 0.0, -0.2, 0.3), k=2.5)
+    problem = _off_the_pole()
     warm = rollplan.plan(problem.goal, k=2.5, start=problem.start, polish=polish)
     r = rollplan.collocate(problem.goal, k=2.5, start=problem.start, intervals=60, warm_start=warm)
     assert r.certificate.passed and r.residual < 1e-6 and r.turns == warm.turns
@@ -495,12 +495,16 @@ def test_collocation_warm_started_from_a_composed_plan(polish):
     assert _collocated_without_a_warm_start().certificate.passed
 
 
+def _off_the_pole():
+    """The problem of test_collocation_warm_started_from_a_composed_plan: start and goal off the pole."""
+    return Problem((0.3, 0.2, 0.5, 0.2, -0.1), start=(0.0, 0.0, 0.0, -0.2, 0.3), k=2.5)
+
+
 @functools.cache
 def _collocated_without_a_warm_start():
-    """The problem of test_collocation_warm_started_from_a_composed_plan solved by collocation with no warm start
-    given (the composed planner plans it): the same for both of its cases, solved once."""
-    problem = Problem((0.3, 0.2, 0.5, 0.2, -0.1), start=(0.0, 0.0, 0.0, -0.2, 0.3), k=2.5)
-    return rollplan.solve(problem, "collocation", intervals=60)
+    """:func:`_off_the_pole` solved by collocation with no warm start given (the composed planner plans it): the
+    same for both cases of test_collocation_warm_started_from_a_composed_plan, solved once."""
+    return rollplan.solve(_off_the_pole(), "collocation", intervals=60)
 
 
 @pytest.mark.parametrize("argv,needle", [

@@ -377,7 +377,7 @@ def test_time_optimal_breaks_against_a_brute_force_scan():
     large step lies in such an interval."""
     from rollplan.execution.actuation import torque_breaks
 
-    m = _readme_time_optimal()[1]
+    m = _readme_time_optimal()
     tb, left, right = torque_breaks(m)
     dq = np.abs(np.diff(m.series.rotor_torques, axis=0)).max(axis=1)
     flagged = np.nonzero((dq > 20 * np.median(dq)) & (dq > 1e-2 * np.abs(m.series.rotor_torques).max()))[0]
@@ -420,7 +420,7 @@ def test_default_samples_pass_the_certificate_with_a_margin(law):
 
     base = rollplan.default_robot()
     rng = np.random.default_rng(11)
-    cases = [(replace(base, max_rotor_rate=300.0, max_rotor_torque=0.05), (0.0, 0.1, 0.0), 1)]
+    cases = [(_readme_robot(), README_GOAL, README_STEPS)]
     for rate, torque, steps in ((60.0, 0.05, 2), (100.0, 0.2, 1)):
         d, a, psi = rng.uniform(0.03, 0.25), rng.uniform(-np.pi, np.pi), rng.uniform(-1, 1)
         cases.append((replace(base, max_rotor_rate=rate, max_rotor_torque=torque),
@@ -430,28 +430,38 @@ def test_default_samples_pass_the_certificate_with_a_margin(law):
         assert certify_motion(m).arrival_error <= MOTION_TOLERANCE / 10, (law, goal)
 
 
+#: The README's example: to (0, 0.1) in one figure eight (with the robot of :func:`_readme_robot`).
+README_GOAL, README_STEPS = (0.0, 0.1, 0.0), 1
+
+
+def _readme_robot():
+    """The README's example's robot: the default robot with max_rotor_rate 300 rad/s, max_rotor_torque 0.05 N m."""
+    from dataclasses import replace
+
+    import rollplan
+
+    return replace(rollplan.default_robot(), max_rotor_rate=300.0, max_rotor_torque=0.05)
+
+
 def _timed(robot, goal, steps, law):
     """The plan of ``steps`` figure eights to ``goal`` for ``robot``, timed by ``law`` at its default samples (the
-    README's example timed time-optimally: once, for two tests)."""
+    README's example timed time-optimally: once, for two tests, :func:`_readme_time_optimal`)."""
     import rollplan
     from rollplan.execution.actuation import actuate
 
-    if (goal, steps, law) == ((0.0, 0.1, 0.0), 1, "time-optimal") and robot == _readme_time_optimal()[0]:
-        return _readme_time_optimal()[1]
+    if (robot, goal, steps, law) == (_readme_robot(), README_GOAL, README_STEPS, "time-optimal"):
+        return _readme_time_optimal()
     return actuate(rollplan.plan(goal, steps, robot=robot), robot, None, timing=law)
 
 
 @functools.cache
 def _readme_time_optimal():
-    """The README's example (the default robot, max_rotor_rate 300 rad/s, max_rotor_torque 0.05 N m, to (0, 0.1)):
-    its robot and its plan timed time-optimally."""
-    from dataclasses import replace
-
+    """The README's example timed time-optimally."""
     import rollplan
     from rollplan.execution.actuation import actuate
 
-    robot = replace(rollplan.default_robot(), max_rotor_rate=300.0, max_rotor_torque=0.05)
-    return robot, actuate(rollplan.plan((0.0, 0.1, 0.0), robot=robot), robot, None, timing="time-optimal")
+    robot = _readme_robot()
+    return actuate(rollplan.plan(README_GOAL, README_STEPS, robot=robot), robot, None, timing="time-optimal")
 
 
 # ----------------------------------------------------------------------------- large plan files
