@@ -3,12 +3,14 @@ numpy/scipy implementation of (2), (6)-(10), (11), invariances, and the planner'
 
 import numpy as np
 import pytest
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
 from scipy.interpolate import CubicSpline
 
 import rollplan
 from rollplan import InputError, State
 from rollplan.execution.actuation import actuate
-from rollplan.execution.plants import rate_spline, simulate_rotors
+from rollplan.execution.plants import STILL_TURN, rate_spline, simulate_rotors
 
 import references
 
@@ -51,6 +53,25 @@ def test_against_scipy_dop853():
     ref = references.rotor_drive(ROBOT.as_dict(), t, rates)
     assert np.abs(ref[-1]).max() > 0.1  # a real motion
     np.testing.assert_allclose(sim.series.state, ref, atol=1e-9)
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered in scalar divide:RuntimeWarning")   # scipy's step
+@settings(max_examples=25, deadline=None)                                                      # size at 0 / 0
+@given(exponent=st.integers(-320, -20), u_o=st.floats(-0.6, 0.6), v_o=st.floats(-0.6, 0.6), psi=st.floats(-3, 3))
+@example(exponent=-145, u_o=0.2, v_o=0.0, psi=0.0)
+def test_vanishing_rotor_rates_leave_the_sphere_where_it_starts(exponent, u_o, v_o, psi):
+    """Rates scaled down towards zero (down to subnormal numbers) turn the sphere by at most about their size: the
+    states stay at the start within 1e-12, as scipy's DOP853 on the printed equations integrates them, whether the
+    motion is integrated or below :data:`STILL_TURN`."""
+    t = np.linspace(0, 4, 60)
+    rates = np.column_stack([40 * np.sin(3 * t), 30 * np.cos(2 * t)]) * 10.0 ** exponent
+    x0 = np.array([0.0, 0.0, psi, u_o, v_o])
+    sim = simulate_rotors(ROBOT, t, rates, x0=x0)
+    np.testing.assert_allclose(sim.series.state, np.tile(x0, (t.size, 1)), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(sim.series.state[-1], references.rotor_drive(ROBOT.as_dict(), t, rates, x0, end=True),
+                               rtol=0, atol=1e-12)
+    if 40 * 10.0 ** exponent * 4 < STILL_TURN:   # far below: not integrated, the start exactly
+        assert np.array_equal(sim.series.state[-1], x0)
 
 
 def test_scaling_all_inertias_changes_nothing():

@@ -72,7 +72,7 @@ from ..progress import report
 from ..robot import Robot
 from ..timeseries import Arrival, TimeSeries
 
-__all__ = ["RotorSimulation", "rate_spline", "check_samples", "simulate_rotors", "MAX_TURN", "Friction",
+__all__ = ["RotorSimulation", "rate_spline", "check_samples", "simulate_rotors", "MAX_TURN", "STILL_TURN", "Friction",
            "MeasurementNoise", "TorqueNoise", "RateNoise", "DISTURBANCES", "disturbance", "PlantResponse",
            "input_function", "run_rates", "run_torques", "PLANTS", "PLANT_NAMES", "by_name", "measure",
            "rotor_momenta"]
@@ -93,6 +93,10 @@ RK_MAX_STEPS = 64
 #: Largest rotation of the sphere [rad] that sampled rotor rates may ask for (bounded from the rates by
 #: (11)); a real plan turns the sphere by a few rad per figure eight.
 MAX_TURN = 1e6
+#: Rotation [rad] below which sampled rotor rates are a sphere at rest: :func:`simulate_rotors` keeps the start
+#: state (its error is this turn, far below the integrator's tolerances) instead of integrating; CVODES fails on
+#: derivatives of about 1e-140 and less, relative to a state of order one.
+STILL_TURN = 1e-100
 
 log = logging.getLogger(__name__)
 
@@ -204,7 +208,9 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
 
     Solves ``x_dot = montana(omega(t, x), x)`` with
     ``Jc omega = -J_r (n_1 phi_1_dot(t) + n_2 phi_2_dot(t))`` (11), where the
-    rates are a cubic spline through the samples.
+    rates are a cubic spline through the samples. Rates that would turn the sphere by less than
+    :data:`STILL_TURN` in all leave it at ``x0``; rates that would turn it by more than :data:`MAX_TURN` are
+    refused.
 
     Parameters
     ----------
@@ -239,6 +245,7 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
     if not np.all(np.isfinite(turns)) or mean * jr / jzz > MAX_TURN:
         raise InputError(f"the rotor rates are not allowed: they would turn the sphere by about "
                          f"{mean * jr / jzz:.3g} rad, more than {MAX_TURN:g} rad (not the rates of a plan)")
+    still = mean * jr / jzz < STILL_TURN
     x = ca.MX.sym("x", 5)
     time = ca.MX.sym("tau")
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
@@ -254,9 +261,12 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
             lo, hi = (0, n) if n - 1 <= CHUNK else (max(0, a - OVERLAP), min(n, b + 1 + OVERLAP))
             spline = rate_spline(tau[lo:hi], turns[lo:hi])
             ode, omega = _rotor_dynamics()(x, spline(time), ca.DM([jxx, jzz, jr, R]))
-            integ = ca.integrator("rotor_sim", "cvodes", {"t": time, "x": x, "ode": ode}, float(tau[a]),
-                                  list(tau[a + 1:b + 1]), opts)
-            xs[a + 1:b + 1] = np.array(interrupts.call(integ, x0=xk)["xf"]).T
+            if still:
+                xs[a + 1:b + 1] = xk
+            else:
+                integ = ca.integrator("rotor_sim", "cvodes", {"t": time, "x": x, "ode": ode}, float(tau[a]),
+                                      list(tau[a + 1:b + 1]), opts)
+                xs[a + 1:b + 1] = np.array(interrupts.call(integ, x0=xk)["xf"]).T
             xk = xs[b]
             om = ca.Function("omega", [time, x], [omega / span]).map(b + 1 - a)
             omegas[a:b + 1] = np.array(om(tau[None, a:b + 1], xs[a:b + 1].T)).T
