@@ -59,6 +59,7 @@ def test_against_scipy_dop853():
 @settings(max_examples=25, deadline=None)                                                      # size at 0 / 0
 @given(exponent=st.integers(-320, -20), u_o=st.floats(-0.6, 0.6), v_o=st.floats(-0.6, 0.6), psi=st.floats(-3, 3))
 @example(exponent=-145, u_o=0.2, v_o=0.0, psi=0.0)
+@example(exponent=-75, u_o=0.0, v_o=0.0, psi=0.0)
 def test_vanishing_rotor_rates_leave_the_sphere_where_it_starts(exponent, u_o, v_o, psi):
     """Rates scaled down towards zero (down to subnormal numbers) turn the sphere by at most about their size: the
     states stay at the start within 1e-12, as scipy's DOP853 on the printed equations integrates them, whether the
@@ -70,7 +71,7 @@ def test_vanishing_rotor_rates_leave_the_sphere_where_it_starts(exponent, u_o, v
     np.testing.assert_allclose(sim.series.state, np.tile(x0, (t.size, 1)), rtol=0, atol=1e-12)
     np.testing.assert_allclose(sim.series.state[-1], references.rotor_drive(ROBOT.as_dict(), t, rates, x0, end=True),
                                rtol=0, atol=1e-12)
-    if 40 * 10.0 ** exponent * 4 < STILL_TURN:   # far below: not integrated, the start exactly
+    if 1e3 * 10.0 ** exponent < STILL_TURN:   # far below: not integrated, the start exactly
         assert np.array_equal(sim.series.state[-1], x0)
 
 

@@ -95,8 +95,8 @@ RK_MAX_STEPS = 64
 MAX_TURN = 1e6
 #: Rotation [rad] below which sampled rotor rates are a sphere at rest: :func:`simulate_rotors` keeps the start
 #: state (its error is this turn, far below the integrator's tolerances) instead of integrating; CVODES fails on
-#: derivatives of about 1e-140 and less, relative to a state of order one.
-STILL_TURN = 1e-100
+#: some derivatives this small (rates of about 1e-70 and 1e-145 rad/s).
+STILL_TURN = 1e-30
 
 log = logging.getLogger(__name__)
 
