@@ -98,7 +98,7 @@ def run_script_here(name: str, out_dir, *args: str) -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["basepoint_bench.py", "curve_families.py", "embedded_report.py", "polish_ipopt.py",
-                                  "reconfiguration.py", "timing_table.py"])
+                                  "reconfiguration.py", "suite_report.py", "timing_table.py"])
 def test_a_script_run_as_a_program_reads_its_own_arguments(name, tmp_path):
     """The scripts whose runs the tests make through ``main`` (:func:`run_script_here`), run as a user does:
     ``python scripts/NAME`` passes its arguments (without the program's name) to ``main`` and exits with its
@@ -265,6 +265,20 @@ def test_fails():
 NO_PLUGINS = ("-p", "no:hypothesispytest", "-p", "no:randomly")
 
 
+def suite_report_here(monkeypatch, *args: str) -> int:
+    """scripts/suite_report.py's ``main`` with ``args`` in this process (the script only starts the pytest runs it
+    measures, each a process of its own; ``python scripts/suite_report.py`` reading its arguments is tested in
+    :func:`test_a_script_run_as_a_program_reads_its_own_arguments`), its speed probe a tenth as long: the probe's
+    seconds are still measured before and after each run and written to the report; its status."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+    try:
+        import suite_report
+    finally:
+        sys.path.pop(0)
+    monkeypatch.setattr(suite_report, "PROBE_ITERATIONS", suite_report.PROBE_ITERATIONS // 10)
+    return suite_report.main(list(args))
+
+
 def test_the_reports_name_the_processor_and_what_chooses_the_blas_kernels(monkeypatch):
     """suite_report.processor (also benchmark.machine's): the model name of /proc/cpuinfo where it exists, its
     widest vector instructions, and OPENBLAS_CORETYPE when set (the kernels decide the solvers' round-off)."""
@@ -323,7 +337,7 @@ def test_suite_report_names_failed_errored_and_skipped_tests(tmp_path):
 
 
 @pytest.mark.slow
-def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
+def test_suite_report_writes_suite_md_from_its_own_run(tmp_path, monkeypatch):
     """scripts/suite_report.py runs each tier of a small suite whose counts are known (six tests: four pass,
     one of them slow, one is skipped, one fails) and writes suite.md from that run: the counts, the slowest
     test, the status, the speed probe before and after; a second run of one tier keeps the other tier's row."""
@@ -331,11 +345,10 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
     tests.mkdir()
     (tests / "pytest.ini").write_text("[pytest]\nmarkers =\n    slow: slow\n")
     (tests / "test_fake.py").write_text(FAKE_TESTS)
-    script = Path(__file__).resolve().parent.parent / "scripts" / "suite_report.py"
     out = tmp_path / "out"
-    run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tests", str(tests), "--out-dir", str(out),
-                          "--", *NO_PLUGINS], capture_output=True, text=True, timeout=600, check=False)
-    assert run.returncode == 1, run.stderr      # pytest's status: a test failed
+    status = suite_report_here(monkeypatch, "--jobs", "0", "--tests", str(tests), "--out-dir", str(out), "--",
+                               *NO_PLUGINS)
+    assert status == 1      # pytest's status: a test failed
     data = json.loads((out / "suite.json").read_text())
     assert (data["unit"]["tests"], data["unit"]["passed"], data["unit"]["failed"], data["unit"]["skipped"]) == \
         (5, 3, 1, 1)
@@ -360,10 +373,9 @@ def test_suite_report_writes_suite_md_from_its_own_run(tmp_path):
         assert data[tier]["skipped_tests"] == [["test_fake.py::test_skipped", "shown as skipped"]]
     assert "`test_fake.py::test_fails`" in text and "`test_fake.py::test_skipped` | shown as skipped" in text
     (tests / "test_fake.py").write_text(FAKE_TESTS.replace("assert False", "pass"))
-    run = subprocess.run([sys.executable, str(script), "--jobs", "0", "--tier", "unit", "--tests", str(tests),
-                          "--out-dir", str(out), "--", *NO_PLUGINS], capture_output=True, text=True, timeout=600,
-                         check=False)
-    assert run.returncode == 0, run.stderr
+    status = suite_report_here(monkeypatch, "--jobs", "0", "--tier", "unit", "--tests", str(tests), "--out-dir",
+                               str(out), "--", *NO_PLUGINS)
+    assert status == 0
     again = json.loads((out / "suite.json").read_text())
     assert again["full"] == data["full"] and (again["unit"]["passed"], again["unit"]["failed"]) == (4, 0)
     assert "6 (4, 1, 1)" in (out / "suite.md").read_text()
@@ -406,7 +418,7 @@ def test_basepoint_bench_script_runs(tmp_path):
 
 
 @pytest.mark.slow
-def test_suite_report_measures_cold_by_default_and_warm_after_a_filling_run(tmp_path):
+def test_suite_report_measures_cold_by_default_and_warm_after_a_filling_run(tmp_path, monkeypatch):
     """A tier is measured cold (the tests' build cache off: ROLLPLAN_TEST_FRESH_CACHE set for the run) unless
     ``--warm``: then an unmeasured run comes first and both runs keep the build cache; the two measurements are
     kept under their own keys and both shown."""
@@ -417,14 +429,12 @@ def test_suite_report_measures_cold_by_default_and_warm_after_a_filling_run(tmp_
     (tests / "test_env.py").write_text(
         "import os\n\ndef test_env():\n"
         f"    open({str(log)!r}, 'a').write(repr(os.environ.get('ROLLPLAN_TEST_FRESH_CACHE')) + '\\n')\n")
-    script = Path(__file__).resolve().parent.parent / "scripts" / "suite_report.py"
     out = tmp_path / "out"
-    base = [sys.executable, str(script), "--jobs", "0", "--tier", "unit", "--tests", str(tests), "--out-dir", str(out)]
-    env = {**os.environ, "ROLLPLAN_TEST_FRESH_CACHE": "1"}
+    monkeypatch.setenv("ROLLPLAN_TEST_FRESH_CACHE", "1")
     for extra in ([], ["--warm"]):
-        run = subprocess.run([*base, *extra, "--", *NO_PLUGINS], capture_output=True, text=True, timeout=600,
-                             check=False, env=env)
-        assert run.returncode == 0, run.stderr
+        status = suite_report_here(monkeypatch, "--jobs", "0", "--tier", "unit", "--tests", str(tests), "--out-dir",
+                                   str(out), *extra, "--", *NO_PLUGINS)
+        assert status == 0
     assert log.read_text().splitlines() == ["'1'", "None", "None"]
     data = json.loads((out / "suite.json").read_text())
     assert (data["unit"]["cache"], data["unit, warm cache"]["cache"]) == ("fresh", "warm")
