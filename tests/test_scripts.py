@@ -100,7 +100,8 @@ def run_script_here(name: str, out_dir, *args: str) -> None:
 @pytest.mark.parametrize("name", ["basepoint_bench.py", "curve_families.py", "embedded_report.py", "polish_ipopt.py",
                                   "reconfiguration.py", "suite_report.py", "timing_table.py"])
 def test_a_script_run_as_a_program_reads_its_own_arguments(name, tmp_path):
-    """The scripts whose runs the tests make through ``main`` (:func:`run_script_here`), run as a user does:
+    """The scripts whose runs the tests make through ``main`` (:func:`run_script_here`, :func:`suite_report_here`),
+    run as a user does:
     ``python scripts/NAME`` passes its arguments (without the program's name) to ``main`` and exits with its
     status (argparse's 2 for an unknown option, naming only that option), before the slow imports (numpy,
     rollplan: ``-X importtime`` lists what was imported)."""
