@@ -178,21 +178,33 @@ def _rk4_interval(m: int) -> ca.Function:
     in time from ``u0`` to ``u1``; ``params = (K, c, Jxx, Jzz, J_r, R)``; ``error``: the sum of the steps'
     embedded error estimates ``|h/6 (k_4 - k_5)|`` (module docstring)."""
     z0, u0, u1, h, par = (ca.SX.sym(n, k) for n, k in (("z", 11), ("u0", 6), ("u1", 6), ("h", 1), ("p", 7)))
-    dynamics = _torque_dynamics()
+    dynamics = _torque_rhs()
 
     def f(z, w):
         u = u0 + w * (u1 - u0)
-        return dynamics(z, u[0:2], u[2:4], u[4:6], par[0], par[1:3], par[3:7])[0]
+        return dynamics(z, u[0:2], u[2:4], u[4:6], par[0], par[1:3], par[3:7])
 
     z, dt, error = z0, h / m, ca.SX.zeros(11)
+    k1 = f(z, 0.0)
     for j in range(m):
-        k1 = f(z, j / m)
         k2 = f(z + 0.5 * dt * k1, (j + 0.5) / m)
         k3 = f(z + 0.5 * dt * k2, (j + 0.5) / m)
         k4 = f(z + dt * k3, (j + 1.0) / m)
         z = z + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        error += ca.fabs(dt / 6 * (k4 - f(z, (j + 1.0) / m)))
+        k5 = f(z, (j + 1.0) / m)   # the right side at the step's end: the next step's k_1
+        error += ca.fabs(dt / 6 * (k4 - k5))
+        k1 = k5
     return ca.Function("torque_rk4", [z0, u0, u1, h, par], [z, error])
+
+
+@lru_cache(maxsize=1)
+def _torque_rhs() -> ca.Function:
+    """``dz/dt`` of :func:`_torque_dynamics` alone, each repeated subexpression computed once (CasADi's
+    ``cse``): the right side that :func:`_rk4_interval` repeats."""
+    z, u, ref, noise, gain, c, r = (ca.SX.sym(n, k) for n, k in (("z", 11), ("u", 2), ("ref", 2), ("noise", 2),
+                                                                 ("gain", 1), ("c", 2), ("robot", 4)))
+    ode = _torque_dynamics()(z, u, ref, noise, gain, c, r)[0]
+    return ca.Function("torque_rhs", [z, u, ref, noise, gain, c, r], [ode], {"cse": True})
 
 
 @lru_cache(maxsize=16)
