@@ -316,6 +316,25 @@ def test_linear_torque_replay_is_exact_for_the_momenta_and_matches_dop853():
         assert np.abs(run.series.state - ref[:, :5]).max() < 1e-11, n
 
 
+def test_a_replay_of_many_chunks_is_as_accurate_as_of_one():
+    """The linear replay goes through the samples RK_CHUNK intervals at a time, choosing the RK4 steps per interval
+    again in each chunk. Torques linear over the whole span, sampled over more than two chunks: the replay's input
+    is one line, so DOP853 on the printed equations runs it without a restart; the states within 1e-11 of its at
+    every sample (as test_linear_torque_replay_is_exact_for_the_momenta_and_matches_dop853 asks of one chunk), the
+    momenta the line's integral to rounding."""
+    from rollplan.execution.plants import RK_CHUNK
+
+    duration, q0, q1 = 6.0, np.array([9e-3, -6e-3]), np.array([-3e-3, 7.5e-3])
+    t = np.linspace(0.0, duration, 2 * RK_CHUNK + 501)
+    run = run_torques(ROBOT, t, q0 + np.outer(t / duration, q1 - q0), interpolation="linear")
+    f, _ = references.torque_driven_rhs(*J, ROBOT.radius, lambda s: q0 + (q1 - q0) * s / duration)
+    ref = solve_ivp(f, (0.0, duration), np.zeros(7), method="DOP853", t_eval=t, rtol=1e-13, atol=1e-16).y.T
+    assert np.abs(ref[:, 3]).max() > 5.0   # the robot rolls on over every chunk
+    assert np.abs(run.series.state - ref[:, :5]).max() < 1e-11
+    exact = np.outer(t, q0) + np.outer(t**2 / (2 * duration), q1 - q0)
+    assert np.abs(run.series.rotor_momenta - exact).max() < 1e-13 * np.abs(exact).max()
+
+
 def test_samples_far_apart_for_the_motion_are_replayed_by_cvodes_to_the_printed_equations(caplog):
     """Five rows over 10 s of torques that turn the robot many times between rows: 64 RK4 steps per interval miss
     by far (their estimate is above 1e-2), so the plant integrates the same linear inputs by CVODES and still ends
