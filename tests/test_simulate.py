@@ -5,8 +5,6 @@ with a final correction; the plan file's keys validated once; Ctrl-C and large f
 import functools
 import json
 import math
-import subprocess
-import sys
 from bisect import bisect_right
 from pathlib import Path
 
@@ -32,13 +30,6 @@ MODEL_TOML = ("radius = 0.1\nmass_total = 0.957\nmass_shell = 0.4\nrotor_inertia
 REAL_TOML = ("radius = 0.1\nmass_total = 1.009635\nmass_shell = 0.4\nrotor_inertia_axial = 0.0001505\n"
              "rotor_inertia_transverse = 9.3525e-05\n")
 LIMITED_TOML = MODEL_TOML + "max_rotor_rate = 150.0\nmax_rotor_torque = 0.05\n"
-
-
-def command(*argv, timeout=600):
-    """``python -m rollplan.cli argv`` in a subprocess: (exit code, stdout, stderr)."""
-    p = subprocess.run([sys.executable, "-m", "rollplan.cli", *map(str, argv)], check=False, capture_output=True,
-                       text=True, timeout=timeout)
-    return p.returncode, p.stdout, p.stderr
 
 
 @pytest.fixture(scope="module")
@@ -486,7 +477,7 @@ def test_a_long_series_is_simulated_in_chunks_with_progress():
 
 
 @pytest.mark.slow
-def test_a_plan_file_over_the_sample_limit_is_refused_naming_it(tmp_path):
+def test_a_plan_file_over_the_sample_limit_is_refused_naming_it(tmp_path, capsys):
     """A 2,000,000-sample plan file ran past 180 s with no progress: files of more samples than any plan has
     (MAX_PLAN_SAMPLES) are refused in one line naming the limit."""
     from rollplan.io import MAX_PLAN_SAMPLES
@@ -498,7 +489,7 @@ def test_a_plan_file_over_the_sample_limit_is_refused_naming_it(tmp_path):
                        "target": {"u_a": 0.0, "v_a": 0.0, "psi": 0.0}})[:-1]
     path.write_text(head + ', "time": [' + ",".join(map(str, range(n))) + '], "rotor_rates": ['
                     + ",".join(["[0, 0]"] * n) + "]}")
-    code, _, err = command("simulate", path)
+    code, _, err = run(capsys, "simulate", path)
     assert code == 2 and one_line(err) and str(MAX_PLAN_SAMPLES) in err and "huge.json" in err, err
 
 
