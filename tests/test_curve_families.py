@@ -2,6 +2,7 @@
 against the printed (28)-(30) integrated by scipy's DOP853 along the leaves as typed in tests/references.py."""
 
 import math
+from functools import cache
 
 import casadi as ca
 import numpy as np
@@ -24,10 +25,18 @@ def closed_turn(name, a, k):
 
 
 def leaf_end(name, a, k, side=1.0, x0=(0.0, 0.0, 0.0)):
+    """(u_a, v_a, psi) at the end of the leaf of ``name`` of size a on ``side`` from x0, by DOP853 piece by piece
+    (:func:`_leaf_end`: a leaf that several tests integrate, e.g. (v) and (iii) at every size and k, once per
+    process)."""
+    return np.array(_leaf_end(name, float(a), float(k), float(side), tuple(map(float, x0))))
+
+
+@cache
+def _leaf_end(name, a, k, side, x0):
     x = np.asarray(x0, float)
     for piece in references.family_leaf(name, a, side):
         x = references.curve_leaf_end(piece, x, k)
-    return x
+    return tuple(x)
 
 
 def rollplan_points(name, a, b, phis):
