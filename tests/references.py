@@ -875,6 +875,19 @@ def family_traces(name, a, b, k):
     return x
 
 
+def repeat_eight(first, steps):
+    """(u_a, v_a, psi) after ``steps`` equal figure eights from zero, given ``first``, the end of one of them from zero
+    (of :func:`trace` or :func:`family_trace`, any curve): the right side of the printed (28)-(30) does not depend on
+    (u_a, v_a), and psi only turns the rates of (u_a, v_a) by -psi, so a figure eight started at (u, v, psi) ends at
+    ``(u + i v) + exp(-i psi) S``, ``psi + eta``, where ``(S, eta)`` is its end from zero."""
+    shift, eta = complex(first[0], first[1]), float(first[2])
+    end, psi = 0j, 0.0
+    for _ in range(int(steps)):
+        end += complex(math.cos(psi), -math.sin(psi)) * shift
+        psi += eta
+    return np.array([end.real, end.imag, psi])
+
+
 @_remembered
 def family_trace(name, a, b, k, gamma=0.0, x0=(0.0, 0.0, 0.0)):
     """(u_a, v_a, psi) after the figure eight of family ``name`` (leaf a on +y, leaf b on -y) rotated by gamma

@@ -74,8 +74,9 @@ def _targets(seed, count):
 @pytest.mark.parametrize("curve", PLANNED)
 def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path, capsys):
     """``plan --curve --json``: the sampled contact path alone, integrated by scipy (``references.replay``, 1e-6), and
-    the figure eight of the family as typed in tests/references.py (DOP853, 1e-9) reach the target; certified to 1e-9; a
-    polygon's contact path is made of great-circle arcs (each edge's samples on one great circle to 1e-9)."""
+    the figure eights of the family as typed in tests/references.py (DOP853 over the first, the others by the
+    symmetry of ``references.repeat_eight``, 1e-9) reach the target; certified to 1e-9; a polygon's contact path is
+    made of great-circle arcs (each edge's samples on one great circle to 1e-9)."""
     require_c_search(curve)
     landed = 0
     for i, (target, steps, k) in enumerate(_targets(26, 6)):
@@ -103,9 +104,7 @@ def test_plans_on_hidden_targets_land_on_the_target(curve, tmp_path, capsys):
         assert abs(x[0] - target[0]) < 1e-6 and abs(x[1] - target[1]) < 1e-6, (target, x)
         assert abs(wrap(x[2] - target[2])) < 1e-6, (target, x)
         f = d["figure_eight"]
-        x = np.zeros(3)
-        for _ in range(steps):
-            x = references.family_trace(curve, f["a"], f["b"], k, f["gamma"], x)
+        x = references.repeat_eight(references.family_trace(curve, f["a"], f["b"], k, f["gamma"]), steps)
         assert max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2]))) < 1e-9
         landed += 1
     assert landed >= 4
@@ -133,7 +132,8 @@ def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path, capsys):
     """``rollplan codegen --curve`` (built with -Wall -Wextra -Werror by its Makefile, through the object store of
     ``test_codegen.make``): plan_demo gives the plan of
     ``plan --curve`` (same branch, a, b, gamma to 1e-8), and that plan reaches the target when the family's figure
-    eight as typed in tests/references.py is integrated by DOP853. Built for k <= 6.5: the triangle's rho table at
+    eight as typed in tests/references.py is integrated by DOP853 (the first; the others by the symmetry of
+    ``references.repeat_eight``). Built for k <= 6.5: the triangle's rho table at
     k = 6 has more radii (965) than a circle's at 6.5 (824), so a table sized for the circles fails; each target's k
     (of TARGET_K, up to 6) costs plan_demo the build of its table, so two targets: one at k = 6 (one step) and one at
     k = 1.5 (two steps)."""
@@ -157,9 +157,7 @@ def test_codegen_curve_plan_demo_gives_the_python_plan(curve, tmp_path, capsys):
         a, b, gamma, residual, bound, m = run_c.stdout.split()
         assert int(m) == p.branch and float(residual) + float(bound) <= 1e-9
         assert max(abs(float(a) - p.a), abs(float(b) - p.b), abs(wrap(float(gamma) - p.gamma))) < 1e-8
-        x = np.zeros(3)
-        for _ in range(steps):
-            x = references.family_trace(curve, float(a), float(b), k, float(gamma), x)
+        x = references.repeat_eight(references.family_trace(curve, float(a), float(b), k, float(gamma)), steps)
         assert max(abs(x[0] - target[0]), abs(x[1] - target[1]), abs(wrap(x[2] - target[2]))) < 1e-9
         planned += 1
     assert planned == 2
