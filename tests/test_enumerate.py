@@ -38,10 +38,15 @@ import references
 wrap = references.wrap
 
 
-@cache
 def _leaf_end(r, side, k, gamma=0.0, x0=(0.0, 0.0, 0.0)):
     """references.leaf_end kept by its arguments: a leaf that several tests integrate by DOP853 (1.6 s at
-    (A_MAX, K_MAX)) is integrated once per process."""
+    (A_MAX, K_MAX)) is integrated once per process, however its arguments are given (the first leaf of
+    :func:`_trace` is the leaf of test_leaf_turn_and_displacement_against_dop853)."""
+    return _leaf_end_of(float(r), float(side), float(k), float(gamma), tuple(map(float, x0)))
+
+
+@cache
+def _leaf_end_of(r, side, k, gamma, x0):
     return tuple(references.leaf_end(r, side, k, gamma, x0))
 
 
