@@ -152,11 +152,11 @@ _READY = ("import sys; from rollplan.cli import main; sys.stderr.write('ready\\n
 @pytest.mark.slow
 def test_ctrl_c_during_a_long_c_search_exits_130():
     """`plan --all --k 99` spends minutes in one call of the C search (every root of 511 branches, after its table of
-    k = 99 is built); a SIGINT 2.5 s after the command's modules are imported (:data:`_READY`), during that call,
+    k = 99 is built); a SIGINT 1.5 s after the command's modules are imported (:data:`_READY`), during that call,
     exits 130 within two seconds (the call runs in a helper thread, the main thread acts on the signal), one line,
     no traceback."""
     require_c_search()
-    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99", "--all"], 2.5, wait_for="ready",
+    code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99", "--all"], 1.5, wait_for="ready",
                                               command=[sys.executable, "-c", _READY])
     assert code == 130, err
     assert elapsed < 2.0
