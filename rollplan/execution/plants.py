@@ -95,7 +95,9 @@ RK_MAX_STEPS = 64
 MAX_TURN = 1e6
 #: Rotation [rad] below which sampled rotor rates are a sphere at rest: :func:`simulate_rotors` keeps the start
 #: state (its error is this turn, far below the integrator's tolerances) instead of integrating; CVODES fails on
-#: some derivatives this small (rates of about 1e-70 and 1e-145 rad/s).
+#: some derivatives this small (rates of about 1e-70 and 1e-145 rad/s). Each sample turning it by less than
+#: this per unit of normalised time is taken as rest (0), so a stretch of such rates in a moving file is not
+#: integrated either.
 STILL_TURN = 1e-30
 
 log = logging.getLogger(__name__)
@@ -257,7 +259,10 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
     if not np.all(np.isfinite(turns)) or mean * jr / jzz > MAX_TURN:
         raise InputError(f"the rotor rates are not allowed: they would turn the sphere by about "
                          f"{mean * jr / jzz:.3g} rad, more than {MAX_TURN:g} rad (not the rates of a plan)")
-    still = mean * jr / jzz < STILL_TURN
+    # a sample that turns the sphere by less than STILL_TURN per unit tau is rest: CVODES fails on a stretch of
+    # derivatives that small (about 1e-70) even where other samples move the sphere
+    turns = np.where(np.abs(turns) * jr / jzz < STILL_TURN, 0.0, turns)
+    still = mean * jr / jzz < STILL_TURN or not np.any(turns)
     x = ca.MX.sym("x", 5)
     time = ca.MX.sym("tau")
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
