@@ -61,3 +61,16 @@ def test_end_only_integrations_end_where_the_sampled_ones_do():
     full = references.replay(u, v, segment, np.zeros(3), 2.5)
     assert np.abs(full[-1]).max() > 1e-2
     assert np.abs(references.replay(u, v, segment, np.zeros(3), 2.5, end=True) - full[-1]).max() < 1e-14
+
+
+def test_repeated_eights_from_their_symmetry_are_the_eights_integrated_in_turn():
+    """references.repeat_eight (n figure eights from the end of one and the symmetry of (28)-(30)) against n figure
+    eights integrated one after another by DOP853 from each one's end, for the circles and a polygon family."""
+    for name, a, b, k, gamma, steps in (("circles", 0.3, 0.2, 2.5, 0.4, 3), ("triangle", 0.35, 0.25, 6.0, -0.7, 2)):
+        if name == "circles":
+            one, x = references.trace(a, b, k, gamma), references.trace(a, b, k, gamma, steps=steps)
+        else:
+            one = x = references.family_trace(name, a, b, k, gamma)
+            for _ in range(steps - 1):
+                x = references.family_trace(name, a, b, k, gamma, x)
+        assert np.abs(references.repeat_eight(one, steps) - x).max() < 1e-11, (name, x)

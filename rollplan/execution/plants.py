@@ -94,7 +94,7 @@ RK_MAX_STEPS = 64
 #: (11)); a real plan turns the sphere by a few rad per figure eight.
 MAX_TURN = 1e6
 #: Rotation [rad] below which sampled rotor rates are a sphere at rest: :func:`simulate_rotors` keeps the start
-#: state (its error is this turn, far below the integrator's tolerances) instead of integrating; CVODES fails on
+#: state (its error is about this turn, far below the integrator's tolerances) instead of integrating; CVODES fails on
 #: some derivatives this small (rates of about 1e-70 and 1e-145 rad/s). Each sample turning it by less than
 #: this per unit of normalised time is taken as rest (0), so a stretch of such rates in a moving file is not
 #: integrated either.
