@@ -10,7 +10,7 @@ from scipy.interpolate import CubicSpline
 import rollplan
 from rollplan import InputError, State
 from rollplan.execution.actuation import actuate
-from rollplan.execution.plants import STILL_TURN, rate_spline, simulate_rotors
+from rollplan.execution.plants import MAX_TURN, STILL_TURN, rate_spline, simulate_rotors
 
 import references
 
@@ -88,6 +88,23 @@ def test_a_stretch_of_vanishing_rates_before_a_motion_is_simulated(exponent):
     ref = references.rotor_drive(ROBOT.as_dict(), t, rates, np.zeros(5))
     assert np.abs(ref[-1]).max() > 1e-6   # the tail moves the sphere
     np.testing.assert_allclose(sim.series.state, ref, rtol=0, atol=1e-9)   # as test_against_scipy_dop853
+
+
+def test_rates_whose_spline_swings_far_beyond_the_samples_are_refused():
+    """One sample 1e-12 s after another, at 1e3 rad/s: the samples' trapezoid turns the sphere by little, but the
+    not-a-knot spline through them (scipy's, on a dense grid) by more than MAX_TURN; CVODES ran out of steps on it.
+    Refused in one line naming the limit."""
+    t = np.linspace(0, 3, 301)
+    rates = np.column_stack([20 * np.sin(2 * t) * t, -15 * np.sin(3 * t) + 5 * t])
+    t, rates = np.insert(t, 101, t[100] + 1e-12), np.insert(rates, 101, [1e3, 1e3], axis=0)
+    gain = ROBOT.rotor_inertia_axial / ROBOT.j_zz
+    trapezoid = (0.5 * (np.abs(rates[1:]) + np.abs(rates[:-1])).sum(axis=1) * np.diff(t)).sum() * gain
+    grid = np.linspace(0, 3, 1_000_001)
+    swing = np.abs(CubicSpline(t, rates, bc_type="not-a-knot")(grid)).sum(axis=1).mean() * 3 * gain
+    assert trapezoid < MAX_TURN < swing
+    with pytest.raises(InputError, match="more than 1e\\+06 rad") as err:
+        simulate_rotors(ROBOT, t, rates)
+    assert "\n" not in str(err.value)
 
 
 def test_scaling_all_inertias_changes_nothing():

@@ -257,8 +257,7 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
     turns = rates * span                            # rotor turn per unit tau [rad]
     mean = 0.5 * (np.abs(turns[1:]) + np.abs(turns[:-1])).sum(axis=1) @ np.diff(tau)
     if not np.all(np.isfinite(turns)) or mean * jr / jzz > MAX_TURN:
-        raise InputError(f"the rotor rates are not allowed: they would turn the sphere by about "
-                         f"{mean * jr / jzz:.3g} rad, more than {MAX_TURN:g} rad (not the rates of a plan)")
+        raise _too_far(mean * jr / jzz)
     # a sample that turns the sphere by less than STILL_TURN per unit tau is rest: CVODES fails on a stretch of
     # derivatives that small (about 1e-70) even where other samples move the sphere
     turns = np.where(np.abs(turns) * jr / jzz < STILL_TURN, 0.0, turns)
@@ -269,6 +268,7 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
     n = tau.size
     xs, omegas, xk = np.empty((n, 5)), np.empty((n, 3)), x0
     xs[0] = x0
+    turned = 0.0   # the splines' turn so far, bounded (_spline_turn): they may swing far beyond the samples
     try:
         # a long series in chunks of CHUNK sample intervals, each with the spline through its samples and
         # OVERLAP more on either side (a cubic spline's dependence on far samples decays by 2 - sqrt(3) per
@@ -277,6 +277,9 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
             b = min(a + CHUNK, n - 1)
             lo, hi = (0, n) if n - 1 <= CHUNK else (max(0, a - OVERLAP), min(n, b + 1 + OVERLAP))
             spline = rate_spline(tau[lo:hi], turns[lo:hi])
+            turned += _spline_turn(spline, tau[a:b + 1], turns[a:b + 1])
+            if not turned * jr / jzz <= MAX_TURN:
+                raise _too_far(turned * jr / jzz)
             ode, omega = _rotor_dynamics()(x, spline(time), ca.DM([jxx, jzz, jr, R]))
             if still:
                 xs[a + 1:b + 1] = xk
@@ -298,6 +301,24 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
         log.info("rotor-driven simulation: arrival error %.3e (position %.3e R)", sim.arrival_error,
                  sim.position_error)
     return sim
+
+
+def _too_far(turn: float) -> InputError:
+    """The refusal of rotor rates that would turn the sphere by ``turn`` [rad], more than :data:`MAX_TURN`."""
+    return InputError(f"the rotor rates are not allowed: they would turn the sphere by about {turn:.3g} rad, more "
+                      f"than {MAX_TURN:g} rad (not the rates of a plan)")
+
+
+def _spline_turn(spline, knots, values) -> float:
+    """An upper bound of the integral of ``|f_1| + |f_2|`` of the spline ``f`` (:func:`rate_spline`) between its
+    ``knots`` (where it takes ``values``, shape (n, 2)): on a knot interval of width w the cubic is the Hermite
+    combination of its end values (weights >= 0 summing to 1) and end slopes (weights within [-4/27, 4/27] times w),
+    so ``|f| <= max(|f_0|, |f_1|) + 4/27 w (|f_0'| + |f_1'|)`` there."""
+    t = ca.MX.sym("t")
+    slope = ca.Function("slope", [t], [ca.jacobian(spline(t), t)]).map(knots.size)
+    s = np.abs(np.array(slope(knots[None, :])).T)
+    v, w = np.abs(values), np.diff(knots)[:, None]
+    return float((w * (np.maximum(v[1:], v[:-1]) + 4.0 / 27.0 * w * (s[1:] + s[:-1]))).sum())
 
 
 _TAG = {"measurement": 1, "torque_noise": 2, "rate_noise": 3, "rest": 4}
