@@ -56,6 +56,7 @@ computation, at the same accuracy.
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -255,31 +256,33 @@ def simulate_rotors(robot: Robot, t, rates, goal=None, x0=None, reltol: float = 
     if np.any(np.diff(tau) <= 0):
         raise InputError("t is not allowed: sample times lie too close together for their span")
     turns = rates * span                            # rotor turn per unit tau [rad]
+    if not np.all(np.isfinite(turns)):
+        raise _too_far(math.inf)
     mean = 0.5 * (np.abs(turns[1:]) + np.abs(turns[:-1])).sum(axis=1) @ np.diff(tau)
-    if not np.all(np.isfinite(turns)) or mean * jr / jzz > MAX_TURN:
-        raise _too_far(mean * jr / jzz)
     # a sample that turns the sphere by less than STILL_TURN per unit tau is rest: CVODES fails on a stretch of
     # derivatives that small (about 1e-70) even where other samples move the sphere
     turns = np.where(np.abs(turns) * jr / jzz < STILL_TURN, 0.0, turns)
     still = mean * jr / jzz < STILL_TURN or not np.any(turns)
+    n = tau.size
+    # a long series in chunks of CHUNK sample intervals, each with the spline through its samples and OVERLAP more
+    # on either side (a cubic spline's dependence on far samples decays by 2 - sqrt(3) per sample: the chunks'
+    # splines are the whole series' to rounding), its progress reported between them; the splines' turn is
+    # bounded before any is integrated (they may swing far beyond the samples)
+    chunks = []
+    for a in range(0, n - 1, CHUNK):
+        b = min(a + CHUNK, n - 1)
+        lo, hi = (0, n) if n - 1 <= CHUNK else (max(0, a - OVERLAP), min(n, b + 1 + OVERLAP))
+        chunks.append((a, b, rate_spline(tau[lo:hi], turns[lo:hi])))
+    turned = sum(_spline_turn(spline, tau[a:b + 1], turns[a:b + 1]) for a, b, spline in chunks) * jr / jzz
+    if not turned <= MAX_TURN:
+        raise _too_far(turned)
     x = ca.MX.sym("x", 5)
     time = ca.MX.sym("tau")
     opts = {"abstol": abstol, "reltol": reltol, "max_num_steps": 500000}
-    n = tau.size
     xs, omegas, xk = np.empty((n, 5)), np.empty((n, 3)), x0
     xs[0] = x0
-    turned = 0.0   # the splines' turn so far, bounded (_spline_turn): they may swing far beyond the samples
     try:
-        # a long series in chunks of CHUNK sample intervals, each with the spline through its samples and
-        # OVERLAP more on either side (a cubic spline's dependence on far samples decays by 2 - sqrt(3) per
-        # sample: the chunks' splines are the whole series' to rounding), its progress reported between them
-        for a in range(0, n - 1, CHUNK):
-            b = min(a + CHUNK, n - 1)
-            lo, hi = (0, n) if n - 1 <= CHUNK else (max(0, a - OVERLAP), min(n, b + 1 + OVERLAP))
-            spline = rate_spline(tau[lo:hi], turns[lo:hi])
-            turned += _spline_turn(spline, tau[a:b + 1], turns[a:b + 1])
-            if not turned * jr / jzz <= MAX_TURN:
-                raise _too_far(turned * jr / jzz)
+        for a, b, spline in chunks:
             ode, omega = _rotor_dynamics()(x, spline(time), ca.DM([jxx, jzz, jr, R]))
             if still:
                 xs[a + 1:b + 1] = xk
