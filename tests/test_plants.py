@@ -55,6 +55,11 @@ def test_against_scipy_dop853():
     np.testing.assert_allclose(sim.series.state, ref, atol=1e-9)
 
 
+def _sines(t):
+    """Rotor rates [rad/s] of two sines at the sample times ``t`` (the vanishing-rate tests scale them)."""
+    return np.column_stack([40 * np.sin(3 * t), 30 * np.cos(2 * t)])
+
+
 @pytest.mark.filterwarnings("ignore:invalid value encountered in scalar divide:RuntimeWarning")   # scipy's step
 @settings(max_examples=25, deadline=None)                                                      # size at 0 / 0
 @given(exponent=st.integers(-320, -20), u_o=st.floats(-0.6, 0.6), v_o=st.floats(-0.6, 0.6), psi=st.floats(-3, 3))
@@ -65,7 +70,7 @@ def test_vanishing_rotor_rates_leave_the_sphere_where_it_starts(exponent, u_o, v
     states stay at the start within 1e-12, as scipy's DOP853 on the printed equations integrates them, whether the
     motion is integrated or below :data:`STILL_TURN`."""
     t = np.linspace(0, 4, 60)
-    rates = np.column_stack([40 * np.sin(3 * t), 30 * np.cos(2 * t)]) * 10.0 ** exponent
+    rates = _sines(t) * 10.0 ** exponent
     x0 = np.array([0.0, 0.0, psi, u_o, v_o])
     sim = simulate_rotors(ROBOT, t, rates, x0=x0)
     np.testing.assert_allclose(sim.series.state, np.tile(x0, (t.size, 1)), rtol=0, atol=1e-12)
@@ -82,7 +87,7 @@ def test_a_stretch_of_vanishing_rates_before_a_motion_is_simulated(exponent):
     (CV_TOO_MUCH_WORK, exit 4 from ``rollplan simulate``) although the file as a whole turns the sphere by far more
     than STILL_TURN. The states match scipy's DOP853 on the printed equations at every sample."""
     t = np.linspace(0, 4, 200)
-    rates = np.column_stack([40 * np.sin(3 * t), 30 * np.cos(2 * t)]) * 10.0 ** exponent
+    rates = _sines(t) * 10.0 ** exponent
     rates[150:] *= 1e-3 / 10.0 ** exponent
     sim = simulate_rotors(ROBOT, t, rates)
     ref = references.rotor_drive(ROBOT.as_dict(), t, rates, np.zeros(5))
