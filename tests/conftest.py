@@ -372,6 +372,14 @@ def run_program(folder, name: str, text: str, *args: str) -> subprocess.Complete
                           timeout=120)
 
 
+#: A launcher of the command (``[sys.executable, "-c", READY, *argv]``): ``rollplan.cli.main`` on the command line, as
+#: ``python -m rollplan.cli`` runs it, once its modules are imported saying "ready" on stderr (a test times its signal
+#: from there); SIGINT is Python's KeyboardInterrupt even where the test's process ignores it.
+READY = ("import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+         "from rollplan.cli import main; sys.stderr.write('ready\\n'); sys.stderr.flush(); "
+         "sys.exit(main(sys.argv[1:]))")
+
+
 def require_c_search(curve: str = "circles") -> None:
     """Skip without a C compiler; with one, the compiled C search of the leaf family ``curve`` must build (a failed
     build fails the test) and is loaded, so that what the test runs next is the search, not its build."""

@@ -18,7 +18,7 @@ import threading
 
 import numpy as np
 import pytest
-from conftest import require_c_search
+from conftest import READY, require_c_search
 from test_enumerate import brute_roots_2d, same_sets
 from test_interrupts import run_and_interrupt
 
@@ -143,21 +143,15 @@ def test_c_roots_against_the_2d_brute_force(k):
         assert first.a + first.b == pytest.approx(shortest, abs=1e-9), (target, steps)
 
 
-#: ``python -c`` program: the command line (argv after the program) as ``python -m rollplan.cli`` runs it, once its
-#: modules are imported saying "ready" on stderr.
-_READY = ("import sys; from rollplan.cli import main; sys.stderr.write('ready\\n'); sys.stderr.flush(); "
-          "sys.exit(main(sys.argv[1:]))")
-
-
 @pytest.mark.slow
 def test_ctrl_c_during_a_long_c_search_exits_130():
     """`plan --all --k 99` spends minutes in one call of the C search (every root of 511 branches, after its table of
-    k = 99 is built); a SIGINT 1.5 s after the command's modules are imported (:data:`_READY`), during that call,
+    k = 99 is built); a SIGINT 1.5 s after the command's modules are imported (``conftest.READY``), during that call,
     exits 130 within two seconds (the call runs in a helper thread, the main thread acts on the signal), one line,
     no traceback."""
     require_c_search()
     code, elapsed, _, err = run_and_interrupt(["plan", "--to", "0", "1", "--k", "99", "--all"], 1.5, wait_for="ready",
-                                              command=[sys.executable, "-c", _READY])
+                                              command=[sys.executable, "-c", READY])
     assert code == 130, err
     assert elapsed < 2.0
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "rollplan: interrupted"

@@ -21,6 +21,7 @@ from functools import cache
 
 import numpy as np
 import pytest
+from conftest import READY
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq, minimize_scalar
@@ -546,11 +547,8 @@ def test_ctrl_c_stops_a_high_k_plan_promptly(tmp_path):
     import sys
     import time
 
-    code = ("import signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
-            "from rollplan.cli import main; sys.stderr.write('ready\\n'); sys.stderr.flush(); "
-            "sys.exit(main(sys.argv[1:]))")
     env = {**os.environ, "ROLLPLAN_CACHE_DIR": str(tmp_path)}   # no table on disk: the plan takes seconds
-    p = subprocess.Popen([sys.executable, "-c", code, "plan", "--to", "0", "1", "--k", "99.5"], env=env,
+    p = subprocess.Popen([sys.executable, "-c", READY, "plan", "--to", "0", "1", "--k", "99.5"], env=env,
                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     assert p.stderr.readline() == "ready\n"
     time.sleep(0.5)
